@@ -1,0 +1,240 @@
+"""The Engine: one world, its systems, resources, events and physics driver.
+
+>>> from engine.system import Phase, system
+>>> with Engine(EngineConfig(backend="ballistic", fast=True), plugins=()) as eng:
+...     seen = []
+...     eng.add_system(system(Phase.SCRIPT)(lambda e, dt: seen.append(e.frame)))
+...     eng.run(frames=3)
+...     seen
+[0, 1, 2]
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TypeVar
+
+import numpy as np
+
+from engine.events import Despawned, EventBus, Spawned
+from engine.physics import create_backend
+from engine.physics.backend import DynamicsBackend, WorldSettings
+from engine.physics.driver import PhysicsDriver
+from engine.realtime import CostLog, Pacing, RealTimeController, Tick
+from engine.system import Phase, Plugin, System, SystemFailure
+from engine.world import World
+
+log = logging.getLogger("colosseum")
+
+R = TypeVar("R")
+
+
+@dataclass(slots=True)
+class EngineConfig:
+    """Run-time choices; the CLI fills these from its flags."""
+
+    content_dir: Path | None = None
+    mode: str = "serial"  # "serial" | "threaded"
+    backend: str = "ode"
+    dt: float = 1.0 / 60.0
+    substeps: int = 1
+    seed: int = 0
+    fast: bool = False
+    early: str = "sleep"
+    late: str = "slowmo"
+    max_dt: float = 1.0 / 20.0
+    max_substeps: int = 8
+    headless: bool = True
+    render: bool = False
+    sound: str = "null"
+    world: WorldSettings = field(default_factory=WorldSettings)
+    options: dict[str, Any] = field(default_factory=dict)
+
+    def pacing(self) -> Pacing:
+        return Pacing(dt=self.dt, paced=not self.fast, early=self.early, late=self.late,
+                      max_dt=max(self.max_dt, self.dt), substeps=self.substeps,
+                      max_substeps=max(self.max_substeps, self.substeps))
+
+
+class Engine:
+    """Owns one private ECS world and runs systems phase by phase, frame after frame."""
+
+    def __init__(self, config: EngineConfig | None = None,
+                 plugins: Iterable[Plugin] | None = None,
+                 backend: DynamicsBackend | None = None,
+                 clock: Callable[[], float] = time.perf_counter,
+                 sleep: Callable[[float], None] = time.sleep) -> None:
+        self.config = config or EngineConfig()
+        cfg = self.config
+        self.world = World()
+        self.events = EventBus()
+        self.rng = np.random.default_rng(cfg.seed)
+        self.resources: dict[type, Any] = {}
+        self.systems: dict[Phase, list[System]] = {phase: [] for phase in Phase}
+        self.plugins: dict[str, Plugin] = {}
+        self.plugin_factories: dict[str, Callable[[], Plugin]] = {}
+        #: Extra sections for ``--stats`` (e.g. the sound manager's counters).
+        self.stat_sources: dict[str, Callable[[], Any]] = {}
+        self.frame = 0
+        self.time = 0.0
+        self.frame_costs = CostLog()
+        self.tick = Tick(self.config.dt, self.config.substeps)
+        #: Wall seconds the dynamics system spent stepping this frame (serial mode).
+        self.physics_seconds: float | None = None
+        self._deferred: list[Callable[[], None]] = []
+        self._started = False
+        self._closed = False
+        backend = backend or create_backend(cfg.backend)
+        backend.configure(cfg.world)
+        self.physics = PhysicsDriver(backend, cfg.mode, cfg.pacing(), clock=clock)
+        self.controller = RealTimeController(cfg.pacing(), clock=clock, sleep=sleep)
+        if plugins is None:
+            from systems import default_plugins
+
+            plugins = default_plugins(self.config)
+        for plugin in plugins:
+            self.add_plugin(plugin)
+
+    # -- composition --------------------------------------------------------
+    def add_system(self, system: System) -> System:
+        self.systems[system.phase].append(system)
+        if self._started:
+            system.setup(self)
+        return system
+
+    def add_plugin(self, plugin: Plugin) -> Plugin:
+        """Build a plugin once; a second plugin of the same name is ignored."""
+        if plugin.name in self.plugins:
+            return self.plugins[plugin.name]
+        self.plugins[plugin.name] = plugin
+        plugin.build(self)
+        return plugin
+
+    def register_plugin(self, name: str, factory: Callable[[], Plugin],
+                        aliases: Iterable[str] = ()) -> None:
+        """Make a plugin loadable by name (``requestPlugin`` in Lua)."""
+        for key in (name, *aliases):
+            self.plugin_factories[key] = factory
+
+    def request_plugin(self, name: str) -> Plugin:
+        factory = self.plugin_factories.get(name)
+        if factory is None:
+            known = ", ".join(sorted(self.plugin_factories)) or "none"
+            raise KeyError(f"unknown plugin {name!r} (known: {known})")
+        plugin = factory()
+        return self.add_plugin(plugin)
+
+    def insert_resource(self, resource: Any, as_type: type | None = None) -> None:
+        self.resources[as_type or type(resource)] = resource
+
+    def resource(self, kind: type[R]) -> R:
+        return self.resources[kind]
+
+    def try_resource(self, kind: type[R]) -> R | None:
+        return self.resources.get(kind)
+
+    # -- structural changes ---------------------------------------------------
+    def spawn(self, *components: Any) -> int:
+        """Create an entity now (main thread); physics learns of it through the queue."""
+        entity = self.world.create_entity(*components)
+        self.events.emit(Spawned(entity))
+        return entity
+
+    def despawn(self, entity: int) -> None:
+        """Delete an entity at the end of the current phase."""
+        self.defer(lambda: self._despawn_now(entity))
+
+    def _despawn_now(self, entity: int) -> None:
+        if self.world.entity_exists(entity):
+            self.world.delete_entity(entity)
+            self.events.emit(Despawned(entity))
+
+    def defer(self, action: Callable[[], None]) -> None:
+        """Run ``action`` on the main thread at the next phase boundary."""
+        self._deferred.append(action)
+
+    def _flush(self) -> None:
+        while self._deferred:
+            actions, self._deferred = self._deferred, []
+            for action in actions:
+                action()
+        self.events.dispatch()
+
+    # -- running ------------------------------------------------------------
+    def start(self) -> None:
+        if self._started:
+            return
+        self._started = True
+        for phase in Phase:
+            for system in self.systems[phase]:
+                system.setup(self)
+        self._flush()
+
+    def step(self) -> None:
+        """Run one frame: every phase in order."""
+        self.start()
+        self.physics.check()
+        tick = self.controller.begin()
+        t0 = self.controller.clock()
+        self.tick = tick
+        self.physics_seconds = None
+        for phase in Phase:
+            for system in self.systems[phase]:
+                try:
+                    system.run(self, tick.dt)
+                except Exception as exc:
+                    raise SystemFailure(system.name, exc) from exc
+            self._flush()
+        self.frame += 1
+        self.time = self.physics.time if self.config.mode == "threaded" else self.time + tick.dt
+        self.events.end_frame()
+        self.frame_costs.add(self.controller.clock() - t0)
+        self.controller.end(tick, self.physics_seconds)
+        if self.config.mode == "threaded" and self.config.fast:
+            time.sleep(0)  # unpaced: still let the physics thread take the GIL
+
+    def run(self, frames: int | None = None, seconds: float | None = None,
+            until: Callable[[Engine], bool] | None = None) -> None:
+        """Run frames until a frame count, a simulated time or a predicate is reached.
+
+        In threaded mode the physics thread stops by itself at the end time and one
+        last frame picks up its final state.
+        """
+        self.start()
+        threaded = self.config.mode == "threaded"
+        end_time = None if seconds is None else self.time + seconds - 1e-9
+        self.physics.stop_at = None if end_time is None else end_time + 1e-9
+        end_frame = None if frames is None else self.frame + frames
+        while end_frame is None or self.frame < end_frame:
+            if until is not None and until(self):
+                break
+            if end_time is not None and threaded and self.physics.time >= end_time:
+                self.step()
+                break
+            if end_time is not None and not threaded and self.time >= end_time:
+                break
+            self.step()
+
+    def close(self) -> None:
+        """Stop physics, shut every system down; safe to call twice, also after errors."""
+        if self._closed:
+            return
+        self._closed = True
+        self.physics.close()
+        for phase in reversed(Phase):
+            for system in reversed(self.systems[phase]):
+                try:
+                    system.shutdown(self)
+                except Exception:
+                    log.exception("system %s failed to shut down", system.name)
+        self.world.close()
+
+    def __enter__(self) -> Engine:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

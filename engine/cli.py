@@ -1,0 +1,246 @@
+"""``colosseum``: run, check, format, scaffold and benchmark content folders.
+
+Exit codes: 0 success, 1 errors in the content (or a system that raised),
+2 usage errors (unknown flags, missing paths).
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import sys
+import time
+import traceback
+from pathlib import Path
+from typing import Any
+
+log = logging.getLogger("colosseum")
+
+USAGE_ERROR = 2
+
+
+def _positive(kind: type) -> Any:
+    def parse(text: str) -> Any:
+        value = kind(text)
+        if value <= 0:
+            raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+        return value
+
+    return parse
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="colosseum", description=__doc__.splitlines()[0])
+    parser.add_argument("--log-level", default="info",
+                        choices=["debug", "info", "warning", "error"],
+                        help="how much to log (default: info)")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    run = sub.add_parser("run", help="run a content folder (default: the bundled demo)")
+    run.add_argument("path", nargs="?", help="content folder or .scene file")
+    limit = run.add_mutually_exclusive_group()
+    limit.add_argument("--seconds", type=_positive(float), help="simulated seconds to run")
+    limit.add_argument("--frames", type=_positive(int), help="frames to run")
+    run.add_argument("--headless", action="store_true",
+                     help="no window (automatic without a display)")
+    run.add_argument("--backend", choices=["ode", "pymunk", "ballistic"], default=None,
+                     help="dynamics backend (default: the scene's, else ode)")
+    run.add_argument("--mode", choices=["serial", "threaded"], default="serial",
+                     help="serial: everything on the main thread; threaded: physics on its own")
+    run.add_argument("--fast", action="store_true",
+                     help="run as fast as possible, not in real time")
+    run.add_argument("--seed", type=int, default=0, help="seed for the scene's random functions")
+    run.add_argument("--dt", type=_positive(float), default=None, help="physics time step (s)")
+    run.add_argument("--substeps", type=_positive(int), default=1, help="physics steps per frame")
+    run.add_argument("--early", choices=["sleep", "substep"], default="sleep",
+                     help="when a step finishes early: sleep, or take smaller substeps")
+    run.add_argument("--late", choices=["slowmo", "grow"], default="slowmo",
+                     help="when steps run late: slow motion, or grow the step (bounded)")
+    run.add_argument("--max-dt", type=_positive(float), default=1.0 / 20.0,
+                     help="upper bound for --late grow (s)")
+    run.add_argument("--sound", default="null", help="audio backend: openal, wave:FILE or null")
+    run.add_argument("--screenshot", type=Path, help="write the last frame to FILE.png")
+    run.add_argument("--record-frames", type=Path, help="write every Nth frame into DIR")
+    run.add_argument("--record-every", type=_positive(int), default=1, help="N for --record-frames")
+    run.add_argument("--interpolate", action="store_true",
+                     help="threaded mode: interpolate poses between physics states when drawing")
+    run.add_argument("--hud", action="store_true", help="show the HUD line (fps, physics ms, rtf)")
+    run.add_argument("--size", default="640x480", help="window/render size WxH")
+    run.add_argument("--save-state", type=Path, help="write the final state as a scene file")
+    run.add_argument("--stats", type=Path, help="write run statistics as JSON")
+    run.add_argument("--progress", action="store_true",
+                     help="print a status line every second (default when stderr is a terminal)")
+
+    check = sub.add_parser("check", help="validate a content folder or scene file")
+    check.add_argument("path")
+    fmt = sub.add_parser("fmt", help="print a scene file in canonical form")
+    fmt.add_argument("path")
+    fmt.add_argument("--write", action="store_true",
+                     help="rewrite the file in place (keeps a .bak)")
+
+    new = sub.add_parser("new", help="scaffold a content folder that runs")
+    new.add_argument("name")
+
+    imp = sub.add_parser("import", help="scene file from a modelling tool's export")
+    imp.add_argument("model")
+    imp.add_argument("-o", "--output", type=Path, required=True)
+
+    bench = sub.add_parser("bench", help="benchmarks, printed as tables")
+    bench.add_argument("what", nargs="?", default="scheduler",
+                       help="scheduler, physics, scene, scripting, sound, render")
+    bench.add_argument("--backend", default=None, help="physics benchmark backend (ode, pymunk)")
+    bench.add_argument("--quick", action="store_true", help="fewer sizes and steps")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=getattr(logging, args.log_level.upper()),
+                        format="%(levelname)s %(name)s: %(message)s")
+    handler = COMMANDS[args.command]
+    try:
+        return handler(args)
+    except KeyboardInterrupt:
+        print("colosseum: interrupted", file=sys.stderr)
+        return 130
+
+
+def _fail(message: str, code: int = USAGE_ERROR) -> int:
+    print(f"colosseum: error: {message}", file=sys.stderr)
+    return code
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from engine.app import Engine, EngineConfig
+    from engine.content import ContentError, load_systems, resolve
+    from engine.physics import BackendUnavailable
+    from engine.scene_loading import SceneLoadError, load_content_scene
+    from engine.stats import collect, status_line, write_json
+    from engine.system import SystemFailure
+
+    try:
+        content = resolve(args.path)
+    except ContentError as exc:
+        return _fail(str(exc))
+    for out in (args.stats, args.save_state, args.screenshot):
+        if out is not None and not out.parent.exists():
+            return _fail(f"{out}: folder {out.parent} does not exist")
+    headless = args.headless or not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    try:
+        scene = load_content_scene(content, seed=args.seed)
+    except SceneLoadError as exc:
+        print(exc, file=sys.stderr)
+        return 1
+    config = EngineConfig(
+        content_dir=content.folder, mode=args.mode, seed=args.seed, fast=args.fast,
+        substeps=args.substeps, early=args.early, late=args.late, max_dt=args.max_dt,
+        headless=headless, sound=args.sound,
+        options={"screenshot": args.screenshot, "record_frames": args.record_frames,
+                 "record_every": args.record_every, "interpolate": args.interpolate,
+                 "hud": args.hud, "size": args.size},
+    )
+    scene.configure(config, backend=args.backend, dt=args.dt)
+    try:
+        engine = Engine(config)
+    except BackendUnavailable as exc:
+        return _fail(str(exc), 1)
+    try:
+        load_systems(engine, content.folder)
+        scene.instantiate(engine)
+        progress = args.progress or sys.stderr.isatty()
+        _run_limited(engine, args, progress, status_line)
+        if args.save_state is not None:
+            from engine.scene_loading import save_state
+
+            save_state(engine, args.save_state)
+        stats = collect(engine)
+    except ContentError as exc:
+        engine.close()
+        return _fail(str(exc), 1)
+    except SystemFailure as exc:
+        engine.close()
+        trace = "".join(traceback.format_exception(exc.original))
+        print(f"colosseum: error: system {exc.system_name!r} raised; the run stopped.\n{trace}",
+              file=sys.stderr)
+        return 1
+    except BaseException:
+        engine.close()
+        raise
+    engine.close()
+    if args.stats is not None:
+        write_json(args.stats, stats)
+    log.info("ran %d frames, %.2f simulated s in %.2f wall s (real-time factor %.2f)",
+             stats["frames"], stats["sim_seconds"], stats["wall_seconds"],
+             stats["real_time_factor"])
+    return 0
+
+
+def _run_limited(engine: Any, args: argparse.Namespace, progress: bool, status_line: Any) -> None:
+    """Run to the requested limit, printing a status line every second when asked."""
+    last = [time.monotonic()]
+
+    def tick(eng: Any) -> bool:
+        now = time.monotonic()
+        if progress and now - last[0] >= 1.0:
+            last[0] = now
+            print("\r" + status_line(eng), end="", file=sys.stderr, flush=True)
+        return False
+
+    quit_requested = getattr(engine, "quit_requested", lambda: False)
+    engine.run(frames=args.frames, seconds=args.seconds,
+               until=lambda eng: tick(eng) or quit_requested())
+    if progress:
+        print(file=sys.stderr)
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    from engine.scene_loading import check_path
+
+    return check_path(Path(args.path))
+
+
+def cmd_fmt(args: argparse.Namespace) -> int:
+    from engine.scene_loading import format_path
+
+    return format_path(Path(args.path), write=args.write)
+
+
+def cmd_new(args: argparse.Namespace) -> int:
+    from engine.scaffold import ScaffoldError, scaffold
+
+    try:
+        folder = scaffold(Path(args.name))
+    except ScaffoldError as exc:
+        return _fail(str(exc))
+    print(f"created {folder}; run it with: colosseum run {folder}")
+    return 0
+
+
+def cmd_import(args: argparse.Namespace) -> int:
+    from engine.scene_loading import import_model
+
+    return import_model(Path(args.model), args.output)
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from tools.bench import BENCHMARKS, run_benchmark
+
+    if args.what not in BENCHMARKS:
+        return _fail(f"unknown benchmark {args.what!r}; choose from {', '.join(BENCHMARKS)}")
+    return run_benchmark(args.what, backend=args.backend, quick=args.quick)
+
+
+COMMANDS = {
+    "run": cmd_run,
+    "check": cmd_check,
+    "fmt": cmd_fmt,
+    "new": cmd_new,
+    "import": cmd_import,
+    "bench": cmd_bench,
+}
+
+
+if __name__ == "__main__":
+    sys.exit(main())

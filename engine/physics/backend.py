@@ -1,0 +1,142 @@
+"""The DynamicsBackend protocol: what the engine asks of a physics library.
+
+Backends (``ode`` in 3D, ``pymunk`` in 2D) are picked by name through
+:func:`engine.physics.create_backend`. Bodies and joints are addressed by an
+integer *key* the caller chooses (the engine uses entity ids). State moves in
+batches of numpy arrays so no Python runs per body per frame.
+
+Threading: a backend is owned by exactly one thread at a time (the physics
+thread in threaded mode). Nothing here is thread-safe; the engine's
+:class:`engine.physics.driver.PhysicsDriver` serialises access.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from components import Joint, Physical
+
+#: One contact between two bodies in one step. ``b`` is -1 for the static world
+#: (ground planes and static geometry without a key).
+CONTACT_DTYPE = np.dtype(
+    [
+        ("a", np.int64),
+        ("b", np.int64),
+        ("position", np.float64, (3,)),
+        ("normal", np.float64, (3,)),
+        ("depth", np.float64),
+        ("impulse", np.float64),
+    ]
+)
+
+
+@dataclass(frozen=True, slots=True)
+class BodyState:
+    """Poses and velocities of many bodies, row ``i`` belonging to ``keys[i]``."""
+
+    keys: np.ndarray  # (N,) int64
+    position: np.ndarray  # (N, 3)
+    orientation: np.ndarray  # (N, 4) w, x, y, z
+    linear_velocity: np.ndarray  # (N, 3)
+    angular_velocity: np.ndarray  # (N, 3)
+
+    @staticmethod
+    def empty() -> BodyState:
+        return BodyState(
+            np.zeros(0, np.int64),
+            np.zeros((0, 3)),
+            np.zeros((0, 4)),
+            np.zeros((0, 3)),
+            np.zeros((0, 3)),
+        )
+
+    def freeze(self) -> BodyState:
+        for arr in (self.keys, self.position, self.orientation,
+                    self.linear_velocity, self.angular_velocity):
+            arr.setflags(write=False)
+        return self
+
+
+@dataclass(frozen=True, slots=True)
+class RayHit:
+    key: int  # -1 for static world geometry
+    position: tuple[float, float, float]
+    normal: tuple[float, float, float]
+    distance: float
+
+
+@dataclass(slots=True)
+class MaterialPair:
+    """Contact parameters used when material ``a`` meets material ``b``."""
+
+    a: str
+    b: str
+    friction: float | None = None
+    bounce: float | None = None
+    softness: float | None = None
+    collide: bool = True
+
+
+@dataclass(slots=True)
+class WorldSettings:
+    gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
+    erp: float = 0.2
+    cfm: float = 1e-5
+    iterations: int = 20
+    max_contacts: int = 4
+    auto_sleep: bool = True
+    material_pairs: list[MaterialPair] = field(default_factory=list)
+
+
+@runtime_checkable
+class DynamicsBackend(Protocol):
+    """What every dynamics backend implements. All vectors are world-frame, SI."""
+
+    name: str
+
+    # -- world -------------------------------------------------------------
+    def configure(self, settings: WorldSettings) -> None: ...
+    def step(self, dt: float) -> None:
+        """Advance by ``dt`` seconds: collide, solve, integrate; record contacts."""
+
+    def close(self) -> None: ...
+
+    # -- bodies ------------------------------------------------------------
+    def add_body(self, key: int, body: Physical, position: np.ndarray,
+                 orientation: np.ndarray, linear_velocity: np.ndarray | None = None,
+                 angular_velocity: np.ndarray | None = None) -> None: ...
+    def remove_body(self, key: int) -> None: ...
+    def body_count(self) -> int: ...
+    def set_pose(self, key: int, position: np.ndarray, orientation: np.ndarray) -> None: ...
+    def set_velocity(self, key: int, linear: np.ndarray, angular: np.ndarray) -> None: ...
+    def set_kinematic_target(self, key: int, position: np.ndarray,
+                             orientation: np.ndarray, dt: float) -> None:
+        """Move a kinematic body so it reaches the target pose after ``dt``."""
+
+    def add_force(self, key: int, force: np.ndarray, point: np.ndarray | None = None) -> None: ...
+    def add_torque(self, key: int, torque: np.ndarray) -> None: ...
+    def add_impulse(self, key: int, impulse: np.ndarray,
+                    point: np.ndarray | None = None) -> None: ...
+    def set_sleeping(self, key: int, sleeping: bool) -> None: ...
+
+    # -- joints ------------------------------------------------------------
+    def add_joint(self, key: int, joint: Joint) -> None: ...
+    def remove_joint(self, key: int) -> None: ...
+    def set_motor(self, key: int, velocity: float, max_force: float) -> None: ...
+    def joint_state(self, key: int) -> tuple[float, float]:
+        """Position (angle or distance) and rate of a joint's first axis."""
+
+    # -- batches -----------------------------------------------------------
+    def read_state(self) -> BodyState:
+        """Every body's pose and velocity, in a fresh arrays (safe to publish)."""
+
+    def write_state(self, state: BodyState) -> None: ...
+    def contacts(self) -> np.ndarray:
+        """Contacts of the last step as a CONTACT_DTYPE array."""
+
+    # -- queries -----------------------------------------------------------
+    def raycast(self, origin: np.ndarray, direction: np.ndarray,
+                max_distance: float) -> RayHit | None: ...

@@ -1,0 +1,181 @@
+"""A collision-free backend: rigid bodies as free particles under gravity.
+
+It implements the whole DynamicsBackend protocol with plain numpy and no
+contacts or joints (each joint is refused once, with a warning), which makes it
+the cheapest deterministic backend for scheduler and tooling tests, and a
+useful ``--backend ballistic`` for scenes of projectiles and flying objects.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from components import Joint, Physical
+from engine.physics.backend import CONTACT_DTYPE, BodyState, RayHit, WorldSettings
+
+log = logging.getLogger("colosseum.physics.ballistic")
+
+
+def _integrate_orientation(q: np.ndarray, w: np.ndarray, dt: float) -> np.ndarray:
+    """q' = q + dt/2 * (0, w) ⊗ q, renormalised; vectorised over rows."""
+    wx, wy, wz = w[:, 0], w[:, 1], w[:, 2]
+    qw, qx, qy, qz = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    dq = 0.5 * dt * np.stack(
+        [
+            -wx * qx - wy * qy - wz * qz,
+            wx * qw + wy * qz - wz * qy,
+            wy * qw + wz * qx - wx * qz,
+            wz * qw + wx * qy - wy * qx,
+        ],
+        axis=1,
+    )
+    out = q + dq
+    return out / np.linalg.norm(out, axis=1, keepdims=True)
+
+
+class BallisticBackend:
+    name = "ballistic"
+
+    def __init__(self) -> None:
+        self.settings = WorldSettings()
+        self._keys: list[int] = []
+        self._index: dict[int, int] = {}
+        self._pos = np.zeros((0, 3))
+        self._quat = np.zeros((0, 4))
+        self._vel = np.zeros((0, 3))
+        self._ang = np.zeros((0, 3))
+        self._force = np.zeros((0, 3))
+        self._torque = np.zeros((0, 3))
+        self._inv_mass = np.zeros(0)
+        self._gravity_on = np.zeros(0)
+        self._targets: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def configure(self, settings: WorldSettings) -> None:
+        self.settings = settings
+
+    def close(self) -> None:
+        self._keys.clear()
+        self._index.clear()
+
+    # -- bodies ------------------------------------------------------------
+    def add_body(self, key: int, body: Physical, position: np.ndarray, orientation: np.ndarray,
+                 linear_velocity: np.ndarray | None = None,
+                 angular_velocity: np.ndarray | None = None) -> None:
+        if key in self._index:
+            raise ValueError(f"body {key} already exists")
+        dynamic = body.kind == "dynamic"
+        mass = body.mass if body.mass else 1.0
+        self._index[key] = len(self._keys)
+        self._keys.append(key)
+        self._pos = np.vstack([self._pos, np.asarray(position, float).reshape(1, 3)])
+        self._quat = np.vstack([self._quat, np.asarray(orientation, float).reshape(1, 4)])
+        zero = np.zeros(3)
+        lin = zero if linear_velocity is None else linear_velocity
+        ang = zero if angular_velocity is None else angular_velocity
+        self._vel = np.vstack([self._vel, np.asarray(lin, float).reshape(1, 3)])
+        self._ang = np.vstack([self._ang, np.asarray(ang, float).reshape(1, 3)])
+        self._force = np.vstack([self._force, np.zeros((1, 3))])
+        self._torque = np.vstack([self._torque, np.zeros((1, 3))])
+        self._inv_mass = np.append(self._inv_mass, 1.0 / mass if dynamic else 0.0)
+        self._gravity_on = np.append(self._gravity_on, 1.0 if dynamic and body.gravity else 0.0)
+        if body.kind == "static":
+            self._vel[-1] = 0.0
+            self._ang[-1] = 0.0
+
+    def remove_body(self, key: int) -> None:
+        i = self._index.pop(key)
+        self._keys.pop(i)
+        for name in ("_pos", "_quat", "_vel", "_ang", "_force", "_torque",
+                     "_inv_mass", "_gravity_on"):
+            setattr(self, name, np.delete(getattr(self, name), i, axis=0))
+        self._index = {k: j for j, k in enumerate(self._keys)}
+        self._targets.pop(key, None)
+
+    def body_count(self) -> int:
+        return len(self._keys)
+
+    def set_pose(self, key: int, position: np.ndarray, orientation: np.ndarray) -> None:
+        i = self._index[key]
+        self._pos[i] = position
+        self._quat[i] = orientation
+
+    def set_velocity(self, key: int, linear: np.ndarray, angular: np.ndarray) -> None:
+        i = self._index[key]
+        self._vel[i] = linear
+        self._ang[i] = angular
+
+    def set_kinematic_target(self, key: int, position: np.ndarray, orientation: np.ndarray,
+                             dt: float) -> None:
+        i = self._index[key]
+        self._vel[i] = (np.asarray(position) - self._pos[i]) / dt
+        self._targets[key] = (np.asarray(position, float), np.asarray(orientation, float))
+
+    def add_force(self, key: int, force: np.ndarray, point: np.ndarray | None = None) -> None:
+        i = self._index[key]
+        self._force[i] += force
+        if point is not None:
+            self._torque[i] += np.cross(np.asarray(point) - self._pos[i], force)
+
+    def add_torque(self, key: int, torque: np.ndarray) -> None:
+        self._torque[self._index[key]] += torque
+
+    def add_impulse(self, key: int, impulse: np.ndarray, point: np.ndarray | None = None) -> None:
+        i = self._index[key]
+        self._vel[i] += np.asarray(impulse) * self._inv_mass[i]
+
+    def set_sleeping(self, key: int, sleeping: bool) -> None:
+        if sleeping:
+            self.set_velocity(key, np.zeros(3), np.zeros(3))
+
+    # -- joints ------------------------------------------------------------
+    def add_joint(self, key: int, joint: Joint) -> None:
+        log.warning("joint %s (%s) ignored: the ballistic backend has no constraints",
+                    joint.id or key, joint.kind)
+
+    def remove_joint(self, key: int) -> None:
+        return None
+
+    def set_motor(self, key: int, velocity: float, max_force: float) -> None:
+        return None
+
+    def joint_state(self, key: int) -> tuple[float, float]:
+        return (0.0, 0.0)
+
+    # -- stepping ----------------------------------------------------------
+    def step(self, dt: float) -> None:
+        if not self._keys:
+            return
+        g = np.asarray(self.settings.gravity, float)
+        accel = self._force * self._inv_mass[:, None] + g * self._gravity_on[:, None]
+        self._vel += accel * dt
+        self._pos += self._vel * dt
+        self._quat = _integrate_orientation(self._quat, self._ang, dt)
+        self._force[:] = 0.0
+        self._torque[:] = 0.0
+        for key, (position, orientation) in self._targets.items():
+            i = self._index[key]
+            self._pos[i] = position
+            self._quat[i] = orientation
+            self._vel[i] = 0.0
+        self._targets.clear()
+
+    # -- batches -----------------------------------------------------------
+    def read_state(self) -> BodyState:
+        return BodyState(np.array(self._keys, np.int64), self._pos.copy(), self._quat.copy(),
+                         self._vel.copy(), self._ang.copy())
+
+    def write_state(self, state: BodyState) -> None:
+        rows = np.array([self._index[int(k)] for k in state.keys], np.int64)
+        self._pos[rows] = state.position
+        self._quat[rows] = state.orientation
+        self._vel[rows] = state.linear_velocity
+        self._ang[rows] = state.angular_velocity
+
+    def contacts(self) -> np.ndarray:
+        return np.zeros(0, CONTACT_DTYPE)
+
+    def raycast(self, origin: np.ndarray, direction: np.ndarray,
+                max_distance: float) -> RayHit | None:
+        return None

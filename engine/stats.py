@@ -1,0 +1,68 @@
+"""Run statistics: what ``--stats FILE.json`` writes and the progress line shows."""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from engine.app import Engine
+
+
+def collect(engine: Engine) -> dict[str, Any]:
+    """Frames, simulated and wall seconds, real-time factor, per-step and per-frame costs."""
+    physics = engine.physics
+    steps = physics.controller.step_costs
+    wall = engine.controller.wall_time
+    dynamics = _dynamics(engine)
+    stats: dict[str, Any] = {
+        "mode": engine.config.mode,
+        "backend": getattr(physics.backend, "name", "?"),
+        "frames": engine.frame,
+        "steps": physics.steps,
+        "sim_seconds": physics.time,
+        "wall_seconds": wall,
+        "real_time_factor": physics.time / wall if wall > 0 else 0.0,
+        "physics_ms_mean": steps.mean() * 1e3,
+        "physics_ms_p99": steps.percentile(99) * 1e3,
+        "frame_ms_mean": engine.frame_costs.mean() * 1e3,
+        "frame_ms_p99": engine.frame_costs.percentile(99) * 1e3,
+        "bodies": len(physics.snapshot.bodies.keys),
+        "entities": len(engine.world),
+        "contacts": dynamics.contacts_total if dynamics is not None else 0,
+        "dt": engine.controller.dt,
+        "substeps": engine.controller.substeps,
+    }
+    for name, source in engine.stat_sources.items():
+        stats[name] = source()
+    return stats
+
+
+def _dynamics(engine: Engine) -> Any:
+    from systems.dynamics import DynamicsSystem
+
+    return engine.try_resource(DynamicsSystem)
+
+
+def status_line(engine: Engine) -> str:
+    s = collect(engine)
+    return (f"t={s['sim_seconds']:7.2f}s frame {s['frames']:6d}  rtf {s['real_time_factor']:5.2f}  "
+            f"physics {s['physics_ms_mean']:6.2f} ms  frame {s['frame_ms_mean']:6.2f} ms  "
+            f"bodies {s['bodies']}")
+
+
+def write_json(path: Path, data: dict[str, Any]) -> None:
+    """Write atomically: a crash never leaves a half-written file behind."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent or ".")
+    try:
+        with os.fdopen(fd, "w") as out:
+            json.dump(data, out, indent=2, sort_keys=True)
+            out.write("\n")
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

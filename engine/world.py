@@ -1,0 +1,234 @@
+"""The entity store: the one module that imports esper.
+
+esper 3 keeps its databases in module globals and switches between them with
+``switch_world``; :class:`World` gives each engine a private, uniquely named
+esper world and switches to it before every call, so two engines in one process
+never see each other's entities. Only the main thread may use a World.
+
+Transforms added to a world are adopted by its :class:`PoseTable`: their arrays
+become views into contiguous numpy tables, so the dynamics system writes every
+pose with one vectorised assignment instead of a Python loop over bodies.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import defaultdict
+from collections.abc import Callable, Iterable, Iterator
+from typing import Any, TypeVar, overload
+
+import esper
+import numpy as np
+
+from components import Transform
+
+C = TypeVar("C")
+C1 = TypeVar("C1")
+C2 = TypeVar("C2")
+C3 = TypeVar("C3")
+
+ComponentHook = Callable[[int, Any], None]
+
+_world_names = itertools.count()
+
+
+class PoseTable:
+    """Contiguous storage for every adopted Transform, one row per entity.
+
+    Rows are recycled through a free list; growth doubles capacity and re-points
+    the adopted Transforms at the new arrays (amortised O(1) per entity).
+    """
+
+    def __init__(self, capacity: int = 64) -> None:
+        self.position = np.zeros((capacity, 3))
+        self.orientation = np.zeros((capacity, 4))
+        self.orientation[:, 0] = 1.0
+        self.linear_velocity = np.zeros((capacity, 3))
+        self.angular_velocity = np.zeros((capacity, 3))
+        self._owner: list[Transform | None] = [None] * capacity
+        self._free: list[int] = list(range(capacity - 1, -1, -1))
+        self.row_of: dict[int, int] = {}
+        #: Bumped whenever rows are assigned or released; caches keyed on it stay valid.
+        self.version = 0
+
+    @property
+    def capacity(self) -> int:
+        return len(self._owner)
+
+    def adopt(self, entity: int, transform: Transform) -> None:
+        if not self._free:
+            self._grow()
+        row = self._free.pop()
+        self.position[row] = transform.position
+        self.orientation[row] = transform.orientation
+        self.linear_velocity[row] = transform.linear_velocity
+        self.angular_velocity[row] = transform.angular_velocity
+        self._bind(row, transform)
+        self._owner[row] = transform
+        self.row_of[entity] = row
+        self.version += 1
+
+    def release(self, entity: int) -> None:
+        row = self.row_of.pop(entity, None)
+        if row is None:
+            return
+        transform = self._owner[row]
+        if transform is not None:  # detach: keep the values, drop the views
+            transform.position = transform.position.copy()
+            transform.orientation = transform.orientation.copy()
+            transform.linear_velocity = transform.linear_velocity.copy()
+            transform.angular_velocity = transform.angular_velocity.copy()
+        self._owner[row] = None
+        self._free.append(row)
+        self.version += 1
+
+    def rows(self, entities: Iterable[int]) -> np.ndarray:
+        """Row indices of ``entities``; -1 where an entity has no Transform."""
+        get = self.row_of.get
+        return np.fromiter((get(int(e), -1) for e in entities), dtype=np.int64)
+
+    def _bind(self, row: int, transform: Transform) -> None:
+        transform.position = self.position[row]
+        transform.orientation = self.orientation[row]
+        transform.linear_velocity = self.linear_velocity[row]
+        transform.angular_velocity = self.angular_velocity[row]
+
+    def _grow(self) -> None:
+        old = self.capacity
+        new = old * 2
+        for name in ("position", "orientation", "linear_velocity", "angular_velocity"):
+            arr = getattr(self, name)
+            grown = np.zeros((new, arr.shape[1]))
+            grown[:old] = arr
+            setattr(self, name, grown)
+        self.orientation[old:, 0] = 1.0
+        self._owner.extend([None] * (new - old))
+        self._free.extend(range(new - 1, old - 1, -1))
+        for row, transform in enumerate(self._owner[:old]):
+            if transform is not None:
+                self._bind(row, transform)
+
+
+class World:
+    """A private esper world plus a pose table and component add/remove hooks."""
+
+    def __init__(self) -> None:
+        self.name = f"colosseum-{next(_world_names)}"
+        self.poses = PoseTable()
+        self._on_add: dict[type, list[ComponentHook]] = defaultdict(list)
+        self._on_remove: dict[type, list[ComponentHook]] = defaultdict(list)
+        self._enter()
+
+    def _enter(self) -> None:
+        if esper.current_world != self.name:
+            esper.switch_world(self.name)
+
+    # -- hooks -------------------------------------------------------------
+    def on_add(self, component_type: type, hook: ComponentHook) -> None:
+        """Call ``hook(entity, component)`` whenever a component of this type is added."""
+        self._on_add[component_type].append(hook)
+
+    def on_remove(self, component_type: type, hook: ComponentHook) -> None:
+        self._on_remove[component_type].append(hook)
+
+    def _added(self, entity: int, component: Any) -> None:
+        if type(component) is Transform:
+            self.poses.adopt(entity, component)
+        for hook in self._on_add.get(type(component), ()):
+            hook(entity, component)
+
+    def _removing(self, entity: int, component: Any) -> None:
+        for hook in self._on_remove.get(type(component), ()):
+            hook(entity, component)
+        if type(component) is Transform:
+            self.poses.release(entity)
+
+    # -- entities ----------------------------------------------------------
+    def create_entity(self, *components: Any) -> int:
+        self._enter()
+        entity = esper.create_entity(*components)
+        for component in components:
+            self._added(entity, component)
+        return entity
+
+    def delete_entity(self, entity: int) -> None:
+        """Delete now (the engine defers this to the end of a frame; see Engine.despawn)."""
+        self._enter()
+        if not esper.entity_exists(entity):
+            return
+        for component in esper.components_for_entity(entity):
+            self._removing(entity, component)
+        esper.delete_entity(entity, immediate=True)
+
+    def entity_exists(self, entity: int) -> bool:
+        self._enter()
+        return esper.entity_exists(entity)
+
+    def add_component(self, entity: int, component: Any) -> None:
+        self._enter()
+        old = esper.try_component(entity, type(component))
+        if old is not None:
+            self._removing(entity, old)
+        esper.add_component(entity, component)
+        self._added(entity, component)
+
+    def remove_component(self, entity: int, component_type: type[C]) -> C | None:
+        self._enter()
+        component = esper.try_component(entity, component_type)
+        if component is None:
+            return None
+        self._removing(entity, component)
+        esper.remove_component(entity, component_type)
+        return component
+
+    def clear(self) -> None:
+        for entity in list(self.entities()):
+            self.delete_entity(entity)
+
+    def close(self) -> None:
+        self.clear()
+        if esper.current_world == self.name:
+            esper.switch_world("default")
+        if self.name in esper.list_worlds():
+            esper.delete_world(self.name)
+
+    # -- queries -----------------------------------------------------------
+    def entities(self) -> Iterator[int]:
+        self._enter()
+        return iter(list(esper._entities))  # noqa: SLF001 - esper has no public listing
+
+    def __len__(self) -> int:
+        self._enter()
+        return len(esper._entities)  # noqa: SLF001
+
+    def component_for_entity(self, entity: int, component_type: type[C]) -> C:
+        self._enter()
+        return esper.component_for_entity(entity, component_type)
+
+    def try_component(self, entity: int, component_type: type[C]) -> C | None:
+        self._enter()
+        return esper.try_component(entity, component_type)
+
+    def has_component(self, entity: int, component_type: type) -> bool:
+        self._enter()
+        return esper.has_component(entity, component_type)
+
+    def components_for_entity(self, entity: int) -> tuple[Any, ...]:
+        self._enter()
+        return esper.components_for_entity(entity)
+
+    def get_component(self, component_type: type[C]) -> list[tuple[int, C]]:
+        self._enter()
+        return esper.get_component(component_type)
+
+    @overload
+    def get_components(self, c1: type[C1]) -> list[tuple[int, tuple[C1]]]: ...
+    @overload
+    def get_components(self, c1: type[C1], c2: type[C2]) -> list[tuple[int, tuple[C1, C2]]]: ...
+    @overload
+    def get_components(
+        self, c1: type[C1], c2: type[C2], c3: type[C3]
+    ) -> list[tuple[int, tuple[C1, C2, C3]]]: ...
+    def get_components(self, *component_types: type) -> list[tuple[int, tuple[Any, ...]]]:
+        self._enter()
+        return esper.get_components(*component_types)

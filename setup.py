@@ -1,0 +1,43 @@
+"""Builds the private ODE binding (engine/physics/ode3d/_ode.pyx) against the system libode."""
+
+import shlex
+import subprocess
+from pathlib import Path
+
+import numpy
+from setuptools import Extension, setup
+
+
+def pkg_config(flag: str) -> list[str]:
+    try:
+        out = subprocess.run(["pkg-config", flag, "ode"], check=True, capture_output=True,
+                             text=True)
+    except (OSError, subprocess.CalledProcessError) as exc:
+        raise SystemExit(
+            "colosseum: cannot find libode with pkg-config; install it with "
+            "`sudo apt-get install libode-dev pkg-config` (or run tools/setup.sh)"
+        ) from exc
+    return shlex.split(out.stdout)
+
+
+def extensions() -> list[Extension]:
+    source = Path("engine/physics/ode3d/_ode.pyx")
+    if not source.exists():
+        return []
+    from Cython.Build import cythonize
+
+    cflags = pkg_config("--cflags")
+    ext = Extension(
+        "engine.physics.ode3d._ode",
+        [str(source)],
+        include_dirs=[numpy.get_include()],
+        extra_compile_args=[*cflags, "-O3", "-DdDOUBLE"],
+        libraries=["ode"],
+        library_dirs=[a[2:] for a in pkg_config("--libs") if a.startswith("-L")],
+        define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION")],
+    )
+    return cythonize([ext], language_level=3, compiler_directives={"boundscheck": False,
+                                                                   "wraparound": False})
+
+
+setup(ext_modules=extensions())

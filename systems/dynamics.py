@@ -1,0 +1,159 @@
+"""The dynamics system: Physical and Joint components ↔ the dynamics backend.
+
+New bodies and joints are sent to the backend through the command queue at the
+start of the FIXED phase (their Transform is read then, so component order at
+spawn does not matter). In serial mode this system steps the backend; in
+threaded mode the physics thread does and this system only picks up the latest
+snapshot. Either way, every Transform is updated by one vectorised numpy
+assignment per array, with no Python work per body.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from components import Joint, Physical, Transform
+from engine.events import BodyFault, Contacts
+from engine.physics.backend import DynamicsBackend
+from engine.physics.driver import Snapshot
+from engine.system import Phase, System
+
+if TYPE_CHECKING:
+    from engine.app import Engine
+
+log = logging.getLogger("colosseum.dynamics")
+
+
+class DynamicsSystem(System):
+    phase = Phase.FIXED
+    reads = (Physical, Joint)
+    writes = (Transform,)
+
+    def __init__(self) -> None:
+        self._new_bodies: list[tuple[int, Physical]] = []
+        self._new_joints: list[tuple[int, Joint]] = []
+        #: The snapshot the Transforms reflect now (newer ones may already exist in
+        #: threaded mode; systems wanting a consistent view read this one).
+        self.snapshot: Snapshot | None = None
+        self._layout: tuple[np.ndarray, int] | None = None
+        self._rows = np.zeros(0, np.int64)
+        self._valid = np.zeros(0, bool)
+        self.contacts_total = 0
+
+    def setup(self, engine: Engine) -> None:
+        world = engine.world
+        world.on_add(Physical, lambda e, c: self._new_bodies.append((e, c)))
+        world.on_add(Joint, lambda e, c: self._new_joints.append((e, c)))
+        world.on_remove(Physical, lambda e, c: self._remove_body(engine, e))
+        world.on_remove(Joint, lambda e, c: engine.physics.push(_remove_joint(e)))
+        for entity, physical in world.get_component(Physical):
+            self._new_bodies.append((entity, physical))
+        for entity, joint in world.get_component(Joint):
+            self._new_joints.append((entity, joint))
+
+    def _remove_body(self, engine: Engine, entity: int) -> None:
+        pending = [pair for pair in self._new_bodies if pair[0] == entity]
+        if pending:  # never reached the backend
+            self._new_bodies = [pair for pair in self._new_bodies if pair[0] != entity]
+            return
+        engine.physics.push(_remove_body(entity))
+
+    def _send_new(self, engine: Engine) -> None:
+        if self._new_bodies:
+            bodies, self._new_bodies = self._new_bodies, []
+            for entity, physical in bodies:
+                t = engine.world.try_component(entity, Transform)
+                if t is None:
+                    t = Transform()
+                engine.physics.push(_add_body(entity, physical, t))
+        if self._new_joints:
+            joints, self._new_joints = self._new_joints, []
+            for entity, joint in joints:
+                engine.physics.push(_add_joint(entity, joint))
+
+    def run(self, engine: Engine, dt: float) -> None:
+        self._send_new(engine)
+        physics = engine.physics
+        if engine.config.mode == "serial":
+            tick = engine.tick
+            engine.physics_seconds = physics.step(tick.dt, tick.substeps)
+        else:
+            physics.start()  # after the first bodies are queued; no-op once running
+        snapshot = physics.snapshot
+        if snapshot is not self.snapshot:
+            self._sync(engine, snapshot)
+        contacts = physics.take_contacts()
+        if len(contacts):
+            self.contacts_total += len(contacts)
+            engine.events.emit(Contacts(contacts))
+        for key, message in physics.take_faults():
+            log.warning("body %s: %s", key, message)
+            engine.events.emit(BodyFault(key, message))
+
+    def _sync(self, engine: Engine, snapshot: Snapshot) -> None:
+        self.snapshot = snapshot
+        bodies = snapshot.bodies
+        poses = engine.world.poses
+        keys = bodies.keys
+        layout = self._layout
+        if layout is None or layout[1] != poses.version or not np.array_equal(layout[0], keys):
+            rows = poses.rows(keys)
+            self._valid = rows >= 0
+            self._rows = rows[self._valid]
+            self._layout = (keys, poses.version)
+        rows, valid = self._rows, self._valid
+        if valid.all():
+            poses.position[rows] = bodies.position
+            poses.orientation[rows] = bodies.orientation
+            poses.linear_velocity[rows] = bodies.linear_velocity
+            poses.angular_velocity[rows] = bodies.angular_velocity
+        else:
+            poses.position[rows] = bodies.position[valid]
+            poses.orientation[rows] = bodies.orientation[valid]
+            poses.linear_velocity[rows] = bodies.linear_velocity[valid]
+            poses.angular_velocity[rows] = bodies.angular_velocity[valid]
+
+
+def _add_body(entity: int, physical: Physical, t: Transform):
+    position = t.position.copy()
+    orientation = t.orientation.copy()
+    linear = t.linear_velocity.copy()
+    angular = t.angular_velocity.copy()
+
+    def add_body(backend: DynamicsBackend) -> None:
+        backend.add_body(entity, physical, position, orientation, linear, angular)
+
+    return add_body
+
+
+def _remove_body(entity: int):
+    def remove_body(backend: DynamicsBackend) -> None:
+        backend.remove_body(entity)
+
+    return remove_body
+
+
+def _add_joint(entity: int, joint: Joint):
+    def add_joint(backend: DynamicsBackend) -> None:
+        backend.add_joint(entity, joint)
+
+    return add_joint
+
+
+def _remove_joint(entity: int):
+    def remove_joint(backend: DynamicsBackend) -> None:
+        backend.remove_joint(entity)
+
+    return remove_joint
+
+
+class DynamicsPlugin:
+    name = "physics"
+
+    def build(self, engine: Engine) -> None:
+        system = DynamicsSystem()
+        engine.insert_resource(system)
+        engine.add_system(system)

@@ -1,0 +1,109 @@
+"""The real-time controller, driven by an injected clock so pacing is exact."""
+
+from __future__ import annotations
+
+import pytest
+
+from engine.realtime import Pacing, RealTimeController
+
+
+class FakeClock:
+    def __init__(self) -> None:
+        self.now = 100.0
+        self.sleeps: list[float] = []
+
+    def __call__(self) -> float:
+        return self.now
+
+    def sleep(self, seconds: float) -> None:
+        self.sleeps.append(seconds)
+        self.now += seconds
+
+    def work(self, seconds: float) -> None:
+        self.now += seconds
+
+
+def controller(clock: FakeClock, **kw) -> RealTimeController:
+    return RealTimeController(Pacing(dt=0.01, **kw), clock=clock, sleep=clock.sleep)
+
+
+def test_sleeps_the_rest_of_the_step_when_ahead():
+    clock = FakeClock()
+    ctl = controller(clock)
+    for _ in range(100):
+        tick = ctl.begin()
+        clock.work(0.004)
+        ctl.end(tick, 0.003)
+    assert clock.sleeps == pytest.approx([0.006] * 100)
+    assert ctl.sim_time == pytest.approx(1.0)
+    assert ctl.real_time_factor == pytest.approx(1.0)
+
+
+def test_runs_in_slow_motion_when_behind_and_does_not_catch_up():
+    clock = FakeClock()
+    ctl = controller(clock)
+    for _ in range(50):
+        tick = ctl.begin()
+        clock.work(0.02)  # twice as long as the step simulates
+        ctl.end(tick, 0.02)
+    assert clock.sleeps == []
+    assert ctl.real_time_factor == pytest.approx(0.5)
+    # once fast again, it sleeps normally instead of racing to repay the debt
+    tick = ctl.begin()
+    clock.work(0.001)
+    ctl.end(tick, 0.001)
+    assert clock.sleeps == pytest.approx([0.009])
+
+
+def test_takes_more_substeps_instead_of_sleeping_when_configured():
+    clock = FakeClock()
+    ctl = controller(clock, early="substep", max_substeps=8)
+    tick = ctl.begin()
+    assert tick.substeps == 1
+    clock.work(0.002)  # 2 ms of physics for one substep, no other work
+    ctl.end(tick, 0.002)
+    tick = ctl.begin()
+    assert tick.substeps == 5  # five 2 ms substeps fit in a 10 ms step
+    assert tick.substep_dt == pytest.approx(0.002)
+    clock.work(0.001 * tick.substeps)
+    ctl.end(tick, 0.001 * tick.substeps)
+    assert ctl.begin().substeps == 8  # bounded by max_substeps
+
+
+def test_grows_the_step_within_its_bound_when_late():
+    clock = FakeClock()
+    ctl = controller(clock, late="grow", max_dt=0.025)
+    tick = ctl.begin()
+    clock.work(0.015)
+    ctl.end(tick, 0.015)
+    assert ctl.begin().dt == pytest.approx(0.015)  # keeps real time with a coarser step
+    tick = ctl.begin()
+    clock.work(0.05)
+    ctl.end(tick, 0.05)
+    assert ctl.begin().dt == pytest.approx(0.025)  # never past the bound
+    for _ in range(3):
+        tick = ctl.begin()
+        clock.work(0.001)
+        ctl.end(tick, 0.001)
+    assert ctl.begin().dt == pytest.approx(0.01)  # back to the nominal step when fast again
+
+
+def test_unpaced_never_sleeps_and_still_measures():
+    clock = FakeClock()
+    ctl = controller(clock, paced=False)
+    for _ in range(10):
+        tick = ctl.begin()
+        clock.work(0.001)
+        ctl.record_step(0.0008)
+        ctl.end(tick, 0.0008)
+    assert clock.sleeps == []
+    assert ctl.real_time_factor == pytest.approx(10.0)
+    assert ctl.step_costs.mean() == pytest.approx(0.0008)
+    assert ctl.tick_costs.percentile(99) == pytest.approx(0.001)
+
+
+def test_rejects_unknown_policies():
+    with pytest.raises(ValueError, match="early policy"):
+        Pacing(early="nap")
+    with pytest.raises(ValueError, match="late policy"):
+        Pacing(late="panic")
