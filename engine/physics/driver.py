@@ -155,6 +155,8 @@ class PhysicsDriver:
                 tick = ctl.begin()
                 spent = self.step(tick.dt, tick.substeps)
                 ctl.end(tick, spent)
+                if not ctl.pacing.paced:
+                    time.sleep(0)  # hand the GIL over between steps; the main thread needs it
         except BaseException as exc:
             self.error = exc
             log.exception("the physics thread stopped")

@@ -1,0 +1,90 @@
+"""``colosseum bench WHAT``: benchmarks printed as tables, each beside a reference.
+
+Every benchmark measures our path and a reference in the same run and reports
+the ratio, so the numbers mean something on any machine.
+"""
+
+from __future__ import annotations
+
+import importlib
+import time
+from collections.abc import Callable
+from typing import Any
+
+#: name -> "module:function"; each function takes (quick, backend) and returns table rows.
+BENCHMARKS: dict[str, str] = {
+    "scheduler": "tools.bench:bench_scheduler",
+    "physics": "tools.bench_physics:run_bench",
+    "scene": "engine.scene:bench_scene",
+    "scripting": "tools.bench_scripting:run_bench",
+    "sound": "tools.bench_sound:run_bench",
+    "render": "tools.bench_render:run_bench",
+}
+
+
+def print_table(rows: list[dict[str, Any]]) -> None:
+    if not rows:
+        return
+    columns = list(rows[0])
+    for row in rows[1:]:
+        columns += [c for c in row if c not in columns]
+    cells = [[_fmt(row.get(c, "")) for c in columns] for row in rows]
+    widths = [max(len(c), *(len(r[i]) for r in cells)) for i, c in enumerate(columns)]
+    print("  ".join(c.rjust(w) for c, w in zip(columns, widths, strict=True)))
+    print("  ".join("-" * w for w in widths))
+    for r in cells:
+        print("  ".join(v.rjust(w) for v, w in zip(r, widths, strict=True)))
+
+
+def _fmt(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    return str(value)
+
+
+def run_benchmark(what: str, backend: str | None = None, quick: bool = False) -> int:
+    module_name, func_name = BENCHMARKS[what].split(":")
+    func: Callable[..., list[dict[str, Any]]] = getattr(importlib.import_module(module_name),
+                                                        func_name)
+    kwargs: dict[str, Any] = {}
+    if backend is not None:
+        kwargs["backend"] = backend
+    if quick:
+        kwargs["quick"] = True
+    rows = func(**kwargs)
+    print(f"\ncolosseum bench {what}")
+    print_table(rows)
+    return 0
+
+
+def bench_scheduler(quick: bool = False) -> list[dict[str, Any]]:
+    """Engine overhead per frame: no bodies, ten trivial systems; reference: a bare loop."""
+    from engine import Engine, EngineConfig, Phase, system
+
+    frames = 2_000 if quick else 20_000
+    phases = list(Phase)
+    counter = [0]
+
+    def trivial(engine: Any, dt: float) -> None:
+        counter[0] += 1
+
+    functions = [trivial] * 10
+    t0 = time.perf_counter()
+    for _ in range(frames):
+        for fn in functions:
+            fn(None, 0.016)
+    bare_ms = (time.perf_counter() - t0) / frames * 1e3
+
+    rows = []
+    for mode in ("serial", "threaded"):
+        with Engine(EngineConfig(backend="ballistic", mode=mode, fast=True)) as eng:
+            for i in range(10):
+                eng.add_system(system(phases[i % len(phases)])(trivial))
+            eng.run(frames=100)
+            t0 = time.perf_counter()
+            eng.run(frames=frames)
+            ms = (time.perf_counter() - t0) / frames * 1e3
+        rows.append({"mode": mode, "systems": 10, "frames": frames, "ms/frame": ms,
+                     "bare loop ms": bare_ms, "overhead ms": ms - bare_ms,
+                     "target ms": 0.2, "ok": "yes" if ms < 0.2 else "NO"})
+    return rows
