@@ -69,6 +69,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--size", default="640x480", help="window/render size WxH")
     run.add_argument("--save-state", type=Path, help="write the final state as a scene file")
     run.add_argument("--stats", type=Path, help="write run statistics as JSON")
+    run.add_argument("--record", type=Path, help="record input events to FILE (JSON lines)")
+    run.add_argument("--replay", type=Path, help="replay input events recorded with --record")
     run.add_argument("--progress", action="store_true",
                      help="print a status line every second (default when stderr is a terminal)")
 
@@ -116,6 +118,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from engine.app import Engine, EngineConfig
     from engine.content import ContentError, load_systems, resolve
     from engine.physics import BackendUnavailable
+    from engine.recording import InputRecorder, InputReplayer, ReplayError
     from engine.scene_loading import SceneLoadError, load_content_scene
     from engine.stats import collect, status_line, write_json
     from engine.system import SystemFailure
@@ -124,7 +127,9 @@ def cmd_run(args: argparse.Namespace) -> int:
         content = resolve(args.path)
     except ContentError as exc:
         return _fail(str(exc))
-    for out in (args.stats, args.save_state, args.screenshot):
+    if args.replay is not None and not args.replay.is_file():
+        return _fail(f"{args.replay}: no such recording")
+    for out in (args.stats, args.save_state, args.screenshot, args.record):
         if out is not None and not out.parent.exists():
             return _fail(f"{out}: folder {out.parent} does not exist")
     headless = args.headless or not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
@@ -147,6 +152,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     except BackendUnavailable as exc:
         return _fail(str(exc), 1)
     try:
+        if args.replay is not None:
+            engine.add_system(InputReplayer(args.replay))
+        if args.record is not None:
+            engine.add_system(InputRecorder(args.record))
         load_systems(engine, content.folder)
         scene.instantiate(engine)
         progress = args.progress or sys.stderr.isatty()
@@ -156,7 +165,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
             save_state(engine, args.save_state)
         stats = collect(engine)
-    except ContentError as exc:
+    except (ContentError, ReplayError) as exc:
         engine.close()
         return _fail(str(exc), 1)
     except SystemFailure as exc:
