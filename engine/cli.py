@@ -1,4 +1,4 @@
-"""``colosseum``: run, check, format, scaffold and benchmark content folders.
+"""colosseum: run, check, format, scaffold and benchmark content folders.
 
 Exit codes: 0 success, 1 errors in the content (or a system that raised),
 2 usage errors (unknown flags, missing paths).
@@ -83,10 +83,6 @@ def build_parser() -> argparse.ArgumentParser:
 
     new = sub.add_parser("new", help="scaffold a content folder that runs")
     new.add_argument("name")
-
-    imp = sub.add_parser("import", help="scene file from a modelling tool's export")
-    imp.add_argument("model")
-    imp.add_argument("-o", "--output", type=Path, required=True)
 
     bench = sub.add_parser("bench", help="benchmarks, printed as tables")
     bench.add_argument("what", nargs="?", default="scheduler",
@@ -227,12 +223,6 @@ def cmd_new(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_import(args: argparse.Namespace) -> int:
-    from engine.scene_loading import import_model
-
-    return import_model(Path(args.model), args.output)
-
-
 def cmd_bench(args: argparse.Namespace) -> int:
     from tools.bench import BENCHMARKS, run_benchmark
 
@@ -246,7 +236,6 @@ COMMANDS = {
     "check": cmd_check,
     "fmt": cmd_fmt,
     "new": cmd_new,
-    "import": cmd_import,
     "bench": cmd_bench,
 }
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 MAIN_SCENE = """\
 // {name}: a ground, a ball and a box. Units: metres, kilograms, seconds; Z is up.
-Gravity [0 0 -9.81]
+World {{ Gravity [0 0 -9.81] TimeStep 0.01 }}
 
 Material {{ ID "rubber" Friction 0.8 Bounce 0.6 }}
 

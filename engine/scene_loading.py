@@ -1,0 +1,106 @@
+"""What the CLI does with scene files: load into an engine, check, format, save state.
+
+Kept apart from :mod:`engine.scene` (the format itself) so the format has no
+knowledge of command lines, exit codes or terminals.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from engine.content import Content
+from engine.files import write_atomic
+
+if TYPE_CHECKING:
+    from engine.app import Engine, EngineConfig
+    from engine.scene import SceneSpec
+
+class SceneLoadError(Exception):
+    """The scene has errors; ``str()`` is the full report, every error with its place."""
+
+
+@dataclass(slots=True)
+class LoadedScene:
+    spec: SceneSpec
+
+    def configure(self, config: EngineConfig, backend: str | None = None,
+                  dt: float | None = None) -> None:
+        """Apply the scene's World settings; command-line flags win over the file."""
+        config.backend = backend or self.spec.backend
+        config.dt = dt or self.spec.time_step
+        config.max_dt = max(config.max_dt, config.dt)
+        config.world = self.spec.world
+
+    def instantiate(self, engine: Engine) -> None:
+        from engine.scene import instantiate
+
+        instantiate(engine, self.spec)
+        # a saved state continues at the time it was saved
+        engine.time = engine.physics.time = self.spec.time
+
+
+def load_content_scene(content: Content, seed: int = 0) -> LoadedScene:
+    from engine.scene import SceneError, load_spec
+
+    try:
+        spec = load_spec(content.scene, np.random.default_rng(seed))
+    except SceneError as exc:
+        raise SceneLoadError(exc.render()) from exc
+    if spec.db is not None:
+        for warning in spec.db.warnings:
+            print(warning.render(spec.db.sources.get(warning.path)), file=sys.stderr)
+    return LoadedScene(spec)
+
+
+def check_path(path: Path) -> int:
+    """Print every diagnostic; 0 when there is no error, 1 with errors, 2 for a bad path."""
+    from engine.scene import check, render_all
+
+    if not path.exists():
+        print(f"colosseum: error: {path}: no such file or folder", file=sys.stderr)
+        return 2
+    diagnostics = check(path)
+    if diagnostics:
+        print(render_all(diagnostics), file=sys.stderr)
+    errors = sum(d.is_error for d in diagnostics)
+    warnings = len(diagnostics) - errors
+    print(f"{path}: {errors} error(s), {warnings} warning(s)", file=sys.stderr)
+    return 1 if errors else 0
+
+
+def format_path(path: Path, write: bool = False) -> int:
+    """Print the canonical form, or rewrite the file in place keeping a ``.bak``."""
+    from engine.scene import SceneError, format_scene, scene_path
+
+    if not path.exists():
+        print(f"colosseum: error: {path}: no such file or folder", file=sys.stderr)
+        return 2
+    try:
+        text = format_scene(path)
+    except SceneError as exc:
+        print(exc.render(), file=sys.stderr)
+        return 1
+    if not write:
+        sys.stdout.write(text)
+        return 0
+    target = scene_path(path)
+    original = target.read_text(encoding="utf-8")
+    if original != text:
+        target.with_name(target.name + ".bak").write_text(original, encoding="utf-8")
+        write_atomic(target, text)
+    return 0
+
+
+def save_state(engine: Engine, path: Path) -> None:
+    """Write the running simulation as a scene file that continues where it stopped."""
+    from engine.scene import write_state
+
+    config_dir = engine.config.content_dir
+    if config_dir is not None and path.resolve() == (config_dir / "main.scene").resolve():
+        raise OSError(f"{path}: refusing to overwrite the scene being run; choose another file")
+    write_atomic(path, write_state(engine))
