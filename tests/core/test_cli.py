@@ -1,0 +1,101 @@
+"""The colosseum command line, end to end in subprocesses."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from engine.scaffold import scaffold
+
+
+def colosseum(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "engine.cli", *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd, timeout=120)
+
+
+@pytest.fixture()
+def sim(tmp_path: Path) -> Path:
+    return scaffold(tmp_path / "sim")
+
+
+def test_new_scaffolds_a_folder_that_runs(sim: Path, tmp_path: Path):
+    stats = tmp_path / "stats.json"
+    result = colosseum("run", sim, "--seconds", "1.5", "--fast", "--stats", stats,
+                       "--backend", "pymunk")
+    assert result.returncode == 0, result.stderr
+    assert "ball z=" in result.stdout  # the scaffold's custom Python system ran
+    data = json.loads(stats.read_text())
+    for key in ("frames", "sim_seconds", "wall_seconds", "real_time_factor", "physics_ms_mean",
+                "physics_ms_p99", "frame_ms_mean", "bodies", "contacts"):
+        assert key in data
+    assert data["frames"] == 150 and data["sim_seconds"] == pytest.approx(1.5)
+    assert data["bodies"] == 3 and data["contacts"] > 0
+    assert data["backend"] == "pymunk"
+
+
+def test_new_refuses_to_overwrite(sim: Path):
+    result = colosseum("new", sim)
+    assert result.returncode == 2
+    assert "already exists" in result.stderr
+
+
+@pytest.mark.parametrize("mode", ["serial", "threaded"])
+def test_run_frames_in_both_modes(sim: Path, tmp_path: Path, mode: str):
+    stats = tmp_path / "s.json"
+    result = colosseum("run", sim, "--frames", "40", "--fast", "--mode", mode, "--stats", stats)
+    assert result.returncode == 0, result.stderr
+    data = json.loads(stats.read_text())
+    assert data["frames"] == 40 and data["mode"] == mode
+
+
+def test_usage_errors_exit_2(tmp_path: Path):
+    assert colosseum("run", "--bogus").returncode == 2
+    missing = colosseum("run", tmp_path / "nowhere")
+    assert missing.returncode == 2 and "nowhere: no such file or folder" in missing.stderr
+    (tmp_path / "empty").mkdir()
+    empty = colosseum("run", tmp_path / "empty")
+    assert empty.returncode == 2 and "has no main.scene" in empty.stderr
+    assert colosseum("run", "--frames", "-3").returncode == 2
+    assert colosseum("frobnicate").returncode == 2
+
+
+def test_a_raising_custom_system_is_named_and_leaves_no_stats(sim: Path, tmp_path: Path):
+    (sim / "systems" / "broken.py").write_text(
+        "from engine import Phase, system\n\n"
+        "@system(Phase.SCRIPT)\n"
+        "def exploder(engine, dt):\n"
+        "    if engine.frame == 10:\n"
+        "        raise ZeroDivisionError('custom failure')\n\n"
+        "def build(engine):\n"
+        "    engine.add_system(exploder)\n")
+    stats = tmp_path / "stats.json"
+    result = colosseum("run", sim, "--frames", "100", "--fast", "--mode", "threaded",
+                       "--stats", stats)
+    assert result.returncode == 1
+    assert "system 'exploder' raised" in result.stderr
+    assert "ZeroDivisionError: custom failure" in result.stderr
+    assert "broken.py" in result.stderr  # the traceback points into the author's file
+    assert not stats.exists()
+    assert list(tmp_path.glob(".stats.json*")) == []
+
+
+def test_a_custom_system_that_fails_to_import_names_its_file(sim: Path):
+    (sim / "systems" / "typo.py").write_text("def build(engine)\n    pass\n")
+    result = colosseum("run", sim, "--frames", "5", "--fast")
+    assert result.returncode == 1
+    assert "typo.py" in result.stderr and "SyntaxError" in result.stderr
+
+
+def test_scene_errors_are_reported_with_places_and_nothing_runs(sim: Path):
+    scene = sim / "main.scene"
+    scene.write_text(scene.read_text().replace('Mass 5', 'Mas 5'))
+    result = colosseum("run", sim, "--frames", "5", "--fast")
+    assert result.returncode == 1
+    assert "main.scene:" in result.stderr and "Mas" in result.stderr
+    assert "did you mean 'Mass'" in result.stderr
+    assert "ball z=" not in result.stdout
+    assert colosseum("check", sim).returncode == 1
