@@ -200,7 +200,7 @@ class Light:
     kind: str = "directional"
     color: tuple[float, float, float] = (1.0, 1.0, 1.0)
     intensity: float = 1.0
-    direction: tuple[float, float, float] = (-0.3, -0.4, -1.0)
+    direction: tuple[float, float, float] = (0.3, 0.5, -1.0)
     cutoff: float = 30.0
     shadows: bool = True
 

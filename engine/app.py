@@ -88,6 +88,7 @@ class Engine:
         self._deferred: list[Callable[[], None]] = []
         self._started = False
         self._closed = False
+        self._quit = False
         backend = backend or create_backend(cfg.backend)
         backend.configure(cfg.world)
         self.physics = PhysicsDriver(backend, cfg.mode, cfg.pacing(), clock=clock)
@@ -218,6 +219,13 @@ class Engine:
             if end_time is not None and not threaded and self.time >= end_time:
                 break
             self.step()
+
+    def request_quit(self) -> None:
+        """Ask the run loop to stop after this frame (a closed window, a script's quit)."""
+        self._quit = True
+
+    def quit_requested(self) -> bool:
+        return self._quit
 
     def close(self) -> None:
         """Stop physics, shut every system down; safe to call twice, also after errors."""

@@ -45,7 +45,7 @@ local bounces = 0
 function onCollision(other, impulse)
   if impulse > 1 then
     bounces = bounces + 1
-    log("bounce " .. bounces .. " off " .. other:id())
+    log("bounce " .. bounces .. " off " .. other:getName())
   end
 end
 """

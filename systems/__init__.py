@@ -15,8 +15,9 @@ if TYPE_CHECKING:
 #: plugin name -> "module:Class"; aliases from the paper's plugin names.
 PLUGINS: dict[str, str] = {
     "physics": "systems.dynamics:DynamicsPlugin",
+    "render": "systems.render:RenderPlugin",
 }
-ALIASES: dict[str, str] = {}
+ALIASES: dict[str, str] = {"osg": "render", "osgsim": "render"}
 
 
 def load_plugin(name: str) -> Any:
@@ -41,5 +42,15 @@ class RegistryPlugin:
         register_all(engine)
 
 
+def wants_render(config: EngineConfig) -> bool:
+    """Draw when someone looks: a window, or a screenshot, recorded frames or a HUD asked for."""
+    opts = config.options
+    return (config.render or not config.headless or bool(opts.get("screenshot"))
+            or bool(opts.get("record_frames")))
+
+
 def default_plugins(config: EngineConfig) -> list[Any]:
-    return [RegistryPlugin(), load_plugin("physics")]
+    plugins = [RegistryPlugin(), load_plugin("physics")]
+    if wants_render(config):
+        plugins.append(load_plugin("render"))
+    return plugins

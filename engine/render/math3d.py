@@ -1,0 +1,154 @@
+"""Matrix math the renderer and its tests share, so a test projects a point with the same
+numbers the GPU uses.
+
+Matrices are float64 numpy ``(4, 4)`` arrays in the usual column-vector convention
+(``clip = P @ V @ M @ p``); they are transposed only when uploaded to GLSL.
+
+Engine camera convention: a camera looks along its local +Y axis with local +Z up, so an
+identity-oriented camera looks toward world +Y with Z up. OpenGL's eye space looks down -Z
+with +Y up; :data:`ENGINE_TO_GL_EYE` converts one to the other.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: Rotation taking camera-local engine axes (forward +Y, up +Z, right +X) to GL eye axes
+#: (forward -Z, up +Y, right +X).
+ENGINE_TO_GL_EYE = np.array(
+    [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+)
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``(..., 3, 3)`` from unit quaternions ``(..., 4)`` in (w, x, y, z)."""
+    q = np.asarray(q, dtype=np.float64)
+    norm = np.linalg.norm(q, axis=-1, keepdims=True)
+    q = q / np.where(norm == 0.0, 1.0, norm)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    out = np.empty(q.shape[:-1] + (3, 3))
+    out[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    out[..., 0, 1] = 2 * (x * y - z * w)
+    out[..., 0, 2] = 2 * (x * z + y * w)
+    out[..., 1, 0] = 2 * (x * y + z * w)
+    out[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    out[..., 1, 2] = 2 * (y * z - x * w)
+    out[..., 2, 0] = 2 * (x * z - y * w)
+    out[..., 2, 1] = 2 * (y * z + x * w)
+    out[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return out
+
+
+def matrix_to_quat(m: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) of a 3x3 rotation matrix."""
+    m = np.asarray(m, dtype=np.float64)
+    trace = m[0, 0] + m[1, 1] + m[2, 2]
+    if trace > 0:
+        s = 2.0 * math.sqrt(trace + 1.0)
+        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
+    elif m[1, 1] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
+    q = np.array(q)
+    return q / np.linalg.norm(q)
+
+
+def compose(position: np.ndarray, orientation: np.ndarray, scale: np.ndarray | None = None
+            ) -> np.ndarray:
+    """Model matrices ``(..., 4, 4)`` = translate · rotate · scale, batched over leading axes."""
+    position = np.asarray(position, dtype=np.float64)
+    rot = quat_to_matrix(orientation)
+    out = np.zeros(rot.shape[:-2] + (4, 4))
+    if scale is not None:
+        rot = rot * np.asarray(scale, dtype=np.float64)[..., None, :]
+    out[..., :3, :3] = rot
+    out[..., :3, 3] = position
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def perspective(fov_y_deg: float, aspect: float, near: float, far: float) -> np.ndarray:
+    """OpenGL perspective projection (vertical field of view in degrees)."""
+    f = 1.0 / math.tan(math.radians(fov_y_deg) / 2.0)
+    return np.array(
+        [
+            [f / aspect, 0.0, 0.0, 0.0],
+            [0.0, f, 0.0, 0.0],
+            [0.0, 0.0, (far + near) / (near - far), 2.0 * far * near / (near - far)],
+            [0.0, 0.0, -1.0, 0.0],
+        ]
+    )
+
+
+def orthographic(left: float, right: float, bottom: float, top: float, near: float, far: float
+                 ) -> np.ndarray:
+    """OpenGL orthographic projection."""
+    return np.array(
+        [
+            [2.0 / (right - left), 0.0, 0.0, -(right + left) / (right - left)],
+            [0.0, 2.0 / (top - bottom), 0.0, -(top + bottom) / (top - bottom)],
+            [0.0, 0.0, -2.0 / (far - near), -(far + near) / (far - near)],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
+
+
+def camera_view(position: np.ndarray, orientation: np.ndarray) -> np.ndarray:
+    """View matrix of an engine camera (forward local +Y, up local +Z) at a world pose."""
+    world = compose(position, orientation)
+    return ENGINE_TO_GL_EYE @ np.linalg.inv(world)
+
+
+def look_at_orientation(eye: np.ndarray, target: np.ndarray,
+                        up: tuple[float, float, float] = (0.0, 0.0, 1.0)) -> np.ndarray:
+    """Orientation (w, x, y, z) of an engine camera at ``eye`` looking at ``target``, Z up."""
+    forward = np.asarray(target, dtype=np.float64) - np.asarray(eye, dtype=np.float64)
+    forward /= np.linalg.norm(forward) or 1.0
+    right = np.cross(forward, up)
+    if np.linalg.norm(right) < 1e-9:  # looking straight up or down: any right will do
+        right = np.cross(forward, (0.0, 1.0, 0.0))
+    right /= np.linalg.norm(right)
+    cam_up = np.cross(right, forward)
+    return matrix_to_quat(np.column_stack([right, forward, cam_up]))
+
+
+def look_at_view(eye: np.ndarray, target: np.ndarray,
+                 up: tuple[float, float, float] = (0.0, 0.0, 1.0)) -> np.ndarray:
+    """View matrix looking from ``eye`` at ``target`` (used for light views)."""
+    return camera_view(np.asarray(eye, dtype=np.float64), look_at_orientation(eye, target, up))
+
+
+def project(point: np.ndarray, view: np.ndarray, proj: np.ndarray, width: int, height: int
+            ) -> tuple[float, float, float]:
+    """Window coordinates ``(x, y_from_top, depth)`` of a world point (pixel centres)."""
+    p = proj @ view @ np.append(np.asarray(point, dtype=np.float64), 1.0)
+    ndc = p[:3] / p[3]
+    x = (ndc[0] * 0.5 + 0.5) * width
+    y = (1.0 - (ndc[1] * 0.5 + 0.5)) * height
+    return float(x), float(y), float(ndc[2])
+
+
+def slerp(q0: np.ndarray, q1: np.ndarray, t: float | np.ndarray) -> np.ndarray:
+    """Spherical interpolation between batches of unit quaternions ``(..., 4)``."""
+    q0 = np.asarray(q0, dtype=np.float64)
+    q1 = np.asarray(q1, dtype=np.float64).copy()
+    t = np.asarray(t, dtype=np.float64)[..., None] if np.ndim(t) else float(t)
+    dot = np.sum(q0 * q1, axis=-1, keepdims=True)
+    q1 = np.where(dot < 0.0, -q1, q1)
+    dot = np.abs(dot)
+    theta = np.arccos(np.clip(dot, -1.0, 1.0))
+    sin_theta = np.sin(theta)
+    near = sin_theta < 1e-6
+    safe = np.where(near, 1.0, sin_theta)
+    w0 = np.where(near, 1.0 - t, np.sin((1.0 - t) * theta) / safe)
+    w1 = np.where(near, t, np.sin(t * theta) / safe)
+    out = w0 * q0 + w1 * q1
+    return out / np.linalg.norm(out, axis=-1, keepdims=True)

@@ -1,0 +1,316 @@
+"""The render system: draws every entity with a Visual and a Transform, once per frame, in the
+RENDER phase; lights from Light components, the view from the active Camera.
+
+Run options come from ``engine.config`` (``headless``, and ``options``: ``screenshot``,
+``record_frames``, ``record_every``, ``hud``, ``interpolate``, ``size``), which the CLI fills
+from ``--headless --screenshot --record-frames --record-every --hud --interpolate --size``.
+Scripts reach the renderer through the :class:`RenderSystem` resource
+(``engine.resource(RenderSystem).set_uniform("toon", "DiffuseColor", (1, 0, 0))``).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from components import Camera, Light, Transform, Visual
+from engine.events import KeyEvent
+from engine.render.camera import CameraView, camera_from_component
+from engine.render.context import create_target
+from engine.render.hud import hud_line
+from engine.render.interpolate import PoseInterpolator
+from engine.render.lights import light_from_component
+from engine.render.postprocess import PostProcessing
+from engine.render.renderer import Renderer
+from engine.render.shaders import (
+    FragmentShader,
+    ShaderLibrary,
+    ShaderProgram,
+    ShaderState,
+    Uniform,
+    UniformValue,
+    VertexShader,
+)
+from engine.system import Phase, System
+
+if TYPE_CHECKING:
+    from engine.app import Engine
+
+log = logging.getLogger("colosseum.render")
+
+#: Key that shows and hides the HUD line.
+HUD_KEY = "F1"
+
+
+@dataclass(slots=True)
+class RenderOptions:
+    """How the render system runs; :meth:`from_config` reads the CLI's choices."""
+
+    backend: str = "auto"  # auto | headless | window
+    size: tuple[int, int] = (640, 480)
+    screenshot: Path | None = None
+    record_frames: Path | None = None
+    record_every: int = 1
+    hud: bool = False
+    interpolate: bool = False
+    shadow_size: int = 1024
+    title: str = "Colosseum"
+
+    @staticmethod
+    def from_config(config: Any) -> RenderOptions:
+        opts = dict(getattr(config, "options", {}) or {})
+        size = opts.get("size") or (640, 480)
+        if isinstance(size, str):
+            w, _, h = size.lower().partition("x")
+            size = (int(w), int(h))
+        backend = "headless" if getattr(config, "headless", True) else opts.get("backend", "auto")
+        shot, frames = opts.get("screenshot"), opts.get("record_frames")
+        return RenderOptions(
+            backend=backend, size=(int(size[0]), int(size[1])),
+            screenshot=Path(shot) if shot else None,
+            record_frames=Path(frames) if frames else None,
+            record_every=int(opts.get("record_every") or 1), hud=bool(opts.get("hud")),
+            interpolate=bool(opts.get("interpolate")))
+
+
+def _signature(visual: Visual) -> tuple:
+    """What, when changed, makes the renderer rebuild an entity's parts."""
+    return (visual.model, visual.texture, visual.shader_state, visual.shadower, visual.shadowed,
+            visual.visible, tuple(visual.color), tuple(visual.scale), len(visual.shapes))
+
+
+def library_from_scene_spec(spec: Any) -> ShaderLibrary:
+    """A ShaderLibrary from the scene factory's ``shader_programs``/``shader_states`` (which
+    hold file paths per program rather than shader IDs)."""
+    lib = ShaderLibrary()
+    for pid, prog in getattr(spec, "shader_programs", {}).items():
+        vid = fid = None
+        if prog.vertex:
+            vid = f"{pid}.vertex"
+            lib.vertex_shaders.append(VertexShader(vid, file=str(prog.vertex)))
+        if prog.fragment:
+            fid = f"{pid}.fragment"
+            lib.fragment_shaders.append(FragmentShader(fid, file=str(prog.fragment)))
+        lib.programs.append(ShaderProgram(pid, vid, fid, enable=bool(prog.enabled)))
+    for sid, state in getattr(spec, "shader_states", {}).items():
+        lib.states.append(ShaderState(sid, state.program,
+                                      [Uniform(k, v) for k, v in state.uniforms.items()]))
+    return lib
+
+
+class RenderSystem(System):
+    """Keeps a :class:`Renderer` in step with the world and draws a frame per engine frame."""
+
+    phase = Phase.RENDER
+    reads = (Visual, Transform, Camera, Light)
+    writes = ()
+
+    def __init__(self, options: RenderOptions | None = None) -> None:
+        self.options = options
+        self.renderer: Renderer | None = None
+        self._target: Any = None
+        self._signatures: dict[int, tuple] = {}
+        self._visuals: dict[int, Visual] = {}
+        self._keys = np.zeros(0, np.int64)
+        self._rows_cache: tuple[int, np.ndarray] | None = None
+        self._interpolator = PoseInterpolator()
+        self._last_wall: float | None = None
+        self._fps = 0.0
+        self.frames_written = 0
+
+    # -- API for scripts and tools --------------------------------------------
+    def set_uniform(self, state_id: str, name: str, value: UniformValue) -> None:
+        """Change a shader state's uniform (Lua's ``setUniform``); errors say what exists."""
+        self._require().set_uniform(state_id, name, value)
+
+    def enable_post(self, name: str, enabled: bool = True) -> None:
+        self._require().enable_post(name, enabled)
+
+    def set_post_uniform(self, name: str, uniform: str, value: UniformValue) -> None:
+        self._require().set_post_uniform(name, uniform, value)
+
+    def toggle_hud(self) -> None:
+        self._require().hud.toggle()
+
+    def screenshot(self, path: str | Path) -> Path:
+        return self._require().screenshot(path)
+
+    @property
+    def closing(self) -> bool:
+        """True when the user closed the window (the run should stop)."""
+        return bool(self._target is not None and self._target.is_closing)
+
+    def _require(self) -> Renderer:
+        if self.renderer is None:
+            raise RuntimeError("the renderer is not running yet (it starts with the engine)")
+        return self.renderer
+
+    # -- lifecycle ------------------------------------------------------------
+    def setup(self, engine: Engine) -> None:
+        if self.options is None:
+            self.options = RenderOptions.from_config(engine.config)
+        opts = self.options
+        self._target = create_target(opts.backend, opts.size, opts.title)
+        root = engine.config.content_dir or Path(".")
+        self.renderer = Renderer(self._target, root=root, shadow_size=opts.shadow_size)
+        self.renderer.hud.enabled = opts.hud
+        log.info("rendering with %s (%s) at %dx%d", self._target.kind,
+                 self._target.renderer_name, *self._target.size)
+        library = engine.try_resource(ShaderLibrary) or self._scene_shaders(engine)
+        if library is not None:
+            self.renderer.load_shaders(library)
+        post = engine.try_resource(PostProcessing)
+        if post is not None:
+            self.renderer.set_post_passes(post.passes)
+        self._target.key_callback = lambda key, pressed: engine.events.emit(
+            KeyEvent(key, pressed))
+        engine.events.subscribe(KeyEvent, self._on_key)
+        engine.world.on_remove(Visual, lambda entity, _: self._forget(entity))
+        engine.insert_resource(self)
+        engine.stat_sources["render"] = self._stats
+
+    @staticmethod
+    def _scene_shaders(engine: Engine) -> ShaderLibrary | None:
+        try:
+            from engine.scene.factory import SceneIds
+        except ImportError:
+            return None
+        ids = engine.try_resource(SceneIds)
+        return None if ids is None else library_from_scene_spec(ids.spec)
+
+    def _on_key(self, event: KeyEvent) -> None:
+        if event.key == HUD_KEY and event.pressed and self.renderer is not None:
+            self.renderer.hud.toggle()
+
+    def _forget(self, entity: int) -> None:
+        self._signatures.pop(entity, None)
+        self._visuals.pop(entity, None)
+        if self.renderer is not None:
+            self.renderer.remove(entity)
+
+    def _stats(self) -> dict[str, Any]:
+        r = self.renderer
+        if r is None:
+            return {}
+        return {"backend": self._target.kind, "gl_renderer": self._target.renderer_name,
+                "draw_calls": r.stats.draw_calls, "instances": r.stats.instances,
+                "render_ms_last": r.stats.frame_ms, "fps": self._fps,
+                "frames_written": self.frames_written, "errors": list(r.errors)}
+
+    def run(self, engine: Engine, dt: float) -> None:
+        renderer = self._require()
+        if self.closing:
+            engine.request_quit()
+        world = engine.world
+        self._sync_visuals(engine)
+        self._sync_poses(engine)
+        renderer.camera = self._camera(engine)
+        lights = []
+        for entity, (light,) in world.get_components(Light):
+            row = world.poses.row_of.get(entity)
+            pos = None if row is None else world.poses.position[row]
+            quat = None if row is None else world.poses.orientation[row]
+            lights.append(light_from_component(light, pos, quat))
+        renderer.lights = lights
+        now = time.perf_counter()
+        if self._last_wall is not None and now > self._last_wall:
+            inst = 1.0 / (now - self._last_wall)
+            self._fps = inst if self._fps == 0.0 else 0.9 * self._fps + 0.1 * inst
+        self._last_wall = now
+        if renderer.hud.enabled:
+            steps = engine.physics.controller.step_costs
+            renderer.hud.text = hud_line(self._fps, steps.mean() * 1e3,
+                                         engine.controller.real_time_factor)
+        renderer.render(dt)
+        opts = self.options
+        if opts is not None and opts.record_frames is not None \
+                and engine.frame % max(opts.record_every, 1) == 0:
+            renderer.screenshot(opts.record_frames / f"frame_{engine.frame:06d}.png")
+            self.frames_written += 1
+
+    def _sync_visuals(self, engine: Engine) -> None:
+        renderer = self._require()
+        world = engine.world
+        seen = set()
+        changed = False
+        for entity, visual in world.get_component(Visual):
+            seen.add(entity)
+            sig = _signature(visual)
+            if self._visuals.get(entity) is not visual or self._signatures.get(entity) != sig:
+                row = world.poses.row_of.get(entity)
+                pos = (0.0, 0.0, 0.0) if row is None else world.poses.position[row]
+                quat = (1.0, 0.0, 0.0, 0.0) if row is None else world.poses.orientation[row]
+                renderer.add(entity, visual, pos, quat)
+                self._visuals[entity] = visual
+                self._signatures[entity] = sig
+                changed = True
+        for entity in [e for e in self._visuals if e not in seen]:
+            self._forget(entity)
+            changed = True
+        if changed:
+            self._keys = np.fromiter(self._visuals, dtype=np.int64, count=len(self._visuals))
+            self._rows_cache = None
+
+    def _sync_poses(self, engine: Engine) -> None:
+        renderer = self._require()
+        poses = engine.world.poses
+        if self._rows_cache is None or self._rows_cache[0] != poses.version:
+            self._rows_cache = (poses.version, poses.rows(self._keys))
+        rows = self._rows_cache[1]
+        has = rows >= 0
+        if has.any():
+            renderer.set_poses(self._keys[has], poses.position[rows[has]],
+                               poses.orientation[rows[has]])
+        opts = self.options
+        if opts is not None and opts.interpolate and engine.config.mode == "threaded":
+            self._interpolator.push(engine.physics.snapshot)
+            interpolated = self._interpolator.poses()
+            if interpolated is not None and len(interpolated[0]):
+                renderer.set_poses(*interpolated)
+
+    def _camera(self, engine: Engine) -> CameraView:
+        world = engine.world
+        poses = world.poses
+        for entity, (camera,) in world.get_components(Camera):
+            if not camera.active:
+                continue
+            row = poses.row_of.get(entity)
+            pos = poses.position[row] if row is not None else np.zeros(3)
+            quat = poses.orientation[row] if row is not None else np.array([1.0, 0, 0, 0])
+            target = None
+            if camera.follow is not None and camera.follow in poses.row_of:
+                t_row = poses.row_of[camera.follow]
+                target = (poses.position[t_row], poses.orientation[t_row])
+            return camera_from_component(camera, pos, quat, target)
+        return CameraView()
+
+    def shutdown(self, engine: Engine) -> None:
+        renderer = self.renderer
+        if renderer is None:
+            return
+        opts = self.options
+        try:
+            if opts is not None and opts.screenshot is not None:
+                path = renderer.screenshot(opts.screenshot)
+                log.info("screenshot written to %s", path)
+        finally:
+            renderer.release()
+            self._target.close()
+            self.renderer = None
+
+
+class RenderPlugin:
+    """Adds the render system (``requestPlugin("osg")`` in the paper's Lua)."""
+
+    name = "render"
+
+    def __init__(self, options: RenderOptions | None = None) -> None:
+        self.options = options
+
+    def build(self, engine: Engine) -> None:
+        engine.add_system(RenderSystem(self.options))
