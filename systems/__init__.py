@@ -16,8 +16,10 @@ if TYPE_CHECKING:
 PLUGINS: dict[str, str] = {
     "physics": "systems.dynamics:DynamicsPlugin",
     "render": "systems.render:RenderPlugin",
+    "sound": "systems.sound:SoundPlugin",
 }
-ALIASES: dict[str, str] = {"osg": "render", "osgsim": "render"}
+ALIASES: dict[str, str] = {"osg": "render", "osgsim": "render", "openalpp": "sound",
+                           "openal": "sound"}
 
 
 def load_plugin(name: str) -> Any:
@@ -50,7 +52,7 @@ def wants_render(config: EngineConfig) -> bool:
 
 
 def default_plugins(config: EngineConfig) -> list[Any]:
-    plugins = [RegistryPlugin(), load_plugin("physics")]
+    plugins = [RegistryPlugin(), load_plugin("physics"), load_plugin("sound")]
     if wants_render(config):
         plugins.append(load_plugin("render"))
     return plugins
