@@ -103,4 +103,4 @@ def save_state(engine: Engine, path: Path) -> None:
     config_dir = engine.config.content_dir
     if config_dir is not None and path.resolve() == (config_dir / "main.scene").resolve():
         raise OSError(f"{path}: refusing to overwrite the scene being run; choose another file")
-    write_atomic(path, write_state(engine))
+    write_atomic(path, write_state(engine, path))

@@ -1,0 +1,65 @@
+"""The scene description format: text -> SceneDB -> checked -> entity specs -> entities.
+
+Typical use::
+
+    db = load_scene("content/demo", rng)          # parse + schema check (SceneError)
+    spec = build_specs(db, "content/demo")        # components per object (pure)
+    ids = instantiate(engine, spec)               # entities; object ID -> entity id
+
+See :mod:`engine.scene.schema` for every key, its default and the units.
+"""
+
+from engine.scene.bench import bench_scene, generate_scene
+from engine.scene.db import Block, Entry, SceneDB, Value
+from engine.scene.diagnostics import Diagnostic, Loc, SceneError, render_all
+from engine.scene.factory import (
+    EntitySpec,
+    JointSpec,
+    SceneIds,
+    SceneSpec,
+    build_specs,
+    instantiate,
+)
+from engine.scene.loader import (
+    check,
+    format_scene,
+    load_scene,
+    load_spec,
+    scene_path,
+    spec_from_text,
+    validated,
+)
+from engine.scene.parser import Limits, parse_file, parse_text
+from engine.scene.snapshot import write_state
+from engine.scene.writer import write
+
+__all__ = [
+    "Block",
+    "Diagnostic",
+    "Entry",
+    "EntitySpec",
+    "JointSpec",
+    "Limits",
+    "Loc",
+    "SceneDB",
+    "SceneError",
+    "SceneIds",
+    "SceneSpec",
+    "Value",
+    "bench_scene",
+    "build_specs",
+    "check",
+    "format_scene",
+    "generate_scene",
+    "instantiate",
+    "load_scene",
+    "load_spec",
+    "parse_file",
+    "parse_text",
+    "render_all",
+    "scene_path",
+    "spec_from_text",
+    "validated",
+    "write",
+    "write_state",
+]

@@ -1,0 +1,528 @@
+"""Factory: SceneDB -> entity specs -> entities. The only place descriptions become entities.
+
+:func:`build_specs` is pure: it reads a validated SceneDB (defaults filled from
+the schema) and returns a :class:`SceneSpec` — per object the list of component
+instances, plus joints (bodies named by object ID), materials, material pairs,
+shaders, world settings. Any problem (for example a model trimesh cannot read)
+raises :class:`SceneError` before anything exists, so a bad file never
+half-loads a world. :func:`instantiate` then creates the entities and resolves
+object IDs to entity ids; a spec is consumed by instantiating it once.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from components import (
+    Camera,
+    Controller,
+    Hand,
+    Joint,
+    Light,
+    MaterialProps,
+    Name,
+    Physical,
+    Script,
+    Shape,
+    Sound,
+    Transform,
+    Visual,
+)
+from engine.physics.backend import MaterialPair, WorldSettings
+from engine.scene import schema as sc
+from engine.scene.db import Block, SceneDB, Value
+from engine.scene.diagnostics import Loc, Reporter
+from engine.scene.parser import paused_gc
+from engine.scene.rotation import euler_to_quat, rotate
+
+if TYPE_CHECKING:
+    from engine.app import Engine
+
+JOINT_KINDS = {"Hinge": "hinge", "MotorizedHinge": "motorized_hinge", "Ball": "ball",
+               "Slider": "slider", "Universal": "universal", "Hinge2": "hinge2",
+               "Fixed": "fixed", "SixDOF": "six_dof"}
+DEFAULT_SIZES = {"sphere": (1.0,), "box": (1.0, 1.0, 1.0), "capsule": (0.5, 1.0),
+                 "cylinder": (0.5, 1.0), "plane": ()}
+
+
+@dataclass(slots=True)
+class EntitySpec:
+    id: str
+    components: list[Any]
+    loc: Loc
+
+
+@dataclass(slots=True)
+class JointSpec:
+    """A joint and the IDs of its bodies; ``local_*`` are anchor and axes in body A's frame
+    (what a saved state needs to re-create the joint where the bodies are then)."""
+
+    id: str
+    joint: Joint
+    bodies: tuple[str, str | None]
+    loc: Loc
+    local_anchor: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    local_axes: tuple[tuple[float, float, float], tuple[float, float, float]] = (
+        (0.0, 0.0, 1.0), (0.0, 1.0, 0.0))
+
+
+@dataclass(slots=True)
+class ShaderStateSpec:
+    program: str
+    uniforms: dict[str, float | tuple[float, ...]]
+
+
+@dataclass(slots=True)
+class ShaderProgramSpec:
+    vertex: str | None  # file path of the vertex shader
+    fragment: str | None
+    enabled: bool
+
+
+@dataclass(slots=True)
+class SceneSpec:
+    """Everything a scene file declares, ready to instantiate."""
+
+    entities: list[EntitySpec] = field(default_factory=list)
+    joints: list[JointSpec] = field(default_factory=list)
+    materials: dict[str, MaterialProps] = field(default_factory=dict)
+    material_pairs: list[MaterialPair] = field(default_factory=list)
+    shader_programs: dict[str, ShaderProgramSpec] = field(default_factory=dict)
+    shader_states: dict[str, ShaderStateSpec] = field(default_factory=dict)
+    world: WorldSettings = field(default_factory=WorldSettings)
+    time_step: float = 0.01
+    backend: str = "ode"
+    time: float = 0.0
+    camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
+    content_dir: Path | None = None
+    db: SceneDB | None = None
+
+
+@dataclass(slots=True)
+class SceneIds:
+    """Resource left by :func:`instantiate`: object ID <-> entity id, and the spec."""
+
+    entities: dict[str, int]
+    joints: dict[str, int]
+    spec: SceneSpec
+
+
+_DEFAULTS = {name: {k: f.default for k, f in fields.items()}
+             for name, fields in sc.SCHEMAS.items()}
+
+
+class _Reader(dict):
+    """A block's values as plain Python with the schema's defaults filled in.
+
+    ``r("Key")`` is the value (or default); ``r.has("Key")`` whether the author wrote it.
+    """
+
+    __call__ = dict.__getitem__
+
+    def __init__(self, block: Block | None, schema: str):
+        last: dict[str, Value] = {} if block is None else {e.key: e.value for e in block}
+        super().__init__(_DEFAULTS[schema])
+        for k, v in last.items():
+            self[k] = v.py()
+        self.block = block
+        self.last = last
+
+    def has(self, key: str) -> bool:
+        return key in self.last
+
+    def value(self, key: str) -> Value | None:
+        return self.last.get(key)
+
+    def blocks(self, key: str) -> list[Block]:
+        return [] if self.block is None else self.block.blocks(key)
+
+
+def _floats(t: Any) -> tuple[float, ...]:
+    return tuple(float(x) for x in t)
+
+
+def build_specs(db: SceneDB, content_dir: str | Path | None = None) -> SceneSpec:
+    """SceneDB -> SceneSpec. Raises SceneError (with places) if a model cannot be used."""
+    folder = Path(content_dir) if content_dir is not None else Path(db.path).parent
+    b = _Builder(folder, Reporter(sources=dict(db.sources)))
+    with paused_gc():
+        spec = b.build(db)
+    b.report.raise_if_errors()
+    spec.db = db
+    spec.content_dir = folder
+    return spec
+
+
+class _Builder:
+    def __init__(self, folder: Path, report: Reporter):
+        self.folder = folder
+        self.report = report
+        self.meshes: dict[tuple[str, tuple[float, ...]], Any] = {}
+        self.materials: dict[str, MaterialProps] = {"default": MaterialProps()}
+        self.dense_materials: set[str] = set()
+        self.poses: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
+        self.physical_ids: set[str] = set()
+
+    def build(self, db: SceneDB) -> SceneSpec:
+        spec = SceneSpec()
+        root = db.root
+        for blk in root.blocks("Material"):
+            r = _Reader(blk, "Material")
+            name = str(r("ID"))
+            self.materials[name] = MaterialProps(
+                name=name, friction=float(r("Friction")), bounce=float(r("Bounce")),
+                bounce_velocity=float(r("BounceVelocity")), softness=float(r("Softness")),
+                density=float(r("Density")), contact_sound=r("ContactSound"))
+            if r.has("Density"):
+                self.dense_materials.add(name)
+        spec.materials = self.materials
+        for i, blk in enumerate(root.blocks("Object")):
+            spec.entities.append(self.object(blk, i))
+        for i, blk in enumerate(root.blocks("Joint")):
+            js = self.joint(blk, i)
+            if js is not None:
+                spec.joints.append(js)
+        self.shaders(root, spec)
+        self.world(root, spec)
+        self.scene_entities(root, spec)
+        return spec
+
+    # -- objects -----------------------------------------------------------
+    def object(self, blk: Block, index: int) -> EntitySpec:
+        r = _Reader(blk, "Object")
+        oid = r("ID") or f"object{index}"
+        position = _floats(r("Position"))
+        quat = _floats(r("Quaternion")) if r.has("Quaternion") else euler_to_quat(
+            r("Orientation"))
+        norm = math.sqrt(sum(q * q for q in quat))
+        if norm == 0.0:
+            self.report.error(r.value("Quaternion").loc, "Quaternion must not be all zeros")
+            norm = 1.0
+        if abs(norm - 1.0) > 1e-12:  # keep a saved state's quaternion bit-exact
+            quat = tuple(q / norm for q in quat)
+        angular = tuple(math.radians(a) for a in r("AngularVelocity"))
+        comps: list[Any] = [Name(oid), Transform(position, quat, r("Velocity"), angular)]
+        size = r("Size")
+        vis_blk, phys_blk = r.value("VisualAttributes"), r.value("PhysicalAttributes")
+        bare = vis_blk is None and phys_blk is None
+        vis = _Reader(vis_blk.data if vis_blk else None, "Visual")
+        phys = _Reader(phys_blk.data if phys_blk else None, "Physical")
+        visual_shapes, model, scale = self.visual_geometry(vis, size)
+        if vis_blk is not None or bare:
+            if not visual_shapes and model is None:
+                visual_shapes = self.physical_shapes(phys, size, (), None, (1.0,) * 3,
+                                                     position, quat)[0]
+            comps.append(Visual(
+                shapes=visual_shapes, model=model, scale=scale,
+                color=_color(vis("Color")), texture=vis("Texture"),
+                shader_state=vis("ShaderState"), shadower=bool(vis("Shadower")),
+                shadowed=bool(vis("Shadowed")), visible=bool(vis("Visible"))))
+        if phys_blk is not None or bare:
+            comps.append(self.physical(r, phys, size, visual_shapes, model, scale, position,
+                                       quat))
+            self.physical_ids.add(oid)
+        self.poses[oid] = (position, quat)
+        if r.has("Sound"):
+            comps.append(_sound(_Reader(r.value("Sound").data, "Sound"), oid))
+        if r.has("Script"):
+            comps.append(Script(file=r("Script")))
+        if r.has("Hand"):
+            h = _Reader(r.value("Hand").data, "Hand")
+            comps.append(Hand(tracker=h("Tracker"), target_position=position,
+                              target_orientation=quat, max_force=float(h("MaxForce")),
+                              max_torque=float(h("MaxTorque")),
+                              deviation_distance=float(h("DeviationDistance"))))
+        if r.has("Controller"):
+            comps.append(_controller(_Reader(r.value("Controller").data, "Controller")))
+        return EntitySpec(oid, comps, blk.loc)
+
+    def visual_geometry(self, vis: _Reader, size: Any
+                        ) -> tuple[list[Shape], str | None, tuple[float, float, float]]:
+        shapes: list[Shape] = []
+        model, scale = None, (1.0, 1.0, 1.0)
+        for g in vis.blocks("Geometry"):
+            gr = _Reader(g, "Geometry")
+            if gr.has("File"):
+                if model is None:
+                    model, scale = gr("File"), _floats(gr("Scale"))
+            elif gr.has("Primitive") and gr("Primitive") != "plane":
+                shapes.append(_primitive(gr, size))
+        return shapes, model, scale
+
+    def physical(self, r: _Reader, phys: _Reader, size: Any, visual_shapes: list[Shape],
+                 model: str | None, scale: tuple[float, ...], position: tuple[float, ...],
+                 quat: tuple[float, ...]) -> Physical:
+        shapes, has_plane = self.physical_shapes(phys, size, visual_shapes, model, scale,
+                                                 position, quat)
+        mat_name = str(phys("Material"))
+        material = self.materials.get(mat_name) or MaterialProps(name=mat_name)
+        if phys.has("Density"):
+            material = MaterialProps(**{**_fields(material), "density": float(phys("Density"))})
+        if phys.has("Mass"):
+            mass: float | None = float(phys("Mass"))
+        elif phys.has("Density") or mat_name in self.dense_materials:
+            mass = None
+        else:
+            mass = 1.0
+        kind = "dynamic"
+        if has_plane or not r("Dynamic"):
+            kind = "static"
+        elif r("Kinematic"):
+            kind = "kinematic"
+        return Physical(kind=kind, mass=mass, shapes=shapes, material=material,
+                        linear_damping=float(phys("LinearDamping")),
+                        angular_damping=float(phys("AngularDamping")),
+                        can_sleep=bool(phys("CanSleep")), category=int(phys("Category")),
+                        mask=int(phys("Mask")), gravity=bool(phys("Gravity")))
+
+    def physical_shapes(self, phys: _Reader, size: Any, visual_shapes: Any, model: str | None,
+                        scale: tuple[float, ...], position: tuple[float, ...],
+                        quat: tuple[float, ...]) -> tuple[list[Shape], bool]:
+        shapes: list[Shape] = []
+        has_plane = False
+        for g in phys.blocks("Geometry"):
+            gr = _Reader(g, "Geometry")
+            if gr.has("File") or gr.has("ParseMethod"):
+                file_v = gr.value("File")
+                file, fscale = (gr("File"), _floats(gr("Scale"))) if file_v else (model, scale)
+                loc = file_v.loc if file_v else g.loc
+                if file is None:
+                    self.report.error(loc, "ParseMethod needs a model: give File here or in "
+                                           "VisualAttributes Geometry")
+                    continue
+                shape = self.mesh_shape(file, fscale, gr("ParseMethod") or "ConvexHull", loc)
+                if shape is not None:
+                    shape.offset = _floats(gr("Offset"))
+                    shape.rotation = euler_to_quat(gr("Orientation"))
+                    shapes.append(shape)
+            elif gr("Primitive") == "plane":
+                has_plane = True
+                normal = rotate(quat, (0.0, 0.0, 1.0))
+                d = sum(n * p for n, p in zip(normal, position, strict=True))
+                shapes.append(Shape("plane", (*normal, d)))
+            else:
+                shapes.append(_primitive(gr, size))
+        if not shapes:
+            if visual_shapes:
+                shapes = [_copy_shape(s) for s in visual_shapes]
+            elif model is not None:
+                shape = self.mesh_shape(model, scale, "Box", phys.block.loc if phys.block
+                                        else Loc("", 0, 0))
+                shapes = [shape] if shape is not None else []
+            else:
+                shapes = [_primitive(_Reader(None, "Geometry"), size)]
+        return shapes, has_plane
+
+    def mesh_shape(self, file: str, scale: tuple[float, ...], method: str,
+                   loc: Loc) -> Shape | None:
+        mesh = self.load_mesh(file, scale, loc)
+        if mesh is None:
+            return None
+        if method == "TriangleMesh":
+            return Shape("mesh", (), vertices=np.asarray(mesh.vertices, np.float64),
+                         faces=np.asarray(mesh.faces, np.int32))
+        if method == "ConvexHull":
+            hull = mesh.convex_hull
+            return Shape("hull", (), vertices=np.asarray(hull.vertices, np.float64),
+                         faces=np.asarray(hull.faces, np.int32))
+        lo, hi = mesh.bounds
+        center = tuple(float(c) for c in (lo + hi) / 2)
+        if method == "Box":
+            return Shape("box", tuple(float(e) for e in hi - lo), offset=center)
+        radius = float(np.linalg.norm(np.asarray(mesh.vertices) - (lo + hi) / 2, axis=1).max())
+        return Shape("sphere", (radius,), offset=center)
+
+    def load_mesh(self, file: str, scale: tuple[float, ...], loc: Loc) -> Any:
+        key = (file, scale)
+        if key in self.meshes:
+            return self.meshes[key]
+        import trimesh
+
+        path = self.folder / file
+        mesh = None
+        try:
+            loaded = trimesh.load(str(path), force="mesh")
+            if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+                raise ValueError("no triangles found")
+            mesh = loaded.copy()
+            mesh.apply_scale(np.asarray(scale, np.float64))
+        except Exception as exc:  # trimesh raises many types for unreadable files
+            self.report.error(loc, f"cannot load model \"{file}\" ({path}): {exc}")
+        self.meshes[key] = mesh
+        return mesh
+
+    # -- joints ------------------------------------------------------------
+    def joint(self, blk: Block, index: int) -> JointSpec | None:
+        r = _Reader(blk, "Joint")
+        jid = r("ID") or f"joint{index}"
+        kind = JOINT_KINDS[r("Type")]
+        bodies = r("Bodies")
+        for name in bodies:
+            if name not in self.physical_ids:
+                self.report.error(r.value("Bodies").loc,
+                                  f"joint body '{name}' has no PhysicalAttributes")
+                return None
+        a, b = bodies[0], bodies[1] if len(bodies) > 1 else None
+        linear = kind == "slider"
+        conv = (lambda x: x) if linear else math.radians
+        pos_a, quat_a = self.poses[a]
+        anchor = _floats(r("Anchor")) if r.has("Anchor") else pos_a
+        low, high = r("Low"), r("High")
+        joint = Joint(kind=kind, anchor=anchor, axis=_floats(r("Axis")),
+                      axis2=_floats(r("Axis2")),
+                      low=None if low is None else conv(low),
+                      high=None if high is None else conv(high),
+                      motor_velocity=conv(r("MotorVelocity")),
+                      motor_max_force=float(r("MotorMaxForce")), id=jid)
+        inv = (quat_a[0], -quat_a[1], -quat_a[2], -quat_a[3])
+        local = rotate(inv, tuple(x - p for x, p in zip(anchor, pos_a, strict=True)))
+        axes = (rotate(inv, joint.axis), rotate(inv, joint.axis2))
+        return JointSpec(jid, joint, (a, b), blk.loc, local, axes)
+
+    # -- shaders, world, scene-level entities ---------------------------------
+    def shaders(self, root: Block, spec: SceneSpec) -> None:
+        files = {}
+        for key in ("VertexShader", "FragmentShader"):
+            files[key] = {str(_Reader(b, key)("ID")): _Reader(b, key)("File")
+                          for b in root.blocks(key)}
+        for b in root.blocks("ShaderProgram"):
+            r = _Reader(b, "ShaderProgram")
+            spec.shader_programs[r("ID")] = ShaderProgramSpec(
+                files["VertexShader"].get(r("VertexShader")),
+                files["FragmentShader"].get(r("FragmentShader")), bool(r("Enable")))
+        for b in root.blocks("ShaderState"):
+            r = _Reader(b, "ShaderState")
+            uniforms = {}
+            for u in r.blocks("Uniform"):
+                ur = _Reader(u, "Uniform")
+                val = ur("Value")
+                uniforms[ur("ID")] = _floats(val) if isinstance(val, tuple) else float(val)
+            spec.shader_states[r("ID")] = ShaderStateSpec(r("ShaderProgram"), uniforms)
+
+    def world(self, root: Block, spec: SceneSpec) -> None:
+        blk = root.value("World")
+        w = _Reader(blk.data if blk else None, "World")
+        pairs = []
+        for b in root.blocks("MaterialPair"):
+            p = _Reader(b, "MaterialPair")
+            pairs.append(MaterialPair(str(p("Material1")), str(p("Material2")),
+                                      _opt(p("Friction")), _opt(p("Bounce")),
+                                      _opt(p("Softness")), bool(p("Collide"))))
+        spec.world = WorldSettings(gravity=_floats(w("Gravity")), erp=float(w("ERP")),
+                                   cfm=float(w("CFM")), iterations=int(w("Iterations")),
+                                   max_contacts=int(w("MaxContacts")),
+                                   auto_sleep=bool(w("AutoSleep")), material_pairs=pairs)
+        spec.material_pairs = pairs
+        spec.time_step = float(w("TimeStep"))
+        spec.backend = w("Backend")
+        spec.time = float(w("Time"))
+
+    def scene_entities(self, root: Block, spec: SceneSpec) -> None:
+        for i, b in enumerate(root.blocks("Camera")):
+            r = _Reader(b, "Camera")
+            cid = r("ID") or f"camera{i}"
+            if r.has("Follow"):
+                spec.camera_follow[cid] = r("Follow")
+            cam = Camera(fov=float(r("Fov")), near=float(r("Near")), far=float(r("Far")),
+                         active=bool(r("Active")), offset=_floats(r("Offset")),
+                         look_at=_floats(r("LookAt")),
+                         eye_separation=float(r("EyeSeparation")))
+            spec.entities.append(EntitySpec(cid, [Name(cid), Transform(r("Position")), cam],
+                                            b.loc))
+        for i, b in enumerate(root.blocks("Light")):
+            r = _Reader(b, "Light")
+            lid = r("ID") or f"light{i}"
+            light = Light(kind=r("Type"), color=_floats(r("Color")),
+                          intensity=float(r("Intensity")), direction=_floats(r("Direction")),
+                          cutoff=float(r("Cutoff")), shadows=bool(r("Shadows")))
+            spec.entities.append(EntitySpec(lid, [Name(lid), Transform(r("Position")), light],
+                                            b.loc))
+        for i, b in enumerate(root.blocks("Sound")):
+            r = _Reader(b, "Sound")
+            sid = r("ID") or f"sound{i}"
+            spec.entities.append(EntitySpec(sid, [Name(sid), Transform(r("Position")),
+                                                  _sound(r, sid)], b.loc))
+        for i, b in enumerate(root.blocks("Controller")):
+            r = _Reader(b, "Controller")
+            cid = r("ID") or f"controller{i}"
+            spec.entities.append(EntitySpec(cid, [Name(cid), _controller(r)], b.loc))
+        for i, e in enumerate(root.get_all("Script")):
+            sid = f"script{i}"
+            spec.entities.append(EntitySpec(sid, [Name(sid), Script(file=e.value.data)],
+                                            e.loc))
+
+
+def _opt(v: Any) -> float | None:
+    return None if v is None else float(v)
+
+
+def _fields(m: MaterialProps) -> dict[str, Any]:
+    return {k: getattr(m, k) for k in m.__slots__}
+
+
+def _color(c: tuple[float, ...]) -> tuple[float, float, float, float]:
+    c = _floats(c)
+    return c if len(c) == 4 else (*c, 1.0)
+
+
+def _copy_shape(s: Shape) -> Shape:
+    return Shape(s.kind, s.size, s.offset, s.rotation, s.vertices, s.faces)
+
+
+def _primitive(gr: _Reader, size: Any) -> Shape:
+    """A primitive Shape from the format's sizes (diameters) to the component's (radii)."""
+    kind = gr("Primitive") or "box"
+    given = gr("Size") if gr.has("Size") else size
+    s = _floats(given) if given is not None else DEFAULT_SIZES[kind]
+    if kind == "sphere":
+        dims: tuple[float, ...] = (s[0] / 2,)
+    elif kind == "box":
+        dims = s if len(s) == 3 else (s[0],) * 3
+    else:
+        dims = (s[0] / 2, s[1] if len(s) > 1 else s[0])
+    return Shape(kind, dims, _floats(gr("Offset")), euler_to_quat(gr("Orientation")))
+
+
+def _sound(r: _Reader, owner: str) -> Sound:
+    return Sound(file=r("File"), loop=bool(r("Loop")), gain=float(r("Gain")),
+                 pitch=float(r("Pitch")), ref_distance=float(r("RefDistance")),
+                 rolloff=float(r("Rolloff")), max_distance=float(r("MaxDistance")),
+                 auto_play=bool(r("AutoPlay")), priority=int(r("Priority")),
+                 id=r("ID") or owner)
+
+
+def _controller(r: _Reader) -> Controller:
+    low, high = r("Low"), r("High")
+    return Controller(input=r("Input"), target=r("Target"), gain=float(r("Gain")),
+                      low=float("-inf") if low is None else float(low),
+                      high=float("inf") if high is None else float(high))
+
+
+def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[str, int]:
+    """Create the spec's entities and joints; returns object ID -> entity id.
+
+    With ``as_scene`` (loading a scene file) it also leaves :class:`SceneIds` and the
+    scene's WorldSettings as engine resources; objects spawned at run time (from Lua
+    snippets) pass ``as_scene=False`` and leave the loaded scene's resources alone.
+    """
+    ids: dict[str, int] = {}
+    for es in spec.entities:
+        ids[es.id] = engine.spawn(*es.components)
+    for cam_id, target in spec.camera_follow.items():
+        cam = engine.world.component_for_entity(ids[cam_id], Camera)
+        cam.follow = ids[target]
+    joints: dict[str, int] = {}
+    for js in spec.joints:
+        a, b = js.bodies
+        js.joint.body_a = ids[a]
+        js.joint.body_b = None if b is None else ids[b]
+        joints[js.id] = engine.spawn(Name(js.id), js.joint)
+    if as_scene:
+        engine.insert_resource(SceneIds(ids, joints, spec))
+        engine.insert_resource(spec.world)
+    return ids

@@ -1,0 +1,87 @@
+"""Entry points the CLI uses: load, check and format a scene file or content folder.
+
+A PATH may be a ``.scene`` file or a content folder (its ``main.scene``). Asset
+files are looked for relative to the scene file's folder.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from engine.scene.db import SceneDB
+from engine.scene.diagnostics import Diagnostic, Reporter, SceneError, sorted_diagnostics
+from engine.scene.factory import SceneSpec, build_specs
+from engine.scene.parser import Limits, parse_file, parse_text, paused_gc
+from engine.scene.validate import validate
+from engine.scene.writer import write
+
+MAIN_SCENE = "main.scene"
+
+
+def scene_path(path: str | Path) -> Path:
+    """The scene file a PATH names (a content folder means its main.scene)."""
+    p = Path(path)
+    return p / MAIN_SCENE if p.is_dir() else p
+
+
+def _missing(path: Path) -> SceneError:
+    what = "content folder has no main.scene" if path.name == MAIN_SCENE else "no such file"
+    return SceneError([Diagnostic(str(path), 1, 1, "error", f"{what}: {path}")])
+
+
+def validated(db: SceneDB, content_dir: Path | None = None) -> SceneDB:
+    """Check ``db`` against the schema; raises SceneError (with warnings kept) on errors."""
+    report = Reporter(list(db.warnings), dict(db.sources))
+    with paused_gc():
+        validate(db, content_dir if content_dir is not None else Path(db.path).parent, report)
+    report.raise_if_errors()
+    db.warnings = sorted_diagnostics(report.diagnostics)
+    return db
+
+
+def load_scene(path: str | Path, rng: np.random.Generator | None = None,
+               limits: Limits | None = None) -> SceneDB:
+    """Parse and validate a scene file or content folder. Raises SceneError."""
+    target = scene_path(path)
+    if not target.is_file():
+        raise _missing(target)
+    return validated(parse_file(target, rng, limits))
+
+
+def load_spec(path: str | Path, rng: np.random.Generator | None = None) -> SceneSpec:
+    """Parse, validate and build specs (models loaded), ready to instantiate. Raises SceneError."""
+    db = load_scene(path, rng)
+    return build_specs(db, Path(db.path).parent)
+
+
+def spec_from_text(text: str, content_dir: str | Path, rng: np.random.Generator | None = None,
+                   path: str = "<string>") -> SceneSpec:
+    """Specs from a scene-format snippet (what Lua uses to spawn objects at run time)."""
+    db = validated(parse_text(text, path, rng, base_dir=content_dir), Path(content_dir))
+    return build_specs(db, content_dir)
+
+
+def check(path: str | Path, rng: np.random.Generator | None = None) -> list[Diagnostic]:
+    """Every error and warning of a scene (parse, schema, references, assets, models)."""
+    try:
+        spec_db = load_scene(path, rng)
+        build_specs(spec_db, Path(spec_db.path).parent)
+    except SceneError as exc:
+        return exc.diagnostics
+    except RecursionError:  # the limits should make this unreachable; never crash a check
+        return [Diagnostic(str(path), 1, 1, "error", "scene is nested too deeply to read")]
+    return spec_db.warnings
+
+
+def format_scene(path: str | Path) -> str:
+    """Canonical text of a scene file (comments kept, includes not inlined). Raises SceneError."""
+    target = scene_path(path)
+    if not target.is_file():
+        raise _missing(target)
+    return write(parse_file(target))
+
+
+__all__ = ["check", "format_scene", "load_scene", "load_spec", "scene_path",
+           "spec_from_text", "validated"]

@@ -1,0 +1,117 @@
+"""Save a running simulation as a scene file (the paper's "state at time t").
+
+The loaded SceneDB is written self-contained (includes inlined, expressions
+frozen to their values) with each object's current pose and velocities, the
+joints' motor settings and the simulated time. Orientation is written exactly
+as ``Quaternion`` (and, for people, as ``Orientation`` degrees), floats with
+full precision, so loading the file continues the motion.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from components import Joint, Transform
+from engine.scene import schema as sc
+from engine.scene.db import FLOAT, STRING, STRUCTURE, VECTOR, Block, Entry, Value
+from engine.scene.diagnostics import Loc
+from engine.scene.factory import SceneIds
+from engine.scene.parser import parse_text
+from engine.scene.rotation import exact_degrees, quat_to_euler, rotate
+from engine.scene.writer import write
+
+if TYPE_CHECKING:
+    from engine.app import Engine
+
+_HERE = Loc("<state>", 0, 0)
+
+
+def _vec(values: object) -> Value:
+    return Value(VECTOR, [Value(FLOAT, float(x), _HERE) for x in values], _HERE)
+
+
+def _set(block: Block, key: str, value: Value) -> None:
+    """Replace the last ``key`` in ``block`` (dropping earlier repeats) or append it."""
+    found = [e for e in block.entries if e.key == key]
+    for e in found[:-1]:
+        block.entries.remove(e)
+    if found:
+        found[-1].value = value
+    else:
+        block.entries.append(Entry(key, value, _HERE))
+
+
+def _rebase_assets(block: Block, schema: str, src: Path, dst: Path) -> None:
+    """Rewrite asset file names so they still resolve from a file saved in ``dst``."""
+    fields = sc.SCHEMAS[schema]
+    for e in block.entries:
+        f = fields.get(e.key)
+        if f is None:
+            continue
+        if f.type == sc.ASSET_T and e.value.kind == STRING:
+            e.value.data = Path(os.path.relpath(src / e.value.data, dst)).as_posix()
+        elif f.type == sc.STRUCT_T and e.value.kind == STRUCTURE:
+            _rebase_assets(e.value.data, f.struct, src, dst)
+
+
+def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> str:
+    """Scene text of the running simulation; needs a scene loaded with ``instantiate``.
+
+    With ``out_path`` (where the text will be saved), model, sound, script and
+    shader file names are rewritten relative to that file's folder.
+    """
+    ids: SceneIds = engine.resource(SceneIds)
+    spec = ids.spec
+    assert spec.db is not None, "write_state needs a spec built from a SceneDB"
+    db = parse_text(write(spec.db, literal=True, flatten=True), spec.db.path)
+    if out_path is not None and spec.content_dir is not None:
+        _rebase_assets(db.root, "Scene", spec.content_dir.resolve(),
+                       Path(out_path).resolve().parent)
+    world = engine.world
+    root = db.root
+    objects = [e for e in root.entries if e.key == "Object"]
+    for index, entry in enumerate(objects):
+        eid = ids.entities.get(spec.entities[index].id)
+        t = None if eid is None else world.try_component(eid, Transform) \
+            if world.entity_exists(eid) else None
+        if t is None:
+            root.entries.remove(entry)
+            continue
+        blk = entry.value.data
+        q = [float(x) for x in t.orientation]
+        _set(blk, "Position", _vec(t.position))
+        _set(blk, "Orientation", _vec(quat_to_euler(q)))
+        _set(blk, "Quaternion", _vec(q))
+        _set(blk, "Velocity", _vec(t.linear_velocity))
+        _set(blk, "AngularVelocity", _vec(exact_degrees(float(w)) for w in t.angular_velocity))
+    joints = [e for e in root.entries if e.key == "Joint"]
+    for js, entry in zip(spec.joints, joints, strict=False):
+        jid = ids.joints.get(js.id)
+        joint = None if jid is None or not world.entity_exists(jid) else \
+            world.try_component(jid, Joint)
+        if joint is None or joint.broken:
+            root.entries.remove(entry)
+            continue
+        conv = (lambda x: x) if joint.kind == "slider" else math.degrees
+        body_a = world.try_component(joint.body_a, Transform) \
+            if joint.body_b is not None and world.entity_exists(joint.body_a) else None
+        if body_a is not None:  # between two bodies, anchor and axes move with body A
+            p, q = body_a.position, [float(x) for x in body_a.orientation]
+            anchor = rotate(q, js.local_anchor)
+            _set(entry.value.data, "Anchor", _vec(a + float(b) for a, b in zip(anchor, p,
+                                                                               strict=True)))
+            _set(entry.value.data, "Axis", _vec(rotate(q, js.local_axes[0])))
+            _set(entry.value.data, "Axis2", _vec(rotate(q, js.local_axes[1])))
+        _set(entry.value.data, "MotorVelocity", Value(FLOAT, conv(joint.motor_velocity), _HERE))
+        _set(entry.value.data, "MotorMaxForce", Value(FLOAT, float(joint.motor_max_force),
+                                                       _HERE))
+    world_entry = next((e for e in root.entries if e.key == "World"), None)
+    if world_entry is None or world_entry.value.kind != STRUCTURE:
+        world_entry = Entry("World", Value(STRUCTURE, Block(), _HERE), _HERE)
+        root.entries.append(world_entry)
+    _set(world_entry.value.data, "Time", Value(FLOAT, float(spec.time + engine.time), _HERE))
+    header = f"// state of {spec.db.path} at t = {spec.time + engine.time!r} s"
+    return header + "\n" + write(db, literal=True)

@@ -1,0 +1,225 @@
+"""Validation: a parsed SceneDB against the schema, every problem in one pass.
+
+Reports unknown keys (with "did you mean", including wrong case), type errors
+that say what was expected, missing required keys, duplicate IDs, references to
+IDs that do not exist (with suggestions) and asset files that are not there
+(naming the path looked for, relative to the scene file's folder).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from engine.scene import schema as sc
+from engine.scene.db import (
+    FLOAT,
+    INCLUDE,
+    INT,
+    STRING,
+    STRINGVECTOR,
+    STRUCTURE,
+    VECTOR,
+    Block,
+    Entry,
+    SceneDB,
+    Value,
+)
+from engine.scene.diagnostics import Loc, Reporter, suggest
+
+#: Size lengths each primitive accepts (see the schema module doc).
+SIZE_LENGTHS = {"sphere": (1,), "box": (1, 3), "capsule": (2,), "cylinder": (2,)}
+SIZE_FORMS = {"sphere": "[diameter]", "box": "[x y z] or [side]",
+              "capsule": "[diameter length]", "cylinder": "[diameter length]"}
+
+
+@dataclass
+class _Ctx:
+    report: Reporter
+    ids: dict[str, dict[str, Loc]] = field(default_factory=lambda: {k: {} for k in sc.ID_KINDS})
+    refs: list[tuple[str, Value]] = field(default_factory=list)
+    assets: list[Value] = field(default_factory=list)
+    targets: list[Value] = field(default_factory=list)
+
+
+def validate(db: SceneDB, content_dir: Path | None, report: Reporter) -> None:
+    """Check ``db`` against the schema; problems go to ``report``."""
+    ctx = _Ctx(report)
+    _block(db.root, "Scene", ctx, db.root.loc, None)
+    _resolve(ctx)
+    if content_dir is not None:
+        for v in ctx.assets:
+            target = content_dir / v.data
+            if not target.is_file():
+                report.error(v.loc, f"file not found: \"{v.data}\" (looked for {target})")
+
+
+def _block(block: Block, name: str, ctx: _Ctx, where: Loc, size: Value | None) -> None:
+    fields = sc.SCHEMAS[name]
+    seen: dict[str, Entry] = {}
+    for e in block:
+        if e.key == INCLUDE:
+            continue
+        f = fields.get(e.key)
+        if f is None:
+            lower = e.key.lower()
+            if e.key[0].islower() and not any(k.lower() == lower for k in fields):
+                continue  # the author's variable
+            ctx.report.error(e.loc, f"unknown key '{e.key}' in {name}{suggest(e.key, fields)}")
+            continue
+        if not f.repeat and e.key in seen:
+            ctx.report.warning(e.loc, f"'{e.key}' given again; this one replaces line "
+                                      f"{seen[e.key].loc.line}")
+        seen[e.key] = e
+        if name == "Object" and e.key == "Size" and _type_ok(e.value, f, name):
+            size = e.value
+        _value(e, f, name, ctx, size)
+    for k, f in fields.items():
+        if f.required and k not in seen:
+            ctx.report.error(where, f"{name} is missing required key '{k}'")
+    if name in sc.ID_KINDS and "ID" in seen:
+        idv = seen["ID"].value
+        key = str(idv.data)
+        first = ctx.ids[name].get(key)
+        if first is not None:
+            ctx.report.error(idv.loc, f"duplicate {name} ID '{key}' (first declared at "
+                                      f"{first.path}:{first.line}:{first.col})")
+        else:
+            ctx.ids[name][key] = idv.loc
+    if name == "Geometry":
+        _geometry(seen, ctx, where, size)
+
+
+def _geometry(seen: dict[str, Entry], ctx: _Ctx, where: Loc, size: Value | None) -> None:
+    prim = seen.get("Primitive")
+    if prim is not None and "File" in seen:
+        ctx.report.error(prim.loc, "Geometry has both Primitive and File; give one")
+    if prim is None and "File" not in seen and "ParseMethod" not in seen:
+        ctx.report.error(where, "Geometry needs a Primitive or a File")
+    size = seen["Size"].value if "Size" in seen else size
+    if prim is None or prim.value.kind != STRING or size is None or size.kind != VECTOR:
+        return
+    kind = prim.value.data
+    if kind in SIZE_LENGTHS and len(size.data) not in SIZE_LENGTHS[kind]:
+        ctx.report.error(size.loc, f"Size of a {kind} is {SIZE_FORMS[kind]}, got "
+                                   f"{len(size.data)} number{'s' if len(size.data) != 1 else ''}")
+    for item in size.data:
+        if item.data <= 0:
+            ctx.report.error(item.loc, f"Size must be positive, got {item.data}")
+
+
+def _describe(v: Value) -> str:
+    if v.kind == VECTOR:
+        return f"VECTOR of {len(v.data)} number{'s' if len(v.data) != 1 else ''}"
+    if v.kind == STRINGVECTOR:
+        return f"STRINGVECTOR of {len(v.data)} string{'s' if len(v.data) != 1 else ''}"
+    if v.kind == STRING:
+        return f'STRING "{v.data}"' if len(v.data) < 30 else "STRING"
+    if v.kind == STRUCTURE:
+        return "STRUCTURE"
+    return f"{v.kind} {v.data!r}"
+
+
+def _counts(lengths: tuple[int, ...]) -> str:
+    if not lengths:
+        return "any number of"
+    words = [str(n) for n in lengths]
+    return words[0] if len(words) == 1 else ", ".join(words[:-1]) + " or " + words[-1]
+
+
+_EXPECTED = {
+    sc.INT_T: "INT",
+    sc.FLOAT_T: "a number (INT or FLOAT)",
+    sc.BOOL_T: "0 or 1",
+    sc.STRING_T: "STRING",
+    sc.ASSET_T: "STRING (a file name)",
+    sc.VEC3_T: "VECTOR of 3 numbers",
+    sc.STRUCT_T: "STRUCTURE { ... }",
+    sc.NUMBER_OR_VECTOR_T: "a number or a VECTOR",
+}
+
+
+def _expected(f: sc.Field) -> str:
+    t = f.type
+    if t == sc.VECTOR_T:
+        return f"VECTOR of {_counts(f.lengths)} numbers"
+    if t == sc.STRINGVECTOR_T:
+        return f"STRINGVECTOR of {_counts(f.lengths)} strings"
+    if t == sc.ENUM_T:
+        return "STRING, one of " + ", ".join(f'"{a}"' for a in f.allowed)
+    if t == sc.REF_T:
+        return f"STRING naming a {f.ref}"
+    return _EXPECTED.get(t, t)
+
+
+def _type_ok(v: Value, f: sc.Field, owner: str) -> bool:
+    t, k = f.type, v.kind
+    if t == sc.ANY_T:
+        return True
+    if t == sc.INT_T:
+        return k == INT or (k == FLOAT and float(v.data).is_integer())
+    if t == sc.FLOAT_T:
+        return k in (INT, FLOAT)
+    if t == sc.BOOL_T:
+        return k in (INT, FLOAT) and v.data in (0, 1)
+    if t in (sc.STRING_T, sc.ASSET_T, sc.ENUM_T):
+        return k == STRING or (owner == "Material" and f is sc.SCHEMAS[owner]["ID"] and k == INT)
+    if t == sc.REF_T:
+        return k == STRING or (f.ref == "Material" and k == INT)
+    if t == sc.VEC3_T:
+        return k == VECTOR and len(v.data) == 3
+    if t == sc.VECTOR_T:
+        return k == VECTOR and (not f.lengths or len(v.data) in f.lengths)
+    if t == sc.STRINGVECTOR_T:
+        return (k == STRINGVECTOR or (k == VECTOR and not v.data)) and (
+            not f.lengths or len(v.data) in f.lengths)
+    if t == sc.STRUCT_T:
+        return k == STRUCTURE
+    if t == sc.NUMBER_OR_VECTOR_T:
+        return k in (INT, FLOAT, VECTOR)
+    return False
+
+
+def _value(e: Entry, f: sc.Field, owner: str, ctx: _Ctx, size: Value | None) -> None:
+    v = e.value
+    if not _type_ok(v, f, owner):
+        ctx.report.error(v.loc, f"'{e.key}' expects {_expected(f)}, got {_describe(v)}")
+        return
+    if f.type == sc.STRUCT_T:
+        _block(v.data, f.struct, ctx, e.loc, size)
+    elif f.type == sc.ENUM_T and v.data not in f.allowed:
+        ctx.report.error(v.loc, f"unknown {e.key} \"{v.data}\"{suggest(v.data, f.allowed)}; "
+                                f"expected one of {', '.join(f.allowed)}")
+    elif f.type == sc.REF_T:
+        ctx.refs.append((f.ref, v))
+    elif f.type == sc.STRINGVECTOR_T and f.ref:
+        ctx.refs.extend((f.ref, item) for item in v.data)
+    elif f.type == sc.ASSET_T:
+        ctx.assets.append(v)
+    elif owner == "Controller" and e.key == "Target":
+        ctx.targets.append(v)
+
+
+_TARGET_KINDS = {"motor": "Joint", "force": "Object", "kinematic": "Object"}
+
+
+def _resolve(ctx: _Ctx) -> None:
+    for kind, v in ctx.refs:
+        name = str(v.data)
+        if name in ctx.ids[kind]:
+            continue
+        if kind == "Material" and (v.kind == INT or name == "default"):
+            if v.kind == INT:
+                ctx.report.warning(v.loc, f"Material {name} is not declared; default material "
+                                          "properties are used")
+            continue
+        ctx.report.error(v.loc, f"unknown {kind} '{name}'{suggest(name, ctx.ids[kind])}")
+    for v in ctx.targets:
+        prefix, _, name = v.data.partition(":")
+        kind = _TARGET_KINDS.get(prefix)
+        if kind is None:
+            ctx.report.error(v.loc, f"controller target \"{v.data}\" must start with motor:, "
+                                    "force: or kinematic:")
+        elif name not in ctx.ids[kind]:
+            ctx.report.error(v.loc, f"unknown {kind} '{name}' in controller target"
+                                    f"{suggest(name, ctx.ids[kind])}")

@@ -1,0 +1,2 @@
+-- touched
+function update(dt) end
