@@ -212,7 +212,7 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "ID": _id("light"),
         "Type": _f(ENUM_T, "directional", allowed=LIGHT_TYPES),
         "Position": _f(VEC3_T, (0.0, 0.0, 10.0)),
-        "Direction": _f(VEC3_T, (-0.3, -0.4, -1.0)),
+        "Direction": _f(VEC3_T, (0.3, 0.5, -1.0)),
         "Color": _f(VEC3_T, (1.0, 1.0, 1.0)),
         "Intensity": _f(FLOAT_T, 1.0),
         "Cutoff": _f(FLOAT_T, 30.0, "spot cone half-angle, degrees"),
