@@ -1,0 +1,15 @@
+"""pymunk in 2D: a DynamicsBackend for prototyping in the world's X–Z side view.
+
+Select it with ``--backend pymunk`` or :func:`engine.physics.create_backend`
+(``"pymunk"``). The same content runs as under ODE, flattened onto X–Z: motion
+and rotation about Y are simulated, Y positions and out-of-plane tilts are kept
+as authored, and anything the plane cannot hold is logged once per object on
+``colosseum.physics.pymunk``. Beyond the protocol it offers what the ODE backend
+offers, with the same meaning: ``set_joint_target``, ``add_static_plane``,
+``raycast(..., ignore, mask)``, ``is_sleeping``, ``has_joint``, ``keys``,
+``read_poses`` and ``take_faults``.
+"""
+
+from engine.physics.pymunk2d.backend import PymunkBackend
+
+__all__ = ["PymunkBackend"]

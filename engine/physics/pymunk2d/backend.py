@@ -1,0 +1,690 @@
+"""PymunkBackend: the DynamicsBackend protocol over pymunk, in the world's X–Z plane.
+
+See :mod:`engine.physics.pymunk2d.planar` for the axis mapping, ``shapes`` for how
+3D shapes and masses become 2D, ``joints`` for the constraints. Materials combine as
+in the ODE backend: friction is the geometric mean of the two materials' (each
+shape carries √μ and pymunk multiplies them), bounce the larger of the two (a
+pre-solve callback, registered only for materials that bounce); a
+:class:`MaterialPair` in the settings overrides both for that pair, or makes the
+pair pass through each other (``collide=False``). Softness has no pymunk
+counterpart and is ignored (reported once); pymunk bounces at any impact speed, so
+``bounce_velocity`` is ignored too.
+
+Whatever the plane cannot represent is reported once per object on the logger
+``colosseum.physics.pymunk`` with the approximation used, never raised. Bad calls
+(unknown keys, unknown body or joint kinds) raise KeyError or ValueError naming them.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pymunk
+import pymunk.batch as batch
+
+from components import Joint, MaterialProps, Physical, Shape
+from engine.physics.backend import (
+    CONTACT_DTYPE,
+    BodyState,
+    MaterialPair,
+    RayHit,
+    WorldSettings,
+)
+from engine.physics.pymunk2d.idindex import IdIndex
+from engine.physics.pymunk2d.joints import JointRecord, build_joint
+from engine.physics.pymunk2d.planar import quat_multiply, split_orientation
+from engine.physics.pymunk2d.shapes import BuiltShape, build_shape
+
+log = logging.getLogger("colosseum.physics.pymunk")
+
+#: Seconds of rest before a body group falls asleep when ``auto_sleep`` is on.
+SLEEP_TIME = 0.5
+#: Overlap allowed between shapes (m); pymunk's default 0.1 is meant for pixels.
+COLLISION_SLOP = 1e-3
+
+_BODY_FIELDS = (batch.BodyFields.BODY_ID | batch.BodyFields.POSITION | batch.BodyFields.ANGLE
+                | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY)
+_ARB = batch.ArbiterFields
+_ARBITER_FIELDS = (_ARB.BODY_A_ID | _ARB.BODY_B_ID | _ARB.CONTACT_COUNT | _ARB.TOTAL_IMPULSE
+                   | _ARB.NORMAL | _ARB.POINT_A_1 | _ARB.POINT_B_1 | _ARB.DISTANCE_1
+                   | _ARB.POINT_A_2 | _ARB.POINT_B_2 | _ARB.DISTANCE_2)
+#: Sums both contact points on both shapes out of a batch arbiter row (x and z).
+_MID_SUM = np.zeros((14, 2))
+_MID_SUM[[4, 6, 9, 11], 0] = 1.0
+_MID_SUM[[5, 7, 10, 12], 1] = 1.0
+_KINDS = {
+    "dynamic": pymunk.Body.DYNAMIC,
+    "static": pymunk.Body.STATIC,
+    "kinematic": pymunk.Body.KINEMATIC,
+}
+
+
+@dataclass(slots=True)
+class _BodyRecord:
+    key: int
+    body: pymunk.Body
+    shapes: list[pymunk.Shape]
+    physical: Physical
+    y: float
+    rest: np.ndarray
+    joints: set[int] = field(default_factory=set)
+
+
+class PymunkBackend:
+    """A 2D side-view world: pymunk space in X–Z, Y kept per body as authored."""
+
+    name = "pymunk"
+
+    def __init__(self) -> None:
+        self._space = pymunk.Space()
+        self._space.collision_slop = COLLISION_SLOP
+        self._bodies: dict[int, _BodyRecord] = {}
+        self._joints: dict[int, JointRecord] = {}
+        self._material_types: dict[str, int] = {}
+        self._bouncy_types: set[int] = set()
+        self._pairs: dict[tuple[int, int], MaterialPair] = {}
+        self._warned: set[tuple[str, str]] = set()
+        self._buf = batch.Buffer()
+        self._contacts: np.ndarray | None = np.zeros(0, CONTACT_DTYPE)
+        self._dirty = True
+        self._keys = np.zeros(0, np.int64)
+        self._row: dict[int, int] = {}
+        self._y = np.zeros(0)
+        self._rest = np.zeros((0, 4))
+        self._any_rest = False
+        self._cog = np.zeros((0, 2))
+        self._any_cog = False
+        self._static_rows = np.ones(1, bool)
+        self._keys_ext = np.full(1, -1, np.int64)
+        self._y_ext = np.zeros(1)
+        self._index = IdIndex(np.zeros(0, np.int64))
+        self._iter_ids = b""
+        self._src: np.ndarray | None = None
+        self._always_awake: list[pymunk.Body] = []
+        self._last_good = BodyState.empty()
+        self._faults: list[tuple[int, str]] = []
+        self.configure(WorldSettings())
+
+    # -- reporting ---------------------------------------------------------
+    def _warn(self, obj: str, topic: str, message: str) -> None:
+        """Log ``message`` once per (object, topic)."""
+        if (obj, topic) in self._warned:
+            return
+        self._warned.add((obj, topic))
+        log.warning("%s: %s", obj, message)
+
+    # -- world -------------------------------------------------------------
+    def configure(self, settings: WorldSettings) -> None:
+        """Gravity, solver iterations, error correction, sleeping and material pairs."""
+        space = self._space
+        gx, _, gz = settings.gravity
+        if settings.gravity[1] != 0.0:
+            self._warn("world", "gravity", "gravity's Y component dropped (not in the X–Z plane)")
+        space.gravity = (float(gx), float(gz))
+        space.iterations = max(1, int(settings.iterations))
+        # ODE's ERP is the share of penetration fixed per step at 60 Hz; pymunk's bias is
+        # the share left after one second.
+        erp = min(max(settings.erp, 0.0), 0.99)
+        space.collision_bias = (1.0 - erp) ** 60
+        space.sleep_time_threshold = SLEEP_TIME if settings.auto_sleep else math.inf
+        self._pairs.clear()
+        for pair in settings.material_pairs:
+            ta, tb = self._material_type(pair.a), self._material_type(pair.b)
+            if pair.softness:
+                self._warn(f"material pair {pair.a}/{pair.b}", "softness",
+                           "softness is not supported by pymunk; ignored")
+            self._pairs[ta, tb] = self._pairs[tb, ta] = pair
+            space.on_collision(ta, tb, begin=_pair_begin, pre_solve=_material_pre_solve,
+                               data=self._pairs)  # data: the live table of pairs
+        for rec in self._bodies.values():
+            ctype = self._material_types.get(rec.physical.material.name, 0)
+            for shape in rec.shapes:
+                shape.collision_type = ctype
+
+    def _material_type(self, name: str) -> int:
+        return self._material_types.setdefault(name, len(self._material_types) + 1)
+
+    def _bouncy(self, name: str) -> int:
+        """Collision type of a bouncing material, whose contacts take the larger bounce."""
+        ctype = self._material_type(name)
+        if ctype not in self._bouncy_types:
+            self._bouncy_types.add(ctype)
+            self._space.on_collision(ctype, None, pre_solve=_material_pre_solve,
+                                     data=self._pairs)
+        return ctype
+
+    def step(self, dt: float) -> None:
+        for rec in self._joints.values():
+            if rec.spec.kind == "slider":
+                rec.drive_slider(dt)
+        if self._space.sleep_time_threshold != math.inf:
+            for body in self._always_awake:
+                body.activate()
+        self._space.step(dt)
+        self._contacts = None
+
+    def close(self) -> None:
+        for key in list(self._joints):
+            self.remove_joint(key)
+        for key in list(self._bodies):
+            self.remove_body(key)
+
+    # -- bodies ------------------------------------------------------------
+    def add_body(self, key: int, body: Physical, position: np.ndarray,
+                 orientation: np.ndarray, linear_velocity: np.ndarray | None = None,
+                 angular_velocity: np.ndarray | None = None) -> None:
+        key = int(key)
+        if key in self._bodies:
+            raise KeyError(f"body {key} already exists")
+        if body.kind not in _KINDS:
+            raise ValueError(f"body {key}: kind {body.kind!r} is not one of "
+                             f"{', '.join(_KINDS)}")
+        obj = f"body {key}"
+        if not np.all(np.isfinite(position)):
+            raise ValueError(f"{obj}: position {np.asarray(position).tolist()} is not finite")
+        theta, rest, planar = split_orientation(orientation)
+        if not planar:
+            self._warn(obj, "tilt", "orientation tilts out of the X–Z plane; the tilt is "
+                       "baked into its 2D silhouette")
+        pbody = pymunk.Body(body_type=_KINDS[body.kind])
+        static = body.kind != "dynamic"
+        built = [b for spec in body.shapes
+                 if (b := build_shape(pbody, spec, rest, body.kind == "static",
+                                      lambda t, m: self._warn(obj, t, m))) is not None]
+        if body.kind == "dynamic":
+            pbody.mass, pbody.moment, pbody.center_of_gravity = self._mass_properties(
+                obj, body, built)
+        pbody.angle = theta  # before the position: pymunk turns a body about its centre
+        pbody.position = (float(position[0]), float(position[2]))
+        mat = body.material
+        if mat.softness:
+            self._warn(f"material {mat.name}", "softness",
+                       "softness is not supported by pymunk; ignored")
+        filt = pymunk.ShapeFilter(categories=body.category & 0xFFFFFFFF,
+                                  mask=body.mask & 0xFFFFFFFF)
+        ctype = (self._bouncy(mat.name) if mat.bounce > 0
+                 else self._material_types.get(mat.name, 0))
+        shapes = [b.shape for b in built]
+        for shape in shapes:
+            # pymunk multiplies the two frictions: √μ each gives the geometric mean, as ODE
+            shape.friction = math.sqrt(min(float(mat.friction), 1e12))
+            shape.elasticity = float(mat.bounce)
+            shape.filter = filt
+            shape.collision_type = ctype
+        if not static and (not body.gravity or body.linear_damping or body.angular_damping):
+            pbody.velocity_func = _velocity_func(body.gravity, body.linear_damping,
+                                                 body.angular_damping)
+        self._space.add(pbody, *shapes)
+        rec = _BodyRecord(key, pbody, shapes, body, float(position[1]), rest)
+        self._bodies[key] = rec
+        if not static and not body.can_sleep:
+            self._always_awake.append(pbody)
+        if linear_velocity is not None or angular_velocity is not None:
+            self.set_velocity(key, np.zeros(3) if linear_velocity is None else linear_velocity,
+                              np.zeros(3) if angular_velocity is None else angular_velocity)
+        self._dirty = True
+
+    def _mass_properties(self, obj: str, body: Physical,
+                         built: list[BuiltShape]) -> tuple[float, float, tuple[float, float]]:
+        """Mass, moment about the centre of mass, and that centre in the body frame."""
+        volume = sum(b.volume for b in built)
+        if body.mass is not None and body.mass > 0.0:
+            shares = ([b.volume / volume for b in built] if volume > 0.0
+                      else [1.0 / len(built)] * len(built)) if built else []
+            masses = [body.mass * s for s in shares]
+        else:
+            masses = [body.material.density * b.volume for b in built]
+        mass = sum(masses)
+        if mass <= 0.0:
+            self._warn(obj, "mass", "dynamic body has no mass (no shapes with volume and no "
+                       "Mass); using 1 kg")
+            mass = body.mass if body.mass is not None and body.mass > 0.0 else 1.0
+            return mass, mass * 0.01, (0.0, 0.0)
+        cx = sum(m * b.shape.center_of_gravity.x for m, b in zip(masses, built, strict=True))
+        cz = sum(m * b.shape.center_of_gravity.y for m, b in zip(masses, built, strict=True))
+        cx, cz = cx / mass, cz / mass
+        moment = sum(m * b.inertia_per_mass for m, b in zip(masses, built, strict=True))
+        moment -= mass * (cx * cx + cz * cz)  # parallel axes: origin → centre of mass
+        return mass, max(moment, mass * 1e-9), (cx, cz)
+
+    def _record(self, key: int) -> _BodyRecord:
+        try:
+            return self._bodies[int(key)]
+        except KeyError:
+            raise KeyError(f"no body with key {key}") from None
+
+    def remove_body(self, key: int) -> None:
+        rec = self._record(key)
+        if self._contacts is None:
+            self._contacts = self._collect_contacts()
+        for jkey in list(rec.joints):
+            log.info("joint %s removed with body %s", jkey, key)
+            self.remove_joint(jkey)
+        if rec.body in self._always_awake:
+            self._always_awake.remove(rec.body)
+        self._space.remove(rec.body, *rec.shapes)
+        del self._bodies[rec.key]
+        self._dirty = True
+
+    def body_count(self) -> int:
+        return len(self._bodies)
+
+    def is_sleeping(self, key: int) -> bool:
+        return self._record(key).body.is_sleeping
+
+    def _set_orientation(self, rec: _BodyRecord, orientation: np.ndarray) -> float:
+        theta, rest, _ = split_orientation(orientation)
+        if not np.allclose(rest, rec.rest, atol=1e-6):
+            self._warn(f"body {rec.key}", "retilt", "new orientation tilts differently out of "
+                       "the X–Z plane; only its turn about Y is applied")
+        return theta
+
+    def set_pose(self, key: int, position: np.ndarray, orientation: np.ndarray) -> None:
+        rec = self._record(key)
+        if not np.all(np.isfinite(position)):
+            raise ValueError(f"body {key}: position {np.asarray(position).tolist()} is not finite")
+        rec.body.angle = self._set_orientation(rec, orientation)
+        rec.body.position = (float(position[0]), float(position[2]))
+        self._set_y(rec, float(position[1]))
+        if rec.body.body_type == pymunk.Body.STATIC:
+            self._space.reindex_shapes_for_body(rec.body)
+
+    def _set_y(self, rec: _BodyRecord, y: float) -> None:
+        rec.y = y
+        if not self._dirty:
+            self._y[self._row[rec.key]] = y
+
+    def set_velocity(self, key: int, linear: np.ndarray, angular: np.ndarray) -> None:
+        rec = self._record(key)
+        if rec.body.body_type == pymunk.Body.STATIC:
+            return
+        self._check_planar(rec.key, "velocity", linear, angular)
+        _set_origin_velocity(rec.body, float(linear[0]), float(linear[2]), -float(angular[1]))
+
+    def _check_planar(self, key: int, what: str, linear: np.ndarray | None,
+                      angular: np.ndarray | None) -> None:
+        if (linear is not None and linear[1] != 0.0) or (
+                angular is not None and (angular[0] != 0.0 or angular[2] != 0.0)):
+            self._warn(f"body {key}", f"planar-{what}",
+                       f"{what} out of the X–Z plane; only its in-plane part is applied")
+
+    def set_kinematic_target(self, key: int, position: np.ndarray,
+                             orientation: np.ndarray, dt: float) -> None:
+        """Give the body the velocities that carry it to the target in ``dt`` (Y jumps)."""
+        rec = self._record(key)
+        if dt <= 0.0 or rec.body.body_type == pymunk.Body.STATIC:
+            self.set_pose(key, position, orientation)
+            return
+        body = rec.body
+        theta = self._set_orientation(rec, orientation)
+        turn = math.remainder(theta - body.angle, 2.0 * math.pi)
+        _set_origin_velocity(body, (float(position[0]) - body.position.x) / dt,
+                             (float(position[2]) - body.position.y) / dt, turn / dt)
+        self._set_y(rec, float(position[1]))
+
+    def add_force(self, key: int, force: np.ndarray, point: np.ndarray | None = None) -> None:
+        rec = self._record(key)
+        self._check_planar(rec.key, "force", force, None)
+        f = (float(force[0]), float(force[2]))
+        if point is None:  # at the centre of mass: no torque
+            rec.body.apply_force_at_local_point(f, rec.body.center_of_gravity)
+        else:
+            rec.body.apply_force_at_world_point(f, (float(point[0]), float(point[2])))
+
+    def add_torque(self, key: int, torque: np.ndarray) -> None:
+        rec = self._record(key)
+        self._check_planar(rec.key, "torque", None, torque)
+        rec.body.torque -= float(torque[1])
+
+    def add_impulse(self, key: int, impulse: np.ndarray,
+                    point: np.ndarray | None = None) -> None:
+        rec = self._record(key)
+        self._check_planar(rec.key, "impulse", impulse, None)
+        j = (float(impulse[0]), float(impulse[2]))
+        if point is None:
+            rec.body.apply_impulse_at_local_point(j, rec.body.center_of_gravity)
+        else:
+            rec.body.apply_impulse_at_world_point(j, (float(point[0]), float(point[2])))
+
+    def set_sleeping(self, key: int, sleeping: bool) -> None:
+        rec = self._record(key)
+        if rec.body.body_type != pymunk.Body.DYNAMIC:
+            return
+        if not sleeping:
+            rec.body.activate()
+        elif self._space.sleep_time_threshold == math.inf:
+            self._warn(f"body {key}", "sleep", "cannot sleep while auto_sleep is off; ignored")
+        else:
+            rec.body.sleep()
+
+    # -- joints ------------------------------------------------------------
+    def add_joint(self, key: int, joint: Joint) -> None:
+        key = int(key)
+        if key in self._joints:
+            raise KeyError(f"joint {key} already exists")
+        a = self._record(joint.body_a)
+        b = self._record(joint.body_b) if joint.body_b is not None else None
+        if b is a:
+            raise ValueError(f"joint {joint.id or key}: body_a and body_b are the same body")
+        obj = f"joint {joint.id or key}"
+        rec = build_joint(joint, a.body, b.body if b else self._space.static_body,
+                          lambda t, m: self._warn(obj, t, m))
+        self._space.add(*rec.constraints)
+        self._joints[key] = rec
+        a.joints.add(key)
+        if b is not None:
+            b.joints.add(key)
+
+    def remove_joint(self, key: int) -> None:
+        try:
+            rec = self._joints.pop(int(key))
+        except KeyError:
+            raise KeyError(f"no joint with key {key}") from None
+        self._space.remove(*rec.constraints)
+        for body in (rec.a, rec.b):
+            if body.body_type == pymunk.Body.DYNAMIC:
+                body.activate()
+        for body_key in (rec.spec.body_a, rec.spec.body_b):
+            if body_key is not None and body_key in self._bodies:
+                self._bodies[body_key].joints.discard(int(key))
+
+    def _joint(self, key: int) -> JointRecord:
+        try:
+            return self._joints[int(key)]
+        except KeyError:
+            raise KeyError(f"no joint with key {key}") from None
+
+    def set_motor(self, key: int, velocity: float, max_force: float) -> None:
+        self._joint(key).set_motor(float(velocity), float(max_force), self._space)
+
+    def joint_state(self, key: int) -> tuple[float, float]:
+        return self._joint(key).state()
+
+    def has_joint(self, key: int) -> bool:
+        return int(key) in self._joints
+
+    def set_joint_target(self, key: int, position: np.ndarray, orientation: np.ndarray,
+                         max_force: float | None = None,
+                         max_torque: float | None = None) -> None:
+        """Move a ``six_dof`` joint's target pose (world) and optionally its bounds.
+
+        The same call as on the ODE backend, so a hand drives either one.
+        """
+        rec = self._joint(key)
+        if rec.spec.kind != "six_dof":
+            raise ValueError(f"joint {rec.spec.id or key}: set_joint_target needs a six_dof "
+                             f"joint, not {rec.spec.kind!r}")
+        theta, _, planar = split_orientation(orientation)
+        if not planar:
+            self._warn(f"joint {rec.spec.id or key}", "target-tilt",
+                       "target orientation tilts out of the X–Z plane; only its turn about Y "
+                       "is followed")
+        rec.set_target((float(position[0]), float(position[2])), theta, max_force, max_torque)
+
+    # -- batches -----------------------------------------------------------
+    def _reindex(self) -> None:
+        """Row tables for the batch paths; rebuilt only after bodies come or go."""
+        buf = self._buf
+        buf.clear()
+        batch.get_space_bodies(self._space, batch.BodyFields.BODY_ID, buf)
+        place = {int(i): p for p, i in enumerate(np.frombuffer(buf.int_buf(), np.uintp))}
+        # rows follow pymunk's own order so the batch read needs no reshuffle
+        recs = sorted(self._bodies.values(), key=lambda r: place[r.body.id])
+        n = len(recs)
+        self._keys = np.fromiter((r.key for r in recs), np.int64, n)
+        self._row = {r.key: i for i, r in enumerate(recs)}
+        self._y = np.fromiter((r.y for r in recs), np.float64, n)
+        self._rest = np.array([r.rest for r in recs]).reshape(-1, 4)
+        self._any_rest = bool(n) and not np.all(self._rest[:, 0] == 1.0)
+        self._cog = np.array([tuple(r.body.center_of_gravity) for r in recs]).reshape(-1, 2)
+        self._any_cog = bool(np.any(self._cog))
+        # one extra row stands for bodies without a key (the static world)
+        self._static_rows = np.append(np.fromiter(
+            (r.body.body_type == pymunk.Body.STATIC for r in recs), bool, n), True)
+        self._keys_ext = np.append(self._keys, -1)
+        self._y_ext = np.append(self._y, 0.0)
+        self._index = IdIndex(np.fromiter((r.body.id for r in recs), np.uintp, n)
+                              .view(np.int64))
+        self._iter_ids = b""
+        self._dirty = False
+
+    def _gather(self) -> np.ndarray:
+        """Every keyed body's (x, z, θ, vx, vz, ω), one batch call, in row order."""
+        buf = self._buf
+        buf.clear()
+        batch.get_space_bodies(self._space, _BODY_FIELDS, buf)
+        id_bytes = bytes(buf.int_buf())
+        data = np.frombuffer(buf.float_buf(), np.float64).reshape(-1, 6)
+        n = len(self._keys)
+        # pymunk's iteration order only changes when bodies come, go, sleep or wake
+        if id_bytes != self._iter_ids:
+            self._iter_ids = id_bytes
+            rows = self._index.rows(np.frombuffer(id_bytes, np.int64))
+            src = np.zeros(n, np.intp)
+            keyed = rows < n
+            src[rows[keyed]] = np.flatnonzero(keyed)
+            self._src = None if np.array_equal(src, np.arange(n)) else src
+        return data[:n] if self._src is None else data[self._src]
+
+    def read_state(self) -> BodyState:
+        """Every body's pose and velocity; a body gone non-finite is reset first."""
+        if self._dirty:
+            self._reindex()
+        d = self._gather()
+        if not np.isfinite(d).all():
+            self._reset_broken(d)
+            d = self._gather()
+        n = len(self._keys)
+        position = np.empty((n, 3))
+        position[:, ::2] = d[:, 0:2]
+        position[:, 1] = self._y
+        orientation = np.zeros((n, 4))  # (cos φ/2, 0, sin φ/2, 0) with φ = −θ
+        half = d[:, 2] * -0.5
+        np.cos(half, out=orientation[:, 0])
+        np.sin(half, out=orientation[:, 2])
+        if self._any_rest:
+            orientation = quat_multiply(orientation, self._rest)
+        linear = np.zeros((n, 3))
+        linear[:, ::2] = d[:, 3:5]
+        if self._any_cog:  # pymunk's velocity is its centre of mass's; ours the origin's
+            c, s_ = np.cos(d[:, 2]), np.sin(d[:, 2])
+            rx = c * self._cog[:, 0] - s_ * self._cog[:, 1]
+            rz = s_ * self._cog[:, 0] + c * self._cog[:, 1]
+            linear[:, 0] += d[:, 5] * rz
+            linear[:, 2] -= d[:, 5] * rx
+        angular = np.zeros((n, 3))
+        np.negative(d[:, 5], out=angular[:, 1])
+        self._last_good = BodyState(self._keys.copy(), position, orientation, linear, angular)
+        return self._last_good
+
+    def _reset_broken(self, d: np.ndarray) -> None:
+        """Put bodies whose state turned non-finite back at their last good pose, at rest."""
+        last = self._last_good
+        for i in np.flatnonzero(~np.isfinite(d).all(axis=1)):
+            key = int(self._keys[i])
+            rec = self._bodies[key]
+            seen = np.flatnonzero(last.keys == key)
+            if seen.size and np.isfinite(last.position[seen[0]]).all():
+                self.set_pose(key, last.position[seen[0]], last.orientation[seen[0]])
+            else:
+                rec.body.angle = 0.0
+                rec.body.position = (0.0, 0.0)
+            rec.body.velocity = (0.0, 0.0)
+            rec.body.angular_velocity = 0.0
+            message = "state turned non-finite; reset to its last good pose, at rest"
+            log.warning("body %s: %s", key, message)
+            self._faults.append((key, message))
+
+    def take_faults(self) -> list[tuple[int, str]]:
+        """Bodies reset since the last call, with why (the engine reports them)."""
+        faults, self._faults = self._faults, []
+        return faults
+
+    def keys(self) -> np.ndarray:
+        """Body keys in the row order of :meth:`read_state` and :meth:`read_poses`."""
+        if self._dirty:
+            self._reindex()
+        return self._keys
+
+    def read_poses(self, out: np.ndarray) -> None:
+        """Fill ``out`` (N, 7) with x y z w x y z per body, in :meth:`keys` order."""
+        state = self.read_state()
+        out[:, :3] = state.position
+        out[:, 3:] = state.orientation
+
+    def write_state(self, state: BodyState) -> None:
+        missing = [int(k) for k in state.keys if int(k) not in self._bodies]
+        if missing:
+            raise KeyError(f"write_state: no bodies with keys {missing[:10]}")
+        for i, key in enumerate(state.keys):
+            rec = self._bodies[int(key)]
+            self.set_pose(rec.key, state.position[i], state.orientation[i])
+            if rec.body.body_type != pymunk.Body.STATIC:
+                _set_origin_velocity(rec.body, float(state.linear_velocity[i, 0]),
+                                     float(state.linear_velocity[i, 2]),
+                                     -float(state.angular_velocity[i, 1]))
+
+    def contacts(self) -> np.ndarray:
+        if self._contacts is None:
+            self._contacts = self._collect_contacts()
+        return self._contacts
+
+    def _collect_contacts(self) -> np.ndarray:
+        """One row per touching shape pair: mean point, deepest overlap, |impulse|.
+
+        Sorted by keys then position, so the same run gives the same array.
+        """
+        if self._dirty:
+            self._reindex()
+        buf = self._buf
+        buf.clear()
+        batch.get_space_arbiters(self._space, _ARBITER_FIELDS, buf)
+        ints = np.frombuffer(buf.int_buf(), np.int64).reshape(-1, 3)
+        fl = np.frombuffer(buf.float_buf(), np.float64).reshape(-1, 14)
+        touching = ints[:, 2] > 0
+        if not touching.all():
+            ints, fl = ints[touching], fl[touching]
+        m = len(ints)
+        if m == 0:
+            return np.zeros(0, CONTACT_DTYPE)
+        rows = self._index.rows(ints[:, :2].ravel()).reshape(-1, 2)
+        keys = self._keys_ext[rows]
+        static = self._static_rows[rows]
+        # "a" is the moving side, or the lower key; "b" the static side (−1: keyless world)
+        swap = (static[:, 0] & ~static[:, 1]) | (
+            (static[:, 0] == static[:, 1]) & (keys[:, 0] > keys[:, 1]))
+        # built as a plain (m, 10) table laid out like CONTACT_DTYPE, then viewed as it
+        res = np.empty((m, 10))
+        as_int = res.view(np.int64)
+        np.copyto(as_int[:, 0:2], keys)
+        np.copyto(as_int[:, 0:2], keys[:, ::-1], where=swap[:, None])
+        # mean of the contact points on both surfaces (pymunk zeroes the unused second one)
+        res[:, 2:5:2] = (fl @ _MID_SUM) / (2.0 * ints[:, 2:3])
+        res[:, 3] = self._y_ext[np.where(swap, rows[:, 1], rows[:, 0])]
+        # pymunk's normal points from shape a to shape b; ours points from b toward a.
+        res[:, 5:8:2] = fl[:, 2:4] * (2.0 * swap - 1.0)[:, None]
+        res[:, 6] = 0.0
+        np.maximum(-np.minimum(fl[:, 8], fl[:, 13]), 0.0, out=res[:, 8])
+        np.hypot(fl[:, 0], fl[:, 1], out=res[:, 9])
+        # pymunk keeps arbiters in a hash set keyed by pointers: sort for a repeatable
+        # order, by keys, and by position where one pair of bodies touches more than once
+        a, b = as_int[:, 0], as_int[:, 1]
+        if a.min() >= -1 and max(a.max(), b.max()) < 1 << 31 and b.min() >= -1:
+            pair = ((a + 1) << 32) | (b + 1)  # keys fit in 32 bits: one integer sort
+            order = np.argsort(pair, kind="stable")
+            sorted_pair = pair[order]
+            repeated = bool(np.any(sorted_pair[1:] == sorted_pair[:-1]))
+        else:
+            repeated = True
+        if repeated:
+            order = np.lexsort((res[:, 4], res[:, 2], b, a))
+        return res[order].view(CONTACT_DTYPE)[:, 0]
+
+    # -- queries -----------------------------------------------------------
+    def raycast(self, origin: np.ndarray, direction: np.ndarray, max_distance: float,
+                ignore: int | None = None, mask: int = 0xFFFFFFFF) -> RayHit | None:
+        """Closest hit along the ray (skipping body ``ignore`` and categories outside
+        ``mask``); what is cast is the ray's projection on the X–Z plane."""
+        d = np.asarray(direction, dtype=np.float64)
+        norm = float(np.linalg.norm(d))
+        if norm == 0.0 or not max_distance > 0.0:
+            return None
+        d = d / norm
+        if math.hypot(d[0], d[2]) < 1e-12:
+            return None  # a ray along Y stays on one point of the plane
+        o = np.asarray(origin, dtype=np.float64)
+        end = o + d * max_distance
+        query = pymunk.ShapeFilter(mask=mask & 0xFFFFFFFF)
+        skip = self._bodies[int(ignore)].body if ignore is not None and int(
+            ignore) in self._bodies else None
+        hits = [h for h in self._space.segment_query((o[0], o[2]), (end[0], end[2]), 0.0, query)
+                if h.shape is not None and h.shape.body is not skip]
+        if not hits:
+            return None
+        hit = min(hits, key=lambda h: h.alpha)
+        dist = float(hit.alpha) * max_distance
+        pos = o + d * dist
+        key = next((r.key for r in self._bodies.values() if r.body is hit.shape.body), -1)
+        return RayHit(key, (float(pos[0]), float(pos[1]), float(pos[2])),
+                      (float(hit.normal.x), 0.0, float(hit.normal.y)), dist)
+
+    def add_static_plane(self, normal: tuple[float, float, float] = (0.0, 0.0, 1.0),
+                         offset: float = 0.0, material: MaterialProps | None = None) -> None:
+        """Keyless ground plane ``normal · x = offset`` (contacts report it as key −1)."""
+        mat = material or MaterialProps()
+        built = build_shape(self._space.static_body, Shape("plane", (*normal, offset)),
+                            np.array([1.0, 0.0, 0.0, 0.0]), True,
+                            lambda t, m: self._warn("static plane", t, m))
+        if built is None:
+            return
+        built.shape.friction = math.sqrt(min(float(mat.friction), 1e12))
+        built.shape.elasticity = float(mat.bounce)
+        built.shape.collision_type = (self._bouncy(mat.name) if mat.bounce > 0
+                                      else self._material_types.get(mat.name, 0))
+        self._space.add(built.shape)
+
+
+def _pair_begin(arbiter: pymunk.Arbiter, space: pymunk.Space,
+                pairs: dict[tuple[int, int], MaterialPair]) -> None:
+    sa, sb = arbiter.shapes
+    pair = pairs.get((sa.collision_type, sb.collision_type))
+    if pair is not None and not pair.collide:
+        arbiter.process_collision = False
+
+
+def _material_pre_solve(arbiter: pymunk.Arbiter, space: pymunk.Space,
+                        pairs: dict[tuple[int, int], MaterialPair]) -> None:
+    """Bounce is the larger of the two materials' (as ODE), unless a pair says otherwise."""
+    sa, sb = arbiter.shapes
+    arbiter.restitution = max(sa.elasticity, sb.elasticity)
+    pair = pairs.get((sa.collision_type, sb.collision_type))
+    if pair is not None:
+        if pair.friction is not None:
+            arbiter.friction = pair.friction
+        if pair.bounce is not None:
+            arbiter.restitution = pair.bounce
+
+
+def _velocity_func(gravity: bool, linear_damping: float, angular_damping: float):
+    """Per-body gravity switch and ODE-style damping (velocity × (1 − damping) per step)."""
+    keep_v = 1.0 - min(max(linear_damping, 0.0), 1.0)
+    keep_w = 1.0 - min(max(angular_damping, 0.0), 1.0)
+
+    def update(body: pymunk.Body, g: tuple[float, float], damping: float, dt: float) -> None:
+        pymunk.Body.update_velocity(body, g if gravity else (0.0, 0.0), damping, dt)
+        if keep_v != 1.0:
+            body.velocity = body.velocity * keep_v
+        if keep_w != 1.0:
+            body.angular_velocity = body.angular_velocity * keep_w
+
+    return update
+
+
+def _set_origin_velocity(body: pymunk.Body, vx: float, vz: float, w: float) -> None:
+    """Velocities given at the body's origin; pymunk keeps its centre of mass's."""
+    r = body.rotation_vector.cpvrotate(body.center_of_gravity)
+    body.angular_velocity = w
+    body.velocity = (vx - w * r.y, vz + w * r.x)

@@ -1,0 +1,192 @@
+"""Joint components → pymunk constraints.
+
+hinge → PivotJoint (+ RotaryLimitJoint for limits); motorized_hinge → the same +
+SimpleMotor whose ``max_force`` is the motor torque; slider → GrooveJoint + GearJoint
+(no relative turning), its motor a bounded force applied before each step; fixed →
+PivotJoint + GearJoint; six_dof → PivotJoint + GearJoint whose ``max_force`` is
+``motor_max_force`` (N and N·m), holding body_a at its pose relative to body_b (a
+kinematic target, carried along as it moves) or, without body_b, at a world pose
+that ``set_target`` moves, with bounded force.
+
+Approximations, each reported once: ball and universal → pivot (out-of-plane freedom
+dropped); hinge2 → pivot about the wheel axle (steering and suspension dropped: its
+motor drives the wheel; its limits and joint state belong to the steering, so they
+are dropped and 0); a hinge axis off ±Y → treated as ±Y.
+
+Joint angles follow ODE: a hinge's angle is body_a's rotation relative to body_b about
+the joint axis, zero when the joint is made; a slider's position is
+``(p_a − p_b)·axis`` minus its value when made. Jointed bodies do not collide.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import pymunk
+
+from components import Joint
+
+#: Groove half-length for a slider without limits (m).
+FREE_GROOVE = 1.0e3
+#: Share of a six_dof's pose error corrected per second (pymunk error_bias).
+SIX_DOF_ERROR_BIAS = (1.0 - 0.5) ** 60
+
+Warn = Callable[[str, str], None]
+
+ANGULAR = ("hinge", "motorized_hinge", "ball", "universal", "hinge2", "fixed", "six_dof")
+
+
+@dataclass(slots=True)
+class JointRecord:
+    """A joint as pymunk constraints, with what is needed to read and drive it."""
+
+    spec: Joint
+    a: pymunk.Body
+    b: pymunk.Body
+    constraints: list[pymunk.Constraint] = field(default_factory=list)
+    sign: float = 1.0  # +1 when the joint axis is +Y, −1 when −Y
+    zero: float = 0.0  # relative angle (θb−θa) or slider position when made
+    axis: tuple[float, float] = (1.0, 0.0)  # slider axis in the plane
+    motor: pymunk.SimpleMotor | None = None
+    slider_velocity: float = 0.0
+    slider_max_force: float = 0.0
+
+    def state(self) -> tuple[float, float]:
+        """Position (angle or distance) and rate of the first axis, ODE's sign."""
+        if self.spec.kind == "hinge2":
+            return 0.0, 0.0  # the first axis is the steering, held straight in the plane
+        if self.spec.kind == "slider":
+            ax, az = self.axis
+            dp = self.a.position - self.b.position
+            dv = self.a.velocity - self.b.velocity
+            return dp.x * ax + dp.y * az - self.zero, dv.x * ax + dv.y * az
+        rel = self.b.angle - self.a.angle
+        return self.sign * (rel - self.zero), self.sign * (self.b.angular_velocity
+                                                           - self.a.angular_velocity)
+
+    def set_motor(self, velocity: float, max_force: float, space: pymunk.Space) -> None:
+        if self.spec.kind == "slider":
+            self.slider_velocity, self.slider_max_force = velocity, max_force
+            return
+        if self.motor is None:
+            self.motor = pymunk.SimpleMotor(self.a, self.b, 0.0)
+            self.motor.collide_bodies = False
+            self.constraints.append(self.motor)
+            space.add(self.motor)
+        # SimpleMotor holds ω_a − ω_b = rate; ODE's rate is sign·(ω_b − ω_a).
+        self.motor.rate = -self.sign * velocity
+        self.motor.max_force = max(0.0, max_force)
+
+    def set_target(self, position: tuple[float, float], angle: float,
+                   max_force: float | None, max_torque: float | None) -> None:
+        """A six_dof's new target: body_a's origin at ``position``, turned to ``angle``."""
+        pivot, gear = self.constraints[0], self.constraints[1]
+        pivot.anchor_b = self.b.world_to_local(position)
+        gear.phase = self.b.angle - angle
+        if max_force is not None:
+            pivot.max_force = max_force
+        if max_torque is not None:
+            gear.max_force = max_torque
+        self.a.activate()
+
+    def drive_slider(self, dt: float) -> None:
+        """The slider motor: the force that reaches the target rate this step, bounded."""
+        if self.slider_max_force <= 0.0:
+            return
+        inv = (1.0 / self.a.mass if self.a.body_type == pymunk.Body.DYNAMIC else 0.0) + (
+            1.0 / self.b.mass if self.b.body_type == pymunk.Body.DYNAMIC else 0.0)
+        if inv == 0.0:
+            return
+        _, rate = self.state()
+        force = (self.slider_velocity - rate) / (inv * dt)
+        force = max(-self.slider_max_force, min(self.slider_max_force, force))
+        ax, az = self.axis
+        for body, f in ((self.a, force), (self.b, -force)):
+            if body.body_type == pymunk.Body.DYNAMIC:
+                body.apply_force_at_local_point((f * ax, f * az), body.center_of_gravity)
+
+
+def _axis_sign(spec: Joint, axis: tuple[float, float, float], warn: Warn) -> float:
+    v = np.asarray(axis, dtype=np.float64)
+    n = float(np.linalg.norm(v))
+    if n == 0.0 or abs(v[1]) < 0.999 * n:
+        warn("axis", f"{spec.kind} axis {tuple(axis)} is not along ±Y; treated as +Y"
+             if n == 0.0 or v[1] >= 0 else
+             f"{spec.kind} axis {tuple(axis)} is not along ±Y; treated as −Y")
+    return -1.0 if n > 0.0 and v[1] < 0.0 else 1.0
+
+
+def _limits(rec: JointRecord, spec: Joint) -> None:
+    if spec.low is None and spec.high is None:
+        return
+    low = spec.low if spec.low is not None else -math.inf
+    high = spec.high if spec.high is not None else math.inf
+    lo, hi = (low, high) if rec.sign > 0 else (-high, -low)
+    lo = rec.zero + lo if math.isfinite(lo) else -1e9
+    hi = rec.zero + hi if math.isfinite(hi) else 1e9
+    rec.constraints.append(pymunk.RotaryLimitJoint(rec.a, rec.b, lo, hi))
+
+
+def build_joint(spec: Joint, a: pymunk.Body, b: pymunk.Body, warn: Warn) -> JointRecord:
+    """Constraints for ``spec`` between ``a`` and ``b`` (b may be the space's static body)."""
+    kind = spec.kind
+    rec = JointRecord(spec, a, b)
+    anchor = (float(spec.anchor[0]), float(spec.anchor[2]))
+    rec.zero = b.angle - a.angle
+    if kind in ("hinge", "motorized_hinge", "ball", "universal", "hinge2"):
+        if kind == "ball":
+            warn("ball", "ball joint: out-of-plane rotation dropped; pivot about Y")
+        elif kind == "universal":
+            warn("universal", "universal joint: second axis dropped; pivot about Y")
+        elif kind == "hinge2":
+            warn("hinge2", "hinge2: steering and suspension dropped; pivot about the axle")
+        axis = spec.axis2 if kind == "hinge2" else spec.axis
+        rec.sign = _axis_sign(spec, axis, warn) if kind in ("hinge", "motorized_hinge",
+                                                            "hinge2") else 1.0
+        rec.constraints.append(pymunk.PivotJoint(a, b, anchor))
+        if kind != "hinge2":  # a hinge2's limits are its steering's, which the plane drops
+            _limits(rec, spec)
+        if kind == "motorized_hinge" or spec.motor_max_force > 0.0:
+            motor = pymunk.SimpleMotor(a, b, -rec.sign * spec.motor_velocity)
+            motor.max_force = max(0.0, spec.motor_max_force)
+            rec.motor = motor
+            rec.constraints.append(motor)
+    elif kind == "slider":
+        v = np.array([spec.axis[0], spec.axis[2]], dtype=np.float64)
+        n = float(np.linalg.norm(v))
+        if n < 1e-9:
+            raise ValueError(f"joint {spec.id or '?'}: slider axis {tuple(spec.axis)} "
+                             "has no component in the X–Z plane")
+        if abs(spec.axis[1]) > 1e-9:
+            warn("axis", f"slider axis {tuple(spec.axis)} leaves the X–Z plane; projected")
+        ax, az = v / n
+        rec.axis = (float(ax), float(az))
+        dp = a.position - b.position
+        rec.zero = dp.x * ax + dp.y * az
+        low = spec.low if spec.low is not None else -FREE_GROOVE
+        high = spec.high if spec.high is not None else FREE_GROOVE
+        pa = a.position
+        g1 = b.world_to_local((pa.x + low * ax, pa.y + low * az))
+        g2 = b.world_to_local((pa.x + high * ax, pa.y + high * az))
+        rec.constraints.append(pymunk.GrooveJoint(b, a, g1, g2, (0.0, 0.0)))
+        rec.constraints.append(pymunk.GearJoint(a, b, b.angle - a.angle, 1.0))
+        rec.slider_velocity = spec.motor_velocity
+        rec.slider_max_force = spec.motor_max_force
+    elif kind in ("fixed", "six_dof"):
+        pivot = pymunk.PivotJoint(a, b, (0.0, 0.0), b.world_to_local(a.position))
+        gear = pymunk.GearJoint(a, b, b.angle - a.angle, 1.0)
+        if kind == "six_dof":
+            limit = spec.motor_max_force if spec.motor_max_force > 0.0 else math.inf
+            for c in (pivot, gear):
+                c.max_force = limit
+                c.error_bias = SIX_DOF_ERROR_BIAS
+        rec.constraints += [pivot, gear]
+    else:
+        raise ValueError(f"joint {spec.id or '?'}: unknown kind {kind!r}; expected one of "
+                         f"{', '.join((*ANGULAR, 'slider'))}")
+    for c in rec.constraints:
+        c.collide_bodies = False
+    return rec

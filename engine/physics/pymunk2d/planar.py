@@ -1,0 +1,80 @@
+"""The side-view mapping between the 3D world and pymunk's plane.
+
+pymunk's ``(x, y)`` is the world's ``(X, Z)``: Z is up and gravity points along −Z.
+A pymunk angle θ turns X toward Z (counter-clockwise in the side view); in 3D that
+is a rotation by φ = −θ about +Y, because a positive turn about +Y takes X toward −Z.
+So an orientation about Y is the quaternion ``(cos φ/2, 0, sin φ/2, 0)`` with φ = −θ,
+and an angular velocity ω (pymunk) is ``(0, −ω, 0)`` in 3D.
+
+An authored orientation with an out-of-plane part is split as ``q = q_y(φ) ⊗ q_rest``:
+φ goes to pymunk, ``q_rest`` (a fixed tilt) is baked into the body's 2D silhouette and
+put back on every orientation read, so what the renderer shows stays what the author
+wrote. Y positions are kept per body as authored.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: Quaternions closer than this to ``q_y(φ)`` count as purely in-plane.
+PLANAR_TOLERANCE = 1e-9
+
+
+def quat_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Hamilton product of quaternion rows ``(w, x, y, z)``; broadcasts over rows."""
+    pw, px, py, pz = np.moveaxis(np.asarray(p, dtype=np.float64), -1, 0)
+    qw, qx, qy, qz = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
+    return np.stack(
+        [
+            pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+        ],
+        axis=-1,
+    )
+
+
+def quat_conjugate(q: np.ndarray) -> np.ndarray:
+    return np.asarray(q, dtype=np.float64) * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """3×3 rotation matrix of a unit quaternion ``(w, x, y, z)``."""
+    w, x, y, z = np.asarray(q, dtype=np.float64) / np.linalg.norm(q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def split_orientation(q: np.ndarray) -> tuple[float, np.ndarray, bool]:
+    """Split ``q`` into the pymunk angle θ and the out-of-plane rest ``q_rest``.
+
+    Returns ``(theta, q_rest, planar)``; ``planar`` is False when ``q`` has a tilt
+    that the plane cannot represent (it is then kept in ``q_rest``).
+    """
+    q = np.asarray(q, dtype=np.float64).reshape(4)
+    norm = float(np.linalg.norm(q))
+    if not math.isfinite(norm) or norm == 0.0:
+        raise ValueError(f"orientation {q.tolist()} is not a rotation quaternion")
+    q = q / norm
+    w, y = float(q[0]), float(q[2])
+    twist_norm = math.hypot(w, y)
+    if twist_norm < 1e-12:  # a half turn about a horizontal axis: no Y twist to speak of
+        twist = np.array([1.0, 0.0, 0.0, 0.0])
+    else:
+        twist = np.array([w / twist_norm, 0.0, y / twist_norm, 0.0])
+    rest = quat_multiply(quat_conjugate(twist), q)
+    if rest[0] < 0.0:
+        rest = -rest
+    phi = 2.0 * math.atan2(twist[2], twist[0])
+    planar = bool(abs(rest[0] - 1.0) < PLANAR_TOLERANCE)
+    if planar:
+        rest = np.array([1.0, 0.0, 0.0, 0.0])
+    return -phi, rest, planar

@@ -1,0 +1,136 @@
+"""pymunk backend: batch reads stay right as pymunk reorders bodies; sleeping; queries."""
+
+from __future__ import annotations
+
+import numpy as np
+import pymunk
+import pytest
+
+from components import Physical, Shape
+from engine.physics.backend import WorldSettings
+from engine.physics.pymunk2d import PymunkBackend
+from engine.physics.pymunk2d.idindex import IdIndex
+
+# a failing pymunk callback is only printed by cffi: make it fail the test
+pytestmark = pytest.mark.filterwarnings("error::pytest.PytestUnraisableExceptionWarning")
+
+
+def test_id_index_finds_every_id_and_only_those() -> None:
+    bodies = [pymunk.Body(1, 1) for _ in range(500)]
+    ids = np.array([b.id for b in bodies], np.uint64).view(np.int64)
+    index = IdIndex(ids)
+    order = np.random.default_rng(1).permutation(500)
+    np.testing.assert_array_equal(index.rows(ids[order]), order)
+    strangers = np.array([pymunk.Body(1, 1).id for _ in range(20)], np.uint64).view(np.int64)
+    assert np.all(index.rows(strangers) == 500)
+
+
+def _check_state_matches_bodies(backend: PymunkBackend) -> None:
+    state = backend.read_state()
+    for i, key in enumerate(state.keys):
+        body = backend._bodies[int(key)].body
+        assert state.position[i, 0] == body.position.x
+        assert state.position[i, 2] == body.position.y
+        assert state.linear_velocity[i, 0] == body.velocity.x
+
+
+def test_read_state_survives_sleeping_and_removal(kit) -> None:
+    backend = PymunkBackend()
+    backend.configure(WorldSettings(auto_sleep=True))
+    kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
+    for i in range(12):
+        kit.add(backend, i, kit.box((0.4, 0.4, 0.4)), (1.0 * (i % 4), 0.0, 0.2 + 0.45 * (i // 4)))
+    kit.add(backend, 99, kit.sphere(), (-3.0, 0.0, 5.0))
+    _check_state_matches_bodies(backend)
+    for _ in range(180):
+        backend.step(1 / 60)
+    assert backend._bodies[0].body.is_sleeping
+    _check_state_matches_bodies(backend)  # sleepers now come last in pymunk's iteration
+    backend.remove_body(5)
+    backend.set_sleeping(0, False)
+    backend.step(1 / 60)
+    _check_state_matches_bodies(backend)
+    assert 5 not in backend.read_state().keys
+
+
+def test_set_sleeping_and_can_sleep(kit) -> None:
+    backend = PymunkBackend()
+    backend.configure(WorldSettings(auto_sleep=True))
+    kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
+    kit.add(backend, 1, kit.box((0.4, 0.4, 0.4)), (0.0, 0.0, 0.2))
+    restless = kit.box((0.4, 0.4, 0.4))
+    restless.can_sleep = False
+    kit.add(backend, 2, restless, (2.0, 0.0, 0.2))
+    for _ in range(120):
+        backend.step(1 / 60)
+    assert backend._bodies[1].body.is_sleeping
+    assert not backend._bodies[2].body.is_sleeping
+    backend.set_sleeping(1, False)
+    assert not backend._bodies[1].body.is_sleeping
+    backend.set_sleeping(1, True)
+    assert backend._bodies[1].body.is_sleeping
+
+
+def test_gravity_switch_and_damping(kit) -> None:
+    backend = PymunkBackend()
+    floating = Physical(shapes=[Shape("sphere", (0.1,))], gravity=False, linear_damping=0.1)
+    kit.add(backend, 1, floating, (0.0, 0.0, 1.0))
+    backend.set_velocity(1, np.array([1.0, 0.0, 0.0]), np.zeros(3))
+    for _ in range(10):
+        backend.step(1 / 60)
+    r = kit.row(backend, 1)
+    assert r["position"][2] == 1.0
+    assert r["linear"][0] == pytest.approx(0.9**10)
+
+
+def test_raycast_along_a_tilted_ray_measures_3d_distance(kit) -> None:
+    backend = PymunkBackend()
+    kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
+    d = np.array([0.0, 1.0, -1.0]) / np.sqrt(2.0)
+    hit = backend.raycast(np.array([0.0, 0.0, 1.0]), d, 5.0)
+    assert hit is not None and hit.key == kit.GROUND
+    assert hit.distance == pytest.approx(np.sqrt(2.0))
+    np.testing.assert_allclose(hit.position, [0.0, 1.0, 0.0], atol=1e-9)
+    assert backend.raycast(np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0]), 5.0) is None
+
+
+def test_contacts_are_sorted_and_static_side_is_b(kit) -> None:
+    backend = PymunkBackend()
+    kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
+    for i in range(5):
+        kit.add(backend, 10 - i, kit.box((0.4, 0.4, 0.4)), (float(i), 0.0, 0.2))
+    backend.step(1 / 60)
+    c = backend.contacts()
+    assert list(c["a"]) == [6, 7, 8, 9, 10]
+    assert set(c["b"]) == {kit.GROUND}
+    assert backend.contacts() is c  # computed once per step
+
+
+def test_a_body_gone_non_finite_is_reset_and_reported(kit) -> None:
+    backend = PymunkBackend()
+    kit.add(backend, 1, kit.sphere(), (0.0, 0.0, 5.0))
+    kit.add(backend, 2, kit.sphere(), (1.0, 0.0, 5.0))
+    backend.step(1 / 60)
+    good = kit.row(backend, 1)["position"].copy()
+    backend._bodies[1].body.velocity = (float("nan"), 0.0)  # what a blown-up solve leaves
+    backend.step(1 / 60)
+    state = backend.read_state()
+    assert np.isfinite(state.position).all() and np.isfinite(state.linear_velocity).all()
+    np.testing.assert_allclose(kit.row(backend, 1)["position"], good)
+    assert [key for key, _ in backend.take_faults()] == [1]
+    assert backend.take_faults() == []
+    backend.step(1 / 60)  # the world steps on
+    assert kit.row(backend, 2)["position"][2] < 5.0
+
+
+def test_read_poses_fills_rows_in_keys_order(kit) -> None:
+    backend = PymunkBackend()
+    for key in (5, 3, 9):
+        kit.add(backend, key, kit.sphere(), (float(key), 1.0, 2.0), kit.quat_y(0.1 * key))
+    backend.step(1 / 60)
+    poses = np.zeros((3, 7))
+    backend.read_poses(poses)
+    state = backend.read_state()
+    np.testing.assert_array_equal(backend.keys(), state.keys)
+    np.testing.assert_array_equal(poses[:, :3], state.position)
+    np.testing.assert_array_equal(poses[:, 3:], state.orientation)
