@@ -15,6 +15,8 @@ if TYPE_CHECKING:
 #: plugin name -> "module:Class"; aliases from the paper's plugin names.
 PLUGINS: dict[str, str] = {
     "physics": "systems.dynamics:DynamicsPlugin",
+    "scripting": "systems.scripting:ScriptingPlugin",
+    "controllers": "systems.controllers:ControllersPlugin",
     "render": "systems.render:RenderPlugin",
     "sound": "systems.sound:SoundPlugin",
 }
@@ -52,7 +54,8 @@ def wants_render(config: EngineConfig) -> bool:
 
 
 def default_plugins(config: EngineConfig) -> list[Any]:
-    plugins = [RegistryPlugin(), load_plugin("physics"), load_plugin("sound")]
+    plugins = [RegistryPlugin(), *(load_plugin(name) for name in
+                                   ("physics", "scripting", "controllers", "sound"))]
     if wants_render(config):
         plugins.append(load_plugin("render"))
     return plugins

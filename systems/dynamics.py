@@ -1,8 +1,8 @@
 """The dynamics system: Physical and Joint components ↔ the dynamics backend.
 
-New bodies and joints are sent to the backend through the command queue at the
-start of the FIXED phase (their Transform is read then, so component order at
-spawn does not matter). In serial mode this system steps the backend; in
+New bodies and joints are sent to the backend through the command queue as
+soon as they are spawned (a body without a Transform yet waits for the FIXED
+phase), so commands queued after a spawn always find their body. In serial mode this system steps the backend; in
 threaded mode the physics thread does and this system only picks up the latest
 snapshot. Either way, every Transform is updated by one vectorised numpy
 assignment per array, with no Python work per body.
@@ -34,7 +34,6 @@ class DynamicsSystem(System):
 
     def __init__(self) -> None:
         self._new_bodies: list[tuple[int, Physical]] = []
-        self._new_joints: list[tuple[int, Joint]] = []
         #: The snapshot the Transforms reflect now (newer ones may already exist in
         #: threaded mode; systems wanting a consistent view read this one).
         self.snapshot: Snapshot | None = None
@@ -45,18 +44,25 @@ class DynamicsSystem(System):
 
     def setup(self, engine: Engine) -> None:
         world = engine.world
-        world.on_add(Physical, lambda e, c: self._new_bodies.append((e, c)))
-        world.on_add(Joint, lambda e, c: self._new_joints.append((e, c)))
+        world.on_add(Physical, lambda e, c: self._add_body(engine, e, c))
+        world.on_add(Joint, lambda e, c: engine.physics.push(_add_joint(e, c)))
         world.on_remove(Physical, lambda e, c: self._remove_body(engine, e))
         world.on_remove(Joint, lambda e, c: engine.physics.push(_remove_joint(e)))
         for entity, physical in world.get_component(Physical):
-            self._new_bodies.append((entity, physical))
+            self._add_body(engine, entity, physical)
         for entity, joint in world.get_component(Joint):
-            self._new_joints.append((entity, joint))
+            engine.physics.push(_add_joint(entity, joint))
+
+    def _add_body(self, engine: Engine, entity: int, physical: Physical) -> None:
+        """Queue the body at once, so commands queued after the spawn find it."""
+        t = engine.world.try_component(entity, Transform)
+        if t is None:  # a Transform may follow with add_component; wait for FIXED
+            self._new_bodies.append((entity, physical))
+        else:
+            engine.physics.push(_add_body(entity, physical, t))
 
     def _remove_body(self, engine: Engine, entity: int) -> None:
-        pending = [pair for pair in self._new_bodies if pair[0] == entity]
-        if pending:  # never reached the backend
+        if any(pair[0] == entity for pair in self._new_bodies):  # never reached the backend
             self._new_bodies = [pair for pair in self._new_bodies if pair[0] != entity]
             return
         engine.physics.push(_remove_body(entity))
@@ -65,14 +71,8 @@ class DynamicsSystem(System):
         if self._new_bodies:
             bodies, self._new_bodies = self._new_bodies, []
             for entity, physical in bodies:
-                t = engine.world.try_component(entity, Transform)
-                if t is None:
-                    t = Transform()
+                t = engine.world.try_component(entity, Transform) or Transform()
                 engine.physics.push(_add_body(entity, physical, t))
-        if self._new_joints:
-            joints, self._new_joints = self._new_joints, []
-            for entity, joint in joints:
-                engine.physics.push(_add_joint(entity, joint))
 
     def run(self, engine: Engine, dt: float) -> None:
         self._send_new(engine)

@@ -1,0 +1,494 @@
+"""The Lua scripting API: what a script can do to the running simulation.
+
+Every name below is a global in each script and also a field of the
+``colosseum`` table. Vectors are passed as three numbers or a table
+``{x, y, z}`` and returned as three numbers (orientations: four, ``w, x, y, z``).
+Objects are handles (``find`` returns them, callbacks receive them); ``self`` is
+the object a script is attached to (nil for a scene script).
+
+Objects (``obj:method(...)``)::
+
+    obj.id                          entity id;  obj:getName() -> the scene ID
+    obj:getPosition() -> x, y, z    obj:setPosition(x, y, z)
+    obj:getOrientation() -> w,x,y,z obj:setOrientation(w, x, y, z)
+    obj:getVelocity() -> x, y, z    obj:setVelocity(x, y, z)
+    obj:getAngularVelocity()        obj:setAngularVelocity(x, y, z)   (rad/s)
+    obj:addForce(fx, fy, fz [, px, py, pz])   for the next physics step (N, world point)
+    obj:addTorque(tx, ty, tz)       obj:addImpulse(ix, iy, iz [, px, py, pz])
+    obj:setKinematicTarget(x, y, z) obj:delete()
+    obj:playSound()                 obj:stopSound()   (its Sound component)
+
+Scene and engine::
+
+    find(id) -> obj or nil          spawn(sceneText) -> {obj, ...}   (scene format)
+    delete(obj)                     setMotor(joint, velocity, maxForce)
+    createJoint{kind=, a=obj, b=obj|nil, anchor={..}, axis={..}, low=, high=, id=}
+        -> joint id;                breakJoint(joint)   (joint: id string or number)
+    playSound(obj) / stopSound(obj) setUniform(state, name, value | {v1, v2, ...})
+    setCamera{position=, lookAt=, follow=obj, offset=, fov=, id=}
+    requestPlugin(name) -> bool     (aliases: osg, osgsim -> render; openalpp -> sound;
+                                     the paper's spelling ``requrestPlugin`` works too)
+    time() -> simulated seconds     log(...), warn(...), print(...)
+    after(sec, fn) / every(sec, fn) -> timer; cancel(timer)
+    on(name, fn(data, name)); emit(name, data)   custom events (also seen by Python);
+                                    data is plain data: objects in it arrive as entity ids
+
+Callbacks a script may define: ``onStart()``, ``onUpdate(dt)``,
+``onCollision(other, impulse)`` (object scripts) or ``onCollision(a, b,
+impulse)`` (scene scripts; ``b`` is nil for static world geometry), called once
+per frame for every pair of bodies in contact, with the impulse (N s) summed
+over the pair's contacts and steps; ``onKey(key, pressed)``, ``onButton(name,
+pressed)`` (InputEvents of devices ``button:NAME``), ``onInput(device,
+value)``, ``onTimer(name)`` (engine TimerEvents), ``onReload()`` (after the file
+changed and was re-run in the script's environment: write ``count = count or 0``
+to keep state across reloads).
+
+Limits: each callback runs under an instruction budget (time in C library
+calls counts too); a script exceeding it, or the memory cap, is stopped with one
+message; a callback failing three times is disabled. Errors read
+``scripts/name.lua:LINE: message`` followed by a Lua traceback.
+
+Everything that touches physics (forces, poses, motors, joints, spawning,
+deleting) goes through the engine's command queue or deferred actions, so the
+same script behaves alike in serial and threaded mode. Missing subsystems
+(no sound or render plugin loaded) turn their calls into no-ops with one
+warning each.
+"""
+
+from __future__ import annotations
+
+import difflib
+import logging
+import sys
+from collections import deque
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from components import Camera, Joint, Name, Physical, Transform
+from engine.scripting.runtime import ScriptRuntime, to_python
+
+if TYPE_CHECKING:
+    from engine.app import Engine
+
+log = logging.getLogger("colosseum.script")
+
+#: Plugin names scripts may request, and the paper's names for them.
+PLUGIN_NAMES = ("physics", "render", "sound", "interaction", "scripting", "controllers",
+                "avatars")
+PLUGIN_ALIASES = {"osg": "render", "osgsim": "render", "openalpp": "sound", "ode": "physics",
+                  "dynamics": "physics", "openal": "sound"}
+
+#: Frames a command on a body that is not in the backend yet is retried.
+RETRY_FRAMES = 3
+
+JOINT_KINDS = ("hinge", "motorized_hinge", "ball", "slider", "universal", "hinge2", "fixed",
+               "six_dof")
+
+
+class ScriptAPIError(RuntimeError):
+    """A script called the API wrongly; the message is shown as ``file:line: message``."""
+
+
+_LUA_API = r"""
+local K, P = ...
+local Object, handle, id_of = K.Object, K.handle, K.id_of
+local type, error = type, error
+
+local function vec(what, x, y, z)
+  if type(x) == "table" then x, y, z = x[1], x[2], x[3] end
+  if type(x) ~= "number" or type(y) ~= "number" or type(z) ~= "number" then
+    error(what .. ": expected three numbers or a table {x, y, z}", 3)
+  end
+  return x, y, z
+end
+local function point(what, x, y, z)
+  if x == nil then return nil, nil, nil end
+  return vec(what, x, y, z)
+end
+local function oid(what, h)
+  local id = id_of(h)
+  if id == nil then error(what .. ": expected an object, got " .. type(h), 3) end
+  return id
+end
+local function joint(what, j)
+  if type(j) ~= "string" and type(j) ~= "number" then
+    error(what .. ": expected a joint id (string or number), got " .. type(j), 3)
+  end
+  return j
+end
+local plain = K.plain
+
+function Object.getName(h) return P.name(oid("getName", h)) end
+function Object.getPosition(h) return P.get(oid("getPosition", h), 0) end
+function Object.getOrientation(h) return P.get(oid("getOrientation", h), 1) end
+function Object.getVelocity(h) return P.get(oid("getVelocity", h), 2) end
+function Object.getAngularVelocity(h) return P.get(oid("getAngularVelocity", h), 3) end
+function Object.setPosition(h, x, y, z)
+  P.set_position(oid("setPosition", h), vec("setPosition", x, y, z))
+end
+function Object.setOrientation(h, w, x, y, z)
+  if type(w) == "table" then w, x, y, z = w[1], w[2], w[3], w[4] end
+  P.set_orientation(oid("setOrientation", h), w, x, y, z)
+end
+function Object.setVelocity(h, x, y, z)
+  P.set_velocity(oid("setVelocity", h), 0, vec("setVelocity", x, y, z))
+end
+function Object.setAngularVelocity(h, x, y, z)
+  P.set_velocity(oid("setAngularVelocity", h), 1, vec("setAngularVelocity", x, y, z))
+end
+function Object.addForce(h, x, y, z, px, py, pz)
+  local fx, fy, fz = vec("addForce", x, y, z)
+  P.push(oid("addForce", h), 0, fx, fy, fz, point("addForce", px, py, pz))
+end
+function Object.addTorque(h, x, y, z)
+  P.push(oid("addTorque", h), 1, vec("addTorque", x, y, z))
+end
+function Object.addImpulse(h, x, y, z, px, py, pz)
+  local ix, iy, iz = vec("addImpulse", x, y, z)
+  P.push(oid("addImpulse", h), 2, ix, iy, iz, point("addImpulse", px, py, pz))
+end
+function Object.setKinematicTarget(h, x, y, z)
+  P.kinematic(oid("setKinematicTarget", h), vec("setKinematicTarget", x, y, z))
+end
+function Object.delete(h) P.delete(oid("delete", h)) end
+function Object.playSound(h) P.sound(oid("playSound", h), true) end
+function Object.stopSound(h) P.sound(oid("stopSound", h), false) end
+
+local C = {}
+function C.find(name) return handle(P.find(name)) end
+function C.spawn(text)
+  if type(text) ~= "string" then error("spawn: expected scene-format text", 2) end
+  local ids = P.spawn(text)
+  local out = {}
+  for i = 1, #ids do out[i] = handle(ids[i]) end
+  return out
+end
+function C.delete(h) P.delete(oid("delete", h)) end
+function C.setMotor(j, velocity, maxForce)
+  P.set_motor(joint("setMotor", j), velocity, maxForce)
+end
+function C.createJoint(spec)
+  if type(spec) ~= "table" then error("createJoint: expected a table {kind=, a=, b=, ...}", 2) end
+  return P.create_joint(plain(spec))
+end
+function C.breakJoint(j) P.break_joint(joint("breakJoint", j)) end
+function C.playSound(h) P.sound(oid("playSound", h), true) end
+function C.stopSound(h) P.sound(oid("stopSound", h), false) end
+function C.setUniform(state, name, value)
+  P.set_uniform(state, name, plain(value))
+end
+function C.setCamera(opts)
+  if type(opts) ~= "table" then error("setCamera: expected a table of options", 2) end
+  P.set_camera(plain(opts))
+end
+function C.requestPlugin(name) return P.request_plugin(name) end
+C.requrestPlugin = C.requestPlugin
+function C.time() return P.time() end
+
+local G = {colosseum = C}
+for k, v in pairs(C) do G[k] = v end
+return G
+"""
+
+
+class ScriptAPI:
+    """The Python side of the API, bound to one engine (main thread only)."""
+
+    def __init__(self, engine: Engine) -> None:
+        self.engine = engine
+        self._names: dict[str, int] = {}
+        self._warned: set[str] = set()
+        self.runtime: ScriptRuntime | None = None
+        #: Commands that met a body or joint not created in the backend yet (spawned this
+        #: frame: bodies reach the backend in the FIXED phase); appended by the physics thread.
+        self._retry: deque[tuple[Callable[[Any], None], int, str]] = deque()
+
+    def _push(self, what: str, command: Callable[[Any], None], tries: int = 0) -> None:
+        """Queue a backend call; one on a body the backend has not got yet is retried."""
+
+        def run(backend: Any) -> None:
+            try:
+                command(backend)
+            except KeyError as exc:
+                if tries < RETRY_FRAMES:
+                    self._retry.append((command, tries + 1, what))
+                else:
+                    log.error("%s: %s", what, exc.args[0] if exc.args else exc)
+
+        self.engine.physics.push(run)
+
+    def flush_retries(self) -> None:
+        """Re-queue commands that found no body (called once a frame, before scripts)."""
+        for _ in range(len(self._retry)):
+            command, tries, what = self._retry.popleft()
+            self._push(what, command, tries)
+
+    def install(self, runtime: ScriptRuntime) -> Any:
+        """Build the Lua API table for ``runtime`` (passed as ``api=`` to it)."""
+        self.runtime = runtime
+        P = runtime.lua.table_from({
+            "name": self.name, "get": self.get, "set_position": self.set_position,
+            "set_orientation": self.set_orientation, "set_velocity": self.set_velocity,
+            "push": self.push, "kinematic": self.kinematic, "delete": self.delete,
+            "sound": self.sound, "find": self.find, "spawn": self.spawn,
+            "set_motor": self.set_motor, "create_joint": self.create_joint,
+            "break_joint": self.break_joint, "set_uniform": self.set_uniform,
+            "set_camera": self.set_camera, "request_plugin": self.request_plugin,
+            "time": self.time,
+        })
+        return runtime.lua.execute(_LUA_API, runtime.kernel, P, name="=colosseum")
+
+    # -- lookup ---------------------------------------------------------------
+    def find(self, name: Any) -> int:
+        """Entity id of the object whose scene ID is ``name`` (-1: none)."""
+        if isinstance(name, int | float) and not isinstance(name, bool):
+            entity = int(name)
+            return entity if self.engine.world.entity_exists(entity) else -1
+        if not isinstance(name, str):
+            raise ScriptAPIError(f"find: expected an object ID string, got {name!r}")
+        world = self.engine.world
+        entity = self._names.get(name)
+        if entity is not None and world.entity_exists(entity):
+            named = world.try_component(entity, Name)
+            if named is not None and named.id == name:
+                return entity
+        self._names = {n.id: e for e, n in world.get_component(Name)}
+        return self._names.get(name, -1)
+
+    def _entity(self, entity: int, what: str) -> int:
+        if not self.engine.world.entity_exists(entity):
+            raise ScriptAPIError(f"{what}: object {entity} no longer exists")
+        return entity
+
+    def _joint(self, ref: Any, what: str) -> tuple[int, Joint]:
+        entity = self.find(ref)
+        joint = self.engine.world.try_component(entity, Joint) if entity >= 0 else None
+        if joint is None:
+            known = sorted(j.id for _, j in self.engine.world.get_component(Joint) if j.id)
+            hint = difflib.get_close_matches(str(ref), known, 1)
+            extra = f"; did you mean {hint[0]!r}?" if hint else f" (joints: {', '.join(known)})"
+            raise ScriptAPIError(f"{what}: no joint {ref!r}{extra}")
+        return entity, joint
+
+    def name(self, entity: int) -> str | None:
+        named = self.engine.world.try_component(self._entity(entity, "getName"), Name)
+        return None if named is None else named.id
+
+    # -- state ------------------------------------------------------------------
+    def _transform(self, entity: int, what: str) -> Transform:
+        t = self.engine.world.try_component(self._entity(entity, what), Transform)
+        if t is None:
+            raise ScriptAPIError(f"{what}: object {entity} has no position")
+        return t
+
+    def get(self, entity: int, which: int) -> tuple[float, ...]:
+        t = self._transform(entity, "get")
+        arr = (t.position, t.orientation, t.linear_velocity, t.angular_velocity)[which]
+        return tuple(arr.tolist())
+
+    def set_position(self, entity: int, x: float, y: float, z: float) -> None:
+        t = self._transform(entity, "setPosition")
+        t.position[:] = (x, y, z)
+        self._set_pose(entity, t)
+
+    def set_orientation(self, entity: int, w: float, x: float, y: float, z: float) -> None:
+        q = np.array([w, x, y, z], dtype=np.float64)
+        norm = float(np.linalg.norm(q))
+        if not np.isfinite(norm) or norm == 0.0:
+            raise ScriptAPIError("setOrientation: expected a non-zero quaternion w, x, y, z")
+        t = self._transform(entity, "setOrientation")
+        t.orientation[:] = q / norm
+        self._set_pose(entity, t)
+
+    def _set_pose(self, entity: int, t: Transform) -> None:
+        if self.engine.world.has_component(entity, Physical):
+            position, orientation = t.position.copy(), t.orientation.copy()
+            self._push("setPosition", lambda b: b.set_pose(entity, position, orientation))
+
+    def set_velocity(self, entity: int, which: int, x: float, y: float, z: float) -> None:
+        t = self._transform(entity, "setVelocity")
+        (t.linear_velocity if which == 0 else t.angular_velocity)[:] = (x, y, z)
+        if self.engine.world.has_component(entity, Physical):
+            linear, angular = t.linear_velocity.copy(), t.angular_velocity.copy()
+            self._push("setVelocity", lambda b: b.set_velocity(entity, linear, angular))
+
+    def push(self, entity: int, kind: int, x: float, y: float, z: float,
+             px: float | None = None, py: float | None = None, pz: float | None = None) -> None:
+        what = ("addForce", "addTorque", "addImpulse")[kind]
+        if not self.engine.world.has_component(self._entity(entity, what), Physical):
+            raise ScriptAPIError(f"{what}: object {entity} has no physical body")
+        vector = np.array([x, y, z], dtype=np.float64)
+        where = None if px is None else np.array([px, py, pz], dtype=np.float64)
+        if kind == 0:
+            self._push(what, lambda b: b.add_force(entity, vector, where))
+        elif kind == 1:
+            self._push(what, lambda b: b.add_torque(entity, vector))
+        else:
+            self._push(what, lambda b: b.add_impulse(entity, vector, where))
+
+    def kinematic(self, entity: int, x: float, y: float, z: float) -> None:
+        t = self._transform(entity, "setKinematicTarget")
+        target = np.array([x, y, z], dtype=np.float64)
+        orientation = t.orientation.copy()
+        dt = self.engine.config.dt
+        self._push("setKinematicTarget",
+                   lambda b: b.set_kinematic_target(entity, target, orientation, dt))
+
+    def delete(self, entity: int) -> None:
+        self.engine.despawn(entity)
+
+    def time(self) -> float:
+        return float(self.engine.time)
+
+    # -- structure --------------------------------------------------------------
+    def spawn(self, text: str) -> Any:
+        """Objects (and joints) from scene-format text, through the scene factory."""
+        from engine.scene import SceneError, spec_from_text
+
+        content = self.engine.config.content_dir or "."
+        try:
+            spec = spec_from_text(str(text), content, self.engine.rng, path="<spawn>")
+        except SceneError as exc:
+            raise ScriptAPIError(f"spawn: {exc}") from None
+        ids: dict[str, int] = {}
+        made: list[int] = []
+        for es in spec.entities:
+            ids[es.id] = self.engine.spawn(*es.components)
+            made.append(ids[es.id])
+        for js in spec.joints:
+            a, b = js.bodies
+            js.joint.body_a = ids[a] if a in ids else self.find(a)
+            js.joint.body_b = None if b is None else (ids[b] if b in ids else self.find(b))
+            made.append(self.engine.spawn(Name(js.id), js.joint))
+        self._names.update(ids)
+        assert self.runtime is not None
+        return self.runtime.lua.table_from(made)
+
+    def set_motor(self, ref: Any, velocity: Any, max_force: Any) -> None:
+        entity, joint = self._joint(ref, "setMotor")
+        joint.motor_velocity = float(velocity)
+        joint.motor_max_force = float(max_force)
+        v, f = joint.motor_velocity, joint.motor_max_force
+        self._push("setMotor", lambda b: b.set_motor(entity, v, f))
+
+    def create_joint(self, spec: Any) -> int:
+        opts = to_python(spec)
+        if not isinstance(opts, dict):
+            raise ScriptAPIError("createJoint: expected a table {kind=, a=, b=, ...}")
+        kind = str(opts.pop("kind", "hinge"))
+        if kind not in JOINT_KINDS:
+            raise ScriptAPIError(f"createJoint: unknown kind {kind!r} "
+                                 f"(one of {', '.join(JOINT_KINDS)})")
+        a = self.find(opts.pop("a", -1))
+        b_ref = opts.pop("b", None)
+        b = None if b_ref is None else self.find(b_ref)
+        if a < 0 or (b is not None and b < 0):
+            raise ScriptAPIError("createJoint: a and b must be existing objects")
+        fields = {"anchor": tuple, "axis": tuple, "axis2": tuple, "low": float, "high": float,
+                  "motor_velocity": float, "motor_max_force": float, "id": str}
+        kwargs: dict[str, Any] = {}
+        for key, value in opts.items():
+            key = {"maxForce": "motor_max_force", "velocity": "motor_velocity"}.get(key, key)
+            if key not in fields:
+                raise ScriptAPIError(f"createJoint: unknown field {key!r}")
+            kwargs[key] = fields[key](value)
+        joint = Joint(kind=kind, body_a=a, body_b=b, **kwargs)
+        return self.engine.spawn(Name(joint.id or f"joint{a}_{b}"), joint)
+
+    def break_joint(self, ref: Any) -> None:
+        entity, joint = self._joint(ref, "breakJoint")
+        joint.broken = True
+        self.engine.despawn(entity)
+
+    # -- optional subsystems ---------------------------------------------------
+    def _resource(self, module: str, cls: str, what: str) -> Any:
+        mod = sys.modules.get(module)
+        found = None if mod is None else self.engine.try_resource(getattr(mod, cls))
+        if found is None and what not in self._warned:
+            self._warned.add(what)
+            log.warning("%s: the %s plugin is not loaded; the call does nothing "
+                        "(requestPlugin(%r) loads it)", what, module.split(".")[-1],
+                        module.split(".")[-1])
+        return found
+
+    def sound(self, entity: int, play: bool) -> None:
+        system = self._resource("systems.sound", "SoundSystem",
+                                "playSound" if play else "stopSound")
+        if system is None:
+            return
+        if play:
+            system.play(self.engine, self._entity(entity, "playSound"))
+        else:
+            system.stop(entity)
+
+    def set_uniform(self, state: Any, name: Any, value: Any) -> None:
+        system = self._resource("systems.render", "RenderSystem", "setUniform")
+        if system is None:
+            return
+        value = to_python(value)
+        if isinstance(value, list) and all(isinstance(v, int | float) for v in value):
+            value = tuple(float(v) for v in value)
+        elif not isinstance(value, int | float):
+            raise ScriptAPIError("setUniform: value must be a number or a table of numbers")
+        try:
+            system.set_uniform(str(state), str(name), value)
+        except (KeyError, ValueError) as exc:
+            raise ScriptAPIError(f"setUniform: {exc}") from None
+
+    def set_camera(self, opts: Any) -> None:
+        """Move, aim or attach the active camera (or the one named ``id``)."""
+        options = to_python(opts)
+        world = self.engine.world
+        cameras = world.get_component(Camera)
+        if "id" in options:
+            entity = self.find(options.pop("id"))
+            cameras = [(e, c) for e, c in cameras if e == entity]
+        else:
+            cameras = [(e, c) for e, c in cameras if c.active][:1]
+        if not cameras:
+            raise ScriptAPIError("setCamera: no such camera in the scene")
+        entity, camera = cameras[0]
+        for key, value in options.items():
+            if key == "position":
+                t = world.try_component(entity, Transform)
+                if t is not None:
+                    t.position[:] = [float(v) for v in value]
+            elif key == "lookAt":
+                camera.look_at = tuple(float(v) for v in value)
+            elif key == "follow":
+                camera.follow = None if value is None else self.find(value)
+            elif key == "offset":
+                camera.offset = tuple(float(v) for v in value)
+            elif key == "fov":
+                camera.fov = float(value)
+            else:
+                raise ScriptAPIError(f"setCamera: unknown option {key!r} "
+                                     "(position, lookAt, follow, offset, fov, id)")
+
+    def request_plugin(self, name: Any) -> bool:
+        """Load an engine plugin by name; False (with a warning) if this engine lacks it."""
+        if not isinstance(name, str):
+            raise ScriptAPIError(f"requestPlugin: expected a plugin name, got {name!r}")
+        canonical = PLUGIN_ALIASES.get(name, name)
+        engine = self.engine
+        if canonical in engine.plugins:
+            return True
+        factories = engine.plugin_factories
+        target = canonical if canonical in factories else name if name in factories else None
+        if target is None:
+            if canonical not in PLUGIN_NAMES:
+                known = sorted({*PLUGIN_NAMES, *PLUGIN_ALIASES, *factories})
+                hint = difflib.get_close_matches(name, known, 1)
+                extra = f"; did you mean {hint[0]!r}?" if hint else ""
+                raise ScriptAPIError(f"requestPlugin: unknown plugin {name!r}{extra} "
+                                     f"(known: {', '.join(known)})")
+            if canonical not in self._warned:
+                self._warned.add(canonical)
+                shown = canonical if canonical == name else f"{canonical} (as {name!r})"
+                log.warning("requestPlugin: plugin %s is not available in this engine; "
+                            "continuing without it", shown)
+            return False
+        engine.request_plugin(target)
+        return True

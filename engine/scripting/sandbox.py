@@ -1,0 +1,496 @@
+"""The Lua sandbox: what a script may touch, and the budget that stops it.
+
+The kernel below runs once per runtime with the full Lua 5.4 standard library,
+keeps private references to the few dangerous functions it needs
+(``debug.sethook``, ``debug.getinfo``, ``debug.traceback``, ``load``) and then
+strips the global table. Scripts never see ``_G``: each one gets an environment
+table whose ``__index`` is the frozen table of safe globals, with private copies
+of the library tables so one script cannot patch ``string`` for another.
+
+Refused: ``io``, ``os`` (except ``clock``/``time``/``date``), ``package``,
+``debug``, ``dofile``/``loadfile``, ``string.dump``, loading bytecode (``load``
+is text-only and defaults to the script's own environment), ``__gc``
+finalizers, ``collectgarbage`` modes other than count/collect/step, and any
+attribute of a Python object (the runtime's attribute filter refuses all).
+``require`` resolves only modules in the content folder's ``scripts/``.
+
+The budget is an instruction count hook; CPU time spent inside C library calls
+the hook cannot see (pattern matching, sorting, string building) is measured
+and charged to the same budget (process CPU time: in threaded mode the physics
+thread's share makes this conservative), and patterns whose backtracking could
+run for seconds on the given subject are refused before they start.
+
+Once a callback exceeds the budget the kernel enters a *killed* state in which
+the hook raises on every instruction of any Lua function except the kernel's
+own dispatcher, so ``pcall`` loops, ``xpcall`` message handlers (never run
+after a kill: Lua calls them with hooks off) and coroutines (whose hooks are
+installed by the wrapped ``coroutine.create``/``wrap``) all unwind back to the
+dispatcher.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+from pathlib import Path
+
+log = logging.getLogger("colosseum.script")
+
+#: Marker at the end of the error raised when a callback runs out of budget.
+BUDGET_MESSAGE = "script exceeded its instruction budget"
+#: Lua's own message when an allocation fails (the runtime's memory cap).
+MEMORY_MESSAGE = "not enough memory"
+#: Hook granularity: the hook runs once every HOOK_STEP VM instructions.
+HOOK_STEP = 1000
+#: How the budget counts time spent in C library calls (matching, sorting): one second
+#: costs as much as this many VM instructions (Lua 5.4 runs ~5e8 simple ones per second).
+INSTRUCTIONS_PER_SECOND = 5e8
+
+_CURLY = {"\u201c": '"', "\u201d": '"', "\u201e": '"', "\u2018": "'", "\u2019": "'"}
+_CURLY_RE = re.compile("[\u201c\u201d\u201e\u2018\u2019]")
+_MODULE_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
+
+
+def normalise_quotes(source: str, chunkname: str) -> str:
+    """Replace typographic quotes by ASCII ones, warning once with the first place.
+
+    Text copied from papers and word processors (the paper's Listing 2) is
+    otherwise a syntax error Lua reports as "unexpected symbol near '<\\226>'".
+    """
+    first = _CURLY_RE.search(source)
+    if first is None:
+        return source
+    line = source.count("\n", 0, first.start()) + 1
+    col = first.start() - (source.rfind("\n", 0, first.start()) + 1) + 1
+    count = len(_CURLY_RE.findall(source))
+    log.warning("%s:%d:%d: warning: %d typographic quote(s) replaced by ASCII quotes",
+                chunkname, line, col, count)
+    return _CURLY_RE.sub(lambda m: _CURLY[m.group(0)], source)
+
+
+def resolve_module(scripts_dir: Path | None, name: object) -> Path:
+    """The file ``require(name)`` may load: ``scripts/a/b.lua`` for ``"a.b"``, nothing else."""
+    if not isinstance(name, str) or not _MODULE_RE.match(name):
+        raise ValueError(f"require: invalid module name {name!r} "
+                         "(use dotted Lua names such as 'lib.vector')")
+    if scripts_dir is None:
+        raise ValueError(f"require: no content folder, cannot load module {name!r}")
+    root = scripts_dir.resolve()
+    path = (root / (name.replace(".", "/") + ".lua")).resolve()
+    if not path.is_relative_to(root):
+        raise ValueError(f"require: module {name!r} is outside the content folder")
+    if not path.is_file():
+        raise ValueError(f"require: module {name!r} not found in {scripts_dir}")
+    return path
+
+
+#: The kernel: args (hook step, budget ticks, budget message); returns table K.
+KERNEL = r"""
+local STEP, LIMIT, BUDGET_MESSAGE, INSTRUCTIONS_PER_SECOND = ...
+local sethook, getinfo, traceback = debug.sethook, debug.getinfo, debug.traceback
+local co_create, co_resume, co_running, co_status = coroutine.create, coroutine.resume,
+  coroutine.running, coroutine.status
+local base_load, error, type, tostring, select, pairs = load, error, type, tostring, select, pairs
+local rawget, rawset, setmetatable, getmetatable = rawget, rawset, setmetatable, getmetatable
+local xpcall, pack, unpack, collectgarbage = xpcall, table.pack, table.unpack, collectgarbage
+local format, sub, raw_find = string.format, string.sub, string.find
+
+local K = {}
+local budget, limit, killed, kill_message = 0, LIMIT, false, nil
+local exempt = setmetatable({}, {__mode = "k"})
+
+local function where(level)
+  -- first frame at or above `level` that belongs to a script file ("@" chunks)
+  while true do
+    local info = getinfo(level, "Sl")
+    if info == nil then return "" end
+    if sub(info.source, 1, 1) == "@" and info.currentline > 0 then
+      return info.short_src .. ":" .. info.currentline .. ": "
+    end
+    level = level + 1
+  end
+end
+
+local function hook()
+  if killed then
+    local f = getinfo(2, "f").func
+    if exempt[f] then return end
+    sethook(co_running(), hook, "", 1)
+    error(kill_message, 0)
+  end
+  budget = budget - 1
+  if budget < 0 then
+    killed = true
+    kill_message = where(2) .. format("%s (%d instructions per callback)", BUDGET_MESSAGE,
+                                      limit * STEP)
+    sethook(co_running(), hook, "", 1)
+    error(kill_message, 0)
+  end
+end
+
+local function handler(e)
+  if killed then return kill_message end
+  budget = limit  -- the report itself must not run out of budget
+  local t = type(e)
+  if t == "string" then
+    if sub(e, 1, 1) == "[" or not raw_find(e, "^[^:]+:%d+: ") then e = where(2) .. e end
+  elseif t == "userdata" then  -- a Python exception raised by an API function
+    e = where(2) .. tostring(e)
+  else  -- never call a script's __tostring here: it would run outside the budget
+    e = where(2) .. "error object is a " .. t .. " value"
+  end
+  local tb = traceback(e, 2)
+  local cut, at = nil, 1
+  while true do  -- drop the kernel's own frames below the last xpcall
+    local i = raw_find(tb, "\n\t[C]: in function 'xpcall'", at, true)
+    if i == nil then break end
+    cut, at = i, i + 1
+  end
+  return cut and sub(tb, 1, cut - 1) or tb
+end
+
+local function finish(ok, err)
+  budget = limit
+  if killed then  -- still exempt here: restore the normal hook, then leave the killed state
+    sethook(hook, "", STEP)
+    killed = false
+  end
+  if ok then return nil end
+  if type(err) ~= "string" then return "error object is a " .. type(err) .. " value" end
+  return err
+end
+
+-- Run fn(...) under a fresh budget. Returns nil, or the error message with traceback.
+local function dispatch(fn, ...)
+  budget = limit
+  return finish(xpcall(fn, handler, ...))
+end
+
+-- Call env[name](...) when the script defines it.
+local function call(env, name, ...)
+  local fn = rawget(env, name)
+  if fn == nil then return nil end
+  budget = limit
+  return finish(xpcall(fn, handler, ...))
+end
+
+exempt[hook] = true; exempt[handler] = true; exempt[finish] = true
+exempt[dispatch] = true; exempt[call] = true
+K.dispatch, K.call = dispatch, call
+sethook(hook, "", STEP)
+budget = limit
+
+function K.set_limit(ticks) limit = ticks; budget = ticks end
+function K.collect() collectgarbage("collect"); return collectgarbage("count") end
+function K.memory() return collectgarbage("count") end
+
+-- coroutines: every new coroutine gets the budget hook (hooks are per thread)
+local co = {}
+for k, v in pairs(coroutine) do co[k] = v end
+function co.create(f)
+  local c = co_create(f)
+  sethook(c, hook, "", STEP)
+  return c
+end
+function co.wrap(f)
+  local c = co.create(f)
+  return function(...)
+    local r = pack(co_resume(c, ...))
+    if r[1] then return unpack(r, 2, r.n) end
+    error(r[2], 0)
+  end
+end
+
+-- object handles: read-only proxies, one per entity, shared by all scripts
+local handle_ids = setmetatable({}, {__mode = "k"})
+local handles = {}
+local Object = {}
+K.Object = Object
+local handle_mt = {
+  __index = function(h, k)
+    if k == "id" then return handle_ids[h] end
+    return Object[k]
+  end,
+  __newindex = function() error("object handles are read-only", 2) end,
+  __tostring = function(h) return "object " .. tostring(handle_ids[h]) end,
+  __eq = function(a, b) return handle_ids[a] == handle_ids[b] end,
+  __metatable = false,
+}
+function K.handle(id)
+  if id == nil or id < 0 then return nil end
+  local h = handles[id]
+  if h == nil then
+    h = setmetatable({}, handle_mt)
+    handle_ids[h] = id
+    handles[id] = h
+  end
+  return h
+end
+function K.forget(id) handles[id] = nil end
+function K.id_of(h)
+  local id = type(h) == "table" and handle_ids[h]
+  if id then return id end
+  if math.type(h) == "integer" then return h end
+  return nil
+end
+-- A copy of a value as plain data: handles become entity ids, metatables are dropped.
+function K.plain(v, depth)
+  if type(v) ~= "table" then return v end
+  local id = handle_ids[v]
+  if id ~= nil then return id end
+  depth = (depth or 0) + 1
+  if depth > 16 then error("data nested too deeply (more than 16 levels)", 0) end
+  local t = {}
+  for k, x in next, v do t[k] = K.plain(x, depth) end
+  return t
+end
+function K.collide(env, other, impulse)
+  local fn = rawget(env, "onCollision")
+  if fn == nil then return nil end
+  budget = limit
+  return finish(xpcall(fn, handler, K.handle(other), impulse))
+end
+function K.collide_scene(env, a, b, impulse)
+  local fn = rawget(env, "onCollision")
+  if fn == nil then return nil end
+  budget = limit
+  return finish(xpcall(fn, handler, K.handle(a), K.handle(b), impulse))
+end
+-- Many onCollision calls in one go: returns nil, or the index that failed and its error.
+local function collide_batch(envs, others, impulses, n, i)
+  local handle = K.handle
+  while i <= n do
+    local fn = rawget(envs[i], "onCollision")
+    if fn ~= nil then
+      budget = limit
+      local err = finish(xpcall(fn, handler, handle(others[i]), impulses[i]))
+      if err ~= nil then return i, err end
+    end
+    i = i + 1
+  end
+  return nil
+end
+K.collide_batch = collide_batch
+-- env[name](...) on envs[i..n]: returns nil, or the index that failed and its error.
+local function call_batch(envs, name, n, i, ...)
+  while i <= n do
+    local fn = rawget(envs[i], name)
+    if fn ~= nil then
+      budget = limit
+      local err = finish(xpcall(fn, handler, ...))
+      if err ~= nil then return i, err end
+    end
+    i = i + 1
+  end
+  return nil
+end
+K.call_batch = call_batch
+exempt[K.collide] = true; exempt[K.collide_scene] = true; exempt[collide_batch] = true
+exempt[call_batch] = true
+
+-- safe globals
+local function safe_setmetatable(t, mt)
+  if type(mt) == "table" and rawget(mt, "__gc") ~= nil then
+    error("__gc finalizers are not allowed in scripts", 2)
+  end
+  return setmetatable(t, mt)
+end
+local function safe_rawset(t, k, v)
+  if handle_ids[t] then error("object handles are read-only", 2) end
+  return rawset(t, k, v)
+end
+-- Lua calls a message handler at the error point, where an error raised by the hook
+-- has left hooks disabled: a script's handler must never run then.
+local function safe_xpcall(f, msgh, ...)
+  return xpcall(f, function(e)
+    if killed then return e end
+    return msgh(e)
+  end, ...)
+end
+local gc_modes = {count = true, collect = true, step = true}
+local function safe_collectgarbage(opt, ...)
+  opt = opt or "collect"
+  if not gc_modes[opt] then error("collectgarbage('" .. tostring(opt) .. "') is not allowed", 2) end
+  return collectgarbage(opt, ...)
+end
+
+local SAFE = {
+  assert = assert, error = error, ipairs = ipairs, next = next, pairs = pairs, pcall = pcall,
+  xpcall = safe_xpcall, rawequal = rawequal, rawget = rawget, rawlen = rawlen, rawset = safe_rawset,
+  select = select, tonumber = tonumber, tostring = tostring, type = type, _VERSION = _VERSION,
+  getmetatable = getmetatable, setmetatable = safe_setmetatable,
+  collectgarbage = safe_collectgarbage,
+}
+K.SAFE = SAFE
+-- Pattern matching runs in C, out of the hook's reach, and backtracks: ("a"):rep(1e5)
+-- :find("a+b") takes 40 s. Estimate the worst case before matching: within a run of
+-- repeated items not separated by a literal, k repetitions cost up to n^k/k! steps when
+-- something after them can fail (a trailing run never backtracks: one repetition less);
+-- an unanchored search multiplies by n start positions. Refuse above MATCH_STEPS.
+local MATCH_STEPS = 2e7
+local QUANT = {["*"] = true, ["+"] = true, ["-"] = true}
+local function check_pattern(what, s, p, plain)
+  if plain or type(s) ~= "string" or type(p) ~= "string" then return end
+  local n = #s
+  if n < 64 then return end
+  local i, len = 1, #p
+  local anchored = sub(p, 1, 1) == "^"
+  if anchored then i = 2 end
+  local k, worst = 0, 1
+  local function close(reps)
+    local cost = 1
+    for j = 1, reps do cost = cost * n / j end
+    if cost > worst then worst = cost end
+  end
+  while i <= len do
+    local c = sub(p, i, i)
+    local item_end, literal = i, false
+    if c == "%" then
+      local d = sub(p, i + 1, i + 1)
+      if d == "b" then item_end = i + 3; k = k + 1
+      elseif d == "f" then  -- frontier: skip its set
+        local j = raw_find(p, "]", i + 4, true)
+        item_end = j or len
+      else
+        item_end = i + 1
+        literal = not d:match("%w")
+      end
+    elseif c == "[" then
+      local j = i + 1
+      if sub(p, j, j) == "^" then j = j + 1 end
+      if sub(p, j, j) == "]" then j = j + 1 end
+      while j <= len and sub(p, j, j) ~= "]" do
+        if sub(p, j, j) == "%" then j = j + 1 end
+        j = j + 1
+      end
+      item_end = j
+    elseif c == "(" or c == ")" or c == "." then
+      item_end = i
+    else
+      literal = not (c == "$" and i == len)
+    end
+    local q = sub(p, item_end + 1, item_end + 1)
+    if QUANT[q] then
+      k = k + 1
+      item_end = item_end + 1
+    elseif q == "?" then
+      item_end = item_end + 1
+    elseif literal or (c == "$" and i == len) then
+      close(k)
+      k = 0
+    end
+    i = item_end + 1
+  end
+  close(k - 1)  -- a trailing run succeeds as soon as it has expanded
+  if not anchored then worst = worst * n end
+  if worst > MATCH_STEPS then
+    error(format("%s: pattern %q on a %d-byte string may backtrack for up to %.0e steps "
+                 .. "(limit %.0e); use a plain find (4th argument true) or split the text",
+                 what, p, n, worst, MATCH_STEPS), 3)
+  end
+end
+-- Time spent in C (matching, sorting, building strings) is invisible to the count hook:
+-- measure it with the CPU clock and take it from the same budget.
+local clock = os.clock
+local TICKS_PER_SECOND = INSTRUCTIONS_PER_SECOND / STEP
+local function charged(t0, ...)
+  budget = budget - (clock() - t0) * TICKS_PER_SECOND
+  return ...
+end
+local s_find, s_match, s_gmatch, s_gsub = string.find, string.match, string.gmatch,
+  string.gsub
+string.find = function(s, p, init, plain)
+  check_pattern("string.find", s, p, plain)
+  return charged(clock(), s_find(s, p, init, plain))
+end
+string.match = function(s, p, init)
+  check_pattern("string.match", s, p)
+  return charged(clock(), s_match(s, p, init))
+end
+string.gmatch = function(s, p, init)
+  check_pattern("string.gmatch", s, p)
+  local step = s_gmatch(s, p, init)
+  return function() return charged(clock(), step()) end
+end
+string.gsub = function(s, p, repl, n)
+  check_pattern("string.gsub", s, p)
+  return charged(clock(), s_gsub(s, p, repl, n))
+end
+local s_rep, t_sort, t_concat = string.rep, table.sort, table.concat
+string.rep = function(...) return charged(clock(), s_rep(...)) end
+table.sort = function(...) return charged(clock(), t_sort(...)) end
+table.concat = function(...) return charged(clock(), t_concat(...)) end
+local string_copy = {}
+for k, v in pairs(string) do string_copy[k] = v end
+string_copy.dump = nil
+string.dump = nil
+local LIBS = {
+  string = string_copy, table = table, math = math, utf8 = utf8, coroutine = co,
+  os = {clock = os.clock, time = os.time, date = os.date},
+}
+-- the shared string metatable must not lead back to the real string table
+getmetatable("").__metatable = false
+
+local function copy(t)
+  local c = {}
+  for k, v in pairs(t) do c[k] = v end
+  return c
+end
+K.copy = copy
+
+-- A fresh environment for one script (or module): private library copies.
+function K.new_env(extra)
+  local env = {}
+  for name, lib in pairs(LIBS) do env[name] = copy(lib) end
+  if extra then for k, v in pairs(extra) do env[k] = v end end
+  env._G = env
+  env.load = function(chunk, name, mode, e)
+    if mode ~= nil and mode ~= "t" then
+      return nil, "load: only text chunks are allowed (mode 't')"
+    end
+    if type(chunk) == "string" and sub(chunk, 1, 4) == "\27Lua" then
+      return nil, "load: binary chunks are not allowed"
+    end
+    return base_load(chunk, name, "t", e or env)
+  end
+  return setmetatable(env, {__index = SAFE, __metatable = false})
+end
+
+-- Compile a script's source in its environment: returns fn or nil, message.
+function K.compile(source, chunkname, env)
+  local fn, err = base_load(source, chunkname, "t", env)
+  return fn, err
+end
+
+-- Modules: loaded once per runtime, each in its own environment.
+local modules, loading = {}, {}
+function K.require_with(read_module, extra)
+  return function(name)
+    local m = modules[name]
+    if m ~= nil then return m end
+    if loading[name] then error("require: module '" .. tostring(name) .. "' requires itself", 2) end
+    local chunkname, source = read_module(name)
+    local env = K.new_env(extra)
+    local fn, err = base_load(source, chunkname, "t", env)
+    if fn == nil then error(err, 0) end
+    loading[name] = true
+    local ok, result = pcall(fn, name)
+    loading[name] = nil
+    if not ok then error(result, 0) end
+    if result == nil then result = true end
+    modules[name] = result
+    return result
+  end
+end
+function K.forget_modules() modules = {} end
+
+-- Lock down the global table itself (scripts never see it; defence in depth).
+function K.lockdown()
+  for _, name in ipairs({"io", "os", "package", "debug", "dofile", "loadfile", "load",
+                         "require", "python", "collectgarbage"}) do
+    _G[name] = nil
+  end
+  string.dump = nil
+end
+return K
+"""

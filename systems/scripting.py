@@ -1,0 +1,296 @@
+"""The scripting system: Script components run as sandboxed Lua, fed with engine events.
+
+A Script on an entity with a Transform is an *object script* (``self`` is the
+object; ``onCollision(other, impulse)``); a Script on an entity without one is a
+*scene script* (``onCollision(a, b, impulse)`` for every colliding pair). The
+frame's Contacts batch is reduced in numpy to one event per colliding pair with
+the summed impulse, and only pairs involving scripted entities reach Lua.
+Scripts run in the SCRIPT phase on the main thread; what they do to physics
+goes through the command queue. Script files are watched (a stat at most every
+``RELOAD_INTERVAL`` seconds) and reloaded when they change.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from components import Name, Script, Transform
+from engine.events import Contacts, CustomEvent, Despawned, InputEvent, KeyEvent, TimerEvent
+from engine.scripting.api import ScriptAPI
+from engine.scripting.runtime import Script as LoadedScript
+from engine.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRuntime
+from engine.system import Phase, System
+
+if TYPE_CHECKING:
+    from engine.app import Engine
+
+log = logging.getLogger("colosseum.script")
+
+#: Seconds between two checks of the script files' modification times.
+RELOAD_INTERVAL = 0.25
+
+
+@dataclass(eq=False, slots=True)
+class _Broken:
+    """A script file that failed to load; retried when the file changes."""
+
+    entity: int
+    path: Path
+    mtime: float
+
+
+class ScriptingSystem(System):
+    phase = Phase.SCRIPT
+    reads = (Script, Transform, Name)
+    writes = (Transform,)
+
+    def __init__(self, limits: ScriptLimits | None = None,
+                 reload_interval: float = RELOAD_INTERVAL) -> None:
+        self.limits = limits
+        self.reload_interval = reload_interval
+        self.runtime: ScriptRuntime | None = None
+        self.api: ScriptAPI | None = None
+        self._pending: list[tuple[int, Script]] = []
+        self._started: list[LoadedScript] = []
+        self._by_entity: dict[int, list[LoadedScript]] = {}
+        self._scene: list[LoadedScript] = []
+        self._scripted = np.zeros(0, np.int64)
+        self._lookup = np.zeros(1, bool)
+        self._broken: list[_Broken] = []
+        self._owners: dict[int, list[LoadedScript]] = {}
+        self._next_check = 0.0
+        self.contact_events = 0
+
+    # -- setup ------------------------------------------------------------------
+    def setup(self, engine: Engine) -> None:
+        content = engine.config.content_dir
+        scripts_dir = Path(content) / "scripts" if content is not None else None
+        limits = self.limits or engine.config.options.get("script_limits") or ScriptLimits()
+        api = ScriptAPI(engine)
+        self.api = api
+        runtime = ScriptRuntime(limits, scripts_dir, api=api.install, seed=engine.config.seed)
+        runtime.emit_hook = lambda name, data: engine.events.emit(CustomEvent(name, data))
+        self.runtime = runtime
+        engine.insert_resource(runtime)
+        engine.insert_resource(self)
+        world = engine.world
+        world.on_add(Script, lambda e, c: self._pending.append((e, c)))
+        world.on_remove(Script, lambda e, c: self._unload(e))
+        for entity, script in world.get_component(Script):
+            self._pending.append((entity, script))
+        events = engine.events
+        events.subscribe(Contacts, self._on_contacts)
+        events.subscribe(KeyEvent, lambda ev: runtime.broadcast("onKey", ev.key, ev.pressed))
+        events.subscribe(InputEvent, self._on_input)
+        events.subscribe(TimerEvent, lambda ev: runtime.broadcast("onTimer", ev.name))
+        events.subscribe(CustomEvent, lambda ev: runtime.deliver(ev.name, ev.data))
+        events.subscribe(Despawned, lambda ev: runtime.kernel.forget(ev.entity))
+
+    # -- per frame --------------------------------------------------------------
+    def run(self, engine: Engine, dt: float) -> None:
+        runtime, api = self.runtime, self.api
+        assert runtime is not None and api is not None
+        api.flush_retries()
+        if self._pending:
+            self._load_pending(engine)
+        now = time.monotonic()
+        if now >= self._next_check:
+            self._next_check = now + self.reload_interval
+            self._check_files(engine)
+        runtime.update(dt)
+
+    def _load_pending(self, engine: Engine) -> None:
+        runtime = self.runtime
+        assert runtime is not None
+        pending, self._pending = self._pending, []
+        fresh: list[LoadedScript] = []
+        for entity, component in pending:
+            if not component.enabled or not engine.world.entity_exists(entity):
+                continue
+            loaded = self._load(engine, entity, component)
+            if loaded is not None:
+                fresh.append(loaded)
+                self._owners.setdefault(entity, []).append(loaded)
+        self._reindex(engine)
+        for loaded in fresh:
+            runtime.call(loaded, "onStart")
+
+    def _load(self, engine: Engine, entity: int, component: Script) -> LoadedScript | None:
+        runtime = self.runtime
+        assert runtime is not None
+        is_object = engine.world.has_component(entity, Transform)
+        owner = entity if is_object else None
+        try:
+            if component.source is not None:
+                named = engine.world.try_component(entity, Name)
+                label = f"{named.id if named else entity}.lua"
+                return runtime.load(label, component.source, owner)
+            path = self._resolve(engine, component.file)
+            try:
+                return runtime.load_file(path, owner)
+            except OSError as exc:
+                runtime.report(f"{component.file}: cannot read script: {exc.strerror or exc}")
+                return None
+        except ScriptLoadError as exc:
+            runtime.report(f"{exc}\n(script not started; fix the file and it is reloaded)")
+            if component.source is None:
+                path = self._resolve(engine, component.file)
+                if path.exists():
+                    self._broken.append(_Broken(entity, path, path.stat().st_mtime))
+            return None
+
+    @staticmethod
+    def _resolve(engine: Engine, file: str) -> Path:
+        path = Path(file)
+        content = engine.config.content_dir
+        if not path.is_absolute() and content is not None:
+            path = Path(content) / path
+        return path
+
+    def _reindex(self, engine: Engine) -> None:
+        runtime = self.runtime
+        assert runtime is not None
+        self._by_entity = {}
+        self._scene = []
+        for script in runtime.scripts:
+            if script.entity is None:
+                self._scene.append(script)
+            else:
+                self._by_entity.setdefault(script.entity, []).append(script)
+        self._scripted = np.array(sorted(self._by_entity), dtype=np.int64)
+        self._update_lookup()
+
+    def _update_lookup(self) -> None:
+        """Boolean table entity id -> has an object script, plus a final False slot."""
+        size = int(self._scripted.max()) + 2 if len(self._scripted) else 1
+        self._lookup = np.zeros(size, bool)
+        self._lookup[self._scripted] = True
+
+    def _unload(self, entity: int) -> None:
+        runtime = self.runtime
+        if runtime is None:
+            return
+        for script in self._owners.pop(entity, ()):
+            runtime.unload(script)
+        self._pending = [(e, c) for e, c in self._pending if e != entity]
+        self._broken = [b for b in self._broken if b.entity != entity]
+        self._by_entity.pop(entity, None)
+        self._scene = [s for s in self._scene if s in runtime.scripts]
+        self._scripted = self._scripted[self._scripted != entity]
+        self._update_lookup()
+
+    def _check_files(self, engine: Engine) -> None:
+        runtime = self.runtime
+        assert runtime is not None
+        for script in list(runtime.scripts):
+            path = script.path
+            if path is None:
+                continue
+            try:
+                mtime = path.stat().st_mtime
+            except OSError:
+                continue
+            if mtime != script.mtime:
+                script.mtime = mtime
+                try:
+                    source = path.read_text(encoding="utf-8")
+                except (OSError, UnicodeDecodeError) as exc:
+                    runtime.report(f"{script.name}: cannot read the changed file: {exc}")
+                    continue
+                if runtime.reload(script, source):
+                    log.info("%s: reloaded", script.name)
+        for broken in list(self._broken):
+            try:
+                mtime = broken.path.stat().st_mtime
+            except OSError:
+                continue
+            if mtime != broken.mtime:
+                self._broken.remove(broken)
+                if engine.world.entity_exists(broken.entity):
+                    component = engine.world.try_component(broken.entity, Script)
+                    if component is not None:
+                        self._pending.append((broken.entity, component))
+        if self._pending:
+            self._load_pending(engine)
+
+    # -- events -----------------------------------------------------------------
+    def _on_contacts(self, event: Contacts) -> None:
+        runtime = self.runtime
+        batch = event.batch
+        if runtime is None or not len(batch) or not (len(self._scripted) or self._scene):
+            return
+        a, b = batch["a"], batch["b"]
+        impulse = batch["impulse"]
+        if not self._scene:
+            lut = self._lookup
+            last = len(lut) - 1  # lut[last] (= lut[-1]) is False: the world (-1), unscripted ids
+            mask = lut[np.clip(a, -1, last)] | lut[np.clip(b, -1, last)]
+            if not mask.any():
+                return
+            a, b, impulse = a[mask], b[mask], impulse[mask]
+        # one event per colliding pair, impulses summed over contacts and steps
+        key = (a.astype(np.int64) << 32) | (b.astype(np.int64) & 0xFFFFFFFF)
+        pairs, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+        total = np.bincount(inverse.reshape(-1), weights=impulse, minlength=len(pairs))
+        pa, pb = a[first].tolist(), b[first].tolist()
+        totals = total.tolist()
+        by_entity, scene = self._by_entity, self._scene
+        self.contact_events += len(totals)
+        owners: list[LoadedScript] = []
+        others: list[int] = []
+        impulses: list[float] = []
+        for ea, eb, j in zip(pa, pb, totals, strict=True):
+            scripts = by_entity.get(ea)
+            if scripts:
+                for script in scripts:
+                    owners.append(script)
+                    others.append(eb)
+                    impulses.append(j)
+            scripts = by_entity.get(eb)
+            if scripts:
+                for script in scripts:
+                    owners.append(script)
+                    others.append(ea)
+                    impulses.append(j)
+        if owners:
+            runtime.collide_many(owners, others, impulses)
+        for script in scene:
+            for ea, eb, j in zip(pa, pb, totals, strict=True):
+                runtime.collide_scene(script, ea, eb, j)
+
+    def _on_input(self, event: InputEvent) -> None:
+        runtime = self.runtime
+        assert runtime is not None
+        device = event.device
+        if device.startswith("button:"):
+            runtime.broadcast("onButton", device[7:], bool(event.value))
+        try:
+            value = runtime.to_lua(event.value)
+        except TypeError as exc:
+            runtime.report(f"input {device!r}: {exc}; not delivered to scripts")
+            return
+        runtime.broadcast("onInput", device, value)
+
+    def shutdown(self, engine: Engine) -> None:
+        self._pending.clear()
+        self._broken.clear()
+
+
+class ScriptingPlugin:
+    """Runs the scene's Lua scripts (``requestPlugin("scripting")``)."""
+
+    name = "scripting"
+
+    def __init__(self, limits: ScriptLimits | None = None,
+                 reload_interval: float = RELOAD_INTERVAL) -> None:
+        self.limits = limits
+        self.reload_interval = reload_interval
+
+    def build(self, engine: Engine) -> None:
+        engine.add_system(ScriptingSystem(self.limits, self.reload_interval))
