@@ -2,10 +2,11 @@
 
 New bodies and joints are sent to the backend through the command queue as
 soon as they are spawned (a body without a Transform yet waits for the FIXED
-phase), so commands queued after a spawn always find their body. In serial mode this system steps the backend; in
-threaded mode the physics thread does and this system only picks up the latest
-snapshot. Either way, every Transform is updated by one vectorised numpy
-assignment per array, with no Python work per body.
+phase), so commands queued after a spawn always find their body. In serial
+mode this system steps the backend; in threaded mode the physics thread does
+and this system only picks up the latest snapshot. Either way, every Transform
+is updated by one vectorised numpy assignment per array, with no Python work
+per body.
 """
 
 from __future__ import annotations
