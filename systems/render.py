@@ -60,6 +60,8 @@ class RenderOptions:
     interpolate: bool = False
     shadow_size: int = 1024
     title: str = "Colosseum"
+    #: False for headless runs from the CLI: only frames that are saved get drawn.
+    draw_every_frame: bool = True
 
     @staticmethod
     def from_config(config: Any) -> RenderOptions:
@@ -75,7 +77,8 @@ class RenderOptions:
             screenshot=Path(shot) if shot else None,
             record_frames=Path(frames) if frames else None,
             record_every=int(opts.get("record_every") or 1), hud=bool(opts.get("hud")),
-            interpolate=bool(opts.get("interpolate")))
+            interpolate=bool(opts.get("interpolate")),
+            draw_every_frame=backend != "headless" or bool(getattr(config, "render", False)))
 
 
 def _signature(visual: Visual) -> tuple:
@@ -122,6 +125,8 @@ class RenderSystem(System):
         self._last_wall: float | None = None
         self._fps = 0.0
         self.frames_written = 0
+        self.frames_drawn = 0
+        self._drawn = False  # whether the last frame was drawn (headless runs skip frames)
 
     # -- API for scripts and tools --------------------------------------------
     def set_uniform(self, state_id: str, name: str, value: UniformValue) -> None:
@@ -200,12 +205,24 @@ class RenderSystem(System):
         return {"backend": self._target.kind, "gl_renderer": self._target.renderer_name,
                 "draw_calls": r.stats.draw_calls, "instances": r.stats.instances,
                 "render_ms_last": r.stats.frame_ms, "fps": self._fps,
-                "frames_written": self.frames_written, "errors": list(r.errors)}
+                "frames_drawn": self.frames_drawn, "frames_written": self.frames_written,
+                "errors": list(r.errors)}
 
     def run(self, engine: Engine, dt: float) -> None:
-        renderer = self._require()
         if self.closing:
             engine.request_quit()
+        opts = self.options or RenderOptions()
+        record = opts.record_frames is not None and engine.frame % max(opts.record_every, 1) == 0
+        self._drawn = opts.draw_every_frame or self._target.kind == "window" or record
+        if not self._drawn:  # headless and nobody looking this frame: skip the GPU work
+            return
+        self._draw(engine, dt)
+        if record:
+            self._require().screenshot(opts.record_frames / f"frame_{engine.frame:06d}.png")
+            self.frames_written += 1
+
+    def _draw(self, engine: Engine, dt: float) -> None:
+        renderer = self._require()
         world = engine.world
         self._sync_visuals(engine)
         self._sync_poses(engine)
@@ -227,11 +244,7 @@ class RenderSystem(System):
             renderer.hud.text = hud_line(self._fps, steps.mean() * 1e3,
                                          engine.controller.real_time_factor)
         renderer.render(dt)
-        opts = self.options
-        if opts is not None and opts.record_frames is not None \
-                and engine.frame % max(opts.record_every, 1) == 0:
-            renderer.screenshot(opts.record_frames / f"frame_{engine.frame:06d}.png")
-            self.frames_written += 1
+        self.frames_drawn += 1
 
     def _sync_visuals(self, engine: Engine) -> None:
         renderer = self._require()
@@ -296,6 +309,8 @@ class RenderSystem(System):
         opts = self.options
         try:
             if opts is not None and opts.screenshot is not None:
+                if not self._drawn:
+                    self._draw(engine, engine.tick.dt)
                 path = renderer.screenshot(opts.screenshot)
                 log.info("screenshot written to %s", path)
         finally:
