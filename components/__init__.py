@@ -104,10 +104,13 @@ class Physical:
 class Joint:
     """A constraint between two bodies (``body_b`` None means the static world).
 
-    kind: hinge, motorized_hinge, ball, slider, universal, hinge2, fixed, six_dof.
-    ``anchor``/``axis`` are in world coordinates at creation. Limits are in
-    radians (angular) or metres (slider). A motor drives ``motor_velocity``
-    (rad/s or m/s) with at most ``motor_max_force`` (N·m or N).
+    kind: hinge, motorized_hinge, ball, slider, universal, hinge2, fixed,
+    angular_motor, linear_motor, six_dof. ``anchor``/``axis`` are in world
+    coordinates at creation. Limits are in radians (angular) or metres (slider).
+    A motor drives ``motor_velocity`` (rad/s or m/s) with at most
+    ``motor_max_force`` (N·m or N). For six_dof, ``body_b`` is the tracked target
+    (or None: the target is set with ``set_joint_target``) and ``motor_max_force``
+    caps both force and torque until ``set_drive_limits`` changes them.
     """
 
     kind: str = "hinge"

@@ -138,5 +138,23 @@ class DynamicsBackend(Protocol):
         """Contacts of the last step as a CONTACT_DTYPE array."""
 
     # -- queries -----------------------------------------------------------
-    def raycast(self, origin: np.ndarray, direction: np.ndarray,
-                max_distance: float) -> RayHit | None: ...
+    def raycast(self, origin: np.ndarray, direction: np.ndarray, max_distance: float,
+                ignore: int | None = None, mask: int = 0xFFFFFFFF) -> RayHit | None:
+        """Closest hit along the ray, skipping body ``ignore`` and categories not in ``mask``."""
+
+
+@runtime_checkable
+class SupportsFaults(Protocol):
+    """Backends that detect non-finite or exploding bodies, reset them, and report them."""
+
+    def take_faults(self) -> list[tuple[int, str]]: ...
+
+
+@runtime_checkable
+class SupportsJointTargets(Protocol):
+    """Backends whose six_dof constraint follows a moving target pose (the virtual hand)."""
+
+    def set_joint_target(self, key: int, position: np.ndarray, orientation: np.ndarray,
+                         max_force: float | None = None,
+                         max_torque: float | None = None) -> None: ...
+    def set_drive_limits(self, key: int, max_force: float, max_torque: float) -> None: ...

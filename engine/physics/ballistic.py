@@ -176,6 +176,6 @@ class BallisticBackend:
     def contacts(self) -> np.ndarray:
         return np.zeros(0, CONTACT_DTYPE)
 
-    def raycast(self, origin: np.ndarray, direction: np.ndarray,
-                max_distance: float) -> RayHit | None:
-        return None
+    def raycast(self, origin: np.ndarray, direction: np.ndarray, max_distance: float,
+                ignore: int | None = None, mask: int = 0xFFFFFFFF) -> RayHit | None:
+        return None  # particles have no extent: a ray never hits one

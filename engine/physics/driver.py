@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from engine.physics.backend import CONTACT_DTYPE, BodyState, DynamicsBackend
+from engine.physics.backend import CONTACT_DTYPE, BodyState, DynamicsBackend, SupportsFaults
 from engine.realtime import Pacing, RealTimeController
 
 log = logging.getLogger("colosseum.physics")
@@ -55,6 +55,7 @@ class PhysicsDriver:
         if mode not in ("serial", "threaded"):
             raise ValueError(f"mode must be 'serial' or 'threaded', not {mode!r}")
         self.backend = backend
+        self._reports_faults = isinstance(backend, SupportsFaults)
         self.mode = mode
         self.clock = clock
         self.snapshot: Snapshot = EMPTY_SNAPSHOT
@@ -125,8 +126,7 @@ class PhysicsDriver:
             contacts = backend.contacts()
             self.steps += 1
             self.time += h
-            take_faults = getattr(backend, "take_faults", None)
-            faults = take_faults() if take_faults is not None else ()
+            faults = backend.take_faults() if self._reports_faults else ()
             if len(contacts) or faults:
                 with self._lock:
                     if len(contacts):

@@ -1,0 +1,164 @@
+"""``colosseum bench physics``: the "boxes" scene on our ODE backend beside plain C.
+
+Scene (issue 4): a ground plane and N boxes of 1 m and 1 kg in columns 10 high,
+1.2 m apart horizontally and 1.1 m vertically, the lowest centred at 0.55 m;
+Δt 1/60 s, QuickStep 20 iterations, at most 4 contacts per pair, μ 0.5.
+
+The reference is ``tools/bench_ode.c``, compiled here with ``cc -O2`` against the
+same libode (pkg-config) into a temporary folder and run in the same session,
+both plain ("C") and with the contact feedback our backend always does to report
+contact impulses ("C+fb": a dJointFeedback per contact joint, impulses summed
+after the step).
+For each N and with sleeping off and on it reports ms per step of: plain C; our
+raw ``OdeBackend.step``; our step plus the ECS sync (every pose read in C into an
+(N, 7) array, then scattered into a pose table with one numpy assignment, as the
+dynamics system does). Times are the stepping thread's CPU time (C:
+CLOCK_THREAD_CPUTIME_ID, Python: time.thread_time), so other work on a shared
+machine does not count; each variant runs ``repeats`` times, alternating, and
+the fastest run counts.
+
+Run: ``python -m tools.bench_physics [--n 100 500 2000] [--steps S] [--quick]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import shlex
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+DT = 1.0 / 60.0
+SOURCE = Path(__file__).with_name("bench_ode.c")
+
+
+def box_positions(n: int) -> np.ndarray:
+    """Centres of the boxes, in the order bench_ode.c creates them (column by column)."""
+    i = np.arange(n)
+    col, level = i // 10, i % 10
+    side = math.ceil(math.sqrt((n + 9) // 10)) if n else 1
+    return np.column_stack([1.2 * (col % side), 1.2 * (col // side), 0.55 + 1.1 * level])
+
+
+def compile_reference(folder: Path) -> Path:
+    """Build bench_ode.c with the system compiler against pkg-config's libode."""
+    flags = subprocess.run(["pkg-config", "--cflags", "--libs", "ode"], check=True,
+                           capture_output=True, text=True).stdout
+    exe = folder / "bench_ode"
+    cc = os.environ.get("CC", "cc")
+    cmd = [cc, "-O2", "-o", str(exe), str(SOURCE), *shlex.split(flags), "-lm"]
+    done = subprocess.run(cmd, capture_output=True, text=True)
+    if done.returncode:
+        raise RuntimeError(f"cannot compile {SOURCE}: {' '.join(cmd)}\n{done.stderr}")
+    return exe
+
+
+def run_reference(exe: Path, n: int, steps: int, sleep: bool,
+                  feedback: bool = False) -> tuple[float, float]:
+    """(ms per step, mean box height at the end) of the plain C program."""
+    out = subprocess.run([str(exe), str(n), str(steps), str(int(sleep)), str(int(feedback))],
+                         check=True, capture_output=True, text=True).stdout
+    fields = dict(item.split("=") for item in out.split())
+    return float(fields["ms_per_step"]), float(fields["mean_z"])
+
+
+def build_ours(n: int, sleep: bool) -> Any:
+    """The same scene through OdeBackend, with the settings bench_ode.c uses."""
+    from components import MaterialProps, Physical, Shape
+    from engine.physics.backend import WorldSettings
+    from engine.physics.ode3d import OdeBackend
+
+    backend = OdeBackend(WorldSettings(iterations=20, max_contacts=4, auto_sleep=sleep))
+    material = MaterialProps(friction=0.5)
+    backend.add_static_plane((0.0, 0.0, 1.0), 0.0, material)
+    body = Physical(mass=1.0, shapes=[Shape("box", (1.0, 1.0, 1.0))], material=material)
+    identity = np.array([1.0, 0.0, 0.0, 0.0])
+    for key, pos in enumerate(box_positions(n)):
+        backend.add_body(key, body, pos, identity)
+    return backend
+
+
+def time_ours(n: int, steps: int, sleep: bool, sync: bool) -> tuple[float, float]:
+    """(ms per step, mean box height at the end); ``sync`` adds the ECS pose sync."""
+    backend = build_ours(n, sleep)
+    keys = backend.keys()
+    poses = np.empty((n, 7))
+    table = np.zeros((n + 1, 7))  # the world's pose table, rows indexed by entity id
+    step, read = backend.step, backend.read_poses
+    t0 = time.thread_time()
+    if sync:
+        for _ in range(steps):
+            step(DT)
+            read(poses)
+            table[keys] = poses
+    else:
+        for _ in range(steps):
+            step(DT)
+    ms = (time.thread_time() - t0) / steps * 1e3
+    mean_z = float(backend.read_state().position[:, 2].mean()) if n else 0.0
+    backend.close()
+    return ms, mean_z
+
+
+def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
+              backend: str = "ode", quick: bool = False, repeats: int = 3) -> list[dict]:
+    """Measure every N with sleeping off and on; returns one row per (N, sleeping)."""
+    if backend == "pymunk":
+        from tools.bench_physics2d import run_bench as run_2d
+
+        return run_2d(ns, steps)
+    if backend != "ode":
+        raise ValueError(f"bench physics: no benchmark for backend {backend!r} "
+                         "(choose ode or pymunk)")
+    if quick:
+        ns = tuple(n for n in ns if n <= 500) or ns[:1]
+        repeats = 1
+    steps = steps or (60 if quick else 240)
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="colosseum-bench-") as tmp:
+        exe = compile_reference(Path(tmp))
+        for n in ns:
+            for sleep in (False, True):
+                c_ms = fb_ms = raw_ms = sync_ms = math.inf
+                c_z = ours_z = 0.0
+                for _ in range(repeats):
+                    ms, c_z = run_reference(exe, n, steps, sleep)
+                    c_ms = min(c_ms, ms)
+                    fb_ms = min(fb_ms, run_reference(exe, n, steps, sleep, feedback=True)[0])
+                    ms, ours_z = time_ours(n, steps, sleep, sync=False)
+                    raw_ms = min(raw_ms, ms)
+                    sync_ms = min(sync_ms, time_ours(n, steps, sleep, sync=True)[0])
+                row = {"N": n, "sleeping": "on" if sleep else "off", "C ms": c_ms,
+                       "C+fb ms": fb_ms, "ours ms": raw_ms, "ours+sync ms": sync_ms,
+                       "ratio": raw_ms / c_ms, "ratio+sync": sync_ms / c_ms,
+                       "ratio+sync vs C+fb": sync_ms / fb_ms,
+                       "realtime 60Hz": "yes" if sync_ms < 1e3 * DT else "no",
+                       "mean z C": c_z, "mean z ours": ours_z}
+                print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                                for k, v in row.items()), flush=True)
+                rows.append(row)
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n", type=int, nargs="+", default=[100, 500, 2000])
+    parser.add_argument("--steps", type=int, default=None)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--quick", action="store_true")
+    args = parser.parse_args(argv)
+    from tools.bench import print_table
+
+    rows = run_bench(tuple(args.n), args.steps, quick=args.quick, repeats=args.repeats)
+    print_table(rows)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
