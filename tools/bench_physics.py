@@ -112,7 +112,7 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
     if backend == "pymunk":
         from tools.bench_physics2d import run_bench as run_2d
 
-        return run_2d(ns, steps)
+        return run_2d((100, 500) if quick else ns, 300 if quick else steps)
     if backend != "ode":
         raise ValueError(f"bench physics: no benchmark for backend {backend!r} "
                          "(choose ode or pymunk)")
