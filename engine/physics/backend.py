@@ -89,6 +89,8 @@ class WorldSettings:
     max_contacts: int = 4
     auto_sleep: bool = True
     material_pairs: list[MaterialPair] = field(default_factory=list)
+    #: The solver's random state to start from (a saved state restores it); None: fresh.
+    solver_seed: int | None = None
 
 
 @runtime_checkable

@@ -162,7 +162,14 @@ class OdeBackend:
         self._settings = settings
         self._world.configure(_vec(settings.gravity, 3, "gravity"), settings.erp, settings.cfm,
                               settings.iterations, settings.max_contacts, settings.auto_sleep)
+        if settings.solver_seed is not None:
+            self._world.solver_seed = settings.solver_seed
         self._rebuild_pairs()
+
+    @property
+    def solver_seed(self) -> int:
+        """The solver's random state; saved states restore it so runs continue exactly."""
+        return self._world.solver_seed
 
     def step(self, dt: float) -> None:
         """Collide and solve in C with the GIL released; record contacts and faults."""

@@ -1239,6 +1239,15 @@ cdef class World:
         self.static_geoms.append([<size_t>g, 0, None, None, None, GEOM_PLANE])
 
     # -- stepping ---------------------------------------------------------------------------
+    @property
+    def solver_seed(self) -> int:
+        """ODE's random state for this world (QuickStep shuffles constraints with it)."""
+        return self.seed
+
+    @solver_seed.setter
+    def solver_seed(self, unsigned long value) -> None:
+        self.seed = value
+
     def step(self, double dt) -> list:
         """Collide and QuickStep with the GIL released; returns the keys of bodies reset."""
         cdef int nf
