@@ -145,6 +145,13 @@ class Engine:
         self.events.emit(Spawned(entity))
         return entity
 
+    def spawn_many(self, component_lists: Iterable[Iterable[Any]]) -> list[int]:
+        """:meth:`spawn` for many entities at once (a scene load): cheaper per entity."""
+        entities = self.world.create_entities(component_lists)
+        for entity in entities:
+            self.events.emit(Spawned(entity))
+        return entities
+
     def despawn(self, entity: int) -> None:
         """Delete an entity at the end of the current phase."""
         self.defer(lambda: self._despawn_now(entity))

@@ -68,6 +68,33 @@ class PoseTable:
         self.row_of[entity] = row
         self.version += 1
 
+    def adopt_many(self, entities: list[int], transforms: list[Transform]) -> None:
+        """:meth:`adopt` for many at once: one numpy assignment per field, same rows."""
+        n = len(transforms)
+        if not n:
+            return
+        rows: list[int] = []
+        while len(rows) < n:  # the rows one adopt() after another would take
+            if not self._free:
+                self._grow()
+            take = min(n - len(rows), len(self._free))
+            rows += self._free[:-take - 1:-1]
+            del self._free[-take:]
+        index = np.asarray(rows, dtype=np.intp)
+        for name in ("position", "orientation", "linear_velocity", "angular_velocity"):
+            getattr(self, name)[index] = [getattr(t, name) for t in transforms]
+        owner, row_of = self._owner, self.row_of
+        position, orientation = self.position, self.orientation
+        linear, angular = self.linear_velocity, self.angular_velocity
+        for entity, row, t in zip(entities, rows, transforms, strict=True):
+            t.position = position[row]
+            t.orientation = orientation[row]
+            t.linear_velocity = linear[row]
+            t.angular_velocity = angular[row]
+            owner[row] = t
+            row_of[entity] = row
+        self.version += 1
+
     def release(self, entity: int) -> None:
         row = self.row_of.pop(entity, None)
         if row is None:
@@ -150,6 +177,36 @@ class World:
         for component in components:
             self._added(entity, component)
         return entity
+
+    def create_entities(self, component_lists: Iterable[Iterable[Any]]) -> list[int]:
+        """Create many entities; same result as :meth:`create_entity` on each, but cheaper.
+
+        Their Transforms are adopted in one batch, then add hooks run entity by entity
+        in order (so a hook sees every entity of the batch already created).
+        """
+        self._enter()
+        create = esper.create_entity
+        entities: list[int] = []
+        made: list[tuple[int, tuple[Any, ...]]] = []
+        posed: list[int] = []
+        transforms: list[Transform] = []
+        for components in component_lists:
+            components = tuple(components)
+            entity = create(*components)
+            entities.append(entity)
+            made.append((entity, components))
+            for component in components:
+                if type(component) is Transform:
+                    posed.append(entity)
+                    transforms.append(component)
+        self.poses.adopt_many(posed, transforms)
+        hooks = self._on_add
+        if hooks:
+            for entity, components in made:
+                for component in components:
+                    for hook in hooks.get(type(component), ()):
+                        hook(entity, component)
+        return entities
 
     def delete_entity(self, entity: int) -> None:
         """Delete now (the engine defers this to the end of a frame; see Engine.despawn)."""

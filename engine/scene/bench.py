@@ -4,12 +4,17 @@ from __future__ import annotations
 
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
 from engine.scene.factory import build_specs, instantiate
-from engine.scene.loader import load_scene
+from engine.scene.loader import validated
+from engine.scene.parser import parse_file
+
+T = TypeVar("T")
 
 
 def generate_scene(n: int) -> str:
@@ -33,26 +38,32 @@ def generate_scene(n: int) -> str:
 
 
 def bench_scene(n: int = 10000) -> dict[str, float]:
-    """Seconds to parse (+ validate), build specs and instantiate ``n`` objects.
+    """Seconds to parse, validate, build specs and instantiate ``n`` objects.
 
-    ``*_s`` are wall seconds; ``cpu_s`` is this process's CPU time for all three
-    (steadier than wall time on a busy machine).
+    ``*_s`` are wall seconds per stage; ``*_cpu_s`` this process's CPU seconds
+    (steadier than wall time on a busy machine); ``parse_s`` includes reading the file.
     """
     from engine.app import Engine, EngineConfig
 
     text = generate_scene(n)
+    times: dict[str, float] = {}
+
+    def timed(stage: str, run: Callable[[], T]) -> T:
+        c0, t0 = time.process_time(), time.perf_counter()
+        result = run()
+        times[f"{stage}_s"] = time.perf_counter() - t0
+        times[f"{stage}_cpu_s"] = time.process_time() - c0
+        return result
+
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "main.scene"
         path.write_text(text, encoding="utf-8")
-        c0, t0 = time.process_time(), time.perf_counter()
-        db = load_scene(path, np.random.default_rng(0))
-        t1 = time.perf_counter()
-        spec = build_specs(db, tmp)
-        t2, c1 = time.perf_counter(), time.process_time()
+        parsed = timed("parse", lambda: parse_file(path, np.random.default_rng(0)))
+        db = timed("validate", lambda: validated(parsed))
+        spec = timed("build_specs", lambda: build_specs(db, tmp))
         with Engine(EngineConfig(backend="ballistic", fast=True), plugins=()) as engine:
-            c2, t3 = time.process_time(), time.perf_counter()
-            ids = instantiate(engine, spec)
-            t4, c3 = time.perf_counter(), time.process_time()
+            ids = timed("instantiate", lambda: instantiate(engine, spec))
+    stages = ("parse", "validate", "build_specs", "instantiate")
     return {"objects": n, "entities": len(ids), "file_bytes": len(text.encode("utf-8")),
-            "parse_s": t1 - t0, "build_specs_s": t2 - t1, "instantiate_s": t4 - t3,
-            "total_s": (t1 - t0) + (t2 - t1) + (t4 - t3), "cpu_s": (c1 - c0) + (c3 - c2)}
+            **times, "total_s": sum(times[f"{s}_s"] for s in stages),
+            "cpu_s": sum(times[f"{s}_cpu_s"] for s in stages)}

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from engine.scene.diagnostics import Loc, suggest
-from engine.scene.lexer import EOF, IDENT, NUMBER, PUNCT, Token
+from engine.scene.lexer import EOF, IDENT, NUMBER, PUNCT, Lexer, Token
 
 CONSTANTS = {"pi": math.pi, "e": math.e}
 MAX_EXPR_DEPTH = 256
@@ -120,24 +120,36 @@ Node = Num | Var | Call | Unary | Bin
 
 
 class Cursor:
-    """A position in a token list, shared by the scene parser and the expression parser."""
+    """A position in a lexer's tokens, shared by the scene parser and the expression parser.
 
-    def __init__(self, tokens: list[Token], path: str, max_nesting: int):
-        self.tokens = tokens
+    Tokens are scanned as the cursor reaches them (:meth:`at`); past EOF it stays on EOF.
+    """
+
+    def __init__(self, lexer: Lexer, max_nesting: int):
+        self.lexer = lexer
+        self.tokens = lexer.tokens
         self.i = 0
-        self.path = path
+        self.path = lexer.path
         self.nesting = 0
         self.max_nesting = max_nesting
 
+    def at(self, i: int) -> Token:
+        tokens = self.tokens
+        while i >= len(tokens):
+            if self.lexer.done:
+                return tokens[-1]
+            self.lexer.next_token()
+        return tokens[i]
+
     @property
     def tok(self) -> Token:
-        return self.tokens[self.i]
+        return self.at(self.i)
 
     def peek(self, k: int = 1) -> Token:
-        return self.tokens[min(self.i + k, len(self.tokens) - 1)]
+        return self.at(self.i + k)
 
     def advance(self) -> Token:
-        t = self.tokens[self.i]
+        t = self.at(self.i)
         if t.kind != EOF:
             self.i += 1
         return t
@@ -253,17 +265,33 @@ def _expect(cur: Cursor, text: str, opener: Token) -> None:
 
 
 def number(cur: Cursor, t: Token) -> int | float:
-    s = t.text
+    v = number_value(t.text)
+    if v is None:
+        if _is_float(t.text):
+            raise ExprError(cur.loc(t), f"number {describe(t)} is too large for a FLOAT")
+        raise ExprError(cur.loc(t), f"integer {describe(t)} is out of range (max 2^63-1)")
+    return v
+
+
+def number_value(s: str) -> int | float | None:
+    """The value of a NUMBER lexeme: INT without '.' or exponent; None when out of range."""
     if len(s) < 16 and s.isdigit():
         return int(s)
-    if "." in s or "e" in s or "E" in s:
+    if _is_float(s):
         v = float(s)
-        if math.isinf(v):
-            raise ExprError(cur.loc(t), f"number {describe(t)} is too large for a FLOAT")
-        return v
+        return None if math.isinf(v) else v
     if len(s) > 19 or int(s) >= 2**63:
-        raise ExprError(cur.loc(t), f"integer {describe(t)} is out of range (max 2^63-1)")
+        return None
     return int(s)
+
+
+def _is_float(s: str) -> bool:
+    return "." in s or "e" in s or "E" in s
+
+
+def number_text(v: int | float) -> str:
+    """A number as :func:`unparse` writes it (floats round-trip exactly)."""
+    return str(v) if isinstance(v, int) else repr(v)
 
 
 def literal(node: Node) -> int | float | None:
@@ -357,7 +385,7 @@ def _prec(node: Node) -> int:
 def unparse(node: Node) -> str:
     """Canonical text that parses back to the same tree (also inside a vector)."""
     if isinstance(node, Num):
-        return str(node.value) if isinstance(node.value, int) else repr(node.value)
+        return number_text(node.value)
     if isinstance(node, Var):
         return node.name
     if isinstance(node, Call):

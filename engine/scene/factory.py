@@ -12,6 +12,7 @@ object IDs to entity ids; a spec is consumed by instantiating it once.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -35,7 +36,16 @@ from components import (
 )
 from engine.physics.backend import MaterialPair, WorldSettings
 from engine.scene import schema as sc
-from engine.scene.db import Block, SceneDB, Value
+from engine.scene.db import (
+    INCLUDE,
+    STRINGVECTOR,
+    STRUCTURE,
+    VECTOR,
+    Block,
+    Entry,
+    SceneDB,
+    Value,
+)
 from engine.scene.diagnostics import Loc, Reporter
 from engine.scene.parser import paused_gc
 from engine.scene.rotation import euler_to_quat, rotate
@@ -122,28 +132,61 @@ class _Reader(dict):
     ``r("Key")`` is the value (or default); ``r.has("Key")`` whether the author wrote it.
     """
 
+    __slots__ = ("entries", "block", "has", "value")
     __call__ = dict.__getitem__
 
     def __init__(self, block: Block | None, schema: str):
-        last: dict[str, Value] = {} if block is None else {e.key: e.value for e in block}
-        super().__init__(_DEFAULTS[schema])
-        for k, v in last.items():
-            self[k] = v.py()
+        dict.__init__(self, _DEFAULTS[schema])
+        entries = [] if block is None else block.entries
+        last = self._read(entries)
+        if INCLUDE in last:  # read again with the included files' entries spliced in
+            entries = list(block)  # type: ignore[arg-type]
+            self.clear()
+            self.update(_DEFAULTS[schema])
+            last = self._read(entries)
+        self.entries = entries
         self.block = block
-        self.last = last
+        #: Whether the author wrote ``key``; the Value written (or None).
+        self.has: Callable[[str], bool] = last.__contains__
+        self.value: Callable[[str], Value | None] = last.get
 
-    def has(self, key: str) -> bool:
-        return key in self.last
-
-    def value(self, key: str) -> Value | None:
-        return self.last.get(key)
+    def _read(self, entries: list[Entry]) -> dict[str, Value]:
+        """Set each key's plain value (the last one written wins); returns the Values."""
+        last: dict[str, Value] = {}
+        for e in entries:
+            v = last[e.key] = e.value
+            self[e.key] = tuple([x.data for x in v.data]) if v.kind in _VECTORS else v.data
+        return last
 
     def blocks(self, key: str) -> list[Block]:
-        return [] if self.block is None else self.block.blocks(key)
+        return [e.value.data for e in self.entries
+                if e.key == key and e.value.kind == STRUCTURE]
+
+
+_VECTORS = (VECTOR, STRINGVECTOR)
+
+
+class _Index:
+    """The root block's entries grouped by key in one pass (10,000 objects, a dozen keys)."""
+
+    def __init__(self, root: Block):
+        self.groups: dict[str, list[Entry]] = {}
+        for e in root:
+            self.groups.setdefault(e.key, []).append(e)
+
+    def get_all(self, key: str) -> list[Entry]:
+        return self.groups.get(key, [])
+
+    def blocks(self, key: str) -> list[Block]:
+        return [e.value.data for e in self.get_all(key) if e.value.kind == STRUCTURE]
+
+    def value(self, key: str) -> Value | None:
+        found = self.get_all(key)
+        return found[-1].value if found else None
 
 
 def _floats(t: Any) -> tuple[float, ...]:
-    return tuple(float(x) for x in t)
+    return tuple(map(float, t))
 
 
 def build_specs(db: SceneDB, content_dir: str | Path | None = None) -> SceneSpec:
@@ -170,7 +213,7 @@ class _Builder:
 
     def build(self, db: SceneDB) -> SceneSpec:
         spec = SceneSpec()
-        root = db.root
+        root = _Index(db.root)
         for blk in root.blocks("Material"):
             r = _Reader(blk, "Material")
             name = str(r("ID"))
@@ -199,13 +242,14 @@ class _Builder:
         position = _floats(r("Position"))
         quat = _floats(r("Quaternion")) if r.has("Quaternion") else euler_to_quat(
             r("Orientation"))
-        norm = math.sqrt(sum(q * q for q in quat))
+        w, x, y, z = quat
+        norm = math.sqrt(w * w + x * x + y * y + z * z)
         if norm == 0.0:
             self.report.error(r.value("Quaternion").loc, "Quaternion must not be all zeros")
             norm = 1.0
         if abs(norm - 1.0) > 1e-12:  # keep a saved state's quaternion bit-exact
             quat = tuple(q / norm for q in quat)
-        angular = tuple(math.radians(a) for a in r("AngularVelocity"))
+        angular = tuple(map(math.radians, r("AngularVelocity")))
         comps: list[Any] = [Name(oid), Transform(position, quat, r("Velocity"), angular)]
         size = r("Size")
         vis_blk, phys_blk = r.value("VisualAttributes"), r.value("PhysicalAttributes")
@@ -385,7 +429,7 @@ class _Builder:
         return JointSpec(jid, joint, (a, b), blk.loc, local, axes)
 
     # -- shaders, world, scene-level entities ---------------------------------
-    def shaders(self, root: Block, spec: SceneSpec) -> None:
+    def shaders(self, root: _Index, spec: SceneSpec) -> None:
         files = {}
         for key in ("VertexShader", "FragmentShader"):
             files[key] = {str(_Reader(b, key)("ID")): _Reader(b, key)("File")
@@ -404,7 +448,7 @@ class _Builder:
                 uniforms[ur("ID")] = _floats(val) if isinstance(val, tuple) else float(val)
             spec.shader_states[r("ID")] = ShaderStateSpec(r("ShaderProgram"), uniforms)
 
-    def world(self, root: Block, spec: SceneSpec) -> None:
+    def world(self, root: _Index, spec: SceneSpec) -> None:
         blk = root.value("World")
         w = _Reader(blk.data if blk else None, "World")
         pairs = []
@@ -422,7 +466,7 @@ class _Builder:
         spec.backend = w("Backend")
         spec.time = float(w("Time"))
 
-    def scene_entities(self, root: Block, spec: SceneSpec) -> None:
+    def scene_entities(self, root: _Index, spec: SceneSpec) -> None:
         for i, b in enumerate(root.blocks("Camera")):
             r = _Reader(b, "Camera")
             cid = r("ID") or f"camera{i}"
@@ -510,9 +554,9 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     scene's WorldSettings as engine resources; objects spawned at run time (from Lua
     snippets) pass ``as_scene=False`` and leave the loaded scene's resources alone.
     """
-    ids: dict[str, int] = {}
-    for es in spec.entities:
-        ids[es.id] = engine.spawn(*es.components)
+    with paused_gc():
+        entities = engine.spawn_many([es.components for es in spec.entities])
+    ids = dict(zip([es.id for es in spec.entities], entities, strict=True))
     for cam_id, target in spec.camera_follow.items():
         cam = engine.world.component_for_entity(ids[cam_id], Camera)
         cam.follow = ids[target]

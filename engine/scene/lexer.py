@@ -1,7 +1,9 @@
 """Lexer: scene text -> tokens and comments, each with line and column.
 
-One compiled regular expression does the scanning, so a 10,000-object file
-lexes in a fraction of a second. Bad characters and unterminated strings or
+One compiled regular expression scans a lexeme at a time, on demand: the parser
+reads plain entries straight from the text (see ``parser.FAST``) and asks for
+tokens only where the text needs the general grammar, so a 10,000-object file
+reads in a fraction of a second. Bad characters and unterminated strings or
 comments are reported and skipped, so one pass finds every lexical mistake.
 Typographic quotes (as printed in the paper's listings) are accepted as string
 delimiters with a warning.
@@ -10,6 +12,7 @@ delimiters with a warning.
 from __future__ import annotations
 
 import re
+from bisect import bisect_right
 from dataclasses import dataclass
 
 from engine.scene.diagnostics import Loc, Reporter
@@ -24,15 +27,22 @@ EOF = "EOF"
 QUOTES = "\"\u201c\u201d"
 _ESCAPES = {"n": "\n", "t": "\t", "r": "\r"}
 
-#: Whitespace, then one lexeme. ``findall`` gives (whitespace, lexeme) pairs in one C call;
-#: the kind of a lexeme follows from its first characters.
+#: Whitespace other than newline, as the body of a regular-expression class (the parser's
+#: fast path uses the same set).
+SPACE = r" \t\r\f\v\ufeff"
+#: A NUMBER lexeme and a name as atomic regular expressions (never shortened to let a
+#: longer pattern match), shared with the parser's fast path.
+NUMBER_RE = r"(?>(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)"
+NAME_RE = r"[A-Za-z_][A-Za-z0-9_]*+"
+
+#: Whitespace, then one lexeme; the kind of a lexeme follows from its first characters.
 _TOKEN_RE = re.compile(
-    r"""
-    ([ \t\r\f\v\ufeff\n]*)
+    rf"""
+    ([{SPACE}\n]*)
     (
-      (?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?
-    | [A-Za-z_][A-Za-z0-9_]*
-    | [\[\]{}(),+\-*^]
+      {NUMBER_RE}
+    | {NAME_RE}
+    | [\[\]{{}}(),+\-*^]
     | ["\u201c\u201d](?:[^"\u201c\u201d\\\n]|\\.)*["\u201c\u201d]
     | //[^\n]*
     | /\*.*?\*/
@@ -45,6 +55,7 @@ _TOKEN_RE = re.compile(
     """,
     re.VERBOSE | re.DOTALL,
 )
+_NEWLINE = re.compile("\n")
 _PUNCT_CHARS = frozenset("[]{}(),+-*^/")
 _DIGITS = frozenset("0123456789")
 _IDENT_START = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_")
@@ -73,12 +84,6 @@ class Comment:
     trailing: bool
 
 
-@dataclass(slots=True)
-class Lexed:
-    tokens: list[Token]
-    comments: list[Comment]
-
-
 def decode_string(body: str) -> str:
     """Undo the writer's escapes: ``\\n \\t \\r`` and a backslash before any other char."""
     if "\\" not in body:
@@ -97,72 +102,135 @@ def decode_string(body: str) -> str:
     return "".join(out)
 
 
-def lex(text: str, path: str, report: Reporter, max_tokens: int) -> Lexed:
-    """Scan ``text``; problems go to ``report``. Stops with an error past ``max_tokens``."""
-    tokens: list[Token] = []
-    comments: list[Comment] = []
-    line, line_start = 1, 0
-    warned_quotes = False
-    last_token_line = 0
-    space = True
-    append = tokens.append
-    pos = 0
-    for ws, lexeme in _TOKEN_RE.findall(text):
-        if ws:
-            nl = ws.count("\n")
-            if nl:
-                line += nl
-                line_start = pos + ws.rindex("\n") + 1
-            pos += len(ws)
-            space = True
-        start = pos
-        pos += len(lexeme)
-        col = start - line_start + 1
-        first = lexeme[:1]
-        if first in _IDENT_START:
-            append(Token(IDENT, lexeme, None, line, col, start, space))
-        elif first in _DIGITS or (first == "." and len(lexeme) > 1):
-            append(Token(NUMBER, lexeme, None, line, col, start, space))
-        elif first in _PUNCT_CHARS and (first != "/" or lexeme == "/"):
-            append(Token(PUNCT, lexeme, None, line, col, start, space))
-        elif first in _QUOTE_CHARS:
-            if len(lexeme) > 1 and lexeme[-1] in _QUOTE_CHARS and _closed(lexeme):
-                if not warned_quotes and (first != '"' or lexeme[-1] != '"'):
-                    warned_quotes = True
-                    report.warning(Loc(path, line, col),
-                                   "typographic quotes (\u201c \u201d) used as string "
-                                   'delimiters; write plain " instead')
-                append(Token(STRING, lexeme, decode_string(lexeme[1:-1]), line, col, start,
-                             space))
+class Lexer:
+    """Scans ``text`` one token at a time into ``tokens`` and ``comments``.
+
+    Problems go to ``report``. Past ``max_tokens`` tokens (counting those the
+    parser read without asking, see :meth:`skip`) it reports a limit error and
+    ends with EOF.
+    """
+
+    def __init__(self, text: str, path: str, report: Reporter, max_tokens: int):
+        self.text = text
+        self.path = path
+        self.report = report
+        self.max_tokens = max_tokens
+        self.tokens: list[Token] = []
+        self.comments: list[Comment] = []
+        self.pos = 0
+        self.line = 1
+        self.line_start = 0
+        self.count = 0  # tokens scanned so far, not counting EOF
+        self.done = False  # EOF is the last token
+        self._space = True
+        self._last_token_line = 0
+        self._warned_quotes = False
+        self._line_starts: list[int] | None = None
+        self._skipped = False  # text was read by the parser since the last token
+
+    @property
+    def line_starts(self) -> list[int]:
+        """Offset of each line's first character (made on first use)."""
+        if self._line_starts is None:
+            self._line_starts = [0, *(m.end() for m in _NEWLINE.finditer(self.text))]
+        return self._line_starts
+
+    def skip(self, pos: int, count: int) -> None:
+        """The parser read plain text up to ``pos`` itself; ``count`` tokens so far.
+
+        The line there is worked out when the next token is scanned, if one is.
+        """
+        self.pos = pos
+        self.count = count
+        self._skipped = True
+
+    def _resume(self) -> None:
+        line = bisect_right(self.line_starts, self.pos)
+        self.line = self._last_token_line = line
+        self.line_start = self.line_starts[line - 1]
+        self._space = False
+        self._skipped = False
+
+    def finish(self) -> None:
+        """Scan to the end, reporting every remaining lexical problem."""
+        while not self.done:
+            self.next_token()
+
+    def next_token(self) -> Token:
+        """Scan the next token (EOF at the end or past the limit) and append it."""
+        tokens = self.tokens
+        if self.done:
+            return tokens[-1]
+        if self._skipped:
+            self._resume()
+        text, path, report = self.text, self.path, self.report
+        pos, line, line_start = self.pos, self.line, self.line_start
+        space = self._space
+        match = _TOKEN_RE.match
+        token: Token | None = None
+        while token is None:
+            ws, lexeme = match(text, pos).group(1, 2)  # type: ignore[union-attr]
+            if ws:
+                nl = ws.count("\n")
+                if nl:
+                    line += nl
+                    line_start = pos + ws.rindex("\n") + 1
+                pos += len(ws)
+                space = True
+            start = pos
+            pos += len(lexeme)
+            col = start - line_start + 1
+            first = lexeme[:1]
+            if first in _IDENT_START:
+                token = Token(IDENT, lexeme, None, line, col, start, space)
+            elif first in _DIGITS or (first == "." and len(lexeme) > 1):
+                token = Token(NUMBER, lexeme, None, line, col, start, space)
+            elif first in _PUNCT_CHARS and (first != "/" or lexeme == "/"):
+                token = Token(PUNCT, lexeme, None, line, col, start, space)
+            elif first in _QUOTE_CHARS:
+                if len(lexeme) > 1 and lexeme[-1] in _QUOTE_CHARS and _closed(lexeme):
+                    if not self._warned_quotes and (first != '"' or lexeme[-1] != '"'):
+                        self._warned_quotes = True
+                        report.warning(Loc(path, line, col),
+                                       "typographic quotes (\u201c \u201d) used as string "
+                                       'delimiters; write plain " instead')
+                    token = Token(STRING, lexeme, decode_string(lexeme[1:-1]), line, col,
+                                  start, space)
+                else:
+                    report.error(Loc(path, line, col),
+                                 "string is not closed before the end of the line")
+                    token = Token(STRING, lexeme, decode_string(lexeme[1:]), line, col, start,
+                                  space)
+            elif first == "/":
+                if lexeme.startswith("/*") and not (len(lexeme) >= 4 and lexeme.endswith("*/")):
+                    report.error(Loc(path, line, col), "comment '/*' is never closed with '*/'")
+                nl = lexeme.count("\n")
+                self.comments.append(Comment(lexeme, line, line + nl, start,
+                                             self._last_token_line == line))
+                if nl:
+                    line += nl
+                    line_start = start + lexeme.rindex("\n") + 1
+                space = True
+            elif not lexeme:
+                token = Token(EOF, "", None, line, len(text) - line_start + 1, len(text), True)
             else:
-                report.error(Loc(path, line, col),
-                             "string is not closed before the end of the line")
-                append(Token(STRING, lexeme, decode_string(lexeme[1:]), line, col, start,
-                             space))
-        elif first == "/":
-            if lexeme.startswith("/*") and not (len(lexeme) >= 4 and lexeme.endswith("*/")):
-                report.error(Loc(path, line, col), "comment '/*' is never closed with '*/'")
-            nl = lexeme.count("\n")
-            comments.append(Comment(lexeme, line, line + nl, start, last_token_line == line))
-            if nl:
-                line += nl
-                line_start = start + lexeme.rindex("\n") + 1
-            space = True
-            continue
-        elif not lexeme:
-            break
+                report.error(Loc(path, line, col), f"unexpected character {lexeme!r}")
+                space = True
+        self.pos, self.line, self.line_start = pos, line, line_start
+        self._space = False
+        self._last_token_line = line
+        if token.kind is EOF:
+            self.done = True
         else:
-            report.error(Loc(path, line, col), f"unexpected character {lexeme!r}")
-            space = True
-            continue
-        space = False
-        last_token_line = line
-        if len(tokens) > max_tokens:
-            report.error(Loc(path, line, col),
-                         f"file has more than {max_tokens} tokens (limit); split it with Include")
-            break
-    tokens.append(Token(EOF, "", None, line, len(text) - line_start + 1, len(text), True))
-    return Lexed(tokens, comments)
+            self.count += 1
+            if self.count > self.max_tokens:
+                report.error(Loc(path, line, token.col), f"file has more than "
+                             f"{self.max_tokens} tokens (limit); split it with Include")
+                tokens.append(token)
+                token = Token(EOF, "", None, line, len(text) - line_start + 1, len(text), True)
+                self.done = True
+        tokens.append(token)
+        return token
 
 
 def _closed(lexeme: str) -> bool:

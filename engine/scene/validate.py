@@ -58,26 +58,31 @@ def _block(block: Block, name: str, ctx: _Ctx, where: Loc, size: Value | None) -
     fields = sc.SCHEMAS[name]
     seen: dict[str, Entry] = {}
     for e in block:
-        if e.key == INCLUDE:
-            continue
-        f = fields.get(e.key)
+        key = e.key
+        f = fields.get(key)
         if f is None:
-            lower = e.key.lower()
-            if e.key[0].islower() and not any(k.lower() == lower for k in fields):
+            if key == INCLUDE:
+                continue
+            lower = key.lower()
+            if key[0].islower() and not any(k.lower() == lower for k in fields):
                 continue  # the author's variable
-            ctx.report.error(e.loc, f"unknown key '{e.key}' in {name}{suggest(e.key, fields)}")
+            ctx.report.error(e.loc, f"unknown key '{key}' in {name}{suggest(key, fields)}")
             continue
-        if not f.repeat and e.key in seen:
-            ctx.report.warning(e.loc, f"'{e.key}' given again; this one replaces line "
-                                      f"{seen[e.key].loc.line}")
-        seen[e.key] = e
-        if name == "Object" and e.key == "Size" and _type_ok(e.value, f, name):
+        if key in seen and not f.repeat:
+            ctx.report.warning(e.loc, f"'{key}' given again; this one replaces line "
+                                      f"{seen[key].loc.line}")
+        seen[key] = e
+        if key == "Size" and name == "Object" and _type_ok(e.value, f, name):
             size = e.value
-        _value(e, f, name, ctx, size)
-    for k, f in fields.items():
-        if f.required and k not in seen:
+        v, t = e.value, f.type
+        if t == _STRUCT_T and v.kind == STRUCTURE:  # the common cases, without a call
+            _block(v.data, f.struct, ctx, e.loc, size)
+        elif not (t == _FLOAT_T and (v.kind == INT or v.kind == FLOAT)):
+            _value(e, f, name, ctx, size)
+    for k in _REQUIRED[name]:
+        if k not in seen:
             ctx.report.error(where, f"{name} is missing required key '{k}'")
-    if name in sc.ID_KINDS and "ID" in seen:
+    if "ID" in seen and name in _ID_KINDS:
         idv = seen["ID"].value
         key = str(idv.data)
         first = ctx.ids[name].get(key)
@@ -152,8 +157,21 @@ def _expected(f: sc.Field) -> str:
     return _EXPECTED.get(t, t)
 
 
+#: Required keys of each schema, in schema order.
+_REQUIRED = {name: [k for k, f in fields.items() if f.required]
+             for name, fields in sc.SCHEMAS.items()}
+_STRUCT_T, _FLOAT_T = sc.STRUCT_T, sc.FLOAT_T
+_ID_KINDS = frozenset(sc.ID_KINDS)
+#: Field types whose check is only the value's kind.
+_KINDS = {sc.FLOAT_T: (INT, FLOAT), sc.STRUCT_T: (STRUCTURE,),
+          sc.NUMBER_OR_VECTOR_T: (INT, FLOAT, VECTOR)}
+
+
 def _type_ok(v: Value, f: sc.Field, owner: str) -> bool:
     t, k = f.type, v.kind
+    kinds = _KINDS.get(t)
+    if kinds is not None:
+        return k in kinds
     if t == sc.ANY_T:
         return True
     if t == sc.INT_T:
