@@ -12,7 +12,7 @@ object IDs to entity ids; a spec is consumed by instantiating it once.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -189,10 +189,24 @@ def _floats(t: Any) -> tuple[float, ...]:
     return tuple(map(float, t))
 
 
-def build_specs(db: SceneDB, content_dir: str | Path | None = None) -> SceneSpec:
-    """SceneDB -> SceneSpec. Raises SceneError (with places) if a model cannot be used."""
+Pose = tuple[tuple[float, ...], tuple[float, ...]]
+
+
+def build_specs(db: SceneDB, content_dir: str | Path | None = None,
+                materials: dict[str, MaterialProps] | None = None,
+                bodies: Mapping[str, Pose] | None = None) -> SceneSpec:
+    """SceneDB -> SceneSpec. Raises SceneError (with places) if a model cannot be used.
+
+    ``materials`` and ``bodies`` (object ID -> position, orientation) exist elsewhere
+    (the running scene, when a script spawns a snippet) and may be used by ID here.
+    """
     folder = Path(content_dir) if content_dir is not None else Path(db.path).parent
     b = _Builder(folder, Reporter(sources=dict(db.sources)))
+    if materials:
+        b.materials.update(materials)
+    if bodies:
+        b.poses.update(bodies)
+        b.physical_ids.update(bodies)
     with paused_gc():
         spec = b.build(db)
     b.report.raise_if_errors()

@@ -6,13 +6,14 @@ files are looked for relative to the scene file's folder.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 import numpy as np
 
 from engine.scene.db import SceneDB
 from engine.scene.diagnostics import Diagnostic, Reporter, SceneError, sorted_diagnostics
-from engine.scene.factory import SceneSpec, build_specs
+from engine.scene.factory import Pose, SceneSpec, build_specs
 from engine.scene.parser import Limits, parse_file, parse_text, paused_gc
 from engine.scene.validate import validate
 from engine.scene.writer import write
@@ -31,11 +32,13 @@ def _missing(path: Path) -> SceneError:
     return SceneError([Diagnostic(str(path), 1, 1, "error", f"{what}: {path}")])
 
 
-def validated(db: SceneDB, content_dir: Path | None = None) -> SceneDB:
+def validated(db: SceneDB, content_dir: Path | None = None,
+              known: Mapping[str, Iterable[str]] | None = None) -> SceneDB:
     """Check ``db`` against the schema; raises SceneError (with warnings kept) on errors."""
     report = Reporter(list(db.warnings), dict(db.sources))
     with paused_gc():
-        validate(db, content_dir if content_dir is not None else Path(db.path).parent, report)
+        validate(db, content_dir if content_dir is not None else Path(db.path).parent, report,
+                 known)
     report.raise_if_errors()
     db.warnings = sorted_diagnostics(report.diagnostics)
     return db
@@ -57,10 +60,20 @@ def load_spec(path: str | Path, rng: np.random.Generator | None = None) -> Scene
 
 
 def spec_from_text(text: str, content_dir: str | Path, rng: np.random.Generator | None = None,
-                   path: str = "<string>") -> SceneSpec:
-    """Specs from a scene-format snippet (what Lua uses to spawn objects at run time)."""
-    db = validated(parse_text(text, path, rng, base_dir=content_dir), Path(content_dir))
-    return build_specs(db, content_dir)
+                   path: str = "<string>", scene: SceneSpec | None = None,
+                   bodies: Mapping[str, Pose] | None = None) -> SceneSpec:
+    """Specs from a scene-format snippet (what Lua uses to spawn objects at run time).
+
+    With ``scene`` (the running scene's spec) the snippet may use its materials and
+    shader states by ID; ``bodies`` (ID -> current pose) are what its joints may
+    attach to besides its own objects.
+    """
+    known: dict[str, Iterable[str]] = {"Object": bodies or {}}
+    if scene is not None:
+        known |= {"Material": scene.materials, "ShaderState": scene.shader_states,
+                  "ShaderProgram": scene.shader_programs}
+    db = validated(parse_text(text, path, rng, base_dir=content_dir), Path(content_dir), known)
+    return build_specs(db, content_dir, scene.materials if scene is not None else None, bodies)
 
 
 def check(path: str | Path, rng: np.random.Generator | None = None) -> list[Diagnostic]:

@@ -8,6 +8,7 @@ IDs that do not exist (with suggestions) and asset files that are not there
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -42,9 +43,16 @@ class _Ctx:
     targets: list[Value] = field(default_factory=list)
 
 
-def validate(db: SceneDB, content_dir: Path | None, report: Reporter) -> None:
-    """Check ``db`` against the schema; problems go to ``report``."""
+def validate(db: SceneDB, content_dir: Path | None, report: Reporter,
+             known: Mapping[str, Iterable[str]] | None = None) -> None:
+    """Check ``db`` against the schema; problems go to ``report``.
+
+    ``known`` names IDs declared elsewhere (the running scene, for a snippet a
+    script spawns), by kind, so references to them resolve.
+    """
     ctx = _Ctx(report)
+    for kind, names in (known or {}).items():
+        ctx.ids[kind].update(dict.fromkeys(names, db.root.loc))
     _block(db.root, "Scene", ctx, db.root.loc, None)
     _resolve(ctx)
     if content_dir is not None:

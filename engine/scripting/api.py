@@ -345,11 +345,14 @@ class ScriptAPI:
     # -- structure --------------------------------------------------------------
     def spawn(self, text: str) -> Any:
         """Objects (and joints) from scene-format text, through the scene factory."""
-        from engine.scene import SceneError, spec_from_text
+        from engine.scene import SceneError, SceneIds, spec_from_text
 
         content = self.engine.config.content_dir or "."
+        scene = self.engine.try_resource(SceneIds)
         try:
-            spec = spec_from_text(str(text), content, self.engine.rng, path="<spawn>")
+            spec = spec_from_text(str(text), content, self.engine.rng, path="<spawn>",
+                                  scene=None if scene is None else scene.spec,
+                                  bodies=self._body_poses())
         except SceneError as exc:
             raise ScriptAPIError(f"spawn: {exc}") from None
         ids: dict[str, int] = {}
@@ -365,6 +368,12 @@ class ScriptAPI:
         self._names.update(ids)
         assert self.runtime is not None
         return self.runtime.lua.table_from(made)
+
+    def _body_poses(self) -> dict[str, tuple[tuple[float, ...], tuple[float, ...]]]:
+        """Object ID -> current pose of every named body, for joints in spawned snippets."""
+        world = self.engine.world
+        return {name.id: (tuple(t.position), tuple(t.orientation))
+                for _, (name, t, _p) in world.get_components(Name, Transform, Physical)}
 
     def set_motor(self, ref: Any, velocity: Any, max_force: Any) -> None:
         entity, joint = self._joint(ref, "setMotor")

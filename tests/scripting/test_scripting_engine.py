@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 from script_helpers import backends, runtime_of, script_named, scripted_engine, write_content
 
-from components import Name, Transform
+from components import Joint, Name, Physical, Transform
 from engine.events import Contacts, KeyEvent
+from engine.scene import SceneIds
 
 DATA = Path(__file__).parent / "data"
 G = 9.81
@@ -301,3 +302,25 @@ def test_runaway_script_is_stopped_and_the_engine_runs_on(tmp_path: Path, mode: 
         ball = engine.world.component_for_entity(
             next(e for e, n in engine.world.get_component(Name) if n.id == "ball"), Transform)
         assert ball.position[2] < 1.0  # physics went on
+
+
+def test_spawned_snippets_use_the_scene_materials_and_objects(tmp_path: Path) -> None:
+    scene = ('Material { ID "ice" Friction 0.02 Bounce 0.3 }\n'
+             'Object { ID "post" Dynamic 0 Position [0 0 1]\n'
+             '  PhysicalAttributes { Geometry { Primitive "box" Size [0.2 0.2 2] } } }\n'
+             'Script "scripts/maker.lua"\n')
+    maker = ('function onStart()\n'
+             '  made = spawn([[\n'
+             '    Object { ID "puck" Position [1 0 0.1]\n'
+             '      PhysicalAttributes { Material "ice" Geometry { Primitive "sphere" } } }\n'
+             '    Joint { ID "tether" Type "Ball" Bodies ["puck" "post"] Anchor [0 0 1] }\n'
+             '  ]])\n'
+             'end\n')
+    write_content(tmp_path, scene, {"maker.lua": maker})
+    with scripted_engine(tmp_path) as engine:
+        engine.run(frames=2)
+        made = script_named(engine, "scripts/maker.lua").env.made
+        puck = engine.world.component_for_entity(made[1].id, Physical)
+        assert (puck.material.name, puck.material.friction) == ("ice", 0.02)
+        tether = engine.world.component_for_entity(made[2].id, Joint)
+        assert tether.body_b == engine.resource(SceneIds).entities["post"]
