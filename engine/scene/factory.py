@@ -477,7 +477,7 @@ class _Builder:
                                    auto_sleep=bool(w("AutoSleep")), material_pairs=pairs)
         spec.material_pairs = pairs
         spec.time_step = float(w("TimeStep"))
-        spec.backend = w("Backend")
+        spec.backend = w("Dynamics")
         spec.time = float(w("Time"))
 
     def scene_entities(self, root: _Index, spec: SceneSpec) -> None:
@@ -503,8 +503,9 @@ class _Builder:
         for i, b in enumerate(root.blocks("Sound")):
             r = _Reader(b, "Sound")
             sid = r("ID") or f"sound{i}"
-            spec.entities.append(EntitySpec(sid, [Name(sid), Transform(r("Position")),
-                                                  _sound(r, sid)], b.loc))
+            # without a Position it is music or ambience: played at the listener, stereo kept
+            placed = [Transform(r("Position"))] if r.has("Position") else []
+            spec.entities.append(EntitySpec(sid, [Name(sid), *placed, _sound(r, sid)], b.loc))
         for i, b in enumerate(root.blocks("Controller")):
             r = _Reader(b, "Controller")
             cid = r("ID") or f"controller{i}"

@@ -186,7 +186,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     "Sound": {
         "ID": _id("sound"),
         "File": _f(ASSET_T, None, ".wav or .ogg", required=True),
-        "Position": _f(VEC3_T, (0.0, 0.0, 0.0), "m (scene sounds only)"),
+        "Position": _f(VEC3_T, (0.0, 0.0, 0.0),
+                       "m (scene sounds only; without it the sound plays at the listener)"),
         "Loop": _f(BOOL_T, 0),
         "Gain": _f(FLOAT_T, 1.0),
         "Pitch": _f(FLOAT_T, 1.0),
@@ -237,7 +238,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     "World": {
         "Gravity": _f(VEC3_T, (0.0, 0.0, -9.81), "m/s^2"),
         "TimeStep": _f(FLOAT_T, 0.01, "s, fixed dynamics step"),
-        "Backend": _f(ENUM_T, "ode", allowed=BACKENDS),
+        "Dynamics": _f(ENUM_T, "ode", "dynamics backend: ode (3D) or pymunk (2D, X-Z plane)",
+                       allowed=BACKENDS),
         "Iterations": _f(INT_T, 20),
         "ERP": _f(FLOAT_T, 0.2, "error reduction per step"),
         "CFM": _f(FLOAT_T, 1e-5, "constraint force mixing"),

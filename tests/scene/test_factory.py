@@ -277,3 +277,12 @@ def test_saved_state_elsewhere_still_finds_its_assets(tmp_path):
     again = load_spec(out)  # raises if a model, sound or script is not found
     assert [e.id for e in again.entities] == [e.id for e in spec.entities]
     assert comps(again, "crate")[Physical].shapes[0].kind == "hull"
+
+
+def test_a_scene_sound_is_placed_only_when_it_has_a_position(tmp_path):
+    (tmp_path / "hum.wav").write_bytes(b"")  # only its existence is checked here
+    spec = spec_from_text('Sound { ID "music" File "hum.wav" Loop 1 }\n'
+                          'Sound { ID "tap" File "hum.wav" Position [1 2 3] }\n', tmp_path)
+    kinds = {es.id: {type(c) for c in es.components} for es in spec.entities}
+    assert Transform not in kinds["music"] and Sound in kinds["music"]
+    assert Transform in kinds["tap"]
