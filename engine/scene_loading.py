@@ -40,8 +40,6 @@ class LoadedScene:
         from engine.scene import instantiate
 
         instantiate(engine, self.spec)
-        # a saved state continues at the time it was saved
-        engine.time = engine.physics.time = self.spec.time
 
 
 def load_content_scene(content: Content, seed: int = 0) -> LoadedScene:

@@ -474,7 +474,8 @@ class _Builder:
         spec.world = WorldSettings(gravity=_floats(w("Gravity")), erp=float(w("ERP")),
                                    cfm=float(w("CFM")), iterations=int(w("Iterations")),
                                    max_contacts=int(w("MaxContacts")),
-                                   auto_sleep=bool(w("AutoSleep")), material_pairs=pairs)
+                                   auto_sleep=bool(w("AutoSleep")), material_pairs=pairs,
+                                   solver_seed=w("SolverSeed"))
         spec.material_pairs = pairs
         spec.time_step = float(w("TimeStep"))
         spec.backend = w("Dynamics")
@@ -566,8 +567,9 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     """Create the spec's entities and joints; returns object ID -> entity id.
 
     With ``as_scene`` (loading a scene file) it also leaves :class:`SceneIds` and the
-    scene's WorldSettings as engine resources; objects spawned at run time (from Lua
-    snippets) pass ``as_scene=False`` and leave the loaded scene's resources alone.
+    scene's WorldSettings as engine resources and sets the clock to the scene's Time;
+    objects spawned at run time (from Lua snippets) pass ``as_scene=False`` and leave
+    the loaded scene's resources alone.
     """
     with paused_gc():
         entities = engine.spawn_many([es.components for es in spec.entities])
@@ -584,4 +586,6 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     if as_scene:
         engine.insert_resource(SceneIds(ids, joints, spec))
         engine.insert_resource(spec.world)
+        # a saved state continues at the time it was saved
+        engine.time = engine.physics.time = spec.time
     return ids

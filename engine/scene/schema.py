@@ -246,6 +246,7 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "MaxContacts": _f(INT_T, 4, "per pair of geometries"),
         "AutoSleep": _f(BOOL_T, 1),
         "Time": _f(FLOAT_T, 0.0, "s, simulated time this state was saved at"),
+        "SolverSeed": _f(INT_T, None, "the solver's random state when this state was saved"),
     },
 }
 

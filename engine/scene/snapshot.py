@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 from components import Joint, Transform
 from engine.scene import schema as sc
-from engine.scene.db import FLOAT, STRING, STRUCTURE, VECTOR, Block, Entry, Value
+from engine.scene.db import FLOAT, INT, STRING, STRUCTURE, VECTOR, Block, Entry, Value
 from engine.scene.diagnostics import Loc
 from engine.scene.factory import SceneIds
 from engine.scene.parser import parse_text
@@ -112,6 +112,9 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
     if world_entry is None or world_entry.value.kind != STRUCTURE:
         world_entry = Entry("World", Value(STRUCTURE, Block(), _HERE), _HERE)
         root.entries.append(world_entry)
-    _set(world_entry.value.data, "Time", Value(FLOAT, float(spec.time + engine.time), _HERE))
+    _set(world_entry.value.data, "Time", Value(FLOAT, float(engine.time), _HERE))
+    seed = engine.physics.request(lambda backend: getattr(backend, "solver_seed", None))
+    if seed.result(timeout=5.0) is not None:  # the solver shuffles constraints with it
+        _set(world_entry.value.data, "SolverSeed", Value(INT, int(seed.result()), _HERE))
     header = f"// state of {spec.db.path} at t = {spec.time + engine.time!r} s"
     return header + "\n" + write(db, literal=True)
