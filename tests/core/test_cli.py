@@ -99,3 +99,27 @@ def test_scene_errors_are_reported_with_places_and_nothing_runs(sim: Path):
     assert "did you mean 'Mass'" in result.stderr
     assert "ball z=" not in result.stdout
     assert colosseum("check", sim).returncode == 1
+
+
+def test_save_state_then_run_it_matches_an_uninterrupted_run(sim: Path, tmp_path: Path):
+    from engine.scene import load_scene
+
+    scene = sim / "main.scene"
+    scene.write_text(scene.read_text().replace("TimeStep 0.01", "TimeStep 0.01 AutoSleep 0"))
+    whole, first, rest = tmp_path / "whole.scene", tmp_path / "first.scene", tmp_path / "rest.scene"
+    for args in ((sim, "--seconds", "3", "--save-state", whole),
+                 (sim, "--seconds", "2", "--save-state", first),
+                 (first, "--seconds", "1", "--save-state", rest)):
+        result = colosseum("run", *args, "--fast")
+        assert result.returncode == 0, result.stderr
+
+    def positions(path: Path) -> dict[str, list[float]]:
+        db = load_scene(path)
+        assert db.find("World/Time").data == pytest.approx(3.0)
+        return {o.value.data.find("ID").data: [v.data for v in o.value.data.find("Position").data]
+                for o in db.root.get_all("Object")}
+
+    a, b = positions(whole), positions(rest)
+    assert a.keys() == b.keys() == {"ground", "ball", "crate"}
+    for name in a:
+        assert b[name] == pytest.approx(a[name], abs=1e-6), name
