@@ -31,6 +31,8 @@ class Contacts:
 
 @dataclass(frozen=True, slots=True)
 class KeyEvent:
+    """A key went down or up; names are lower case ("space", "up", "f1", "a")."""
+
     key: str
     pressed: bool
 

@@ -89,10 +89,11 @@ class ControllerSystem(System):
         engine.world.on_remove(Controller, lambda e, c: self._bindings.pop(e, None))
 
     def _on_key(self, event: KeyEvent) -> None:
+        key = event.key.lower()  # bindings are written "key:Up/Down" or "key:up/down"
         if event.pressed:
-            self._keys.add(event.key)
+            self._keys.add(key)
         else:
-            self._keys.discard(event.key)
+            self._keys.discard(key)
 
     def _on_input(self, event: InputEvent) -> None:
         device = event.device
@@ -106,7 +107,7 @@ class ControllerSystem(System):
         if kind not in ("key", "axis", "wheel", "tracker") or not rest:
             return self._refuse(entity, c, f"unknown input {c.input!r} (use key:A/B, axis:N, "
                                            "wheel:NAME or tracker:NAME)")
-        args = tuple(rest.split("/")) if kind == "key" else (f"{kind}:{rest}",)
+        args = tuple(rest.lower().split("/")) if kind == "key" else (f"{kind}:{rest}",)
         target_kind, _, name = c.target.partition(":")
         if target_kind not in ("motor", "force", "kinematic") or not name:
             return self._refuse(entity, c, f"unknown target {c.target!r} (use motor:JOINT, "

@@ -44,7 +44,7 @@ if TYPE_CHECKING:
 log = logging.getLogger("colosseum.render")
 
 #: Key that shows and hides the HUD line.
-HUD_KEY = "F1"
+HUD_KEY = "f1"
 
 
 @dataclass(slots=True)

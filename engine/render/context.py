@@ -102,8 +102,8 @@ class WindowTarget:
         self.ctx = window.ctx
         self.key_callback: Callable[[str, bool], None] | None = None
         keys = window.keys
-        #: window-library key code -> engine key name ("F1", "A", "SPACE", "UP"...)
-        self.key_names = {getattr(keys, n): n for n in dir(keys)
+        #: window-library key code -> engine key name ("f1", "a", "space", "up"...)
+        self.key_names = {getattr(keys, n): n.lower() for n in dir(keys)
                            if n.isupper() and not n.startswith("ACTION_")}
         window.key_event_func = self._on_key
 

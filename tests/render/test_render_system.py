@@ -113,7 +113,7 @@ def test_f1_toggles_the_hud():
         eng.run(frames=1)
         hud = eng.resource(RenderSystem).renderer.hud
         assert not hud.enabled
-        eng.events.emit(KeyEvent("F1", True))
+        eng.events.emit(KeyEvent("f1", True))
         eng.run(frames=1)
         assert hud.enabled and "fps" in hud.text and "real-time" in hud.text
 

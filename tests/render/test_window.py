@@ -22,7 +22,7 @@ def test_window_opens_draws_and_reads_back():
         centre = renderer.read_pixels()[60, 80]
         assert centre[0] > 100 and centre[1] < 40
         assert not target.is_closing
-        assert target.key_names[target.window.keys.F1] == "F1"
+        assert target.key_names[target.window.keys.F1] == "f1"
         renderer.release()
     finally:
         target.close()
