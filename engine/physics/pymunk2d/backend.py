@@ -36,6 +36,7 @@ from engine.physics.backend import (
 from engine.physics.pymunk2d.idindex import IdIndex
 from engine.physics.pymunk2d.joints import JointRecord, build_joint
 from engine.physics.pymunk2d.planar import quat_multiply, split_orientation
+from engine.physics.pymunk2d.readout import Readout
 from engine.physics.pymunk2d.shapes import BuiltShape, build_shape
 
 log = logging.getLogger("colosseum.physics.pymunk")
@@ -45,8 +46,8 @@ SLEEP_TIME = 0.5
 #: Overlap allowed between shapes (m); pymunk's default 0.1 is meant for pixels.
 COLLISION_SLOP = 1e-3
 
-_BODY_FIELDS = (batch.BodyFields.BODY_ID | batch.BodyFields.POSITION | batch.BodyFields.ANGLE
-                | batch.BodyFields.VELOCITY | batch.BodyFields.ANGULAR_VELOCITY)
+_STATE_FIELDS = (batch.BodyFields.POSITION | batch.BodyFields.ANGLE | batch.BodyFields.VELOCITY
+                 | batch.BodyFields.ANGULAR_VELOCITY)
 _ARB = batch.ArbiterFields
 _ARBITER_FIELDS = (_ARB.BODY_A_ID | _ARB.BODY_B_ID | _ARB.CONTACT_COUNT | _ARB.TOTAL_IMPULSE
                    | _ARB.NORMAL | _ARB.POINT_A_1 | _ARB.POINT_B_1 | _ARB.DISTANCE_1
@@ -92,17 +93,18 @@ class PymunkBackend:
         self._dirty = True
         self._keys = np.zeros(0, np.int64)
         self._row: dict[int, int] = {}
-        self._y = np.zeros(0)
+        self._readout = Readout(0, np.zeros(0), np.zeros(0, np.intp))
         self._rest = np.zeros((0, 4))
         self._any_rest = False
         self._cog = np.zeros((0, 2))
         self._any_cog = False
         self._static_rows = np.ones(1, bool)
         self._keys_ext = np.full(1, -1, np.int64)
-        self._y_ext = np.zeros(1)
         self._index = IdIndex(np.zeros(0, np.int64))
         self._iter_ids = b""
-        self._src: np.ndarray | None = None
+        self._track_order = True
+        self._sleep_on = True
+        self._sliders: dict[int, JointRecord] = {}
         self._always_awake: list[pymunk.Body] = []
         self._last_good = BodyState.empty()
         self._faults: list[tuple[int, str]] = []
@@ -130,6 +132,13 @@ class PymunkBackend:
         erp = min(max(settings.erp, 0.0), 0.99)
         space.collision_bias = (1.0 - erp) ** 60
         space.sleep_time_threshold = SLEEP_TIME if settings.auto_sleep else math.inf
+        self._sleep_on = bool(settings.auto_sleep)
+        # pymunk reorders its bodies only as they sleep or wake: while none can, the state
+        # read skips the body ids, its row plan caught up with pymunk's order first
+        track = self._sleep_on or any(rec.body.is_sleeping for rec in self._bodies.values())
+        if self._track_order and not track and not self._dirty:
+            self._read_batch()
+        self._track_order = track
         self._pairs.clear()
         for pair in settings.material_pairs:
             ta, tb = self._material_type(pair.a), self._material_type(pair.b)
@@ -157,10 +166,9 @@ class PymunkBackend:
         return ctype
 
     def step(self, dt: float) -> None:
-        for rec in self._joints.values():
-            if rec.spec.kind == "slider":
-                rec.drive_slider(dt)
-        if self._space.sleep_time_threshold != math.inf:
+        for rec in self._sliders.values():
+            rec.drive_slider(dt)
+        if self._sleep_on:
             for body in self._always_awake:
                 body.activate()
         self._space.step(dt)
@@ -295,7 +303,7 @@ class PymunkBackend:
     def _set_y(self, rec: _BodyRecord, y: float) -> None:
         rec.y = y
         if not self._dirty:
-            self._y[self._row[rec.key]] = y
+            self._readout.y_ext[self._row[rec.key]] = y
 
     def set_velocity(self, key: int, linear: np.ndarray, angular: np.ndarray) -> None:
         rec = self._record(key)
@@ -374,6 +382,8 @@ class PymunkBackend:
                           lambda t, m: self._warn(obj, t, m))
         self._space.add(*rec.constraints)
         self._joints[key] = rec
+        if joint.kind == "slider":
+            self._sliders[key] = rec
         a.joints.add(key)
         if b is not None:
             b.joints.add(key)
@@ -383,6 +393,7 @@ class PymunkBackend:
             rec = self._joints.pop(int(key))
         except KeyError:
             raise KeyError(f"no joint with key {key}") from None
+        self._sliders.pop(int(key), None)
         self._space.remove(*rec.constraints)
         for body in (rec.a, rec.b):
             if body.body_type == pymunk.Body.DYNAMIC:
@@ -430,13 +441,16 @@ class PymunkBackend:
         buf = self._buf
         buf.clear()
         batch.get_space_bodies(self._space, batch.BodyFields.BODY_ID, buf)
-        place = {int(i): p for p, i in enumerate(np.frombuffer(buf.int_buf(), np.uintp))}
+        self._iter_ids = bytes(buf.int_buf())
+        ids = np.frombuffer(self._iter_ids, np.int64)
+        place = {int(i): p for p, i in enumerate(ids)}
         # rows follow pymunk's own order so the batch read needs no reshuffle
         recs = sorted(self._bodies.values(), key=lambda r: place[r.body.id])
         n = len(recs)
         self._keys = np.fromiter((r.key for r in recs), np.int64, n)
         self._row = {r.key: i for i, r in enumerate(recs)}
-        self._y = np.fromiter((r.y for r in recs), np.float64, n)
+        self._readout = Readout(len(ids), np.fromiter((r.y for r in recs), np.float64, n),
+                                np.fromiter((place[r.body.id] for r in recs), np.intp, n))
         self._rest = np.array([r.rest for r in recs]).reshape(-1, 4)
         self._any_rest = bool(n) and not np.all(self._rest[:, 0] == 1.0)
         self._cog = np.array([tuple(r.body.center_of_gravity) for r in recs]).reshape(-1, 2)
@@ -445,65 +459,72 @@ class PymunkBackend:
         self._static_rows = np.append(np.fromiter(
             (r.body.body_type == pymunk.Body.STATIC for r in recs), bool, n), True)
         self._keys_ext = np.append(self._keys, -1)
-        self._y_ext = np.append(self._y, 0.0)
         self._index = IdIndex(np.fromiter((r.body.id for r in recs), np.uintp, n)
                               .view(np.int64))
-        self._iter_ids = b""
         self._dirty = False
 
-    def _gather(self) -> np.ndarray:
-        """Every keyed body's (x, z, θ, vx, vz, ω), one batch call, in row order."""
+    def _read_batch(self) -> np.ndarray:
+        """Every body's (x, z, θ, vx, vz, ω) rows, one batch call, in pymunk's order."""
+        if self._dirty:
+            self._reindex()
         buf = self._buf
         buf.clear()
-        batch.get_space_bodies(self._space, _BODY_FIELDS, buf)
-        id_bytes = bytes(buf.int_buf())
-        data = np.frombuffer(buf.float_buf(), np.float64).reshape(-1, 6)
-        n = len(self._keys)
-        # pymunk's iteration order only changes when bodies come, go, sleep or wake
-        if id_bytes != self._iter_ids:
-            self._iter_ids = id_bytes
-            rows = self._index.rows(np.frombuffer(id_bytes, np.int64))
-            src = np.zeros(n, np.intp)
-            keyed = rows < n
-            src[rows[keyed]] = np.flatnonzero(keyed)
-            self._src = None if np.array_equal(src, np.arange(n)) else src
-        return data[:n] if self._src is None else data[self._src]
+        if self._track_order:
+            batch.get_space_bodies(self._space, _STATE_FIELDS | batch.BodyFields.BODY_ID, buf)
+            ids = bytes(buf.int_buf())
+            if ids != self._iter_ids and not self._replace(ids):
+                return self._read_batch()  # the body set changed behind our back: reread
+        else:
+            batch.get_space_bodies(self._space, _STATE_FIELDS, buf)
+        return np.frombuffer(buf.float_buf(), np.float64)
+
+    def _replace(self, ids: bytes) -> bool:
+        """Follow pymunk's new body order (bodies slept or woke) without a reindex.
+
+        Returns False, having reindexed, when the ids are not a reordering of ours.
+        """
+        batch_ids = np.frombuffer(ids, np.int64)
+        out = self._readout
+        rows = self._index.rows(batch_ids)
+        keyed = np.flatnonzero(rows < out.n)
+        if len(batch_ids) != out.m or len(keyed) != out.n:
+            self._reindex()
+            return False
+        self._iter_ids = ids
+        at = np.empty(out.n, np.intp)
+        at[rows[keyed]] = keyed
+        out.place(at)
+        return True
 
     def read_state(self) -> BodyState:
         """Every body's pose and velocity; a body gone non-finite is reset first."""
-        if self._dirty:
-            self._reindex()
-        d = self._gather()
-        if not np.isfinite(d).all():
-            self._reset_broken(d)
-            d = self._gather()
-        n = len(self._keys)
-        position = np.empty((n, 3))
-        position[:, ::2] = d[:, 0:2]
-        position[:, 1] = self._y
-        orientation = np.zeros((n, 4))  # (cos φ/2, 0, sin φ/2, 0) with φ = −θ
-        half = d[:, 2] * -0.5
-        np.cos(half, out=orientation[:, 0])
-        np.sin(half, out=orientation[:, 2])
+        floats = self._read_batch()
+        out = self._readout
+        if not out.load(floats) and self._reset_broken(out.rows()):
+            floats = self._read_batch()
+            out = self._readout
+            out.load(floats)
+        position, orientation, linear, angular = out.arrays()
         if self._any_rest:
             orientation = quat_multiply(orientation, self._rest)
-        linear = np.zeros((n, 3))
-        linear[:, ::2] = d[:, 3:5]
         if self._any_cog:  # pymunk's velocity is its centre of mass's; ours the origin's
-            c, s_ = np.cos(d[:, 2]), np.sin(d[:, 2])
+            theta, omega = out.rows()[:, 2:6:3].T
+            c, s_ = np.cos(theta), np.sin(theta)
             rx = c * self._cog[:, 0] - s_ * self._cog[:, 1]
             rz = s_ * self._cog[:, 0] + c * self._cog[:, 1]
-            linear[:, 0] += d[:, 5] * rz
-            linear[:, 2] -= d[:, 5] * rx
-        angular = np.zeros((n, 3))
-        np.negative(d[:, 5], out=angular[:, 1])
+            linear[:, 0] += omega * rz
+            linear[:, 2] -= omega * rx
         self._last_good = BodyState(self._keys.copy(), position, orientation, linear, angular)
         return self._last_good
 
-    def _reset_broken(self, d: np.ndarray) -> None:
-        """Put bodies whose state turned non-finite back at their last good pose, at rest."""
+    def _reset_broken(self, d: np.ndarray) -> bool:
+        """Put bodies whose state turned non-finite back at their last good pose, at rest.
+
+        ``d`` holds every keyed body's (x, z, θ, vx, vz, ω); returns whether any was reset.
+        """
         last = self._last_good
-        for i in np.flatnonzero(~np.isfinite(d).all(axis=1)):
+        broken = np.flatnonzero(~np.isfinite(d).all(axis=1))
+        for i in broken:
             key = int(self._keys[i])
             rec = self._bodies[key]
             seen = np.flatnonzero(last.keys == key)
@@ -517,6 +538,7 @@ class PymunkBackend:
             message = "state turned non-finite; reset to its last good pose, at rest"
             log.warning("body %s: %s", key, message)
             self._faults.append((key, message))
+        return bool(broken.size)
 
     def take_faults(self) -> list[tuple[int, str]]:
         """Bodies reset since the last call, with why (the engine reports them)."""
@@ -583,7 +605,7 @@ class PymunkBackend:
         np.copyto(as_int[:, 0:2], keys[:, ::-1], where=swap[:, None])
         # mean of the contact points on both surfaces (pymunk zeroes the unused second one)
         res[:, 2:5:2] = (fl @ _MID_SUM) / (2.0 * ints[:, 2:3])
-        res[:, 3] = self._y_ext[np.where(swap, rows[:, 1], rows[:, 0])]
+        res[:, 3] = self._readout.y_ext[np.where(swap, rows[:, 1], rows[:, 0])]
         # pymunk's normal points from shape a to shape b; ours points from b toward a.
         res[:, 5:8:2] = fl[:, 2:4] * (2.0 * swap - 1.0)[:, None]
         res[:, 6] = 0.0
