@@ -1,4 +1,5 @@
-"""Builds the private ODE binding (engine/physics/ode3d/_ode.pyx) against the system libode."""
+"""Builds the compiled parts: the private ODE binding against the system libode
+(engine/physics/ode3d/_ode.pyx) and the scene scanner (engine/scene/_scan.pyx)."""
 
 import shlex
 import subprocess
@@ -36,8 +37,10 @@ def extensions() -> list[Extension]:
         library_dirs=[a[2:] for a in pkg_config("--libs") if a.startswith("-L")],
         define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION")],
     )
-    return cythonize([ext], language_level=3, compiler_directives={"boundscheck": False,
-                                                                   "wraparound": False})
+    scan = Extension("engine.scene._scan", ["engine/scene/_scan.pyx"],
+                     extra_compile_args=["-O3"])
+    return cythonize([ext, scan], language_level=3,
+                     compiler_directives={"boundscheck": False, "wraparound": False})
 
 
 setup(ext_modules=extensions())

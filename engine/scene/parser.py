@@ -19,6 +19,9 @@ from the text with a few compiled regular expressions (``FAST``), several
 tokens per match and no Token objects; the token path (lexer + recursive
 descent) reads everything else, and both give exactly the same SceneDB, places,
 diagnostics and token count. That reads a 10,000-object file three times faster.
+Built with Cython (``setup.py build_ext``), ``engine/scene/_scan.pyx`` replaces
+that regex scanner (:func:`_scan_plain`) with one reading a character at a time,
+about 2.5 times faster again; without the extension the regex scanner is used.
 """
 
 from __future__ import annotations
@@ -120,6 +123,8 @@ class _FileCursor(ex.Cursor):
 
 
 _CLOSED = -1  # what Parser._plain returns after the block's closing '}'
+#: A block opened by the scanner and not closed yet: (entry, parent's entries, parent's scope).
+Open = tuple[Entry, list[Entry], dict[str, float]]
 
 
 class Parser:
@@ -271,97 +276,29 @@ class Parser:
         count. Plain ``KEY {`` blocks are read here too, without recursion; where
         one stops being plain, :meth:`_block` reads the rest of it.
         """
-        lexer, tokens, text, path = cur.lexer, cur.tokens, cur.text, cur.path
-        starts = lexer.line_starts
-        match = FAST.match
-        max_tokens = lexer.max_tokens
+        lexer, tokens = cur.lexer, cur.tokens
         lookahead = cur.i < len(tokens)  # a key already scanned: read it again from the text
         pos = tokens[-1].pos if lookahead else lexer.pos
-        count = lexer.count - lookahead
-        read = False
+        count = start = lexer.count - lookahead
         entries = block.entries
-        #: Blocks opened here and not closed yet: (entry, parent's entries, parent's scope).
-        stack: list[tuple[Entry, list[Entry], dict[str, float]]] = []
+        stack: list[Open] = []  # blocks opened here and not closed yet
         while True:
-            while True:
-                m = match(text, pos)
-                if m is None:
-                    break
-                kind = m.lastindex
-                if kind == _CLOSE:
-                    if count >= max_tokens:
-                        break
-                    if stack:
-                        pos = m.end()
-                        count += 1
-                        entry, entries, scope = stack.pop()
-                        self.scopes.pop()
-                        cur.nesting -= 1
-                        if entry.key == INCLUDE:
-                            entry.included = self._include(entry.value, cur)
-                        continue
-                    if not nested:
-                        break
-                    at = m.start(_CLOSE)
-                    line = bisect_right(starts, at)  # (never after a lookahead key)
-                    lexer.skip(at + 1, count + 1)
-                    tokens.append(Token(PUNCT, "}", None, line, at - starts[line - 1] + 1, at,
-                                        at > pos))
-                    cur.i = len(tokens)
-                    return _CLOSED
-                at = m.start(1)
-                line = bisect_right(starts, at)
-                line_start = starts[line - 1]
-                vpos = m.start(kind)
-                end = m.end()
-                used = 2
-                if kind == _STRING:  # the group is inside the quotes
-                    value = Value(STRING, m.group(_STRING),
-                                  _new(Loc, (path, line, vpos - line_start)))
-                elif kind == _NUMBER:
-                    digits = m.group(_NUMBER)
-                    lit = (int(digits) if len(digits) < 16 and digits.isdigit()
-                           else ex.number_value(digits))
-                    if lit is None:
-                        break
-                    value = Value(INT if type(lit) is int else FLOAT, lit,
-                                  _new(Loc, (path, line, vpos - line_start + 1)))
-                elif cur.nesting >= cur.max_nesting:
-                    break  # the token path reports the limit
-                else:
-                    vloc = _new(Loc, (path, line, vpos - line_start + 1))
-                    if kind == _VECTOR:
-                        found = self._fast_vector(text, end, vloc, line_start,
-                                                  cur.nesting + 2 <= cur.max_nesting)
-                        if found is None:
-                            break
-                        value, end, used = found
-                    else:
-                        value = Value(STRUCTURE, Block([], vloc, [], []), vloc)
-                if count + used > max_tokens:
-                    break
-                if lookahead:  # the key is read again from the text
-                    tokens.pop()
-                    lookahead = False
-                read = True
-                count += used
-                pos = end
-                key = m.group(1)
-                entry = Entry(key, value, _new(Loc, (path, line, at - line_start + 1)))
-                entries.append(entry)
-                if kind == _NUMBER:
-                    scope[key] = lit
-                if kind == _OPEN:
-                    stack.append((entry, entries, scope))
-                    entries = value.data.entries
-                    scope = {}
-                    self.scopes.append(scope)
-                    cur.nesting += 1
-                elif key == INCLUDE:
-                    entry.included = self._include(value, cur)
-            if not read:
+            pos, count, close = scan_plain(self, cur, pos, count, entries, scope, stack)
+            if lookahead and count != start:  # the key was read again from the text
+                tokens.pop()
+                lookahead = False
+            if close >= 0 and nested:
+                starts = lexer.line_starts
+                line = bisect_right(starts, close)  # (never after a lookahead key)
+                lexer.skip(close + 1, count + 1)
+                tokens.append(Token(PUNCT, "}", None, line, close - starts[line - 1] + 1, close,
+                                    close > pos))
+                cur.i = len(tokens)
+                return _CLOSED
+            if count == start:
                 return None
             lexer.skip(pos, count)
+            starts = lexer.line_starts
             last_line = bisect_right(starts, pos - 1)  # of the last token read
             while stack:  # the token path reads the rest of each open block
                 entry, entries, scope = stack.pop()
@@ -381,100 +318,6 @@ class Parser:
             else:
                 return last_line
             pos, count = lexer.pos, lexer.count
-
-    def _fast_vector(self, text: str, pos: int, loc: Loc, line_start: int, signs: bool
-                     ) -> tuple[Value, int, int] | None:
-        """``KEY [`` ... ``]`` from ``pos`` (just after ``[``) as (VECTOR, end, tokens used).
-
-        None if an item is not plain, or has a sign where ``signs`` is false (a sign is
-        one more nesting level for the token path, which reports the limit).
-        """
-        items: list[Value] = []
-        path, line = loc.path, loc.line
-        m = _NUMBERS.match(text, pos)
-        if m is not None:  # only numbers: split them instead of matching each one
-            numbers = m.group(1)
-            parts = numbers.split(" ") if numbers else []
-            col = pos - line_start + 1
-            signs_used = 0
-            for part in parts:
-                at = col
-                col += len(part) + 1
-                if len(part) < 16 and part.isdigit():
-                    items.append(Value(INT, int(part), _new(Loc, (path, line, at))))
-                    continue
-                sign = part[0] in "+-"
-                v = ex.number_value(part[1:] if sign else part)
-                if v is None or (sign and not signs):
-                    return None
-                if sign:
-                    signs_used += 1
-                    if part[0] == "-":
-                        v = -v
-                items.append(Value(INT if type(v) is int else FLOAT, v,
-                                   _new(Loc, (path, line, at))))
-            return Value(VECTOR, items, loc), m.end(), 3 + len(parts) + signs_used
-        used = 3
-        match = _ITEM.match
-        scopes = self.scopes[::-1]  # innermost first, as _lookup reads them
-        while True:
-            m = match(text, pos)
-            if m is None:
-                return None
-            pos = m.end()
-            if m.lastindex == 1:  # ']'
-                break
-            sign, num, name, op, num2, name2 = m.group(2, 3, 4, 5, 6, 7)
-            if sign and not signs:
-                return None
-            at = _new(Loc, (path, line, m.start(2) - line_start + 1))
-            if num is not None:
-                a = int(num) if len(num) < 16 and num.isdigit() else ex.number_value(num)
-                if a is None:
-                    return None
-                if op is None:
-                    used += 2 if sign else 1
-                    items.append(Value(INT if type(a) is int else FLOAT,
-                                       -a if sign == "-" else a, at))
-                    continue
-                text_a = sign + ex.number_text(a)
-            else:
-                a = _find(scopes, name)
-                if a is None:
-                    return None
-                text_a = sign + name
-            x = -float(a) if sign == "-" else float(a)
-            if op is None:
-                used += 2 if sign else 1
-                items.append(Value(FLOAT, x, at, text_a))
-                continue
-            if num2 is not None:
-                b = int(num2) if len(num2) < 16 and num2.isdigit() else ex.number_value(num2)
-                if b is None:
-                    return None
-                text_b = ex.number_text(b)
-            else:
-                b = _find(scopes, name2)
-                if b is None:
-                    return None
-                text_b = name2
-            y = float(b)
-            if op == "*":
-                x *= y
-            elif op == "/":
-                if y == 0:
-                    return None
-                x /= y
-            elif op == "+":
-                x += y
-            else:
-                x -= y
-            if not isfinite(x):
-                return None
-            used += 4 if sign else 3
-            sep = f" {op} " if op in "+-" else op
-            items.append(Value(FLOAT, x, at, f"{text_a}{sep}{text_b}"))
-        return Value(VECTOR, items, loc), pos, used
 
     def _sync(self, cur: _FileCursor, line: int, skip_first: bool = False) -> None:
         """Skip to the next key that starts a line, or the end of the current block."""
@@ -622,6 +465,183 @@ class Parser:
         return self.parse_file(target, value.loc)
 
 
+
+def _scan_plain(p: Parser, cur: _FileCursor, pos: int, count: int, entries: list[Entry],
+                scope: dict[str, float], stack: list[Open]) -> tuple[int, int, int]:
+    """Plain entries (see ``FAST``) from ``pos`` into ``entries``, until one is not plain.
+
+    ``count`` is the token count so far; blocks opened go on ``stack`` (and their
+    scopes on ``p.scopes``) and are closed at their ``}``. Returns the position and
+    token count after the last entry read, and where a ``}`` closing the block being
+    read stands (-1 if reading stopped elsewhere). ``engine.scene._scan`` is the same
+    scanner compiled, used when built.
+    """
+    lexer = cur.lexer
+    text, path, starts = cur.text, cur.path, lexer.line_starts
+    match = FAST.match
+    max_tokens = lexer.max_tokens
+    scopes = p.scopes
+    while True:
+        m = match(text, pos)
+        if m is None:
+            break
+        kind = m.lastindex
+        if kind == _CLOSE:
+            if count >= max_tokens:
+                break
+            if not stack:
+                return pos, count, m.start(_CLOSE)
+            pos = m.end()
+            count += 1
+            entry, entries, scope = stack.pop()
+            scopes.pop()
+            cur.nesting -= 1
+            if entry.key == INCLUDE:
+                entry.included = p._include(entry.value, cur)
+            continue
+        at = m.start(1)
+        line = bisect_right(starts, at)
+        line_start = starts[line - 1]
+        vpos = m.start(kind)
+        end = m.end()
+        used = 2
+        if kind == _STRING:  # the group is inside the quotes
+            value = Value(STRING, m.group(_STRING), _new(Loc, (path, line, vpos - line_start)))
+        elif kind == _NUMBER:
+            digits = m.group(_NUMBER)
+            lit = (int(digits) if len(digits) < 16 and digits.isdigit()
+                   else ex.number_value(digits))
+            if lit is None:
+                break
+            value = Value(INT if type(lit) is int else FLOAT, lit,
+                          _new(Loc, (path, line, vpos - line_start + 1)))
+        elif cur.nesting >= cur.max_nesting:
+            break  # the token path reports the limit
+        else:
+            vloc = _new(Loc, (path, line, vpos - line_start + 1))
+            if kind == _VECTOR:
+                found = _fast_vector(scopes, text, end, vloc, line_start,
+                                     cur.nesting + 2 <= cur.max_nesting)
+                if found is None:
+                    break
+                value, end, used = found
+            else:
+                value = Value(STRUCTURE, Block([], vloc, [], []), vloc)
+        if count + used > max_tokens:
+            break
+        count += used
+        pos = end
+        key = m.group(1)
+        entry = Entry(key, value, _new(Loc, (path, line, at - line_start + 1)))
+        entries.append(entry)
+        if kind == _NUMBER:
+            scope[key] = lit
+        if kind == _OPEN:
+            stack.append((entry, entries, scope))
+            entries = value.data.entries
+            scope = {}
+            scopes.append(scope)
+            cur.nesting += 1
+        elif key == INCLUDE:
+            entry.included = p._include(value, cur)
+    return pos, count, -1
+
+
+def _fast_vector(scopes: list[dict[str, float]], text: str, pos: int, loc: Loc,
+                 line_start: int, signs: bool) -> tuple[Value, int, int] | None:
+    """``KEY [`` ... ``]`` from ``pos`` (just after ``[``) as (VECTOR, end, tokens used).
+
+    None if an item is not plain, or has a sign where ``signs`` is false (a sign is
+    one more nesting level for the token path, which reports the limit).
+    """
+    items: list[Value] = []
+    path, line = loc.path, loc.line
+    m = _NUMBERS.match(text, pos)
+    if m is not None:  # only numbers: split them instead of matching each one
+        numbers = m.group(1)
+        parts = numbers.split(" ") if numbers else []
+        col = pos - line_start + 1
+        signs_used = 0
+        for part in parts:
+            at = col
+            col += len(part) + 1
+            if len(part) < 16 and part.isdigit():
+                items.append(Value(INT, int(part), _new(Loc, (path, line, at))))
+                continue
+            sign = part[0] in "+-"
+            v = ex.number_value(part[1:] if sign else part)
+            if v is None or (sign and not signs):
+                return None
+            if sign:
+                signs_used += 1
+                if part[0] == "-":
+                    v = -v
+            items.append(Value(INT if type(v) is int else FLOAT, v,
+                               _new(Loc, (path, line, at))))
+        return Value(VECTOR, items, loc), m.end(), 3 + len(parts) + signs_used
+    used = 3
+    match = _ITEM.match
+    scopes = scopes[::-1]  # innermost first, as Parser._lookup reads them
+    while True:
+        m = match(text, pos)
+        if m is None:
+            return None
+        pos = m.end()
+        if m.lastindex == 1:  # ']'
+            break
+        sign, num, name, op, num2, name2 = m.group(2, 3, 4, 5, 6, 7)
+        if sign and not signs:
+            return None
+        at = _new(Loc, (path, line, m.start(2) - line_start + 1))
+        if num is not None:
+            a = int(num) if len(num) < 16 and num.isdigit() else ex.number_value(num)
+            if a is None:
+                return None
+            if op is None:
+                used += 2 if sign else 1
+                items.append(Value(INT if type(a) is int else FLOAT,
+                                   -a if sign == "-" else a, at))
+                continue
+            text_a = sign + ex.number_text(a)
+        else:
+            a = _find(scopes, name)
+            if a is None:
+                return None
+            text_a = sign + name
+        x = -float(a) if sign == "-" else float(a)
+        if op is None:
+            used += 2 if sign else 1
+            items.append(Value(FLOAT, x, at, text_a))
+            continue
+        if num2 is not None:
+            b = int(num2) if len(num2) < 16 and num2.isdigit() else ex.number_value(num2)
+            if b is None:
+                return None
+            text_b = ex.number_text(b)
+        else:
+            b = _find(scopes, name2)
+            if b is None:
+                return None
+            text_b = name2
+        y = float(b)
+        if op == "*":
+            x *= y
+        elif op == "/":
+            if y == 0:
+                return None
+            x /= y
+        elif op == "+":
+            x += y
+        else:
+            x -= y
+        if not isfinite(x):
+            return None
+        used += 4 if sign else 3
+        sep = f" {op} " if op in "+-" else op
+        items.append(Value(FLOAT, x, at, f"{text_a}{sep}{text_b}"))
+    return Value(VECTOR, items, loc), pos, used
+
+
 def _find(scopes: list[dict[str, float]], name: str) -> float | None:
     """A variable from ``scopes`` (innermost first), else a constant; None if unknown."""
     for scope in scopes:
@@ -681,3 +701,9 @@ def parse_file(path: str | os.PathLike, rng: np.random.Generator | None = None,
 def _finish(p: Parser, root: Block, path: str) -> SceneDB:
     p.report.raise_if_errors()
     return SceneDB(root, path, p.report.sources, sorted_diagnostics(p.report.diagnostics))
+
+
+try:  # the compiled scanner (engine/scene/_scan.pyx), when built
+    from engine.scene._scan import scan_plain
+except ImportError:  # not built: the regex scanner above reads the same
+    scan_plain = _scan_plain

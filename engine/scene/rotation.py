@@ -10,7 +10,8 @@ def euler_to_quat(deg: Sequence[float]) -> tuple[float, float, float, float]:
     """Rotation about X, then Y, then Z (extrinsic; R = Rz*Ry*Rx), angles in degrees."""
     if not any(deg):
         return (1.0, 0.0, 0.0, 0.0)
-    hx, hy, hz = (math.radians(a) * 0.5 for a in deg)
+    rx, ry, rz = deg
+    hx, hy, hz = math.radians(rx) * 0.5, math.radians(ry) * 0.5, math.radians(rz) * 0.5
     cx, sx = math.cos(hx), math.sin(hx)
     cy, sy = math.cos(hy), math.sin(hy)
     cz, sz = math.cos(hz), math.sin(hz)

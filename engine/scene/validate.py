@@ -63,29 +63,33 @@ def validate(db: SceneDB, content_dir: Path | None, report: Reporter,
 
 
 def _block(block: Block, name: str, ctx: _Ctx, where: Loc, size: Value | None) -> None:
-    fields = sc.SCHEMAS[name]
+    checks = _CHECKS[name]
     seen: dict[str, Entry] = {}
     for e in block:
         key = e.key
-        f = fields.get(key)
-        if f is None:
+        check = checks.get(key)
+        if check is None:
             if key == INCLUDE:
                 continue
+            fields = sc.SCHEMAS[name]
             lower = key.lower()
             if key[0].islower() and not any(k.lower() == lower for k in fields):
                 continue  # the author's variable
             ctx.report.error(e.loc, f"unknown key '{key}' in {name}{suggest(key, fields)}")
             continue
+        f, kinds, lengths = check
         if key in seen and not f.repeat:
             ctx.report.warning(e.loc, f"'{key}' given again; this one replaces line "
                                       f"{seen[key].loc.line}")
         seen[key] = e
-        if key == "Size" and name == "Object" and _type_ok(e.value, f, name):
-            size = e.value
-        v, t = e.value, f.type
-        if t == _STRUCT_T and v.kind == STRUCTURE:  # the common cases, without a call
+        v = e.value
+        if f.type == _STRUCT_T and v.kind == STRUCTURE:  # the common cases, without a call
             _block(v.data, f.struct, ctx, e.loc, size)
-        elif not (t == _FLOAT_T and (v.kind == INT or v.kind == FLOAT)):
+            continue
+        quick = v.kind in kinds and (not lengths or len(v.data) in lengths)
+        if key == "Size" and name == "Object" and (quick or _type_ok(v, f, name)):
+            size = v
+        if not quick:
             _value(e, f, name, ctx, size)
     for k in _REQUIRED[name]:
         if k not in seen:
@@ -168,7 +172,34 @@ def _expected(f: sc.Field) -> str:
 #: Required keys of each schema, in schema order.
 _REQUIRED = {name: [k for k, f in fields.items() if f.required]
              for name, fields in sc.SCHEMAS.items()}
-_STRUCT_T, _FLOAT_T = sc.STRUCT_T, sc.FLOAT_T
+_STRUCT_T = sc.STRUCT_T
+_ALL_KINDS = frozenset((INT, FLOAT, STRING, VECTOR, STRINGVECTOR, STRUCTURE))
+
+
+def _quick(owner: str, key: str, f: sc.Field) -> tuple[frozenset[str], tuple[int, ...]]:
+    """Value kinds (and vector lengths, if limited) that pass ``f`` with nothing to record.
+
+    Other values go through :func:`_value`, which checks and records them in full.
+    """
+    t = f.type
+    if t == sc.FLOAT_T:
+        return frozenset((INT, FLOAT)), ()
+    if t == sc.INT_T:
+        return frozenset((INT,)), ()
+    if t == sc.STRING_T and not (owner == "Controller" and key == "Target"):
+        return frozenset((STRING,)), ()
+    if t == sc.VEC3_T:
+        return frozenset((VECTOR,)), (3,)
+    if t == sc.VECTOR_T:
+        return frozenset((VECTOR,)), f.lengths
+    if t == sc.ANY_T:
+        return _ALL_KINDS, ()
+    return frozenset(), ()
+
+
+#: Per schema, key -> (field, kinds and lengths that pass without a call: see _quick).
+_CHECKS = {name: {k: (f, *_quick(name, k, f)) for k, f in fields.items()}
+           for name, fields in sc.SCHEMAS.items()}
 _ID_KINDS = frozenset(sc.ID_KINDS)
 #: Field types whose check is only the value's kind.
 _KINDS = {sc.FLOAT_T: (INT, FLOAT), sc.STRUCT_T: (STRUCTURE,),
