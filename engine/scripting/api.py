@@ -17,6 +17,7 @@ Objects (``obj:method(...)``)::
     obj:addTorque(tx, ty, tz)       obj:addImpulse(ix, iy, iz [, px, py, pz])
     obj:setKinematicTarget(x, y, z) obj:delete()
     obj:playSound()                 obj:stopSound()   (its Sound component)
+    obj:setGain(gain)               volume of its sound, now and for later plays
 
 Scene and engine::
 
@@ -24,7 +25,8 @@ Scene and engine::
     delete(obj)                     setMotor(joint, velocity, maxForce)
     createJoint{kind=, a=obj, b=obj|nil, anchor={..}, axis={..}, low=, high=, id=}
         -> joint id;                breakJoint(joint)   (joint: id string or number)
-    playSound(obj) / stopSound(obj) setUniform(state, name, value | {v1, v2, ...})
+    playSound(obj) / stopSound(obj) / setGain(obj, gain)
+    setUniform(state, name, value | {v1, v2, ...})
     setCamera{position=, lookAt=, follow=obj, offset=, fov=, id=}
     requestPlugin(name) -> bool     (aliases: osg, osgsim -> render; openalpp -> sound;
                                      the paper's spelling ``requrestPlugin`` works too)
@@ -66,7 +68,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from components import Camera, Joint, Name, Physical, Transform
+from components import Camera, Joint, Name, Physical, Sound, Transform
 from engine.scripting.runtime import ScriptRuntime, to_python
 
 if TYPE_CHECKING:
@@ -155,6 +157,7 @@ end
 function Object.delete(h) P.delete(oid("delete", h)) end
 function Object.playSound(h) P.sound(oid("playSound", h), true) end
 function Object.stopSound(h) P.sound(oid("stopSound", h), false) end
+function Object.setGain(h, gain) P.set_gain(oid("setGain", h), gain) end
 
 local C = {}
 function C.find(name) return handle(P.find(name)) end
@@ -176,6 +179,7 @@ end
 function C.breakJoint(j) P.break_joint(joint("breakJoint", j)) end
 function C.playSound(h) P.sound(oid("playSound", h), true) end
 function C.stopSound(h) P.sound(oid("stopSound", h), false) end
+function C.setGain(h, gain) P.set_gain(oid("setGain", h), gain) end
 function C.setUniform(state, name, value)
   P.set_uniform(state, name, plain(value))
 end
@@ -235,6 +239,7 @@ class ScriptAPI:
             "sound": self.sound, "find": self.find, "spawn": self.spawn,
             "set_motor": self.set_motor, "create_joint": self.create_joint,
             "break_joint": self.break_joint, "set_uniform": self.set_uniform,
+            "set_gain": self.set_gain,
             "set_camera": self.set_camera, "request_plugin": self.request_plugin,
             "time": self.time,
         })
@@ -431,6 +436,17 @@ class ScriptAPI:
             system.play(self.engine, self._entity(entity, "playSound"))
         else:
             system.stop(entity)
+
+    def set_gain(self, entity: int, gain: Any) -> None:
+        if not isinstance(gain, int | float) or isinstance(gain, bool) or not 0 <= gain < 1e6:
+            raise ScriptAPIError(f"setGain: gain must be a number >= 0, got {gain!r}")
+        sound = self.engine.world.try_component(self._entity(entity, "setGain"), Sound)
+        if sound is None:
+            raise ScriptAPIError("setGain: the object has no Sound")
+        sound.gain = float(gain)
+        system = self._resource("systems.sound", "SoundSystem", "setGain")
+        if system is not None:
+            system.set_gain(entity, float(gain))
 
     def set_uniform(self, state: Any, name: Any, value: Any) -> None:
         system = self._resource("systems.render", "RenderSystem", "setUniform")

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 from sound_helpers import active, read, rms, tone
 
-from components import Camera, MaterialProps, Physical, Shape, Sound, Transform
+from components import Camera, MaterialProps, Physical, Script, Shape, Sound, Transform
 from engine import Engine, EngineConfig
 from engine.audio import SoundManager
 from engine.physics import BackendUnavailable, create_backend
@@ -170,3 +170,20 @@ def test_unknown_backend_name_is_an_error() -> None:
 
     with pytest.raises(ValueError, match="unknown sound backend 'speakers'"):
         create_audio_backend("speakers")
+
+
+def test_set_gain_from_lua_turns_a_loop_down(tmp_path: Path) -> None:
+    hum = tone(tmp_path / "hum.wav", 400.0, 0.25)
+    (tmp_path / "scripts").mkdir()
+    (tmp_path / "scripts" / "vol.lua").write_text(
+        "function onUpdate(dt) if time() > 0.3 then self:setGain(0.25) end end\n")
+    out = tmp_path / "out.wav"
+    with _engine(f"wave:{out}", fast=False, content=tmp_path) as engine:
+        engine.spawn(Camera(), Transform(position=(0.0, -1.0, 0.0)))
+        engine.spawn(Transform(), Sound(file=str(hum), loop=True, auto_play=True),
+                     Script(file="scripts/vol.lua"))
+        engine.run(seconds=0.7)
+    data = active(read(out)).mean(axis=1)
+    n = len(data)
+    loud, quiet = rms(data[n // 10: 4 * n // 10]), rms(data[6 * n // 10: 9 * n // 10])
+    assert quiet == pytest.approx(0.25 * loud, rel=0.15)
