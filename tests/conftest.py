@@ -2,12 +2,20 @@
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import os
 
 import pytest
+from hypothesis import settings
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+
+# CI replays the same examples every run (no wall-clock deadlines on a shared machine);
+# a developer's run explores new ones.
+settings.register_profile("ci", derandomize=True, deadline=None, print_blob=True)
+settings.register_profile("dev", deadline=None)
+settings.load_profile("ci" if os.environ.get("CI") else "dev")
 
 
 def available_backends() -> list[str]:
@@ -19,9 +27,6 @@ def available_backends() -> list[str]:
         except ImportError:
             pass
     return names
-
-
-import importlib  # noqa: E402
 
 
 @pytest.fixture(params=available_backends())
