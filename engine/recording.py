@@ -36,7 +36,6 @@ class InputRecorder(System):
         self.path = Path(path)
         self._out: IO[str] | None = None
         self._engine: Engine | None = None
-        self.replaying = False
 
     def setup(self, engine: Engine) -> None:
         self._engine = engine

@@ -35,6 +35,7 @@ def collect(engine: Engine) -> dict[str, Any]:
         "contacts": dynamics.contacts_total if dynamics is not None else 0,
         "dt": engine.controller.dt,
         "substeps": engine.controller.substeps,
+        "slept_seconds": engine.controller.slept,
     }
     for name, source in engine.stat_sources.items():
         stats[name] = source()

@@ -151,14 +151,6 @@ void main() {
 }
 """
 
-COPY_FRAGMENT = """
-#version 330
-in vec2 v_uv;
-uniform sampler2D u_scene;
-out vec4 f_color;
-void main() { f_color = texture(u_scene, v_uv); }
-"""
-
 HUD_VERTEX = """
 #version 330
 uniform vec4 u_rect;  // x0, y0, x1, y1 in NDC

@@ -346,9 +346,6 @@ class ShaderManager:
             write_uniform(compiled.program, name, value)  # validates the value's size now
         self._uniforms[state_id][name] = value
 
-    def get_uniform(self, state_id: str, name: str) -> UniformValue:
-        return self._uniforms[state_id][name]
-
     def apply(self, compiled: CompiledState) -> None:
         """Write a state's uniform values into its program before drawing with it."""
         for name, value in compiled.uniforms.items():

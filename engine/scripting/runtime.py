@@ -15,7 +15,7 @@ from __future__ import annotations
 import logging
 import math
 from collections import deque
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -519,9 +519,6 @@ class ScriptRuntime:
 
     def memory_kib(self) -> float:
         return float(self.kernel.memory())
-
-    def scripts_of(self, entity: int) -> Iterable[Script]:
-        return [s for s in self.scripts if s.entity == entity]
 
 
 def to_python(value: Any, depth: int = 0) -> Any:
