@@ -56,20 +56,10 @@ class PoseTable:
         return len(self._owner)
 
     def adopt(self, entity: int, transform: Transform) -> None:
-        if not self._free:
-            self._grow()
-        row = self._free.pop()
-        self.position[row] = transform.position
-        self.orientation[row] = transform.orientation
-        self.linear_velocity[row] = transform.linear_velocity
-        self.angular_velocity[row] = transform.angular_velocity
-        self._bind(row, transform)
-        self._owner[row] = transform
-        self.row_of[entity] = row
-        self.version += 1
+        self.adopt_many([entity], [transform])
 
     def adopt_many(self, entities: list[int], transforms: list[Transform]) -> None:
-        """:meth:`adopt` for many at once: one numpy assignment per field, same rows."""
+        """Adopt many Transforms: one numpy assignment per field; rows as if one by one."""
         n = len(transforms)
         if not n:
             return
@@ -83,14 +73,9 @@ class PoseTable:
         index = np.asarray(rows, dtype=np.intp)
         for name in ("position", "orientation", "linear_velocity", "angular_velocity"):
             getattr(self, name)[index] = [getattr(t, name) for t in transforms]
-        owner, row_of = self._owner, self.row_of
-        position, orientation = self.position, self.orientation
-        linear, angular = self.linear_velocity, self.angular_velocity
+        owner, row_of, bind = self._owner, self.row_of, self._bind
         for entity, row, t in zip(entities, rows, transforms, strict=True):
-            t.position = position[row]
-            t.orientation = orientation[row]
-            t.linear_velocity = linear[row]
-            t.angular_velocity = angular[row]
+            bind(row, t)
             owner[row] = t
             row_of[entity] = row
         self.version += 1
