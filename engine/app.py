@@ -227,6 +227,12 @@ class Engine:
                 break
             self.step()
 
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per wall second since the first frame (physics time, either mode)."""
+        wall = self.controller.wall_time
+        return self.physics.time / wall if wall > 0 else 0.0
+
     def request_quit(self) -> None:
         """Ask the run loop to stop after this frame (a closed window, a script's quit)."""
         self._quit = True

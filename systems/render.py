@@ -242,7 +242,7 @@ class RenderSystem(System):
         if renderer.hud.enabled:
             steps = engine.physics.controller.step_costs
             renderer.hud.text = hud_line(self._fps, steps.mean() * 1e3,
-                                         engine.controller.real_time_factor)
+                                         engine.real_time_factor)
         renderer.render(dt)
         self.frames_drawn += 1
 

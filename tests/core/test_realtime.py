@@ -107,3 +107,17 @@ def test_rejects_unknown_policies():
         Pacing(early="nap")
     with pytest.raises(ValueError, match="late policy"):
         Pacing(late="panic")
+
+
+def test_engine_paces_frames_and_reports_physics_time_over_wall_time():
+    from components import Physical, Transform
+    from engine import Engine, EngineConfig
+
+    clock = FakeClock()
+    with Engine(EngineConfig(backend="ballistic", dt=0.01), clock=clock,
+                sleep=clock.sleep) as eng:
+        eng.spawn(Transform(), Physical())
+        eng.run(frames=50)
+        assert len(clock.sleeps) == 50 and all(s == pytest.approx(0.01) for s in clock.sleeps)
+        assert eng.physics.time == pytest.approx(0.5)
+        assert eng.real_time_factor == pytest.approx(1.0)  # paced: one simulated s per s
