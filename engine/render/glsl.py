@@ -20,17 +20,19 @@ from __future__ import annotations
 
 MAX_LIGHTS = 8
 
-LIT_VERTEX = """
-#version 330
+#: Per-vertex and per-instance inputs every mesh program takes (see Renderer's buffers).
+MESH_INPUTS = """
 in vec3 in_position;
 in vec3 in_normal;
 in vec2 in_uv;
 in vec4 in_color;
 in mat4 i_model;
 in vec4 i_color;
-in vec4 i_flags;
 uniform mat4 u_view;
 uniform mat4 u_proj;
+"""
+
+LIT_VERTEX = "#version 330" + MESH_INPUTS + """in vec4 i_flags;
 uniform mat4 u_light_vp;
 out vec3 v_world;
 out vec3 v_normal;
@@ -174,17 +176,7 @@ void main() { f_color = texture(u_text, v_uv); }
 
 #: Default vertex stage for a ShaderProgram that names only a fragment shader: gives the
 #: user's fragment shader ``v_world``, ``v_normal``, ``v_uv`` and ``v_color``.
-DEFAULT_USER_VERTEX = """
-#version 330
-in vec3 in_position;
-in vec3 in_normal;
-in vec2 in_uv;
-in vec4 in_color;
-in mat4 i_model;
-in vec4 i_color;
-uniform mat4 u_view;
-uniform mat4 u_proj;
-out vec3 v_world;
+DEFAULT_USER_VERTEX = "#version 330" + MESH_INPUTS + """out vec3 v_world;
 out vec3 v_normal;
 out vec2 v_uv;
 out vec4 v_color;
@@ -211,16 +203,7 @@ uniform c_LightSourceParameters c_LightSource[MAX_LIGHTS_PLACEHOLDER];
 #: Prepended to a vertex shader written for the fixed-function era (no ``#version`` or a
 #: version below 330), mapping its built-ins onto the engine's inputs. The author's
 #: ``main`` is renamed so the engine can pass the colour and texture coordinate through.
-LEGACY_VERTEX_PRELUDE = """#version 330
-in vec3 in_position;
-in vec3 in_normal;
-in vec2 in_uv;
-in vec4 in_color;
-in mat4 i_model;
-in vec4 i_color;
-uniform mat4 u_view;
-uniform mat4 u_proj;
-out vec4 c_TexCoord[2];
+LEGACY_VERTEX_PRELUDE = "#version 330" + MESH_INPUTS + """out vec4 c_TexCoord[2];
 out vec4 c_FrontColor;
 """ + _LEGACY_LIGHTS + """
 #define attribute in
