@@ -207,18 +207,18 @@ class Engine:
 
     def run(self, frames: int | None = None, seconds: float | None = None,
             until: Callable[[Engine], bool] | None = None) -> None:
-        """Run frames until a frame count, a simulated time or a predicate is reached.
+        """Run frames until a frame count, a simulated time, a predicate or a quit request.
 
         In threaded mode the physics thread stops by itself at the end time and one
         last frame picks up its final state.
         """
         self.start()
         threaded = self.config.mode == "threaded"
+        self.physics.stop_at = None if seconds is None else self.time + seconds
         end_time = None if seconds is None else self.time + seconds - 1e-9
-        self.physics.stop_at = None if end_time is None else end_time + 1e-9
         end_frame = None if frames is None else self.frame + frames
         while end_frame is None or self.frame < end_frame:
-            if until is not None and until(self):
+            if self._quit or (until is not None and until(self)):
                 break
             if end_time is not None and threaded and self.physics.time >= end_time:
                 self.step()
@@ -236,9 +236,6 @@ class Engine:
     def request_quit(self) -> None:
         """Ask the run loop to stop after this frame (a closed window, a script's quit)."""
         self._quit = True
-
-    def quit_requested(self) -> bool:
-        return self._quit
 
     def close(self) -> None:
         """Stop physics, shut every system down; safe to call twice, also after errors."""

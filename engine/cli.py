@@ -193,9 +193,7 @@ def _run_limited(engine: Any, args: argparse.Namespace, progress: bool, status_l
             print("\r" + status_line(eng), end="", file=sys.stderr, flush=True)
         return False
 
-    quit_requested = getattr(engine, "quit_requested", lambda: False)
-    engine.run(frames=args.frames, seconds=args.seconds,
-               until=lambda eng: tick(eng) or quit_requested())
+    engine.run(frames=args.frames, seconds=args.seconds, until=tick)
     if progress:
         print(file=sys.stderr)
 

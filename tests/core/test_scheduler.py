@@ -171,3 +171,10 @@ def test_transforms_are_views_into_the_pose_table_and_survive_growth():
         assert eng.world.component_for_entity(entities[299], Transform).position[0] == 299
         eng.world.delete_entity(entities[7])
         assert t.position.tolist() == [9, 9, 9]  # detached copy keeps its values
+
+
+def test_request_quit_ends_the_run_after_the_frame():
+    with make_engine() as eng:
+        eng.add_system(system(Phase.RENDER)(lambda e, dt: e.frame == 6 and e.request_quit()))
+        eng.run(frames=100)
+        assert eng.frame == 7
