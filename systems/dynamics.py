@@ -40,7 +40,7 @@ class DynamicsSystem(System):
         self.snapshot: Snapshot | None = None
         self._layout: tuple[np.ndarray, int] | None = None
         self._rows = np.zeros(0, np.int64)
-        self._valid = np.zeros(0, bool)
+        self._valid: np.ndarray | None = None
         self.contacts_total = 0
 
     def setup(self, engine: Engine) -> None:
@@ -54,13 +54,14 @@ class DynamicsSystem(System):
         for entity, joint in world.get_component(Joint):
             engine.physics.push(_add_joint(entity, joint))
 
-    def _add_body(self, engine: Engine, entity: int, physical: Physical) -> None:
+    def _add_body(self, engine: Engine, entity: int, physical: Physical,
+                  waited: bool = False) -> None:
         """Queue the body at once, so commands queued after the spawn find it."""
         t = engine.world.try_component(entity, Transform)
-        if t is None:  # a Transform may follow with add_component; wait for FIXED
+        if t is None and not waited:  # a Transform may follow with add_component: wait
             self._new_bodies.append((entity, physical))
         else:
-            engine.physics.push(_add_body(entity, physical, t))
+            engine.physics.push(_add_body(entity, physical, t or Transform()))
 
     def _remove_body(self, engine: Engine, entity: int) -> None:
         if any(pair[0] == entity for pair in self._new_bodies):  # never reached the backend
@@ -69,11 +70,9 @@ class DynamicsSystem(System):
         engine.physics.push(_remove_body(entity))
 
     def _send_new(self, engine: Engine) -> None:
-        if self._new_bodies:
-            bodies, self._new_bodies = self._new_bodies, []
-            for entity, physical in bodies:
-                t = engine.world.try_component(entity, Transform) or Transform()
-                engine.physics.push(_add_body(entity, physical, t))
+        bodies, self._new_bodies = self._new_bodies, []
+        for entity, physical in bodies:
+            self._add_body(engine, entity, physical, waited=True)
 
     def run(self, engine: Engine, dt: float) -> None:
         self._send_new(engine)
@@ -102,20 +101,14 @@ class DynamicsSystem(System):
         layout = self._layout
         if layout is None or layout[1] != poses.version or not np.array_equal(layout[0], keys):
             rows = poses.rows(keys)
-            self._valid = rows >= 0
-            self._rows = rows[self._valid]
+            valid = rows >= 0
+            self._rows = rows[valid]
+            self._valid = None if valid.all() else valid  # None: every body has a Transform
             self._layout = (keys, poses.version)
         rows, valid = self._rows, self._valid
-        if valid.all():
-            poses.position[rows] = bodies.position
-            poses.orientation[rows] = bodies.orientation
-            poses.linear_velocity[rows] = bodies.linear_velocity
-            poses.angular_velocity[rows] = bodies.angular_velocity
-        else:
-            poses.position[rows] = bodies.position[valid]
-            poses.orientation[rows] = bodies.orientation[valid]
-            poses.linear_velocity[rows] = bodies.linear_velocity[valid]
-            poses.angular_velocity[rows] = bodies.angular_velocity[valid]
+        for field in ("position", "orientation", "linear_velocity", "angular_velocity"):
+            values = getattr(bodies, field)
+            getattr(poses, field)[rows] = values if valid is None else values[valid]
 
 
 def _add_body(entity: int, physical: Physical, t: Transform):

@@ -178,3 +178,12 @@ def test_request_quit_ends_the_run_after_the_frame():
         eng.add_system(system(Phase.RENDER)(lambda e, dt: e.frame == 6 and e.request_quit()))
         eng.run(frames=100)
         assert eng.frame == 7
+
+
+def test_bodies_without_a_transform_simulate_and_the_others_still_sync():
+    with make_engine() as eng:
+        bare = eng.spawn(Physical())  # no Transform: starts at the origin, nothing to sync
+        ball = eng.spawn(Transform(position=(0, 0, 10)), Physical())
+        eng.run(frames=30)
+        assert sorted(eng.physics.snapshot.bodies.keys.tolist()) == sorted([bare, ball])
+        assert eng.world.component_for_entity(ball, Transform).position[2] < 10.0
