@@ -3,9 +3,9 @@
 >>> from engine.system import Phase, system
 >>> with Engine(EngineConfig(backend="ballistic", fast=True), plugins=()) as eng:
 ...     seen = []
-...     eng.add_system(system(Phase.SCRIPT)(lambda e, dt: seen.append(e.frame)))
+...     _ = eng.add_system(system(Phase.SCRIPT)(lambda e, dt: seen.append(e.frame)))
 ...     eng.run(frames=3)
-...     seen
+>>> seen
 [0, 1, 2]
 """
 

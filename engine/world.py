@@ -32,6 +32,24 @@ ComponentHook = Callable[[int, Any], None]
 _world_names = itertools.count()
 
 
+def row_index(rows: np.ndarray) -> slice | np.ndarray:
+    """The cheapest index for ``rows``: a slice where they are one increasing run.
+
+    Bodies spawned together sit in consecutive rows, and a backend that keeps its
+    bodies in key order hands them over in that order; a slice then copies a
+    whole table in one block instead of gathering row by row.
+
+    >>> row_index(np.array([4, 5, 6]))
+    slice(4, 7, None)
+    >>> row_index(np.array([4, 6]))
+    array([4, 6])
+    """
+    n = len(rows)
+    if n and rows[-1] - rows[0] == n - 1 and (n == 1 or bool(np.all(np.diff(rows) == 1))):
+        return slice(int(rows[0]), int(rows[-1]) + 1)
+    return rows
+
+
 class PoseTable:
     """Contiguous storage for every adopted Transform, one row per entity.
 

@@ -18,9 +18,10 @@ import numpy as np
 
 from components import Joint, Physical, Transform
 from engine.events import BodyFault, Contacts
-from engine.physics.backend import DynamicsBackend
+from engine.physics.backend import BodyState, DynamicsBackend
 from engine.physics.driver import Snapshot
 from engine.system import Phase, System
+from engine.world import PoseTable, row_index
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -39,7 +40,7 @@ class DynamicsSystem(System):
         #: threaded mode; systems wanting a consistent view read this one).
         self.snapshot: Snapshot | None = None
         self._layout: tuple[np.ndarray, int] | None = None
-        self._rows = np.zeros(0, np.int64)
+        self._rows: slice | np.ndarray = np.zeros(0, np.int64)
         self._valid: np.ndarray | None = None
         self.contacts_total = 0
 
@@ -102,13 +103,18 @@ class DynamicsSystem(System):
         if layout is None or layout[1] != poses.version or not np.array_equal(layout[0], keys):
             rows = poses.rows(keys)
             valid = rows >= 0
-            self._rows = rows[valid]
+            self._rows = row_index(rows[valid])
             self._valid = None if valid.all() else valid  # None: every body has a Transform
             self._layout = (keys, poses.version)
-        rows, valid = self._rows, self._valid
-        for field in ("position", "orientation", "linear_velocity", "angular_velocity"):
-            values = getattr(bodies, field)
-            getattr(poses, field)[rows] = values if valid is None else values[valid]
+        copy_state(poses, self._rows, bodies, self._valid)
+
+
+def copy_state(poses: PoseTable, rows: slice | np.ndarray, bodies: BodyState,
+               valid: np.ndarray | None = None) -> None:
+    """Write a state read into the pose table: body ``i`` (of those ``valid``) → ``rows[i]``."""
+    for field in ("position", "orientation", "linear_velocity", "angular_velocity"):
+        values = getattr(bodies, field)
+        getattr(poses, field)[rows] = values if valid is None else values[valid]
 
 
 def _add_body(entity: int, physical: Physical, t: Transform):

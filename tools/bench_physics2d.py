@@ -7,8 +7,9 @@ sleeping off (``--sleeping`` turns it on in both). Both worlds are built with th
 same pymunk settings and stepped in the same run, alternating every ten steps, so
 they see the same machine and the same simulated phase (they follow bit-identical
 trajectories; the table says so). Ours is timed with the ECS sync the engine does
-each step: ``read_state`` and a vectorised copy of every pose into an (N, 7) table,
-and then again with ``contacts()`` too. Times are medians over the blocks and a ratio
+each step: ``read_state`` and the dynamics system's own copy of every pose and
+velocity into a pose table of N + 1 Transforms, and then again with ``contacts()``
+too (which the engine collects every step). Times are medians over the blocks and a ratio
 is the median of the blocks' own ratios (this is a shared machine; means are in the
 returned dicts).
 
@@ -30,11 +31,13 @@ import pymunk
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from components import MaterialProps, Physical, Shape  # noqa: E402
+from components import MaterialProps, Physical, Shape, Transform  # noqa: E402
 from engine.physics.backend import WorldSettings  # noqa: E402
 from engine.physics.pymunk2d import PymunkBackend  # noqa: E402
 from engine.physics.pymunk2d.backend import COLLISION_SLOP, SLEEP_TIME  # noqa: E402
 from engine.physics.pymunk2d.shapes import PLANE_DEPTH, PLANE_HALF_LENGTH  # noqa: E402
+from engine.world import PoseTable, row_index  # noqa: E402
+from systems.dynamics import copy_state  # noqa: E402
 
 DT = 1.0 / 60.0
 ITERATIONS = 20
@@ -90,25 +93,21 @@ def build_ours(n: int, sleeping: bool = False) -> PymunkBackend:
 def bench_one(n: int, steps: int, sleeping: bool = False) -> dict:
     """Alternate raw and backend blocks of steps; ms per step (medians, and means)."""
     raw, ours = build_raw(n, sleeping), build_ours(n, sleeping)
-    poses = np.zeros((n + 1, 7))  # the ECS pose table
-    state = ours.read_state()
-    table_row = np.where(state.keys == GROUND_KEY, n, state.keys)  # key → row
+    poses = PoseTable()  # the ECS pose table: entity = body key, as in the engine
+    keys = [*range(n), GROUND_KEY]
+    poses.adopt_many(keys, [Transform() for _ in keys])
+    table_row = row_index(poses.rows(ours.read_state().keys))
     clock = time.perf_counter_ns
     blocks = max(1, steps // BLOCK)
     # per block of BLOCK steps, in ns: raw, our step, our sync, our contacts
     times = np.zeros((blocks, 4), np.int64)
 
     def ours_block(i: int) -> None:
-        nonlocal table_row
         for _ in range(BLOCK):
             t1 = clock()
             ours.step(DT)
             t2 = clock()
-            state = ours.read_state()
-            if len(state.keys) != len(table_row):
-                table_row = np.where(state.keys == GROUND_KEY, n, state.keys)
-            poses[table_row, :3] = state.position
-            poses[table_row, 3:] = state.orientation
+            copy_state(poses, table_row, ours.read_state())  # no body comes or goes here
             t3 = clock()
             ours.contacts()
             times[i, 1:] += t2 - t1, t3 - t2, clock() - t3

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pymunk
-import pymunk.batch as batch
+from pymunk._chipmunk import ffi, lib
 
 from components import Joint, MaterialProps, Physical, Shape
 from engine.physics.backend import (
@@ -33,10 +33,9 @@ from engine.physics.backend import (
     RayHit,
     WorldSettings,
 )
-from engine.physics.pymunk2d.idindex import IdIndex
+from engine.physics.pymunk2d import _sync
 from engine.physics.pymunk2d.joints import JointRecord, build_joint
-from engine.physics.pymunk2d.planar import quat_multiply, split_orientation
-from engine.physics.pymunk2d.readout import Readout
+from engine.physics.pymunk2d.planar import split_orientation
 from engine.physics.pymunk2d.shapes import BuiltShape, build_shape
 
 log = logging.getLogger("colosseum.physics.pymunk")
@@ -46,16 +45,9 @@ SLEEP_TIME = 0.5
 #: Overlap allowed between shapes (m); pymunk's default 0.1 is meant for pixels.
 COLLISION_SLOP = 1e-3
 
-_STATE_FIELDS = (batch.BodyFields.POSITION | batch.BodyFields.ANGLE | batch.BodyFields.VELOCITY
-                 | batch.BodyFields.ANGULAR_VELOCITY)
-_ARB = batch.ArbiterFields
-_ARBITER_FIELDS = (_ARB.BODY_A_ID | _ARB.BODY_B_ID | _ARB.CONTACT_COUNT | _ARB.TOTAL_IMPULSE
-                   | _ARB.NORMAL | _ARB.POINT_A_1 | _ARB.POINT_B_1 | _ARB.DISTANCE_1
-                   | _ARB.POINT_A_2 | _ARB.POINT_B_2 | _ARB.DISTANCE_2)
-#: Sums both contact points on both shapes out of a batch arbiter row (x and z).
-_MID_SUM = np.zeros((14, 2))
-_MID_SUM[[4, 6, 9, 11], 0] = 1.0
-_MID_SUM[[5, 7, 10, 12], 1] = 1.0
+#: Addresses of the chipmunk functions the compiled copy calls (pymunk's own chipmunk).
+_FUNCTIONS = tuple(int(ffi.cast("uintptr_t", ffi.addressof(lib, name)))
+                   for name in _sync.FUNCTIONS)
 _KINDS = {
     "dynamic": pymunk.Body.DYNAMIC,
     "static": pymunk.Body.STATIC,
@@ -88,21 +80,12 @@ class PymunkBackend:
         self._bouncy_types: set[int] = set()
         self._pairs: dict[tuple[int, int], MaterialPair] = {}
         self._warned: set[tuple[str, str]] = set()
-        self._buf = batch.Buffer()
         self._contacts: np.ndarray | None = np.zeros(0, CONTACT_DTYPE)
         self._dirty = True
         self._keys = np.zeros(0, np.int64)
         self._row: dict[int, int] = {}
-        self._readout = Readout(0, np.zeros(0), np.zeros(0, np.intp))
-        self._rest = np.zeros((0, 4))
-        self._any_rest = False
-        self._cog = np.zeros((0, 2))
-        self._any_cog = False
-        self._static_rows = np.ones(1, bool)
-        self._keys_ext = np.full(1, -1, np.int64)
-        self._index = IdIndex(np.zeros(0, np.int64))
-        self._iter_ids = b""
-        self._track_order = True
+        self._y_ext = np.zeros(1)
+        self._sync: _sync.SpaceSync | None = None
         self._sleep_on = True
         self._sliders: dict[int, JointRecord] = {}
         self._always_awake: list[pymunk.Body] = []
@@ -133,12 +116,6 @@ class PymunkBackend:
         space.collision_bias = (1.0 - erp) ** 60
         space.sleep_time_threshold = SLEEP_TIME if settings.auto_sleep else math.inf
         self._sleep_on = bool(settings.auto_sleep)
-        # pymunk reorders its bodies only as they sleep or wake: while none can, the state
-        # read skips the body ids, its row plan caught up with pymunk's order first
-        track = self._sleep_on or any(rec.body.is_sleeping for rec in self._bodies.values())
-        if self._track_order and not track and not self._dirty:
-            self._read_batch()
-        self._track_order = track
         self._pairs.clear()
         for pair in settings.material_pairs:
             ta, tb = self._material_type(pair.a), self._material_type(pair.b)
@@ -267,7 +244,7 @@ class PymunkBackend:
     def remove_body(self, key: int) -> None:
         rec = self._record(key)
         if self._contacts is None:
-            self._contacts = self._collect_contacts()
+            self._contacts = self._space_sync().contacts()
         for jkey in list(rec.joints):
             log.info("joint %s removed with body %s", jkey, key)
             self.remove_joint(jkey)
@@ -303,7 +280,7 @@ class PymunkBackend:
     def _set_y(self, rec: _BodyRecord, y: float) -> None:
         rec.y = y
         if not self._dirty:
-            self._readout.y_ext[self._row[rec.key]] = y
+            self._y_ext[self._row[rec.key]] = y
 
     def set_velocity(self, key: int, linear: np.ndarray, angular: np.ndarray) -> None:
         rec = self._record(key)
@@ -435,95 +412,48 @@ class PymunkBackend:
                        "is followed")
         rec.set_target((float(position[0]), float(position[2])), theta, max_force, max_torque)
 
-    # -- batches -----------------------------------------------------------
+    # -- state and contacts ---------------------------------------------
     def _reindex(self) -> None:
-        """Row tables for the batch paths; rebuilt only after bodies come or go."""
-        buf = self._buf
-        buf.clear()
-        batch.get_space_bodies(self._space, batch.BodyFields.BODY_ID, buf)
-        self._iter_ids = bytes(buf.int_buf())
-        ids = np.frombuffer(self._iter_ids, np.int64)
-        place = {int(i): p for p, i in enumerate(ids)}
-        # rows follow pymunk's own order so the batch read needs no reshuffle
-        recs = sorted(self._bodies.values(), key=lambda r: place[r.body.id])
+        """Rows, and the compiled reader planned for them; rebuilt only as bodies come or go.
+
+        Rows are in key order, so the contacts sort by row and a table filled by key
+        takes the state in one slice.
+        """
+        recs = sorted(self._bodies.values(), key=lambda r: r.key)
         n = len(recs)
         self._keys = np.fromiter((r.key for r in recs), np.int64, n)
         self._row = {r.key: i for i, r in enumerate(recs)}
-        self._readout = Readout(len(ids), np.fromiter((r.y for r in recs), np.float64, n),
-                                np.fromiter((place[r.body.id] for r in recs), np.intp, n))
-        self._rest = np.array([r.rest for r in recs]).reshape(-1, 4)
-        self._any_rest = bool(n) and not np.all(self._rest[:, 0] == 1.0)
-        self._cog = np.array([tuple(r.body.center_of_gravity) for r in recs]).reshape(-1, 2)
-        self._any_cog = bool(np.any(self._cog))
         # one extra row stands for bodies without a key (the static world)
-        self._static_rows = np.append(np.fromiter(
-            (r.body.body_type == pymunk.Body.STATIC for r in recs), bool, n), True)
-        self._keys_ext = np.append(self._keys, -1)
-        self._index = IdIndex(np.fromiter((r.body.id for r in recs), np.uintp, n)
-                              .view(np.int64))
+        self._y_ext = np.append(np.fromiter((r.y for r in recs), np.float64, n), 0.0)
+        static = np.fromiter((r.body.body_type == pymunk.Body.STATIC for r in recs), bool, n)
+        self._sync = _sync.SpaceSync(
+            _FUNCTIONS, _address(self._space._space), [_address(r.body._body) for r in recs],
+            self._y_ext, np.array([r.rest for r in recs], np.float64).reshape(-1, 4),
+            np.array([tuple(r.body.center_of_gravity) for r in recs]).reshape(-1, 2),
+            np.append(self._keys, -1), np.append(static, True), CONTACT_DTYPE)
         self._dirty = False
 
-    def _read_batch(self) -> np.ndarray:
-        """Every body's (x, z, θ, vx, vz, ω) rows, one batch call, in pymunk's order."""
+    def _space_sync(self) -> _sync.SpaceSync:
         if self._dirty:
             self._reindex()
-        buf = self._buf
-        buf.clear()
-        if self._track_order:
-            batch.get_space_bodies(self._space, _STATE_FIELDS | batch.BodyFields.BODY_ID, buf)
-            ids = bytes(buf.int_buf())
-            if ids != self._iter_ids and not self._replace(ids):
-                return self._read_batch()  # the body set changed behind our back: reread
-        else:
-            batch.get_space_bodies(self._space, _STATE_FIELDS, buf)
-        return np.frombuffer(buf.float_buf(), np.float64)
-
-    def _replace(self, ids: bytes) -> bool:
-        """Follow pymunk's new body order (bodies slept or woke) without a reindex.
-
-        Returns False, having reindexed, when the ids are not a reordering of ours.
-        """
-        batch_ids = np.frombuffer(ids, np.int64)
-        out = self._readout
-        rows = self._index.rows(batch_ids)
-        keyed = np.flatnonzero(rows < out.n)
-        if len(batch_ids) != out.m or len(keyed) != out.n:
-            self._reindex()
-            return False
-        self._iter_ids = ids
-        at = np.empty(out.n, np.intp)
-        at[rows[keyed]] = keyed
-        out.place(at)
-        return True
+        return self._sync
 
     def read_state(self) -> BodyState:
         """Every body's pose and velocity; a body gone non-finite is reset first."""
-        floats = self._read_batch()
-        out = self._readout
-        if not out.load(floats) and self._reset_broken(out.rows()):
-            floats = self._read_batch()
-            out = self._readout
-            out.load(floats)
-        position, orientation, linear, angular = out.arrays()
-        if self._any_rest:
-            orientation = quat_multiply(orientation, self._rest)
-        if self._any_cog:  # pymunk's velocity is its centre of mass's; ours the origin's
-            theta, omega = out.rows()[:, 2:6:3].T
-            c, s_ = np.cos(theta), np.sin(theta)
-            rx = c * self._cog[:, 0] - s_ * self._cog[:, 1]
-            rz = s_ * self._cog[:, 0] + c * self._cog[:, 1]
-            linear[:, 0] += omega * rz
-            linear[:, 2] -= omega * rx
+        position, orientation, linear, angular, finite = self._space_sync().read()
+        if not finite and self._reset_broken(position, orientation, linear, angular):
+            position, orientation, linear, angular, _ = self._space_sync().read()
         self._last_good = BodyState(self._keys.copy(), position, orientation, linear, angular)
         return self._last_good
 
-    def _reset_broken(self, d: np.ndarray) -> bool:
+    def _reset_broken(self, *arrays: np.ndarray) -> bool:
         """Put bodies whose state turned non-finite back at their last good pose, at rest.
 
-        ``d`` holds every keyed body's (x, z, θ, vx, vz, ω); returns whether any was reset.
+        ``arrays`` are a state read's rows; returns whether any body was reset.
         """
         last = self._last_good
-        broken = np.flatnonzero(~np.isfinite(d).all(axis=1))
+        broken = np.flatnonzero(~np.logical_and.reduce(
+            [np.isfinite(a).all(axis=1) for a in arrays]))
         for i in broken:
             key = int(self._keys[i])
             rec = self._bodies[key]
@@ -571,59 +501,8 @@ class PymunkBackend:
 
     def contacts(self) -> np.ndarray:
         if self._contacts is None:
-            self._contacts = self._collect_contacts()
+            self._contacts = self._space_sync().contacts()
         return self._contacts
-
-    def _collect_contacts(self) -> np.ndarray:
-        """One row per touching shape pair: mean point, deepest overlap, |impulse|.
-
-        Sorted by keys then position, so the same run gives the same array.
-        """
-        if self._dirty:
-            self._reindex()
-        buf = self._buf
-        buf.clear()
-        batch.get_space_arbiters(self._space, _ARBITER_FIELDS, buf)
-        ints = np.frombuffer(buf.int_buf(), np.int64).reshape(-1, 3)
-        fl = np.frombuffer(buf.float_buf(), np.float64).reshape(-1, 14)
-        touching = ints[:, 2] > 0
-        if not touching.all():
-            ints, fl = ints[touching], fl[touching]
-        m = len(ints)
-        if m == 0:
-            return np.zeros(0, CONTACT_DTYPE)
-        rows = self._index.rows(ints[:, :2].ravel()).reshape(-1, 2)
-        keys = self._keys_ext[rows]
-        static = self._static_rows[rows]
-        # "a" is the moving side, or the lower key; "b" the static side (−1: keyless world)
-        swap = (static[:, 0] & ~static[:, 1]) | (
-            (static[:, 0] == static[:, 1]) & (keys[:, 0] > keys[:, 1]))
-        # built as a plain (m, 10) table laid out like CONTACT_DTYPE, then viewed as it
-        res = np.empty((m, 10))
-        as_int = res.view(np.int64)
-        np.copyto(as_int[:, 0:2], keys)
-        np.copyto(as_int[:, 0:2], keys[:, ::-1], where=swap[:, None])
-        # mean of the contact points on both surfaces (pymunk zeroes the unused second one)
-        res[:, 2:5:2] = (fl @ _MID_SUM) / (2.0 * ints[:, 2:3])
-        res[:, 3] = self._readout.y_ext[np.where(swap, rows[:, 1], rows[:, 0])]
-        # pymunk's normal points from shape a to shape b; ours points from b toward a.
-        res[:, 5:8:2] = fl[:, 2:4] * (2.0 * swap - 1.0)[:, None]
-        res[:, 6] = 0.0
-        np.maximum(-np.minimum(fl[:, 8], fl[:, 13]), 0.0, out=res[:, 8])
-        np.hypot(fl[:, 0], fl[:, 1], out=res[:, 9])
-        # pymunk keeps arbiters in a hash set keyed by pointers: sort for a repeatable
-        # order, by keys, and by position where one pair of bodies touches more than once
-        a, b = as_int[:, 0], as_int[:, 1]
-        if a.min() >= -1 and max(a.max(), b.max()) < 1 << 31 and b.min() >= -1:
-            pair = ((a + 1) << 32) | (b + 1)  # keys fit in 32 bits: one integer sort
-            order = np.argsort(pair, kind="stable")
-            sorted_pair = pair[order]
-            repeated = bool(np.any(sorted_pair[1:] == sorted_pair[:-1]))
-        else:
-            repeated = True
-        if repeated:
-            order = np.lexsort((res[:, 4], res[:, 2], b, a))
-        return res[order].view(CONTACT_DTYPE)[:, 0]
 
     # -- queries -----------------------------------------------------------
     def raycast(self, origin: np.ndarray, direction: np.ndarray, max_distance: float,
@@ -703,6 +582,11 @@ def _velocity_func(gravity: bool, linear_damping: float, angular_damping: float)
             body.angular_velocity = body.angular_velocity * keep_w
 
     return update
+
+
+def _address(pointer: object) -> int:
+    """A cffi pointer (pymunk's ``cpSpace*`` or ``cpBody*``) as the integer the kernel takes."""
+    return int(ffi.cast("uintptr_t", pointer))
 
 
 def _set_origin_velocity(body: pymunk.Body, vx: float, vz: float, w: float) -> None:
