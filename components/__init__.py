@@ -111,6 +111,11 @@ class Joint:
     ``motor_max_force`` (N·m or N). For six_dof, ``body_b`` is the tracked target
     (or None: the target is set with ``set_joint_target``) and ``motor_max_force``
     caps both force and torque until ``set_drive_limits`` changes them.
+
+    ``reference`` is the pose (x, y, z, qw, qx, qy, qz) of ``body_a`` and of
+    ``body_b`` (None for the world) when the joint was first made, with ``anchor``
+    and ``axis`` as they were then; a backend makes the joint as if the bodies
+    were there, which re-creates a saved joint exactly. None: where they are now.
     """
 
     kind: str = "hinge"
@@ -125,6 +130,7 @@ class Joint:
     motor_max_force: float = 0.0
     id: str = ""
     broken: bool = False
+    reference: tuple[tuple[float, ...], tuple[float, ...] | None] | None = None
 
 
 @dataclass(slots=True)

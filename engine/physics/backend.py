@@ -152,6 +152,30 @@ class SupportsFaults(Protocol):
     def take_faults(self) -> list[tuple[int, str]]: ...
 
 
+@dataclass(frozen=True, slots=True)
+class SleepState:
+    """A body's standing with auto-sleep: what a saved state needs to sleep on time."""
+
+    asleep: bool
+    #: Steps in a row the body has been at rest; it sleeps at the backend's limit
+    #: (20 steps for ODE).
+    idle_steps: int = 0
+    #: (k, 6) recent centre-of-mass velocities (m/s, then rad/s; world frame), oldest
+    #: first, as many as the backend's rule averages (5 for ODE).
+    samples: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+
+
+@runtime_checkable
+class SupportsSleepState(Protocol):
+    """Backends that keep their own auto-sleep counters and can hand them over, so a saved
+    state falls asleep exactly when the uninterrupted run would."""
+
+    def sleep_states(self) -> dict[int, SleepState]: ...
+
+    def set_sleep_state(self, key: int, asleep: bool, idle_steps: int = 0,
+                        samples: np.ndarray | None = None) -> None: ...
+
+
 @runtime_checkable
 class SupportsJointTargets(Protocol):
     """Backends whose six_dof constraint follows a moving target pose (the virtual hand)."""

@@ -34,7 +34,12 @@ from components import (
     Transform,
     Visual,
 )
-from engine.physics.backend import MaterialPair, WorldSettings
+from engine.physics.backend import (
+    DynamicsBackend,
+    MaterialPair,
+    SupportsSleepState,
+    WorldSettings,
+)
 from engine.scene import schema as sc
 from engine.scene.db import (
     INCLUDE,
@@ -69,16 +74,22 @@ class EntitySpec:
 
 @dataclass(slots=True)
 class JointSpec:
-    """A joint and the IDs of its bodies; ``local_*`` are anchor and axes in body A's frame
-    (what a saved state needs to re-create the joint where the bodies are then)."""
+    """A joint and the IDs of its bodies."""
 
     id: str
     joint: Joint
     bodies: tuple[str, str | None]
     loc: Loc
-    local_anchor: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    local_axes: tuple[tuple[float, float, float], tuple[float, float, float]] = (
-        (0.0, 0.0, 1.0), (0.0, 1.0, 0.0))
+
+
+@dataclass(frozen=True, slots=True)
+class SleepSpec:
+    """A body's auto-sleep state from a saved state: asleep, steps at rest so far, and the
+    recent velocity samples the rule averages ((k, 6): m/s and rad/s, oldest first)."""
+
+    asleep: bool
+    idle_steps: int
+    samples: np.ndarray
 
 
 @dataclass(slots=True)
@@ -109,6 +120,8 @@ class SceneSpec:
     backend: str = "ode"
     time: float = 0.0
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
+    #: Object ID -> auto-sleep state a saved state carries (see :class:`SleepSpec`).
+    sleep: dict[str, SleepSpec] = field(default_factory=dict)
     content_dir: Path | None = None
     db: SceneDB | None = None
 
@@ -224,6 +237,7 @@ class _Builder:
         self.dense_materials: set[str] = set()
         self.poses: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
         self.physical_ids: set[str] = set()
+        self.sleep: dict[str, SleepSpec] = {}
 
     def build(self, db: SceneDB) -> SceneSpec:
         spec = SceneSpec()
@@ -240,10 +254,12 @@ class _Builder:
         spec.materials = self.materials
         for i, blk in enumerate(root.blocks("Object")):
             spec.entities.append(self.object(blk, i))
+        spawned = {es.id for es in spec.entities}
         for i, blk in enumerate(root.blocks("Joint")):
-            js = self.joint(blk, i)
+            js = self.joint(blk, i, spawned)
             if js is not None:
                 spec.joints.append(js)
+        spec.sleep = self.sleep
         self.shaders(root, spec)
         self.world(root, spec)
         self.scene_entities(root, spec)
@@ -284,6 +300,8 @@ class _Builder:
             comps.append(self.physical(r, phys, size, visual_shapes, model, scale, position,
                                        quat))
             self.physical_ids.add(oid)
+            if r("Asleep") or r("IdleSteps") or r.has("VelocitySamples"):
+                self.sleep[oid] = self.sleep_spec(r)
         self.poses[oid] = (position, quat)
         if r.has("Sound"):
             comps.append(_sound(_Reader(r.value("Sound").data, "Sound"), oid))
@@ -414,8 +432,18 @@ class _Builder:
         self.meshes[key] = mesh
         return mesh
 
+    def sleep_spec(self, r: _Reader) -> SleepSpec:
+        """An object's saved auto-sleep state, so a loaded state falls asleep on time."""
+        if r("IdleSteps") < 0:
+            self.report.error(r.value("IdleSteps").loc, "IdleSteps must not be negative")
+        samples = np.array(r("VelocitySamples") or (), np.float64).reshape(-1, 6)
+        samples[:, 3:] = np.radians(samples[:, 3:])  # written in deg/s, like AngularVelocity
+        return SleepSpec(bool(r("Asleep")), max(int(r("IdleSteps")), 0), samples)
+
     # -- joints ------------------------------------------------------------
-    def joint(self, blk: Block, index: int) -> JointSpec | None:
+    def joint(self, blk: Block, index: int, spawned: set[str]) -> JointSpec | None:
+        """The joint; its reference poses are the file's or, when this spec spawns both
+        bodies, their poses now (where they are when the joint is made)."""
         r = _Reader(blk, "Joint")
         jid = r("ID") or f"joint{index}"
         kind = JOINT_KINDS[r("Type")]
@@ -428,19 +456,24 @@ class _Builder:
         a, b = bodies[0], bodies[1] if len(bodies) > 1 else None
         linear = kind == "slider"
         conv = (lambda x: x) if linear else math.radians
-        pos_a, quat_a = self.poses[a]
-        anchor = _floats(r("Anchor")) if r.has("Anchor") else pos_a
+        anchor = _floats(r("Anchor")) if r.has("Anchor") else self.poses[a][0]
         low, high = r("Low"), r("High")
+
+        def pose(key: str, body: str) -> tuple[float, ...]:
+            return _floats(r(key)) if r.has(key) else (*self.poses[body][0],
+                                                        *self.poses[body][1])
+
+        reference = None
+        if r.has("ReferencePose1") or r.has("ReferencePose2") or {a, b} - {None} <= spawned:
+            reference = (pose("ReferencePose1", a),
+                         None if b is None else pose("ReferencePose2", b))
         joint = Joint(kind=kind, anchor=anchor, axis=_floats(r("Axis")),
                       axis2=_floats(r("Axis2")),
                       low=None if low is None else conv(low),
                       high=None if high is None else conv(high),
                       motor_velocity=conv(r("MotorVelocity")),
-                      motor_max_force=float(r("MotorMaxForce")), id=jid)
-        inv = (quat_a[0], -quat_a[1], -quat_a[2], -quat_a[3])
-        local = rotate(inv, tuple(x - p for x, p in zip(anchor, pos_a, strict=True)))
-        axes = (rotate(inv, joint.axis), rotate(inv, joint.axis2))
-        return JointSpec(jid, joint, (a, b), blk.loc, local, axes)
+                      motor_max_force=float(r("MotorMaxForce")), id=jid, reference=reference)
+        return JointSpec(jid, joint, (a, b), blk.loc)
 
     # -- shaders, world, scene-level entities ---------------------------------
     def shaders(self, root: _Index, spec: SceneSpec) -> None:
@@ -583,9 +616,26 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
         js.joint.body_a = ids[a]
         js.joint.body_b = None if b is None else ids[b]
         joints[js.id] = engine.spawn(Name(js.id), js.joint)
+    if spec.sleep:  # after the bodies and their joints (whose motors wake them) are made
+        sleep = {ids[oid]: state for oid, state in spec.sleep.items()}
+        engine.defer(lambda: engine.physics.push(_restore_sleep(sleep)))
     if as_scene:
         engine.insert_resource(SceneIds(ids, joints, spec))
         engine.insert_resource(spec.world)
         # a saved state continues at the time it was saved
         engine.time = engine.physics.time = spec.time
     return ids
+
+
+def _restore_sleep(states: dict[int, SleepSpec]) -> Callable[[DynamicsBackend], None]:
+    """Backend command: give bodies their saved auto-sleep state (or just sleep, where the
+    backend keeps no counters of its own)."""
+    def restore(backend: DynamicsBackend) -> None:
+        keeps_counters = isinstance(backend, SupportsSleepState)
+        for key, state in states.items():
+            if keeps_counters:
+                backend.set_sleep_state(key, state.asleep, state.idle_steps, state.samples)
+            elif state.asleep:
+                backend.set_sleeping(key, True)
+
+    return restore

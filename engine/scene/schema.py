@@ -58,6 +58,11 @@ def _id(kind: str, required: bool = False) -> Field:
                  required=required)
 
 
+#: Auto-sleep: a body at rest this many steps in a row falls asleep; the rest test
+#: averages this many velocity samples (mirrors engine.physics.ode3d._ode).
+SLEEP_STEPS = 20
+SLEEP_SAMPLES = 5
+
 PRIMITIVES = ("sphere", "box", "capsule", "cylinder", "plane")
 PARSE_METHODS = ("TriangleMesh", "ConvexHull", "Box", "Sphere")
 JOINT_TYPES = ("Hinge", "MotorizedHinge", "Ball", "Slider", "Universal", "Hinge2", "Fixed",
@@ -104,6 +109,14 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Hand": _f(STRUCT_T, struct="Hand"),
         "Controller": _f(STRUCT_T, doc="input bound to this object", struct="Controller"),
         "UserData": _f(ANY_T, repeat=True),
+        # Auto-sleep state (written by --save-state so a loaded state sleeps on time).
+        "Asleep": _f(BOOL_T, 0, "1: the body starts asleep (until something wakes it)"),
+        "IdleSteps": _f(INT_T, 0, f"steps in a row the body has been at rest; it falls "
+                        f"asleep after {SLEEP_STEPS}"),
+        "VelocitySamples": _f(VECTOR_T, None, "the last velocities auto-sleep averages, "
+                              "oldest first: [vx vy vz wx wy wz] per sample, m/s and deg/s "
+                              f"of the centre of mass, at most {SLEEP_SAMPLES} samples",
+                              lengths=tuple(range(6, 6 * SLEEP_SAMPLES + 1, 6))),
     },
     "Visual": {
         "Geometry": _f(STRUCT_T, repeat=True, struct="Geometry"),
@@ -158,13 +171,18 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Type": _f(ENUM_T, None, required=True, allowed=JOINT_TYPES),
         "Bodies": _f(STRINGVECTOR_T, None, "one object (jointed to the world) or two",
                      required=True, ref="Object", lengths=(1, 2)),
-        "Anchor": _f(VEC3_T, None, "m, world frame (default: first body's position)"),
+        "Anchor": _f(VEC3_T, None, "m, world frame, with the bodies at their reference poses "
+                     "(default: first body's position)"),
         "Axis": _f(VEC3_T, (0.0, 0.0, 1.0)),
         "Axis2": _f(VEC3_T, (0.0, 1.0, 0.0)),
         "Low": _f(FLOAT_T, None, "lower limit: degrees, or m for a slider"),
         "High": _f(FLOAT_T, None, "upper limit: degrees, or m for a slider"),
         "MotorVelocity": _f(FLOAT_T, 0.0, "deg/s, or m/s for a slider"),
         "MotorMaxForce": _f(FLOAT_T, 0.0, "N*m, or N for a slider"),
+        "ReferencePose1": _f(VECTOR_T, None, "[x y z qw qx qy qz] (m, quaternion): the first "
+                             "body's pose when the joint was first made; Anchor and axes are "
+                             "as they were then (default: the body's own pose)", lengths=(7,)),
+        "ReferencePose2": _f(VECTOR_T, None, "the same for the second body", lengths=(7,)),
     },
     "VertexShader": {"ID": _id("vertex shader", True), "File": _f(ASSET_T, required=True)},
     "FragmentShader": {"ID": _id("fragment shader", True), "File": _f(ASSET_T, required=True)},

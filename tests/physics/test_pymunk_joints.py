@@ -98,3 +98,38 @@ def test_bad_joints_raise_clear_errors(kit, backend: PymunkBackend) -> None:
         backend.add_joint(10, Joint(kind="weld", body_a=1, id="w"))
     with pytest.raises(ValueError, match="slider axis"):
         backend.add_joint(10, Joint(kind="slider", body_a=1, axis=(0.0, 1.0, 0.0)))
+
+
+def test_a_joint_made_from_its_reference_poses_is_the_joint_first_made(kit) -> None:
+    """A saved joint comes back anchored where it was first made, not where it is now."""
+    first = PymunkBackend()
+    kit.add(first, 1, kit.box((1.0, 0.1, 0.1)), (0.5, 0.0, 2.0))
+    kit.add(first, 2, kit.box((1.0, 0.1, 0.1)), (1.5, 0.0, 2.0))
+    reference = ((0.5, 0.0, 2.0, 1.0, 0.0, 0.0, 0.0), (1.5, 0.0, 2.0, 1.0, 0.0, 0.0, 0.0))
+    limited = Joint(kind="hinge", body_a=2, body_b=1, anchor=(1.0, 0.0, 2.0),
+                    axis=(0.0, 1.0, 0.0), low=-0.5, high=0.5)
+    first.add_joint(10, kit.hinge(1, (0.0, 0.0, 2.0)))
+    first.add_joint(11, limited)
+    for _ in range(45):  # the chain swings down and bends at its limited middle hinge
+        first.step(1 / 60)
+    state = first.read_state()
+    again = PymunkBackend()
+    for i, key in enumerate(state.keys):
+        kit.add(again, int(key), kit.box((1.0, 0.1, 0.1)), tuple(state.position[i]),
+                state.orientation[i])
+    again.add_joint(10, Joint(**{**_fields(kit.hinge(1, (0.0, 0.0, 2.0))),
+                                 "reference": (reference[0], None)}))
+    again.add_joint(11, Joint(**{**_fields(limited), "reference": reference[::-1]}))
+    for key in (10, 11):
+        assert again.joint_state(key)[0] == pytest.approx(first.joint_state(key)[0], abs=1e-12)
+        for made, remade in zip(first._joints[key].constraints, again._joints[key].constraints,
+                                strict=True):
+            for side in ("anchor_a", "anchor_b"):
+                if hasattr(made, side):
+                    assert tuple(getattr(remade, side)) == pytest.approx(
+                        tuple(getattr(made, side)), abs=1e-12)
+    np.testing.assert_array_equal(again.read_state().position, state.position)  # put back
+
+
+def _fields(joint: Joint) -> dict:
+    return {name: getattr(joint, name) for name in Joint.__dataclass_fields__}

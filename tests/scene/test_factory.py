@@ -195,20 +195,6 @@ Object {
   PhysicalAttributes { Mass 1 Geometry { Primitive "sphere" Size [0.4] } }
 }
 """
-PENDULUM = """\
-World { TimeStep 0.01 }
-Object { ID "anchor" Position [5 0 5] PhysicalAttributes { Geometry { Primitive "sphere" } } }
-Object {
-  ID "bob"
-  Position [5 1 5]
-  Velocity [0 0 2]
-  PhysicalAttributes { Mass 1 Geometry { Primitive "sphere" Size [0.2] } }
-}
-Joint { Type "Ball" Bodies ["anchor" "bob"] Anchor [5 0 5] }
-Joint { Type "Hinge" Bodies ["anchor"] Axis [1 0 0] }
-"""
-
-
 def run_positions(text: str, seconds: float, folder: Path) -> tuple[np.ndarray, str]:
     spec = spec_from_text(text, folder, np.random.default_rng(4), path=str(folder / "m.scene"))
     with engine_for(spec) as engine:
@@ -222,7 +208,7 @@ def run_positions(text: str, seconds: float, folder: Path) -> tuple[np.ndarray, 
 def test_saved_state_continues_the_motion(tmp_path):
     """Tumbling flight, sliding and rolling on the ground: save at t=2 + 1 s matches 3 s.
 
-    (Auto-sleep is off: a body's sleep counter is not part of the saved state.)"""
+    (Joints and sleeping bodies: tests/scene/test_saved_state.py.)"""
     straight, _ = run_positions(MOTION, 3.0, tmp_path)
     _, saved = run_positions(MOTION, 2.0, tmp_path)
     resumed, _ = run_positions(saved, 1.0, tmp_path)
@@ -250,16 +236,6 @@ def test_saved_state_continues_through_impacts_and_stacking(tmp_path):
     resumed, _ = run_positions(saved, 2.5, tmp_path)
     np.testing.assert_allclose(resumed, straight, atol=1e-6, rtol=0)
     assert straight[1, 2] < 0.5 and straight[4, 2] < 1.5  # it landed; the top box toppled
-
-
-def test_saved_jointed_state_continues_within_constraint_drift(tmp_path):
-    """Joints are re-created where the bodies are, so the solver's drift correction restarts:
-    the motion continues closely but not bit-for-bit (see the factory's report)."""
-    straight, _ = run_positions(PENDULUM, 3.0, tmp_path)
-    _, saved = run_positions(PENDULUM, 2.0, tmp_path)
-    resumed, _ = run_positions(saved, 1.0, tmp_path)
-    np.testing.assert_allclose(resumed, straight, atol=0.05, rtol=0)
-    assert "MotorVelocity 0.0" in saved and "Anchor [" in saved
 
 
 def test_saved_state_is_a_valid_literal_scene(tmp_path):

@@ -46,6 +46,13 @@ Conventions beyond the protocol:
   aborts the process on a non-finite rotation.
 * ``hinge2`` limits act on axis 1 (steering) and its motor on axis 2 (the
   wheel); :meth:`OdeBackend.joint_state` reports axis 1, as the protocol says.
+* A joint with a ``reference`` (its bodies' poses when it was first made) is made
+  as if its bodies stood there, then they are put back: ODE keeps anchors, axes
+  and the reference rotation in the bodies' frames, fixed when the joint is made,
+  so this re-creates a saved joint bit for bit.
+* Auto-sleep is ODE's auto-disable rule, run in ``_ode`` on counters of its own
+  (see its module doc): :meth:`OdeBackend.sleep_states` and
+  :meth:`OdeBackend.set_sleep_state` read and restore them for saved states.
 """
 
 from __future__ import annotations
@@ -57,7 +64,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from components import Joint, MaterialProps, Physical, Shape
-from engine.physics.backend import CONTACT_DTYPE, BodyState, RayHit, WorldSettings
+from engine.physics.backend import (
+    CONTACT_DTYPE,
+    BodyState,
+    RayHit,
+    SleepState,
+    WorldSettings,
+)
 from engine.physics.ode3d import _ode
 
 log = logging.getLogger("colosseum.physics.ode")
@@ -380,9 +393,27 @@ class OdeBackend:
     def sleeping_count(self) -> int:
         return self._world.sleeping_count()
 
+    def sleep_states(self) -> dict[int, SleepState]:
+        """Auto-sleep state of every moving body that is not fresh (awake, nothing counted)."""
+        keys, asleep, idle, counts, samples = self._world.sleep_states()
+        busy = np.flatnonzero(asleep | (idle != 0) | (counts != 0))
+        return {int(keys[i]): SleepState(bool(asleep[i]), int(idle[i]),
+                                         samples[i, :counts[i]].copy())
+                for i in busy.tolist()}
+
+    def set_sleep_state(self, key: int, asleep: bool, idle_steps: int = 0,
+                        samples: np.ndarray | None = None) -> None:
+        """Restore a body's auto-sleep state, as :meth:`sleep_states` reported it."""
+        rows = np.zeros((0, 6)) if samples is None else \
+            np.ascontiguousarray(samples, dtype=np.float64).reshape(-1, 6)
+        if not np.isfinite(rows).all():
+            raise ValueError(f"body {key}: non-finite velocity samples")
+        self._world.set_sleep_state(int(key), bool(asleep), int(idle_steps), rows)
+
     # -- joints ------------------------------------------------------------
     def add_joint(self, key: int, joint: Joint) -> None:
-        """Create a joint from its component; anchor and axes are world-frame, now."""
+        """Create a joint from its component: anchor and axes are world-frame, with the
+        bodies at ``joint.reference`` (the poses when it was first made) or where they are."""
         kind = _JOINT_KINDS.get(joint.kind)
         if kind is None:
             raise ValueError(f"joint {joint.id or key}: unknown kind {joint.kind!r} "
@@ -395,13 +426,19 @@ class OdeBackend:
         if kind not in (_ode.JOINT_BALL, _ode.JOINT_FIXED, _ode.JOINT_SIX_DOF) and \
                 not np.linalg.norm(axis) > 0:
             raise ValueError(f"joint {joint.id or key}: axis is zero")
+        ref_a = ref_b = None
+        if joint.reference is not None:
+            pose_a, pose_b = joint.reference
+            ref_a = _vec(pose_a, 7, "joint reference pose of body_a")
+            if pose_b is not None and joint.body_b is not None:
+                ref_b = _vec(pose_b, 7, "joint reference pose of body_b")
         try:
             self._world.create_joint(
                 int(key), kind, int(joint.body_a),
                 None if joint.body_b is None else int(joint.body_b),
                 _vec(joint.anchor, 3, "joint anchor"), axis, axis2,
                 joint.low, joint.high, float(joint.motor_velocity),
-                float(joint.motor_max_force))
+                float(joint.motor_max_force), ref_a, ref_b)
         except KeyError as exc:
             raise KeyError(f"joint {joint.id or key}: {exc.args[0]}") from None
 

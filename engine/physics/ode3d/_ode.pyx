@@ -9,13 +9,25 @@ and the six-DOF drives. The typed, user-facing layer is ``engine.physics.ode3d``
 Bodies sit in a dense slot table (removal swaps the last slot in), so batch
 reads are one C loop over ``n`` slots. A body's geoms carry a small ``GeomInfo``
 (key, material, collision bits) that the near callback reads without Python.
+
+Auto-sleep is ODE's auto-disable rule run by us (ODE's own is off), on counters
+kept in our ``Rest`` table beside the slots, so a saved state can carry them:
+each step, after collision and before QuickStep (where ODE runs its rule), every
+awake body that may sleep and touches something (a joint or a contact) records
+its linear and angular velocity; once the mean of its last ``SLEEP_SAMPLES``
+samples stays within 0.05 m/s and 0.05 rad/s for ``SLEEP_STEPS`` steps in a row
+it is disabled with its velocities zeroed. Waking (ODE re-enables a body that an
+awake one touches; forces, poses, motors) works as before, and every explicit
+wake restarts the count, as ``dBodyEnable`` does in ODE. One difference from
+ODE: the mean adds the samples oldest first (ODE adds them in ring order), so the
+samples saved oldest first reproduce it bit for bit.
 """
 
 cimport cython
-from libc.math cimport INFINITY, acos, fabs, isfinite, sqrt
-from libc.stdint cimport int64_t, uint32_t
+from libc.math cimport INFINITY, atan2, fabs, isfinite, sqrt
+from libc.stdint cimport int64_t, intptr_t, uint32_t
 from libc.stdlib cimport calloc, free, malloc, realloc
-from libc.string cimport memcpy, memset
+from libc.string cimport memcmp, memcpy, memset
 
 
 
@@ -101,11 +113,6 @@ cdef extern from "ode/ode.h" nogil:
     void dWorldSetQuickStepNumIterations(dWorldID, int)
     int dWorldQuickStep(dWorldID, dReal)
     void dWorldSetAutoDisableFlag(dWorldID, int)
-    void dWorldSetAutoDisableLinearThreshold(dWorldID, dReal)
-    void dWorldSetAutoDisableAngularThreshold(dWorldID, dReal)
-    void dWorldSetAutoDisableSteps(dWorldID, int)
-    void dWorldSetAutoDisableTime(dWorldID, dReal)
-    void dWorldSetAutoDisableAverageSamplesCount(dWorldID, unsigned int)
     void dWorldSetContactSurfaceLayer(dWorldID, dReal)
     void dWorldImpulseToForce(dWorldID, dReal stepsize, dReal ix, dReal iy, dReal iz,
                               dVector3 force)
@@ -139,7 +146,9 @@ cdef extern from "ode/ode.h" nogil:
     void dBodyEnable(dBodyID)
     void dBodyDisable(dBodyID)
     int dBodyIsEnabled(dBodyID)
-    void dBodySetAutoDisableFlag(dBodyID, int)
+    void dBodySetData(dBodyID, void*)
+    void* dBodyGetData(dBodyID)
+    dJointID dBodyGetJoint(dBodyID, int index)
     void dBodySetKinematic(dBodyID)
     int dBodyIsKinematic(dBodyID)
     void dBodySetGravityMode(dBodyID, int)
@@ -163,6 +172,7 @@ cdef extern from "ode/ode.h" nogil:
     void dMassAdd(dMass*, const dMass*)
     int dMassCheck(const dMass*)
     void dRfromQ(dMatrix3, const dQuaternion)
+    void dNormalize4(dReal* q)
 
     dGeomID dCreateSphere(dSpaceID, dReal)
     dGeomID dCreateBox(dSpaceID, dReal, dReal, dReal)
@@ -284,6 +294,14 @@ MODE_SOFT = dContactSoftERP | dContactSoftCFM
 cdef enum:
     FB_CHUNK = 4096
     BODY_DYNAMIC_C = 0
+    REST_SAMPLES = 5      # velocity samples averaged by auto-sleep
+    REST_STEPS = 20       # steps the mean must stay within the thresholds
+
+#: Squared auto-sleep thresholds (0.05 m/s, 0.05 rad/s), squared as ODE squares them.
+cdef double REST_LINEAR2 = 0.05 * 0.05
+cdef double REST_ANGULAR2 = 0.05 * 0.05
+SLEEP_SAMPLES = REST_SAMPLES
+SLEEP_STEPS = REST_STEPS
 
 #: Speed (m/s) and spin (rad/s) beyond which a body counts as exploded.
 cdef double MAX_SPEED = 1e5
@@ -330,6 +348,14 @@ cdef struct Slot:
     double pose[7]       # static bodies: entity pose (x y z w x y z)
     double com[3]        # centre of mass in the entity frame (ODE bodies sit at the COM)
     double good[7]       # last sane pose of the ODE body (position, quaternion)
+
+
+cdef struct Rest:
+    int can_sleep        # a dynamic body allowed to sleep
+    int left             # idle steps still needed before it sleeps (ODE's adis_stepsleft)
+    int next             # ring slot of the next velocity sample
+    int ready            # the ring is full, so ``next`` is also the oldest sample
+    double samples[30]   # REST_SAMPLES x (linear xyz, angular xyz)
 
 
 cdef struct Ctx:
@@ -427,7 +453,7 @@ cdef inline void rotvec_between(const double* qcur, const double* qtarget, doubl
         out[1] = 2.0 * d[2]
         out[2] = 2.0 * d[3]
         return
-    angle = 2.0 * acos(min(d[0], 1.0))
+    angle = 2.0 * atan2(s, d[0])   # not acos(w): that turns an ulp of w into 1e-8 rad
     out[0] = d[1] / s * angle
     out[1] = d[2] / s * angle
     out[2] = d[3] / s * angle
@@ -599,6 +625,7 @@ cdef class World:
     cdef dSpaceID space
     cdef Ctx ctx
     cdef Slot* slots
+    cdef Rest* rest            # slot -> auto-sleep counters (swapped along with the slots)
     cdef int n
     cdef int cap
     cdef int* faults
@@ -628,6 +655,7 @@ cdef class World:
         self.ctx.pairs[0].mode = dContactApprox1
         self.ctx.pairs[0].mu = 0.5
         self.slots = NULL
+        self.rest = NULL
         self.faults = NULL
         self.n = 0
         self.cap = 0
@@ -640,12 +668,7 @@ cdef class World:
         self.static_geoms = []
         self.auto_sleep = 1
         dWorldSetContactSurfaceLayer(self.world, 0.001)
-        dWorldSetAutoDisableFlag(self.world, 1)
-        dWorldSetAutoDisableLinearThreshold(self.world, 0.05)
-        dWorldSetAutoDisableAngularThreshold(self.world, 0.05)
-        dWorldSetAutoDisableSteps(self.world, 20)
-        dWorldSetAutoDisableTime(self.world, 0.0)
-        dWorldSetAutoDisableAverageSamplesCount(self.world, 5)
+        dWorldSetAutoDisableFlag(self.world, 0)   # bodies sleep by our rule (_auto_sleep)
 
     def __dealloc__(self) -> None:
         self._destroy()
@@ -675,6 +698,7 @@ cdef class World:
         free(self.ctx.buf)
         free(self.ctx.pairs)
         free(self.slots)
+        free(self.rest)
         free(self.faults)
         self.n = 0
 
@@ -699,12 +723,13 @@ cdef class World:
         self.ctx.buf = <dContact*>calloc(max_contacts, sizeof(dContact))
         self.ctx.max_contacts = max_contacts
         self.auto_sleep = auto_sleep
-        dWorldSetAutoDisableFlag(self.world, auto_sleep)
-        for i in range(self.n):
-            if self.slots[i].body != NULL and not dBodyIsKinematic(self.slots[i].body):
-                dBodySetAutoDisableFlag(self.slots[i].body, auto_sleep)
-                if not auto_sleep:
-                    dBodyEnable(self.slots[i].body)
+        if auto_sleep:
+            return
+        for i in range(self.n):   # as ODE's dBodySetAutoDisableFlag(b, 0): awake, counts reset
+            if self.slots[i].kind == BODY_DYNAMIC:
+                self._enable(self.slots[i].body)
+                self.rest[i].next = 0
+                self.rest[i].ready = 0
 
     def set_pairs(self, cnp.ndarray[cnp.float64_t, ndim=3] table) -> None:
         """Install the (M, M, 7) material pair table (columns: ``PAIR_COLUMNS``)."""
@@ -743,6 +768,7 @@ cdef class World:
         cdef dBodyID b = NULL
         cdef double q[4]
         cdef Slot* grown
+        cdef Rest* rgrown
         cdef int* fgrown
         self._check()
         if key in self.slot_of:
@@ -757,6 +783,10 @@ cdef class World:
             if fgrown == NULL:
                 raise MemoryError()
             self.faults = fgrown
+            rgrown = <Rest*>realloc(self.rest, newcap * sizeof(Rest))
+            if rgrown == NULL:
+                raise MemoryError()
+            self.rest = rgrown
             self.cap = newcap
         q[0] = quat[0]
         q[1] = quat[1]
@@ -782,16 +812,22 @@ cdef class World:
             dBodySetGravityMode(b, gravity)
             if kind == BODY_KINEMATIC:
                 dBodySetKinematic(b)
-                dBodySetAutoDisableFlag(b, 0)
-            else:
-                dBodySetAutoDisableFlag(b, can_sleep and self.auto_sleep)
+            dBodySetData(b, <void*><intptr_t>self.n)   # slot index, for _enable
         s.body = b
+        memset(&self.rest[self.n], 0, sizeof(Rest))
+        self.rest[self.n].can_sleep = kind == BODY_DYNAMIC and can_sleep
+        self.rest[self.n].left = REST_STEPS
         self.slot_of[key] = self.n
         self.geoms.append([])
         self.pending_mass.append(bytearray(sizeof(dMass)))
         dMassSetZero(<dMass*><char*>self.pending_mass[self.n])
         self.n += 1
         self._store_good(self.n - 1)
+
+    cdef inline void _enable(self, dBodyID b) noexcept nogil:
+        """Wake a body and restart its idle count, as ODE's own dBodyEnable does."""
+        dBodyEnable(b)
+        self.rest[<intptr_t>dBodyGetData(b)].left = REST_STEPS
 
     cdef void _store_good(self, int i) noexcept:
         cdef Slot* s = &self.slots[i]
@@ -933,6 +969,8 @@ cdef class World:
         cdef double q[4]
         cdef int k
         cdef const dReal* p
+        cdef const dReal* v
+        cdef const dReal* w
         if s.body == NULL:
             return
         if m.mass <= 0.0:
@@ -965,6 +1003,12 @@ cdef class World:
         p = dBodyGetPosition(s.body)
         qrotate(dBodyGetQuaternion(s.body), c, wc)
         dBodySetPosition(s.body, p[0] + wc[0], p[1] + wc[1], p[2] + wc[2])
+        # the body was given its entity origin's velocity: move it to the COM too
+        v = dBodyGetLinearVel(s.body)
+        w = dBodyGetAngularVel(s.body)
+        dBodySetLinearVel(s.body, v[0] + w[1] * wc[2] - w[2] * wc[1],
+                          v[1] + w[2] * wc[0] - w[0] * wc[2],
+                          v[2] + w[0] * wc[1] - w[1] * wc[0])
         self._store_good(i)
 
     cdef void _free_geom(self, list entry) noexcept:
@@ -992,6 +1036,9 @@ cdef class World:
             dBodyDestroy(self.slots[i].body)
         if i != last:
             self.slots[i] = self.slots[last]
+            self.rest[i] = self.rest[last]
+            if self.slots[i].body != NULL:
+                dBodySetData(self.slots[i].body, <void*><intptr_t>i)
             self.geoms[i] = self.geoms[last]
             self.pending_mass[i] = self.pending_mass[last]
             self.slot_of[self.slots[i].key] = i
@@ -1032,7 +1079,7 @@ cdef class World:
         qrotate(q, s.com, wc)
         dBodySetPosition(s.body, pos[0] + wc[0], pos[1] + wc[1], pos[2] + wc[2])
         dBodySetQuaternion(s.body, q)
-        dBodyEnable(s.body)
+        self._enable(s.body)
 
     cdef void _set_slot_velocity(self, int i, const double* lin, const double* ang) noexcept:
         """Entity-origin velocities -> COM velocity (v_com = v + w x R c)."""
@@ -1045,7 +1092,7 @@ cdef class World:
                           lin[1] + ang[2] * wc[0] - ang[0] * wc[2],
                           lin[2] + ang[0] * wc[1] - ang[1] * wc[0])
         dBodySetAngularVel(s.body, ang[0], ang[1], ang[2])
-        dBodyEnable(s.body)
+        self._enable(s.body)
 
     def set_pose(self, key, double[::1] pos, double[::1] quat) -> None:
         cdef int i = self._slot(key)
@@ -1181,7 +1228,7 @@ cdef class World:
         cdef dBodyID b = self._body(key)
         if b == NULL or dBodyIsKinematic(b):
             return
-        dBodyEnable(b)
+        self._enable(b)
         if point is None:
             dBodyAddForce(b, fx, fy, fz)
         else:
@@ -1192,7 +1239,7 @@ cdef class World:
         cdef dBodyID b = self._body(key)
         if b == NULL or dBodyIsKinematic(b):
             return
-        dBodyEnable(b)
+        self._enable(b)
         dBodyAddTorque(b, tx, ty, tz)
         self._check_load(key, b)
 
@@ -1209,7 +1256,7 @@ cdef class World:
         if sleeping:
             dBodyDisable(b)
         else:
-            dBodyEnable(b)
+            self._enable(b)
 
     def is_sleeping(self, key) -> bool:
         cdef dBodyID b = self._body(key)
@@ -1221,6 +1268,62 @@ cdef class World:
             if self.slots[i].body != NULL and not dBodyIsEnabled(self.slots[i].body):
                 c += 1
         return c
+
+    def sleep_states(self) -> tuple:
+        """Auto-sleep state of every moving body: (keys, asleep, idle steps, sample counts,
+        samples (N, SLEEP_SAMPLES, 6) oldest first, unused rows zero).
+
+        Idle steps count toward ``SLEEP_STEPS`` (a body woken by a touch keeps its count);
+        a sample is (linear m/s, angular rad/s) at the centre of mass, world frame.
+        """
+        cdef int i, j, m = 0, start
+        for i in range(self.n):
+            if self.slots[i].body != NULL:
+                m += 1
+        cdef cnp.ndarray[cnp.int64_t, ndim=1] keys = np.empty(m, np.int64)
+        cdef cnp.ndarray[cnp.uint8_t, ndim=1] asleep = np.empty(m, np.uint8)
+        cdef cnp.ndarray[cnp.int64_t, ndim=1] idle = np.empty(m, np.int64)
+        cdef cnp.ndarray[cnp.int64_t, ndim=1] counts = np.empty(m, np.int64)
+        cdef cnp.ndarray[cnp.float64_t, ndim=3] samples = np.zeros((m, REST_SAMPLES, 6))
+        cdef Rest* r
+        m = 0
+        for i in range(self.n):
+            if self.slots[i].body == NULL:
+                continue
+            r = &self.rest[i]
+            keys[m] = self.slots[i].key
+            asleep[m] = not dBodyIsEnabled(self.slots[i].body)
+            idle[m] = REST_STEPS - r.left
+            counts[m] = REST_SAMPLES if r.ready else r.next
+            start = r.next if r.ready else 0
+            for j in range(counts[m]):
+                memcpy(&samples[m, j, 0], &r.samples[6 * ((start + j) % REST_SAMPLES)],
+                       6 * sizeof(double))
+            m += 1
+        return keys, asleep.astype(bool), idle, counts, samples
+
+    def set_sleep_state(self, key, bint asleep, int idle_steps,
+                        double[:, ::1] samples) -> None:
+        """Restore what :meth:`sleep_states` reported for one body (``samples``: (k, 6),
+        oldest first, k <= SLEEP_SAMPLES), so a loaded state sleeps when the saved run did."""
+        cdef int i = self._slot(key)
+        cdef int k = samples.shape[0]
+        cdef int j
+        cdef Rest* r = &self.rest[i]
+        if self.slots[i].body == NULL:
+            return               # a static body never moves: nothing to restore
+        if k > REST_SAMPLES or (k and samples.shape[1] != 6) or idle_steps < 0:
+            raise ValueError(f"body {key}: sleep state needs idle steps >= 0 and at most "
+                             f"{REST_SAMPLES} samples of 6 numbers")
+        for j in range(k):
+            memcpy(&r.samples[6 * j], &samples[j, 0], 6 * sizeof(double))
+        r.next = k % REST_SAMPLES
+        r.ready = k == REST_SAMPLES
+        r.left = REST_STEPS - idle_steps
+        if asleep:
+            dBodyDisable(self.slots[i].body)
+        else:
+            dBodyEnable(self.slots[i].body)   # not _enable: that would restart the count
 
     # -- keyless static geometry -----------------------------------------------------------
     def add_static_plane(self, double a, double b, double c, double d, int material,
@@ -1264,12 +1367,65 @@ cdef class World:
         dRandSetSeed(self.seed)
         with nogil:
             dSpaceCollide(self.space, &self.ctx, near_callback)
+            if self.auto_sleep:
+                self._auto_sleep()
             dWorldQuickStep(self.world, dt)
             nf = self._after_step(dt)
         self.seed = dRandGetSeed()
         if self.ctx.oom:
             raise MemoryError("out of memory while recording contacts")
         return [(self.slots[self.faults[k]].key) for k in range(nf)]
+
+    cdef void _auto_sleep(self) noexcept nogil:
+        """ODE's auto-disable rule on our counters (see the module doc), before QuickStep."""
+        cdef int i, j, k, idx
+        cdef Rest* r
+        cdef dBodyID b
+        cdef const dReal* v
+        cdef const dReal* w
+        cdef double* x
+        cdef double mean[6]
+        cdef int idle
+        for i in range(self.n):
+            r = &self.rest[i]
+            b = self.slots[i].body
+            # asleep, or touching nothing (never freeze in mid-air): nothing to count
+            if not r.can_sleep or not dBodyIsEnabled(b) or dBodyGetJoint(b, 0) == NULL:
+                continue
+            v = dBodyGetLinearVel(b)
+            w = dBodyGetAngularVel(b)
+            x = &r.samples[6 * r.next]
+            x[0] = v[0]
+            x[1] = v[1]
+            x[2] = v[2]
+            x[3] = w[0]
+            x[4] = w[1]
+            x[5] = w[2]
+            r.next += 1
+            if r.next >= REST_SAMPLES:
+                r.next = 0
+                r.ready = 1
+            idle = 0
+            if r.ready:
+                memcpy(mean, &r.samples[6 * r.next], 6 * sizeof(double))
+                for j in range(1, REST_SAMPLES):
+                    idx = 6 * ((r.next + j) % REST_SAMPLES)
+                    for k in range(6):
+                        mean[k] += r.samples[idx + k]
+                for k in range(6):
+                    mean[k] *= 1.0 / REST_SAMPLES
+                idle = (mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2]
+                        <= REST_LINEAR2 and
+                        mean[3] * mean[3] + mean[4] * mean[4] + mean[5] * mean[5]
+                        <= REST_ANGULAR2)
+            if idle:
+                r.left -= 1
+            else:
+                r.left = REST_STEPS
+            if r.left <= 0:
+                dBodyDisable(b)
+                dBodySetLinearVel(b, 0.0, 0.0, 0.0)
+                dBodySetAngularVel(b, 0.0, 0.0, 0.0)
 
     cdef void _reset(self, int i) noexcept nogil:
         """Put a runaway body back where it last was sane, at rest, and disable it."""
@@ -1358,8 +1514,13 @@ cdef class World:
 
     # -- joints -------------------------------------------------------------------------
     def create_joint(self, key, int kind, key_a, key_b, anchor, axis, axis2, low, high,
-                     double velocity, double max_force) -> None:
-        """Create a joint between two bodies (``key_b`` None or static: the world)."""
+                     double velocity, double max_force, ref_a=None, ref_b=None) -> None:
+        """Create a joint between two bodies (``key_b`` None or static: the world).
+
+        ``ref_a``/``ref_b`` (entity poses x y z w x y z, or None: where the body is) are
+        the poses the bodies had when the joint was first made: the joint is made as if
+        they were there, so a saved state re-creates it exactly.
+        """
         cdef dBodyID ba = NULL
         cdef dBodyID bb = NULL
         cdef dJointID j = NULL
@@ -1373,6 +1534,8 @@ cdef class World:
             raise ValueError(f"joint {key} already exists")
         cdef int ia = self._slot(key_a)
         cdef int ib = -1 if key_b is None else self._slot(key_b)
+        cdef int ia0 = ia
+        cdef int ib0 = ib
         ba = self.slots[ia].body
         if ib >= 0:
             bb = self.slots[ib].body
@@ -1382,78 +1545,98 @@ cdef class World:
             ia = ib
         if ba == NULL:
             raise ValueError("a joint needs at least one non-static body")
-        for k in range(3):
-            a1[k] = axis[k]
-            a2[k] = axis2[k]
-        if kind == JOINT_HINGE:
-            j = dJointCreateHinge(self.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetHingeAnchor(j, anchor[0], anchor[1], anchor[2])
-            dJointSetHingeAxis(j, a1[0], a1[1], a1[2])
-        elif kind == JOINT_BALL:
-            j = dJointCreateBall(self.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetBallAnchor(j, anchor[0], anchor[1], anchor[2])
-        elif kind == JOINT_SLIDER:
-            j = dJointCreateSlider(self.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetSliderAxis(j, a1[0], a1[1], a1[2])
-        elif kind == JOINT_UNIVERSAL:
-            j = dJointCreateUniversal(self.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetUniversalAnchor(j, anchor[0], anchor[1], anchor[2])
-            dJointSetUniversalAxis1(j, a1[0], a1[1], a1[2])
-            dJointSetUniversalAxis2(j, a2[0], a2[1], a2[2])
-        elif kind == JOINT_HINGE2:
-            j = dJointCreateHinge2(self.world, NULL)
-            # ODE's hinge2 turns axis 1 (steering) with body 1 and axis 2 (spin) with
-            # body 2: the chassis (body_b) goes first, the wheel (body_a) second.
-            if bb != NULL:
-                dJointAttach(j, bb, ba)
-                sign = -1.0
-            else:
-                dJointAttach(j, ba, NULL)
-            dJointSetHinge2Anchor(j, anchor[0], anchor[1], anchor[2])
-            dJointSetHinge2Axes(j, a1, a2)
-        elif kind == JOINT_FIXED:
-            j = dJointCreateFixed(self.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetFixed(j)
-        elif kind == JOINT_AMOTOR:
-            j = dJointCreateAMotor(self.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetAMotorMode(j, dAMotorUser)
-            dJointSetAMotorNumAxes(j, 1)
-            dJointSetAMotorAxis(j, 0, 1, a1[0], a1[1], a1[2])
-        elif kind == JOINT_LMOTOR:
-            j = dJointCreateLMotor(self.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetLMotorNumAxes(j, 1)
-            dJointSetLMotorAxis(j, 0, 1, a1[0], a1[1], a1[2])
-        elif kind == JOINT_SIX_DOF:
-            d = _Drive()
-            d.body = ba
-            d.lmotor = dJointCreateLMotor(self.world, NULL)
-            dJointAttach(d.lmotor, ba, bb)
-            dJointSetLMotorNumAxes(d.lmotor, 3)
-            d.amotor = dJointCreateAMotor(self.world, NULL)
-            dJointAttach(d.amotor, ba, bb)
-            dJointSetAMotorMode(d.amotor, dAMotorUser)
-            dJointSetAMotorNumAxes(d.amotor, 3)
+        # ODE fixes the joint's body-frame anchors, axes and reference rotation from where
+        # the bodies are now: make them where they were when the joint was first made.
+        cdef double saved[14]
+        cdef int moved_a = 0
+        cdef int moved_b = 0
+        for ref in (ref_a, ref_b):
+            if ref is not None and len(ref) != 7:
+                raise ValueError(f"a reference pose is 7 numbers (x y z w x y z), got {ref!r}")
+        if ref_a is not None and self.slots[ia0].body != NULL:
+            moved_a = self._place(ia0, ref_a, saved)
+        if ref_b is not None and ib0 >= 0 and self.slots[ib0].body != NULL:
+            moved_b = self._place(ib0, ref_b, &saved[7])
+        try:
             for k in range(3):
-                dJointSetLMotorAxis(d.lmotor, k, 0, k == 0, k == 1, k == 2)
-                dJointSetAMotorAxis(d.amotor, k, 0, k == 0, k == 1, k == 2)
-            memcpy(&d.target[0], dBodyGetPosition(ba), 3 * sizeof(double))
-            memcpy(&d.target[3], dBodyGetQuaternion(ba), 4 * sizeof(double))
-            d.max_force = max_force
-            d.max_torque = max_force
-            memcpy(d.com, self.slots[ia].com, 3 * sizeof(double))
-            d.other = bb
-            if bb != NULL:
-                relative_pose(bb, ba, d.rel)
-            j = d.lmotor
-        else:
-            raise ValueError(f"unknown joint kind {kind}")
+                a1[k] = axis[k]
+                a2[k] = axis2[k]
+            if kind == JOINT_HINGE:
+                j = dJointCreateHinge(self.world, NULL)
+                dJointAttach(j, ba, bb)
+                dJointSetHingeAnchor(j, anchor[0], anchor[1], anchor[2])
+                dJointSetHingeAxis(j, a1[0], a1[1], a1[2])
+            elif kind == JOINT_BALL:
+                j = dJointCreateBall(self.world, NULL)
+                dJointAttach(j, ba, bb)
+                dJointSetBallAnchor(j, anchor[0], anchor[1], anchor[2])
+            elif kind == JOINT_SLIDER:
+                j = dJointCreateSlider(self.world, NULL)
+                dJointAttach(j, ba, bb)
+                dJointSetSliderAxis(j, a1[0], a1[1], a1[2])
+            elif kind == JOINT_UNIVERSAL:
+                j = dJointCreateUniversal(self.world, NULL)
+                dJointAttach(j, ba, bb)
+                dJointSetUniversalAnchor(j, anchor[0], anchor[1], anchor[2])
+                dJointSetUniversalAxis1(j, a1[0], a1[1], a1[2])
+                dJointSetUniversalAxis2(j, a2[0], a2[1], a2[2])
+            elif kind == JOINT_HINGE2:
+                j = dJointCreateHinge2(self.world, NULL)
+                # ODE's hinge2 turns axis 1 (steering) with body 1 and axis 2 (spin) with
+                # body 2: the chassis (body_b) goes first, the wheel (body_a) second.
+                if bb != NULL:
+                    dJointAttach(j, bb, ba)
+                    sign = -1.0
+                else:
+                    dJointAttach(j, ba, NULL)
+                dJointSetHinge2Anchor(j, anchor[0], anchor[1], anchor[2])
+                dJointSetHinge2Axes(j, a1, a2)
+            elif kind == JOINT_FIXED:
+                j = dJointCreateFixed(self.world, NULL)
+                dJointAttach(j, ba, bb)
+                dJointSetFixed(j)
+            elif kind == JOINT_AMOTOR:
+                j = dJointCreateAMotor(self.world, NULL)
+                dJointAttach(j, ba, bb)
+                dJointSetAMotorMode(j, dAMotorUser)
+                dJointSetAMotorNumAxes(j, 1)
+                dJointSetAMotorAxis(j, 0, 1, a1[0], a1[1], a1[2])
+            elif kind == JOINT_LMOTOR:
+                j = dJointCreateLMotor(self.world, NULL)
+                dJointAttach(j, ba, bb)
+                dJointSetLMotorNumAxes(j, 1)
+                dJointSetLMotorAxis(j, 0, 1, a1[0], a1[1], a1[2])
+            elif kind == JOINT_SIX_DOF:
+                d = _Drive()
+                d.body = ba
+                d.lmotor = dJointCreateLMotor(self.world, NULL)
+                dJointAttach(d.lmotor, ba, bb)
+                dJointSetLMotorNumAxes(d.lmotor, 3)
+                d.amotor = dJointCreateAMotor(self.world, NULL)
+                dJointAttach(d.amotor, ba, bb)
+                dJointSetAMotorMode(d.amotor, dAMotorUser)
+                dJointSetAMotorNumAxes(d.amotor, 3)
+                for k in range(3):
+                    dJointSetLMotorAxis(d.lmotor, k, 0, k == 0, k == 1, k == 2)
+                    dJointSetAMotorAxis(d.amotor, k, 0, k == 0, k == 1, k == 2)
+                memcpy(&d.target[0], dBodyGetPosition(ba), 3 * sizeof(double))
+                memcpy(&d.target[3], dBodyGetQuaternion(ba), 4 * sizeof(double))
+                d.max_force = max_force
+                d.max_torque = max_force
+                memcpy(d.com, self.slots[ia].com, 3 * sizeof(double))
+                d.other = bb
+                if bb != NULL:
+                    relative_pose(bb, ba, d.rel)
+                j = d.lmotor
+            else:
+                raise ValueError(f"unknown joint kind {kind}")
+        finally:
+            if moved_a:
+                dBodySetPosition(self.slots[ia0].body, saved[0], saved[1], saved[2])
+                dBodySetQuaternion(self.slots[ia0].body, &saved[3])
+            if moved_b:
+                dBodySetPosition(self.slots[ib0].body, saved[7], saved[8], saved[9])
+                dBodySetQuaternion(self.slots[ib0].body, &saved[10])
         rec = _JointRec()
         rec.joint = j
         rec.kind = kind
@@ -1470,6 +1653,36 @@ cdef class World:
                 self._param(rec, dParamHiStop, high)
             if max_force > 0.0:
                 self.set_motor(key, velocity, max_force)
+
+    cdef int _place(self, int i, ref, double* saved) except -1:
+        """Put slot ``i``'s body at entity pose ``ref`` the way create_body and finish_body
+        do (bit for bit); 1 and its former raw pose in ``saved`` if that moved it."""
+        cdef Slot* s = &self.slots[i]
+        cdef const dReal* cp = dBodyGetPosition(s.body)
+        cdef const dReal* cq = dBodyGetQuaternion(s.body)
+        cdef double q[4]
+        cdef double qo[4]
+        cdef double p[3]
+        cdef double wc[3]
+        cdef int k
+        for k in range(4):
+            q[k] = ref[3 + k]
+        qnormalize(q)
+        memcpy(qo, q, 4 * sizeof(double))
+        dNormalize4(qo)      # what dBodySetQuaternion will make of q
+        for k in range(3):
+            p[k] = ref[k]
+        if s.com[0] != 0.0 or s.com[1] != 0.0 or s.com[2] != 0.0:
+            qrotate(qo, s.com, wc)
+            for k in range(3):
+                p[k] = p[k] + wc[k]
+        if memcmp(p, cp, 3 * sizeof(double)) == 0 and memcmp(qo, cq, 4 * sizeof(double)) == 0:
+            return 0         # already there (a joint made with its bodies): touch nothing
+        memcpy(saved, cp, 3 * sizeof(double))
+        memcpy(&saved[3], cq, 4 * sizeof(double))
+        dBodySetPosition(s.body, p[0], p[1], p[2])
+        dBodySetQuaternion(s.body, q)
+        return 1
 
     cdef void _param(self, _JointRec rec, int param, double value):
         cdef dJointID j = rec.joint
@@ -1514,7 +1727,7 @@ cdef class World:
             if k is not None and k in self.slot_of:
                 b = self.slots[self.slot_of[k]].body
                 if b != NULL:
-                    dBodyEnable(b)
+                    self._enable(b)
 
     def joint_state(self, key) -> tuple:
         cdef _JointRec rec = self._joint(key)
@@ -1549,7 +1762,7 @@ cdef class World:
             d.max_force = max_force
         if max_torque >= 0.0:
             d.max_torque = max_torque
-        dBodyEnable(d.body)
+        self._enable(d.body)
 
     def set_drive_limits(self, key, double max_force, double max_torque) -> None:
         cdef _JointRec rec = self._joint(key)
@@ -1560,7 +1773,7 @@ cdef class World:
             raise ValueError("six_dof force and torque bounds must be >= 0")
         d.max_force = max_force
         d.max_torque = max_torque
-        dBodyEnable(d.body)
+        self._enable(d.body)
 
     cdef void _drive(self, double dt):
         """Aim every six-DOF drive: velocity = pose error / dt, force bounded by the motors."""

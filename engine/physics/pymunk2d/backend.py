@@ -347,6 +347,9 @@ class PymunkBackend:
 
     # -- joints ------------------------------------------------------------
     def add_joint(self, key: int, joint: Joint) -> None:
+        """Constraints for ``joint``, anchored as if its bodies were at ``joint.reference``
+        (their poses when it was first made: a saved joint comes back exactly) or where
+        they are."""
         key = int(key)
         if key in self._joints:
             raise KeyError(f"joint {key} already exists")
@@ -355,8 +358,21 @@ class PymunkBackend:
         if b is a:
             raise ValueError(f"joint {joint.id or key}: body_a and body_b are the same body")
         obj = f"joint {joint.id or key}"
-        rec = build_joint(joint, a.body, b.body if b else self._space.static_body,
-                          lambda t, m: self._warn(obj, t, m))
+        moved = [] if joint.reference is None else [
+            (side.body, pose) for side, pose in zip((a, b), joint.reference, strict=True)
+            if side is not None and pose is not None]
+        now = [(body, body.angle, body.position) for body, _ in moved]
+        for body, pose in moved:  # made where the bodies were when it was first made
+            if len(pose) != 7 or not all(map(math.isfinite, pose)):
+                raise ValueError(f"{obj}: reference pose {tuple(pose)} is not 7 finite numbers")
+            body.angle = split_orientation(np.asarray(pose[3:], np.float64))[0]
+            body.position = (float(pose[0]), float(pose[2]))
+        try:
+            rec = build_joint(joint, a.body, b.body if b else self._space.static_body,
+                              lambda t, m: self._warn(obj, t, m))
+        finally:
+            for body, angle, position in now:
+                body.angle, body.position = angle, position
         self._space.add(*rec.constraints)
         self._joints[key] = rec
         if joint.kind == "slider":
