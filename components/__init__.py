@@ -18,11 +18,13 @@ import numpy as np
 
 
 def _vec3(value: Any = (0.0, 0.0, 0.0)) -> np.ndarray:
-    return np.array(value, dtype=np.float64).reshape(3)
+    a = np.array(value, dtype=np.float64)
+    return a if a.shape == (3,) else a.reshape(3)
 
 
 def _quat(value: Any = (1.0, 0.0, 0.0, 0.0)) -> np.ndarray:
-    return np.array(value, dtype=np.float64).reshape(4)
+    a = np.array(value, dtype=np.float64)
+    return a if a.shape == (4,) else a.reshape(4)
 
 
 @dataclass(slots=True, eq=False)

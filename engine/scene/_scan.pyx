@@ -64,8 +64,8 @@ cdef inline object _entry(object key, object value, object loc):
     e.key = key
     e.value = value
     e.loc = loc
-    e.comments = []
-    e.trailing = []
+    e.comments = ()
+    e.trailing = ()
     e.included = None
     return e
 
@@ -74,8 +74,8 @@ cdef inline object _block(object loc):
     cdef object b = _object_new(Block)
     b.entries = []
     b.loc = loc
-    b.open_comment = []
-    b.tail_comments = []
+    b.open_comment = ()
+    b.tail_comments = ()
     return b
 
 

@@ -9,7 +9,7 @@ entry keeps the included file's entries under it: the writer writes the
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -50,13 +50,17 @@ class Value:
 
 @dataclass(slots=True, eq=False)
 class Entry:
-    """``key value`` with its place, the comments above it and a trailing comment."""
+    """``key value`` with its place, the comments above it and a trailing comment.
+
+    Comments default to a shared empty tuple: a large file has few, and a list per
+    entry would be most of what reading it allocates. Give a new sequence to change them.
+    """
 
     key: str
     value: Value
     loc: Loc
-    comments: list[str] = field(default_factory=list)
-    trailing: list[str] = field(default_factory=list)
+    comments: Sequence[str] = ()
+    trailing: Sequence[str] = ()
     included: Block | None = None
 
 
@@ -66,8 +70,8 @@ class Block:
 
     entries: list[Entry] = field(default_factory=list)
     loc: Loc = field(default_factory=lambda: Loc("", 1, 1))
-    open_comment: list[str] = field(default_factory=list)
-    tail_comments: list[str] = field(default_factory=list)
+    open_comment: Sequence[str] = ()
+    tail_comments: Sequence[str] = ()
 
     def __iter__(self) -> Iterator[Entry]:
         """Entries in order, with included files' entries spliced in place."""

@@ -61,6 +61,9 @@ if TYPE_CHECKING:
 JOINT_KINDS = {"Hinge": "hinge", "MotorizedHinge": "motorized_hinge", "Ball": "ball",
                "Slider": "slider", "Universal": "universal", "Hinge2": "hinge2",
                "Fixed": "fixed", "SixDOF": "six_dof"}
+#: Shared defaults (tuples: immutable, so every shape and pose may hold the same one).
+_ORIGIN = (0.0, 0.0, 0.0)
+_IDENTITY = (1.0, 0.0, 0.0, 0.0)
 DEFAULT_SIZES = {"sphere": (1.0,), "box": (1.0, 1.0, 1.0), "capsule": (0.5, 1.0),
                  "cylinder": (0.5, 1.0), "plane": ()}
 
@@ -279,7 +282,8 @@ class _Builder:
             norm = 1.0
         if abs(norm - 1.0) > 1e-12:  # keep a saved state's quaternion bit-exact
             quat = tuple(q / norm for q in quat)
-        angular = tuple(map(math.radians, r("AngularVelocity")))
+        angular = tuple(map(math.radians, r("AngularVelocity"))) if r.has(
+            "AngularVelocity") else _ORIGIN
         comps: list[Any] = [Name(oid), Transform(position, quat, r("Velocity"), angular)]
         size = r("Size")
         vis_blk, phys_blk = r.value("VisualAttributes"), r.value("PhysicalAttributes")
@@ -578,7 +582,9 @@ def _primitive(gr: _Reader, size: Any) -> Shape:
         dims = s if len(s) == 3 else (s[0],) * 3
     else:
         dims = (s[0] / 2, s[1] if len(s) > 1 else s[0])
-    return Shape(kind, dims, _floats(gr("Offset")), euler_to_quat(gr("Orientation")))
+    offset = _floats(gr("Offset")) if gr.has("Offset") else _ORIGIN
+    rotation = euler_to_quat(gr("Orientation")) if gr.has("Orientation") else _IDENTITY
+    return Shape(kind, dims, offset, rotation)
 
 
 def _sound(r: _Reader, owner: str) -> Sound:

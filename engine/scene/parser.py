@@ -220,7 +220,10 @@ class Parser:
             if cur.ci < len(comments) and comments[cur.ci].pos < t.pos:
                 for c in cur.take_comments(t.pos):
                     if c.trailing and c.line == prev_line:
-                        (prev.trailing if prev else block.open_comment).append(c.text)
+                        if prev:
+                            prev.trailing = [*prev.trailing, c.text]
+                        else:
+                            block.open_comment = [*block.open_comment, c.text]
                     else:
                         pending.append(c.text)
             kind = t.kind
@@ -255,7 +258,7 @@ class Parser:
             if cur.ci < len(comments) and comments[cur.ci].pos < last.pos:
                 # Comments inside a vector or expression move above the key.
                 pending.extend(c.text for c in cur.take_comments(last.pos))
-            entry = Entry(key, value, Loc(path, t.line, t.col), pending)
+            entry = Entry(key, value, Loc(path, t.line, t.col), pending or ())
             pending = []  # a new list: entries must not share one
             if value.kind is INT or value.kind is FLOAT:
                 scope[key] = value.data
@@ -264,7 +267,7 @@ class Parser:
             entries.append(entry)
             prev = entry
             prev_line = last.line
-        block.tail_comments = pending
+        block.tail_comments = pending or ()
 
     def _plain(self, cur: _FileCursor, block: Block, nested: bool,
                scope: dict[str, float]) -> int | None:
@@ -526,7 +529,7 @@ def _scan_plain(p: Parser, cur: _FileCursor, pos: int, count: int, entries: list
                     break
                 value, end, used = found
             else:
-                value = Value(STRUCTURE, Block([], vloc, [], []), vloc)
+                value = Value(STRUCTURE, Block([], vloc), vloc)
         if count + used > max_tokens:
             break
         count += used
