@@ -112,9 +112,14 @@ class DynamicsSystem(System):
 def copy_state(poses: PoseTable, rows: slice | np.ndarray, bodies: BodyState,
                valid: np.ndarray | None = None) -> None:
     """Write a state read into the pose table: body ``i`` (of those ``valid``) → ``rows[i]``."""
-    for field in ("position", "orientation", "linear_velocity", "angular_velocity"):
-        values = getattr(bodies, field)
-        getattr(poses, field)[rows] = values if valid is None else values[valid]
+    if valid is not None:
+        bodies = BodyState(bodies.keys[valid], bodies.position[valid],
+                           bodies.orientation[valid], bodies.linear_velocity[valid],
+                           bodies.angular_velocity[valid])
+    poses.position[rows] = bodies.position
+    poses.orientation[rows] = bodies.orientation
+    poses.linear_velocity[rows] = bodies.linear_velocity
+    poses.angular_velocity[rows] = bodies.angular_velocity
 
 
 def _add_body(entity: int, physical: Physical, t: Transform):

@@ -438,6 +438,7 @@ class PymunkBackend:
         recs = sorted(self._bodies.values(), key=lambda r: r.key)
         n = len(recs)
         self._keys = np.fromiter((r.key for r in recs), np.int64, n)
+        self._keys.setflags(write=False)  # every state read hands out this same array
         self._row = {r.key: i for i, r in enumerate(recs)}
         # one extra row stands for bodies without a key (the static world)
         self._y_ext = np.append(np.fromiter((r.y for r in recs), np.float64, n), 0.0)
@@ -456,10 +457,11 @@ class PymunkBackend:
 
     def read_state(self) -> BodyState:
         """Every body's pose and velocity; a body gone non-finite is reset first."""
-        position, orientation, linear, angular, finite = self._space_sync().read()
+        sync = self._sync if not self._dirty else self._space_sync()
+        position, orientation, linear, angular, finite = sync.read()
         if not finite and self._reset_broken(position, orientation, linear, angular):
             position, orientation, linear, angular, _ = self._space_sync().read()
-        self._last_good = BodyState(self._keys.copy(), position, orientation, linear, angular)
+        self._last_good = BodyState(self._keys, position, orientation, linear, angular)
         return self._last_good
 
     def _reset_broken(self, *arrays: np.ndarray) -> bool:
