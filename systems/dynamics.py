@@ -50,9 +50,11 @@ class DynamicsSystem(System):
         world.on_add(Joint, lambda e, c: engine.physics.push(_add_joint(e, c)))
         world.on_remove(Physical, lambda e, c: self._remove_body(engine, e))
         world.on_remove(Joint, lambda e, c: engine.physics.push(_remove_joint(e)))
-        for entity, physical in world.get_component(Physical):
+        # in the order they were made (esper's sets iterate in hash order), so a solver
+        # that depends on constraint order sees the same world however it was built
+        for entity, physical in sorted(world.get_component(Physical), key=_first):
             self._add_body(engine, entity, physical)
-        for entity, joint in world.get_component(Joint):
+        for entity, joint in sorted(world.get_component(Joint), key=_first):
             engine.physics.push(_add_joint(entity, joint))
 
     def _add_body(self, engine: Engine, entity: int, physical: Physical,
@@ -107,6 +109,10 @@ class DynamicsSystem(System):
             self._valid = None if valid.all() else valid  # None: every body has a Transform
             self._layout = (keys, poses.version)
         copy_state(poses, self._rows, bodies, self._valid)
+
+
+def _first(pair: tuple[int, object]) -> int:
+    return pair[0]
 
 
 def copy_state(poses: PoseTable, rows: slice | np.ndarray, bodies: BodyState,

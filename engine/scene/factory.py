@@ -130,12 +130,43 @@ class SceneSpec:
 
 
 @dataclass(slots=True)
+class SpawnRecord:
+    """What one script call made at run time, kept so a saved state writes it too.
+
+    ``spawn(text)``: the snippet's SceneDB, the folder its asset names are relative to,
+    and the entity its i-th ``Object`` block (``objects[i]``) and i-th ``Joint`` block
+    (``joints[i]``) became. ``createJoint``: ``db`` None and ``joints`` its one joint
+    entity, whose Joint component holds all a ``Joint`` block needs.
+    """
+
+    db: SceneDB | None
+    content_dir: Path | None
+    objects: list[int]
+    joints: list[int]
+
+
+@dataclass(slots=True)
 class SceneIds:
-    """Resource left by :func:`instantiate`: object ID <-> entity id, and the spec."""
+    """Resource left by :func:`instantiate`: object ID <-> entity id, and the spec.
+
+    ``spawned`` lists, oldest first, what scripts made since (see :class:`SpawnRecord`;
+    recorded on the main thread by the scripting API), so ``write_state`` can write it.
+    """
 
     entities: dict[str, int]
     joints: dict[str, int]
     spec: SceneSpec
+    spawned: list[SpawnRecord] = field(default_factory=list)
+    _kept: int = 16
+
+    def record(self, made: SpawnRecord, exists: Callable[[int], bool]) -> None:
+        """Keep ``made``; now and then forget records whose entities are all gone, so a
+        script that spawns and deletes forever does not hold their snippets forever."""
+        self.spawned.append(made)
+        if len(self.spawned) >= 2 * self._kept:
+            self.spawned = [r for r in self.spawned
+                            if any(exists(e) for e in (*r.objects, *r.joints))]
+            self._kept = max(len(self.spawned), 16)
 
 
 _DEFAULTS = {name: {k: f.default for k, f in fields.items()}

@@ -10,27 +10,44 @@ full precision, so loading the file continues the motion.
 A joint keeps the ``Anchor`` and axes it was made with, plus the poses its bodies
 had then (``ReferencePose1``/``ReferencePose2``): loading makes it as if the bodies
 stood there, so it holds them exactly as before, however far they have moved.
+
+What scripts made at run time (``spawn(text)`` snippets and ``createJoint``, recorded
+in :attr:`SceneIds.spawned`) follows the file's own objects and joints, oldest first,
+written the same way; what was deleted since (or a broken joint) is left out. IDs
+stay unique: a taken one gets ``~2``, ``~3``, ... (``ball``, ``ball~2``) and the joints
+naming that object are written to match.
 """
 
 from __future__ import annotations
 
-import math
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from components import Joint, Transform
+from components import Joint, Name, Transform
 from engine.physics.backend import SleepState, SupportsSleepState
 from engine.scene import schema as sc
-from engine.scene.db import FLOAT, INT, STRING, STRUCTURE, VECTOR, Block, Entry, Value
+from engine.scene.db import (
+    FLOAT,
+    INT,
+    STRING,
+    STRINGVECTOR,
+    STRUCTURE,
+    VECTOR,
+    Block,
+    Entry,
+    SceneDB,
+    Value,
+)
 from engine.scene.diagnostics import Loc
-from engine.scene.factory import SceneIds
+from engine.scene.factory import JOINT_KINDS, SceneIds, SpawnRecord
 from engine.scene.parser import parse_text
 from engine.scene.rotation import exact_degrees, quat_to_euler
 from engine.scene.writer import write
 
 if TYPE_CHECKING:
     from engine.app import Engine
+    from engine.world import World
 
 _HERE = Loc("<state>", 0, 0)
 
@@ -83,6 +100,150 @@ def _sleep_keys(block: Block, state: SleepState | None) -> None:
             for row in state.samples.tolist() for k, x in enumerate(row)))
 
 
+def _literal(db: SceneDB, src: Path | None, dst: Path | None) -> Block:
+    """A self-contained copy of ``db``'s root (includes inlined, expressions frozen),
+    its asset names rebased from folder ``src`` to ``dst`` when both are known."""
+    root = parse_text(write(db, literal=True, flatten=True), db.path).root
+    if src is not None and dst is not None:
+        _rebase_assets(root, "Scene", src.resolve(), dst)
+    return root
+
+
+def _transform(world: World, entity: int | None) -> Transform | None:
+    if entity is None or not world.entity_exists(entity):
+        return None
+    return world.try_component(entity, Transform)
+
+
+def _write_body(blk: Block, t: Transform, sleep: SleepState | None) -> None:
+    """An object's pose, velocities and auto-sleep state now."""
+    q = [float(x) for x in t.orientation]
+    _set(blk, "Position", _vec(t.position))
+    _set(blk, "Orientation", _vec(quat_to_euler(q)))
+    _set(blk, "Quaternion", _vec(q))
+    _set(blk, "Velocity", _vec(t.linear_velocity))
+    _set(blk, "AngularVelocity", _vec(exact_degrees(float(w)) for w in t.angular_velocity))
+    _sleep_keys(blk, sleep)
+
+
+def _write_joint(blk: Block, joint: Joint) -> None:
+    """A joint as made at first (anchor, axes, where its bodies were) and its motor now."""
+    conv = (lambda x: x) if joint.kind == "slider" else exact_degrees
+    _set(blk, "Anchor", _vec(joint.anchor))
+    _set(blk, "Axis", _vec(joint.axis))
+    _set(blk, "Axis2", _vec(joint.axis2))
+    if joint.reference is not None:
+        pose_a, pose_b = joint.reference
+        _set(blk, "ReferencePose1", _vec(pose_a))
+        if pose_b is not None:
+            _set(blk, "ReferencePose2", _vec(pose_b))
+    _set(blk, "MotorVelocity", Value(FLOAT, conv(float(joint.motor_velocity)), _HERE))
+    _set(blk, "MotorMaxForce", Value(FLOAT, float(joint.motor_max_force), _HERE))
+
+
+def _live_joint(world: World, entity: int | None, names: dict[int, str]) -> Joint | None:
+    """The joint at ``entity`` if it still holds bodies that are written (else None)."""
+    if entity is None or entity < 0 or not world.entity_exists(entity):
+        return None
+    joint = world.try_component(entity, Joint)
+    if joint is None or joint.broken or joint.body_a not in names or (
+            joint.body_b is not None and joint.body_b not in names):
+        return None
+    return joint
+
+
+def _unique(name: str, taken: set[str]) -> str:
+    """``name``, or ``name~2``, ``name~3``, ... whichever is free first; now taken."""
+    found, n = name, 2
+    while found in taken:
+        found, n = f"{name}~{n}", n + 1
+    taken.add(found)
+    return found
+
+
+_TYPE_NAMES = {kind: name for name, kind in JOINT_KINDS.items()}
+
+
+def _string(text: str) -> Value:
+    return Value(STRING, text, _HERE)
+
+
+def _block(key: str, entries: list[tuple[str, Value]]) -> Entry:
+    return Entry(key, Value(STRUCTURE, Block([Entry(k, v, _HERE) for k, v in entries]),
+                            _HERE), _HERE)
+
+
+class _Spawns:
+    """Writes what scripts made (:class:`SpawnRecord`) after the file's own entries."""
+
+    def __init__(self, world: World, root: Block, names: dict[int, str], taken: set[str],
+                 sleep: dict[int, SleepState] | None, dst: Path | None):
+        self.world, self.root, self.names, self.taken = world, root, names, taken
+        self.sleep, self.dst = sleep, dst
+        self.materials = {str(b.get("ID")) for b in root.blocks("Material")}
+
+    def name(self, entity: int, fallback: str) -> str:
+        named = self.world.try_component(entity, Name)
+        return _unique(named.id if named is not None and named.id else fallback, self.taken)
+
+    def bodies(self, joint: Joint) -> Value:
+        ids = [self.names[joint.body_a]] + ([] if joint.body_b is None
+                                            else [self.names[joint.body_b]])
+        return Value(STRINGVECTOR, [_string(i) for i in ids], _HERE)
+
+    def snippet(self, rec: SpawnRecord) -> None:
+        """A ``spawn(text)``: its objects and joints still there, and the materials it
+        declared that the file has no material of that ID for."""
+        assert rec.db is not None
+        root = _literal(rec.db, rec.content_dir, self.dst)
+        out: list[Entry] = []
+        for entry in root.get_all("Material"):  # the snippet's own, used by its objects
+            mid = str(entry.value.data.get("ID"))
+            if mid not in self.materials:
+                self.materials.add(mid)
+                out.append(entry)
+        for entry, entity in zip(root.get_all("Object"), rec.objects, strict=True):
+            t = _transform(self.world, entity)
+            if t is None:
+                continue
+            blk = entry.value.data
+            self.names[entity] = oid = self.name(entity, "object")
+            _set(blk, "ID", _string(oid))
+            _write_body(blk, t, None if self.sleep is None else self.sleep.get(entity))
+            out.append(entry)
+        for entry, entity in zip(root.get_all("Joint"), rec.joints, strict=True):
+            joint = _live_joint(self.world, entity, self.names)
+            if joint is None:
+                continue
+            blk = entry.value.data
+            _set(blk, "ID", _string(self.name(entity, "joint")))
+            _set(blk, "Bodies", self.bodies(joint))
+            _write_joint(blk, joint)
+            out.append(entry)
+        self.root.entries.extend(out)
+
+    def joint(self, entity: int) -> None:
+        """A ``createJoint``: a Joint block from its component (limits in file units)."""
+        joint = _live_joint(self.world, entity, self.names)
+        if joint is None:
+            return
+        conv = (lambda x: x) if joint.kind == "slider" else exact_degrees
+        entries = [("ID", _string(self.name(entity, "joint"))),
+                   ("Type", _string(_TYPE_NAMES[joint.kind])), ("Bodies", self.bodies(joint))]
+        for key, limit in (("Low", joint.low), ("High", joint.high)):
+            if limit is not None:
+                entries.append((key, Value(FLOAT, conv(float(limit)), _HERE)))
+        entry = _block("Joint", entries)
+        _write_joint(entry.value.data, joint)
+        self.root.entries.append(entry)
+
+
+def _taken(ids: SceneIds) -> set[str]:
+    """IDs of the file's own entries (those without one are written with the one they
+    were given by their place, so loading the saved file keeps every name)."""
+    return {es.id for es in ids.spec.entities} | {js.id for js in ids.spec.joints}
+
+
 def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> str:
     """Scene text of the running simulation; needs a scene loaded with ``instantiate``.
 
@@ -92,54 +253,42 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
     ids: SceneIds = engine.resource(SceneIds)
     spec = ids.spec
     assert spec.db is not None, "write_state needs a spec built from a SceneDB"
-    db = parse_text(write(spec.db, literal=True, flatten=True), spec.db.path)
-    if out_path is not None and spec.content_dir is not None:
-        _rebase_assets(db.root, "Scene", spec.content_dir.resolve(),
-                       Path(out_path).resolve().parent)
+    dst = None if out_path is None else Path(out_path).resolve().parent
+    root = _literal(spec.db, spec.content_dir, dst)
     world = engine.world
-    root = db.root
     # the solver's random state and each body's auto-sleep state, where the backend has them
     seed, sleep = engine.physics.request(lambda backend: (
         getattr(backend, "solver_seed", None),
         backend.sleep_states() if isinstance(backend, SupportsSleepState) else None)
     ).result(5.0)
+    names: dict[int, str] = {}  # entity -> the object ID written for it
     objects = [e for e in root.entries if e.key == "Object"]
     for index, entry in enumerate(objects):
         eid = ids.entities.get(spec.entities[index].id)
-        t = None if eid is None else world.try_component(eid, Transform) \
-            if world.entity_exists(eid) else None
-        if t is None:
+        t = _transform(world, eid)
+        if eid is None or t is None:
             root.entries.remove(entry)
             continue
+        names[eid] = oid = spec.entities[index].id
         blk = entry.value.data
-        q = [float(x) for x in t.orientation]
-        _set(blk, "Position", _vec(t.position))
-        _set(blk, "Orientation", _vec(quat_to_euler(q)))
-        _set(blk, "Quaternion", _vec(q))
-        _set(blk, "Velocity", _vec(t.linear_velocity))
-        _set(blk, "AngularVelocity", _vec(exact_degrees(float(w)) for w in t.angular_velocity))
-        _sleep_keys(blk, None if sleep is None else sleep.get(eid))
+        if blk.value("ID") is None:  # its name by place would move as others are left out
+            _set(blk, "ID", _string(oid))
+        _write_body(blk, t, None if sleep is None else sleep.get(eid))
     joints = [e for e in root.entries if e.key == "Joint"]
     for js, entry in zip(spec.joints, joints, strict=False):
-        jid = ids.joints.get(js.id)
-        joint = None if jid is None or not world.entity_exists(jid) else \
-            world.try_component(jid, Joint)
-        if joint is None or joint.broken:
+        joint = _live_joint(world, ids.joints.get(js.id), names)
+        if joint is None:
             root.entries.remove(entry)
             continue
-        conv = (lambda x: x) if joint.kind == "slider" else math.degrees
-        blk = entry.value.data
-        # as made at first: the anchor and axes then, and where its bodies were then
-        _set(blk, "Anchor", _vec(joint.anchor))
-        _set(blk, "Axis", _vec(joint.axis))
-        _set(blk, "Axis2", _vec(joint.axis2))
-        if joint.reference is not None:
-            pose_a, pose_b = joint.reference
-            _set(blk, "ReferencePose1", _vec(pose_a))
-            if pose_b is not None:
-                _set(blk, "ReferencePose2", _vec(pose_b))
-        _set(blk, "MotorVelocity", Value(FLOAT, conv(joint.motor_velocity), _HERE))
-        _set(blk, "MotorMaxForce", Value(FLOAT, float(joint.motor_max_force), _HERE))
+        if entry.value.data.value("ID") is None:
+            _set(entry.value.data, "ID", _string(js.id))
+        _write_joint(entry.value.data, joint)
+    spawns = _Spawns(world, root, names, _taken(ids), sleep, dst)
+    for rec in ids.spawned:
+        if rec.db is None:
+            spawns.joint(rec.joints[0])
+        else:
+            spawns.snippet(rec)
     world_entry = next((e for e in root.entries if e.key == "World"), None)
     if world_entry is None or world_entry.value.kind != STRUCTURE:
         world_entry = Entry("World", Value(STRUCTURE, Block(), _HERE), _HERE)
@@ -148,4 +297,4 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
     if seed is not None:  # the solver shuffles constraints with it
         _set(world_entry.value.data, "SolverSeed", Value(INT, int(seed), _HERE))
     header = f"// state of {spec.db.path} at t = {spec.time + engine.time!r} s"
-    return header + "\n" + write(db, literal=True)
+    return header + "\n" + write(root, literal=True)

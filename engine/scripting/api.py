@@ -349,8 +349,15 @@ class ScriptAPI:
 
     # -- structure --------------------------------------------------------------
     def spawn(self, text: str) -> Any:
-        """Objects (and joints) from scene-format text, through the scene factory."""
+        """Objects (and joints) from scene-format text, through the scene factory.
+
+        What it made is recorded on :class:`SceneIds` (so ``--save-state`` writes it).
+        A joint of the snippet on a body that already existed gets that body's pose now
+        as its reference (see :meth:`_reference`); one on the snippet's own bodies only
+        has their spawn poses from the factory.
+        """
         from engine.scene import SceneError, SceneIds, spec_from_text
+        from engine.scene.factory import SpawnRecord
 
         content = self.engine.config.content_dir or "."
         scene = self.engine.try_resource(SceneIds)
@@ -365,14 +372,42 @@ class ScriptAPI:
         for es in spec.entities:
             ids[es.id] = self.engine.spawn(*es.components)
             made.append(ids[es.id])
+        objects = made[:len(spec.db.blocks("Object"))] if spec.db is not None else []
+        joints: list[int] = []
         for js in spec.joints:
             a, b = js.bodies
-            js.joint.body_a = ids[a] if a in ids else self.find(a)
-            js.joint.body_b = None if b is None else (ids[b] if b in ids else self.find(b))
-            made.append(self.engine.spawn(Name(js.id), js.joint))
+            joint = js.joint
+            joint.body_a = ids[a] if a in ids else self.find(a)
+            joint.body_b = None if b is None else (ids[b] if b in ids else self.find(b))
+            if joint.reference is None:
+                joint.reference = self._reference(joint.body_a, joint.body_b)
+            joints.append(self.engine.spawn(Name(js.id), joint))
+        made.extend(joints)
         self._names.update(ids)
+        if scene is not None:
+            scene.record(SpawnRecord(spec.db, spec.content_dir, objects, joints),
+                         self.engine.world.entity_exists)
         assert self.runtime is not None
         return self.runtime.lua.table_from(made)
+
+    def _reference(self, a: int, b: int | None
+                   ) -> tuple[tuple[float, ...], tuple[float, ...] | None] | None:
+        """The poses (x y z qw qx qy qz) of a joint's bodies now, as its reference poses.
+
+        Read from their Transforms: in serial mode exactly where the backend has them
+        (nothing steps between a script and the joint's creation), so a saved state
+        re-creates the joint exactly; in threaded mode the last synced poses.
+        """
+        world = self.engine.world
+        ta = world.try_component(a, Transform)
+        tb = None if b is None else world.try_component(b, Transform)
+        if ta is None or (b is not None and tb is None):
+            return None
+
+        def pose(t: Transform) -> tuple[float, ...]:
+            return (*map(float, t.position), *map(float, t.orientation))
+
+        return pose(ta), None if tb is None else pose(tb)
 
     def _body_poses(self) -> dict[str, tuple[tuple[float, ...], tuple[float, ...]]]:
         """Object ID -> current pose of every named body, for joints in spawned snippets."""
@@ -388,6 +423,10 @@ class ScriptAPI:
         self._push("setMotor", lambda b: b.set_motor(entity, v, f))
 
     def create_joint(self, spec: Any) -> int:
+        """A joint between existing objects, made with their poses now as its reference
+        poses (see :meth:`_reference`); recorded on :class:`SceneIds` for saved states."""
+        from engine.scene.factory import SceneIds, SpawnRecord
+
         opts = to_python(spec)
         if not isinstance(opts, dict):
             raise ScriptAPIError("createJoint: expected a table {kind=, a=, b=, ...}")
@@ -409,7 +448,13 @@ class ScriptAPI:
                 raise ScriptAPIError(f"createJoint: unknown field {key!r}")
             kwargs[key] = fields[key](value)
         joint = Joint(kind=kind, body_a=a, body_b=b, **kwargs)
-        return self.engine.spawn(Name(joint.id or f"joint{a}_{b}"), joint)
+        joint.reference = self._reference(a, b)
+        entity = self.engine.spawn(Name(joint.id or f"joint{a}_{b}"), joint)
+        scene = self.engine.try_resource(SceneIds)
+        if scene is not None:
+            scene.record(SpawnRecord(None, None, [], [entity]),
+                         self.engine.world.entity_exists)
+        return entity
 
     def break_joint(self, ref: Any) -> None:
         entity, joint = self._joint(ref, "breakJoint")
