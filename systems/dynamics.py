@@ -39,9 +39,7 @@ class DynamicsSystem(System):
         #: The snapshot the Transforms reflect now (newer ones may already exist in
         #: threaded mode; systems wanting a consistent view read this one).
         self.snapshot: Snapshot | None = None
-        self._layout: tuple[np.ndarray, int] | None = None
-        self._rows: slice | np.ndarray = np.zeros(0, np.int64)
-        self._valid: np.ndarray | None = None
+        self._copy: PoseCopy | None = None
         self.contacts_total = 0
 
     def setup(self, engine: Engine) -> None:
@@ -100,32 +98,59 @@ class DynamicsSystem(System):
         self.snapshot = snapshot
         bodies = snapshot.bodies
         poses = engine.world.poses
-        keys = bodies.keys
-        layout = self._layout
-        if layout is None or layout[1] != poses.version or not np.array_equal(layout[0], keys):
-            rows = poses.rows(keys)
-            valid = rows >= 0
-            self._rows = row_index(rows[valid])
-            self._valid = None if valid.all() else valid  # None: every body has a Transform
-            self._layout = (keys, poses.version)
-        copy_state(poses, self._rows, bodies, self._valid)
+        if self._copy is None or not self._copy.fits(poses, bodies.keys):
+            self._copy = PoseCopy(poses, bodies.keys)
+        self._copy(bodies)
 
 
 def _first(pair: tuple[int, object]) -> int:
     return pair[0]
 
 
-def copy_state(poses: PoseTable, rows: slice | np.ndarray, bodies: BodyState,
-               valid: np.ndarray | None = None) -> None:
-    """Write a state read into the pose table: body ``i`` (of those ``valid``) → ``rows[i]``."""
-    if valid is not None:
-        bodies = BodyState(bodies.keys[valid], bodies.position[valid],
-                           bodies.orientation[valid], bodies.linear_velocity[valid],
-                           bodies.angular_velocity[valid])
-    poses.position[rows] = bodies.position
-    poses.orientation[rows] = bodies.orientation
-    poses.linear_velocity[rows] = bodies.linear_velocity
-    poses.angular_velocity[rows] = bodies.angular_velocity
+class PoseCopy:
+    """Writes state reads into the pose table, planned once per layout of bodies.
+
+    A layout is the bodies' keys (in a state read's row order) and the table's
+    version. Where their rows are one run the destination is kept as four views, so
+    each copy is four block copies and no indexing.
+    """
+
+    def __init__(self, poses: PoseTable, keys: np.ndarray) -> None:
+        self.keys, self.version = keys, poses.version
+        rows = poses.rows(keys)
+        valid = rows >= 0
+        self._valid = None if valid.all() else valid  # None: every body has a Transform
+        index = row_index(rows[valid])
+        self._rows = index
+        self._poses = poses
+        self._views = None if not isinstance(index, slice) else (
+            poses.position[index], poses.orientation[index], poses.linear_velocity[index],
+            poses.angular_velocity[index])
+
+    def fits(self, poses: PoseTable, keys: np.ndarray) -> bool:
+        """Whether this plan still holds (a backend may hand out the same key array)."""
+        return self.version == poses.version and self._poses is poses and (
+            self.keys is keys or np.array_equal(self.keys, keys))
+
+    def __call__(self, bodies: BodyState) -> None:
+        """Body ``i`` (of those with a Transform) → its row."""
+        if self._valid is not None:
+            valid = self._valid
+            bodies = BodyState(bodies.keys[valid], bodies.position[valid],
+                               bodies.orientation[valid], bodies.linear_velocity[valid],
+                               bodies.angular_velocity[valid])
+        if self._views is not None:
+            p, q, v, w = self._views
+            p[...] = bodies.position
+            q[...] = bodies.orientation
+            v[...] = bodies.linear_velocity
+            w[...] = bodies.angular_velocity
+            return
+        poses, rows = self._poses, self._rows
+        poses.position[rows] = bodies.position
+        poses.orientation[rows] = bodies.orientation
+        poses.linear_velocity[rows] = bodies.linear_velocity
+        poses.angular_velocity[rows] = bodies.angular_velocity
 
 
 def _add_body(entity: int, physical: Physical, t: Transform):

@@ -36,8 +36,8 @@ from engine.physics.backend import WorldSettings  # noqa: E402
 from engine.physics.pymunk2d import PymunkBackend  # noqa: E402
 from engine.physics.pymunk2d.backend import COLLISION_SLOP, SLEEP_TIME  # noqa: E402
 from engine.physics.pymunk2d.shapes import PLANE_DEPTH, PLANE_HALF_LENGTH  # noqa: E402
-from engine.world import PoseTable, row_index  # noqa: E402
-from systems.dynamics import copy_state  # noqa: E402
+from engine.world import PoseTable  # noqa: E402
+from systems.dynamics import PoseCopy  # noqa: E402
 
 DT = 1.0 / 60.0
 ITERATIONS = 20
@@ -96,7 +96,7 @@ def bench_one(n: int, steps: int, sleeping: bool = False) -> dict:
     poses = PoseTable()  # the ECS pose table: entity = body key, as in the engine
     keys = [*range(n), GROUND_KEY]
     poses.adopt_many(keys, [Transform() for _ in keys])
-    table_row = row_index(poses.rows(ours.read_state().keys))
+    copy = PoseCopy(poses, ours.read_state().keys)  # no body comes or goes here
     clock = time.perf_counter_ns
     blocks = max(1, steps // BLOCK)
     # per block of BLOCK steps, in ns: raw, our step, our sync, our contacts
@@ -107,7 +107,7 @@ def bench_one(n: int, steps: int, sleeping: bool = False) -> dict:
             t1 = clock()
             ours.step(DT)
             t2 = clock()
-            copy_state(poses, table_row, ours.read_state())  # no body comes or goes here
+            copy(ours.read_state())
             t3 = clock()
             ours.contacts()
             times[i, 1:] += t2 - t1, t3 - t2, clock() - t3
