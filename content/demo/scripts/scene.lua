@@ -4,10 +4,17 @@ requestPlugin("physics")
 requestPlugin("osg")
 requestPlugin("openalpp")
 
-local dropped = 0
+-- a crate every 2 s, three in all; counted from the clock, so a saved state that is
+-- run again (--save-state) does not drop the ones it already holds a second time
+local dropped
 
-every(2.0, function()
-  if dropped < 3 then
+function onStart()
+  dropped = math.min(3, math.floor(time() / 2.0))
+end
+
+function onUpdate(dt)
+  local t = time()
+  while dropped < 3 and t >= 2.0 * (dropped + 1) do
     dropped = dropped + 1
     spawn(string.format([[
       Object { ID "gift%d" Position [%f 0 6] Size [0.5 0.5 0.5]
@@ -15,10 +22,6 @@ every(2.0, function()
         PhysicalAttributes { Mass 0.5 Material "wood" Geometry { Primitive "box" } } }
     ]], dropped, 2.5 + 0.2 * dropped))
   end
-end)
-
-function onUpdate(dt)
-  local t = time()
   setUniform("toon", "DiffuseColor", {0.5 + 0.5 * math.sin(t), 0.25, 1.0})
 end
 
