@@ -53,16 +53,17 @@ def row_index(rows: np.ndarray) -> slice | np.ndarray:
 class PoseTable:
     """Contiguous storage for every adopted Transform, one row per entity.
 
-    Rows are recycled through a free list; growth doubles capacity and re-points
-    the adopted Transforms at the new arrays (amortised O(1) per entity).
+    One (capacity, 13) ``table`` holds each row's ``x y z  qw qx qy qz  vx vy vz  wx wy
+    wz``, the layout of a state read (``BodyState.table``), which it takes in one
+    copy; ``position``, ``orientation``, ``linear_velocity`` and ``angular_velocity``
+    are its column views. Rows are recycled through a free list; growth doubles
+    capacity and re-points the adopted Transforms at the new table (amortised O(1)
+    per entity).
     """
 
     def __init__(self, capacity: int = 64) -> None:
-        self.position = np.zeros((capacity, 3))
-        self.orientation = np.zeros((capacity, 4))
+        self._use(np.zeros((capacity, 13)))
         self.orientation[:, 0] = 1.0
-        self.linear_velocity = np.zeros((capacity, 3))
-        self.angular_velocity = np.zeros((capacity, 3))
         self._owner: list[Transform | None] = [None] * capacity
         self._free: list[int] = list(range(capacity - 1, -1, -1))
         self.row_of: dict[int, int] = {}
@@ -123,14 +124,19 @@ class PoseTable:
         transform.linear_velocity = self.linear_velocity[row]
         transform.angular_velocity = self.angular_velocity[row]
 
+    def _use(self, table: np.ndarray) -> None:
+        self.table = table
+        self.position = table[:, 0:3]
+        self.orientation = table[:, 3:7]
+        self.linear_velocity = table[:, 7:10]
+        self.angular_velocity = table[:, 10:13]
+
     def _grow(self) -> None:
         old = self.capacity
         new = old * 2
-        for name in ("position", "orientation", "linear_velocity", "angular_velocity"):
-            arr = getattr(self, name)
-            grown = np.zeros((new, arr.shape[1]))
-            grown[:old] = arr
-            setattr(self, name, grown)
+        grown = np.zeros((new, 13))
+        grown[:old] = self.table
+        self._use(grown)
         self.orientation[old:, 0] = 1.0
         self._owner.extend([None] * (new - old))
         self._free.extend(range(new - 1, old - 1, -1))

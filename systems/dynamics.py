@@ -111,8 +111,8 @@ class PoseCopy:
     """Writes state reads into the pose table, planned once per layout of bodies.
 
     A layout is the bodies' keys (in a state read's row order) and the table's
-    version. Where their rows are one run the destination is kept as four views, so
-    each copy is four block copies and no indexing.
+    version. Both tables share one row layout, so a copy is one assignment: into a
+    kept view where the rows are one run and every body has a Transform.
     """
 
     def __init__(self, poses: PoseTable, keys: np.ndarray) -> None:
@@ -120,12 +120,10 @@ class PoseCopy:
         rows = poses.rows(keys)
         valid = rows >= 0
         self._valid = None if valid.all() else valid  # None: every body has a Transform
-        index = row_index(rows[valid])
-        self._rows = index
+        self._rows = row_index(rows[valid])
         self._poses = poses
-        self._views = None if not isinstance(index, slice) else (
-            poses.position[index], poses.orientation[index], poses.linear_velocity[index],
-            poses.angular_velocity[index])
+        self._view = poses.table[self._rows] if (
+            self._valid is None and isinstance(self._rows, slice)) else None
 
     def fits(self, poses: PoseTable, keys: np.ndarray) -> bool:
         """Whether this plan still holds (a backend may hand out the same key array)."""
@@ -134,23 +132,12 @@ class PoseCopy:
 
     def __call__(self, bodies: BodyState) -> None:
         """Body ``i`` (of those with a Transform) → its row."""
-        if self._valid is not None:
-            valid = self._valid
-            bodies = BodyState(bodies.keys[valid], bodies.position[valid],
-                               bodies.orientation[valid], bodies.linear_velocity[valid],
-                               bodies.angular_velocity[valid])
-        if self._views is not None:
-            p, q, v, w = self._views
-            p[...] = bodies.position
-            q[...] = bodies.orientation
-            v[...] = bodies.linear_velocity
-            w[...] = bodies.angular_velocity
-            return
-        poses, rows = self._poses, self._rows
-        poses.position[rows] = bodies.position
-        poses.orientation[rows] = bodies.orientation
-        poses.linear_velocity[rows] = bodies.linear_velocity
-        poses.angular_velocity[rows] = bodies.angular_velocity
+        if self._view is not None:
+            self._view[...] = bodies.table
+        elif self._valid is None:
+            self._poses.table[self._rows] = bodies.table
+        else:
+            self._poses.table[self._rows] = bodies.table[self._valid]
 
 
 def _add_body(entity: int, physical: Physical, t: Transform):

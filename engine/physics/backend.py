@@ -33,30 +33,68 @@ CONTACT_DTYPE = np.dtype(
 )
 
 
-@dataclass(frozen=True, slots=True)
 class BodyState:
-    """Poses and velocities of many bodies, row ``i`` belonging to ``keys[i]``."""
+    """Poses and velocities of many bodies, row ``i`` belonging to ``keys[i]``.
 
-    keys: np.ndarray  # (N,) int64
-    position: np.ndarray  # (N, 3)
-    orientation: np.ndarray  # (N, 4) w, x, y, z
-    linear_velocity: np.ndarray  # (N, 3)
-    angular_velocity: np.ndarray  # (N, 3)
+    One (N, 13) ``table`` of rows ``x y z  qw qx qy qz  vx vy vz  wx wy wz`` (m,
+    quaternion, m/s, rad/s); ``position``, ``orientation``, ``linear_velocity`` and
+    ``angular_velocity`` are its column views, made when first asked for. A pose
+    table laid out the same way (``engine.world.PoseTable``) takes a state in one copy.
+    """
+
+    __slots__ = ("keys", "table", "_columns")
+
+    def __init__(self, keys: np.ndarray, table: np.ndarray) -> None:
+        self.keys = keys  # (N,) int64
+        self.table = table  # (N, 13)
+        self._columns: tuple[np.ndarray, ...] | None = None
+
+    @staticmethod
+    def from_arrays(keys: np.ndarray, position: np.ndarray, orientation: np.ndarray,
+                    linear_velocity: np.ndarray, angular_velocity: np.ndarray) -> BodyState:
+        """A state from its four parts, (N, 3), (N, 4), (N, 3) and (N, 3)."""
+        keys = np.asarray(keys, np.int64)
+        table = np.empty((len(keys), 13))
+        table[:, 0:3] = position
+        table[:, 3:7] = orientation
+        table[:, 7:10] = linear_velocity
+        table[:, 10:13] = angular_velocity
+        return BodyState(keys, table)
 
     @staticmethod
     def empty() -> BodyState:
-        return BodyState(
-            np.zeros(0, np.int64),
-            np.zeros((0, 3)),
-            np.zeros((0, 4)),
-            np.zeros((0, 3)),
-            np.zeros((0, 3)),
-        )
+        return BodyState(np.zeros(0, np.int64), np.zeros((0, 13)))
+
+    def columns(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(position, orientation, linear_velocity, angular_velocity), views of the table."""
+        if self._columns is None:
+            t = self.table
+            self._columns = (t[:, 0:3], t[:, 3:7], t[:, 7:10], t[:, 10:13])
+        return self._columns  # type: ignore[return-value]
+
+    @property
+    def position(self) -> np.ndarray:
+        return self.columns()[0]
+
+    @property
+    def orientation(self) -> np.ndarray:
+        """(N, 4) w, x, y, z."""
+        return self.columns()[1]
+
+    @property
+    def linear_velocity(self) -> np.ndarray:
+        return self.columns()[2]
+
+    @property
+    def angular_velocity(self) -> np.ndarray:
+        return self.columns()[3]
 
     def freeze(self) -> BodyState:
-        for arr in (self.keys, self.position, self.orientation,
-                    self.linear_velocity, self.angular_velocity):
-            arr.setflags(write=False)
+        """Make it read-only (a published snapshot); views made later are read-only too."""
+        self.keys.setflags(write=False)
+        self.table.setflags(write=False)
+        for column in self._columns or ():
+            column.setflags(write=False)
         return self
 
 

@@ -163,8 +163,8 @@ class BallisticBackend:
 
     # -- batches -----------------------------------------------------------
     def read_state(self) -> BodyState:
-        return BodyState(np.array(self._keys, np.int64), self._pos.copy(), self._quat.copy(),
-                         self._vel.copy(), self._ang.copy())
+        return BodyState.from_arrays(np.array(self._keys, np.int64), self._pos, self._quat,
+                                     self._vel, self._ang)
 
     def write_state(self, state: BodyState) -> None:
         rows = np.array([self._index[int(k)] for k in state.keys], np.int64)

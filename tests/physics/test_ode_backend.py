@@ -115,14 +115,14 @@ def test_write_state_accepts_any_key_order_and_rejects_unknown_keys() -> None:
         b.add_body(k, Physical(shapes=[Shape("sphere", (0.1,))]), np.zeros(3), I4)
     keys = np.array([9, 5])
     pos = np.array([[9.0, 0, 0], [5.0, 0, 0]])
-    b.write_state(BodyState(keys, pos, np.tile(I4, (2, 1)), np.zeros((2, 3)),
-                            np.array([[0, 0, 1.0], [0, 0, 2.0]])))
+    b.write_state(BodyState.from_arrays(keys, pos, np.tile(I4, (2, 1)), np.zeros((2, 3)),
+                                        np.array([[0, 0, 1.0], [0, 0, 2.0]])))
     s = b.read_state()
     got = dict(zip(s.keys.tolist(), s.position[:, 0].tolist(), strict=True))
     assert got == {5: 5.0, 7: 0.0, 9: 9.0}
     with pytest.raises(KeyError, match="123"):
-        b.write_state(BodyState(np.array([123]), np.zeros((1, 3)), I4[None], np.zeros((1, 3)),
-                                np.zeros((1, 3))))
+        b.write_state(BodyState.from_arrays(np.array([123]), np.zeros((1, 3)), I4[None],
+                                            np.zeros((1, 3)), np.zeros((1, 3))))
     out = np.empty((3, 7))
     b.read_poses(out)
     np.testing.assert_array_equal(out[:, :3], s.position)
@@ -162,8 +162,8 @@ def test_loads_and_speeds_that_would_overflow_are_refused() -> None:
     with pytest.raises(ValueError, match="body 1: velocity"):
         b.set_velocity(1, np.zeros(3), np.array([1e300, 0, 0]))
     with pytest.raises(ValueError, match="non-finite"):
-        b.write_state(BodyState(np.array([1]), np.array([[np.nan, 0, 0]]), I4[None],
-                                np.zeros((1, 3)), np.zeros((1, 3))))
+        b.write_state(BodyState.from_arrays(np.array([1]), np.array([[np.nan, 0, 0]]),
+                                            I4[None], np.zeros((1, 3)), np.zeros((1, 3))))
     b.add_force(1, np.array([0, 0, 1.0]))  # the refused torque was discarded, others work
     run(b, 30)
     assert b.take_faults() == []

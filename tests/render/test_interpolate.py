@@ -16,7 +16,8 @@ def _state(keys, xs, angles) -> BodyState:
     quat = np.array([[math.cos(a / 2), 0.0, 0.0, math.sin(a / 2)] for a in angles])
     pos = np.zeros((n, 3))
     pos[:, 0] = xs
-    return BodyState(np.array(keys, np.int64), pos, quat, np.zeros((n, 3)), np.zeros((n, 3)))
+    return BodyState.from_arrays(np.array(keys, np.int64), pos, quat, np.zeros((n, 3)),
+                                 np.zeros((n, 3)))
 
 
 def test_halfway_is_halfway_in_position_and_angle():

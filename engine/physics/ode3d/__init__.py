@@ -473,8 +473,8 @@ class OdeBackend:
     # -- batches -----------------------------------------------------------
     def read_state(self) -> BodyState:
         """Every body's pose and velocity (static ones included) in fresh arrays."""
-        keys, pos, quat, lin, ang = self._world.read_state()
-        return BodyState(keys, pos, quat, lin, ang)
+        keys, table = self._world.read_state()
+        return BodyState(keys, table)
 
     def read_poses(self, out: np.ndarray) -> None:
         """Fill ``out`` (N, 7) with x y z w x y z per body, in :meth:`keys` order, in C."""

@@ -1150,29 +1150,19 @@ cdef class World:
         out[9] = v[2] - (w[0] * wc[1] - w[1] * wc[0])
 
     def read_state(self) -> tuple:
-        """Fresh arrays (keys, position, orientation, linear, angular) for every body."""
+        """Fresh (keys, table) for every body: table rows are x y z, w x y z, linear and
+        angular velocity (BodyState's layout)."""
         cdef int n = self.n
         cdef cnp.ndarray[cnp.int64_t, ndim=1] keys = np.empty(n, np.int64)
-        cdef cnp.ndarray[cnp.float64_t, ndim=2] pos = np.empty((n, 3))
-        cdef cnp.ndarray[cnp.float64_t, ndim=2] quat = np.empty((n, 4))
-        cdef cnp.ndarray[cnp.float64_t, ndim=2] lin = np.empty((n, 3))
-        cdef cnp.ndarray[cnp.float64_t, ndim=2] ang = np.empty((n, 3))
+        cdef cnp.ndarray[cnp.float64_t, ndim=2] table = np.empty((n, 13))
         cdef int64_t* kp = <int64_t*>keys.data
-        cdef double* pp = <double*>pos.data
-        cdef double* qp = <double*>quat.data
-        cdef double* lp = <double*>lin.data
-        cdef double* ap = <double*>ang.data
-        cdef double out[13]
+        cdef double* tp = <double*>table.data
         cdef int i
         with nogil:
             for i in range(n):
-                self._read_slot(i, out)
+                self._read_slot(i, &tp[13 * i])
                 kp[i] = self.slots[i].key
-                memcpy(&pp[3 * i], &out[0], 3 * sizeof(double))
-                memcpy(&qp[4 * i], &out[3], 4 * sizeof(double))
-                memcpy(&lp[3 * i], &out[7], 3 * sizeof(double))
-                memcpy(&ap[3 * i], &out[10], 3 * sizeof(double))
-        return keys, pos, quat, lin, ang
+        return keys, table
 
     def read_poses(self, double[:, ::1] out) -> None:
         """Write every body's pose as rows (x y z w x y z) into ``out`` (N, 7), no allocation."""

@@ -321,26 +321,19 @@ cdef class SpaceSync:
         free(self._arbiters.rows)
 
     def read(self):
-        """Fresh (position, orientation, linear, angular velocity) and whether all finite.
+        """A fresh (n, 13) table of every body's state (BodyState's layout), and whether
+        it is all finite.
 
-        Pose: (x, Y, z), and the turn θ about pymunk's axis as a quaternion about
-        −Y (pymunk turns X toward Z; a right-handed turn about +Y turns Z toward X).
+        Row ``i``: x Y z (Y as authored), the turn θ about pymunk's axis as a quaternion
+        about −Y (pymunk turns X toward Z; a right-handed turn about +Y turns Z toward
+        X), the origin's linear velocity, then the angular velocity (0, −ω, 0).
         """
         cdef Py_ssize_t i, n = self._arbiters.n
-        cdef cnp.npy_intp dims3[2]
-        cdef cnp.npy_intp dims4[2]
-        dims3[0] = n
-        dims3[1] = 3
-        dims4[0] = n
-        dims4[1] = 4
-        position = cnp.PyArray_EMPTY(2, dims3, cnp.NPY_DOUBLE, 0)
-        orientation = cnp.PyArray_EMPTY(2, dims4, cnp.NPY_DOUBLE, 0)
-        linear = cnp.PyArray_EMPTY(2, dims3, cnp.NPY_DOUBLE, 0)
-        angular = cnp.PyArray_EMPTY(2, dims3, cnp.NPY_DOUBLE, 0)
-        cdef double *p = <double *>cnp.PyArray_DATA(position)
-        cdef double *q = <double *>cnp.PyArray_DATA(orientation)
-        cdef double *v = <double *>cnp.PyArray_DATA(linear)
-        cdef double *w = <double *>cnp.PyArray_DATA(angular)
+        cdef cnp.npy_intp dims[2]
+        dims[0] = n
+        dims[1] = 13
+        table = cnp.PyArray_EMPTY(2, dims, cnp.NPY_DOUBLE, 0)
+        cdef double *row = <double *>cnp.PyArray_DATA(table)
         cdef const double *r
         cdef const double *g
         cdef cpVect pos, vel
@@ -354,38 +347,39 @@ cdef class SpaceSync:
                 vel = self._velocity(body)
                 omega = self._angular_velocity(body)
                 total += pos.x + pos.y + theta + vel.x + vel.y + omega
-                p[3 * i] = pos.x
-                p[3 * i + 1] = self._y[i]
-                p[3 * i + 2] = pos.y
+                row[0] = pos.x
+                row[1] = self._y[i]
+                row[2] = pos.y
                 c = cos(-0.5 * theta)
                 s = sin(-0.5 * theta)
                 if self._any_rest:  # (c, 0, s, 0) ⊗ rest
                     r = &self._rest_p[4 * i]
-                    q[4 * i] = c * r[0] - s * r[2]
-                    q[4 * i + 1] = c * r[1] + s * r[3]
-                    q[4 * i + 2] = c * r[2] + s * r[0]
-                    q[4 * i + 3] = c * r[3] - s * r[1]
+                    row[3] = c * r[0] - s * r[2]
+                    row[4] = c * r[1] + s * r[3]
+                    row[5] = c * r[2] + s * r[0]
+                    row[6] = c * r[3] - s * r[1]
                 else:
-                    q[4 * i] = c
-                    q[4 * i + 1] = 0.0
-                    q[4 * i + 2] = s
-                    q[4 * i + 3] = 0.0
+                    row[3] = c
+                    row[4] = 0.0
+                    row[5] = s
+                    row[6] = 0.0
                 if self._any_cog:  # v_origin = v_cog + ω × (origin − cog)
                     g = &self._cog_p[2 * i]
                     c = cos(theta)
                     s = sin(theta)
                     ox = c * g[0] - s * g[1]
                     oz = s * g[0] + c * g[1]
-                    v[3 * i] = vel.x + omega * oz
-                    v[3 * i + 2] = vel.y - omega * ox
+                    row[7] = vel.x + omega * oz
+                    row[9] = vel.y - omega * ox
                 else:
-                    v[3 * i] = vel.x
-                    v[3 * i + 2] = vel.y
-                v[3 * i + 1] = 0.0
-                w[3 * i] = 0.0
-                w[3 * i + 1] = -omega
-                w[3 * i + 2] = 0.0
-        return position, orientation, linear, angular, bool(isfinite(total))
+                    row[7] = vel.x
+                    row[9] = vel.y
+                row[8] = 0.0
+                row[10] = 0.0
+                row[11] = -omega
+                row[12] = 0.0
+                row += 13
+        return table, bool(isfinite(total))
 
     def contacts(self):
         """One CONTACT_DTYPE row per touching shape pair, sorted by keys then place.

@@ -458,20 +458,19 @@ class PymunkBackend:
     def read_state(self) -> BodyState:
         """Every body's pose and velocity; a body gone non-finite is reset first."""
         sync = self._sync if not self._dirty else self._space_sync()
-        position, orientation, linear, angular, finite = sync.read()
-        if not finite and self._reset_broken(position, orientation, linear, angular):
-            position, orientation, linear, angular, _ = self._space_sync().read()
-        self._last_good = BodyState(self._keys, position, orientation, linear, angular)
+        table, finite = sync.read()
+        if not finite and self._reset_broken(table):
+            table, _ = self._space_sync().read()
+        self._last_good = BodyState(self._keys, table)
         return self._last_good
 
-    def _reset_broken(self, *arrays: np.ndarray) -> bool:
+    def _reset_broken(self, table: np.ndarray) -> bool:
         """Put bodies whose state turned non-finite back at their last good pose, at rest.
 
-        ``arrays`` are a state read's rows; returns whether any body was reset.
+        ``table`` is a state read (a row per body); returns whether any body was reset.
         """
         last = self._last_good
-        broken = np.flatnonzero(~np.logical_and.reduce(
-            [np.isfinite(a).all(axis=1) for a in arrays]))
+        broken = np.flatnonzero(~np.isfinite(table).all(axis=1))
         for i in broken:
             key = int(self._keys[i])
             rec = self._bodies[key]
