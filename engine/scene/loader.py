@@ -66,16 +66,18 @@ def spec_from_text(text: str, content_dir: str | Path, rng: np.random.Generator 
 
     With ``scene`` (the running scene's spec) the snippet may use its materials and
     shader states by ID; ``bodies`` (ID -> current pose) are what its joints may
-    attach to besides its own objects. An ID the snippet declares itself names its
-    own object, not a duplicate of a body of that name (spawning "ball" again).
+    attach to besides its own objects. An object or material ID the snippet declares
+    itself names its own, not a duplicate of the scene's (spawning "ball" again, with
+    its "wood"); the snippet's objects use the snippet's material.
     """
     db = parse_text(text, path, rng, base_dir=content_dir)
     own = {b.get("ID") for b in db.blocks("Object")}
     bodies = {k: pose for k, pose in (bodies or {}).items() if k not in own}
     known: dict[str, Iterable[str]] = {"Object": bodies}
     if scene is not None:
-        known |= {"Material": scene.materials, "ShaderState": scene.shader_states,
-                  "ShaderProgram": scene.shader_programs}
+        own_materials = {str(b.get("ID")) for b in db.blocks("Material")}
+        known |= {"Material": [m for m in scene.materials if m not in own_materials],
+                  "ShaderState": scene.shader_states, "ShaderProgram": scene.shader_programs}
     db = validated(db, Path(content_dir), known)
     return build_specs(db, content_dir, scene.materials if scene is not None else None, bodies)
 

@@ -256,6 +256,21 @@ def test_runtime_snippets_spawn_without_replacing_the_scene(tmp_path):
         assert engine.world.component_for_entity(ids["dropped"], Name).id == "dropped"
 
 
+def test_a_snippet_spawned_again_may_declare_its_ids_again(tmp_path):
+    """A script spawning the same snippet twice: its object and material IDs are its own."""
+    snippet = ('Material { ID "wood" Friction 0.3 }\n'
+               'Object { ID "plank" Position [0 0 1] PhysicalAttributes { Material "wood" } }')
+    spec = load_spec(REP, np.random.default_rng(0))
+    with engine_for(spec) as engine:
+        instantiate(engine, spec)
+        scene = engine.resource(SceneIds).spec
+        for _ in range(2):
+            extra = spec_from_text(snippet, REP, scene=scene, bodies={"plank": ((0, 0, 1),
+                                                                              (1, 0, 0, 0))})
+            instantiate(engine, extra, as_scene=False)
+            assert comps(extra, "plank")[Physical].material.friction == 0.3
+
+
 def test_snippets_include_relative_to_the_content_folder():
     spec = spec_from_text('Include "../include/materials.scene"\n'
                           'Object { ID "b" Position [0 0 height] '
