@@ -152,6 +152,11 @@ def _live_joint(world: World, entity: int | None, names: dict[int, str]) -> Join
     return joint
 
 
+def _definition(material: Block) -> tuple:
+    """What a Material block says, but for its ID (to tell a redeclaration from a new one)."""
+    return tuple((e.key, repr(e.value.py())) for e in material.entries if e.key != "ID")
+
+
 def _unique(name: str, taken: set[str]) -> str:
     """``name``, or ``name~2``, ``name~3``, ... whichever is free first; now taken."""
     found, n = name, 2
@@ -180,7 +185,8 @@ class _Spawns:
                  sleep: dict[int, SleepState] | None, dst: Path | None):
         self.world, self.root, self.names, self.taken = world, root, names, taken
         self.sleep, self.dst = sleep, dst
-        self.materials = {str(b.get("ID")) for b in root.blocks("Material")}
+        #: material ID written -> its definition (see _definition)
+        self.materials = {str(b.get("ID")): _definition(b) for b in root.blocks("Material")}
 
     def name(self, entity: int, fallback: str) -> str:
         named = self.world.try_component(entity, Name)
@@ -193,20 +199,33 @@ class _Spawns:
 
     def snippet(self, rec: SpawnRecord) -> None:
         """A ``spawn(text)``: its objects and joints still there, and the materials it
-        declared that the file has no material of that ID for."""
+        declared. One whose ID is written already with another definition is written
+        as ``wood~2`` (and its objects refer to that); an identical one is not repeated."""
         assert rec.db is not None
         root = _literal(rec.db, rec.content_dir, self.dst)
         out: list[Entry] = []
+        renamed: dict[str, str] = {}
         for entry in root.get_all("Material"):  # the snippet's own, used by its objects
             mid = str(entry.value.data.get("ID"))
-            if mid not in self.materials:
-                self.materials.add(mid)
-                out.append(entry)
+            definition = _definition(entry.value.data)
+            same = next((name for name, d in self.materials.items() if d == definition and (
+                name == mid or name.startswith(mid + "~"))), None)
+            if same is not None:
+                renamed[mid] = same
+                continue
+            renamed[mid] = name = _unique(mid, set(self.materials))
+            self.materials[name] = definition
+            _set(entry.value.data, "ID", _string(name))
+            out.append(entry)
         for entry, entity in zip(root.get_all("Object"), rec.objects, strict=True):
             t = _transform(self.world, entity)
             if t is None:
                 continue
             blk = entry.value.data
+            physical = blk.get("PhysicalAttributes")
+            material = None if not isinstance(physical, Block) else physical.value("Material")
+            if material is not None and material.kind == STRING and material.data in renamed:
+                _set(physical, "Material", _string(renamed[material.data]))
             self.names[entity] = oid = self.name(entity, "object")
             _set(blk, "ID", _string(oid))
             _write_body(blk, t, None if self.sleep is None else self.sleep.get(entity))

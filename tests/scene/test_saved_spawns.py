@@ -176,3 +176,32 @@ def test_deleted_spawns_are_not_written(tmp_path: Path, mode: str) -> None:
     assert state["keep"]["Script"] == "sim/scripts/idle.lua"
     assert load_scene(tmp_path / "state.scene").find("Material[rubber]/Bounce").data == 0.8
     assert check_path(tmp_path / "state.scene") == 0  # what `colosseum check` runs
+
+
+def test_a_spawned_material_redeclaring_the_files_keeps_its_own_values(tmp_path: Path) -> None:
+    """Spawned twice, a snippet's slippery "wood" is written once, as wood~2, and its
+    planks refer to it; the file's own wood keeps its name and friction."""
+    scene = SCENE.replace("World {", 'Material { ID "wood" Friction 0.9 }\nWorld {')
+    script = """\
+local last = time()
+function onUpdate(dt)
+  local now = time()
+  for _, t in ipairs({0.1, 0.2}) do
+    if last < t and t <= now then
+      spawn([[Material { ID "wood" Friction 0.1 }
+        Object { ID "plank" Position [3 0 0.3]
+          PhysicalAttributes { Material "wood" Geometry { Primitive "box" Size [1 1 0.2] } } }]])
+    end
+  end
+  last = now
+end
+"""
+    folder = content(tmp_path / "sim", scene, script)
+    out = tmp_path / "state.scene"
+    blocks = saved(folder, 0.5, out)
+    db = load_scene(out)
+    frictions = {str(b.get("ID")): b.get("Friction") for b in db.blocks("Material")}
+    assert frictions == {"wood": 0.9, "wood~2": 0.1}
+    for plank in ("plank", "plank~2"):
+        assert blocks[plank]["PhysicalAttributes"].get("Material") == "wood~2"
+    assert check_path(out) == 0
