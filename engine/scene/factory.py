@@ -37,6 +37,7 @@ from components import (
 from engine.physics.backend import (
     DynamicsBackend,
     MaterialPair,
+    SleepState,
     SupportsSleepState,
     WorldSettings,
 )
@@ -85,16 +86,6 @@ class JointSpec:
     loc: Loc
 
 
-@dataclass(frozen=True, slots=True)
-class SleepSpec:
-    """A body's auto-sleep state from a saved state: asleep, steps at rest so far, and the
-    recent velocity samples the rule averages ((k, 6): m/s and rad/s, oldest first)."""
-
-    asleep: bool
-    idle_steps: int
-    samples: np.ndarray
-
-
 @dataclass(slots=True)
 class ShaderStateSpec:
     program: str
@@ -123,8 +114,8 @@ class SceneSpec:
     backend: str = "ode"
     time: float = 0.0
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
-    #: Object ID -> auto-sleep state a saved state carries (see :class:`SleepSpec`).
-    sleep: dict[str, SleepSpec] = field(default_factory=dict)
+    #: Object ID -> auto-sleep state a saved state carries (see :class:`SleepState`).
+    sleep: dict[str, SleepState] = field(default_factory=dict)
     content_dir: Path | None = None
     db: SceneDB | None = None
 
@@ -271,7 +262,7 @@ class _Builder:
         self.dense_materials: set[str] = set()
         self.poses: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
         self.physical_ids: set[str] = set()
-        self.sleep: dict[str, SleepSpec] = {}
+        self.sleep: dict[str, SleepState] = {}
 
     def build(self, db: SceneDB) -> SceneSpec:
         spec = SceneSpec()
@@ -467,13 +458,13 @@ class _Builder:
         self.meshes[key] = mesh
         return mesh
 
-    def sleep_spec(self, r: _Reader) -> SleepSpec:
+    def sleep_spec(self, r: _Reader) -> SleepState:
         """An object's saved auto-sleep state, so a loaded state falls asleep on time."""
         if r("IdleSteps") < 0:
             self.report.error(r.value("IdleSteps").loc, "IdleSteps must not be negative")
         samples = np.array(r("VelocitySamples") or (), np.float64).reshape(-1, 6)
         samples[:, 3:] = np.radians(samples[:, 3:])  # written in deg/s, like AngularVelocity
-        return SleepSpec(bool(r("Asleep")), max(int(r("IdleSteps")), 0), samples)
+        return SleepState(bool(r("Asleep")), max(int(r("IdleSteps")), 0), samples)
 
     # -- joints ------------------------------------------------------------
     def joint(self, blk: Block, index: int, spawned: set[str]) -> JointSpec | None:
@@ -664,7 +655,7 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     return ids
 
 
-def _restore_sleep(states: dict[int, SleepSpec]) -> Callable[[DynamicsBackend], None]:
+def _restore_sleep(states: dict[int, SleepState]) -> Callable[[DynamicsBackend], None]:
     """Backend command: give bodies their saved auto-sleep state (or just sleep, where the
     backend keeps no counters of its own)."""
     def restore(backend: DynamicsBackend) -> None:
