@@ -246,17 +246,10 @@ class ScriptingSystem(System):
         others: list[int] = []
         impulses: list[float] = []
         for ea, eb, j in zip(pa, pb, totals, strict=True):
-            scripts = by_entity.get(ea)
-            if scripts:
-                for script in scripts:
+            for mine, other in ((ea, eb), (eb, ea)):  # each side's scripts hear the other
+                for script in by_entity.get(mine, ()):
                     owners.append(script)
-                    others.append(eb)
-                    impulses.append(j)
-            scripts = by_entity.get(eb)
-            if scripts:
-                for script in scripts:
-                    owners.append(script)
-                    others.append(ea)
+                    others.append(other)
                     impulses.append(j)
         if owners:
             runtime.collide_many(owners, others, impulses)
