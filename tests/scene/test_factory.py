@@ -1,4 +1,4 @@
-"""Factory: a representative file becomes the right components; entities; saved states."""
+"""Factory: a representative file becomes the right components; entities; snippets."""
 
 from __future__ import annotations
 
@@ -29,7 +29,6 @@ from engine.scene import (
     instantiate,
     load_scene,
     load_spec,
-    parse_text,
     spec_from_text,
     write_state,
 )
@@ -168,82 +167,6 @@ def test_a_file_with_errors_creates_nothing(tmp_path):
         with pytest.raises(SceneError):
             instantiate(engine, load_spec(tmp_path))
         assert len(engine.world.get_component(Name)) == 0
-
-
-MOTION = """\
-World { TimeStep 0.01 AutoSleep 0 }
-Object { ID "ground" Dynamic 0 PhysicalAttributes { Geometry { Primitive "plane" } } }
-Object {
-  ID "thrown"
-  Position [0 0 10]
-  Velocity [1 2 12]
-  AngularVelocity [90 30 -45]
-  PhysicalAttributes { Mass 2 Geometry { Primitive "box" Size [0.2 0.4 0.6] } }
-}
-Object {
-  ID "slider"
-  Position [5 0 0.25]
-  Orientation [0 0 30]
-  Velocity [randInterval(3, 4) 0 0]
-  PhysicalAttributes { Mass 1 Geometry { Primitive "box" Size [0.5] } }
-}
-Object {
-  ID "ball"
-  Position [-3 0 1]
-  Velocity [0 1 0]
-  AngularVelocity [0 0 720]
-  PhysicalAttributes { Mass 1 Geometry { Primitive "sphere" Size [0.4] } }
-}
-"""
-def run_positions(text: str, seconds: float, folder: Path) -> tuple[np.ndarray, str]:
-    spec = spec_from_text(text, folder, np.random.default_rng(4), path=str(folder / "m.scene"))
-    with engine_for(spec) as engine:
-        ids = instantiate(engine, spec)
-        engine.run(seconds=seconds)
-        pos = np.array([engine.world.component_for_entity(ids[e.id], Transform).position
-                        for e in spec.entities])
-        return pos, write_state(engine)
-
-
-def test_saved_state_continues_the_motion(tmp_path):
-    """Tumbling flight, sliding and rolling on the ground: save at t=2 + 1 s matches 3 s.
-
-    (Joints and sleeping bodies: tests/scene/test_saved_state.py.)"""
-    straight, _ = run_positions(MOTION, 3.0, tmp_path)
-    _, saved = run_positions(MOTION, 2.0, tmp_path)
-    resumed, _ = run_positions(saved, 1.0, tmp_path)
-    np.testing.assert_allclose(resumed, straight, atol=1e-6, rtol=0)
-    assert straight[1, 2] < 3 and straight[2, 0] > 6  # it really moved (and touched ground)
-
-
-IMPACTS = """\
-World { TimeStep 0.01 AutoSleep 0 }
-Object { ID "ground" Dynamic 0 PhysicalAttributes { Geometry { Primitive "plane" } } }
-Object { ID "crate" Position [0 0 3] AngularVelocity [200 100 0]
-  PhysicalAttributes { Mass 2 Geometry { Primitive "box" Size [0.4 0.6 0.8] } } }
-Object { ID "ball" Position [0.3 0 5] Velocity [0 0 -2]
-  PhysicalAttributes { Mass 1 Geometry { Primitive "sphere" Size [0.5] } } }
-Object { ID "base" Position [3 0 0.5] PhysicalAttributes { Geometry { Primitive "box" } } }
-Object { ID "top" Position [3.2 0 1.6] PhysicalAttributes { Geometry { Primitive "box" } } }
-"""
-
-
-def test_saved_state_continues_through_impacts_and_stacking(tmp_path):
-    """Saved before the bodies land and tumble: the solver's random state is saved too."""
-    straight, _ = run_positions(IMPACTS, 3.0, tmp_path)
-    _, saved = run_positions(IMPACTS, 0.5, tmp_path)
-    assert "SolverSeed" in saved
-    resumed, _ = run_positions(saved, 2.5, tmp_path)
-    np.testing.assert_allclose(resumed, straight, atol=1e-6, rtol=0)
-    assert straight[1, 2] < 0.5 and straight[4, 2] < 1.5  # it landed; the top box toppled
-
-
-def test_saved_state_is_a_valid_literal_scene(tmp_path):
-    _, saved = run_positions(MOTION, 0.5, tmp_path)
-    db = parse_text(saved)
-    assert db.find("Object[thrown]/Quaternion") is not None
-    assert db.find("Object[slider]/Velocity").data[0].expr is None  # frozen
-    assert db.find("World/Time").data == pytest.approx(0.5)
 
 
 def test_runtime_snippets_spawn_without_replacing_the_scene(tmp_path):
