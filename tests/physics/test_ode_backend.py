@@ -47,13 +47,18 @@ def test_primitives_rest_on_a_keyless_ground_plane(shape: Shape, rest_z: float) 
     assert set(b.contacts()["b"]) == {-1}
 
 
+def add_mesh_ground(b: OdeBackend, key: int) -> None:
+    """A static 10 m square of two triangles at z = 0."""
+    quad = np.array([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], float)
+    b.add_body(key, Physical(kind="static", mass=None,
+                             shapes=[Shape("mesh", vertices=quad,
+                                           faces=np.array([[0, 1, 2], [0, 2, 3]]))]),
+               np.zeros(3), I4)
+
+
 def test_static_trimesh_ground_and_dynamic_trimesh_body() -> None:
     b = make()
-    quad = np.array([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], float)
-    b.add_body(1, Physical(kind="static", mass=None,
-                           shapes=[Shape("mesh", vertices=quad,
-                                         faces=np.array([[0, 1, 2], [0, 2, 3]]))]),
-               np.zeros(3), I4)
+    add_mesh_ground(b, 1)
     b.add_body(2, Physical(shapes=[Shape("box", (0.5, 0.5, 0.5))]), np.array([0, 0, 1.0]), I4)
     ico = trimesh.creation.icosphere(subdivisions=2, radius=0.4)
     dense = Physical(mass=None, material=MaterialProps(density=500.0),
@@ -240,11 +245,7 @@ def test_a_world_with_meshes_steps_on_another_thread() -> None:
     import threading
 
     b = make()
-    quad = np.array([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], float)
-    b.add_body(1, Physical(kind="static", mass=None,
-                           shapes=[Shape("mesh", vertices=quad,
-                                         faces=np.array([[0, 1, 2], [0, 2, 3]]))]),
-               np.zeros(3), I4)
+    add_mesh_ground(b, 1)
     ico = trimesh.creation.icosphere(subdivisions=1, radius=0.3)
     b.add_body(2, Physical(shapes=[Shape("mesh", vertices=ico.vertices, faces=ico.faces)]),
                np.array([0, 0, 1.0]), I4)
