@@ -457,8 +457,7 @@ class PymunkBackend:
 
     def read_state(self) -> BodyState:
         """Every body's pose and velocity; a body gone non-finite is reset first."""
-        sync = self._sync if not self._dirty else self._space_sync()
-        table, finite = sync.read()
+        table, finite = self._space_sync().read()
         if not finite and self._reset_broken(table):
             table, _ = self._space_sync().read()
         self._last_good = BodyState(self._keys, table)
