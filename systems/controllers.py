@@ -41,6 +41,7 @@ import numpy as np
 
 from components import Controller, Joint, Name, Transform
 from engine.events import InputEvent, KeyEvent
+from engine.rotation import local_axis
 from engine.system import Phase, System
 
 if TYPE_CHECKING:
@@ -48,12 +49,6 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("colosseum.controllers")
 
-
-
-def forward(q: np.ndarray) -> np.ndarray:
-    """The local +X axis of orientation ``q`` (w, x, y, z) in world coordinates."""
-    w, x, y, z = q
-    return np.array([1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)])
 
 
 @dataclass(eq=False, slots=True)
@@ -125,7 +120,7 @@ class ControllerSystem(System):
             t = engine.world.try_component(found[0], Transform)
             binding.origin = np.zeros(3) if t is None else t.position.copy()
             binding.direction = np.array([1.0, 0.0, 0.0]) if t is None else \
-                forward(t.orientation)
+                local_axis(t.orientation, 0)
         return binding
 
     def _refuse(self, entity: int, c: Controller, message: str) -> None:
@@ -195,7 +190,7 @@ class ControllerSystem(System):
             elif b.target_kind == "force":
                 t = engine.world.try_component(key, Transform)
                 if c.value != 0.0 and t is not None:
-                    force_vec = forward(t.orientation) * c.value
+                    force_vec = local_axis(t.orientation, 0) * c.value
                     physics.push(lambda be, k=key, f=force_vec: be.add_force(k, f))
             else:
                 if target is None:

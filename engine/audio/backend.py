@@ -18,6 +18,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from engine.rotation import quat_to_matrix
+
 #: Rotation taking engine axes (Z up, camera forward +Y) to OpenAL axes (Y up, forward -Z).
 ENGINE_TO_AL = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
 
@@ -45,10 +47,8 @@ def to_al(vectors: np.ndarray) -> np.ndarray:
 
 def listener_axes(orientation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Engine-frame (forward, up) of a camera with quaternion ``(w, x, y, z)``."""
-    w, x, y, z = np.asarray(orientation, dtype=np.float64) / np.linalg.norm(orientation)
-    forward = np.array([2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w)])
-    up = np.array([2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y)])
-    return forward, up
+    rot = quat_to_matrix(orientation)
+    return rot[:, 1], rot[:, 2]
 
 
 def inverse_clamped_gain(distance: float, ref_distance: float = 1.0, rolloff: float = 1.0,

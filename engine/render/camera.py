@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from engine.render import math3d
+from engine.rotation import quat_to_matrix
 
 
 @dataclass(slots=True)
@@ -43,7 +44,7 @@ class CameraView:
         if self.eye_separation <= 0.0:
             return [Eye(self.view(), self.projection(width / max(height, 1)), self.position,
                         (0, 0, width, height))]
-        right = math3d.quat_to_matrix(self.orientation)[:, 0]
+        right = quat_to_matrix(self.orientation)[:, 0]
         half = width // 2
         proj = self.projection(half / max(height, 1))
         out = []
@@ -79,7 +80,7 @@ def camera_from_component(camera: object, position: np.ndarray, orientation: np.
     look_at = cam.look_at  # type: ignore[attr-defined]
     if target is not None:
         t_pos, t_quat = (np.asarray(x, dtype=np.float64) for x in target)
-        rot = math3d.quat_to_matrix(t_quat)
+        rot = quat_to_matrix(t_quat)
         pos = t_pos + rot @ np.asarray(cam.offset, dtype=np.float64)  # type: ignore[attr-defined]
         quat = t_quat
         if look_at is not None:

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from engine.render.math3d import slerp
+from engine.rotation import slerp
 
 
 def interpolate_states(older: Any, newer: Any, alpha: float

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from engine.render import math3d
+from engine.rotation import quat_to_matrix
 
 
 @dataclass(slots=True)
@@ -47,7 +48,7 @@ def light_from_component(light: object, position: np.ndarray | None,
     """
     direction = np.asarray(light.direction, dtype=np.float64)  # type: ignore[attr-defined]
     if orientation is not None:
-        direction = math3d.quat_to_matrix(orientation) @ direction
+        direction = quat_to_matrix(orientation) @ direction
     pos = (0.0, 0.0, 10.0) if position is None else tuple(float(x) for x in position)
     return LightInfo(kind=light.kind, color=tuple(light.color),  # type: ignore[attr-defined]
                      intensity=float(light.intensity),  # type: ignore[attr-defined]

@@ -41,6 +41,7 @@ from engine.physics.backend import (
     SupportsSleepState,
     WorldSettings,
 )
+from engine.rotation import euler_to_quat, rotate
 from engine.scene import schema as sc
 from engine.scene.db import (
     INCLUDE,
@@ -54,7 +55,6 @@ from engine.scene.db import (
 )
 from engine.scene.diagnostics import Loc, Reporter
 from engine.scene.parser import paused_gc
-from engine.scene.rotation import euler_to_quat, rotate
 
 if TYPE_CHECKING:
     from engine.app import Engine

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 
 from components import Joint, Name, Transform
 from engine.physics.backend import SleepState, SupportsSleepState
+from engine.rotation import exact_degrees, quat_to_euler
 from engine.scene import schema as sc
 from engine.scene.db import (
     FLOAT,
@@ -42,7 +43,6 @@ from engine.scene.db import (
 from engine.scene.diagnostics import Loc
 from engine.scene.factory import JOINT_KINDS, SceneIds, SpawnRecord
 from engine.scene.parser import parse_text
-from engine.scene.rotation import exact_degrees, quat_to_euler
 from engine.scene.writer import write
 
 if TYPE_CHECKING:

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from engine.physics.pymunk2d import PymunkBackend
-from engine.physics.pymunk2d.planar import quat_multiply, quat_to_matrix, split_orientation
+from engine.physics.pymunk2d.planar import split_orientation
+from engine.rotation import quat_multiply, quat_to_matrix
 
 LOGGER = "colosseum.physics.pymunk"
 

@@ -15,6 +15,7 @@ import pytest
 
 from components import Transform
 from engine.app import Engine, EngineConfig
+from engine.rotation import euler_to_quat
 from engine.scene import (
     SceneIds,
     SceneSpec,
@@ -27,7 +28,6 @@ from engine.scene import (
     write_state,
 )
 from engine.scene.db import STRUCTURE, VECTOR
-from engine.scene.rotation import euler_to_quat
 
 pytest.importorskip("engine.physics.ode3d")
 

@@ -58,7 +58,6 @@ Conventions beyond the protocol:
 from __future__ import annotations
 
 import logging
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -72,6 +71,7 @@ from engine.physics.backend import (
     WorldSettings,
 )
 from engine.physics.ode3d import _ode
+from engine.rotation import rotation_vector_between
 
 log = logging.getLogger("colosseum.physics.ode")
 
@@ -118,22 +118,6 @@ def _hull(vertices: np.ndarray) -> _HullData:
     planes = np.column_stack([normals, -hull.equations[:, 3]])
     polygons = np.column_stack([np.full(len(tris), 3), tris]).astype(np.uint32).ravel()
     return _HullData(planes, points, polygons, tris.astype(np.uint32))
-
-
-def _qrotvec(q_from: np.ndarray, q_to: np.ndarray) -> np.ndarray:
-    """World-frame rotation vector (axis·angle) that turns ``q_from`` into ``q_to``."""
-    w1, x1, y1, z1 = q_to
-    w2, x2, y2, z2 = q_from[0], -q_from[1], -q_from[2], -q_from[3]
-    d = np.array([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-                  w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                  w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-                  w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2])
-    if d[0] < 0:
-        d = -d
-    s = float(np.linalg.norm(d[1:]))
-    if s < 1e-12:
-        return 2.0 * d[1:]
-    return d[1:] / s * 2.0 * math.atan2(s, d[0])
 
 
 def _vec(value: object, n: int, what: str) -> np.ndarray:
@@ -364,7 +348,7 @@ class OdeBackend:
         target = _vec(position, 3, "position")
         q = _vec(orientation, 4, "orientation")
         q /= np.linalg.norm(q)
-        lin, ang = (target - pos) / dt, _qrotvec(quat, q) / dt
+        lin, ang = (target - pos) / dt, rotation_vector_between(quat, q) / dt
         _check_speed(key, lin, ang)
         self._world.set_velocity(int(key), lin, ang)
 

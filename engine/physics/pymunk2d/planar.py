@@ -18,39 +18,10 @@ import math
 
 import numpy as np
 
+from engine.rotation import quat_conjugate, quat_multiply
+
 #: Quaternions closer than this to ``q_y(φ)`` count as purely in-plane.
 PLANAR_TOLERANCE = 1e-9
-
-
-def quat_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Hamilton product of quaternion rows ``(w, x, y, z)``; broadcasts over rows."""
-    pw, px, py, pz = np.moveaxis(np.asarray(p, dtype=np.float64), -1, 0)
-    qw, qx, qy, qz = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
-    return np.stack(
-        [
-            pw * qw - px * qx - py * qy - pz * qz,
-            pw * qx + px * qw + py * qz - pz * qy,
-            pw * qy - px * qz + py * qw + pz * qx,
-            pw * qz + px * qy - py * qx + pz * qw,
-        ],
-        axis=-1,
-    )
-
-
-def quat_conjugate(q: np.ndarray) -> np.ndarray:
-    return np.asarray(q, dtype=np.float64) * np.array([1.0, -1.0, -1.0, -1.0])
-
-
-def quat_to_matrix(q: np.ndarray) -> np.ndarray:
-    """3×3 rotation matrix of a unit quaternion ``(w, x, y, z)``."""
-    w, x, y, z = np.asarray(q, dtype=np.float64) / np.linalg.norm(q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
 
 
 def split_orientation(q: np.ndarray) -> tuple[float, np.ndarray, bool]:

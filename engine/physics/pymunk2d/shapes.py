@@ -20,7 +20,7 @@ import numpy as np
 import pymunk
 
 from components import Shape
-from engine.physics.pymunk2d.planar import quat_to_matrix
+from engine.rotation import quat_to_matrix
 
 #: Half-length and depth of the polygon that stands in for an infinite plane (m).
 PLANE_HALF_LENGTH = 1.0e4

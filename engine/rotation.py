@@ -1,0 +1,177 @@
+"""Rotations, the one definition the engine uses: unit quaternions ``(w, x, y, z)``.
+
+Scene files write Euler angles in degrees (:func:`euler_to_quat`,
+:func:`quat_to_euler`); inside the engine every orientation is a quaternion.
+Array functions broadcast over leading axes, so a whole pose table turns in one
+call; the scalar helpers (:func:`rotate`) take plain sequences for the scene code.
+
+>>> q = euler_to_quat((0.0, 0.0, 90.0))
+>>> [round(c, 12) + 0.0 for c in rotate(q, (1.0, 0.0, 0.0))]
+[0.0, 1.0, 0.0]
+>>> local_axis(np.array(q), 0).round(12).tolist()
+[0.0, 1.0, 0.0]
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+IDENTITY = (1.0, 0.0, 0.0, 0.0)
+
+
+# -- scene angles ------------------------------------------------------------------
+def euler_to_quat(deg: Sequence[float]) -> tuple[float, float, float, float]:
+    """Rotation about X, then Y, then Z (extrinsic; R = Rz*Ry*Rx), angles in degrees."""
+    if not any(deg):
+        return IDENTITY
+    rx, ry, rz = deg
+    hx, hy, hz = math.radians(rx) * 0.5, math.radians(ry) * 0.5, math.radians(rz) * 0.5
+    cx, sx = math.cos(hx), math.sin(hx)
+    cy, sy = math.cos(hy), math.sin(hy)
+    cz, sz = math.cos(hz), math.sin(hz)
+    return (cz * cy * cx + sz * sy * sx,
+            cz * cy * sx - sz * sy * cx,
+            cz * sy * cx + sz * cy * sx,
+            sz * cy * cx - cz * sy * sx)
+
+
+def quat_to_euler(q: Sequence[float]) -> tuple[float, float, float]:
+    """Inverse of :func:`euler_to_quat` (degrees; Y clamped at the gimbal-lock poles)."""
+    w, x, y, z = q
+    n = math.sqrt(w * w + x * x + y * y + z * z) or 1.0
+    w, x, y, z = w / n, x / n, y / n, z / n
+    rx = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    ry = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+    rz = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return (math.degrees(rx), math.degrees(ry), math.degrees(rz))
+
+
+def exact_degrees(rad: float) -> float:
+    """Degrees ``d`` with ``math.radians(d) == rad`` when such a float exists (nearest else).
+
+    A saved state writes angular velocities in degrees; this keeps the reload bit-exact
+    for most values and within one ulp for the rest.
+    """
+    d = math.degrees(rad)
+    up = down = d
+    for _ in range(4):
+        if math.radians(up) == rad:
+            return up
+        if math.radians(down) == rad:
+            return down
+        up, down = math.nextafter(up, math.inf), math.nextafter(down, -math.inf)
+    return d
+
+
+def rotate(q: Sequence[float], v: Sequence[float]) -> tuple[float, float, float]:
+    """``v`` rotated by the unit quaternion ``q`` (plain floats, no numpy)."""
+    w, x, y, z = q
+    vx, vy, vz = v
+    tx = 2 * (y * vz - z * vy)
+    ty = 2 * (z * vx - x * vz)
+    tz = 2 * (x * vy - y * vx)
+    return (vx + w * tx + y * tz - z * ty,
+            vy + w * ty + z * tx - x * tz,
+            vz + w * tz + x * ty - y * tx)
+
+
+# -- quaternion algebra (numpy, broadcasting) -----------------------------------------
+def quat_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Hamilton product ``p ⊗ q`` (apply ``q`` first, then ``p``); broadcasts over rows."""
+    pw, px, py, pz = np.moveaxis(np.asarray(p, dtype=np.float64), -1, 0)
+    qw, qx, qy, qz = np.moveaxis(np.asarray(q, dtype=np.float64), -1, 0)
+    return np.stack(
+        [
+            pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+        ],
+        axis=-1,
+    )
+
+
+def quat_conjugate(q: np.ndarray) -> np.ndarray:
+    """The inverse rotation of a unit quaternion."""
+    return np.asarray(q, dtype=np.float64) * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def quat_normalize(q: np.ndarray) -> np.ndarray:
+    """``q`` scaled to unit length (a zero quaternion stays zero)."""
+    q = np.asarray(q, dtype=np.float64)
+    norm = np.linalg.norm(q, axis=-1, keepdims=True)
+    return q / np.where(norm == 0.0, 1.0, norm)
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``(..., 3, 3)`` from quaternions ``(..., 4)`` (normalised first)."""
+    q = quat_normalize(q)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    out = np.empty(q.shape[:-1] + (3, 3))
+    out[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    out[..., 0, 1] = 2 * (x * y - z * w)
+    out[..., 0, 2] = 2 * (x * z + y * w)
+    out[..., 1, 0] = 2 * (x * y + z * w)
+    out[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    out[..., 1, 2] = 2 * (y * z - x * w)
+    out[..., 2, 0] = 2 * (x * z - y * w)
+    out[..., 2, 1] = 2 * (y * z + x * w)
+    out[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return out
+
+
+def local_axis(q: np.ndarray, index: int) -> np.ndarray:
+    """World direction of the body's local X (0), Y (1) or Z (2) axis: a matrix column."""
+    return quat_to_matrix(q)[..., :, index]
+
+
+def matrix_to_quat(m: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) of a 3x3 rotation matrix."""
+    m = np.asarray(m, dtype=np.float64)
+    trace = m[0, 0] + m[1, 1] + m[2, 2]
+    if trace > 0:
+        s = 2.0 * math.sqrt(trace + 1.0)
+        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
+    elif m[1, 1] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
+    out = np.array(q)
+    return out / np.linalg.norm(out)
+
+
+def slerp(q0: np.ndarray, q1: np.ndarray, t: float | np.ndarray) -> np.ndarray:
+    """Spherical interpolation between batches of unit quaternions ``(..., 4)``."""
+    q0 = np.asarray(q0, dtype=np.float64)
+    q1 = np.asarray(q1, dtype=np.float64).copy()
+    t = np.asarray(t, dtype=np.float64)[..., None] if np.ndim(t) else float(t)
+    dot = np.sum(q0 * q1, axis=-1, keepdims=True)
+    q1 = np.where(dot < 0.0, -q1, q1)
+    dot = np.abs(dot)
+    theta = np.arccos(np.clip(dot, -1.0, 1.0))
+    sin_theta = np.sin(theta)
+    near = sin_theta < 1e-6
+    safe = np.where(near, 1.0, sin_theta)
+    w0 = np.where(near, 1.0 - t, np.sin((1.0 - t) * theta) / safe)
+    w1 = np.where(near, t, np.sin(t * theta) / safe)
+    out = w0 * q0 + w1 * q1
+    return out / np.linalg.norm(out, axis=-1, keepdims=True)
+
+
+def rotation_vector_between(q_from: np.ndarray, q_to: np.ndarray) -> np.ndarray:
+    """World-frame rotation vector (axis · angle, the short way) turning ``q_from`` into
+    ``q_to``: what an angular velocity must integrate to over one unit of time."""
+    d = quat_multiply(q_to, quat_conjugate(q_from))
+    d = np.where(d[..., :1] < 0, -d, d)
+    s = np.linalg.norm(d[..., 1:], axis=-1, keepdims=True)
+    small = s < 1e-12
+    angle = 2.0 * np.arctan2(s, d[..., :1])
+    return np.where(small, 2.0 * d[..., 1:], d[..., 1:] / np.where(small, 1.0, s) * angle)
