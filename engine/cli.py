@@ -15,6 +15,8 @@ import traceback
 from pathlib import Path
 from typing import Any
 
+from engine.physics.backend import BackendName
+
 log = logging.getLogger("colosseum")
 
 USAGE_ERROR = 2
@@ -44,7 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
     limit.add_argument("--frames", type=_positive(int), help="frames to run")
     run.add_argument("--headless", action="store_true",
                      help="no window (automatic without a display)")
-    run.add_argument("--backend", choices=["ode", "pymunk", "ballistic"], default=None,
+    run.add_argument("--backend", choices=list(BackendName), default=None,
                      help="dynamics backend (default: the scene's, else ode)")
     run.add_argument("--mode", choices=["serial", "threaded"], default="serial",
                      help="serial: everything on the main thread; threaded: physics on its own")

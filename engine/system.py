@@ -75,7 +75,7 @@ def system(phase: Phase = Phase.SCRIPT, reads: tuple[type, ...] = (),
     ... def report(engine, dt):
     ...     pass
     >>> report.phase.name, report.reads
-    ('SCRIPT', (<class 'components.Transform'>,))
+    ('SCRIPT', (<class 'components.transform.Transform'>,))
     """
 
     def wrap(fn: Callable[[Engine, float], None]) -> FunctionSystem:

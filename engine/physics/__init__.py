@@ -1,6 +1,6 @@
 """Dynamics backends behind one protocol, picked by name.
 
->>> sorted(BACKENDS)
+>>> sorted(map(str, BACKENDS))
 ['ballistic', 'ode', 'pymunk']
 """
 
@@ -10,6 +10,7 @@ import importlib
 
 from engine.physics.backend import (
     CONTACT_DTYPE,
+    BackendName,
     BodyState,
     DynamicsBackend,
     MaterialPair,
@@ -18,10 +19,10 @@ from engine.physics.backend import (
 )
 
 #: name -> "module:Class". Registered lazily so importing the engine loads no physics library.
-BACKENDS: dict[str, str] = {
-    "ode": "engine.physics.ode3d:OdeBackend",
-    "pymunk": "engine.physics.pymunk2d:PymunkBackend",
-    "ballistic": "engine.physics.ballistic:BallisticBackend",
+BACKENDS: dict[BackendName, str] = {
+    BackendName.ODE: "engine.physics.ode3d:OdeBackend",
+    BackendName.PYMUNK: "engine.physics.pymunk2d:PymunkBackend",
+    BackendName.BALLISTIC: "engine.physics.ballistic:BallisticBackend",
 }
 
 
@@ -49,6 +50,7 @@ def create_backend(name: str) -> DynamicsBackend:
 
 __all__ = [
     "BACKENDS",
+    "BackendName",
     "CONTACT_DTYPE",
     "BackendUnavailable",
     "BodyState",

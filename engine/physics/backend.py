@@ -13,11 +13,22 @@ thread in threaded mode). Nothing here is thread-safe; the engine's
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
 from components import Joint, Physical
+
+
+class BackendName(StrEnum):
+    """The dynamics backends, by the name a scene (``World { Dynamics ... }``) or
+    ``--backend`` picks them."""
+
+    ODE = "ode"
+    PYMUNK = "pymunk"
+    BALLISTIC = "ballistic"
+
 
 #: One contact between two bodies in one step. ``b`` is -1 for the static world
 #: (ground planes and static geometry without a key).

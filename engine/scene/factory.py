@@ -34,6 +34,7 @@ from components import (
     Transform,
     Visual,
 )
+from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from engine.physics.backend import (
     DynamicsBackend,
     MaterialPair,
@@ -59,9 +60,6 @@ from engine.scene.parser import paused_gc
 if TYPE_CHECKING:
     from engine.app import Engine
 
-JOINT_KINDS = {"Hinge": "hinge", "MotorizedHinge": "motorized_hinge", "Ball": "ball",
-               "Slider": "slider", "Universal": "universal", "Hinge2": "hinge2",
-               "Fixed": "fixed", "SixDOF": "six_dof"}
 #: Shared defaults (tuples: immutable, so every shape and pose may hold the same one).
 _ORIGIN = (0.0, 0.0, 0.0)
 _IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -335,8 +333,7 @@ class _Builder:
             comps.append(Script(file=r("Script")))
         if r.has("Hand"):
             h = _Reader(r.value("Hand").data, "Hand")
-            comps.append(Hand(tracker=h("Tracker"), target_position=position,
-                              target_orientation=quat, max_force=float(h("MaxForce")),
+            comps.append(Hand(tracker=h("Tracker"), max_force=float(h("MaxForce")),
                               max_torque=float(h("MaxTorque")),
                               deviation_distance=float(h("DeviationDistance"))))
         if r.has("Controller"):
@@ -472,7 +469,7 @@ class _Builder:
         bodies, their poses now (where they are when the joint is made)."""
         r = _Reader(blk, "Joint")
         jid = r("ID") or f"joint{index}"
-        kind = JOINT_KINDS[r("Type")]
+        kind = SCENE_JOINT_TYPES[r("Type")]
         bodies = r("Bodies")
         for name in bodies:
             if name not in self.physical_ids:
@@ -480,7 +477,7 @@ class _Builder:
                                   f"joint body '{name}' has no PhysicalAttributes")
                 return None
         a, b = bodies[0], bodies[1] if len(bodies) > 1 else None
-        linear = kind == "slider"
+        linear = kind in LINEAR_KINDS
         conv = (lambda x: x) if linear else math.radians
         anchor = _floats(r("Anchor")) if r.has("Anchor") else self.poses[a][0]
         low, high = r("Low"), r("High")

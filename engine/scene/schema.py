@@ -20,6 +20,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from components.joint import SCENE_JOINT_TYPES
+from components.shape import ShapeKind
+from engine.physics.backend import BackendName
+
 # Field types.
 INT_T = "int"
 FLOAT_T = "float"
@@ -63,12 +67,12 @@ def _id(kind: str, required: bool = False) -> Field:
 SLEEP_STEPS = 20
 SLEEP_SAMPLES = 5
 
-PRIMITIVES = ("sphere", "box", "capsule", "cylinder", "plane")
+PRIMITIVES = (ShapeKind.SPHERE, ShapeKind.BOX, ShapeKind.CAPSULE, ShapeKind.CYLINDER,
+              ShapeKind.PLANE)
 PARSE_METHODS = ("TriangleMesh", "ConvexHull", "Box", "Sphere")
-JOINT_TYPES = ("Hinge", "MotorizedHinge", "Ball", "Slider", "Universal", "Hinge2", "Fixed",
-               "SixDOF")
+JOINT_TYPES = tuple(SCENE_JOINT_TYPES)
 LIGHT_TYPES = ("directional", "point", "spot")
-BACKENDS = ("ode", "pymunk", "ballistic")
+BACKENDS = tuple(BackendName)
 
 SCHEMAS: dict[str, dict[str, Field]] = {
     "Scene": {

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from components import Joint, Name, Transform
+from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from engine.physics.backend import SleepState, SupportsSleepState
 from engine.rotation import exact_degrees, quat_to_euler
 from engine.scene import schema as sc
@@ -41,7 +42,7 @@ from engine.scene.db import (
     Value,
 )
 from engine.scene.diagnostics import Loc
-from engine.scene.factory import JOINT_KINDS, SceneIds, SpawnRecord
+from engine.scene.factory import SceneIds, SpawnRecord
 from engine.scene.parser import parse_text
 from engine.scene.writer import write
 
@@ -128,7 +129,7 @@ def _write_body(blk: Block, t: Transform, sleep: SleepState | None) -> None:
 
 def _write_joint(blk: Block, joint: Joint) -> None:
     """A joint as made at first (anchor, axes, where its bodies were) and its motor now."""
-    conv = (lambda x: x) if joint.kind == "slider" else exact_degrees
+    conv = (lambda x: x) if joint.kind in LINEAR_KINDS else exact_degrees
     _set(blk, "Anchor", _vec(joint.anchor))
     _set(blk, "Axis", _vec(joint.axis))
     _set(blk, "Axis2", _vec(joint.axis2))
@@ -166,7 +167,7 @@ def _unique(name: str, taken: set[str]) -> str:
     return found
 
 
-_TYPE_NAMES = {kind: name for name, kind in JOINT_KINDS.items()}
+_TYPE_NAMES = {kind: name for name, kind in SCENE_JOINT_TYPES.items()}
 
 
 def _string(text: str) -> Value:
@@ -246,7 +247,7 @@ class _Spawns:
         joint = _live_joint(self.world, entity, self.names)
         if joint is None:
             return
-        conv = (lambda x: x) if joint.kind == "slider" else exact_degrees
+        conv = (lambda x: x) if joint.kind in LINEAR_KINDS else exact_degrees
         entries = [("ID", _string(self.name(entity, "joint"))),
                    ("Type", _string(_TYPE_NAMES[joint.kind])), ("Bodies", self.bodies(joint))]
         for key, limit in (("Low", joint.low), ("High", joint.high)):

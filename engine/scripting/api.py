@@ -69,6 +69,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from components import Camera, Joint, Name, Physical, Sound, Transform
+from components.joint import SCENE_JOINT_TYPES
 from engine.scripting.runtime import ScriptRuntime, to_python
 
 if TYPE_CHECKING:
@@ -85,8 +86,8 @@ PLUGIN_ALIASES = {"osg": "render", "osgsim": "render", "openalpp": "sound", "ode
 #: Frames a command on a body that is not in the backend yet is retried.
 RETRY_FRAMES = 3
 
-JOINT_KINDS = ("hinge", "motorized_hinge", "ball", "slider", "universal", "hinge2", "fixed",
-               "six_dof")
+#: The joint kinds a script may create: those a scene file may declare.
+JOINT_KINDS = tuple(SCENE_JOINT_TYPES.values())
 
 
 class ScriptAPIError(RuntimeError):

@@ -1,0 +1,64 @@
+"""Constraints between bodies, and the one list of joint kinds."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import StrEnum
+
+
+class JointKind(StrEnum):
+    """Every joint kind; backends, the scene format and Lua all name joints by these."""
+
+    HINGE = "hinge"
+    MOTORIZED_HINGE = "motorized_hinge"
+    BALL = "ball"
+    SLIDER = "slider"
+    UNIVERSAL = "universal"
+    HINGE2 = "hinge2"
+    FIXED = "fixed"
+    SIX_DOF = "six_dof"
+    ANGULAR_MOTOR = "angular_motor"
+    LINEAR_MOTOR = "linear_motor"
+
+
+#: The scene format's ``Joint { Type ... }`` names (the paper's spelling) and their kinds.
+SCENE_JOINT_TYPES: dict[str, JointKind] = {
+    "Hinge": JointKind.HINGE, "MotorizedHinge": JointKind.MOTORIZED_HINGE,
+    "Ball": JointKind.BALL, "Slider": JointKind.SLIDER, "Universal": JointKind.UNIVERSAL,
+    "Hinge2": JointKind.HINGE2, "Fixed": JointKind.FIXED, "SixDOF": JointKind.SIX_DOF,
+}
+
+#: Kinds whose limits and motor act along a line (metres, m/s, N) rather than an angle.
+LINEAR_KINDS = frozenset({JointKind.SLIDER, JointKind.LINEAR_MOTOR})
+
+
+@dataclass(slots=True)
+class Joint:
+    """A constraint between two bodies (``body_b`` None means the static world).
+
+    ``kind`` is a :class:`JointKind`. ``anchor``/``axis`` are in world
+    coordinates at creation. Limits are in radians (angular) or metres (slider).
+    A motor drives ``motor_velocity`` (rad/s or m/s) with at most
+    ``motor_max_force`` (N·m or N). For six_dof, ``body_b`` is the tracked target
+    (or None: the target is set with ``set_joint_target``) and ``motor_max_force``
+    caps both force and torque until ``set_drive_limits`` changes them.
+
+    ``reference`` is the pose (x, y, z, qw, qx, qy, qz) of ``body_a`` and of
+    ``body_b`` (None for the world) when the joint was first made, with ``anchor``
+    and ``axis`` as they were then; a backend makes the joint as if the bodies
+    were there, which re-creates a saved joint exactly. None: where they are now.
+    """
+
+    kind: str = JointKind.HINGE
+    body_a: int = -1
+    body_b: int | None = None
+    anchor: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    axis2: tuple[float, float, float] = (0.0, 1.0, 0.0)
+    low: float | None = None
+    high: float | None = None
+    motor_velocity: float = 0.0
+    motor_max_force: float = 0.0
+    id: str = ""
+    broken: bool = False
+    reference: tuple[tuple[float, ...], tuple[float, ...] | None] | None = None

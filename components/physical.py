@@ -1,0 +1,50 @@
+"""The body an entity has in the dynamics backend, and its surface material."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+from components.shape import Shape
+
+
+class BodyKind(StrEnum):
+    """How a body moves: by the solver, not at all, or along a path it is given."""
+
+    DYNAMIC = "dynamic"
+    STATIC = "static"
+    KINEMATIC = "kinematic"
+
+
+@dataclass(slots=True)
+class MaterialProps:
+    """Surface response of a body: Coulomb friction, restitution, softness."""
+
+    name: str = "default"
+    friction: float = 0.5
+    bounce: float = 0.0
+    bounce_velocity: float = 0.1
+    softness: float = 0.0
+    density: float = 1000.0
+    contact_sound: str | None = None
+
+
+@dataclass(slots=True)
+class Physical:
+    """The body an entity has in the dynamics backend.
+
+    ``kind`` is a :class:`BodyKind`. ``mass`` wins over the material density when
+    both are given. ``category``/``mask`` filter collisions as bit sets: two bodies
+    collide when each one's category meets the other's mask.
+    """
+
+    kind: str = BodyKind.DYNAMIC
+    mass: float | None = 1.0
+    shapes: list[Shape] = field(default_factory=lambda: [Shape()])
+    material: MaterialProps = field(default_factory=MaterialProps)
+    linear_damping: float = 0.0
+    angular_damping: float = 0.0
+    can_sleep: bool = True
+    category: int = 1
+    mask: int = 0xFFFFFFFF
+    gravity: bool = True
