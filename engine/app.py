@@ -21,11 +21,10 @@ from typing import Any, TypeVar
 import numpy as np
 
 from engine.events import Despawned, EventBus, Spawned
-from engine.physics import create_backend
-from engine.physics.backend import DynamicsBackend, WorldSettings
-from engine.physics.driver import PhysicsDriver
+from engine.physics.backend import WorldSettings
+from engine.physics.driver import DetachedPhysics, PhysicsPort
 from engine.realtime import CostLog, Pacing, RealTimeController, Tick
-from engine.system import Phase, Plugin, System, SystemFailure
+from engine.system import Phase, Plugin, System, SystemFailure, order_systems
 from engine.world import World
 
 log = logging.getLogger("colosseum")
@@ -61,11 +60,16 @@ class EngineConfig:
 
 
 class Engine:
-    """Owns one private ECS world and runs systems phase by phase, frame after frame."""
+    """Owns one private ECS world and runs systems phase by phase, frame after frame.
+
+    The engine itself simulates nothing: plugins bring the systems, physics included
+    (``systems.create_engine`` assembles the default set). Without a physics plugin,
+    ``physics`` is a :class:`~engine.physics.driver.DetachedPhysics` that keeps the
+    commands pushed to it.
+    """
 
     def __init__(self, config: EngineConfig | None = None,
-                 plugins: Iterable[Plugin] | None = None,
-                 backend: DynamicsBackend | None = None,
+                 plugins: Iterable[Plugin] = (),
                  clock: Callable[[], float] = time.perf_counter,
                  sleep: Callable[[float], None] = time.sleep) -> None:
         self.config = config or EngineConfig()
@@ -89,23 +93,29 @@ class Engine:
         self._started = False
         self._closed = False
         self._quit = False
-        backend = backend or create_backend(cfg.backend)
-        backend.configure(cfg.world)
-        self.physics = PhysicsDriver(backend, cfg.mode, cfg.pacing(), clock=clock)
+        #: The wall clock every controller of this engine reads (injectable for tests).
+        self.clock = clock
+        self.physics: PhysicsPort = DetachedPhysics()
         self.controller = RealTimeController(cfg.pacing(), clock=clock, sleep=sleep)
-        if plugins is None:
-            from systems import default_plugins
-
-            plugins = default_plugins(self.config)
         for plugin in plugins:
             self.add_plugin(plugin)
 
     # -- composition --------------------------------------------------------
     def add_system(self, system: System) -> System:
-        self.systems[system.phase].append(system)
+        """Add a system to its phase, ordered by its ``before``/``after`` declarations."""
+        self.systems[system.phase] = order_systems([*self.systems[system.phase], system])
         if self._started:
             system.setup(self)
         return system
+
+    def attach_physics(self, physics: PhysicsPort) -> None:
+        """Make ``physics`` the engine's (the physics plugin's job); commands already
+        pushed to a detached port are handed over in order."""
+        previous = self.physics
+        if isinstance(previous, DetachedPhysics):
+            for command in previous.outbox:
+                physics.push(command)
+        self.physics = physics
 
     def add_plugin(self, plugin: Plugin) -> Plugin:
         """Build a plugin once; a second plugin of the same name is ignored."""

@@ -113,13 +113,14 @@ def _fail(message: str, code: int = USAGE_ERROR) -> int:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from engine.app import Engine, EngineConfig
+    from engine.app import EngineConfig
     from engine.content import ContentError, load_systems, resolve
     from engine.physics import BackendUnavailable
     from engine.recording import InputRecorder, InputReplayer, ReplayError
     from engine.scene_loading import SceneLoadError, load_content_scene
     from engine.stats import collect, status_line, write_json
     from engine.system import SystemFailure
+    from systems import create_engine
 
     try:
         content = resolve(args.path)
@@ -146,7 +147,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     )
     scene.configure(config, backend=args.backend, dt=args.dt)
     try:
-        engine = Engine(config)
+        engine = create_engine(config)
     except BackendUnavailable as exc:
         return _fail(str(exc), 1)
     try:

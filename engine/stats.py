@@ -17,10 +17,9 @@ def collect(engine: Engine) -> dict[str, Any]:
     physics = engine.physics
     steps = physics.controller.step_costs
     wall = engine.controller.wall_time
-    dynamics = _dynamics(engine)
     stats: dict[str, Any] = {
         "mode": engine.config.mode,
-        "backend": getattr(physics.backend, "name", "?"),
+        "backend": physics.backend_name,
         "frames": engine.frame,
         "steps": physics.steps,
         "sim_seconds": physics.time,
@@ -32,7 +31,7 @@ def collect(engine: Engine) -> dict[str, Any]:
         "frame_ms_p99": engine.frame_costs.percentile(99) * 1e3,
         "bodies": len(physics.snapshot.bodies.keys),
         "entities": len(engine.world),
-        "contacts": dynamics.contacts_total if dynamics is not None else 0,
+        "contacts": physics.contacts_total,
         "dt": engine.controller.dt,
         "substeps": engine.controller.substeps,
         "slept_seconds": engine.controller.slept,
@@ -40,12 +39,6 @@ def collect(engine: Engine) -> dict[str, Any]:
     for name, source in engine.stat_sources.items():
         stats[name] = source()
     return stats
-
-
-def _dynamics(engine: Engine) -> Any:
-    from systems.dynamics import DynamicsSystem
-
-    return engine.try_resource(DynamicsSystem)
 
 
 def status_line(engine: Engine) -> str:

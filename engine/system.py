@@ -17,13 +17,19 @@ if TYPE_CHECKING:
 
 
 class Phase(IntEnum):
-    """Phases of one frame, in the order they run."""
+    """Phases of one frame, in the order they run.
+
+    INPUT drains devices; SCRIPT runs scripts; PRE_PHYSICS turns this frame's input into
+    actuation (controllers, hand drives) so it reaches this frame's step; FIXED steps the
+    dynamics; POST_PHYSICS reacts to contacts; RENDER draws.
+    """
 
     INPUT = 0
     SCRIPT = 1
-    FIXED = 2
-    POST_PHYSICS = 3
-    RENDER = 4
+    PRE_PHYSICS = 2
+    FIXED = 3
+    POST_PHYSICS = 4
+    RENDER = 5
 
 
 class System:
@@ -32,6 +38,9 @@ class System:
     phase: ClassVar[Phase] = Phase.SCRIPT
     reads: ClassVar[tuple[type, ...]] = ()
     writes: ClassVar[tuple[type, ...]] = ()
+    #: Names of systems of the same phase this one runs before / after.
+    before: ClassVar[tuple[str, ...]] = ()
+    after: ClassVar[tuple[str, ...]] = ()
 
     @property
     def name(self) -> str:
@@ -51,11 +60,14 @@ class FunctionSystem(System):
     """A plain function ``f(engine, dt)`` registered as a system."""
 
     def __init__(self, fn: Callable[[Engine, float], None], phase: Phase,
-                 reads: tuple[type, ...], writes: tuple[type, ...]) -> None:
+                 reads: tuple[type, ...], writes: tuple[type, ...],
+                 before: tuple[str, ...] = (), after: tuple[str, ...] = ()) -> None:
         self.fn = fn
         self.phase = phase  # type: ignore[misc]
         self.reads = reads  # type: ignore[misc]
         self.writes = writes  # type: ignore[misc]
+        self.before = before  # type: ignore[misc]
+        self.after = after  # type: ignore[misc]
 
     @property
     def name(self) -> str:
@@ -66,9 +78,13 @@ class FunctionSystem(System):
 
 
 def system(phase: Phase = Phase.SCRIPT, reads: tuple[type, ...] = (),
-           writes: tuple[type, ...] = ()) -> Callable[[Callable[[Engine, float], None]],
-                                                      FunctionSystem]:
+           writes: tuple[type, ...] = (), before: tuple[str, ...] = (),
+           after: tuple[str, ...] = ()) -> Callable[[Callable[[Engine, float], None]],
+                                                    FunctionSystem]:
     """Decorator: turn ``def f(engine, dt)`` into a system.
+
+    ``before``/``after`` name systems of the same phase (class names, or a function's
+    qualified name) this one must run before or after.
 
     >>> from components import Transform
     >>> @system(Phase.SCRIPT, reads=(Transform,))
@@ -79,9 +95,40 @@ def system(phase: Phase = Phase.SCRIPT, reads: tuple[type, ...] = (),
     """
 
     def wrap(fn: Callable[[Engine, float], None]) -> FunctionSystem:
-        return FunctionSystem(fn, phase, reads, writes)
+        return FunctionSystem(fn, phase, reads, writes, before, after)
 
     return wrap
+
+
+def order_systems(systems: list[System]) -> list[System]:
+    """``systems`` (one phase's, in the order added) reordered so every ``before``/``after``
+    holds; otherwise the order added is kept. Names that match no system are ignored
+    (the system they name may come from a plugin that is not loaded).
+
+    >>> a, b = system()(lambda e, dt: None), system(before=("first",))(lambda e, dt: None)
+    >>> def first(e, dt): pass
+    >>> [s.name for s in order_systems([a, system()(first), b])][1:]
+    ['<lambda>', 'first']
+    """
+    names = {s.name for s in systems}
+    index = {id(s): i for i, s in enumerate(systems)}
+    after: dict[int, set[int]] = {id(s): set() for s in systems}
+    for s in systems:
+        for other in systems:
+            if other.name in s.after or s.name in other.before:
+                after[id(s)].add(id(other))
+    ordered: list[System] = []
+    placed: set[int] = set()
+    while len(ordered) < len(systems):
+        ready = [s for s in systems if id(s) not in placed and after[id(s)] <= placed]
+        if not ready:
+            stuck = sorted(s.name for s in systems if id(s) not in placed)
+            raise ValueError(f"systems {', '.join(stuck)} order each other in a cycle "
+                             f"(before/after among {sorted(names)})")
+        first = min(ready, key=lambda s: index[id(s)])
+        ordered.append(first)
+        placed.add(id(first))
+    return ordered
 
 
 @runtime_checkable

@@ -7,7 +7,9 @@ never see each other's entities. Only the main thread may use a World.
 
 Transforms added to a world are adopted by its :class:`PoseTable`: their arrays
 become views into contiguous numpy tables, so the dynamics system writes every
-pose with one vectorised assignment instead of a Python loop over bodies.
+pose with one vectorised assignment instead of a Python loop over bodies. An
+adopted Transform stays bound: assigning a field (``t.position = (1, 2, 3)``)
+writes into its row rather than detaching it, so the engine sees every write.
 """
 
 from __future__ import annotations
@@ -48,6 +50,35 @@ def row_index(rows: np.ndarray) -> slice | np.ndarray:
     if n and rows[-1] - rows[0] == n - 1 and (n == 1 or bool(np.all(np.diff(rows) == 1))):
         return slice(int(rows[0]), int(rows[-1]) + 1)
     return rows
+
+
+class AdoptedTransform(Transform):
+    """A Transform whose arrays are rows of a pose table (see :class:`PoseTable`).
+
+    Assigning a field copies into the row, so ``t.position = new`` moves the entity
+    like ``t.position[:] = new`` does instead of silently detaching it from the table.
+
+    >>> table = PoseTable()
+    >>> t = Transform()
+    >>> table.adopt(1, t)
+    >>> t.position = (1.0, 2.0, 3.0)
+    >>> table.position[table.row_of[1]].tolist()
+    [1.0, 2.0, 3.0]
+    """
+
+    __slots__ = ()
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        getattr(self, name)[...] = value
+
+
+_set = object.__setattr__
+
+
+def _kind(component: Any) -> type:
+    """The type a component is filed under (an adopted Transform is still a Transform)."""
+    kind = type(component)
+    return Transform if kind is AdoptedTransform else kind
 
 
 class PoseTable:
@@ -105,6 +136,7 @@ class PoseTable:
             return
         transform = self._owner[row]
         if transform is not None:  # detach: keep the values, drop the views
+            _set(transform, "__class__", Transform)
             transform.position = transform.position.copy()
             transform.orientation = transform.orientation.copy()
             transform.linear_velocity = transform.linear_velocity.copy()
@@ -119,10 +151,11 @@ class PoseTable:
         return np.fromiter((get(int(e), -1) for e in entities), dtype=np.int64)
 
     def _bind(self, row: int, transform: Transform) -> None:
-        transform.position = self.position[row]
-        transform.orientation = self.orientation[row]
-        transform.linear_velocity = self.linear_velocity[row]
-        transform.angular_velocity = self.angular_velocity[row]
+        _set(transform, "position", self.position[row])
+        _set(transform, "orientation", self.orientation[row])
+        _set(transform, "linear_velocity", self.linear_velocity[row])
+        _set(transform, "angular_velocity", self.angular_velocity[row])
+        _set(transform, "__class__", AdoptedTransform)
 
     def _use(self, table: np.ndarray) -> None:
         self.table = table
@@ -168,15 +201,15 @@ class World:
         self._on_remove[component_type].append(hook)
 
     def _added(self, entity: int, component: Any) -> None:
-        if type(component) is Transform:
+        if isinstance(component, Transform):
             self.poses.adopt(entity, component)
-        for hook in self._on_add.get(type(component), ()):
+        for hook in self._on_add.get(_kind(component), ()):
             hook(entity, component)
 
     def _removing(self, entity: int, component: Any) -> None:
-        for hook in self._on_remove.get(type(component), ()):
+        for hook in self._on_remove.get(_kind(component), ()):
             hook(entity, component)
-        if type(component) is Transform:
+        if isinstance(component, Transform):
             self.poses.release(entity)
 
     # -- entities ----------------------------------------------------------
@@ -205,7 +238,7 @@ class World:
             entities.append(entity)
             made.append((entity, components))
             for component in components:
-                if type(component) is Transform:
+                if isinstance(component, Transform):
                     posed.append(entity)
                     transforms.append(component)
         self.poses.adopt_many(posed, transforms)
@@ -213,7 +246,7 @@ class World:
         if hooks:
             for entity, components in made:
                 for component in components:
-                    for hook in hooks.get(type(component), ()):
+                    for hook in hooks.get(_kind(component), ()):
                         hook(entity, component)
         return entities
 
@@ -232,10 +265,11 @@ class World:
 
     def add_component(self, entity: int, component: Any) -> None:
         self._enter()
-        old = esper.try_component(entity, type(component))
+        kind = _kind(component)
+        old = esper.try_component(entity, kind)
         if old is not None:
             self._removing(entity, old)
-        esper.add_component(entity, component)
+        esper.add_component(entity, component, type_alias=kind)
         self._added(entity, component)
 
     def remove_component(self, entity: int, component_type: type[C]) -> C | None:
@@ -261,11 +295,11 @@ class World:
     # -- queries -----------------------------------------------------------
     def entities(self) -> Iterator[int]:
         self._enter()
-        return iter(list(esper._entities))  # noqa: SLF001 - esper has no public listing
+        return iter(list(esper.get_entities()))
 
     def __len__(self) -> int:
         self._enter()
-        return len(esper._entities)  # noqa: SLF001
+        return sum(1 for _ in esper.get_entities())
 
     def component_for_entity(self, entity: int, component_type: type[C]) -> C:
         self._enter()

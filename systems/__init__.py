@@ -1,7 +1,9 @@
-"""Engine systems, one module each; every module exposes a plugin.
+"""Engine systems, one module each; every module exposes a plugin. This package is where
+an application is assembled: :func:`default_plugins` is what ``colosseum run`` starts with,
+:func:`create_engine` an engine built with them.
 
-Plugins are registered by name so scenes and Lua's ``requestPlugin`` can load
-them; :func:`default_plugins` is what ``colosseum run`` starts with.
+Plugins are registered by name (:data:`PLUGINS`, the one list of plugin names and the
+paper's aliases for them) so scenes and Lua's ``requestPlugin`` can load them.
 """
 
 from __future__ import annotations
@@ -9,8 +11,10 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
+from engine.app import Engine, EngineConfig
+
 if TYPE_CHECKING:
-    from engine.app import Engine, EngineConfig
+    from engine.system import Plugin
 
 #: plugin name -> "module:Class"; aliases from the paper's plugin names.
 PLUGINS: dict[str, str] = {
@@ -21,7 +25,7 @@ PLUGINS: dict[str, str] = {
     "sound": "systems.sound:SoundPlugin",
 }
 ALIASES: dict[str, str] = {"osg": "render", "osgsim": "render", "openalpp": "sound",
-                           "openal": "sound"}
+                           "openal": "sound", "ode": "physics", "dynamics": "physics"}
 
 
 def load_plugin(name: str) -> Any:
@@ -53,9 +57,15 @@ def wants_render(config: EngineConfig) -> bool:
             or bool(opts.get("record_frames")))
 
 
-def default_plugins(config: EngineConfig) -> list[Any]:
+def default_plugins(config: EngineConfig) -> list[Plugin]:
     plugins = [RegistryPlugin(), *(load_plugin(name) for name in
                                    ("physics", "scripting", "controllers", "sound"))]
     if wants_render(config):
         plugins.append(load_plugin("render"))
     return plugins
+
+
+def create_engine(config: EngineConfig | None = None, **kwargs: Any) -> Engine:
+    """An engine with the default plugins (``kwargs`` go to :class:`Engine`)."""
+    config = config or EngineConfig()
+    return Engine(config, plugins=default_plugins(config), **kwargs)

@@ -24,11 +24,11 @@ Targets (``Controller.target``):
   times the gain (clamped per component); for a scalar input the object's start
   position moved by the value along its start forward axis (local +X).
 
-Every actuation goes through the physics command queue, so controllers work in
-serial and threaded mode; the system runs in POST_PHYSICS (after the frame's new
-bodies reached the backend), so an input acts from the next physics step on.
-A controller naming an unknown input kind, joint or object is reported once and
-then ignored.
+Every actuation is a physics command, so controllers work in serial and threaded
+mode. The system runs in PRE_PHYSICS: input read in this frame's INPUT phase acts
+in this frame's physics step (new bodies are queued when they are spawned, so a
+controller's command always follows its body's creation). A controller naming an
+unknown input kind, joint or object is reported once and then ignored.
 """
 
 from __future__ import annotations
@@ -41,7 +41,15 @@ import numpy as np
 
 from components import Controller, Joint, Name, Transform
 from engine.events import InputEvent, KeyEvent
-from engine.rotation import local_axis
+from engine.messages import MessageLog
+from engine.physics.commands import (
+    ApplyForce,
+    Command,
+    CommandError,
+    SetKinematicTarget,
+    SetMotor,
+)
+from engine.rotation import IDENTITY, local_axis
 from engine.system import Phase, System
 
 if TYPE_CHECKING:
@@ -65,8 +73,7 @@ class _Binding:
 
 
 class ControllerSystem(System):
-    # after the dynamics system has sent the frame's new bodies and joints to the backend
-    phase = Phase.POST_PHYSICS
+    phase = Phase.PRE_PHYSICS
     reads = (Controller, Joint, Name)
     writes = (Controller,)
 
@@ -77,6 +84,7 @@ class ControllerSystem(System):
         self._wheel_acc: dict[str, float] = {}
         self._bindings: dict[int, _Binding | None] = {}
         self._bad: set[int] = set()
+        self._messages = MessageLog(log)
 
     def setup(self, engine: Engine) -> None:
         engine.events.subscribe(KeyEvent, self._on_key)
@@ -171,36 +179,42 @@ class ControllerSystem(System):
                     seen_wheels.add(b.input_args[0])
             if raw is None:
                 continue
-            key = b.target
             if isinstance(raw, np.ndarray):  # tracker position -> kinematic target
                 target = np.clip(raw * c.gain, c.low, c.high)
                 c.value = float(np.linalg.norm(target))
             else:
                 c.value = float(min(max(raw * c.gain, c.low), c.high))
                 target = None
-            if b.target_kind == "motor":
-                if c.value != b.sent:
-                    b.sent = c.value
-                    joint = engine.world.try_component(key, Joint)
-                    if joint is None:
-                        continue
-                    joint.motor_velocity = c.value
-                    velocity, force = c.value, joint.motor_max_force
-                    physics.push(lambda be, k=key, v=velocity, f=force: be.set_motor(k, v, f))
-            elif b.target_kind == "force":
-                t = engine.world.try_component(key, Transform)
-                if c.value != 0.0 and t is not None:
-                    force_vec = local_axis(t.orientation, 0) * c.value
-                    physics.push(lambda be, k=key, f=force_vec: be.add_force(k, f))
-            else:
-                if target is None:
-                    assert b.origin is not None and b.direction is not None
-                    target = b.origin + b.direction * c.value
-                t = engine.world.try_component(key, Transform)
-                orientation = np.array([1.0, 0, 0, 0]) if t is None else t.orientation.copy()
-                step = engine.config.dt
-                physics.push(lambda be, k=key, p=target, q=orientation, h=step:
-                             be.set_kinematic_target(k, p, q, h))
+            try:
+                command = self._actuate(engine, b, c, target)
+            except CommandError as exc:
+                self._messages.warn(f"controller {c.input!r} -> {c.target!r}: {exc}; "
+                                    "the value is not applied")
+                continue
+            if command is not None:
+                physics.push(command)
+
+    def _actuate(self, engine: Engine, b: _Binding, c: Controller,
+                 target: np.ndarray | None) -> Command | None:
+        """The command that sends ``c.value`` (or a tracked ``target``) to the actuator."""
+        key = b.target
+        if b.target_kind == "motor":
+            joint = engine.world.try_component(key, Joint)
+            if c.value == b.sent or joint is None:
+                return None
+            b.sent = c.value
+            joint.motor_velocity = c.value
+            return SetMotor(key, c.value, joint.motor_max_force)
+        t = engine.world.try_component(key, Transform)
+        if b.target_kind == "force":
+            if c.value == 0.0 or t is None:
+                return None
+            return ApplyForce(key, local_axis(t.orientation, 0) * c.value)
+        if target is None:
+            assert b.origin is not None and b.direction is not None
+            target = b.origin + b.direction * c.value
+        orientation = IDENTITY if t is None else t.orientation
+        return SetKinematicTarget(key, target, orientation, engine.config.dt)
 
 
 class ControllersPlugin:

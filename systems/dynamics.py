@@ -1,25 +1,44 @@
-"""The dynamics system: Physical and Joint components ↔ the dynamics backend.
+"""The physics plugin: it owns the dynamics backend and keeps the ECS and the backend in step.
 
-New bodies and joints are sent to the backend through the command queue as
-soon as they are spawned (a body without a Transform yet waits for the FIXED
-phase), so commands queued after a spawn always find their body. In serial
-mode this system steps the backend; in threaded mode the physics thread does
-and this system only picks up the latest snapshot. Either way, every Transform
-is updated by one vectorised numpy assignment per array, with no Python work
-per body.
+:class:`DynamicsPlugin` creates the backend the configuration names, wraps it in a
+:class:`~engine.physics.driver.PhysicsDriver` and makes that the engine's
+``physics``; a process without it (a network client) runs scripts and rendering
+with no local physics. :class:`DynamicsSystem` then, on the main thread:
+
+* turns Physical and Joint components into commands as soon as they are added
+  (a body without a Transform yet waits for the FIXED phase), so commands queued
+  after a spawn always find their body;
+* detects writes to a physical body's Transform (a Python system moving a box,
+  even by rebinding ``t.position``) and turns them into SetPose/SetVelocity
+  commands before the step, instead of letting the readback overwrite them;
+* steps the backend (serial mode) or picks up the physics thread's latest
+  snapshot (threaded mode), and copies it into the pose table with one
+  vectorised assignment, with no Python work per body.
 """
 
 from __future__ import annotations
 
 import logging
+from collections import deque
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from components import Joint, Physical, Transform
+from components import Joint, Name, Physical, Transform
 from engine.events import BodyFault, Contacts
+from engine.messages import MessageLog
+from engine.physics import create_backend
 from engine.physics.backend import BodyState, DynamicsBackend
-from engine.physics.driver import Snapshot
+from engine.physics.commands import (
+    AddBody,
+    AddJoint,
+    CommandError,
+    RemoveBody,
+    RemoveJoint,
+    SetPose,
+    SetVelocity,
+)
+from engine.physics.driver import PhysicsDriver, Snapshot
 from engine.system import Phase, System
 from engine.world import PoseTable, row_index
 
@@ -28,71 +47,158 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("colosseum.dynamics")
 
+#: Frames a removed entity's scene ID is remembered, so late messages can still name it.
+NAME_GRACE_FRAMES = 10
+
 
 class DynamicsSystem(System):
     phase = Phase.FIXED
-    reads = (Physical, Joint)
+    reads = (Physical, Joint, Name)
     writes = (Transform,)
 
-    def __init__(self) -> None:
+    def __init__(self, driver: PhysicsDriver) -> None:
+        self.driver = driver
         self._new_bodies: list[tuple[int, Physical]] = []
         #: The snapshot the Transforms reflect now (newer ones may already exist in
         #: threaded mode; systems wanting a consistent view read this one).
         self.snapshot: Snapshot | None = None
         self._copy: PoseCopy | None = None
-        self.contacts_total = 0
+        self._names: dict[int, str] = {}
+        self._forget: deque[tuple[int, int]] = deque()
+        self._moved: set[int] = set()  # entities already told their Transform write is taken
+        self.messages = MessageLog(log)
+        driver.names = self._names
+
+    @property
+    def contacts_total(self) -> int:
+        """Contacts reported since the start (every step's, in either mode)."""
+        return self.driver.contacts_total
 
     def setup(self, engine: Engine) -> None:
         world = engine.world
+        names = self._names
+        world.on_add(Name, lambda e, n: names.__setitem__(e, n.id))
+        world.on_remove(Name, lambda e, n: self._forget.append((engine.frame, e)))
         world.on_add(Physical, lambda e, c: self._add_body(engine, e, c))
-        world.on_add(Joint, lambda e, c: engine.physics.push(_add_joint(e, c)))
-        world.on_remove(Physical, lambda e, c: self._remove_body(engine, e))
-        world.on_remove(Joint, lambda e, c: engine.physics.push(_remove_joint(e)))
+        world.on_add(Joint, lambda e, c: self._push_joint(e, c))
+        world.on_remove(Physical, lambda e, c: self._remove_body(e))
+        world.on_remove(Joint, lambda e, c: self.driver.push(RemoveJoint(e)))
+        for entity, name in world.get_component(Name):
+            names[entity] = name.id
         # in the order they were made (esper's sets iterate in hash order), so a solver
         # that depends on constraint order sees the same world however it was built
         for entity, physical in sorted(world.get_component(Physical), key=_first):
             self._add_body(engine, entity, physical)
         for entity, joint in sorted(world.get_component(Joint), key=_first):
-            engine.physics.push(_add_joint(entity, joint))
+            self._push_joint(entity, joint)
 
+    def shutdown(self, engine: Engine) -> None:
+        self.messages.flush()
+
+    # -- ECS -> backend ---------------------------------------------------------
     def _add_body(self, engine: Engine, entity: int, physical: Physical,
                   waited: bool = False) -> None:
         """Queue the body at once, so commands queued after the spawn find it."""
         t = engine.world.try_component(entity, Transform)
         if t is None and not waited:  # a Transform may follow with add_component: wait
             self._new_bodies.append((entity, physical))
-        else:
-            engine.physics.push(_add_body(entity, physical, t or Transform()))
+            return
+        t = t or Transform()
+        try:
+            command = AddBody(entity, physical, t.position, t.orientation, t.linear_velocity,
+                              t.angular_velocity)
+        except CommandError as exc:
+            self.messages.error(f"{self.driver.describe(entity)} has no body: {exc}")
+            return
+        self.driver.push(command)
 
-    def _remove_body(self, engine: Engine, entity: int) -> None:
+    def _push_joint(self, entity: int, joint: Joint) -> None:
+        try:
+            command = AddJoint(entity, joint)
+        except CommandError as exc:
+            self.messages.error(f"{self.driver.describe(entity, joint=True)} is not made: {exc}")
+            return
+        self.driver.push(command)
+
+    def _remove_body(self, entity: int) -> None:
         if any(pair[0] == entity for pair in self._new_bodies):  # never reached the backend
             self._new_bodies = [pair for pair in self._new_bodies if pair[0] != entity]
             return
-        engine.physics.push(_remove_body(entity))
+        self.driver.push(RemoveBody(entity))
 
     def _send_new(self, engine: Engine) -> None:
         bodies, self._new_bodies = self._new_bodies, []
         for entity, physical in bodies:
             self._add_body(engine, entity, physical, waited=True)
 
+    # -- per frame ----------------------------------------------------------------
     def run(self, engine: Engine, dt: float) -> None:
+        driver = self.driver
+        driver.frame = engine.frame
         self._send_new(engine)
-        physics = engine.physics
+        self._forget_names(engine.frame)
+        if self._copy is not None:
+            self._take_transform_writes(engine)
+        driver.teleported.clear()
         if engine.config.mode == "serial":
             tick = engine.tick
-            engine.physics_seconds = physics.step(tick.dt, tick.substeps)
+            engine.physics_seconds = driver.step(tick.dt, tick.substeps)
         else:
-            physics.start()  # after the first bodies are queued; no-op once running
-        snapshot = physics.snapshot
+            driver.start()  # after the first bodies are queued; no-op once running
+        snapshot = driver.snapshot
         if snapshot is not self.snapshot:
             self._sync(engine, snapshot)
-        contacts = physics.take_contacts()
+        contacts = driver.take_contacts()
         if len(contacts):
-            self.contacts_total += len(contacts)
             engine.events.emit(Contacts(contacts))
-        for key, message in physics.take_faults():
-            log.warning("body %s: %s", key, message)
+        for key, message in driver.take_faults():
+            self.messages.warn(f"{driver.describe(key)}: {message}")
             engine.events.emit(BodyFault(key, message))
+
+    def _take_transform_writes(self, engine: Engine) -> None:
+        """Transforms of bodies written since the last sync become teleports."""
+        assert self._copy is not None
+        copy, driver = self._copy, self.driver
+        written = copy.changed()
+        keys = copy.synced_keys
+        for i in written.tolist():
+            entity = int(keys[i])
+            row = copy.row(i)
+            if entity in driver.teleported or self._teleport(engine, entity, row,
+                                                             copy.synced[i]):
+                copy.synced[i] = row
+
+    def _teleport(self, engine: Engine, entity: int, row: np.ndarray,
+                  before: np.ndarray) -> bool:
+        """Push what was written; a value physics cannot take is undone (returns False)."""
+        driver = self.driver
+        try:
+            pose = SetPose(entity, row[0:3], row[3:7]) if (row[:7] != before[:7]).any() \
+                else None
+            velocity = SetVelocity(entity, row[7:10], row[10:13]) \
+                if (row[7:] != before[7:]).any() else None
+        except CommandError as exc:
+            self.messages.error(f"{driver.describe(entity)}: its Transform was given a value "
+                                f"physics cannot take ({exc}); the write is undone",
+                                f"frame {engine.frame}: ")
+            row[...] = before
+            return False
+        for command in (pose, velocity):
+            if command is not None:
+                driver.push(command)
+        if entity not in self._moved:
+            self._moved.add(entity)
+            log.info("frame %d: the Transform of %s was written; the body is moved there "
+                     "(engine.physics.set_pose does this explicitly)", engine.frame,
+                     driver.describe(entity))
+        return True
+
+    def _forget_names(self, frame: int) -> None:
+        forget = self._forget
+        while forget and forget[0][0] + NAME_GRACE_FRAMES <= frame:
+            _, entity = forget.popleft()
+            self._names.pop(entity, None)
+            self._moved.discard(entity)
 
     def _sync(self, engine: Engine, snapshot: Snapshot) -> None:
         self.snapshot = snapshot
@@ -112,7 +218,8 @@ class PoseCopy:
 
     A layout is the bodies' keys (in a state read's row order) and the table's
     version. Both tables share one row layout, so a copy is one assignment: into a
-    kept view where the rows are one run and every body has a Transform.
+    kept view where the rows are one run. :attr:`synced` keeps what was written, so
+    :meth:`changed` finds the rows someone wrote since.
     """
 
     def __init__(self, poses: PoseTable, keys: np.ndarray) -> None:
@@ -120,63 +227,64 @@ class PoseCopy:
         rows = poses.rows(keys)
         valid = rows >= 0
         self._valid = None if valid.all() else valid  # None: every body has a Transform
+        self.synced_keys = keys if self._valid is None else keys[valid]
+        self.synced = np.empty((len(self.synced_keys), 13))
         self._rows = row_index(rows[valid])
         self._poses = poses
-        self._view = poses.table[self._rows] if (
-            self._valid is None and isinstance(self._rows, slice)) else None
+        self._view = poses.table[self._rows] if isinstance(self._rows, slice) else None
+        self._rows_now: tuple[int, np.ndarray] = (self.version, rows[valid])
 
     def fits(self, poses: PoseTable, keys: np.ndarray) -> bool:
         """Whether this plan still holds (a backend may hand out the same key array)."""
         return self.version == poses.version and self._poses is poses and (
             self.keys is keys or np.array_equal(self.keys, keys))
 
+    def rows_now(self) -> np.ndarray:
+        """Table rows of the synced bodies now (-1: no Transform any more); they move when
+        entities come and go between a copy and the next."""
+        version = self._poses.version
+        if self._rows_now[0] != version:
+            self._rows_now = (version, self._poses.rows(self.synced_keys))
+        return self._rows_now[1]
+
+    def changed(self) -> np.ndarray:
+        """Indices (into :attr:`synced_keys`) of the rows written since the last copy."""
+        if self._view is not None and self.version == self._poses.version:
+            return np.flatnonzero((self._view != self.synced).any(axis=1))
+        rows = self.rows_now()
+        kept = np.flatnonzero(rows >= 0)
+        written = (self._poses.table[rows[kept]] != self.synced[kept]).any(axis=1)
+        return kept[written]
+
+    def row(self, i: int) -> np.ndarray:
+        """Synced body ``i``'s row of the table (a view)."""
+        return self._poses.table[self.rows_now()[i]]
+
     def __call__(self, bodies: BodyState) -> None:
         """Body ``i`` (of those with a Transform) → its row."""
+        source = bodies.table if self._valid is None else bodies.table[self._valid]
+        self.synced[...] = source
         if self._view is not None:
-            self._view[...] = bodies.table
-        elif self._valid is None:
-            self._poses.table[self._rows] = bodies.table
+            self._view[...] = source
         else:
-            self._poses.table[self._rows] = bodies.table[self._valid]
-
-
-def _add_body(entity: int, physical: Physical, t: Transform):
-    position = t.position.copy()
-    orientation = t.orientation.copy()
-    linear = t.linear_velocity.copy()
-    angular = t.angular_velocity.copy()
-
-    def add_body(backend: DynamicsBackend) -> None:
-        backend.add_body(entity, physical, position, orientation, linear, angular)
-
-    return add_body
-
-
-def _remove_body(entity: int):
-    def remove_body(backend: DynamicsBackend) -> None:
-        backend.remove_body(entity)
-
-    return remove_body
-
-
-def _add_joint(entity: int, joint: Joint):
-    def add_joint(backend: DynamicsBackend) -> None:
-        backend.add_joint(entity, joint)
-
-    return add_joint
-
-
-def _remove_joint(entity: int):
-    def remove_joint(backend: DynamicsBackend) -> None:
-        backend.remove_joint(entity)
-
-    return remove_joint
+            self._poses.table[self._rows] = source
 
 
 class DynamicsPlugin:
+    """Physics: the backend named by ``config.backend`` (or the one given), its driver and
+    the system that keeps the ECS in step with it."""
+
     name = "physics"
 
+    def __init__(self, backend: DynamicsBackend | None = None) -> None:
+        self.backend = backend
+
     def build(self, engine: Engine) -> None:
-        system = DynamicsSystem()
+        cfg = engine.config
+        backend = self.backend or create_backend(cfg.backend)
+        backend.configure(cfg.world)
+        driver = PhysicsDriver(backend, cfg.mode, cfg.pacing(), clock=engine.clock)
+        engine.attach_physics(driver)
+        system = DynamicsSystem(driver)
         engine.insert_resource(system)
         engine.add_system(system)

@@ -36,6 +36,7 @@ from engine.render.shaders import (
     UniformValue,
     VertexShader,
 )
+from engine.services import ShaderControl
 from engine.system import Phase, System
 
 if TYPE_CHECKING:
@@ -177,6 +178,7 @@ class RenderSystem(System):
         engine.events.subscribe(KeyEvent, self._on_key)
         engine.world.on_remove(Visual, lambda entity, _: self._forget(entity))
         engine.insert_resource(self)
+        engine.insert_resource(self, as_type=ShaderControl)
         engine.stat_sources["render"] = self._stats
 
     @staticmethod

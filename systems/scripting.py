@@ -94,9 +94,8 @@ class ScriptingSystem(System):
 
     # -- per frame --------------------------------------------------------------
     def run(self, engine: Engine, dt: float) -> None:
-        runtime, api = self.runtime, self.api
-        assert runtime is not None and api is not None
-        api.flush_retries()
+        runtime = self.runtime
+        assert runtime is not None
         if self._pending:
             self._load_pending(engine)
         now = time.monotonic()

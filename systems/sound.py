@@ -39,6 +39,7 @@ from engine.audio import (
 )
 from engine.events import Contacts, Spawned
 from engine.physics.backend import CONTACT_DTYPE
+from engine.services import SoundControl
 from engine.system import Phase, System
 
 if TYPE_CHECKING:
@@ -251,5 +252,6 @@ class SoundPlugin:
         self.system = SoundSystem(manager, self.contact_settings)
         engine.insert_resource(manager)
         engine.insert_resource(self.system)
+        engine.insert_resource(self.system, as_type=SoundControl)
         engine.add_system(self.system)
         engine.stat_sources["sound"] = self.system.stats

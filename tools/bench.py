@@ -11,6 +11,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from systems import create_engine
+
 #: name -> "module:function"; each function takes (quick, backend) and returns table rows.
 BENCHMARKS: dict[str, str] = {
     "scheduler": "tools.bench:bench_scheduler",
@@ -59,7 +61,7 @@ def run_benchmark(what: str, backend: str | None = None, quick: bool = False) ->
 
 def bench_scheduler(quick: bool = False) -> list[dict[str, Any]]:
     """Engine overhead per frame: no bodies, ten trivial systems; reference: a bare loop."""
-    from engine import Engine, EngineConfig, Phase, system
+    from engine import EngineConfig, Phase, system
 
     frames = 2_000 if quick else 20_000
     phases = list(Phase)
@@ -77,7 +79,7 @@ def bench_scheduler(quick: bool = False) -> list[dict[str, Any]]:
 
     rows = []
     for mode in ("serial", "threaded"):
-        with Engine(EngineConfig(backend="ballistic", mode=mode, fast=True)) as eng:
+        with create_engine(EngineConfig(backend="ballistic", mode=mode, fast=True)) as eng:
             for i in range(10):
                 eng.add_system(system(phases[i % len(phases)])(trivial))
             eng.run(frames=100)

@@ -28,6 +28,8 @@ from typing import Any
 import numpy as np
 import soundfile as sf
 
+from systems import create_engine
+
 SOURCES = 32
 
 
@@ -45,7 +47,7 @@ def run_bench(quick: bool = False, backend: str | None = None) -> list[dict[str,
 
 def _bench(folder: Path, backend: str | None, quick: bool) -> list[dict[str, Any]]:
     from components import Camera, Physical, Sound, Transform
-    from engine import Engine, EngineConfig
+    from engine import EngineConfig
     from engine.audio import SoundManager
     from engine.physics.backend import WorldSettings
     from systems.sound import SoundPlugin, SoundSystem
@@ -58,7 +60,7 @@ def _bench(folder: Path, backend: str | None, quick: bool) -> list[dict[str, Any
 
     cfg = EngineConfig(backend="ballistic", fast=True, sound=spec,
                        world=WorldSettings(gravity=(0.0, 0.0, 0.0)))
-    with Engine(cfg) as engine:
+    with create_engine(cfg) as engine:
         engine.add_plugin(SoundPlugin(pool_size=SOURCES))
         rng = np.random.default_rng(0)
         engine.spawn(Transform(linear_velocity=(0.5, 0.2, 0.0)), Physical(gravity=False),
@@ -108,7 +110,7 @@ def _bench(folder: Path, backend: str | None, quick: bool) -> list[dict[str, Any
         rows.append({"case": "requests, pool saturated", "backend": rows[0]["backend"],
                      "requests_per_s": n / busy, "us_per_request": busy / n * 1e6})
     # Free sources: every request starts a source (configure, attach, play).
-    with Engine(cfg) as engine:
+    with create_engine(cfg) as engine:
         engine.add_plugin(SoundPlugin(pool_size=SOURCES))
         manager = engine.resource(SoundManager)
         n = 2_000 if quick else 10_000

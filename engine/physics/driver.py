@@ -5,10 +5,21 @@ phase. Threaded mode: a physics thread owns the backend and loops
 *apply commands → step → publish snapshot* under its own real-time controller;
 the main thread only :meth:`push`-es commands and reads :attr:`snapshot`.
 
+Commands are data (:mod:`engine.physics.commands`), applied by the one dispatch
+:func:`apply`. A command whose body or joint does not exist yet waits a few steps
+(a body spawned without a Transform reaches the backend in the next FIXED phase),
+then is dropped with a message naming the object's scene ID. With :attr:`log`
+set, everything applied and every step is recorded, so the run can be replayed
+into a fresh backend or sent elsewhere.
+
 A :class:`Snapshot` is built from fresh arrays, frozen, and published by one
 reference assignment, so every pose in it comes from the same step and readers
 never see it change. Contacts accumulate between frames and are handed over
 whole by :meth:`take_contacts`.
+
+A process without local physics (a network client) has no driver: the engine's
+``physics`` is then a :class:`DetachedPhysics`, which keeps what is pushed for
+whoever forwards it.
 """
 
 from __future__ import annotations
@@ -17,19 +28,70 @@ import logging
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from concurrent.futures import Future
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
+from engine.messages import MessageLog
+from engine.physics import commands as cmd
 from engine.physics.backend import CONTACT_DTYPE, BodyState, DynamicsBackend, SupportsFaults
 from engine.realtime import Pacing, RealTimeController
 
 log = logging.getLogger("colosseum.physics")
 
-Command = Callable[[DynamicsBackend], Any]
+R = TypeVar("R")
+
+#: Steps a command waits for its body or joint to appear in the backend before it is dropped.
+WAIT_STEPS = 3
+
+
+def _vec(values: tuple[float, ...] | None) -> np.ndarray | None:
+    return None if values is None else np.array(values)
+
+
+#: The one dispatch: command type -> what it asks of the backend.
+_APPLY: dict[type, Callable[[DynamicsBackend, Any], Any]] = {
+    cmd.AddBody: lambda b, c: b.add_body(c.key, c.body, np.array(c.position),
+                                         np.array(c.orientation), np.array(c.linear_velocity),
+                                         np.array(c.angular_velocity)),
+    cmd.RemoveBody: lambda b, c: b.remove_body(c.key),
+    cmd.AddJoint: lambda b, c: b.add_joint(c.key, c.joint),
+    cmd.RemoveJoint: lambda b, c: b.remove_joint(c.key),
+    cmd.SetMotor: lambda b, c: b.set_motor(c.key, c.velocity, c.max_force),
+    cmd.ApplyForce: lambda b, c: b.add_force(c.key, np.array(c.force), _vec(c.point)),
+    cmd.ApplyTorque: lambda b, c: b.add_torque(c.key, np.array(c.torque)),
+    cmd.ApplyImpulse: lambda b, c: b.add_impulse(c.key, np.array(c.impulse), _vec(c.point)),
+    cmd.SetPose: lambda b, c: b.set_pose(c.key, np.array(c.position), np.array(c.orientation)),
+    cmd.SetVelocity: lambda b, c: b.set_velocity(c.key, np.array(c.linear),
+                                                 np.array(c.angular)),
+    cmd.SetKinematicTarget: lambda b, c: b.set_kinematic_target(
+        c.key, np.array(c.position), np.array(c.orientation), c.dt),
+    cmd.SetCollisionEnabled: lambda b, c: b.set_collision_enabled(c.key, c.enabled),
+    cmd.SetGravityEnabled: lambda b, c: b.set_gravity_enabled(c.key, c.enabled),
+    cmd.SetSleeping: lambda b, c: b.set_sleeping(c.key, c.sleeping),
+    cmd.SetSleepState: lambda b, c: _restore_sleep(b, c.key, c.state),
+    cmd.SetJointTarget: lambda b, c: b.set_joint_target(
+        c.key, np.array(c.position), np.array(c.orientation), c.max_force, c.max_torque),
+    cmd.SetDriveLimits: lambda b, c: b.set_drive_limits(c.key, c.max_force, c.max_torque),
+}
+
+
+def apply(command: cmd.Command, backend: DynamicsBackend) -> Any:
+    """Carry out one command on ``backend`` (the owner thread's job)."""
+    return _APPLY[type(command)](backend, command)
+
+
+def _restore_sleep(backend: DynamicsBackend, key: int, state: Any) -> None:
+    """A saved auto-sleep state; a backend keeping no counters of its own just sleeps."""
+    from engine.physics.backend import SupportsSleepState
+
+    if isinstance(backend, SupportsSleepState):
+        backend.set_sleep_state(key, state.asleep, state.idle_steps, state.samples)
+    elif state.asleep:
+        backend.set_sleeping(key, True)
 
 
 @dataclass(frozen=True, slots=True)
@@ -48,64 +110,203 @@ class PhysicsThreadError(RuntimeError):
     pass
 
 
-class PhysicsDriver:
+class PhysicsUnavailable(RuntimeError):
+    """A query needs a dynamics backend and this process runs none."""
+
+
+class PhysicsPort:
+    """What ``engine.physics`` offers the main thread, with or without a local backend."""
+
+    mode = "serial"
+    snapshot: Snapshot = EMPTY_SNAPSHOT
+    steps = 0
+    time = 0.0
+    #: The main thread's frame number, stamped on messages (set by the physics system).
+    frame = 0
+    contacts_total = 0
+    #: Simulated time at which a physics thread stops stepping (None: never).
+    stop_at: float | None = None
+    controller: RealTimeController
+    #: Scene IDs of entities, for messages (kept by the physics system).
+    names: Mapping[int, str]
+    #: Entities teleported through :meth:`set_pose` this frame (the physics system treats
+    #: their Transform writes as done, not as writes to detect).
+    teleported: set[int]
+
+    @property
+    def backend_name(self) -> str:
+        """The dynamics backend's name ("none" without local physics)."""
+        backend = getattr(self, "backend", None)
+        return getattr(backend, "name", "none") if backend is not None else "none"
+
+    def push(self, command: cmd.Command) -> None:
+        raise NotImplementedError
+
+    def set_pose(self, entity: int, position: Any, orientation: Any) -> None:
+        """Teleport a body (checked now: a bad value raises :class:`CommandError` here).
+
+        This is the documented way to move a physical body; a plain write to its
+        Transform does the same, detected before the next step.
+        """
+        self.push(cmd.SetPose(entity, position, orientation))
+        self.teleported.add(entity)
+
+    def set_velocity(self, entity: int, linear: Any, angular: Any) -> None:
+        """Set a body's velocities (m/s, rad/s), checked now."""
+        self.push(cmd.SetVelocity(entity, linear, angular))
+        self.teleported.add(entity)
+
+    def request(self, query: Callable[[DynamicsBackend], R]) -> Future:
+        raise NotImplementedError
+
+    def take_contacts(self) -> np.ndarray:
+        return np.zeros(0, CONTACT_DTYPE)
+
+    def take_faults(self) -> list[tuple[int, str]]:
+        return []
+
+    def check(self) -> None:
+        """Raise on the main thread if physics failed elsewhere."""
+
+    @property
+    def running(self) -> bool:
+        return False
+
+    def close(self) -> None:
+        """Stop physics; safe to call twice."""
+
+
+class DetachedPhysics(PhysicsPort):
+    """``engine.physics`` of a process without a dynamics backend (a network client, a
+    tool): commands are checked and kept in :attr:`outbox` for whoever forwards them; a
+    physics plugin loaded later takes them over."""
+
+    #: Commands kept at most; older ones are dropped (and counted) when nobody drains them.
+    LIMIT = 100_000
+
+    def __init__(self) -> None:
+        self.controller = RealTimeController(Pacing())
+        self.names: dict[int, str] = {}
+        self.teleported: set[int] = set()
+        self.outbox: deque[cmd.Command] = deque(maxlen=self.LIMIT)
+        self.dropped = 0
+
+    def push(self, command: cmd.Command) -> None:
+        if not isinstance(command, cmd.Command):
+            raise TypeError(f"physics.push takes a command from engine.physics.commands, "
+                            f"got {type(command).__name__}")
+        if len(self.outbox) == self.LIMIT:
+            self.dropped += 1
+        self.outbox.append(command)
+
+    def request(self, query: Callable[[DynamicsBackend], R]) -> Future:
+        future: Future = Future()
+        future.set_exception(PhysicsUnavailable(
+            "this engine runs no physics (the physics plugin is not loaded)"))
+        return future
+
+
+class PhysicsDriver(PhysicsPort):
+    """Owns one backend; the engine's ``physics`` when the physics plugin is loaded."""
+
     def __init__(self, backend: DynamicsBackend, mode: str = "serial",
                  pacing: Pacing | None = None,
-                 clock: Callable[[], float] = time.perf_counter) -> None:
+                 clock: Callable[[], float] = time.perf_counter,
+                 names: Mapping[int, str] | None = None) -> None:
         if mode not in ("serial", "threaded"):
             raise ValueError(f"mode must be 'serial' or 'threaded', not {mode!r}")
         self.backend = backend
         self._reports_faults = isinstance(backend, SupportsFaults)
         self.mode = mode
         self.clock = clock
-        self.snapshot: Snapshot = EMPTY_SNAPSHOT
+        self.snapshot = EMPTY_SNAPSHOT
         self.steps = 0
         self.time = 0.0
+        self.frame = 0
         self.controller = RealTimeController(pacing or Pacing(), clock=clock)
-        self._commands: deque[tuple[Command, Future | None]] = deque()
+        self.names = names if names is not None else {}
+        self.teleported = set()
+        #: When set, every command applied and every step are recorded here.
+        self.log: cmd.CommandLog | None = None
+        self.messages = MessageLog(log)
+        self.contacts_total = 0
+        self._commands: deque[tuple[cmd.Command | Callable[[DynamicsBackend], Any],
+                                    Future | None]] = deque()
+        self._waiting: list[tuple[cmd.Command, int]] = []
         self._contacts: list[np.ndarray] = []
         self._faults: list[tuple[int, str]] = []
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        #: Simulated time at which the physics thread stops stepping (None: never).
-        self.stop_at: float | None = None
+        self.stop_at = None
         self.error: BaseException | None = None
         self.closed = False
 
     # -- commands (any thread) ---------------------------------------------
-    def push(self, command: Command) -> None:
-        """Queue a call on the backend, applied between two steps."""
+    def push(self, command: cmd.Command) -> None:
+        """Queue a command; it is applied between two steps, in the order pushed."""
+        if not isinstance(command, cmd.Command):
+            raise TypeError(f"physics.push takes a command from engine.physics.commands, "
+                            f"got {type(command).__name__}")
         self._commands.append((command, None))
 
-    def request(self, command: Command) -> Future:
-        """Queue a call whose result is wanted (e.g. a ray cast); serial runs it now."""
+    def request(self, query: Callable[[DynamicsBackend], R]) -> Future:
+        """Run a read-only ``query(backend)`` on the owner thread (e.g. a ray cast); serial
+        mode runs it now. Queries are not commands: they are not logged and must not change
+        the world."""
         future: Future = Future()
         if self.mode == "serial" or self._thread is None:
             self._apply_pending()
-            self._run(command, future)
+            self._query(query, future)
         else:
-            self._commands.append((command, future))
+            self._commands.append((query, future))
         return future
 
-    def _run(self, command: Command, future: Future | None) -> None:
+    def describe(self, key: int, joint: bool = False) -> str:
+        """How messages name a body or joint: its scene ID when it has one."""
+        name = self.names.get(key)
+        what = "joint" if joint else "object"
+        return f"{what} {name!r}" if name else f"{what} (entity {key})"
+
+    def _query(self, query: Callable[[DynamicsBackend], Any], future: Future) -> None:
         try:
-            result = command(self.backend)
-        except Exception as exc:  # a bad command must not take the physics down
-            if future is not None:
-                future.set_exception(exc)
+            future.set_result(query(self.backend))
+        except Exception as exc:
+            future.set_exception(exc)
+
+    def _run(self, command: cmd.Command, waited: int = 0) -> None:
+        try:
+            apply(command, self.backend)
+        except KeyError:
+            if waited < WAIT_STEPS:
+                self._waiting.append((command, waited + 1))
             else:
-                log.error("physics command %s failed: %s", getattr(command, "__qualname__",
-                                                                    command), exc)
+                self.messages.warn(
+                    f"{type(command).__name__} dropped: no "
+                    f"{self.describe(command.key, command.on_joint)} in the physics world "
+                    f"(not created yet, or removed)", f"frame {self.frame}: ")
             return
-        if future is not None:
-            future.set_result(result)
+        except Exception as exc:  # a bad command must not take the physics down
+            self.messages.error(f"{type(command).__name__} on "
+                                f"{self.describe(command.key, command.on_joint)} failed: {exc}",
+                                f"frame {self.frame}: ")
+            return
+        if self.log is not None:
+            self.log.record(command)
 
     def _apply_pending(self) -> None:
         commands = self._commands
         while commands:
-            command, future = commands.popleft()
-            self._run(command, future)
+            item, future = commands.popleft()
+            if future is None:
+                self._run(item)  # type: ignore[arg-type]
+            else:
+                self._query(item, future)  # type: ignore[arg-type]
+
+    def _retry_waiting(self) -> None:
+        waiting, self._waiting = self._waiting, []
+        for command, waited in waiting:
+            self._run(command, waited)
 
     # -- stepping (owner thread) -------------------------------------------
     def step(self, dt: float, substeps: int = 1) -> float:
@@ -114,13 +315,18 @@ class PhysicsDriver:
         Returns the wall seconds spent stepping.
         """
         self._apply_pending()
+        if self._waiting:
+            self._retry_waiting()
         backend = self.backend
         h = dt / substeps
+        record = self.log.record if self.log is not None else None
         spent = 0.0
         for _ in range(substeps):
             t0 = self.clock()
             backend.step(h)
             cost = self.clock() - t0
+            if record is not None:
+                record(cmd.Step(h))
             spent += cost
             self.controller.record_step(cost)
             contacts = backend.contacts()
@@ -131,6 +337,7 @@ class PhysicsDriver:
                 with self._lock:
                     if len(contacts):
                         self._contacts.append(contacts)
+                        self.contacts_total += len(contacts)
                     self._faults.extend(faults)
         self.snapshot = Snapshot(self.steps, self.time, backend.read_state().freeze())
         return spent
@@ -186,7 +393,7 @@ class PhysicsDriver:
         return faults
 
     # -- shutdown ----------------------------------------------------------
-    def close(self, timeout: float = 5.0) -> None:
+    def close(self, timeout: float = 5.0) -> None:  # type: ignore[override]
         if self.closed:
             return
         self._stop.set()
@@ -198,6 +405,7 @@ class PhysicsDriver:
         else:
             self._close_backend()
         self.closed = True
+        self.messages.flush()
 
     def _close_backend(self) -> None:
         try:

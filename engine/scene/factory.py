@@ -35,13 +35,8 @@ from components import (
     Visual,
 )
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
-from engine.physics.backend import (
-    DynamicsBackend,
-    MaterialPair,
-    SleepState,
-    SupportsSleepState,
-    WorldSettings,
-)
+from engine.physics.backend import MaterialPair, SleepState, WorldSettings
+from engine.physics.commands import SetSleepState
 from engine.rotation import euler_to_quat, rotate
 from engine.scene import schema as sc
 from engine.scene.db import (
@@ -642,25 +637,11 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
         js.joint.body_b = None if b is None else ids[b]
         joints[js.id] = engine.spawn(Name(js.id), js.joint)
     if spec.sleep:  # after the bodies and their joints (whose motors wake them) are made
-        sleep = {ids[oid]: state for oid, state in spec.sleep.items()}
-        engine.defer(lambda: engine.physics.push(_restore_sleep(sleep)))
+        sleep = [SetSleepState(ids[oid], state) for oid, state in spec.sleep.items()]
+        engine.defer(lambda: [engine.physics.push(command) for command in sleep])
     if as_scene:
         engine.insert_resource(SceneIds(ids, joints, spec))
         engine.insert_resource(spec.world)
         # a saved state continues at the time it was saved
         engine.time = engine.physics.time = spec.time
     return ids
-
-
-def _restore_sleep(states: dict[int, SleepState]) -> Callable[[DynamicsBackend], None]:
-    """Backend command: give bodies their saved auto-sleep state (or just sleep, where the
-    backend keeps no counters of its own)."""
-    def restore(backend: DynamicsBackend) -> None:
-        keeps_counters = isinstance(backend, SupportsSleepState)
-        for key, state in states.items():
-            if keeps_counters:
-                backend.set_sleep_state(key, state.asleep, state.idle_steps, state.samples)
-            elif state.asleep:
-                backend.set_sleeping(key, True)
-
-    return restore

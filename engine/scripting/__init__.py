@@ -4,11 +4,10 @@ See :mod:`engine.scripting.api` for what scripts can call and
 :mod:`engine.scripting.sandbox` for what they cannot.
 """
 
-from engine.scripting.api import PLUGIN_ALIASES, ScriptAPI, ScriptAPIError
+from engine.scripting.api import ScriptAPI, ScriptAPIError
 from engine.scripting.runtime import Script, ScriptLimits, ScriptLoadError, ScriptRuntime
 
 __all__ = [
-    "PLUGIN_ALIASES",
     "Script",
     "ScriptAPI",
     "ScriptAPIError",

@@ -28,8 +28,9 @@ Scene and engine::
     playSound(obj) / stopSound(obj) / setGain(obj, gain)
     setUniform(state, name, value | {v1, v2, ...})
     setCamera{position=, lookAt=, follow=obj, offset=, fov=, id=}
-    requestPlugin(name) -> bool     (aliases: osg, osgsim -> render; openalpp -> sound;
-                                     the paper's spelling ``requrestPlugin`` works too)
+    requestPlugin(name) -> bool     (the engine's plugin names and the paper's aliases:
+                                     osg, osgsim -> render; openalpp -> sound; the paper's
+                                     spelling ``requrestPlugin`` works too)
     time() -> simulated seconds     log(...), warn(...), print(...)
     after(sec, fn) / every(sec, fn) -> timer; cancel(timer)
     on(name, fn(data, name)); emit(name, data)   custom events (also seen by Python);
@@ -51,40 +52,31 @@ message; a callback failing three times is disabled. Errors read
 ``scripts/name.lua:LINE: message`` followed by a Lua traceback.
 
 Everything that touches physics (forces, poses, motors, joints, spawning,
-deleting) goes through the engine's command queue or deferred actions, so the
-same script behaves alike in serial and threaded mode. Missing subsystems
-(no sound or render plugin loaded) turn their calls into no-ops with one
-warning each.
+deleting) becomes a physics command (:mod:`engine.physics.commands`), checked
+when the call is made — a bad value fails at the script's line — and queued,
+so the same script behaves alike in serial and threaded mode. Missing
+subsystems (no sound or render plugin loaded) turn their calls into no-ops
+with one warning each.
 """
 
 from __future__ import annotations
 
 import difflib
 import logging
-import sys
-from collections import deque
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
-
-import numpy as np
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from components import Camera, Joint, Name, Physical, Sound, Transform
 from components.joint import SCENE_JOINT_TYPES
+from engine.physics import commands as cmd
 from engine.scripting.runtime import ScriptRuntime, to_python
+from engine.services import ShaderControl, SoundControl
 
 if TYPE_CHECKING:
     from engine.app import Engine
 
 log = logging.getLogger("colosseum.script")
 
-#: Plugin names scripts may request, and the paper's names for them.
-PLUGIN_NAMES = ("physics", "render", "sound", "interaction", "scripting", "controllers",
-                "avatars")
-PLUGIN_ALIASES = {"osg": "render", "osgsim": "render", "openalpp": "sound", "ode": "physics",
-                  "dynamics": "physics", "openal": "sound"}
-
-#: Frames a command on a body that is not in the backend yet is retried.
-RETRY_FRAMES = 3
+S = TypeVar("S")
 
 #: The joint kinds a script may create: those a scene file may declare.
 JOINT_KINDS = tuple(SCENE_JOINT_TYPES.values())
@@ -206,29 +198,17 @@ class ScriptAPI:
         self._names: dict[str, int] = {}
         self._warned: set[str] = set()
         self.runtime: ScriptRuntime | None = None
-        #: Commands that met a body or joint not created in the backend yet (spawned this
-        #: frame: bodies reach the backend in the FIXED phase); appended by the physics thread.
-        self._retry: deque[tuple[Callable[[Any], None], int, str]] = deque()
 
-    def _push(self, what: str, command: Callable[[Any], None], tries: int = 0) -> None:
-        """Queue a backend call; one on a body the backend has not got yet is retried."""
-
-        def run(backend: Any) -> None:
-            try:
-                command(backend)
-            except KeyError as exc:
-                if tries < RETRY_FRAMES:
-                    self._retry.append((command, tries + 1, what))
-                else:
-                    log.error("%s: %s", what, exc.args[0] if exc.args else exc)
-
-        self.engine.physics.push(run)
-
-    def flush_retries(self) -> None:
-        """Re-queue commands that found no body (called once a frame, before scripts)."""
-        for _ in range(len(self._retry)):
-            command, tries, what = self._retry.popleft()
-            self._push(what, command, tries)
+    def _push(self, what: str, make: Any, *args: Any) -> None:
+        """Make the command ``make(*args)`` and queue it; a bad value fails here, at the
+        script's line, with the object's scene ID."""
+        try:
+            command = make(*args)
+        except cmd.CommandError as exc:
+            target = self.name(args[0]) if args and isinstance(args[0], int) else None
+            on = f" for object {target!r}" if target else ""
+            raise ScriptAPIError(f"{what}{on}: {str(exc).partition(': ')[2]}") from None
+        self.engine.physics.push(command)
 
     def install(self, runtime: ScriptRuntime) -> Any:
         """Build the Lua API table for ``runtime`` (passed as ``api=`` to it)."""
@@ -296,51 +276,56 @@ class ScriptAPI:
 
     def set_position(self, entity: int, x: float, y: float, z: float) -> None:
         t = self._transform(entity, "setPosition")
-        t.position[:] = (x, y, z)
-        self._set_pose(entity, t)
+        self._set_pose("setPosition", entity, t, (x, y, z), t.orientation)
 
     def set_orientation(self, entity: int, w: float, x: float, y: float, z: float) -> None:
-        q = np.array([w, x, y, z], dtype=np.float64)
-        norm = float(np.linalg.norm(q))
-        if not np.isfinite(norm) or norm == 0.0:
-            raise ScriptAPIError("setOrientation: expected a non-zero quaternion w, x, y, z")
         t = self._transform(entity, "setOrientation")
-        t.orientation[:] = q / norm
-        self._set_pose(entity, t)
+        self._set_pose("setOrientation", entity, t, t.position, (w, x, y, z))
 
-    def _set_pose(self, entity: int, t: Transform) -> None:
+    def _set_pose(self, what: str, entity: int, t: Transform, position: Any,
+                  orientation: Any) -> None:
+        """Check the pose (a SetPose command), teleport the body if it has one, and write
+        the Transform so the script reads back what it set."""
+        try:
+            pose = cmd.SetPose(entity, position, orientation)
+        except cmd.CommandError as exc:
+            raise ScriptAPIError(f"{what}: {str(exc).partition(': ')[2]}") from None
         if self.engine.world.has_component(entity, Physical):
-            position, orientation = t.position.copy(), t.orientation.copy()
-            self._push("setPosition", lambda b: b.set_pose(entity, position, orientation))
+            self.engine.physics.set_pose(entity, pose.position, pose.orientation)
+        t.position[:] = pose.position
+        t.orientation[:] = pose.orientation
 
     def set_velocity(self, entity: int, which: int, x: float, y: float, z: float) -> None:
-        t = self._transform(entity, "setVelocity")
-        (t.linear_velocity if which == 0 else t.angular_velocity)[:] = (x, y, z)
+        what = "setVelocity" if which == 0 else "setAngularVelocity"
+        t = self._transform(entity, what)
+        linear = (x, y, z) if which == 0 else t.linear_velocity
+        angular = (x, y, z) if which == 1 else t.angular_velocity
+        try:
+            velocity = cmd.SetVelocity(entity, linear, angular)
+        except cmd.CommandError as exc:
+            raise ScriptAPIError(f"{what}: {str(exc).partition(': ')[2]}") from None
         if self.engine.world.has_component(entity, Physical):
-            linear, angular = t.linear_velocity.copy(), t.angular_velocity.copy()
-            self._push("setVelocity", lambda b: b.set_velocity(entity, linear, angular))
+            self.engine.physics.set_velocity(entity, velocity.linear, velocity.angular)
+        t.linear_velocity[:] = velocity.linear
+        t.angular_velocity[:] = velocity.angular
 
     def push(self, entity: int, kind: int, x: float, y: float, z: float,
              px: float | None = None, py: float | None = None, pz: float | None = None) -> None:
         what = ("addForce", "addTorque", "addImpulse")[kind]
         if not self.engine.world.has_component(self._entity(entity, what), Physical):
             raise ScriptAPIError(f"{what}: object {entity} has no physical body")
-        vector = np.array([x, y, z], dtype=np.float64)
-        where = None if px is None else np.array([px, py, pz], dtype=np.float64)
+        where = None if px is None else (px, py, pz)
         if kind == 0:
-            self._push(what, lambda b: b.add_force(entity, vector, where))
+            self._push(what, cmd.ApplyForce, entity, (x, y, z), where)
         elif kind == 1:
-            self._push(what, lambda b: b.add_torque(entity, vector))
+            self._push(what, cmd.ApplyTorque, entity, (x, y, z))
         else:
-            self._push(what, lambda b: b.add_impulse(entity, vector, where))
+            self._push(what, cmd.ApplyImpulse, entity, (x, y, z), where)
 
     def kinematic(self, entity: int, x: float, y: float, z: float) -> None:
         t = self._transform(entity, "setKinematicTarget")
-        target = np.array([x, y, z], dtype=np.float64)
-        orientation = t.orientation.copy()
-        dt = self.engine.config.dt
-        self._push("setKinematicTarget",
-                   lambda b: b.set_kinematic_target(entity, target, orientation, dt))
+        self._push("setKinematicTarget", cmd.SetKinematicTarget, entity, (x, y, z),
+                   t.orientation, self.engine.config.dt)
 
     def delete(self, entity: int) -> None:
         self.engine.despawn(entity)
@@ -418,10 +403,13 @@ class ScriptAPI:
 
     def set_motor(self, ref: Any, velocity: Any, max_force: Any) -> None:
         entity, joint = self._joint(ref, "setMotor")
-        joint.motor_velocity = float(velocity)
-        joint.motor_max_force = float(max_force)
-        v, f = joint.motor_velocity, joint.motor_max_force
-        self._push("setMotor", lambda b: b.set_motor(entity, v, f))
+        try:
+            motor = cmd.SetMotor(entity, velocity, max_force)
+        except cmd.CommandError as exc:
+            raise ScriptAPIError(f"setMotor on joint {joint.id or ref!r}: "
+                                 f"{str(exc).partition(': ')[2]}") from None
+        joint.motor_velocity, joint.motor_max_force = motor.velocity, motor.max_force
+        self.engine.physics.push(motor)
 
     def create_joint(self, spec: Any) -> int:
         """A joint between existing objects, made with their poses now as its reference
@@ -463,19 +451,18 @@ class ScriptAPI:
         self.engine.despawn(entity)
 
     # -- optional subsystems ---------------------------------------------------
-    def _resource(self, module: str, cls: str, what: str) -> Any:
-        mod = sys.modules.get(module)
-        found = None if mod is None else self.engine.try_resource(getattr(mod, cls))
+    def _service(self, kind: type[S], what: str) -> S | None:
+        """The plugin service ``kind`` (None, warned once, when its plugin is not loaded)."""
+        found = self.engine.try_resource(kind)
         if found is None and what not in self._warned:
             self._warned.add(what)
+            plugin = kind.plugin  # type: ignore[attr-defined]
             log.warning("%s: the %s plugin is not loaded; the call does nothing "
-                        "(requestPlugin(%r) loads it)", what, module.split(".")[-1],
-                        module.split(".")[-1])
+                        "(requestPlugin(%r) loads it)", what, plugin, plugin)
         return found
 
     def sound(self, entity: int, play: bool) -> None:
-        system = self._resource("systems.sound", "SoundSystem",
-                                "playSound" if play else "stopSound")
+        system = self._service(SoundControl, "playSound" if play else "stopSound")
         if system is None:
             return
         if play:
@@ -490,12 +477,12 @@ class ScriptAPI:
         if sound is None:
             raise ScriptAPIError("setGain: the object has no Sound")
         sound.gain = float(gain)
-        system = self._resource("systems.sound", "SoundSystem", "setGain")
+        system = self._service(SoundControl, "setGain")
         if system is not None:
             system.set_gain(entity, float(gain))
 
     def set_uniform(self, state: Any, name: Any, value: Any) -> None:
-        system = self._resource("systems.render", "RenderSystem", "setUniform")
+        system = self._service(ShaderControl, "setUniform")
         if system is None:
             return
         value = to_python(value)
@@ -539,27 +526,17 @@ class ScriptAPI:
                                      "(position, lookAt, follow, offset, fov, id)")
 
     def request_plugin(self, name: Any) -> bool:
-        """Load an engine plugin by name; False (with a warning) if this engine lacks it."""
+        """Load an engine plugin by the name (or alias) the engine registered it under."""
         if not isinstance(name, str):
             raise ScriptAPIError(f"requestPlugin: expected a plugin name, got {name!r}")
-        canonical = PLUGIN_ALIASES.get(name, name)
         engine = self.engine
-        if canonical in engine.plugins:
+        if name in engine.plugins:
             return True
-        factories = engine.plugin_factories
-        target = canonical if canonical in factories else name if name in factories else None
-        if target is None:
-            if canonical not in PLUGIN_NAMES:
-                known = sorted({*PLUGIN_NAMES, *PLUGIN_ALIASES, *factories})
-                hint = difflib.get_close_matches(name, known, 1)
-                extra = f"; did you mean {hint[0]!r}?" if hint else ""
-                raise ScriptAPIError(f"requestPlugin: unknown plugin {name!r}{extra} "
-                                     f"(known: {', '.join(known)})")
-            if canonical not in self._warned:
-                self._warned.add(canonical)
-                shown = canonical if canonical == name else f"{canonical} (as {name!r})"
-                log.warning("requestPlugin: plugin %s is not available in this engine; "
-                            "continuing without it", shown)
-            return False
-        engine.request_plugin(target)
+        if name not in engine.plugin_factories:
+            known = sorted(engine.plugin_factories)
+            hint = difflib.get_close_matches(name, known, 1)
+            extra = f"; did you mean {hint[0]!r}?" if hint else ""
+            raise ScriptAPIError(f"requestPlugin: unknown plugin {name!r}{extra} "
+                                 f"(known: {', '.join(known) or 'none'})")
+        engine.request_plugin(name)
         return True

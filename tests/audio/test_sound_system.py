@@ -17,6 +17,7 @@ from engine import Engine, EngineConfig
 from engine.audio import SoundManager
 from engine.physics import BackendUnavailable, create_backend
 from engine.physics.backend import WorldSettings
+from systems import create_engine
 from systems.dynamics import DynamicsSystem
 from systems.sound import SoundPlugin, SoundSystem
 
@@ -28,7 +29,7 @@ def _engine(sound: str, backend: str = "ballistic", fast: bool = True,
             content: Path | None = None) -> Engine:
     cfg = EngineConfig(backend=backend, fast=fast, sound=sound, content_dir=content,
                        world=WorldSettings(gravity=gravity, auto_sleep=False))
-    engine = Engine(cfg)
+    engine = create_engine(cfg)
     engine.add_plugin(SoundPlugin())
     return engine
 

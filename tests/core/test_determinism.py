@@ -5,11 +5,13 @@ from __future__ import annotations
 import numpy as np
 
 from components import Physical, Shape, Transform
-from engine import Engine, EngineConfig, Phase, system
+from engine import EngineConfig, Phase, system
+from engine.physics.commands import ApplyImpulse
+from systems import create_engine
 
 
 def run_scene(backend: str, seed: int, frames: int = 1000) -> np.ndarray:
-    with Engine(EngineConfig(backend=backend, seed=seed, fast=True)) as eng:
+    with create_engine(EngineConfig(backend=backend, seed=seed, fast=True)) as eng:
         eng.spawn(Transform(), Physical(kind="static", mass=None,
                                         shapes=[Shape("plane", (0, 0, 1, 0))]))
         bodies = []
@@ -22,7 +24,7 @@ def run_scene(backend: str, seed: int, frames: int = 1000) -> np.ndarray:
         def push(e, dt):  # scripted input: a sideways shove every 97 frames
             if e.frame % 97 == 0:
                 target = bodies[e.frame % len(bodies)]
-                e.physics.push(lambda b: b.add_impulse(target, np.array([2.0, 0, 1.0])))
+                e.physics.push(ApplyImpulse(target, (2.0, 0, 1.0)))
 
         eng.add_system(push)
         eng.run(frames=frames)

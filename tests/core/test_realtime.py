@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from engine.realtime import Pacing, RealTimeController
+from systems import create_engine
 
 
 class FakeClock:
@@ -111,10 +112,10 @@ def test_rejects_unknown_policies():
 
 def test_engine_paces_frames_and_reports_physics_time_over_wall_time():
     from components import Physical, Transform
-    from engine import Engine, EngineConfig
+    from engine import EngineConfig
 
     clock = FakeClock()
-    with Engine(EngineConfig(backend="ballistic", dt=0.01), clock=clock,
+    with create_engine(EngineConfig(backend="ballistic", dt=0.01), clock=clock,
                 sleep=clock.sleep) as eng:
         eng.spawn(Transform(), Physical())
         eng.run(frames=50)

@@ -6,13 +6,15 @@ import numpy as np
 import pytest
 
 from components import Physical, Transform
-from engine import Engine, EngineConfig, Phase, system
+from engine import EngineConfig, Phase, system
 from engine.events import KeyEvent
+from engine.physics.commands import ApplyImpulse
 from engine.recording import InputRecorder, InputReplayer, ReplayError
+from systems import create_engine
 
 
 def run(recorder=None, replayer=None, live_keys=True) -> np.ndarray:
-    with Engine(EngineConfig(backend="ballistic", fast=True)) as eng:
+    with create_engine(EngineConfig(backend="ballistic", fast=True)) as eng:
         ball = eng.spawn(Transform(position=(0, 0, 100)), Physical())
         if live_keys:  # stands in for a device that produces key presses
             eng.add_system(system(Phase.INPUT)(
@@ -21,7 +23,7 @@ def run(recorder=None, replayer=None, live_keys=True) -> np.ndarray:
             if extra is not None:
                 eng.add_system(extra)
         eng.events.subscribe(KeyEvent, lambda ev: eng.physics.push(
-            lambda b: b.add_impulse(ball, np.array([1.0, 0.0, 5.0]))))
+            ApplyImpulse(ball, (1.0, 0.0, 5.0))))
         eng.run(frames=120)
         return eng.physics.snapshot.bodies.position.copy()
 

@@ -8,10 +8,11 @@ from components import Name, Physical, Transform
 from engine import Engine, EngineConfig, Phase, System, system
 from engine.events import CustomEvent, Spawned
 from engine.system import SystemFailure
+from systems import create_engine
 
 
 def make_engine(**kw) -> Engine:
-    return Engine(EngineConfig(backend="ballistic", fast=True, **kw))
+    return create_engine(EngineConfig(backend="ballistic", fast=True, **kw))
 
 
 def test_phases_run_in_order_every_frame():

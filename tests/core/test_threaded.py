@@ -9,6 +9,8 @@ import numpy as np
 from components import Physical, Transform
 from engine import Engine, EngineConfig, Phase, system
 from engine.physics.backend import WorldSettings
+from engine.physics.commands import SetVelocity
+from systems import create_engine
 from systems.dynamics import DynamicsSystem
 
 
@@ -16,7 +18,7 @@ def drifting_engine(n: int) -> tuple[Engine, list[int]]:
     """Bodies without gravity, body i moving at (i + 1) m/s along X from x = 0."""
     cfg = EngineConfig(backend="ballistic", mode="threaded", fast=True,
                        world=WorldSettings(gravity=(0.0, 0.0, 0.0)))
-    eng = Engine(cfg)
+    eng = create_engine(cfg)
     ids = [eng.spawn(Transform(linear_velocity=(i + 1.0, 0, 0)), Physical()) for i in range(n)]
     return eng, ids
 
@@ -58,7 +60,7 @@ def test_commands_from_the_main_thread_are_applied_between_steps():
     try:
         eng.run(frames=5)
         late = eng.spawn(Transform(position=(0, 5, 0)), Physical())
-        eng.physics.push(lambda b: b.set_velocity(ids[0], np.zeros(3), np.zeros(3)))
+        eng.physics.push(SetVelocity(ids[0], (0, 0, 0), (0, 0, 0)))
         eng.run(frames=100_000, until=lambda e: late in e.physics.snapshot.bodies.keys)
         assert late in eng.physics.snapshot.bodies.keys
         x0 = eng.world.component_for_entity(ids[0], Transform).position[0]
@@ -72,7 +74,7 @@ def test_commands_from_the_main_thread_are_applied_between_steps():
 
 def test_threaded_seconds_stops_physics_at_the_requested_time():
     cfg = EngineConfig(backend="ballistic", mode="threaded", fast=True)
-    with Engine(cfg) as eng:
+    with create_engine(cfg) as eng:
         ball = eng.spawn(Transform(position=(0, 0, 10)), Physical())
         eng.run(seconds=0.5)
         assert eng.physics.steps == 30
@@ -83,14 +85,14 @@ def test_threaded_seconds_stops_physics_at_the_requested_time():
 
 def test_physics_thread_error_stops_the_run_cleanly():
     cfg = EngineConfig(backend="ballistic", mode="threaded", fast=True)
-    eng = Engine(cfg)
+    eng = create_engine(cfg)
     eng.spawn(Transform(), Physical())
     eng.run(frames=2)
 
     def explode(dt):
         raise RuntimeError("solver exploded")
 
-    eng.physics.push(lambda b: setattr(b, "step", explode))
+    eng.physics.request(lambda b: setattr(b, "step", explode))
     try:
         import pytest
 

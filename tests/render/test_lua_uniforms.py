@@ -7,9 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from engine import Engine, EngineConfig
+from engine import EngineConfig
 from engine.content import resolve
 from engine.scene_loading import load_content_scene
+from systems import create_engine
 from systems.render import RenderSystem
 
 SHADERS = Path(__file__).parent / "content" / "shaders"
@@ -42,7 +43,7 @@ def centre_after(folder: Path, seconds: float) -> np.ndarray:
     cfg = EngineConfig(content_dir=folder, backend="ballistic", fast=True, render=True,
                        options={"size": "160x120"})
     scene.configure(cfg)
-    with Engine(cfg) as engine:
+    with create_engine(cfg) as engine:
         scene.instantiate(engine)
         engine.run(seconds=seconds)
         return engine.resource(RenderSystem).renderer.read_pixels()[60, 80].astype(int)

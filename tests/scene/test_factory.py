@@ -21,7 +21,7 @@ from components import (
     Transform,
     Visual,
 )
-from engine.app import Engine, EngineConfig
+from engine.app import EngineConfig
 from engine.scene import (
     SceneError,
     SceneIds,
@@ -32,6 +32,7 @@ from engine.scene import (
     spec_from_text,
     write_state,
 )
+from systems import create_engine
 
 DATA = Path(__file__).parent / "data"
 REP = DATA / "representative"
@@ -144,7 +145,7 @@ def test_defaults_make_a_short_file_work():
 
 def engine_for(spec):
     cfg = EngineConfig(backend="ode", dt=spec.time_step, fast=True, world=spec.world)
-    return Engine(cfg)
+    return create_engine(cfg)
 
 
 def test_instantiate_creates_entities_and_resolves_ids(rep):

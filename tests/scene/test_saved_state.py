@@ -28,6 +28,7 @@ from engine.scene import (
     write_state,
 )
 from engine.scene.db import STRUCTURE, VECTOR
+from systems import create_engine
 
 pytest.importorskip("engine.physics.ode3d")
 
@@ -120,7 +121,7 @@ Object { ID "pebble" Position [-3.2 0.1 19.5]
 
 
 def engine_for(spec: SceneSpec) -> Engine:
-    return Engine(EngineConfig(backend=spec.backend, dt=spec.time_step, fast=True,
+    return create_engine(EngineConfig(backend=spec.backend, dt=spec.time_step, fast=True,
                                world=spec.world))
 
 
