@@ -200,6 +200,7 @@ class Engine:
         t0 = self.controller.clock()
         self.tick = tick
         self.physics_seconds = None
+        self.physics.frame = self.frame
         for phase in Phase:
             for system in self.systems[phase]:
                 try:

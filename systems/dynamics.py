@@ -134,7 +134,6 @@ class DynamicsSystem(System):
     # -- per frame ----------------------------------------------------------------
     def run(self, engine: Engine, dt: float) -> None:
         driver = self.driver
-        driver.frame = engine.frame
         self._send_new(engine)
         self._forget_names(engine.frame)
         if self._copy is not None:

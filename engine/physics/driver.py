@@ -121,7 +121,7 @@ class PhysicsPort:
     snapshot: Snapshot = EMPTY_SNAPSHOT
     steps = 0
     time = 0.0
-    #: The main thread's frame number, stamped on messages (set by the physics system).
+    #: The main thread's frame number, stamped on messages (set by the engine each frame).
     frame = 0
     contacts_total = 0
     #: Simulated time at which a physics thread stops stepping (None: never).
