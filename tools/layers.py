@@ -1,0 +1,197 @@
+"""Dependencies run one way: a check over the project's imports (``python -m tools.layers``).
+
+Layers, lowest first (docs/ARCHITECTURE.md draws them)::
+
+    components  <-  engine core  <-  engine services  <-  systems  <-  CLI and tools
+
+A module may import its own layer and the ones below; an import of a higher layer
+is an error, and so is any import cycle among the project's modules. Imports under
+``if TYPE_CHECKING:`` are type hints, not dependencies, and are not counted; imports
+inside functions are (deferring an import does not remove the dependency).
+
+>>> layer_of("engine.render.camera").name, layer_of("engine.scene.parser").name
+('engine services', 'engine core')
+"""
+
+from __future__ import annotations
+
+import ast
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PACKAGES = ("components", "engine", "systems", "tools")
+
+
+@dataclass(frozen=True, slots=True)
+class Layer:
+    rank: int
+    name: str
+    prefixes: tuple[str, ...]
+
+
+#: Longest prefix wins, so ``engine.cli`` is the CLI although ``engine`` is the core.
+LAYERS = (
+    Layer(0, "components", ("components",)),
+    Layer(1, "engine core", ("engine",)),
+    Layer(2, "engine services", ("engine.render", "engine.audio", "engine.scripting",
+                                 "engine.input", "engine.assets", "engine.net")),
+    Layer(3, "systems", ("systems",)),
+    Layer(4, "CLI and tools", ("engine.cli", "engine.scene_loading", "engine.scaffold",
+                               "tools")),
+)
+
+
+def layer_of(module: str) -> Layer:
+    best: tuple[int, Layer] | None = None
+    for layer in LAYERS:
+        for prefix in layer.prefixes:
+            if (module == prefix or module.startswith(prefix + ".")) and (
+                    best is None or len(prefix) > best[0]):
+                best = (len(prefix), layer)
+    if best is None:
+        raise ValueError(f"{module} belongs to no layer")
+    return best[1]
+
+
+@dataclass(frozen=True, slots=True)
+class Import:
+    source: str
+    target: str
+    path: Path
+    line: int
+
+
+def module_name(path: Path, root: Path) -> str:
+    parts = path.relative_to(root).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def project_modules(root: Path) -> dict[str, Path]:
+    """Python and Cython modules of the project by dotted name."""
+    found = {}
+    for package in PACKAGES:
+        for pattern in ("*.py", "*.pyx"):
+            for path in (root / package).rglob(pattern):
+                found[module_name(path, root)] = path
+    return found
+
+
+def _cython_imports(path: Path) -> ast.Module:
+    """The Python-level imports of a Cython module (its ``cimport``s are C, not modules)."""
+    lines = [line for line in path.read_text(encoding="utf-8").splitlines()
+             if line.startswith(("import ", "from ")) and " cimport " not in line
+             and not line.startswith("cimport")]
+    return ast.parse("\n".join(lines) or "pass", str(path))
+
+
+def _type_checking(node: ast.If) -> bool:
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+
+
+def imports_of(path: Path, name: str, modules: dict[str, Path]) -> list[Import]:
+    """The project modules ``path`` imports (``from pkg import sub`` names ``pkg.sub``)."""
+    tree = _cython_imports(path) if path.suffix == ".pyx" else ast.parse(
+        path.read_text(encoding="utf-8"), str(path))
+    is_package = path.name == "__init__.py"
+    found: list[Import] = []
+
+    def add(target: str, line: int) -> None:
+        if target.split(".")[0] in PACKAGES and target != name:
+            found.append(Import(name, target, path, line))
+
+    def visit(node: ast.AST) -> None:
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, ast.If) and _type_checking(child):
+                for sub in child.orelse:
+                    visit(sub)
+                continue
+            if isinstance(child, ast.Import):
+                for alias in child.names:
+                    add(alias.name, child.lineno)
+            elif isinstance(child, ast.ImportFrom):
+                base = child.module or ""
+                if child.level:
+                    package = name if is_package else name.rpartition(".")[0]
+                    for _ in range(child.level - 1):
+                        package = package.rpartition(".")[0]
+                    base = f"{package}.{base}" if base else package
+                for alias in child.names:
+                    sub = f"{base}.{alias.name}"
+                    add(sub if sub in modules else base, child.lineno)
+            visit(child)
+
+    visit(tree)
+    return found
+
+
+def upward_imports(graph: list[Import]) -> list[Import]:
+    return [i for i in graph if layer_of(i.target).rank > layer_of(i.source).rank]
+
+
+def cycles(graph: list[Import]) -> list[list[str]]:
+    """Strongly connected groups of more than one module (Tarjan), sorted."""
+    edges: dict[str, set[str]] = {}
+    for i in graph:
+        edges.setdefault(i.source, set()).add(i.target)
+        edges.setdefault(i.target, set())
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    groups: list[list[str]] = []
+    sys.setrecursionlimit(max(sys.getrecursionlimit(), 10 * len(edges) + 100))
+
+    def connect(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(edges[v]):
+            if w not in index:
+                connect(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            group = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                group.append(w)
+                if w == v:
+                    break
+            if len(group) > 1:
+                groups.append(sorted(group))
+
+    for v in sorted(edges):
+        if v not in index:
+            connect(v)
+    return sorted(groups)
+
+
+def check(root: Path = ROOT) -> list[str]:
+    """Every upward import (``file:line``) and every cycle, as messages; empty when clean."""
+    modules = project_modules(root)
+    graph = [i for name, path in sorted(modules.items())
+             for i in imports_of(path, name, modules)]
+    problems = [f"{i.path.relative_to(root)}:{i.line}: {i.source} ({layer_of(i.source).name}) "
+                f"imports {i.target} ({layer_of(i.target).name}), a higher layer"
+                for i in upward_imports(graph)]
+    for group in cycles(graph):
+        problems.append("import cycle: " + " -> ".join(group))
+    return problems
+
+
+def main() -> int:
+    problems = check()
+    for problem in problems:
+        print(problem)
+    print(f"{len(problems)} layering problem(s)", file=sys.stderr)
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
