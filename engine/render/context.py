@@ -40,7 +40,8 @@ class HeadlessTarget:
             except Exception as exc:  # glcontext raises plain Exceptions with the EGL reason
                 raise RenderBackendError(
                     f"headless EGL context failed: {exc}. Install Mesa's EGL (libegl1, "
-                    "libgl1-mesa-dri) or run with a display and --backend window") from exc
+                    "libegl-mesa0, libgl1-mesa-dri; `tools/dev setup` does), or run on a "
+                    "display without --headless to draw in a window") from exc
         self.ctx = ctx
         self.size = (int(size[0]), int(size[1]))
         self.fbo = self._framebuffer(self.size)
