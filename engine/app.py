@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import logging
+import os
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -24,8 +25,16 @@ from engine.events import Despawned, EventBus, Spawned
 from engine.physics.backend import WorldSettings
 from engine.physics.driver import DetachedPhysics, PhysicsPort
 from engine.realtime import CostLog, Pacing, RealTimeController, Tick
-from engine.system import Phase, Plugin, System, SystemFailure, order_systems
-from engine.world import World
+from engine.system import (
+    ANY_COMPONENT,
+    Phase,
+    Plugin,
+    System,
+    SystemFailure,
+    UndeclaredAccess,
+    order_systems,
+)
+from engine.world import AccessAudit, World
 
 log = logging.getLogger("colosseum")
 
@@ -52,6 +61,9 @@ class EngineConfig:
     sound: str = "null"
     world: WorldSettings = field(default_factory=WorldSettings)
     options: dict[str, Any] = field(default_factory=dict)
+    #: Check that every system touches only the component types it declares (slower; the
+    #: test suite turns it on with COLOSSEUM_DEBUG=1, ``colosseum run --debug`` too).
+    debug: bool = field(default_factory=lambda: os.environ.get("COLOSSEUM_DEBUG") == "1")
 
     def pacing(self) -> Pacing:
         return Pacing(dt=self.dt, paced=not self.fast, early=self.early, late=self.late,
@@ -201,10 +213,14 @@ class Engine:
         self.tick = tick
         self.physics_seconds = None
         self.physics.frame = self.frame
+        audited = self.config.debug
         for phase in Phase:
             for system in self.systems[phase]:
                 try:
-                    system.run(self, tick.dt)
+                    if audited:
+                        self._run_audited(system, tick.dt)
+                    else:
+                        system.run(self, tick.dt)
                 except Exception as exc:
                     raise SystemFailure(system.name, exc) from exc
             self._flush()
@@ -215,6 +231,20 @@ class Engine:
         self.controller.end(tick, self.physics_seconds)
         if self.config.mode == "threaded" and self.config.fast:
             time.sleep(0)  # unpaced: still let the physics thread take the GIL
+
+    def _run_audited(self, system: System, dt: float) -> None:
+        """Run ``system`` and check it touched only the component types it declares."""
+        audit = self.world.audit = AccessAudit()
+        try:
+            system.run(self, dt)
+        finally:
+            self.world.audit = None
+        readable, writable = {*system.reads, *system.writes}, set(system.writes)
+        undeclared = set() if ANY_COMPONENT in readable else audit.read - readable
+        if ANY_COMPONENT not in writable:
+            undeclared |= audit.written - writable
+        if undeclared:
+            raise UndeclaredAccess(system, sorted(t.__name__ for t in undeclared))
 
     def run(self, frames: int | None = None, seconds: float | None = None,
             until: Callable[[Engine], bool] | None = None) -> None:

@@ -1,9 +1,10 @@
 """Systems, phases and plugins: how behaviour is attached to the engine.
 
-A system declares the phase it runs in and the component types it reads and
-writes (documentation today, the basis for checks and parallel schedules
-tomorrow). A plugin is any object with a ``name`` and ``build(engine)`` that
-adds systems and resources; content folders add their own from ``systems/*.py``.
+A system declares the phase it runs in, the component types it reads and writes
+(checked in debug mode: ``EngineConfig.debug``, on in the test suite) and, where
+it matters, which systems of its phase it runs before or after. A plugin is any
+object with a ``name`` and ``build(engine)`` that adds systems and resources;
+content folders add their own from ``systems/*.py``.
 """
 
 from __future__ import annotations
@@ -14,6 +15,11 @@ from typing import TYPE_CHECKING, ClassVar, Protocol, runtime_checkable
 
 if TYPE_CHECKING:
     from engine.app import Engine
+
+
+#: In ``reads``/``writes``: every component type (a system whose behaviour comes from
+#: content, like Lua scripts, that may find, spawn and change objects of any kind).
+ANY_COMPONENT: type = object
 
 
 class Phase(IntEnum):
@@ -136,6 +142,18 @@ class Plugin(Protocol):
     name: str
 
     def build(self, engine: Engine) -> None: ...
+
+
+class UndeclaredAccess(RuntimeError):
+    """Debug mode: a system touched component types missing from its ``reads``/``writes``."""
+
+    def __init__(self, system: System, types: list[str]) -> None:
+        reads = ", ".join(t.__name__ for t in system.reads) or "nothing"
+        writes = ", ".join(t.__name__ for t in system.writes) or "nothing"
+        super().__init__(f"{system.name} touched {', '.join(types)} without declaring it "
+                         f"(it declares reads: {reads}; writes: {writes}); add it to the "
+                         "system's reads (queries) or writes (components added, removed or "
+                         "changed)")
 
 
 class SystemFailure(RuntimeError):

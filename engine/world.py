@@ -178,11 +178,38 @@ class PoseTable:
                 self._bind(row, transform)
 
 
+class AccessAudit:
+    """Which component types the running system touches (the engine's debug mode).
+
+    Reads are every query; writes are components added or removed. Hooks run for
+    whoever registered them, so their accesses are not counted against the system
+    that triggered them. What a system does to a component it got (``t.position[0] =
+    1``) cannot be seen here: declaring ``writes`` for that stays the author's word.
+    """
+
+    __slots__ = ("read", "written", "paused")
+
+    def __init__(self) -> None:
+        self.read: set[type] = set()
+        self.written: set[type] = set()
+        self.paused = 0
+
+    def reads(self, *kinds: type) -> None:
+        if not self.paused:
+            self.read.update(kinds)
+
+    def writes(self, *kinds: type) -> None:
+        if not self.paused:
+            self.written.update(kinds)
+
+
 class World:
     """A private esper world plus a pose table and component add/remove hooks."""
 
     def __init__(self) -> None:
         self.name = f"colosseum-{next(_world_names)}"
+        #: Set by the engine's debug mode while a system runs (see :class:`AccessAudit`).
+        self.audit: AccessAudit | None = None
         self.poses = PoseTable()
         self._on_add: dict[type, list[ComponentHook]] = defaultdict(list)
         self._on_remove: dict[type, list[ComponentHook]] = defaultdict(list)
@@ -203,18 +230,29 @@ class World:
     def _added(self, entity: int, component: Any) -> None:
         if isinstance(component, Transform):
             self.poses.adopt(entity, component)
-        for hook in self._on_add.get(_kind(component), ()):
-            hook(entity, component)
+        self._run_hooks(self._on_add.get(_kind(component), ()), entity, component)
 
     def _removing(self, entity: int, component: Any) -> None:
-        for hook in self._on_remove.get(_kind(component), ()):
-            hook(entity, component)
+        self._run_hooks(self._on_remove.get(_kind(component), ()), entity, component)
         if isinstance(component, Transform):
             self.poses.release(entity)
+
+    def _run_hooks(self, hooks: Iterable[ComponentHook], entity: int, component: Any) -> None:
+        audit = self.audit
+        if audit is not None:
+            audit.paused += 1
+        try:
+            for hook in hooks:
+                hook(entity, component)
+        finally:
+            if audit is not None:
+                audit.paused -= 1
 
     # -- entities ----------------------------------------------------------
     def create_entity(self, *components: Any) -> int:
         self._enter()
+        if self.audit is not None:
+            self.audit.writes(*map(_kind, components))
         entity = esper.create_entity(*components)
         for component in components:
             self._added(entity, component)
@@ -232,8 +270,11 @@ class World:
         made: list[tuple[int, tuple[Any, ...]]] = []
         posed: list[int] = []
         transforms: list[Transform] = []
+        audit = self.audit
         for components in component_lists:
             components = tuple(components)
+            if audit is not None:
+                audit.writes(*map(_kind, components))
             entity = create(*components)
             entities.append(entity)
             made.append((entity, components))
@@ -246,8 +287,7 @@ class World:
         if hooks:
             for entity, components in made:
                 for component in components:
-                    for hook in hooks.get(_kind(component), ()):
-                        hook(entity, component)
+                    self._run_hooks(hooks.get(_kind(component), ()), entity, component)
         return entities
 
     def delete_entity(self, entity: int) -> None:
@@ -266,6 +306,8 @@ class World:
     def add_component(self, entity: int, component: Any) -> None:
         self._enter()
         kind = _kind(component)
+        if self.audit is not None:
+            self.audit.writes(kind)
         old = esper.try_component(entity, kind)
         if old is not None:
             self._removing(entity, old)
@@ -274,6 +316,8 @@ class World:
 
     def remove_component(self, entity: int, component_type: type[C]) -> C | None:
         self._enter()
+        if self.audit is not None:
+            self.audit.writes(component_type)
         component = esper.try_component(entity, component_type)
         if component is None:
             return None
@@ -303,22 +347,33 @@ class World:
 
     def component_for_entity(self, entity: int, component_type: type[C]) -> C:
         self._enter()
+        if self.audit is not None:
+            self.audit.reads(component_type)
         return esper.component_for_entity(entity, component_type)
 
     def try_component(self, entity: int, component_type: type[C]) -> C | None:
         self._enter()
+        if self.audit is not None:
+            self.audit.reads(component_type)
         return esper.try_component(entity, component_type)
 
     def has_component(self, entity: int, component_type: type) -> bool:
         self._enter()
+        if self.audit is not None:
+            self.audit.reads(component_type)
         return esper.has_component(entity, component_type)
 
     def components_for_entity(self, entity: int) -> tuple[Any, ...]:
         self._enter()
-        return esper.components_for_entity(entity)
+        found = esper.components_for_entity(entity)
+        if self.audit is not None:
+            self.audit.reads(*map(_kind, found))
+        return found
 
     def get_component(self, component_type: type[C]) -> list[tuple[int, C]]:
         self._enter()
+        if self.audit is not None:
+            self.audit.reads(component_type)
         return esper.get_component(component_type)
 
     @overload
@@ -331,4 +386,6 @@ class World:
     ) -> list[tuple[int, tuple[C1, C2, C3]]]: ...
     def get_components(self, *component_types: type) -> list[tuple[int, tuple[Any, ...]]]:
         self._enter()
+        if self.audit is not None:
+            self.audit.reads(*component_types)
         return esper.get_components(*component_types)

@@ -74,8 +74,8 @@ class _Binding:
 
 class ControllerSystem(System):
     phase = Phase.PRE_PHYSICS
-    reads = (Controller, Joint, Name)
-    writes = (Controller,)
+    reads = (Controller, Joint, Name, Transform)
+    writes = (Controller, Joint)
 
     def __init__(self) -> None:
         self._keys: set[str] = set()

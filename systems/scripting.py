@@ -25,7 +25,7 @@ from engine.events import Contacts, CustomEvent, Despawned, InputEvent, KeyEvent
 from engine.scripting.api import ScriptAPI
 from engine.scripting.runtime import Script as LoadedScript
 from engine.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRuntime
-from engine.system import Phase, System
+from engine.system import ANY_COMPONENT, Phase, System
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -47,8 +47,9 @@ class _Broken:
 
 class ScriptingSystem(System):
     phase = Phase.SCRIPT
-    reads = (Script, Transform, Name)
-    writes = (Transform,)
+    # scripts find, spawn, move and delete objects of every kind
+    reads = (ANY_COMPONENT,)
+    writes = (ANY_COMPONENT,)
 
     def __init__(self, limits: ScriptLimits | None = None,
                  reload_interval: float = RELOAD_INTERVAL) -> None:

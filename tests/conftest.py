@@ -10,6 +10,8 @@ import pytest
 from hypothesis import settings
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+# Every engine in the tests checks that systems touch only what they declare.
+os.environ.setdefault("COLOSSEUM_DEBUG", "1")
 
 # CI replays the same examples every run (no wall-clock deadlines on a shared machine);
 # a developer's run explores new ones.

@@ -45,7 +45,7 @@ def test_a_key_in_frame_n_drives_the_motor_in_physics_step_n_serial(backend):
     log = eng.physics.log = cmd.CommandLog()
     spin: dict[int, float] = {}
 
-    @system(Phase.POST_PHYSICS)
+    @system(Phase.POST_PHYSICS, reads=(Transform,))
     def sample(e, dt):
         spin[e.frame] = float(np.linalg.norm(
             e.world.component_for_entity(wheel, Transform).angular_velocity))
@@ -133,7 +133,7 @@ def test_a_python_system_teleports_a_box_by_writing_its_transform(backend, how, 
 
     eng.add_system(lift)
     heights = {}
-    eng.add_system(system(Phase.POST_PHYSICS)(lambda e, dt: heights.__setitem__(
+    eng.add_system(system(Phase.POST_PHYSICS, reads=(Transform,))(lambda e, dt: heights.__setitem__(
         e.frame, e.world.component_for_entity(box, Transform).position.copy())))
     with eng, caplog.at_level(logging.INFO, "colosseum.dynamics"):
         eng.run(frames=40)
@@ -166,7 +166,7 @@ def test_a_teleport_through_the_api_is_not_taken_twice(mode):
     eng, box = falling_box("ode", mode)
     log = eng.physics.log = cmd.CommandLog()
 
-    @system(Phase.SCRIPT)
+    @system(Phase.SCRIPT, writes=(Transform,))
     def move(e, dt):
         if e.frame == 3:
             e.physics.set_pose(box, (0, 0, 3), (1, 0, 0, 0))

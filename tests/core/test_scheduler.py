@@ -188,3 +188,23 @@ def test_bodies_without_a_transform_simulate_and_the_others_still_sync():
         eng.run(frames=30)
         assert sorted(eng.physics.snapshot.bodies.keys.tolist()) == sorted([bare, ball])
         assert eng.world.component_for_entity(ball, Transform).position[2] < 10.0
+
+
+def test_debug_mode_stops_a_system_that_touches_what_it_does_not_declare():
+    @system(Phase.SCRIPT, reads=(Name,))
+    def sneaky(e, dt):
+        for _, (t,) in e.world.get_components(Transform):
+            t.position[2] += 1.0
+        e.spawn(Physical())
+
+    for debug in (True, False):
+        with make_engine(debug=debug) as eng:
+            eng.spawn(Transform())
+            eng.add_system(sneaky)
+            if debug:
+                with pytest.raises(SystemFailure, match=r"sneaky touched Physical, Transform "
+                                   r"without declaring it \(it declares reads: Name; "
+                                   r"writes: nothing\)"):
+                    eng.step()
+            else:
+                eng.step()  # the check costs nothing when it is off
