@@ -44,14 +44,15 @@ class LoadedScene:
 
 def load_content_scene(content: Content, seed: int = 0) -> LoadedScene:
     from engine.scene import SceneError, load_spec
+    from engine.scene.diagnostics import sorted_diagnostics
 
     try:
         spec = load_spec(content.scene, np.random.default_rng(seed))
     except SceneError as exc:
         raise SceneLoadError(exc.render()) from exc
-    if spec.db is not None:
-        for warning in spec.db.warnings:
-            print(warning.render(spec.db.sources.get(warning.path)), file=sys.stderr)
+    if spec.db is not None:  # warnings, and assets that failed (what they left out)
+        for told in sorted_diagnostics([*spec.db.warnings, *spec.problems]):
+            print(told.render(spec.db.sources.get(told.path)), file=sys.stderr)
     return LoadedScene(spec)
 
 

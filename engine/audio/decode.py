@@ -21,6 +21,10 @@ import soundfile as sf
 
 from engine.audio.backend import AudioError
 
+#: Sample rates a sound may have: outside these a header is broken, not unusual audio.
+MIN_SAMPLE_RATE = 1_000
+MAX_SAMPLE_RATE = 384_000
+
 
 class AudioFileError(AudioError):
     """A sound file is missing, truncated or in a format libsndfile cannot read."""
@@ -98,9 +102,19 @@ def probe(path: str | Path) -> SoundInfo:
         raise
     except (sf.LibsndfileError, RuntimeError, OSError, struct.error) as exc:
         raise AudioFileError(p, _reason(exc)) from exc
-    if info.frames <= 0 or info.samplerate <= 0:
-        raise AudioFileError(p, "no audio frames")
-    return SoundInfo(str(p), int(info.samplerate), int(info.channels), int(info.frames))
+    found = SoundInfo(str(p), int(info.samplerate), int(info.channels), int(info.frames))
+    check_header(found)
+    return found
+
+
+def check_header(info: SoundInfo) -> None:
+    """Refuse a header no sound has (OpenAL would play it as noise, or not at all)."""
+    if info.frames <= 0 or info.channels <= 0:
+        raise AudioFileError(info.path, "no audio frames")
+    if not MIN_SAMPLE_RATE <= info.rate <= MAX_SAMPLE_RATE:
+        raise AudioFileError(info.path, f"its sample rate, {info.rate} Hz, is not one a sound "
+                             f"can have ({MIN_SAMPLE_RATE} to {MAX_SAMPLE_RATE} Hz): a "
+                             f"broken header")
 
 
 def _reason(exc: BaseException) -> str:
