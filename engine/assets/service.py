@@ -137,6 +137,18 @@ class Assets:
             raise found.error.at(where)
         return found
 
+    def adopt(self, other: Assets) -> None:
+        """Take over what ``other`` read (a scene built before the engine had this cache),
+        so nothing it holds is read again."""
+        for key, value in other._cache.items():
+            self._cache.setdefault(key, value)
+        for found, joined in other._shown.items():
+            self._shown.setdefault(found, joined)
+        for found, where in other._places.items():
+            self._places.setdefault(found, where)
+        self._told |= other._told
+        self.loads.update(other.loads)
+
     def mark_told(self, error: AssetError) -> bool:
         """Note that ``error``'s file failure has been told; True if it had not been, so
         a later user (the renderer, the sound manager) does not tell it again."""

@@ -721,8 +721,13 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
         engine.defer(lambda: engine.physics.push(_restore_sleep(sleep)))
     if as_scene:
         engine.insert_resource(SceneIds(ids, joints, spec))
-        if spec.assets is not None:  # render and sound find the files the scene read
-            engine.insert_resource(spec.assets)
+        if spec.assets is not None:  # render, sound and spawns use the files it read
+            assets = engine.try_resource(Assets)
+            if assets is None:
+                engine.insert_resource(spec.assets)
+            elif assets is not spec.assets:
+                assets.adopt(spec.assets)
+                spec.assets = assets
         engine.insert_resource(spec.world)
         # a saved state continues at the time it was saved
         engine.time = engine.physics.time = spec.time
