@@ -143,7 +143,7 @@ def load_pillow_image(path: Path) -> ImageAsset:
     except UnidentifiedImageError:
         raise ValueError("not an image Pillow can read") from None
     except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
-        raise ValueError(f"not decoded: {exc}") from None
+        raise ValueError(f"not decoded: {str(exc).rstrip('.')}") from None
 
 
 @register_loader("sound", *SOUND_EXTENSIONS)
