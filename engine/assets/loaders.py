@@ -10,12 +10,15 @@ from __future__ import annotations
 import json
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from engine.assets.registry import register_loader
 from engine.assets.types import WHITE, ImageAsset, MeshPart, ModelAsset
+
+if TYPE_CHECKING:
+    from engine.audio.decode import SoundInfo
 
 #: Model formats trimesh reads for us (.dae through pycollada).
 MODEL_EXTENSIONS = (".obj", ".stl", ".ply", ".glb", ".gltf", ".dae")
@@ -108,7 +111,7 @@ def rgba_pixels(image: Any) -> np.ndarray:
     from PIL import Image
 
     if isinstance(image, Image.Image):
-        _check_size(*image.size)
+        check_image_size(*image.size)
         return np.asarray(image.convert("RGBA"), dtype=np.uint8)
     arr = np.asarray(image)
     if arr.dtype != np.uint8:
@@ -120,7 +123,8 @@ def rgba_pixels(image: Any) -> np.ndarray:
     return arr
 
 
-def _check_size(width: int, height: int) -> None:
+def check_image_size(width: int, height: int) -> None:
+    """Refuse, from the header alone, an image too large to be a texture."""
     if width <= 0 or height <= 0:
         raise ValueError(f"the image is {width}x{height} pixels: empty")
     if max(width, height) > MAX_IMAGE_SIDE or width * height > MAX_IMAGE_PIXELS:
@@ -138,7 +142,7 @@ def load_pillow_image(path: Path) -> ImageAsset:
         with warnings.catch_warnings():
             warnings.simplefilter("error", Image.DecompressionBombWarning)
             with Image.open(path) as img:
-                _check_size(*img.size)
+                check_image_size(*img.size)
                 return ImageAsset(path, rgba_pixels(img))
     except UnidentifiedImageError:
         raise ValueError("not an image Pillow can read") from None
@@ -147,7 +151,7 @@ def load_pillow_image(path: Path) -> ImageAsset:
 
 
 @register_loader("sound", *SOUND_EXTENSIONS)
-def load_sound_info(path: Path) -> Any:
+def load_sound_info(path: Path) -> SoundInfo:
     """The sound's header (rate, channels, frames), checked; decoding is per use
     (:meth:`engine.assets.Assets.clip`), since positional sources need a mono mixdown
     and long files are streamed."""

@@ -9,13 +9,16 @@ from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol, TypeVar
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 import numpy as np
 
 from engine.assets import loaders
 from engine.assets.registry import UnknownExtension, loader_for
 from engine.assets.types import ImageAsset, ModelAsset
+
+if TYPE_CHECKING:
+    from engine.audio.decode import Clip, SoundInfo
 
 T = TypeVar("T")
 
@@ -104,20 +107,20 @@ class Assets:
         return self._load("image", name, where, root, _check_image)
 
     def sound(self, name: str | Path, where: Where | None = None,
-              root: Path | None = None) -> Any:
+              root: Path | None = None) -> SoundInfo:
         """The sound file ``name``'s header (:class:`engine.audio.decode.SoundInfo`),
         checked: frames present, a plausible sample rate."""
         return self._load("sound", name, where, root, _check_sound)
 
     def clip(self, name: str | Path, mono: bool, where: Where | None = None,
-             root: Path | None = None) -> Any:
+             root: Path | None = None) -> Clip:
         """The sound ``name`` decoded whole to int16 (:class:`engine.audio.decode.Clip`),
         mixed to mono for a positional source; one decoding per file and ``mono``."""
         from engine.audio.decode import load_clip
 
         info = self.sound(name, where, root)
-        return self.derived(("clip", self.resolve(name, root), mono), "decode sound",
-                            _called(name), self.resolve(name, root),
+        path = self.resolve(name, root)
+        return self.derived(("clip", path, mono), "decode sound", _called(name), path,
                             lambda: load_clip(info.path, mono), where)
 
     def derived(self, key: Any, action: str, name: str, path: Path,
@@ -252,10 +255,10 @@ def _check_image(image: ImageAsset) -> None:
     rgba = image.rgba
     if rgba.dtype != np.uint8 or rgba.ndim != 3 or rgba.shape[2] != 4:
         raise ValueError("an image must be RGBA uint8 pixels (height, width, 4)")
-    loaders._check_size(rgba.shape[1], rgba.shape[0])
+    loaders.check_image_size(rgba.shape[1], rgba.shape[0])
 
 
-def _check_sound(info: Any) -> None:
+def _check_sound(info: SoundInfo) -> None:
     from engine.audio.decode import SoundInfo, check_header
 
     if not isinstance(info, SoundInfo):

@@ -124,3 +124,9 @@ CASES = [
     Case("cut.wav", truncated_wav, _SOUNDING, "truncated", action="load sound",
          left_out=False),
 ]
+
+
+def case(file: str) -> Case:
+    """The case of ``file``."""
+    (found,) = [c for c in CASES if c.file == file]
+    return found

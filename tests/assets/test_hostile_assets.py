@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from hostile import CASES, Case, cube, flat_obj, knock
+from hostile import CASES, Case, case, cube, flat_obj, knock
 
 from components import Name, Sound, Transform, Visual
 from engine.app import Engine, EngineConfig
@@ -85,7 +85,7 @@ def test_a_broken_texture_is_drawn_as_a_checker_and_told_once(tmp_path: Path):
         'Object { ID "a" Position [-1 0 1] Dynamic 0 VisualAttributes { Texture "bomb.png" '
         'Geometry { Primitive "box" } } }',
         'Object { ID "b" Position [1 0 1] Dynamic 0 VisualAttributes { Texture "bomb.png" '
-        'Geometry { Primitive "box" } } }', CAMERA], {"bomb.png": CASES[8].make})
+        'Geometry { Primitive "box" } } }', CAMERA], {"bomb.png": case("bomb.png").make})
     spec = load_spec(folder)
     assert [(p.line, "bomb.png" in p.message) for p in spec.problems] == [(1, True), (2, True)]
     with engine_for(folder) as engine:
@@ -101,9 +101,10 @@ def _visual(engine: Engine, name: str) -> Visual:
 
 
 def test_an_object_whose_sound_fails_keeps_everything_but_the_sound(tmp_path: Path):
-    folder = content(tmp_path / "sim", [GROUND, BALL, CASES[10].use.format(file="buzz.wav"),
+    buzz, cut = case("buzz.wav"), case("cut.wav")
+    folder = content(tmp_path / "sim", [GROUND, BALL, buzz.use.format(file=buzz.file),
                                         'Sound { ID "music" File "cut.wav" Loop 1 }'],
-                     {"buzz.wav": CASES[10].make, "cut.wav": CASES[11].make})
+                     {buzz.file: buzz.make, cut.file: cut.make})
     spec = load_spec(folder)
     assert [p.message.split(";")[1].strip() for p in spec.problems] == [
         "object 'bad' has no sound", "sound 'music' is left out"]
@@ -176,9 +177,9 @@ def test_the_command_line_runs_on_and_check_lists_every_broken_file(tmp_path: Pa
     """Every hostile file at once, end to end: a run that saves a screenshot and its state
     exits 0 and tells each file with its line; ``check`` lists the same and exits 1."""
     lines, files = [GROUND, BALL, CAMERA], {"knock.wav": knock}
-    for i, case in enumerate(CASES):
-        lines.append(case.use.format(file=case.file).replace('"bad"', f'"bad{i}"'))
-        files[case.file] = case.make
+    for i, each in enumerate(CASES):
+        lines.append(each.use.format(file=each.file).replace('"bad"', f'"bad{i}"'))
+        files[each.file] = each.make
     folder = content(tmp_path / "sim", lines, files)
     shot, state = tmp_path / "shot.png", tmp_path / "state.scene"
     run = subprocess.run(
@@ -188,18 +189,18 @@ def test_the_command_line_runs_on_and_check_lists_every_broken_file(tmp_path: Pa
     assert run.returncode == 0, run.stderr
     assert "Traceback" not in run.stderr and shot.is_file()
     scene = folder / "main.scene"
-    for case in CASES:
-        line, col = place(scene, case.file)
-        assert f'{scene}:{line}:{col}: error: cannot {case.action} "{case.file}"' in run.stderr
+    for each in CASES:
+        line, col = place(scene, each.file)
+        assert f'{scene}:{line}:{col}: error: cannot {each.action} "{each.file}"' in run.stderr
     saved = state.read_text()
-    for i, case in enumerate(CASES):
-        assert (f'"bad{i}"' in saved) != case.left_out
+    for i, each in enumerate(CASES):
+        assert (f'"bad{i}"' in saved) != each.left_out
     check = subprocess.run([sys.executable, "-m", "engine.cli", "check", str(folder)],
                            capture_output=True, text=True, timeout=180)
     assert check.returncode == 1 and "Traceback" not in check.stderr
     assert f"{len(CASES)} error(s)" in check.stderr
-    for case in CASES:
-        assert f'cannot {case.action} "{case.file}"' in check.stderr
+    for each in CASES:
+        assert f'cannot {each.action} "{each.file}"' in check.stderr
 
 
 def test_a_snippet_naming_a_bad_model_twice_is_told_at_both_lines(tmp_path: Path):
