@@ -2,8 +2,10 @@
 
 A content folder holds ``main.scene`` and optionally ``systems/*.py``; each
 such module defines ``build(engine)`` (a plugin function) or a ``plugin``
-object with ``build``. A module that fails to import or build is reported
-with its path and traceback.
+object with ``build``. The modules are imported before the scene is built, so
+one may register asset loaders (:func:`engine.assets.register_loader`) for the
+files the scene names; ``build`` runs once the engine exists. A module that
+fails to import or build is reported with its path and traceback.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import sys
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -49,17 +52,34 @@ def resolve(path: str | Path | None) -> Content:
     return Content(target.resolve().parent, target.resolve())
 
 
-def load_systems(engine: Engine, folder: Path) -> list[str]:
-    """Import ``folder/systems/*.py`` and build each as a plugin; return their names."""
-    loaded = []
+def import_systems(folder: Path) -> list[tuple[Path, ModuleType]]:
+    """Import ``folder/systems/*.py``, each once per process (its module code runs then:
+    the place to register asset loaders); returns (path, module) in name order."""
+    imported = []
     for path in sorted((folder / "systems").glob("*.py")):
         module_name = f"colosseum_content_{abs(hash(str(folder)))}_{path.stem}"
+        module = sys.modules.get(module_name)
+        if module is None:
+            try:
+                spec = importlib.util.spec_from_file_location(module_name, path)
+                assert spec is not None and spec.loader is not None
+                module = importlib.util.module_from_spec(spec)
+                sys.modules[module_name] = module
+                spec.loader.exec_module(module)
+            except Exception as exc:
+                sys.modules.pop(module_name, None)
+                trace = "".join(traceback.format_exception(exc))
+                raise ContentError(f"{path}: custom system failed to load:\n{trace}") from exc
+        imported.append((path, module))
+    return imported
+
+
+def load_systems(engine: Engine, folder: Path) -> list[str]:
+    """Import ``folder/systems/*.py`` (if not yet) and build each as a plugin; return
+    their names."""
+    loaded = []
+    for path, module in import_systems(folder):
         try:
-            spec = importlib.util.spec_from_file_location(module_name, path)
-            assert spec is not None and spec.loader is not None
-            module = importlib.util.module_from_spec(spec)
-            sys.modules[module_name] = module
-            spec.loader.exec_module(module)
             build = getattr(module, "build", None)
             plugin = getattr(module, "plugin", None)
             if build is not None:

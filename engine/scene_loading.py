@@ -43,25 +43,38 @@ class LoadedScene:
 
 
 def load_content_scene(content: Content, seed: int = 0) -> LoadedScene:
+    """The content's scene, built; its ``systems/*.py`` are imported first, so asset
+    loaders they register read the scene's files."""
+    from engine.content import ContentError, import_systems
     from engine.scene import SceneError, load_spec
+    from engine.scene.diagnostics import sorted_diagnostics
 
     try:
+        import_systems(content.folder)
         spec = load_spec(content.scene, np.random.default_rng(seed))
+    except ContentError as exc:
+        raise SceneLoadError(str(exc)) from exc
     except SceneError as exc:
         raise SceneLoadError(exc.render()) from exc
-    if spec.db is not None:
-        for warning in spec.db.warnings:
-            print(warning.render(spec.db.sources.get(warning.path)), file=sys.stderr)
+    if spec.db is not None:  # warnings, and assets that failed (what they left out)
+        for told in sorted_diagnostics([*spec.db.warnings, *spec.problems]):
+            print(told.render(spec.db.sources.get(told.path)), file=sys.stderr)
     return LoadedScene(spec)
 
 
 def check_path(path: Path) -> int:
     """Print every diagnostic; 0 when there is no error, 1 with errors, 2 for a bad path."""
+    from engine.content import ContentError, import_systems
     from engine.scene import check, render_all
 
     if not path.exists():
         print(f"colosseum: error: {path}: no such file or folder", file=sys.stderr)
         return 2
+    try:  # the content's asset loaders, so its files are checked as a run reads them
+        import_systems(path if path.is_dir() else path.parent)
+    except ContentError as exc:
+        print(exc, file=sys.stderr)
+        return 1
     diagnostics = check(path)
     if diagnostics:
         print(render_all(diagnostics), file=sys.stderr)

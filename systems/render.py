@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from components import Camera, Light, Transform, Visual
+from engine.assets import Assets
 from engine.events import KeyEvent
 from engine.render.camera import CameraView, camera_from_component
 from engine.render.context import create_target
@@ -163,7 +164,8 @@ class RenderSystem(System):
         opts = self.options
         self._target = create_target(opts.backend, opts.size, opts.title)
         root = engine.config.content_dir or Path(".")
-        self.renderer = Renderer(self._target, root=root, shadow_size=opts.shadow_size)
+        self.renderer = Renderer(self._target, root=root, shadow_size=opts.shadow_size,
+                                 assets=Assets.of(engine))
         self.renderer.hud.enabled = opts.hud
         log.info("rendering with %s (%s) at %dx%d", self._target.kind,
                  self._target.renderer_name, *self._target.size)

@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from components import Camera, Physical, Sound, Transform
+from engine.assets import Assets
 from engine.audio import (
     ContactSoundFilter,
     ContactSoundSettings,
@@ -74,6 +75,7 @@ class SoundSystem(System):
     # -- life cycle -----------------------------------------------------------
     def setup(self, engine: Engine) -> None:
         self._content = engine.config.content_dir
+        self.manager.assets = Assets.of(engine)  # the files the scene checked, decoded once
         for entity, _ in engine.world.get_component(Physical):
             self.contacts.settle(entity, engine.time)
         self._new = [entity for entity, _ in engine.world.get_component(Sound)]

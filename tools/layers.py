@@ -4,6 +4,9 @@ Layers, lowest first (docs/ARCHITECTURE.md draws them)::
 
     components  <-  engine core  <-  engine services  <-  systems  <-  CLI and tools
 
+The asset layer (``engine.assets``) is core: the scene factory builds physics shapes
+from models with it, as the renderer and the sound service do.
+
 A module may import its own layer and the ones below; an import of a higher layer
 is an error, and so is any import cycle among the project's modules. Imports under
 ``if TYPE_CHECKING:`` are type hints, not dependencies, and are not counted; imports
@@ -36,7 +39,7 @@ LAYERS = (
     Layer(0, "components", ("components",)),
     Layer(1, "engine core", ("engine",)),
     Layer(2, "engine services", ("engine.render", "engine.audio", "engine.scripting",
-                                 "engine.input", "engine.assets", "engine.net")),
+                                 "engine.input", "engine.net")),
     Layer(3, "systems", ("systems",)),
     Layer(4, "CLI and tools", ("engine.cli", "engine.scene_loading", "engine.scaffold",
                                "tools")),

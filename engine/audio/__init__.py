@@ -22,6 +22,7 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
+from engine.assets.sound import AudioFileError, Clip, StreamReader, load_clip, probe
 from engine.audio.backend import (
     DISTANCE_MODELS,
     ENGINE_TO_AL,
@@ -33,7 +34,6 @@ from engine.audio.backend import (
     to_al,
 )
 from engine.audio.contacts import ContactSoundFilter, ContactSoundSettings
-from engine.audio.decode import AudioFileError, Clip, StreamReader, load_clip, probe
 from engine.audio.manager import SoundManager, Voice
 from engine.audio.null_backend import NullBackend
 

@@ -39,8 +39,9 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.assets import AssetError, Assets
+from engine.assets.sound import AudioFileError, StreamReader
 from engine.audio.backend import DISTANCE_MODELS, AudioBackend, listener_axes
-from engine.audio.decode import AudioFileError, SoundInfo, StreamReader, load_clip, probe
 
 log = logging.getLogger("colosseum.audio")
 
@@ -118,7 +119,8 @@ class SoundManager:
                  queue_deadline: float = 0.1, queue_limit: int | None = None,
                  stream_threshold: float = 2.0, stream_block: int = 8192,
                  stream_buffers: int = 4, distance_model: str = "inverse_clamped",
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic,
+                 assets: Assets | None = None) -> None:
         size = min(backend.mono_sources, 32) if pool_size is None else pool_size
         if size < 1:
             raise ValueError(f"pool_size must be at least 1, not {size}")
@@ -130,6 +132,8 @@ class SoundManager:
         self.stream_block = stream_block
         self.stream_buffers = stream_buffers
         self.clock = clock
+        #: Where sound files are read and decoded (the run's shared cache).
+        self.assets = assets if assets is not None else Assets()
         self.counters = SoundStats()
         #: Bumped whenever a voice starts or ends, so callers can skip rescanning theirs.
         self.generation = 0
@@ -140,7 +144,6 @@ class SoundManager:
         self._shots: dict[int, deque[Voice]] = {}  # priority -> playing one-shots, oldest first
         self._shot_entries = 0
         self._pending: deque[Voice] = deque()
-        self._info: dict[str, SoundInfo] = {}
         self._cache: dict[tuple[str, bool], tuple[int, float]] = {}
         self._reported: set[str] = set()
         self._warned_stereo: set[str] = set()
@@ -170,11 +173,13 @@ class SoundManager:
         self.counters.requests += 1
         try:
             self._prepare(voice)
-        except AudioFileError as exc:
+        except (AssetError, AudioFileError) as exc:
             self.counters.failed += 1
             voice.state, voice.error = "failed", str(exc)
-            if voice.file not in self._reported:
-                self._reported.add(voice.file)
+            told = self.assets.mark_told(exc) if isinstance(exc, AssetError) else \
+                voice.file not in self._reported
+            self._reported.add(voice.file)
+            if told:
                 log.error("%s (the sound stays silent)", exc)
             return voice
         if voice.exclusive:
@@ -351,9 +356,7 @@ class SoundManager:
         if cached is not None:
             voice._buffer, voice._duration = cached
             return
-        info = self._info.get(voice.file)
-        if info is None:
-            info = self._info[voice.file] = probe(voice.file)
+        info = self.assets.sound(voice.file)
         if mono and info.channels > 1 and voice.file not in self._warned_stereo:
             self._warned_stereo.add(voice.file)
             log.warning("%s: warning: %d-channel sound used by a positional source; mixed "
@@ -362,7 +365,7 @@ class SoundManager:
         if info.duration > self.stream_threshold:
             voice._stream = _Stream(StreamReader(info, mono, voice.loop), [])
             return
-        clip = load_clip(voice.file, mono)
+        clip = self.assets.clip(voice.file, mono)
         (buffer,) = self.backend.gen_buffers(1)
         self.backend.buffer_data(buffer, clip.pcm, clip.rate)
         self._cache[(voice.file, mono)] = (buffer, clip.duration)

@@ -11,12 +11,7 @@ from engine.render.context import (
     has_display,
 )
 from engine.render.lights import LightInfo, light_from_component
-from engine.render.meshes import (
-    SUPPORTED_MODEL_FORMATS,
-    ModelError,
-    UnsupportedModelFormat,
-    load_model,
-)
+from engine.render.meshes import ModelError
 from engine.render.postprocess import BUILTIN_PASSES, PostPass, PostProcessing
 from engine.render.renderer import FrameStats, Renderer
 from engine.render.shaders import (
@@ -42,18 +37,15 @@ __all__ = [
     "PostProcessing",
     "RenderBackendError",
     "Renderer",
-    "SUPPORTED_MODEL_FORMATS",
     "ShaderError",
     "ShaderLibrary",
     "ShaderProgram",
     "ShaderState",
     "Uniform",
-    "UnsupportedModelFormat",
     "VertexShader",
     "WindowTarget",
     "camera_from_component",
     "create_target",
     "has_display",
     "light_from_component",
-    "load_model",
 ]

@@ -1,20 +1,18 @@
-"""CPU-side meshes: primitives generated here and model files loaded with trimesh.
+"""CPU-side meshes: primitives generated here, model parts from :mod:`engine.assets`.
 
 Every mesh uses one interleaved vertex layout (position, normal, uv, rgba colour), so any
-mesh can be drawn by any program. Models come back as several :class:`MeshData` parts, one
-per material, each with its base colour and texture image.
+mesh can be drawn by any program. A model is several :class:`MeshData` parts, one per
+material (:func:`from_part`), each with its base colour and texture pixels.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-#: Model file suffixes trimesh loads for us (.dae needs pycollada).
-SUPPORTED_MODEL_FORMATS = (".obj", ".stl", ".ply", ".glb", ".gltf", ".dae")
+from engine.assets import MeshPart
 
 #: Side of the quad drawn for an infinite plane, in metres.
 PLANE_EXTENT = 200.0
@@ -26,11 +24,7 @@ VERTEX_ATTRIBUTES = ("in_position", "in_normal", "in_uv", "in_color")
 
 
 class ModelError(ValueError):
-    """A model file that cannot be used; the message names the file."""
-
-
-class UnsupportedModelFormat(ModelError):
-    """A model file whose format we do not read (the paper's ``cow.osg``)."""
+    """A shape that cannot be drawn (files that cannot are :class:`AssetError`)."""
 
 
 @dataclass(slots=True)
@@ -40,7 +34,7 @@ class MeshData:
     vertices: np.ndarray
     indices: np.ndarray
     color: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
-    texture: object | None = None  # a PIL image from the model file, if any
+    texture: np.ndarray | None = None  # RGBA pixels of the model's material, if any
     name: str = ""
 
     @property
@@ -187,92 +181,18 @@ def primitive(kind: str, size: tuple[float, ...]) -> MeshData:
 
 
 def mesh_from_arrays(vertices: np.ndarray, faces: np.ndarray) -> MeshData:
-    """Flat-shaded mesh from raw triangles (a Shape of kind mesh or hull)."""
-    import trimesh
-
-    tm = trimesh.Trimesh(np.asarray(vertices, float), np.asarray(faces, int), process=False)
-    return _from_trimesh(tm, smooth=False)[0]
-
-
-def _from_trimesh(tm: object, smooth: bool = True) -> list[MeshData]:
-    import trimesh
-
-    assert isinstance(tm, trimesh.Trimesh)
-    if not smooth:
-        tm = tm.copy()
-        tm.unmerge_vertices()
-    positions = np.asarray(tm.vertices, dtype=np.float64)
-    normals = np.asarray(tm.vertex_normals, dtype=np.float64)
-    uvs = None
-    colors = None
-    color = (1.0, 1.0, 1.0, 1.0)
-    image = None
-    visual = tm.visual
-    if visual is not None and visual.kind == "texture":
-        uv = getattr(visual, "uv", None)
-        if uv is not None and len(uv) == len(positions):
-            uvs = np.asarray(uv, dtype=np.float64)
-        material = getattr(visual, "material", None)
-        if material is not None:
-            image = getattr(material, "baseColorTexture", None) or getattr(material, "image", None)
-            # glTF multiplies its texture by baseColorFactor; for OBJ/MTL the texture map
-            # replaces Kd, as in common viewers
-            factor = getattr(material, "baseColorFactor", None)
-            if factor is None and image is None:
-                factor = getattr(material, "diffuse", None)
-            if factor is not None:
-                f = np.asarray(factor, dtype=np.float64).reshape(-1)
-                color = tuple(float(c) for c in (f / 255.0 if f.max() > 1.0 else f))
-                if len(color) == 3:
-                    color = (*color, 1.0)
-    elif visual is not None and visual.kind in ("vertex", "face"):
-        colors = np.asarray(visual.vertex_colors, dtype=np.float64)[:, :4] / 255.0
-    if uvs is None:
-        image = None
-    data = MeshData(_pack(positions, normals, uvs, colors),
-                    np.asarray(tm.faces, dtype=np.uint32).reshape(-1), color=color,
-                    texture=image)
-    return [data]
+    """Flat-shaded mesh from raw triangles (a Shape of kind mesh or hull): each triangle
+    its own three vertices, with the triangle's normal."""
+    corners = np.asarray(vertices, np.float64)[np.asarray(faces, np.int64).reshape(-1, 3)]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    length = np.linalg.norm(normal, axis=1, keepdims=True)
+    normal = np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
+    return MeshData(_pack(corners.reshape(-1, 3), np.repeat(normal, 3, axis=0)),
+                    np.arange(3 * len(corners), dtype=np.uint32))
 
 
-#: glTF is +Y up; the engine is +Z up.
-_Y_UP_TO_Z_UP = np.array([[1.0, 0, 0, 0], [0, 0, -1.0, 0], [0, 1.0, 0, 0], [0, 0, 0, 1.0]])
-
-
-def load_model(path: str | Path) -> list[MeshData]:
-    """Load a model file into mesh parts (one per material), in metres, Z up.
-
-    Raises :class:`UnsupportedModelFormat` naming the file and the formats we read, and
-    :class:`ModelError` for a missing or unreadable file.
-    """
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix not in SUPPORTED_MODEL_FORMATS:
-        raise UnsupportedModelFormat(
-            f"{path}: unsupported model format {suffix or '(none)'!r}; "
-            f"supported formats: {', '.join(SUPPORTED_MODEL_FORMATS)}")
-    if not path.is_file():
-        raise ModelError(f"{path}: model file not found")
-    import trimesh
-
-    try:
-        scene = trimesh.load(str(path), force="scene")
-    except Exception as exc:  # trimesh raises many types; the user needs the file and reason
-        hint = " (.dae needs the pycollada package)" if suffix == ".dae" else ""
-        raise ModelError(f"{path}: cannot read model: {exc}{hint}") from exc
-    parts: list[MeshData] = []
-    for node in scene.graph.nodes_geometry:
-        transform, geom_name = scene.graph[node]
-        geom = scene.geometry[geom_name]
-        if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
-            continue
-        geom = geom.copy()
-        geom.apply_transform(transform)
-        if suffix in (".gltf", ".glb"):
-            geom.apply_transform(_Y_UP_TO_Z_UP)
-        for part in _from_trimesh(geom):
-            part.name = str(geom_name)
-            parts.append(part)
-    if not parts:
-        raise ModelError(f"{path}: model has no triangle geometry")
-    return parts
+def from_part(part: MeshPart) -> MeshData:
+    """A model part in the interleaved layout, with its colour and texture."""
+    return MeshData(_pack(part.vertices, part.normals, part.uv, part.colors),
+                    np.asarray(part.faces, dtype=np.uint32).reshape(-1), color=part.color,
+                    texture=part.texture, name=part.name)

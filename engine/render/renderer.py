@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from engine.assets import AssetError, Assets
 from engine.render import glsl, math3d, meshes
 from engine.render.camera import CameraView, Eye
 from engine.render.hud import Hud
@@ -28,7 +29,7 @@ from engine.render.lights import (
     LightInfo,
     shadow_matrix,
 )
-from engine.render.materials import checker_image, image_rgba, load_texture_image
+from engine.render.materials import checker_image
 from engine.render.postprocess import PostChain, PostPass
 from engine.render.shaders import ShaderLibrary, ShaderManager, UniformValue, write_uniform
 
@@ -87,11 +88,13 @@ class Renderer:
     """Draws objects into a render target (see :mod:`engine.render.context`)."""
 
     def __init__(self, target: Any, root: str | Path = ".", shadow_size: int = 1024,
-                 instancing: bool = True) -> None:
+                 instancing: bool = True, assets: Assets | None = None) -> None:
         self.target = target
         self._instancing = instancing
         self.ctx = target.ctx
         self.root = Path(root)
+        #: Where model and texture files come from (the run's shared cache).
+        self.assets = assets if assets is not None else Assets(self.root)
         self.background = (0.55, 0.62, 0.72)
         self.ambient = DEFAULT_AMBIENT
         self.camera = CameraView()
@@ -107,7 +110,6 @@ class Renderer:
                                        fragment_shader=glsl.DEPTH_FRAGMENT)
         self._meshes: dict[str, _GpuMesh] = {}
         self._textures: dict[str, Any] = {}
-        self._models: dict[str, list[meshes.MeshData]] = {}
         self._objects: dict[int, list[_Part]] = {}
         self._rows: dict[int, int] = {}
         self._free_rows: list[int] = []
@@ -206,7 +208,7 @@ class Renderer:
         color = tuple(float(c) for c in visual.color)
         texture = _WHITE
         if visual.texture:
-            texture = str(self.root / visual.texture)
+            texture = visual.texture
         parts = []
         for shape in visual.shapes:
             try:
@@ -219,36 +221,29 @@ class Renderer:
                                visual.shadower and not self._meshes[mesh].is_plane,
                                visual.shadowed))
         if visual.model:
-            path = self.root / visual.model
             local = math3d.compose((0, 0, 0), (1, 0, 0, 0), scale)
             try:
-                model = self._load_model(path)
-            except meshes.ModelError as exc:
-                self._error(f"{exc}; drawing a placeholder box")
+                model = self.assets.model(visual.model, root=self.root)
+            except AssetError as exc:
+                self._told(exc, "drawing a placeholder box")
                 self._mesh_for_shape_key("box:placeholder", lambda: meshes.box((1, 1, 1)))
                 self._texture_for(_PLACEHOLDER)
                 return parts + [_Part(row, "box:placeholder", _PLACEHOLDER, None, local,
                                       (1, 1, 1, 1), visual.shadower, visual.shadowed)]
-            for i, data in enumerate(model):
-                mkey = f"model:{path}#{i}"
-                self._mesh_for_shape_key(mkey, lambda d=data: d)
+            for i, part in enumerate(model.parts):
+                mkey = f"model:{model.path}#{i}"
+                self._mesh_for_shape_key(mkey, lambda p=part: meshes.from_part(p))
                 tex = texture
-                if texture == _WHITE and data.texture is not None:
+                if texture == _WHITE and part.texture is not None:
                     tex = f"{mkey}:texture"
                     if tex not in self._textures:
-                        self._textures[tex] = self._upload_texture(image_rgba(data.texture))
-                part_color = tuple(a * b for a, b in zip(color, data.color, strict=True))
+                        self._textures[tex] = self._upload_texture(part.texture)
+                part_color = tuple(a * b for a, b in zip(color, part.color, strict=True))
                 parts.append(_Part(row, mkey, tex, visual.shader_state, local, part_color,
                                    visual.shadower, visual.shadowed))
         for part in parts:
             self._texture_for(part.texture)
         return parts
-
-    def _load_model(self, path: Path) -> list[meshes.MeshData]:
-        key = str(path)
-        if key not in self._models:
-            self._models[key] = meshes.load_model(path)
-        return self._models[key]
 
     def _mesh_for_shape(self, shape: Any) -> str:
         if shape.kind in ("mesh", "hull"):
@@ -294,10 +289,11 @@ class Renderer:
         elif key == _PLACEHOLDER:
             tex = self._upload_texture(checker_image(), nearest=True)
         else:
-            rgba, ok = load_texture_image(key)
-            if not ok:
-                self.errors.append(f"{key}: texture missing or unreadable; showing a checker")
-            tex = self._upload_texture(rgba, nearest=not ok)
+            try:
+                tex = self._upload_texture(self.assets.image(key, root=self.root).rgba)
+            except AssetError as exc:
+                self._told(exc, "drawing a checker placeholder")
+                tex = self._upload_texture(checker_image(), nearest=True)
         self._textures[key] = tex
         return tex
 
@@ -325,6 +321,14 @@ class Renderer:
     def _error(self, message: str) -> None:
         self.errors.append(message)
         log.error("%s", message)
+
+    def _told(self, error: AssetError, outcome: str) -> None:
+        """An asset that failed: in :attr:`errors` always, logged unless the scene
+        loader told it already (with its scene line)."""
+        message = f"{error}; {outcome}"
+        self.errors.append(message)
+        if self.assets.mark_told(error):
+            log.error("%s", message)
 
     # -------------------------------------------------------------- per frame
     def _rebuild(self) -> None:

@@ -3,10 +3,15 @@
 :func:`build_specs` is pure: it reads a validated SceneDB (defaults filled from
 the schema) and returns a :class:`SceneSpec` — per object the list of component
 instances, plus joints (bodies named by object ID), materials, material pairs,
-shaders, world settings. Any problem (for example a model trimesh cannot read)
-raises :class:`SceneError` before anything exists, so a bad file never
-half-loads a world. :func:`instantiate` then creates the entities and resolves
-object IDs to entity ids; a spec is consumed by instantiating it once.
+shaders, world settings. A mistake in the description raises :class:`SceneError`
+before anything exists, so a bad file never half-loads a world. An asset that
+cannot be used (a model, texture or sound file that is unreadable, a hull that
+cannot be built) is not a mistake in the text: its object (or just its sound, or
+texture) is left out, marked ``skipped``, with a diagnostic in
+:attr:`SceneSpec.problems`, and the run goes on. Files are read through one
+:class:`engine.assets.Assets` cache, which the renderer and the sound system share.
+:func:`instantiate` then creates the entities and resolves object IDs to entity
+ids; a spec is consumed by instantiating it once.
 """
 
 from __future__ import annotations
@@ -35,6 +40,8 @@ from components import (
     Visual,
 )
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
+from engine.assets import AssetError, Assets
+from engine.assets.geometry import convex_hull
 from engine.physics.backend import MaterialPair, SleepState, WorldSettings
 from engine.physics.commands import SetSleepState
 from engine.rotation import euler_to_quat, rotate
@@ -49,7 +56,7 @@ from engine.scene.db import (
     SceneDB,
     Value,
 )
-from engine.scene.diagnostics import Loc, Reporter
+from engine.scene.diagnostics import ERROR, Diagnostic, Loc, Reporter, sorted_diagnostics
 from engine.scene.parser import paused_gc
 
 if TYPE_CHECKING:
@@ -64,19 +71,24 @@ DEFAULT_SIZES = {"sphere": (1.0,), "box": (1.0, 1.0, 1.0), "capsule": (0.5, 1.0)
 
 @dataclass(slots=True)
 class EntitySpec:
+    """An entity's components; ``skipped`` (no components) when an asset it needs failed:
+    kept in its place so a saved state still matches the file's blocks to entities."""
+
     id: str
     components: list[Any]
     loc: Loc
+    skipped: bool = False
 
 
 @dataclass(slots=True)
 class JointSpec:
-    """A joint and the IDs of its bodies."""
+    """A joint and the IDs of its bodies; ``skipped`` when one of them was."""
 
     id: str
     joint: Joint
     bodies: tuple[str, str | None]
     loc: Loc
+    skipped: bool = False
 
 
 @dataclass(slots=True)
@@ -111,6 +123,10 @@ class SceneSpec:
     sleep: dict[str, SleepState] = field(default_factory=dict)
     content_dir: Path | None = None
     db: SceneDB | None = None
+    #: Assets that could not be used, each at the line that named it (what was skipped).
+    problems: list[Diagnostic] = field(default_factory=list)
+    #: The files this spec read; instantiate makes it the engine's Assets resource.
+    assets: Assets | None = None
 
 
 @dataclass(slots=True)
@@ -225,14 +241,17 @@ Pose = tuple[tuple[float, ...], tuple[float, ...]]
 
 def build_specs(db: SceneDB, content_dir: str | Path | None = None,
                 materials: dict[str, MaterialProps] | None = None,
-                bodies: Mapping[str, Pose] | None = None) -> SceneSpec:
-    """SceneDB -> SceneSpec. Raises SceneError (with places) if a model cannot be used.
+                bodies: Mapping[str, Pose] | None = None,
+                assets: Assets | None = None) -> SceneSpec:
+    """SceneDB -> SceneSpec. Raises SceneError (with places) for mistakes in the text;
+    assets that cannot be used skip their object and are listed in ``spec.problems``.
 
     ``materials`` and ``bodies`` (object ID -> position, orientation) exist elsewhere
-    (the running scene, when a script spawns a snippet) and may be used by ID here.
+    (the running scene, when a script spawns a snippet) and may be used by ID here;
+    ``assets`` is the running scene's cache (a new one when None).
     """
     folder = Path(content_dir) if content_dir is not None else Path(db.path).parent
-    b = _Builder(folder, Reporter(sources=dict(db.sources)))
+    b = _Builder(folder, Reporter(sources=dict(db.sources)), assets or Assets(folder))
     if materials:
         b.materials.update(materials)
     if bodies:
@@ -243,14 +262,18 @@ def build_specs(db: SceneDB, content_dir: str | Path | None = None,
     b.report.raise_if_errors()
     spec.db = db
     spec.content_dir = folder
+    spec.problems = sorted_diagnostics(b.problems)
+    spec.assets = b.assets
     return spec
 
 
 class _Builder:
-    def __init__(self, folder: Path, report: Reporter):
+    def __init__(self, folder: Path, report: Reporter, assets: Assets):
         self.folder = folder
         self.report = report
-        self.meshes: dict[tuple[str, tuple[float, ...]], Any] = {}
+        self.assets = assets
+        self.problems: list[Diagnostic] = []
+        self.skipped: set[str] = set()  # IDs of objects left out for a failed asset
         self.materials: dict[str, MaterialProps] = {"default": MaterialProps()}
         self.dense_materials: set[str] = set()
         self.poses: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
@@ -266,7 +289,8 @@ class _Builder:
             self.materials[name] = MaterialProps(
                 name=name, friction=float(r("Friction")), bounce=float(r("Bounce")),
                 bounce_velocity=float(r("BounceVelocity")), softness=float(r("Softness")),
-                density=float(r("Density")), contact_sound=r("ContactSound"))
+                density=float(r("Density")),
+                contact_sound=self.sound_file(r, "ContactSound", "the material stays silent"))
             if r.has("Density"):
                 self.dense_materials.add(name)
         spec.materials = self.materials
@@ -283,10 +307,38 @@ class _Builder:
         self.scene_entities(root, spec)
         return spec
 
+    # -- assets --------------------------------------------------------------
+    def problem(self, error: AssetError, outcome: str) -> None:
+        """Tell of an asset that failed, at its scene line, and what was left out."""
+        self.assets.mark_told(error)
+        where = error.where or Loc(str(self.folder), 0, 0)
+        self.problems.append(Diagnostic(where.path, where.line, where.col, ERROR,
+                                        f"{error.message}; {outcome}"))
+
+    def sound_file(self, r: _Reader, key: str, outcome: str) -> str | None:
+        """``r(key)``, a sound file, if it can be played; else None, told as a problem."""
+        file = r(key)
+        if file is not None:
+            try:
+                self.assets.sound(file, r.value(key).loc, self.folder)
+            except AssetError as exc:
+                self.problem(exc, outcome)
+                return None
+        return file
+
     # -- objects -----------------------------------------------------------
     def object(self, blk: Block, index: int) -> EntitySpec:
+        """The object's components, or a skipped spec when a model it needs failed."""
         r = _Reader(blk, "Object")
         oid = r("ID") or f"object{index}"
+        try:
+            return self.object_components(r, oid, blk)
+        except AssetError as exc:
+            self.problem(exc, f"object '{oid}' is left out")
+            self.skipped.add(oid)
+            return EntitySpec(oid, [], blk.loc, skipped=True)
+
+    def object_components(self, r: _Reader, oid: str, blk: Block) -> EntitySpec:
         position = _floats(r("Position"))
         quat = _floats(r("Quaternion")) if r.has("Quaternion") else euler_to_quat(
             r("Orientation"))
@@ -312,7 +364,7 @@ class _Builder:
                                                      position, quat)[0]
             comps.append(Visual(
                 shapes=visual_shapes, model=model, scale=scale,
-                color=_color(vis("Color")), texture=vis("Texture"),
+                color=_color(vis("Color")), texture=self.texture(vis),
                 shader_state=vis("ShaderState"), shadower=bool(vis("Shadower")),
                 shadowed=bool(vis("Shadowed")), visible=bool(vis("Visible"))))
         if phys_blk is not None or bare:
@@ -323,7 +375,9 @@ class _Builder:
                 self.sleep[oid] = self.sleep_spec(r)
         self.poses[oid] = (position, quat)
         if r.has("Sound"):
-            comps.append(_sound(_Reader(r.value("Sound").data, "Sound"), oid))
+            sr = _Reader(r.value("Sound").data, "Sound")
+            if self.sound_file(sr, "File", f"object '{oid}' has no sound") is not None:
+                comps.append(_sound(sr, oid))
         if r.has("Script"):
             comps.append(Script(file=r("Script")))
         if r.has("Hand"):
@@ -337,6 +391,8 @@ class _Builder:
 
     def visual_geometry(self, vis: _Reader, size: Any
                         ) -> tuple[list[Shape], str | None, tuple[float, float, float]]:
+        """Primitives and the model drawn (loaded now, so a bad one skips the object and
+        the renderer finds it in the cache)."""
         shapes: list[Shape] = []
         model, scale = None, (1.0, 1.0, 1.0)
         for g in vis.blocks("Geometry"):
@@ -344,6 +400,7 @@ class _Builder:
             if gr.has("File"):
                 if model is None:
                     model, scale = gr("File"), _floats(gr("Scale"))
+                    self.assets.model(model, gr.value("File").loc, self.folder)
             elif gr.has("Primitive") and gr("Primitive") != "plane":
                 shapes.append(_primitive(gr, size))
         return shapes, model, scale
@@ -390,10 +447,9 @@ class _Builder:
                                            "VisualAttributes Geometry")
                     continue
                 shape = self.mesh_shape(file, fscale, gr("ParseMethod") or "ConvexHull", loc)
-                if shape is not None:
-                    shape.offset = _floats(gr("Offset"))
-                    shape.rotation = euler_to_quat(gr("Orientation"))
-                    shapes.append(shape)
+                shape.offset = _floats(gr("Offset"))
+                shape.rotation = euler_to_quat(gr("Orientation"))
+                shapes.append(shape)
             elif gr("Primitive") == "plane":
                 has_plane = True
                 normal = rotate(quat, (0.0, 0.0, 1.0))
@@ -405,50 +461,33 @@ class _Builder:
             if visual_shapes:
                 shapes = [_copy_shape(s) for s in visual_shapes]
             elif model is not None:
-                shape = self.mesh_shape(model, scale, "Box", phys.block.loc if phys.block
-                                        else Loc("", 0, 0))
-                shapes = [shape] if shape is not None else []
+                shapes = [self.mesh_shape(model, scale, "Box", phys.block.loc if phys.block
+                                          else Loc("", 0, 0))]
             else:
                 shapes = [_primitive(_Reader(None, "Geometry"), size)]
         return shapes, has_plane
 
-    def mesh_shape(self, file: str, scale: tuple[float, ...], method: str,
-                   loc: Loc) -> Shape | None:
-        mesh = self.load_mesh(file, scale, loc)
-        if mesh is None:
-            return None
-        if method == "TriangleMesh":
-            return Shape("mesh", (), vertices=np.asarray(mesh.vertices, np.float64),
-                         faces=np.asarray(mesh.faces, np.int32))
-        if method == "ConvexHull":
-            hull = mesh.convex_hull
-            return Shape("hull", (), vertices=np.asarray(hull.vertices, np.float64),
-                         faces=np.asarray(hull.faces, np.int32))
-        lo, hi = mesh.bounds
-        center = tuple(float(c) for c in (lo + hi) / 2)
-        if method == "Box":
-            return Shape("box", tuple(float(e) for e in hi - lo), offset=center)
-        radius = float(np.linalg.norm(np.asarray(mesh.vertices) - (lo + hi) / 2, axis=1).max())
-        return Shape("sphere", (radius,), offset=center)
+    def texture(self, vis: _Reader) -> str | None:
+        """The Visual's texture file; one that cannot be read is told here (the renderer
+        draws a checker in its place, so the author sees which surface lost it)."""
+        file = vis("Texture")
+        if file is not None:
+            try:
+                self.assets.image(file, vis.value("Texture").loc, self.folder)
+            except AssetError as exc:
+                self.problem(exc, "drawn with a checker instead")
+        return file
 
-    def load_mesh(self, file: str, scale: tuple[float, ...], loc: Loc) -> Any:
-        key = (file, scale)
-        if key in self.meshes:
-            return self.meshes[key]
-        import trimesh
-
-        path = self.folder / file
-        mesh = None
-        try:
-            loaded = trimesh.load(str(path), force="mesh")
-            if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
-                raise ValueError("no triangles found")
-            mesh = loaded.copy()
-            mesh.apply_scale(np.asarray(scale, np.float64))
-        except Exception as exc:  # trimesh raises many types for unreadable files
-            self.report.error(loc, f"cannot load model \"{file}\" ({path}): {exc}")
-        self.meshes[key] = mesh
-        return mesh
+    def mesh_shape(self, file: str, scale: tuple[float, ...], method: str, loc: Loc) -> Shape:
+        """A physics shape from a model at ``scale`` (made once per file, scale and method;
+        each body gets its own Shape). Raises AssetError for a model or hull that fails."""
+        model = self.assets.model(file, loc, self.folder)
+        path = self.assets.resolve(file, self.folder)
+        action = ("build a convex hull of model" if method == "ConvexHull"
+                  else "make a physics shape of model")
+        made = self.assets.derived(("shape", path, scale, method), action, file, path,
+                                   lambda: _model_shape(model.triangles(), scale, method), loc)
+        return _copy_shape(made)
 
     def sleep_spec(self, r: _Reader) -> SleepState:
         """An object's saved auto-sleep state, so a loaded state falls asleep on time."""
@@ -466,12 +505,19 @@ class _Builder:
         jid = r("ID") or f"joint{index}"
         kind = SCENE_JOINT_TYPES[r("Type")]
         bodies = r("Bodies")
+        a, b = bodies[0], bodies[1] if len(bodies) > 1 else None
+        left_out = [name for name in bodies if name in self.skipped]
+        if left_out:
+            where = r.value("Bodies").loc
+            self.problems.append(Diagnostic(
+                where.path, where.line, where.col, ERROR,
+                f"joint '{jid}' is left out: its body '{left_out[0]}' was (see its error)"))
+            return JointSpec(jid, Joint(kind=kind, id=jid), (a, b), blk.loc, skipped=True)
         for name in bodies:
             if name not in self.physical_ids:
                 self.report.error(r.value("Bodies").loc,
                                   f"joint body '{name}' has no PhysicalAttributes")
                 return None
-        a, b = bodies[0], bodies[1] if len(bodies) > 1 else None
         linear = kind in LINEAR_KINDS
         conv = (lambda x: x) if linear else math.radians
         anchor = _floats(r("Anchor")) if r.has("Anchor") else self.poses[a][0]
@@ -536,7 +582,12 @@ class _Builder:
         for i, b in enumerate(root.blocks("Camera")):
             r = _Reader(b, "Camera")
             cid = r("ID") or f"camera{i}"
-            if r.has("Follow"):
+            if r.has("Follow") and r("Follow") in self.skipped:
+                where = r.value("Follow").loc
+                self.problems.append(Diagnostic(
+                    where.path, where.line, where.col, ERROR,
+                    f"camera '{cid}' follows nothing: object '{r('Follow')}' was left out"))
+            elif r.has("Follow"):
                 spec.camera_follow[cid] = r("Follow")
             cam = Camera(fov=float(r("Fov")), near=float(r("Near")), far=float(r("Far")),
                          active=bool(r("Active")), offset=_floats(r("Offset")),
@@ -555,6 +606,9 @@ class _Builder:
         for i, b in enumerate(root.blocks("Sound")):
             r = _Reader(b, "Sound")
             sid = r("ID") or f"sound{i}"
+            if self.sound_file(r, "File", f"sound '{sid}' is left out") is None:
+                spec.entities.append(EntitySpec(sid, [], b.loc, skipped=True))
+                continue
             # without a Position it is music or ambience: played at the listener, stereo kept
             placed = [Transform(r("Position"))] if r.has("Position") else []
             spec.entities.append(EntitySpec(sid, [Name(sid), *placed, _sound(r, sid)], b.loc))
@@ -583,6 +637,24 @@ def _color(c: tuple[float, ...]) -> tuple[float, float, float, float]:
 
 def _copy_shape(s: Shape) -> Shape:
     return Shape(s.kind, s.size, s.offset, s.rotation, s.vertices, s.faces)
+
+
+def _model_shape(triangles: tuple[np.ndarray, np.ndarray], scale: tuple[float, ...],
+                 method: str) -> Shape:
+    """A model's triangles at ``scale`` as the ParseMethod's shape: the mesh itself, its
+    convex hull, or the box or sphere around it (centred on the bounds' centre)."""
+    vertices = triangles[0] * np.asarray(scale, np.float64)
+    if method == "TriangleMesh":
+        return Shape("mesh", (), vertices=vertices, faces=triangles[1].astype(np.int32))
+    if method == "ConvexHull":
+        hull_vertices, hull_faces = convex_hull(vertices)
+        return Shape("hull", (), vertices=hull_vertices, faces=hull_faces.astype(np.int32))
+    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+    center = tuple(float(c) for c in (lo + hi) / 2)
+    if method == "Box":
+        return Shape("box", tuple(float(e) for e in hi - lo), offset=center)
+    radius = float(np.linalg.norm(vertices - (lo + hi) / 2, axis=1).max())
+    return Shape("sphere", (radius,), offset=center)
 
 
 def _primitive(gr: _Reader, size: Any) -> Shape:
@@ -624,14 +696,17 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     objects spawned at run time (from Lua snippets) pass ``as_scene=False`` and leave
     the loaded scene's resources alone.
     """
+    made = [es for es in spec.entities if not es.skipped]
     with paused_gc():
-        entities = engine.spawn_many([es.components for es in spec.entities])
-    ids = dict(zip([es.id for es in spec.entities], entities, strict=True))
+        entities = engine.spawn_many([es.components for es in made])
+    ids = dict(zip([es.id for es in made], entities, strict=True))
     for cam_id, target in spec.camera_follow.items():
         cam = engine.world.component_for_entity(ids[cam_id], Camera)
         cam.follow = ids[target]
     joints: dict[str, int] = {}
     for js in spec.joints:
+        if js.skipped:
+            continue
         a, b = js.bodies
         js.joint.body_a = ids[a]
         js.joint.body_b = None if b is None else ids[b]
@@ -641,6 +716,13 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
         engine.defer(lambda: [engine.physics.push(command) for command in sleep])
     if as_scene:
         engine.insert_resource(SceneIds(ids, joints, spec))
+        if spec.assets is not None:  # render, sound and spawns use the files it read
+            assets = engine.try_resource(Assets)
+            if assets is None:
+                engine.insert_resource(spec.assets)
+            elif assets is not spec.assets:
+                assets.adopt(spec.assets)
+                spec.assets = assets
         engine.insert_resource(spec.world)
         # a saved state continues at the time it was saved
         engine.time = engine.physics.time = spec.time

@@ -79,19 +79,20 @@ def spec_from_text(text: str, content_dir: str | Path, rng: np.random.Generator 
         known |= {"Material": [m for m in scene.materials if m not in own_materials],
                   "ShaderState": scene.shader_states, "ShaderProgram": scene.shader_programs}
     db = validated(db, Path(content_dir), known)
-    return build_specs(db, content_dir, scene.materials if scene is not None else None, bodies)
+    return build_specs(db, content_dir, scene.materials if scene is not None else None, bodies,
+                       scene.assets if scene is not None else None)
 
 
 def check(path: str | Path, rng: np.random.Generator | None = None) -> list[Diagnostic]:
     """Every error and warning of a scene (parse, schema, references, assets, models)."""
     try:
         spec_db = load_scene(path, rng)
-        build_specs(spec_db, Path(spec_db.path).parent)
+        spec = build_specs(spec_db, Path(spec_db.path).parent)
     except SceneError as exc:
         return exc.diagnostics
     except RecursionError:  # the limits should make this unreachable; never crash a check
         return [Diagnostic(str(path), 1, 1, "error", "scene is nested too deeply to read")]
-    return spec_db.warnings
+    return sorted_diagnostics([*spec_db.warnings, *spec.problems])
 
 
 def format_scene(path: str | Path) -> str:

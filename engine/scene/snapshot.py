@@ -258,6 +258,18 @@ class _Spawns:
         self.root.entries.append(entry)
 
 
+def _drop_follows(root: Block, written: set[str]) -> None:
+    """A camera following an object that is not written (deleted, or left out for a bad
+    asset) follows nothing, so the saved file refers to no missing object."""
+    for entry in root.entries:
+        if entry.key != "Camera" or entry.value.kind != STRUCTURE:
+            continue
+        blk = entry.value.data
+        follow = blk.value("Follow")
+        if follow is not None and follow.data not in written:
+            blk.entries = [e for e in blk.entries if e.key != "Follow"]
+
+
 def _taken(ids: SceneIds) -> set[str]:
     """IDs of the file's own entries (those without one are written with the one they
     were given by their place, so loading the saved file keeps every name)."""
@@ -309,6 +321,7 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
             spawns.joint(rec.joints[0])
         else:
             spawns.snippet(rec)
+    _drop_follows(root, set(names.values()))
     world_entry = next((e for e in root.entries if e.key == "World"), None)
     if world_entry is None or world_entry.value.kind != STRUCTURE:
         world_entry = Entry("World", Value(STRUCTURE, Block(), _HERE), _HERE)

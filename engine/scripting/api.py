@@ -353,14 +353,19 @@ class ScriptAPI:
                                   bodies=self._body_poses())
         except SceneError as exc:
             raise ScriptAPIError(f"spawn: {exc}") from None
+        for problem in spec.problems:  # an asset failed: told, its object left out
+            log.error("spawn: %s", problem.render())
         ids: dict[str, int] = {}
-        made: list[int] = []
+        made: list[int] = []  # -1 where an object was left out, keeping blocks in step
         for es in spec.entities:
-            ids[es.id] = self.engine.spawn(*es.components)
+            ids[es.id] = -1 if es.skipped else self.engine.spawn(*es.components)
             made.append(ids[es.id])
         objects = made[:len(spec.db.blocks("Object"))] if spec.db is not None else []
         joints: list[int] = []
         for js in spec.joints:
+            if js.skipped:
+                joints.append(-1)
+                continue
             a, b = js.bodies
             joint = js.joint
             joint.body_a = ids[a] if a in ids else self.find(a)
@@ -368,8 +373,8 @@ class ScriptAPI:
             if joint.reference is None:
                 joint.reference = self._reference(joint.body_a, joint.body_b)
             joints.append(self.engine.spawn(Name(js.id), joint))
-        made.extend(joints)
-        self._names.update(ids)
+        made = [e for e in (*made, *joints) if e >= 0]
+        self._names.update({name: e for name, e in ids.items() if e >= 0})
         if scene is not None:
             scene.record(SpawnRecord(spec.db, spec.content_dir, objects, joints),
                          self.engine.world.entity_exists)

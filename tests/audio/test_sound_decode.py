@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from sound_helpers import RATE, tone
 
+from engine.assets.sound import StreamReader
 from engine.audio import AudioFileError, load_clip, probe
-from engine.audio.decode import StreamReader
 
 FORMATS = [
     ("PCM_U8", "wav", "WAV"),

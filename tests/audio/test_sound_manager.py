@@ -144,8 +144,9 @@ def test_bad_files_fail_once_loudly_and_stay_silent(tmp_path: Path, clock: Clock
     assert [v.state for v in voices] == ["failed"] * 3
     errors = [r.getMessage() for r in caplog.records]
     assert len(errors) == 2
-    assert "missing.wav: error: file not found" in errors[0]
-    assert "broken.ogg: error:" in errors[1]
+    assert errors[0] == (f'error: cannot load sound "missing.wav" ({tmp_path / "missing.wav"}): '
+                         f"file not found (the sound stays silent)")
+    assert 'cannot load sound "broken.ogg"' in errors[1] and "cannot decode" in errors[1]
     manager.update()
     assert manager.stats()["failed"] == 3 and manager.stats()["active"] == 0
 

@@ -106,7 +106,8 @@ def test_a_missing_sound_file_keeps_the_simulation_running(
         engine.run(frames=30)
         assert engine.world.component_for_entity(body, Transform).position[0] > 0.4
     assert [r.getMessage() for r in caplog.records] == [
-        f"{tmp_path / 'moo.wav'}: error: file not found (the sound stays silent)"]
+        f"error: cannot load sound \"moo.wav\" ({tmp_path / 'moo.wav'}): file not found "
+        f"(the sound stays silent)"]
 
 
 def _stack_scene(engine: Engine, knock: Path, drop_height: float | None) -> list[int]:

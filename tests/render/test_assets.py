@@ -1,4 +1,5 @@
-"""Models through trimesh (every supported format), textures, and bad assets."""
+"""Models through the asset layer (every built-in format) drawn, textures, and bad assets
+drawn as placeholders."""
 
 from __future__ import annotations
 
@@ -11,20 +12,21 @@ from PIL import Image
 from render_helpers import pixel_at
 
 from components import Shape, Visual
-from engine.render import SUPPORTED_MODEL_FORMATS, ModelError, UnsupportedModelFormat, load_model
+from engine.assets import Assets
+from engine.assets.loaders import MODEL_EXTENSIONS
 from engine.render.materials import CHECKER_A
 
 CENTRE = (0.0, 0.0, 0.5)
 
 
-@pytest.mark.parametrize("suffix", SUPPORTED_MODEL_FORMATS)
+@pytest.mark.parametrize("suffix", MODEL_EXTENSIONS)
 def test_every_supported_model_format_loads_and_draws(make_renderer, tmp_path, suffix):
     path = tmp_path / f"cube{suffix}"
     cube = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
     cube.visual.face_colors = (255, 255, 255, 255)  # a white model, tinted by Visual.color
     cube.export(path)
-    parts = load_model(path)
-    extents = np.ptp(np.concatenate([p.positions for p in parts]), axis=0)
+    parts = Assets(tmp_path).model(path.name).parts
+    extents = np.ptp(np.concatenate([p.vertices for p in parts]), axis=0)
     assert np.allclose(extents, 1.0, atol=1e-5)
     r = make_renderer(root=tmp_path)
     r.add(1, Visual(model=path.name, color=(0.1, 0.9, 0.1, 1.0)), position=CENTRE)
@@ -36,7 +38,7 @@ def test_every_supported_model_format_loads_and_draws(make_renderer, tmp_path, s
 def test_gltf_y_up_becomes_engine_z_up(tmp_path):
     path = tmp_path / "tall.glb"
     trimesh.creation.box(extents=(0.5, 2.0, 0.5)).export(path)  # tall along glTF's up (+Y)
-    extents = np.ptp(load_model(path)[0].positions, axis=0)
+    extents = np.ptp(Assets(tmp_path).model(path.name).parts[0].vertices, axis=0)
     assert np.allclose(extents, (0.5, 0.5, 2.0), atol=1e-5)
 
 
@@ -83,7 +85,11 @@ def test_missing_texture_draws_a_checker_and_warns(make_renderer, tmp_path, capl
     with caplog.at_level(logging.WARNING, logger="colosseum.render"):
         r.add(1, Visual(shapes=[Shape("box", (1.2, 1.2, 1.2))], texture="textures/gone.png",
                         color=(1, 1, 1, 1)), position=CENTRE)
-    assert "gone.png" in caplog.text and "placeholder" in caplog.text
+        r.add(2, Visual(shapes=[Shape("box", (0.2, 0.2, 0.2))], texture="textures/gone.png"),
+              position=(5.0, 0.0, 0.0))
+    assert len(caplog.records) == 1  # told once, however many surfaces use it
+    assert 'cannot load image "textures/gone.png"' in caplog.text
+    assert "file not found" in caplog.text and "placeholder" in caplog.text
     assert any("gone.png" in e for e in r.errors)
     r.render()
     image = r.read_pixels().astype(int)
@@ -95,16 +101,6 @@ def test_missing_texture_draws_a_checker_and_warns(make_renderer, tmp_path, capl
     assert CHECKER_A[:3] == (255, 0, 255)
 
 
-def test_unsupported_model_format_names_file_and_formats(tmp_path):
-    (tmp_path / "cow.osg").write_text("osg")
-    with pytest.raises(UnsupportedModelFormat) as info:
-        load_model(tmp_path / "cow.osg")
-    message = str(info.value)
-    assert "cow.osg" in message and ".osg" in message
-    for suffix in (".obj", ".stl", ".ply", ".glb", ".gltf", ".dae"):
-        assert suffix in message
-
-
 def test_bad_model_stops_that_object_not_the_frame(make_renderer, tmp_path):
     (tmp_path / "cow.osg").write_text("osg")
     (tmp_path / "broken.obj").write_text("this is not an obj file\n")
@@ -113,16 +109,12 @@ def test_bad_model_stops_that_object_not_the_frame(make_renderer, tmp_path):
     r.add(2, Visual(model="missing.ply"), position=(1.5, 0.0, 0.5))
     r.add(3, Visual(model="broken.obj"), position=(-1.5, 0.0, 0.5))
     report = "\n".join(r.errors)
-    assert "cow.osg" in report and "supported formats" in report
+    assert "cow.osg" in report and "unsupported model format '.osg'" in report
     assert "missing.ply" in report and "not found" in report
     assert "broken.obj" in report
     r.render()  # placeholders are drawn; nothing raised
     rgb = pixel_at(r, r.read_pixels(), CENTRE)
     assert (rgb[0] > 100 and rgb[2] > 100 and rgb[1] < 40) or rgb.sum() < 120  # checker
-
-
-def test_model_error_is_a_value_error():
-    assert issubclass(ModelError, ValueError)
 
 
 def test_mesh_shape_from_raw_triangles_draws(make_renderer):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -35,6 +36,7 @@ from engine.scene import (
 from systems import create_engine
 
 DATA = Path(__file__).parent / "data"
+CONTENT = Path(__file__).parents[2] / "content" / "demo"
 REP = DATA / "representative"
 
 
@@ -126,13 +128,17 @@ def test_parse_methods(method, kind, size):
         assert shape.vertices.shape == (8, 3) and shape.faces.shape == (12, 3)
 
 
-def test_an_unreadable_model_is_an_error_at_its_file(tmp_path):
+def test_an_unreadable_model_is_told_at_its_file_and_its_object_left_out(tmp_path):
     (tmp_path / "bad.obj").write_text("this is not a model\n")
-    with pytest.raises(SceneError) as info:
-        spec_from_text('Object {\n  PhysicalAttributes { Geometry { File "bad.obj" } }\n}\n',
-                       tmp_path)
-    (err,) = info.value.errors
-    assert (err.line, err.col) == (2, 40) and 'cannot load model "bad.obj"' in err.message
+    spec = spec_from_text('Object {\n  PhysicalAttributes { Geometry { File "bad.obj" } }\n}\n'
+                          'Object { ID "fine" }\n', tmp_path)
+    (err,) = spec.problems
+    assert (err.line, err.col) == (2, 40) and err.is_error
+    assert err.message == (f'cannot load model "bad.obj" ({tmp_path / "bad.obj"}): the file '
+                           f"holds no triangles; object 'object0' is left out")
+    assert [(es.id, es.skipped, es.components) for es in spec.entities[:1]] == [
+        ("object0", True, [])]
+    assert not spec.entities[1].skipped
 
 
 def test_defaults_make_a_short_file_work():
@@ -217,7 +223,7 @@ def test_saved_state_elsewhere_still_finds_its_assets(tmp_path):
 
 
 def test_a_scene_sound_is_placed_only_when_it_has_a_position(tmp_path):
-    (tmp_path / "hum.wav").write_bytes(b"")  # only its existence is checked here
+    shutil.copy(CONTENT / "sounds" / "knock.wav", tmp_path / "hum.wav")
     spec = spec_from_text('Sound { ID "music" File "hum.wav" Loop 1 }\n'
                           'Sound { ID "tap" File "hum.wav" Position [1 2 3] }\n', tmp_path)
     kinds = {es.id: {type(c) for c in es.components} for es in spec.entities}

@@ -1,4 +1,7 @@
-"""Decoding sound files with soundfile (libsndfile) into 16-bit PCM for OpenAL.
+"""Sound files: decoded with soundfile (libsndfile) into 16-bit PCM for OpenAL.
+
+Part of the asset layer (any engine part may read a sound's header or samples);
+the audio service plays what is decoded here.
 
 Any format libsndfile reads works: WAV (8/16/24/32-bit PCM, 32/64-bit float),
 Ogg Vorbis, FLAC, AIFF. Samples are decoded as float, clipped to [-1, 1] and
@@ -19,10 +22,12 @@ from pathlib import Path
 import numpy as np
 import soundfile as sf
 
-from engine.audio.backend import AudioError
+#: Sample rates a sound may have: outside these a header is broken, not unusual audio.
+MIN_SAMPLE_RATE = 1_000
+MAX_SAMPLE_RATE = 384_000
 
 
-class AudioFileError(AudioError):
+class AudioFileError(RuntimeError):
     """A sound file is missing, truncated or in a format libsndfile cannot read."""
 
     def __init__(self, path: str | Path, reason: str) -> None:
@@ -98,9 +103,19 @@ def probe(path: str | Path) -> SoundInfo:
         raise
     except (sf.LibsndfileError, RuntimeError, OSError, struct.error) as exc:
         raise AudioFileError(p, _reason(exc)) from exc
-    if info.frames <= 0 or info.samplerate <= 0:
-        raise AudioFileError(p, "no audio frames")
-    return SoundInfo(str(p), int(info.samplerate), int(info.channels), int(info.frames))
+    found = SoundInfo(str(p), int(info.samplerate), int(info.channels), int(info.frames))
+    check_header(found)
+    return found
+
+
+def check_header(info: SoundInfo) -> None:
+    """Refuse a header no sound has (OpenAL would play it as noise, or not at all)."""
+    if info.frames <= 0 or info.channels <= 0:
+        raise AudioFileError(info.path, "no audio frames")
+    if not MIN_SAMPLE_RATE <= info.rate <= MAX_SAMPLE_RATE:
+        raise AudioFileError(info.path, f"its sample rate, {info.rate} Hz, is not one a sound "
+                             f"can have ({MIN_SAMPLE_RATE} to {MAX_SAMPLE_RATE} Hz): a "
+                             f"broken header")
 
 
 def _reason(exc: BaseException) -> str:

@@ -1,0 +1,73 @@
+"""Assets: model, image and sound files, each read once per run by the loader its
+extension names, and shared by render, physics shapes and sound.
+
+:class:`Assets` is the one cache (an engine resource: ``Assets.of(engine)``); every
+failure is an :class:`AssetError` told the same way, naming the file and the scene line
+that asked for it::
+
+    main.scene:12:30: error: cannot load model "rock.obj" (content/x/rock.obj): why
+
+Built in: models through trimesh (.obj .stl .ply .glb .gltf .dae), images through
+Pillow (.png .jpg .bmp .tga .tif .gif .webp), sounds through libsndfile (.wav .ogg
+.flac .aiff). A new format is one function registered for its extension — put it in a
+content folder's ``systems/*.py`` (imported before the scene is built) or any module
+imported before loading. It returns a :class:`ModelAsset` (:func:`mesh_part` makes a
+part from raw triangles), an :class:`ImageAsset` or a ``SoundInfo``; whatever it
+raises becomes the reason in the message:
+
+>>> import tempfile
+>>> from pathlib import Path
+>>> from engine.assets import AssetError, Assets, ModelAsset, mesh_part, register_loader
+>>> @register_loader("model", ".tri")
+... def load_tri(path):
+...     '''One triangle per line: nine numbers.'''
+...     rows = [[float(x) for x in line.split()] for line in path.read_text().splitlines()]
+...     return ModelAsset(path, (mesh_part([r[i:i + 3] for r in rows for i in (0, 3, 6)],
+...                                        [[3 * k, 3 * k + 1, 3 * k + 2]
+...                                         for k in range(len(rows))]),))
+>>> folder = Path(tempfile.mkdtemp())
+>>> _ = (folder / "wedge.tri").write_text("0 0 0  1 0 0  0 1 0\\n")
+>>> assets = Assets(folder)
+>>> assets.model("wedge.tri").parts[0].faces.tolist()
+[[0, 1, 2]]
+>>> _ = (folder / "bad.tri").write_text("0 0 zero\\n")
+>>> try:
+...     assets.model("bad.tri")
+... except AssetError as error:
+...     print(error.reason)
+could not convert string to float: 'zero'
+>>> unregister_loader("model", ".tri")
+"""
+
+from engine.assets import loaders
+from engine.assets.registry import (
+    KINDS,
+    Loader,
+    UnknownExtension,
+    extensions,
+    loader_for,
+    register_loader,
+    unregister_loader,
+)
+from engine.assets.service import AssetError, Assets, Where, reason
+from engine.assets.types import ImageAsset, MeshPart, ModelAsset, mesh_part, vertex_normals
+
+__all__ = [
+    "KINDS",
+    "AssetError",
+    "Assets",
+    "ImageAsset",
+    "Loader",
+    "MeshPart",
+    "ModelAsset",
+    "UnknownExtension",
+    "Where",
+    "extensions",
+    "loader_for",
+    "loaders",
+    "mesh_part",
+    "reason",
+    "register_loader",
+    "unregister_loader",
+    "vertex_normals",
+]

@@ -1,0 +1,78 @@
+"""Loaders by file extension: which function reads a ``.obj``, a ``.png``, a ``.wav``.
+
+A loader is a function ``load(path) -> asset`` registered for a *kind* (``"model"``,
+``"image"`` or ``"sound"``) and the extensions it reads; :class:`engine.assets.Assets`
+picks it by the file's extension, calls it once per file and checks what it returned.
+Registering an extension that already has a loader replaces that loader (a user's
+loader may take over a built-in format).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, TypeVar
+
+#: The kinds of asset there are loaders for, and what their loaders return.
+KINDS = {"model": "ModelAsset", "image": "ImageAsset", "sound": "SoundInfo"}
+
+F = TypeVar("F", bound=Callable[[Path], Any])
+
+
+@dataclass(frozen=True, slots=True)
+class Loader:
+    kind: str
+    extension: str
+    load: Callable[[Path], Any]
+
+
+class UnknownExtension(LookupError):
+    """No loader of the wanted kind reads files with this extension."""
+
+
+_LOADERS: dict[tuple[str, str], Loader] = {}
+
+
+def _normal(extension: str) -> str:
+    ext = extension.lower()
+    return ext if ext.startswith(".") else f".{ext}"
+
+
+def register_loader(kind: str, *extensions: str) -> Callable[[F], F]:
+    """Decorator: the function reads files of ``kind`` ending in any of ``extensions``
+    (see the example in :mod:`engine.assets`)."""
+    if kind not in KINDS:
+        raise ValueError(f"unknown asset kind {kind!r}; kinds: {', '.join(KINDS)}")
+    if not extensions:
+        raise ValueError("register_loader needs at least one extension, such as '.obj'")
+
+    def register(load: F) -> F:
+        for ext in extensions:
+            _LOADERS[(kind, _normal(ext))] = Loader(kind, _normal(ext), load)
+        return load
+
+    return register
+
+
+def unregister_loader(kind: str, extension: str) -> None:
+    """Forget the loader of ``kind`` for ``extension`` (tests, plugins that unload)."""
+    _LOADERS.pop((kind, _normal(extension)), None)
+
+
+def extensions(kind: str) -> tuple[str, ...]:
+    """The extensions ``kind`` has loaders for, in the order they were registered."""
+    return tuple(ext for k, ext in _LOADERS if k == kind)
+
+
+def loader_for(kind: str, path: Path) -> Loader:
+    """The loader of ``kind`` for ``path``'s extension; raises :class:`UnknownExtension`
+    naming the extensions there are loaders for."""
+    ext = path.suffix.lower()
+    found = _LOADERS.get((kind, ext))
+    if found is None:
+        raise UnknownExtension(
+            f"unsupported {kind} format {ext or '(no extension)'!r}; "
+            f"supported: {', '.join(extensions(kind))} (more with "
+            f"engine.assets.register_loader)")
+    return found
