@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import logging
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -161,3 +162,9 @@ def test_an_engine_without_physics_keeps_commands_for_a_plugin_that_comes_later(
         eng.run(frames=60)
         assert eng.world.component_for_entity(ball, Transform).position[1] == pytest.approx(
             3.0, rel=0.02)
+
+
+def test_the_architecture_document_lists_every_command():
+    text = (Path(__file__).resolve().parents[2] / "docs" / "ARCHITECTURE.md").read_text()
+    missing = [name for name in cmd.COMMANDS if f"`{name}`" not in text]
+    assert missing == []
