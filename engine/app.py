@@ -39,6 +39,7 @@ from engine.world import AccessAudit, World
 log = logging.getLogger("colosseum")
 
 R = TypeVar("R")
+PHASES = tuple(Phase)
 
 
 @dataclass(slots=True)
@@ -214,7 +215,7 @@ class Engine:
         self.physics_seconds = None
         self.physics.frame = self.frame
         audited = self.config.debug
-        for phase in Phase:
+        for phase in PHASES:
             for system in self.systems[phase]:
                 try:
                     if audited:

@@ -136,7 +136,7 @@ class DynamicsSystem(System):
         driver = self.driver
         self._send_new(engine)
         self._forget_names(engine.frame)
-        if self._copy is not None:
+        if self._copy is not None and len(self._copy.synced):
             self._take_transform_writes(engine)
         driver.teleported.clear()
         if engine.config.mode == "serial":
@@ -208,6 +208,9 @@ class DynamicsSystem(System):
         self._copy(bodies)
 
 
+_NONE = np.zeros(0, np.intp)
+
+
 def _first(pair: tuple[int, object]) -> int:
     return pair[0]
 
@@ -249,7 +252,8 @@ class PoseCopy:
     def changed(self) -> np.ndarray:
         """Indices (into :attr:`synced_keys`) of the rows written since the last copy."""
         if self._view is not None and self.version == self._poses.version:
-            return np.flatnonzero((self._view != self.synced).any(axis=1))
+            written = self._view != self.synced
+            return np.flatnonzero(written.any(axis=1)) if written.any() else _NONE
         rows = self.rows_now()
         kept = np.flatnonzero(rows >= 0)
         written = (self._poses.table[rows[kept]] != self.synced[kept]).any(axis=1)
