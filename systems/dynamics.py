@@ -136,7 +136,7 @@ class DynamicsSystem(System):
         driver = self.driver
         self._send_new(engine)
         self._forget_names(engine.frame)
-        if self._copy is not None and len(self._copy.synced):
+        if self._copy is not None and len(self._copy.synced_keys):
             self._take_transform_writes(engine)
         driver.teleported.clear()
         if engine.config.mode == "serial":
@@ -165,7 +165,7 @@ class DynamicsSystem(System):
             row = copy.row(i)
             if entity in driver.teleported or self._teleport(engine, entity, row,
                                                              copy.synced[i]):
-                copy.synced[i] = row
+                copy.taken[i] = row.copy()
 
     def _teleport(self, engine: Engine, entity: int, row: np.ndarray,
                   before: np.ndarray) -> bool:
@@ -209,6 +209,7 @@ class DynamicsSystem(System):
 
 
 _NONE = np.zeros(0, np.intp)
+_NO_ROWS = np.zeros((0, 13))
 
 
 def _first(pair: tuple[int, object]) -> int:
@@ -220,8 +221,9 @@ class PoseCopy:
 
     A layout is the bodies' keys (in a state read's row order) and the table's
     version. Both tables share one row layout, so a copy is one assignment: into a
-    kept view where the rows are one run. :attr:`synced` keeps what was written, so
-    :meth:`changed` finds the rows someone wrote since.
+    kept view where the rows are one run. :attr:`synced` is what was written (the
+    snapshot's rows), so :meth:`changed` finds the rows someone wrote since; rows whose
+    writes were already taken (:attr:`taken`) count only if written again.
     """
 
     def __init__(self, poses: PoseTable, keys: np.ndarray) -> None:
@@ -230,7 +232,9 @@ class PoseCopy:
         valid = rows >= 0
         self._valid = None if valid.all() else valid  # None: every body has a Transform
         self.synced_keys = keys if self._valid is None else keys[valid]
-        self.synced = np.empty((len(self.synced_keys), 13))
+        self.synced: np.ndarray = _NO_ROWS  # set by the first copy, right after planning
+        #: Synced-body index -> the row as last taken as a write (until the next copy).
+        self.taken: dict[int, np.ndarray] = {}
         self._rows = row_index(rows[valid])
         self._poses = poses
         self._view = poses.table[self._rows] if isinstance(self._rows, slice) else None
@@ -253,11 +257,18 @@ class PoseCopy:
         """Indices (into :attr:`synced_keys`) of the rows written since the last copy."""
         if self._view is not None and self.version == self._poses.version:
             written = self._view != self.synced
-            return np.flatnonzero(written.any(axis=1)) if written.any() else _NONE
-        rows = self.rows_now()
-        kept = np.flatnonzero(rows >= 0)
-        written = (self._poses.table[rows[kept]] != self.synced[kept]).any(axis=1)
-        return kept[written]
+            if not written.any():
+                return _NONE
+            found = np.flatnonzero(written.any(axis=1))
+        else:
+            rows = self.rows_now()
+            kept = np.flatnonzero(rows >= 0)
+            found = kept[(self._poses.table[rows[kept]] != self.synced[kept]).any(axis=1)]
+        taken = self.taken
+        if taken:
+            found = np.array([i for i in found.tolist() if i not in taken
+                              or (taken[i] != self.row(i)).any()], np.intp)
+        return found
 
     def row(self, i: int) -> np.ndarray:
         """Synced body ``i``'s row of the table (a view)."""
@@ -266,7 +277,8 @@ class PoseCopy:
     def __call__(self, bodies: BodyState) -> None:
         """Body ``i`` (of those with a Transform) → its row."""
         source = bodies.table if self._valid is None else bodies.table[self._valid]
-        self.synced[...] = source
+        self.synced = source
+        self.taken.clear()
         if self._view is not None:
             self._view[...] = source
         else:
