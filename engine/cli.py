@@ -15,6 +15,7 @@ import traceback
 from pathlib import Path
 from typing import Any
 
+from engine.input.config import input_option
 from engine.physics.backend import BackendName
 
 log = logging.getLogger("colosseum")
@@ -73,6 +74,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--stats", type=Path, help="write run statistics as JSON")
     run.add_argument("--record", type=Path, help="record input events to FILE (JSON lines)")
     run.add_argument("--replay", type=Path, help="replay input events recorded with --record")
+    run.add_argument("--input", action="append", default=[], type=input_option,
+                     metavar="KIND[:ARG]", help="open an input device: osc:PORT, "
+                     "serial:PATH[@BAUD], lsl:STREAM[,...], desktop or openxr (repeatable)")
     run.add_argument("--progress", action="store_true",
                      help="print a status line every second (default when stderr is a terminal)")
 
