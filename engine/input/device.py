@@ -211,7 +211,7 @@ def make_pose(device: str, values: Sequence[float], timestamp: float,
     norm = math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
     if abs(norm - 1.0) > QUAT_TOLERANCE:
         raise BadMessage(f"tracker {device!r}: quaternion length {norm:.4g} is not 1")
-    if norm != 1.0:
+    if abs(norm - 1.0) > 1e-12:  # so normalising twice (a replay) changes no bit
         qw, qx, qy, qz = qw / norm, qx / norm, qy / norm, qz / norm
     vel = None if velocity is None else (float(velocity[0]), float(velocity[1]),
                                          float(velocity[2]))

@@ -35,7 +35,7 @@ class OneEuro:
 
     __slots__ = ("min_cutoff", "beta", "value", "speed", "time")
 
-    def __init__(self, min_cutoff: float = 1.0, beta: float = 0.5) -> None:
+    def __init__(self, min_cutoff: float = 1.0, beta: float = 10.0) -> None:
         self.min_cutoff = min_cutoff
         self.beta = beta
         self.value: np.ndarray | None = None
@@ -61,7 +61,7 @@ class OneEuroRotation:
 
     __slots__ = ("min_cutoff", "beta", "value", "angular_speed", "time")
 
-    def __init__(self, min_cutoff: float = 1.0, beta: float = 0.5) -> None:
+    def __init__(self, min_cutoff: float = 1.0, beta: float = 10.0) -> None:
         self.min_cutoff = min_cutoff
         self.beta = beta
         self.value: np.ndarray | None = None

@@ -91,6 +91,7 @@ class SerialDevice(QueuedDevice):
         self.clock = clock
         self._port = None
         self._buffer = b""
+        self._overlong = False
         super().__init__(name)
 
     def describe_name(self) -> str:
@@ -116,9 +117,12 @@ class SerialDevice(QueuedDevice):
             return
         now = self.clock()
         *lines, self._buffer = (self._buffer + data).split(b"\n")
+        if self._overlong and lines:  # the rest of a line already reported as too long
+            self._overlong = False
+            lines.pop(0)
         if len(self._buffer) > MAX_LINE:
             self.bad.note(f"no newline in {MAX_LINE} bytes", self._buffer[:40])
-            self._buffer = b""
+            self._buffer, self._overlong = b"", True
         for raw in lines:
             if not raw.strip():
                 continue

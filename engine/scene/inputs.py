@@ -98,7 +98,7 @@ class TrackerSpec:
     axes: Axes = IDENTITY_AXES
     filter: str = "none"
     min_cutoff: float = 1.0
-    beta: float = 0.5
+    beta: float = 10.0
     predict: float = 0.0  # seconds
     object: str | None = None
 

@@ -318,8 +318,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                    "\"x -z y\" for a Y-up device"),
         "Filter": _f(ENUM_T, "none", "jitter filter", allowed=TRACKER_FILTERS),
         "MinCutoff": _f(FLOAT_T, 1.0, "one-euro: Hz, jitter cut at rest (lower: smoother)"),
-        "Beta": _f(FLOAT_T, 0.5, "one-euro: how fast the cutoff rises with speed (higher: "
-                   "less lag)"),
+        "Beta": _f(FLOAT_T, 10.0, "one-euro: s/m, how fast the cutoff rises with speed "
+                   "(higher: less lag in fast moves)"),
         "Predict": _f(FLOAT_T, 0.0, "ms of constant-velocity prediction"),
         "Object": _f(REF_T, None, "an object without physics (a cursor, a camera) whose pose "
                      "follows the tracker", ref="Object"),
