@@ -119,8 +119,8 @@ def _fail(message: str, code: int = USAGE_ERROR) -> int:
 def cmd_run(args: argparse.Namespace) -> int:
     from engine.app import EngineConfig
     from engine.content import ContentError, load_systems, resolve
+    from engine.input import InputRecorder, InputReplayer, ReplayError
     from engine.physics import BackendUnavailable
-    from engine.recording import InputRecorder, InputReplayer, ReplayError
     from engine.scene_loading import SceneLoadError, load_content_scene
     from engine.stats import collect, status_line, write_json
     from engine.system import SystemFailure

@@ -60,6 +60,7 @@ class InputSystem(System):
     """Drains all devices once per frame and publishes what they said."""
 
     phase = Phase.INPUT
+    reads = (Name, Physical, Camera, Transform)
     writes = (Transform, Camera)
 
     def __init__(self, devices: Sequence[DeviceSpec | str] = ()) -> None:

@@ -130,6 +130,8 @@ class OscDevice(QueuedDevice):
         except _GARBAGE as exc:
             self.bad.note(f"not an OSC packet ({exc})", data[:40])
             return
+        if not packet.messages:
+            self.bad.note("an OSC bundle without a message python-osc can read", data[:40])
         for timed in packet.messages:
             message: OscMessage = timed.message
             try:

@@ -10,7 +10,6 @@ import threading
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
 from input_helpers import input_engine
 from pythonosc.udp_client import SimpleUDPClient
@@ -27,6 +26,7 @@ from engine.input import (
     read_recording,
 )
 from engine.input.osc import OscDevice
+from engine.physics.commands import ApplyImpulse
 from systems import load_plugin
 
 SCENE = """
@@ -45,7 +45,7 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-@system(Phase.SCRIPT)
+@system(Phase.SCRIPT, reads=(Physical, Transform))
 def steer_ball(engine, dt):
     """Input drives physics: the hand pulls the ball, the wheel spins it up."""
     state = engine.resource(InputState)
@@ -53,12 +53,11 @@ def steer_ball(engine, dt):
     hand, wheel = state.tracker("hand_r"), state.wheel("left")
     if hand is not None:
         pull = (hand.position - engine.world.component_for_entity(ball, Transform).position)
-        engine.physics.push(lambda b, f=pull * 0.01: b.add_impulse(ball, f))
+        engine.physics.push(ApplyImpulse(ball, tuple(pull * 0.01)))
     if wheel is not None and wheel.angular_velocity:
-        push = np.array([0.0, wheel.angular_velocity * 1e-3, 0.0])
-        engine.physics.push(lambda b, f=push: b.add_impulse(ball, f))
+        engine.physics.push(ApplyImpulse(ball, (0.0, wheel.angular_velocity * 1e-3, 0.0)))
     if state.button("glove_r", "index"):
-        engine.physics.push(lambda b: b.add_impulse(ball, np.array([0.0, 0.0, 0.2])))
+        engine.physics.push(ApplyImpulse(ball, (0.0, 0.0, 0.2)))
 
 
 def run(tmp_path: Path, port: int, frames: int, live: bool = False, **extra):
