@@ -13,9 +13,11 @@ orientations stay proper.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
-from engine.rotation import IDENTITY, matrix_to_quat, quat_multiply, quat_to_matrix
+from engine.rotation import IDENTITY, matrix_to_quat, quat_product, quat_to_matrix
 from engine.scene.inputs import IDENTITY_AXES, Axes, TrackerSpec, axes_map
 
 Vec3 = tuple[float, float, float]
@@ -31,36 +33,46 @@ def axes_matrix(axes: Axes) -> np.ndarray:
 
 
 class Calibration:
-    """Offset, rotation, scale and axis map of one tracker (identity by default)."""
+    """Offset, rotation, scale and axis map of one tracker (identity by default).
 
-    __slots__ = ("offset", "rotation", "scale", "axes", "is_identity", "_offset", "_rotation",
-                 "_axes", "_linear")
+    Works on plain tuples: a thousand samples a second, where numpy's per-call cost
+    would be most of the time.
+    """
+
+    __slots__ = ("offset", "rotation", "scale", "axes", "is_identity", "_linear", "_before",
+                 "_after")
 
     def __init__(self, offset: Vec3 = (0.0, 0.0, 0.0), rotation: Quat = IDENTITY,
                  scale: float = 1.0, axes: Axes = IDENTITY_AXES) -> None:
         self.offset, self.rotation, self.scale, self.axes = offset, rotation, scale, axes
         self.is_identity = (offset == (0.0, 0.0, 0.0) and rotation == IDENTITY
                             and scale == 1.0 and axes == IDENTITY_AXES)
-        self._offset = np.asarray(offset, dtype=np.float64)
-        self._rotation = np.asarray(rotation, dtype=np.float64)
-        self._axes = axes_matrix(axes)
-        self._linear = quat_to_matrix(self._rotation) @ (scale * self._axes)
+        m = axes_matrix(axes)
+        linear = quat_to_matrix(np.asarray(rotation, dtype=np.float64)) @ (scale * m)
+        self._linear = tuple(tuple(float(v) for v in row) for row in linear)
+        # M R Mᵀ is the conjugation by M's rotation (by -M's when M mirrors: same result)
+        turn = matrix_to_quat(m if np.linalg.det(m) > 0 else -m)
+        self._before = quat_product(rotation, tuple(float(v) for v in turn))
+        self._after = (float(turn[0]), -float(turn[1]), -float(turn[2]), -float(turn[3]))
 
     @staticmethod
     def of(spec: TrackerSpec) -> Calibration:
         return Calibration(spec.offset, spec.rotation, spec.scale, spec.axes)
 
-    def position(self, p: np.ndarray) -> np.ndarray:
-        return self._linear @ p + self._offset
+    def position(self, p: Sequence[float]) -> Vec3:
+        (a, b, c), (d, e, f), (g, h, i) = self._linear
+        x, y, z = p
+        ox, oy, oz = self.offset
+        return (a * x + b * y + c * z + ox, d * x + e * y + f * z + oy,
+                g * x + h * y + i * z + oz)
 
-    def velocity(self, v: np.ndarray) -> np.ndarray:
-        return self._linear @ v
+    def velocity(self, v: Sequence[float]) -> Vec3:
+        (a, b, c), (d, e, f), (g, h, i) = self._linear
+        x, y, z = v
+        return (a * x + b * y + c * z, d * x + e * y + f * z, g * x + h * y + i * z)
 
-    def orientation(self, q: np.ndarray) -> np.ndarray:
-        if self.axes == IDENTITY_AXES:
-            return quat_multiply(self._rotation, q)
-        m = self._axes
-        return matrix_to_quat(quat_to_matrix(self._rotation) @ m @ quat_to_matrix(q) @ m.T)
+    def orientation(self, q: Sequence[float]) -> Quat:
+        return quat_product(quat_product(self._before, q), self._after)
 
 
 #: OpenXR's stage frame (x right, y up, -z forward) to the engine's (x right, y forward, z up).
@@ -73,7 +85,4 @@ def openxr_to_engine(position: Vec3, orientation: Quat) -> tuple[Vec3, Quat]:
     A headset with identity orientation looks along OpenXR's -z; the engine's camera with
     identity orientation looks along +y: the same direction after conversion.
     """
-    p = OPENXR.position(np.asarray(position, dtype=np.float64))
-    q = OPENXR.orientation(np.asarray(orientation, dtype=np.float64))
-    return ((float(p[0]), float(p[1]), float(p[2])),
-            (float(q[0]), float(q[1]), float(q[2]), float(q[3])))
+    return OPENXR.position(position), OPENXR.orientation(orientation)

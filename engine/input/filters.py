@@ -13,10 +13,12 @@ and angular velocity, to hide the latency between a sensor and the frame shown.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
-import numpy as np
+from engine.rotation import quat_from_rotation_vector, quat_product, rotation_vector
 
-from engine.rotation import quat_multiply, rotation_vector_between, slerp
+Vec3 = tuple[float, float, float]
+Quat = tuple[float, float, float, float]
 
 #: Cutoff (Hz) of the filter on the speed the one-euro cutoff is computed from.
 DERIVATIVE_CUTOFF = 1.0
@@ -31,28 +33,29 @@ def smoothing(cutoff: float, dt: float) -> float:
 
 
 class OneEuro:
-    """One-euro filter of a vector signal (positions, or any number of channels)."""
+    """One-euro filter of a vector signal (a position: a tuple of floats)."""
 
     __slots__ = ("min_cutoff", "beta", "value", "speed", "time")
 
     def __init__(self, min_cutoff: float = 1.0, beta: float = 10.0) -> None:
         self.min_cutoff = min_cutoff
         self.beta = beta
-        self.value: np.ndarray | None = None
-        self.speed: np.ndarray | None = None  # filtered derivative (units per second)
+        self.value: tuple[float, ...] | None = None
+        self.speed: tuple[float, ...] = ()  # filtered derivative (units per second)
         self.time = 0.0
 
-    def __call__(self, x: np.ndarray, t: float) -> np.ndarray:
+    def __call__(self, x: Sequence[float], t: float) -> tuple[float, ...]:
         if self.value is None:
-            self.value, self.speed, self.time = x.copy(), np.zeros_like(x), t
+            self.value, self.speed, self.time = tuple(x), (0.0,) * len(x), t
             return self.value
-        assert self.speed is not None
         dt = max(t - self.time, MIN_DT)
         self.time = max(t, self.time)
-        derivative = (x - self.value) / dt
-        self.speed = self.speed + smoothing(DERIVATIVE_CUTOFF, dt) * (derivative - self.speed)
-        cutoff = self.min_cutoff + self.beta * float(np.linalg.norm(self.speed))
-        self.value = self.value + smoothing(cutoff, dt) * (x - self.value)
+        a = smoothing(DERIVATIVE_CUTOFF, dt)
+        self.speed = tuple(s + a * ((xi - v) / dt - s)
+                           for s, xi, v in zip(self.speed, x, self.value, strict=True))
+        cutoff = self.min_cutoff + self.beta * math.sqrt(sum(s * s for s in self.speed))
+        b = smoothing(cutoff, dt)
+        self.value = tuple(v + b * (xi - v) for v, xi in zip(self.value, x, strict=True))
         return self.value
 
 
@@ -64,20 +67,23 @@ class OneEuroRotation:
     def __init__(self, min_cutoff: float = 1.0, beta: float = 10.0) -> None:
         self.min_cutoff = min_cutoff
         self.beta = beta
-        self.value: np.ndarray | None = None
+        self.value: Quat | None = None
         self.angular_speed = 0.0  # rad/s, filtered
         self.time = 0.0
 
-    def __call__(self, q: np.ndarray, t: float) -> np.ndarray:
+    def __call__(self, q: Quat, t: float) -> Quat:
         if self.value is None:
-            self.value, self.time = q.copy(), t
-            return self.value
+            self.value, self.time = q, t
+            return q
         dt = max(t - self.time, MIN_DT)
         self.time = max(t, self.time)
-        rate = float(np.linalg.norm(rotation_vector_between(self.value, q))) / dt
+        turn = rotation_vector(self.value, q)
+        rate = math.sqrt(turn[0] ** 2 + turn[1] ** 2 + turn[2] ** 2) / dt
         self.angular_speed += smoothing(DERIVATIVE_CUTOFF, dt) * (rate - self.angular_speed)
-        cutoff = self.min_cutoff + self.beta * self.angular_speed
-        self.value = slerp(self.value, q, smoothing(cutoff, dt))
+        b = smoothing(self.min_cutoff + self.beta * self.angular_speed, dt)
+        # slerp by b: the same way round, b of the angle
+        self.value = quat_product(quat_from_rotation_vector(
+            (turn[0] * b, turn[1] * b, turn[2] * b)), self.value)
         return self.value
 
 
@@ -87,29 +93,25 @@ class Velocity:
     __slots__ = ("position", "orientation", "time", "linear", "angular")
 
     def __init__(self) -> None:
-        self.position: np.ndarray | None = None
-        self.orientation: np.ndarray | None = None
+        self.position: Vec3 | None = None
+        self.orientation: Quat = (1.0, 0.0, 0.0, 0.0)
         self.time = 0.0
-        self.linear = np.zeros(3)
-        self.angular = np.zeros(3)
+        self.linear: Vec3 = (0.0, 0.0, 0.0)
+        self.angular: Vec3 = (0.0, 0.0, 0.0)
 
-    def update(self, p: np.ndarray, q: np.ndarray, t: float) -> None:
-        if self.position is not None and self.orientation is not None and t > self.time:
+    def update(self, p: Vec3, q: Quat, t: float) -> None:
+        if self.position is not None and t > self.time:
             dt = t - self.time
-            self.linear = (p - self.position) / dt
-            self.angular = rotation_vector_between(self.orientation, q) / dt
+            x, y, z = self.position
+            self.linear = ((p[0] - x) / dt, (p[1] - y) / dt, (p[2] - z) / dt)
+            wx, wy, wz = rotation_vector(self.orientation, q)
+            self.angular = (wx / dt, wy / dt, wz / dt)
         if self.position is None or t > self.time:
             self.position, self.orientation, self.time = p, q, t
 
 
-def predict(p: np.ndarray, q: np.ndarray, linear: np.ndarray, angular: np.ndarray,
-            lead: float) -> tuple[np.ndarray, np.ndarray]:
+def predict(p: Vec3, q: Quat, linear: Vec3, angular: Vec3, lead: float) -> tuple[Vec3, Quat]:
     """The pose ``lead`` seconds ahead at constant linear (m/s) and angular (rad/s) velocity."""
-    turn = angular * lead
-    angle = float(np.linalg.norm(turn))
-    if angle < 1e-12:
-        return p + linear * lead, q
-    axis = turn / angle
-    half = 0.5 * angle
-    step = np.array([math.cos(half), *(axis * math.sin(half))])
-    return p + linear * lead, quat_multiply(step, q)
+    turn = quat_from_rotation_vector((angular[0] * lead, angular[1] * lead, angular[2] * lead))
+    return ((p[0] + linear[0] * lead, p[1] + linear[1] * lead, p[2] + linear[2] * lead),
+            quat_product(turn, q))

@@ -64,18 +64,17 @@ class TrackerPipeline:
 
     def __call__(self, raw: TrackerPose) -> TrackerPose:
         cal = self.calibration
-        p = cal.position(np.asarray(raw.position, dtype=np.float64))
-        q = cal.orientation(np.asarray(raw.orientation, dtype=np.float64))
-        t = raw.timestamp
+        p, q, t = raw.position, raw.orientation, raw.timestamp
+        if not cal.is_identity:
+            p, q = cal.position(p), cal.orientation(q)
         if self.position_filter is not None and self.rotation_filter is not None:
-            p = self.position_filter(p, t)
-            q = self.rotation_filter(q, t)
+            x, y, z = self.position_filter(p, t)
+            p, q = (x, y, z), self.rotation_filter(q, t)
         self.motion.update(p, q, t)
-        linear = (cal.velocity(np.asarray(raw.velocity, dtype=np.float64))
-                  if raw.velocity is not None else self.motion.linear)
+        linear = self.motion.linear if raw.velocity is None else cal.velocity(raw.velocity)
         if self.lead > 0.0:
             p, q = predict(p, q, linear, self.motion.angular, self.lead)
-        return TrackerPose(raw.device, _vec3(p), _quat(q), _vec3(linear), t)
+        return TrackerPose(raw.device, p, q, linear, t)
 
 
 class InputHub:
@@ -92,6 +91,7 @@ class InputHub:
         self._tracker_specs = {t.id: t for t in spec.trackers}
         self._wheel_specs = {w.id: w for w in spec.wheels}
         self._pipelines: dict[str, TrackerPipeline] = {}
+        self._posed: dict[str, TrackerPose] = {}  # this frame's newest pose per tracker
         #: transport name -> seconds of silence before its sources are lost
         self._timeouts = {d.name: (timeouts or {}).get(d.name, spec.lost_after)
                           for d in self.devices}
@@ -194,33 +194,33 @@ class InputHub:
         state = self.state
         state.now = batch.clock
         out: list[AnyInput] = []
+        self._posed.clear()
         for event in batch.events:
             processed = self._apply(event)
-            if processed is not None:
-                out.append(processed)
-                self.delivered[TAGS[type(processed)]] += 1
+            out.append(processed)
+            self.delivered[TAGS[type(processed)]] += 1
+        for name, pose in self._posed.items():  # the table holds each tracker's newest pose
+            tracker = state.trackers[name]
+            tracker.position = np.array(pose.position)
+            tracker.orientation = np.array(pose.orientation)
+            tracker.velocity = np.array(pose.velocity)
+            tracker.angular_velocity = np.array(self._pipelines[name].motion.angular)
+            tracker.timestamp = pose.timestamp
         for wheel in state.wheels.values():
             wheel.angular_velocity = wheel.rate.angular_velocity(batch.clock)
         for complaints in self._complaints.values():
             complaints.report(batch.clock)
         return out
 
-    def _apply(self, event: AnyInput) -> AnyInput | None:
+    def _apply(self, event: AnyInput) -> AnyInput:
         state = self.state
         if isinstance(event, TrackerPose):
             pipeline = self._pipelines.get(event.device)
             if pipeline is None:
                 pipeline = self._pipelines[event.device] = TrackerPipeline(
                     self._tracker_specs.get(event.device))
-            pose = pipeline(event)
-            tracker = state.trackers.get(event.device)
-            if tracker is None:
-                tracker = state.trackers[event.device] = TrackerState()
-            tracker.position = np.array(pose.position)
-            tracker.orientation = np.array(pose.orientation)
-            tracker.velocity = np.array(pose.velocity)
-            tracker.angular_velocity = pipeline.motion.angular.copy()
-            tracker.timestamp = pose.timestamp
+                state.trackers.setdefault(event.device, TrackerState())
+            pose = self._posed[event.device] = pipeline(event)
             return pose
         if isinstance(event, WheelCount):
             wheel = state.wheels.get(event.device)
@@ -295,10 +295,3 @@ def describe(device: InputDevice) -> str:
 def vars_of(status: Any) -> dict[str, Any]:
     return {name: getattr(status, name) for name in status.__slots__}
 
-
-def _vec3(a: np.ndarray) -> tuple[float, float, float]:
-    return (float(a[0]), float(a[1]), float(a[2]))
-
-
-def _quat(a: np.ndarray) -> tuple[float, float, float, float]:
-    return (float(a[0]), float(a[1]), float(a[2]), float(a[3]))
