@@ -147,7 +147,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         headless=headless, sound=args.sound,
         options={"screenshot": args.screenshot, "record_frames": args.record_frames,
                  "record_every": args.record_every, "interpolate": args.interpolate,
-                 "hud": args.hud, "size": args.size},
+                 "hud": args.hud, "size": args.size, "input": args.input},
     )
     scene.configure(config, backend=args.backend, dt=args.dt)
     try:

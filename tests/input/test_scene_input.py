@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -74,3 +75,17 @@ def test_the_command_line_adds_devices_and_refuses_bad_ones(tmp_path: Path, caps
         main(["run", "--input", "osc:port", "--frames", "1"])
     assert exited.value.code == 2
     assert "argument --input: bad --input 'osc:port'" in capsys.readouterr().err
+
+
+def test_input_devices_from_the_command_line_are_opened(tmp_path: Path):
+    content = tmp_path / "content"
+    content.mkdir()
+    (content / "main.scene").write_text('Input { Device { Kind "osc" Port 0 } }\n')
+    stats = tmp_path / "stats.json"
+    code = main(["run", str(content), "--headless", "--frames", "3", "--fast",
+                 "--input", "osc:127.0.0.1:0", "--input", "desktop", "--stats", str(stats)])
+    assert code == 0
+    devices = json.loads(stats.read_text())["input"]["devices"]
+    # the command line's osc replaces the scene's (same ID); desktop is added
+    assert [(d["name"], d["kind"], d["state"]) for d in devices] == [
+        ("osc", "osc", "open"), ("desktop", "desktop", "open")]
