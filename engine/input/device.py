@@ -26,6 +26,9 @@ from engine.input.events import AnyInput, TrackerPose
 
 log = logging.getLogger("colosseum.input")
 
+#: Where devices read the time (injectable for tests); monotonic seconds.
+Clock = Callable[[], float]
+MONOTONIC: Clock = time.monotonic
 #: Seconds between two reports of a device's bad messages.
 REPORT_EVERY = 3.0
 #: How far from 1 a quaternion's length may be and still be normalised (else it is bad).
@@ -230,6 +233,3 @@ def whole_count(value: float, what: str) -> int:
         raise BadMessage(f"{what}: count {value:g} is not a whole number")
     return int(value)
 
-
-Clock = Callable[[], float]
-MONOTONIC: Clock = time.monotonic

@@ -18,6 +18,7 @@ from __future__ import annotations
 import logging
 from collections import Counter
 from collections.abc import Sequence
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -53,13 +54,12 @@ class TrackerPipeline:
     """Raw device poses of one tracker -> scene poses (calibrated, filtered, predicted)."""
 
     def __init__(self, spec: TrackerSpec | None) -> None:
-        self.spec = spec
-        self.calibration = Calibration.of(spec) if spec is not None else Calibration()
-        smooth = spec is not None and spec.filter == "oneeuro"
-        self.position_filter = OneEuro(spec.min_cutoff, spec.beta) if smooth and spec else None
-        self.rotation_filter = (OneEuroRotation(spec.min_cutoff, spec.beta)
-                                if smooth and spec else None)
-        self.lead = spec.predict if spec is not None else 0.0
+        spec = spec or TrackerSpec("")
+        self.calibration = Calibration.of(spec)
+        self.filters = ((OneEuro(spec.min_cutoff, spec.beta),
+                         OneEuroRotation(spec.min_cutoff, spec.beta))
+                        if spec.filter == "oneeuro" else None)
+        self.lead = spec.predict
         self.motion = Velocity()
 
     def __call__(self, raw: TrackerPose) -> TrackerPose:
@@ -67,9 +67,9 @@ class TrackerPipeline:
         p, q, t = raw.position, raw.orientation, raw.timestamp
         if not cal.is_identity:
             p, q = cal.position(p), cal.orientation(q)
-        if self.position_filter is not None and self.rotation_filter is not None:
-            x, y, z = self.position_filter(p, t)
-            p, q = (x, y, z), self.rotation_filter(q, t)
+        if self.filters is not None:
+            x, y, z = self.filters[0](p, t)
+            p, q = (x, y, z), self.filters[1](q, t)
         self.motion.update(p, q, t)
         linear = self.motion.linear if raw.velocity is None else cal.velocity(raw.velocity)
         if self.lead > 0.0:
@@ -282,7 +282,7 @@ class InputHub:
 
     def stats(self) -> dict[str, Any]:
         """The ``input`` section of ``--stats``."""
-        return {"devices": [vars_of(d.status()) for d in self.devices],
+        return {"devices": [asdict(d.status()) for d in self.devices],
                 "delivered": dict(self.delivered), "lost": sorted(self.state.lost),
                 "replaying": self._replay is not None}
 
@@ -290,8 +290,4 @@ class InputHub:
 def describe(device: InputDevice) -> str:
     describe_name = getattr(device, "describe_name", None)
     return describe_name() if describe_name else f"input device {device.name!r} ({device.kind})"
-
-
-def vars_of(status: Any) -> dict[str, Any]:
-    return {name: getattr(status, name) for name in status.__slots__}
 
