@@ -163,7 +163,7 @@ def _engine_run(seconds: float, folder: Path) -> list[dict[str, Any]]:
         engine.events.subscribe(TrackerPose, on_event)
         engine.events.subscribe(Button, on_event)
         device = next(d for d in hub.devices if isinstance(d, OscDevice))
-        io_thread = device._threads[0]
+        io_thread = device.threads[0]
         io_before = thread_cpu(io_thread)
         sender = Sender(device.port, seconds)
         sender.start()

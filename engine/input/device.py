@@ -177,6 +177,11 @@ class QueuedDevice:
         return DeviceStatus(self.name, self.kind, self._state, self._detail, self.received,
                             self.bad.total)
 
+    @property
+    def threads(self) -> list[threading.Thread]:
+        """The I/O threads (a benchmark reads their CPU clocks)."""
+        return list(self._threads)
+
     def _open(self) -> None:
         raise NotImplementedError
 
