@@ -15,6 +15,7 @@ import traceback
 from pathlib import Path
 from typing import Any
 
+from engine.input.config import input_option
 from engine.physics.backend import BackendName
 
 log = logging.getLogger("colosseum")
@@ -73,6 +74,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--stats", type=Path, help="write run statistics as JSON")
     run.add_argument("--record", type=Path, help="record input events to FILE (JSON lines)")
     run.add_argument("--replay", type=Path, help="replay input events recorded with --record")
+    run.add_argument("--input", action="append", default=[], type=input_option,
+                     metavar="KIND[:ARG]", help="open an input device: osc:PORT, "
+                     "serial:PATH[@BAUD], lsl:STREAM[,...], desktop or openxr (repeatable)")
     run.add_argument("--progress", action="store_true",
                      help="print a status line every second (default when stderr is a terminal)")
 
@@ -115,8 +119,8 @@ def _fail(message: str, code: int = USAGE_ERROR) -> int:
 def cmd_run(args: argparse.Namespace) -> int:
     from engine.app import EngineConfig
     from engine.content import ContentError, load_systems, resolve
+    from engine.input import InputRecorder, InputReplayer, ReplayError
     from engine.physics import BackendUnavailable
-    from engine.recording import InputRecorder, InputReplayer, ReplayError
     from engine.scene_loading import SceneLoadError, load_content_scene
     from engine.stats import collect, status_line, write_json
     from engine.system import SystemFailure
@@ -143,7 +147,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         headless=headless, sound=args.sound,
         options={"screenshot": args.screenshot, "record_frames": args.record_frames,
                  "record_every": args.record_every, "interpolate": args.interpolate,
-                 "hud": args.hud, "size": args.size},
+                 "hud": args.hud, "size": args.size, "input": args.input},
     )
     scene.configure(config, backend=args.backend, dt=args.dt)
     try:

@@ -31,10 +31,16 @@ class Contacts:
 
 @dataclass(frozen=True, slots=True)
 class KeyEvent:
-    """A key went down or up; names are lower case ("space", "up", "f1", "a")."""
+    """A key went down or up; names are lower case ("space", "up", "f1", "a").
+
+    Also the input layer's typed ``Key`` event (``engine.input.Key``): ``device`` is where
+    it came from, ``timestamp`` when (``time.monotonic()`` seconds, 0 when unknown).
+    """
 
     key: str
     pressed: bool
+    device: str = "keyboard"
+    timestamp: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)

@@ -21,6 +21,7 @@ import numpy as np
 from components import Camera, Light, Transform, Visual
 from engine.assets import Assets
 from engine.events import KeyEvent
+from engine.input.desktop import WindowDevice
 from engine.render.camera import CameraView, camera_from_component
 from engine.render.context import create_target
 from engine.render.hud import hud_line
@@ -175,8 +176,7 @@ class RenderSystem(System):
         post = engine.try_resource(PostProcessing)
         if post is not None:
             self.renderer.set_post_passes(post.passes)
-        self._target.key_callback = lambda key, pressed: engine.events.emit(
-            KeyEvent(key, pressed))
+        self._target.input = engine.try_resource(WindowDevice)  # keys and mouse: input layer
         engine.events.subscribe(KeyEvent, self._on_key)
         engine.world.on_remove(Visual, lambda entity, _: self._forget(entity))
         engine.insert_resource(self)

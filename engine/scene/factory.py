@@ -57,6 +57,7 @@ from engine.scene.db import (
     Value,
 )
 from engine.scene.diagnostics import ERROR, Diagnostic, Loc, Reporter, sorted_diagnostics
+from engine.scene.inputs import InputSpec, read_inputs
 from engine.scene.parser import paused_gc
 
 if TYPE_CHECKING:
@@ -127,6 +128,8 @@ class SceneSpec:
     problems: list[Diagnostic] = field(default_factory=list)
     #: The files this spec read; instantiate makes it the engine's Assets resource.
     assets: Assets | None = None
+    #: The ``Input`` and ``Output`` blocks (devices, calibration, published values).
+    input: InputSpec = field(default_factory=InputSpec)
 
 
 @dataclass(slots=True)
@@ -305,6 +308,7 @@ class _Builder:
         self.shaders(root, spec)
         self.world(root, spec)
         self.scene_entities(root, spec)
+        spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
         return spec
 
     # -- assets --------------------------------------------------------------

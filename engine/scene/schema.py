@@ -73,6 +73,10 @@ PARSE_METHODS = ("TriangleMesh", "ConvexHull", "Box", "Sphere")
 JOINT_TYPES = tuple(SCENE_JOINT_TYPES)
 LIGHT_TYPES = ("directional", "point", "spot")
 BACKENDS = tuple(BackendName)
+INPUT_KINDS = ("osc", "lsl", "serial", "openxr", "desktop")
+OUTPUT_KINDS = ("osc", "lsl")
+LSL_SCOPES = ("machine", "link", "site", "organization", "global")
+TRACKER_FILTERS = ("none", "oneeuro")
 
 SCHEMAS: dict[str, dict[str, Field]] = {
     "Scene": {
@@ -93,6 +97,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Controller": _f(STRUCT_T, repeat=True, struct="Controller"),
         "World": _f(STRUCT_T, doc="dynamics settings", struct="World"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
+        "Input": _f(STRUCT_T, doc="input devices and how their trackers, wheels and buttons "
+                    "are calibrated (engine.input)", repeat=True, struct="Input"),
+        "Output": _f(STRUCT_T, doc="engine values published every frame over OSC or LSL",
+                     repeat=True, struct="Output"),
     },
     "Object": {
         "ID": _id("object"),
@@ -269,6 +277,79 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "AutoSleep": _f(BOOL_T, 1),
         "Time": _f(FLOAT_T, 0.0, "s, simulated time this state was saved at"),
         "SolverSeed": _f(INT_T, None, "the solver's random state when this state was saved"),
+    },
+    # -- input devices and bindings (engine.input; address space in docs/input-format.md) --
+    "Input": {
+        "Device": _f(STRUCT_T, doc="a device to open", repeat=True, struct="InputDevice"),
+        "Tracker": _f(STRUCT_T, doc="calibration and filtering of one 6-DOF tracker",
+                      repeat=True, struct="InputTracker"),
+        "Wheel": _f(STRUCT_T, doc="a wheel counter: counts to angular velocity", repeat=True,
+                    struct="InputWheel"),
+        "Button": _f(STRUCT_T, doc="a button given a name of its own", repeat=True,
+                     struct="InputButton"),
+        "LostAfter": _f(FLOAT_T, 0.5, "s of silence after which a tracker, glove or wheel is "
+                        "reported lost (DeviceLost) until it sends again"),
+    },
+    "InputDevice": {
+        "ID": _f(STRING_T, "", "name trackers refer to (default: the Kind)"),
+        "Kind": _f(ENUM_T, None, "transport", required=True, allowed=INPUT_KINDS),
+        "Port": _f(INT_T, 9000, "osc: UDP port to listen on"),
+        "Address": _f(STRING_T, "127.0.0.1", "osc: address to listen on (0.0.0.0: every "
+                      "network interface)"),
+        "Path": _f(STRING_T, "", "serial: the port, e.g. /dev/ttyUSB0"),
+        "Baud": _f(INT_T, 115200, "serial: bits per second"),
+        "Line": _f(STRING_T, "{name} {count}", "serial: one line's fields: {name} {count} "
+                   "{button} {pressed} {axis} {value} {x} {y} {z} {qw} {qx} {qy} {qz}"),
+        "Streams": _f(STRINGVECTOR_T, (), "lsl: streams to open, by name or \"type:TYPE\""),
+        "Scope": _f(ENUM_T, "site", "lsl: how far stream discovery reaches",
+                    allowed=LSL_SCOPES),
+        "Timeout": _f(FLOAT_T, None, "s; overrides Input LostAfter for this device's sources"),
+        "TurnsPerSecond": _f(FLOAT_T, 0.5, "desktop: wheel turns per second while W/S/A/D "
+                             "are held"),
+    },
+    "InputTracker": {
+        "ID": Field(STRING_T, None, "the tracker's name as its device sends it", required=True),
+        "Device": _f(STRING_T, "", "only poses from this device (its ID); default: any"),
+        "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, added after rotation and scale"),
+        "Rotation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees turning the device frame "
+                       "into the scene frame"),
+        "Scale": _f(FLOAT_T, 1.0, "device units to metres"),
+        "Axes": _f(STRING_T, "x y z", "which device axis becomes engine X, Y and Z, e.g. "
+                   "\"x -z y\" for a Y-up device"),
+        "Filter": _f(ENUM_T, "none", "jitter filter", allowed=TRACKER_FILTERS),
+        "MinCutoff": _f(FLOAT_T, 1.0, "one-euro: Hz, jitter cut at rest (lower: smoother)"),
+        "Beta": _f(FLOAT_T, 10.0, "one-euro: s/m, how fast the cutoff rises with speed "
+                   "(higher: less lag in fast moves)"),
+        "Predict": _f(FLOAT_T, 0.0, "ms of constant-velocity prediction"),
+        "Object": _f(REF_T, None, "an object without physics (a cursor, a camera) whose pose "
+                     "follows the tracker", ref="Object"),
+    },
+    "InputWheel": {
+        "ID": Field(STRING_T, None, "the counter's name as its device sends it",
+                    required=True),
+        "CountsPerTurn": _f(INT_T, 1024, "encoder counts per wheel revolution"),
+        "Wrap": _f(INT_T, 0, "the counter wraps to 0 at this value (0: it never wraps)"),
+        "MaxTurnsPerSecond": _f(FLOAT_T, 20.0, "faster jumps are a counter reset, not motion"),
+        "Invert": _f(BOOL_T, 0, "1: counts run backwards"),
+        "Window": _f(FLOAT_T, 0.1, "s of counts the angular velocity is measured over"),
+    },
+    "InputButton": {
+        "ID": Field(STRING_T, None, "the name scripts and controllers use", required=True),
+        "Device": Field(STRING_T, None, "the glove or device sending it", required=True),
+        "Name": Field(STRING_T, None, "the button's name on that device", required=True),
+        "Invert": _f(BOOL_T, 0, "1: a normally-closed switch (pressed when it reads 0)"),
+    },
+    "Output": {
+        "Kind": _f(ENUM_T, "osc", "transport", allowed=OUTPUT_KINDS),
+        "Address": _f(STRING_T, "127.0.0.1", "osc: where to send"),
+        "Port": _f(INT_T, 9001, "osc: UDP port to send to"),
+        "Name": _f(STRING_T, "colosseum", "lsl: stream name prefix"),
+        "Scope": _f(ENUM_T, "site", "lsl: how far stream discovery reaches",
+                    allowed=LSL_SCOPES),
+        "Value": _f(STRING_T, None, "a value sent every frame: position:OBJECT, "
+                    "velocity:OBJECT, angular_velocity:OBJECT, controller:ID, wheel:NAME, "
+                    "tracker:NAME, or a name Python systems set", repeat=True),
+        "Markers": _f(BOOL_T, 1, "1: send task markers (Lua emit(\"marker\", text))"),
     },
 }
 
