@@ -44,14 +44,6 @@ class KeyEvent:
 
 
 @dataclass(frozen=True, slots=True)
-class InputEvent:
-    """A value from an input device: an axis, a tracker pose, a wheel counter."""
-
-    device: str
-    value: Any
-
-
-@dataclass(frozen=True, slots=True)
 class TimerEvent:
     name: str
 

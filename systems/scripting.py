@@ -21,7 +21,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from components import Name, Script, Transform
-from engine.events import Contacts, CustomEvent, Despawned, InputEvent, KeyEvent, TimerEvent
+from engine.events import Contacts, CustomEvent, Despawned, KeyEvent, TimerEvent
+from engine.input.events import Axis, Button, DeviceFound, DeviceLost, TrackerPose, WheelCount
 from engine.scripting.api import ScriptAPI
 from engine.scripting.runtime import Script as LoadedScript
 from engine.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRuntime
@@ -67,6 +68,8 @@ class ScriptingSystem(System):
         self._owners: dict[int, list[LoadedScript]] = {}
         self._next_check = 0.0
         self.contact_events = 0
+        #: This frame's newest pose per tracker: scripts hear each tracker once a frame.
+        self._poses: dict[str, TrackerPose] = {}
 
     # -- setup ------------------------------------------------------------------
     def setup(self, engine: Engine) -> None:
@@ -88,7 +91,16 @@ class ScriptingSystem(System):
         events = engine.events
         events.subscribe(Contacts, self._on_contacts)
         events.subscribe(KeyEvent, lambda ev: runtime.broadcast("onKey", ev.key, ev.pressed))
-        events.subscribe(InputEvent, self._on_input)
+        events.subscribe(Button, lambda ev: runtime.broadcast("onButton", ev.device, ev.name,
+                                                             ev.pressed))
+        events.subscribe(Axis, lambda ev: runtime.broadcast(
+            "onInput", f"axis:{ev.device}/{ev.name}", ev.value))
+        events.subscribe(WheelCount, lambda ev: runtime.broadcast(
+            "onInput", f"wheel:{ev.device}", ev.count))
+        events.subscribe(TrackerPose, lambda ev: self._poses.__setitem__(ev.device, ev))
+        events.subscribe(DeviceLost, lambda ev: runtime.broadcast("onDeviceLost", ev.device))
+        events.subscribe(DeviceFound, lambda ev: runtime.broadcast("onDeviceFound",
+                                                                   ev.device))
         events.subscribe(TimerEvent, lambda ev: runtime.broadcast("onTimer", ev.name))
         events.subscribe(CustomEvent, lambda ev: runtime.deliver(ev.name, ev.data))
         events.subscribe(Despawned, lambda ev: runtime.kernel.forget(ev.entity))
@@ -103,6 +115,8 @@ class ScriptingSystem(System):
         if now >= self._next_check:
             self._next_check = now + self.reload_interval
             self._check_files(engine)
+        if self._poses:
+            self._deliver_poses(runtime)
         runtime.update(dt)
 
     def _load_pending(self, engine: Engine) -> None:
@@ -257,18 +271,10 @@ class ScriptingSystem(System):
             for ea, eb, j in zip(pa, pb, totals, strict=True):
                 runtime.collide_scene(script, ea, eb, j)
 
-    def _on_input(self, event: InputEvent) -> None:
-        runtime = self.runtime
-        assert runtime is not None
-        device = event.device
-        if device.startswith("button:"):
-            runtime.broadcast("onButton", device[7:], bool(event.value))
-        try:
-            value = runtime.to_lua(event.value)
-        except TypeError as exc:
-            runtime.report(f"input {device!r}: {exc}; not delivered to scripts")
-            return
-        runtime.broadcast("onInput", device, value)
+    def _deliver_poses(self, runtime: ScriptRuntime) -> None:
+        poses, self._poses = self._poses, {}
+        for name, pose in poses.items():
+            runtime.broadcast("onTracker", name, *pose.position, *pose.orientation)
 
     def shutdown(self, engine: Engine) -> None:
         self._pending.clear()

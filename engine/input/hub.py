@@ -18,7 +18,7 @@ from __future__ import annotations
 import logging
 from collections import Counter
 from collections.abc import Sequence
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
@@ -104,6 +104,7 @@ class InputHub:
         self._started = False
         self._closed = False
         self._replay_clock = 0.0
+        self._injected: list[AnyInput] = []
         self.delivered: Counter[str] = Counter()
 
     # -- configuration ----------------------------------------------------------
@@ -125,6 +126,15 @@ class InputHub:
 
     def describe_devices(self) -> list[dict[str, Any]]:
         return [{"id": d.name, "kind": d.kind} for d in self.devices]
+
+    def inject(self, event: AnyInput) -> None:
+        """Feed a raw event as if a device had sent it (a network peer, a tool, a test):
+        collected with the next frame's input (stamped with its clock when the event has
+        no timestamp), recorded and applied like any other; a replay ignores it (the
+        recording already holds the run's input)."""
+        if not isinstance(event, tuple(TAGS)):
+            raise TypeError(f"inject takes a typed input event, got {type(event).__name__}")
+        self._injected.append(event)
 
     # -- running ------------------------------------------------------------------
     def start(self) -> None:
@@ -155,6 +165,7 @@ class InputHub:
         return self.apply(batch)
 
     def collect(self, frame: int) -> FrameInput:
+        injected, self._injected = self._injected, []
         if self._replay is not None:
             recorded = self._replay.frames.get(frame)
             if recorded is not None:
@@ -162,7 +173,8 @@ class InputHub:
                 return recorded
             return FrameInput(self._replay_clock)
         now = self.clock()
-        events: list[AnyInput] = []
+        events: list[AnyInput] = [e if e.timestamp else replace(e, timestamp=now)
+                                  for e in injected]
         for device in self.devices:
             for event in device.poll(now):
                 if not self._wanted(event, device.name):
