@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -21,10 +22,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from components import Name, Script, Transform
+from components.script import SavedScript
 from engine.events import Contacts, CustomEvent, Despawned, InputEvent, KeyEvent, TimerEvent
 from engine.scripting.api import ScriptAPI
 from engine.scripting.runtime import Script as LoadedScript
 from engine.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRuntime
+from engine.services import ScriptStates
 from engine.system import ANY_COMPONENT, Phase, System
 
 if TYPE_CHECKING:
@@ -80,6 +83,7 @@ class ScriptingSystem(System):
         self.runtime = runtime
         engine.insert_resource(runtime)
         engine.insert_resource(self)
+        engine.insert_resource(self, as_type=ScriptStates)
         world = engine.world
         world.on_add(Script, lambda e, c: self._pending.append((e, c)))
         world.on_remove(Script, lambda e, c: self._unload(e))
@@ -97,6 +101,7 @@ class ScriptingSystem(System):
     def run(self, engine: Engine, dt: float) -> None:
         runtime = self.runtime
         assert runtime is not None
+        runtime.time = engine.time  # timers run on the simulation's clock (a saved one too)
         if self._pending:
             self._load_pending(engine)
         now = time.monotonic()
@@ -109,17 +114,23 @@ class ScriptingSystem(System):
         runtime = self.runtime
         assert runtime is not None
         pending, self._pending = self._pending, []
-        fresh: list[LoadedScript] = []
+        started: list[tuple[LoadedScript, str]] = []
         for entity, component in pending:
             if not component.enabled or not engine.world.entity_exists(entity):
                 continue
             loaded = self._load(engine, entity, component)
             if loaded is not None:
-                fresh.append(loaded)
+                saved, component.saved = component.saved, None
+                resumed = saved is not None and runtime.resume(loaded, saved, self._find)
+                started.append((loaded, "onResume" if resumed else "onStart"))
                 self._owners.setdefault(entity, []).append(loaded)
         self._reindex(engine)
-        for loaded in fresh:
-            runtime.call(loaded, "onStart")
+        for loaded, callback in started:
+            runtime.call(loaded, callback)
+
+    def _find(self, name: str) -> int:
+        assert self.api is not None
+        return self.api.find(name)
 
     def _load(self, engine: Engine, entity: int, component: Script) -> LoadedScript | None:
         runtime = self.runtime
@@ -269,6 +280,25 @@ class ScriptingSystem(System):
             runtime.report(f"input {device!r}: {exc}; not delivered to scripts")
             return
         runtime.broadcast("onInput", device, value)
+
+    def saved_scripts(self, object_name: Callable[[int], str | None]
+                      ) -> dict[int, SavedScript]:
+        """Each running script's state, by the entity it runs on (see
+        :mod:`engine.scripting.persist`); what cannot be saved is told, once per save."""
+        runtime = self.runtime
+        if runtime is None:
+            return {}
+        states: dict[int, SavedScript] = {}
+        for entity, scripts in self._owners.items():
+            for script in scripts:
+                if script.stopped or script not in runtime.scripts:
+                    continue
+                saved, told = runtime.capture(script, object_name)
+                for message in told:
+                    log.warning("saved state: %s", message)
+                if saved is not None:
+                    states[entity] = saved
+        return states
 
     def shutdown(self, engine: Engine) -> None:
         self._pending.clear()

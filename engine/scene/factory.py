@@ -40,6 +40,7 @@ from components import (
     Visual,
 )
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
+from components.script import SavedScript, ScriptHandler, ScriptTimer
 from engine.assets import AssetError, Assets
 from engine.assets.geometry import convex_hull
 from engine.physics.backend import MaterialPair, SleepState, WorldSettings
@@ -56,7 +57,14 @@ from engine.scene.db import (
     SceneDB,
     Value,
 )
-from engine.scene.diagnostics import ERROR, Diagnostic, Loc, Reporter, sorted_diagnostics
+from engine.scene.diagnostics import (
+    ERROR,
+    WARNING,
+    Diagnostic,
+    Loc,
+    Reporter,
+    sorted_diagnostics,
+)
 from engine.scene.parser import paused_gc
 
 if TYPE_CHECKING:
@@ -279,10 +287,14 @@ class _Builder:
         self.poses: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
         self.physical_ids: set[str] = set()
         self.sleep: dict[str, SleepState] = {}
+        #: Owner -> the saved state its script resumes from, and the block that said so.
+        self.script_states: dict[str, SavedScript] = {}
+        self.script_blocks: dict[str, Block] = {}
 
     def build(self, db: SceneDB) -> SceneSpec:
         spec = SceneSpec()
         root = _Index(db.root)
+        self.script_states = self.saved_scripts(root)
         for blk in root.blocks("Material"):
             r = _Reader(blk, "Material")
             name = str(r("ID"))
@@ -379,7 +391,7 @@ class _Builder:
             if self.sound_file(sr, "File", f"object '{oid}' has no sound") is not None:
                 comps.append(_sound(sr, oid))
         if r.has("Script"):
-            comps.append(Script(file=r("Script")))
+            comps.append(Script(file=r("Script"), saved=self.script_states.pop(oid, None)))
         if r.has("Hand"):
             h = _Reader(r.value("Hand").data, "Hand")
             comps.append(Hand(tracker=h("Tracker"), max_force=float(h("MaxForce")),
@@ -618,8 +630,27 @@ class _Builder:
             spec.entities.append(EntitySpec(cid, [Name(cid), _controller(r)], b.loc))
         for i, e in enumerate(root.get_all("Script")):
             sid = f"script{i}"
-            spec.entities.append(EntitySpec(sid, [Name(sid), Script(file=e.value.data)],
-                                            e.loc))
+            script = Script(file=e.value.data, saved=self.script_states.pop(sid, None))
+            spec.entities.append(EntitySpec(sid, [Name(sid), script], e.loc))
+        for owner, block in self.script_blocks.items():
+            if owner in self.script_states:  # its owner runs no script (or was left out)
+                self.problems.append(Diagnostic(
+                    block.loc.path, block.loc.line, block.loc.col, WARNING,
+                    f"ScriptState for {owner!r}, which runs no script here; ignored"))
+
+    def saved_scripts(self, root: _Index) -> dict[str, SavedScript]:
+        """Owner -> the saved state its script resumes from (a loaded saved state)."""
+        states: dict[str, SavedScript] = {}
+        for blk in root.blocks("ScriptState"):
+            r = _Reader(blk, "ScriptState")
+            timers = tuple(ScriptTimer(str(t("Function")), float(t("Due")), float(t("Period")))
+                           for t in (_Reader(b, "ScriptTimer") for b in r.blocks("Timer")))
+            handlers = tuple(ScriptHandler(str(h("Event")), str(h("Function")))
+                             for h in (_Reader(b, "ScriptHandler") for b in r.blocks("Handler")))
+            owner = str(r("Owner"))
+            states[owner] = SavedScript(str(r("Globals")), str(r("Locals")), timers, handlers)
+            self.script_blocks[owner] = blk
+        return states
 
 
 def _opt(v: Any) -> float | None:

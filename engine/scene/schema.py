@@ -93,6 +93,9 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Controller": _f(STRUCT_T, repeat=True, struct="Controller"),
         "World": _f(STRUCT_T, doc="dynamics settings", struct="World"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
+        "ScriptState": _f(STRUCT_T, doc="where a script stood when this state was saved "
+                          "(written by --save-state): it resumes instead of starting",
+                          repeat=True, struct="ScriptState"),
     },
     "Object": {
         "ID": _id("object"),
@@ -256,6 +259,25 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "MaxForce": _f(FLOAT_T, 200.0, "N"),
         "MaxTorque": _f(FLOAT_T, 20.0, "N*m"),
         "DeviationDistance": _f(FLOAT_T, 0.3, "m before the hand is reset to the tracker"),
+    },
+    "ScriptState": {
+        "Owner": _f(STRING_T, None, "the object whose script this is, or the scene script's "
+                    "name by its place (script0, script1, ...)", required=True),
+        "Globals": _f(STRING_T, "{}", "the script's global variables, a Lua table "
+                      "constructor of data (objects as object('ID'))"),
+        "Locals": _f(STRING_T, "{}", "the file's local variables its functions use, the "
+                     "same way (a second local of one name is 'name#2')"),
+        "Timer": _f(STRUCT_T, repeat=True, struct="ScriptTimer"),
+        "Handler": _f(STRUCT_T, repeat=True, struct="ScriptHandler"),
+    },
+    "ScriptTimer": {
+        "Function": _f(STRING_T, None, "the name of the function it calls", required=True),
+        "Due": _f(FLOAT_T, None, "s, the simulated time it fires at", required=True),
+        "Period": _f(FLOAT_T, 0.0, "s between calls (every); 0 fires once (after)"),
+    },
+    "ScriptHandler": {
+        "Event": _f(STRING_T, None, "the custom event's name (on(name, fn))", required=True),
+        "Function": _f(STRING_T, None, "the name of the function it calls", required=True),
     },
     "World": {
         "Gravity": _f(VEC3_T, (0.0, 0.0, -9.81), "m/s^2"),

@@ -45,6 +45,7 @@ from engine.scene.diagnostics import Loc
 from engine.scene.factory import SceneIds, SpawnRecord
 from engine.scene.parser import parse_text
 from engine.scene.writer import write
+from engine.services import ScriptStates
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -270,6 +271,35 @@ def _drop_follows(root: Block, written: set[str]) -> None:
             blk.entries = [e for e in blk.entries if e.key != "Follow"]
 
 
+def _script_states(engine: Engine, ids: SceneIds, root: Block, names: dict[int, str]) -> None:
+    """A ``ScriptState`` for each running script of a written object or of the scene, so
+    the saved file resumes its scripts (see :mod:`engine.scripting.persist`)."""
+    scripts = engine.try_resource(ScriptStates)
+    if scripts is None:
+        return
+    scene_ids = {entity: sid for sid, entity in ids.entities.items()}
+    for entity, saved in scripts.saved_scripts(names.get).items():
+        owner = names.get(entity)
+        if owner is None and not engine.world.has_component(entity, Transform):
+            owner = scene_ids.get(entity)  # a scene script (script0, ...)
+        if owner is None:
+            continue
+        entries: list[tuple[str, Value]] = [("Owner", _string(owner))]
+        for key, text in (("Globals", saved.globals), ("Locals", saved.locals)):
+            if text != "{}":
+                entries.append((key, _string(text)))
+        block = _block("ScriptState", entries)
+        for timer in saved.timers:
+            block.value.data.entries.append(_block("Timer", [
+                ("Function", _string(timer.function)),
+                ("Due", Value(FLOAT, float(timer.due), _HERE)),
+                ("Period", Value(FLOAT, float(timer.period), _HERE))]))
+        for handler in saved.handlers:
+            block.value.data.entries.append(_block("Handler", [
+                ("Event", _string(handler.event)), ("Function", _string(handler.function))]))
+        root.entries.append(block)
+
+
 def _taken(ids: SceneIds) -> set[str]:
     """IDs of the file's own entries (those without one are written with the one they
     were given by their place, so loading the saved file keeps every name)."""
@@ -322,6 +352,7 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
         else:
             spawns.snippet(rec)
     _drop_follows(root, set(names.values()))
+    _script_states(engine, ids, root, names)
     world_entry = next((e for e in root.entries if e.key == "World"), None)
     if world_entry is None or world_entry.value.kind != STRUCTURE:
         world_entry = Entry("World", Value(STRUCTURE, Block(), _HERE), _HERE)
@@ -329,5 +360,16 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
     _set(world_entry.value.data, "Time", Value(FLOAT, float(engine.time), _HERE))
     if seed is not None:  # the solver shuffles constraints with it
         _set(world_entry.value.data, "SolverSeed", Value(INT, int(seed), _HERE))
-    header = f"// state of {spec.db.path} at t = {spec.time + engine.time!r} s"
-    return header + "\n" + write(root, literal=True)
+    return _header(spec.db.path, engine.time, dst) + write(root, literal=True)
+
+
+#: The first words of a saved state (how a loader tells one from an authored scene).
+STATE_HEADER = "// state of "
+
+
+def _header(source: str, time: float, dst: Path | None) -> str:
+    """Where the state came from and when (for people: 12 significant digits), and what
+    its file names are relative to."""
+    where = "this file's folder" if dst is None else f"this file's folder ({dst})"
+    return (f"{STATE_HEADER}{source} at t = {time:.12g} s\n"
+            f"// file names are relative to {where}\n")
