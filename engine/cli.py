@@ -137,6 +137,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     except SceneLoadError as exc:
         print(exc, file=sys.stderr)
         return 1
+    content = scene.content  # a saved state runs in the content folder it names
     config = EngineConfig(
         content_dir=content.folder, mode=args.mode, seed=args.seed, fast=args.fast,
         substeps=args.substeps, early=args.early, late=args.late, max_dt=args.max_dt,

@@ -93,6 +93,9 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Controller": _f(STRUCT_T, repeat=True, struct="Controller"),
         "World": _f(STRUCT_T, doc="dynamics settings", struct="World"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
+        "Content": _f(STRING_T, None, "the content folder a saved state continues (relative "
+                      "to this file): its file names are relative to that folder, its "
+                      "systems/ and scripts/ are the ones used"),
         "ScriptState": _f(STRUCT_T, doc="where a script stood when this state was saved "
                           "(written by --save-state): it resumes instead of starting",
                           repeat=True, struct="ScriptState"),

@@ -41,7 +41,7 @@ from engine.scene.db import (
     SceneDB,
     Value,
 )
-from engine.scene.diagnostics import Loc
+from engine.scene.diagnostics import ERROR, Diagnostic, Loc, SceneError
 from engine.scene.factory import SceneIds, SpawnRecord
 from engine.scene.parser import parse_text
 from engine.scene.writer import write
@@ -309,14 +309,21 @@ def _taken(ids: SceneIds) -> set[str]:
 def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> str:
     """Scene text of the running simulation; needs a scene loaded with ``instantiate``.
 
-    With ``out_path`` (where the text will be saved), model, sound, script and
-    shader file names are rewritten relative to that file's folder.
+    Model, sound, script and shader file names are relative to the content folder (as
+    its ``main.scene`` names them). With ``out_path`` (where the text will be saved) the
+    file also says where that folder is, relative to it (``Content``), so it runs from
+    anywhere as long as the two keep their places.
     """
     ids: SceneIds = engine.resource(SceneIds)
     spec = ids.spec
     assert spec.db is not None, "write_state needs a spec built from a SceneDB"
-    dst = None if out_path is None else Path(out_path).resolve().parent
+    dst = None if spec.content_dir is None else spec.content_dir.resolve()
     root = _literal(spec.db, spec.content_dir, dst)
+    _drop(root, "Content")
+    if out_path is not None and dst is not None:
+        here = Path(out_path).resolve().parent
+        root.entries.insert(0, Entry("Content", _string(
+            Path(os.path.relpath(dst, here)).as_posix()), _HERE))
     world = engine.world
     # the solver's random state and each body's auto-sleep state, where the backend has them
     seed, sleep = engine.physics.request(lambda backend: (
@@ -363,13 +370,27 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
     return _header(spec.db.path, engine.time, dst) + write(root, literal=True)
 
 
-#: The first words of a saved state (how a loader tells one from an authored scene).
-STATE_HEADER = "// state of "
+def content_folder(db: SceneDB) -> Path:
+    """The folder a scene's file names are relative to: the content folder a saved state
+    names (``Content``), else the scene file's own. Raises SceneError when a saved
+    state's folder is not there: the file was moved without it."""
+    named = db.root.value("Content")
+    if named is None or not isinstance(named.data, str):  # (the schema check reports one
+        return Path(db.path).parent                        # that is not a string)
+    folder = (Path(db.path).parent / named.data).resolve()
+    if folder.is_dir():
+        return folder
+    raise SceneError([Diagnostic(
+        named.loc.path, named.loc.line, named.loc.col, ERROR,
+        f"this saved state continues the content folder {named.data!r}, relative to the "
+        f"file ({folder}), which does not exist: the file was moved (or its content folder "
+        "was). Paths in a saved state are relative to the file; put it back, or change "
+        "Content to the content folder's path from where the file is now")])
 
 
-def _header(source: str, time: float, dst: Path | None) -> str:
-    """Where the state came from and when (for people: 12 significant digits), and what
-    its file names are relative to."""
-    where = "this file's folder" if dst is None else f"this file's folder ({dst})"
-    return (f"{STATE_HEADER}{source} at t = {time:.12g} s\n"
-            f"// file names are relative to {where}\n")
+def _header(source: str, time: float, content: Path | None) -> str:
+    """Where the state came from and when (for people: 12 significant digits; the exact
+    time is World's ``Time``), and what its file names are relative to."""
+    folder = "" if content is None else f" (saved from {content})"
+    return (f"// state of {source} at t = {time:.12g} s\n"
+            f"// file names are relative to the content folder{folder}\n")
