@@ -27,8 +27,9 @@ from typing import Any
 #: The marker the kernel gives handles in captured data (see ``K.OBJECT``).
 OBJECT_KEY = "\0object"
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-_LUA_KEYWORDS = frozenset(
-    ["and", "break", "do", "else", "elseif", "end", "false", "for", "function", "goto", "if", "in", "local", "nil", "not", "or", "repeat", "return", "then", "true", "until", "while"])
+_LUA_KEYWORDS = frozenset((
+    "and", "break", "do", "else", "elseif", "end", "false", "for", "function", "goto", "if",
+    "in", "local", "nil", "not", "or", "repeat", "return", "then", "true", "until", "while"))
 _PLAIN = frozenset(range(0x20, 0x7F)) - {ord("'"), ord("\\")}
 
 
