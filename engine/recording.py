@@ -10,12 +10,15 @@ studied again without the hardware.
 from __future__ import annotations
 
 import json
+import logging
 from dataclasses import asdict
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 from engine.events import CustomEvent, InputEvent, KeyEvent
 from engine.system import Phase, System
+
+log = logging.getLogger("colosseum")
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -36,6 +39,7 @@ class InputRecorder(System):
         self.path = Path(path)
         self._out: IO[str] | None = None
         self._engine: Engine | None = None
+        self.recorded = 0
 
     def setup(self, engine: Engine) -> None:
         self._engine = engine
@@ -48,14 +52,23 @@ class InputRecorder(System):
             return
         record = {"frame": self._engine.frame, "type": tag, **asdict(event)}
         self._out.write(json.dumps(record) + "\n")
+        self.recorded += 1
 
     def run(self, engine: Engine, dt: float) -> None:
         return None
 
     def shutdown(self, engine: Engine) -> None:
-        if self._out is not None:
-            self._out.close()
-            self._out = None
+        """Close the file and say what it holds (an empty recording is not a silent one)."""
+        if self._out is None:
+            return
+        self._out.close()
+        self._out = None
+        if self.recorded:
+            log.info("recorded %d input event(s) over %d frames to %s", self.recorded,
+                     engine.frame, self.path)
+        else:
+            log.warning("--record: no input event arrived in %d frames (no key pressed, no "
+                        "device sent anything); %s is empty", engine.frame, self.path)
 
 
 class InputReplayer(System):

@@ -45,7 +45,7 @@ from engine.assets import AssetError, Assets
 from engine.assets.geometry import convex_hull
 from engine.physics.backend import MaterialPair, SleepState, WorldSettings
 from engine.physics.commands import SetSleepState
-from engine.rotation import euler_to_quat, rotate
+from engine.rotation import euler_to_quat, rotate, view_problem
 from engine.scene import schema as sc
 from engine.scene.db import (
     INCLUDE,
@@ -601,6 +601,7 @@ class _Builder:
                     f"camera '{cid}' follows nothing: object '{r('Follow')}' was left out"))
             elif r.has("Follow"):
                 spec.camera_follow[cid] = r("Follow")
+            self.camera_view(r, cid, b)
             cam = Camera(fov=float(r("Fov")), near=float(r("Near")), far=float(r("Far")),
                          active=bool(r("Active")), offset=_floats(r("Offset")),
                          look_at=_floats(r("LookAt")),
@@ -637,6 +638,23 @@ class _Builder:
                 self.problems.append(Diagnostic(
                     block.loc.path, block.loc.line, block.loc.col, WARNING,
                     f"ScriptState for {owner!r}, which runs no script here; ignored"))
+
+    def camera_view(self, r: _Reader, cid: str, blk: Block) -> None:
+        """Warn about a camera with no well-defined view direction (the picture and the
+        3D sound listener follow it): LookAt at its eye, or straight along Z."""
+        if r.has("Follow"):  # LookAt and Offset are in the followed object's frame
+            if not r.has("LookAt"):
+                return  # it takes the object's orientation
+            eye = r("Offset")
+        else:
+            eye = r("Position")
+        problem = view_problem(np.subtract(r("LookAt"), eye))
+        if problem is not None:
+            where = (r.value("LookAt") or r.value("Position") or blk).loc
+            self.problems.append(Diagnostic(
+                where.path, where.line, where.col, WARNING,
+                f"camera '{cid}': {problem}; the view is meaningless and 3D sound unpanned: "
+                "move its LookAt (or Position) so it looks across, not along, Z"))
 
     def saved_scripts(self, root: _Index) -> dict[str, SavedScript]:
         """Owner -> the saved state its script resumes from (a loaded saved state)."""

@@ -464,8 +464,13 @@ class ScriptAPI:
         if found is None and what not in self._warned:
             self._warned.add(what)
             plugin = kind.plugin  # type: ignore[attr-defined]
-            log.warning("%s: the %s plugin is not loaded; the call does nothing "
-                        "(requestPlugin(%r) loads it)", what, plugin, plugin)
+            if plugin == "render" and self.engine.config.headless:  # nothing to look at
+                log.warning("%s: nothing is drawn in this run (headless, without --screenshot "
+                            "or --record-frames), so the call does nothing; run it with a "
+                            "display, or with --screenshot FILE.png, to see it", what)
+            else:
+                log.warning("%s: the %s plugin is not loaded; the call does nothing "
+                            "(requestPlugin(%r) loads it)", what, plugin, plugin)
         return found
 
     def sound(self, entity: int, play: bool) -> None:
