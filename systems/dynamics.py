@@ -27,7 +27,6 @@ import numpy as np
 from components import Joint, Name, Physical, Transform
 from engine.events import BodyFault, Contacts
 from engine.messages import MessageLog
-from engine.physics.naming import SceneNames, backend_loggers
 from engine.physics import create_backend
 from engine.physics.backend import BodyState, DynamicsBackend
 from engine.physics.commands import (
@@ -40,6 +39,7 @@ from engine.physics.commands import (
     SetVelocity,
 )
 from engine.physics.driver import PhysicsDriver, Snapshot
+from engine.physics.naming import SceneNames, backend_loggers
 from engine.system import Phase, System
 from engine.world import PoseTable, row_index
 
