@@ -83,6 +83,10 @@ def build_parser() -> argparse.ArgumentParser:
     fmt.add_argument("--write", action="store_true",
                      help="rewrite the file in place (keeps a .bak)")
 
+    keys = sub.add_parser("keys", help="the scene keys: every block, or one block's keys with "
+                          "type, default, meaning and an example")
+    keys.add_argument("block", nargs="?", help="a block (Object, Camera, World, ...)")
+
     new = sub.add_parser("new", help="scaffold a content folder that runs")
     new.add_argument("name")
 
@@ -105,6 +109,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("colosseum: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # `colosseum keys | head`: the reader left, nothing to tell
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
 
 
 def _fail(message: str, code: int = USAGE_ERROR) -> int:
@@ -214,6 +221,22 @@ def cmd_fmt(args: argparse.Namespace) -> int:
     return format_path(Path(args.path), write=args.write)
 
 
+def cmd_keys(args: argparse.Namespace) -> int:
+    from engine.scene import keys
+
+    if args.block is None:
+        for block in keys.blocks():
+            print(f"{block:<15} {keys.about(block)}")
+        print("\ncolosseum keys BLOCK lists a block's keys; docs/KEYS.md has them all")
+        return 0
+    block = keys.find_block(args.block)
+    if block is None:
+        return _fail(f"no block {args.block!r}{keys.suggest(args.block)} "
+                     f"(blocks: {', '.join(keys.blocks())})")
+    print(keys.block_text(block))
+    return 0
+
+
 def cmd_new(args: argparse.Namespace) -> int:
     from engine.scaffold import ScaffoldError, scaffold
 
@@ -237,6 +260,7 @@ COMMANDS = {
     "run": cmd_run,
     "check": cmd_check,
     "fmt": cmd_fmt,
+    "keys": cmd_keys,
     "new": cmd_new,
     "bench": cmd_bench,
 }
