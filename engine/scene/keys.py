@@ -112,7 +112,8 @@ def example(block: str, key: str, field: sc.Field) -> str:
         return f'{key} "{field.allowed[0]}"'
     if field.default is not None:
         return f"{key} {_value(field.default)}"
-    return f"{key} {_value({sc.INT_T: 1, sc.FLOAT_T: 1.0, sc.VEC3_T: (0.0, 0.0, 1.0)}.get(field.type, 'name'))}"
+    typical = {sc.INT_T: 1, sc.FLOAT_T: 1.0, sc.VEC3_T: (0.0, 0.0, 1.0)}
+    return f"{key} {_value(typical.get(field.type, 'name'))}"
 
 
 def _parents() -> dict[str, tuple[str, str]]:
@@ -190,7 +191,9 @@ def reference_markdown() -> str:
             if field.struct:
                 kind = kind.replace(f"{{ {field.struct} keys }}",
                                     f"{{ [{field.struct}](#{field.struct.lower()}) }}")
-            out.append(f"| `{key}` | {kind} | {'`' + default_text(field) + '`' if default_text(field) else ''} "
-                       f"| {field.doc} | `{example(block, key, field)}` |")
+            default = default_text(field)
+            shown = f"`{default}`" if default else ""
+            out.append(f"| `{key}` | {kind} | {shown} | {field.doc} "
+                       f"| `{example(block, key, field)}` |")
         out.append("")
     return "\n".join(out)
