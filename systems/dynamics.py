@@ -42,6 +42,7 @@ from engine.physics.driver import PhysicsDriver, Snapshot
 from engine.physics.naming import SceneNames, backend_loggers
 from engine.system import Phase, System
 from engine.world import PoseTable, row_index
+from systems.contacts import ContactEventsSystem
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -295,3 +296,4 @@ class DynamicsPlugin:
         system = DynamicsSystem(driver)
         engine.insert_resource(system)
         engine.add_system(system)
+        engine.add_system(ContactEventsSystem())  # ContactBegan / ContactEnded

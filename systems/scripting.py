@@ -23,7 +23,16 @@ import numpy as np
 
 from components import Name, Script, Transform
 from components.script import SavedScript
-from engine.events import Contacts, CustomEvent, Despawned, InputEvent, KeyEvent, TimerEvent
+from engine.events import (
+    ContactBegan,
+    ContactEnded,
+    Contacts,
+    CustomEvent,
+    Despawned,
+    InputEvent,
+    KeyEvent,
+    TimerEvent,
+)
 from engine.scripting.api import ScriptAPI
 from engine.scripting.runtime import Script as LoadedScript
 from engine.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRuntime
@@ -91,6 +100,9 @@ class ScriptingSystem(System):
             self._pending.append((entity, script))
         events = engine.events
         events.subscribe(Contacts, self._on_contacts)
+        events.subscribe(ContactBegan, lambda ev: self._on_touch(
+            "onCollisionBegin", ev.a, ev.b, (ev.impulse,)))
+        events.subscribe(ContactEnded, lambda ev: self._on_touch("onCollisionEnd", ev.a, ev.b, ()))
         events.subscribe(KeyEvent, lambda ev: runtime.broadcast("onKey", ev.key, ev.pressed))
         events.subscribe(InputEvent, self._on_input)
         events.subscribe(TimerEvent, lambda ev: runtime.broadcast("onTimer", ev.name))
@@ -267,6 +279,18 @@ class ScriptingSystem(System):
         for script in scene:
             for ea, eb, j in zip(pa, pb, totals, strict=True):
                 runtime.collide_scene(script, ea, eb, j)
+
+    def _on_touch(self, callback: str, a: int, b: int, extra: tuple[float, ...]) -> None:
+        """A pair began or stopped touching: each side's object scripts hear the other
+        (``callback(other, ...)``), scene scripts hear both (``callback(a, b, ...)``)."""
+        runtime = self.runtime
+        if runtime is None:
+            return
+        for mine, other in ((a, b), (b, a)):
+            for script in self._by_entity.get(mine, ()):
+                runtime.call_objects(script, callback, (other,), *extra)
+        for script in self._scene:
+            runtime.call_objects(script, callback, (a, b), *extra)
 
     def _on_input(self, event: InputEvent) -> None:
         runtime = self.runtime

@@ -40,9 +40,12 @@ Callbacks a script may define: ``onStart()``, ``onUpdate(dt)``,
 ``onCollision(other, impulse)`` (object scripts) or ``onCollision(a, b,
 impulse)`` (scene scripts; ``b`` is nil for static world geometry), called once
 per frame for every pair of bodies in contact, with the impulse (N s) summed
-over the pair's contacts and steps; ``onKey(key, pressed)``, ``onButton(name,
-pressed)`` (InputEvents of devices ``button:NAME``), ``onInput(device,
-value)``, ``onTimer(name)`` (engine TimerEvents), ``onReload()`` (after the file
+over the pair's contacts and steps; ``onCollisionBegin(other, impulse)`` /
+``onCollisionBegin(a, b, impulse)`` once when a pair starts touching and
+``onCollisionEnd(other)`` / ``onCollisionEnd(a, b)`` once when it stops (bodies
+asleep on each other still touch; see :mod:`systems.contacts`);
+``onKey(key, pressed)``, ``onButton(name, pressed)`` (InputEvents of devices
+``button:NAME``), ``onInput(device, value)``, ``onTimer(name)`` (engine TimerEvents), ``onReload()`` (after the file
 changed and was re-run in the script's environment: write ``count = count or 0``
 to keep state across reloads), ``onResume()`` (instead of ``onStart`` when a saved
 state runs: the script's variables, timers and handlers are back, see

@@ -170,6 +170,7 @@ class ScriptRuntime:
         self._collide_scene = k.collide_scene
         self._collide_batch = k.collide_batch
         self._call_batch = k.call_batch
+        self._call_handles = k.call_handles
         #: scripts that get onUpdate and their environments as a Lua array; None: rebuild
         self._update_batch: tuple[list[Script], Any] | None = None
         self._collect_pending = False
@@ -404,6 +405,18 @@ class ScriptRuntime:
             index, err = result
             self._failed(scripts[index - 1], "onCollision", err)
             scripts, others, impulses = scripts[index:], others[index:], impulses[index:]
+
+    def call_objects(self, script: Script, callback: str, objects: tuple[int, ...],
+                     *args: Any) -> None:
+        """``callback(objects..., args...)`` with the entities as handles (-1: nil)."""
+        if script.stopped or callback in script.disabled:
+            return
+        try:
+            err = self._call_handles(script.env, callback, len(objects), *objects, *args)
+        except LuaError as exc:
+            err = str(exc) or MEMORY_MESSAGE
+        if err is not None:
+            self._failed(script, callback, err)
 
     def collide_scene(self, script: Script, a: int, b: int, impulse: float) -> None:
         """``onCollision(a, b, impulse)`` on a scene script."""

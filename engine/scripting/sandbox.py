@@ -287,6 +287,16 @@ local function call_batch(envs, name, n, i, ...)
   return nil
 end
 K.call_batch = call_batch
+-- env[name](...) with its first n arguments (entity ids) given as handles (nil for -1).
+function K.call_handles(env, name, n, ...)
+  local fn = rawget(env, name)
+  if fn == nil then return nil end
+  local args = pack(...)
+  for i = 1, n do args[i] = K.handle(args[i]) end
+  budget = limit
+  return finish(xpcall(fn, handler, unpack(args, 1, args.n)))
+end
+exempt[K.call_handles] = true
 exempt[K.collide] = true; exempt[K.collide_scene] = true; exempt[collide_batch] = true
 exempt[call_batch] = true
 
