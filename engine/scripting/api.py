@@ -46,10 +46,10 @@ over the pair's contacts and steps; ``onCollisionBegin(other, impulse)`` /
 asleep on each other still touch; see :mod:`systems.contacts`);
 ``onKey(key, pressed)``, ``onButton(name, pressed)`` (InputEvents of devices
 ``button:NAME``), ``onInput(device, value)``, ``onTimer(name)`` (engine
-TimerEvents), ``onReload()`` (after the file changed and was re-run in the script's environment: write ``count = count or 0``
-to keep state across reloads), ``onResume()`` (instead of ``onStart`` when a saved
-state runs: the script's variables, timers and handlers are back, see
-:mod:`engine.scripting.persist`).
+TimerEvents), ``onReload()`` (after the file changed and was re-run in the
+script's environment: write ``count = count or 0`` to keep state across reloads),
+``onResume()`` (instead of ``onStart`` when a saved state runs: the script's
+variables, timers and handlers are back, see :mod:`engine.scripting.persist`).
 
 Limits: each callback runs under an instruction budget (time in C library
 calls counts too); a script exceeding it, or the memory cap, is stopped with one
