@@ -74,7 +74,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--record", type=Path, help="record input events to FILE (JSON lines)")
     run.add_argument("--replay", type=Path, help="replay input events recorded with --record")
     run.add_argument("--progress", action="store_true",
-                     help="print a status line every second (default when stderr is a terminal)")
+                     help="print a status line every second, also into a log or pipe (on a "
+                          "terminal: a progress bar when the run has --frames or --seconds)")
 
     check = sub.add_parser("check", help="validate a content folder or scene file")
     check.add_argument("path")
@@ -95,6 +96,10 @@ def build_parser() -> argparse.ArgumentParser:
                        help="scheduler, physics, scene, scripting, sound, render")
     bench.add_argument("--backend", default=None, help="physics benchmark backend (ode, pymunk)")
     bench.add_argument("--quick", action="store_true", help="fewer sizes and steps")
+    bench.add_argument("--json", nargs="?", const="-", metavar="FILE",
+                       help="the rows and figures as JSON: to FILE, or alone on stdout")
+    bench.add_argument("--plot", type=Path, metavar="FILE.png",
+                       help="our figures beside their references as a bar chart")
     return parser
 
 
@@ -125,7 +130,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from engine.physics import BackendUnavailable
     from engine.recording import InputRecorder, InputReplayer, ReplayError
     from engine.scene_loading import SceneLoadError, load_content_scene
-    from engine.stats import collect, status_line, write_json
+    from engine.stats import collect, sections, status_line, write_json
     from engine.system import SystemFailure
     from systems import create_engine
 
@@ -171,7 +176,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             from engine.scene_loading import save_state
 
             save_state(engine, args.save_state)
-        stats = collect(engine)
+        stats = collect(engine)  # before close(), which empties the world
     except (ContentError, ReplayError) as exc:
         engine.close()
         return _fail(str(exc), 1)
@@ -185,6 +190,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         engine.close()
         raise
     engine.close()
+    stats.update(sections(engine))  # what shutting down did (the --screenshot frame)
     if args.stats is not None:
         write_json(args.stats, stats)
     log.info("ran %d frames, %.2f simulated s in %.2f wall s (real-time factor %.2f)",
@@ -193,18 +199,46 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _short_status(engine: Any) -> str:
+    """What fits beside a progress bar: simulated time and real-time factor."""
+    return f"t={engine.time:.2f} s  rtf {engine.real_time_factor:.2f}"
+
+
 def _run_limited(engine: Any, args: argparse.Namespace, progress: bool, status_line: Any) -> None:
-    """Run to the requested limit, printing a status line every second when asked."""
+    """Run to the requested limit. On a terminal, a run with a limit shows a progress bar;
+    otherwise ``progress`` prints the status line every second
+    (``--progress``: also into a log or a pipe)."""
+    from engine.progress import on_terminal
+    from engine.progress import progress as progress_bar
+
+    limited = args.frames is not None or args.seconds is not None
+    if on_terminal() and limited:
+        total = args.frames if args.frames is not None else args.seconds
+        start_frame, start_time = engine.frame, engine.time
+        last = [0.0]
+        with progress_bar("running", total) as report:
+            def tick(eng: Any) -> bool:
+                now = time.monotonic()
+                if now - last[0] >= 0.1:
+                    last[0] = now
+                    done = eng.frame - start_frame if args.frames is not None \
+                        else eng.time - start_time
+                    report(done, _short_status(eng))
+                return False
+
+            engine.run(frames=args.frames, seconds=args.seconds, until=tick)
+            report(total, _short_status(engine))
+        return
     last = [time.monotonic()]
 
-    def tick(eng: Any) -> bool:
+    def line(eng: Any) -> bool:
         now = time.monotonic()
         if progress and now - last[0] >= 1.0:
             last[0] = now
             print("\r" + status_line(eng), end="", file=sys.stderr, flush=True)
         return False
 
-    engine.run(frames=args.frames, seconds=args.seconds, until=tick)
+    engine.run(frames=args.frames, seconds=args.seconds, until=line)
     if progress:
         print(file=sys.stderr)
 
@@ -253,7 +287,11 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
     if args.what not in BENCHMARKS:
         return _fail(f"unknown benchmark {args.what!r}; choose from {', '.join(BENCHMARKS)}")
-    return run_benchmark(args.what, backend=args.backend, quick=args.quick)
+    for out in (None if args.json in (None, "-") else Path(args.json), args.plot):
+        if out is not None and not out.parent.exists():
+            return _fail(f"{out}: folder {out.parent} does not exist")
+    return run_benchmark(args.what, backend=args.backend, quick=args.quick,
+                         json_out=args.json, plot_out=args.plot)
 
 
 COMMANDS = {

@@ -1,15 +1,17 @@
 """``python -m tools.docs``: write the generated pages of docs/ (the GLSL contract, the scene
-key reference); ``--check`` only says which differ. Tests keep the pages equal to what this
-writes, so they cannot drift from the code."""
+key reference, the --stats keys and schema); ``--check`` only says which differ. Tests keep
+the pages equal to what this writes, so they cannot drift from the code."""
 
 from __future__ import annotations
 
+import json
 import sys
 from collections.abc import Callable
 from pathlib import Path
 
 from engine.render.glsl import contract_markdown
 from engine.scene.keys import reference_markdown
+from engine.stats import STATS_SCHEMA, stats_markdown
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 
@@ -17,6 +19,8 @@ DOCS = Path(__file__).resolve().parent.parent / "docs"
 PAGES: dict[str, Callable[[], str]] = {
     "GLSL.md": contract_markdown,
     "KEYS.md": reference_markdown,
+    "STATS.md": stats_markdown,
+    "stats.schema.json": lambda: json.dumps(STATS_SCHEMA, indent=2) + "\n",
 }
 
 
