@@ -313,6 +313,10 @@ class ScriptingSystem(System):
         if runtime is None:
             return {}
         states: dict[int, SavedScript] = {}
+        if runtime.kernel.random_calls():
+            log.warning("saved state: scripts drew from math.random, whose position in its "
+                        "sequence cannot be saved; the resumed run draws other numbers (seed "
+                        "it in onResume with math.randomseed(n) for a repeatable continuation)")
         for entity, scripts in self._owners.items():
             for script in scripts:
                 if script.stopped or script not in runtime.scripts:

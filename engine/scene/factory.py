@@ -46,6 +46,7 @@ from engine.assets.geometry import convex_hull
 from engine.physics.backend import MaterialPair, SleepState, WorldSettings
 from engine.physics.commands import SetSleepState
 from engine.rotation import euler_to_quat, rotate, view_problem
+from engine.scene import random_state
 from engine.scene import schema as sc
 from engine.scene.db import (
     INCLUDE,
@@ -126,6 +127,8 @@ class SceneSpec:
     time_step: float = 0.01
     backend: str = "ode"
     time: float = 0.0
+    #: The scene's random generator when a saved state was written (see random_state).
+    random_state: dict[str, object] | None = None
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
     #: Object ID -> auto-sleep state a saved state carries (see :class:`SleepState`).
     sleep: dict[str, SleepState] = field(default_factory=dict)
@@ -589,6 +592,11 @@ class _Builder:
         spec.time_step = float(w("TimeStep"))
         spec.backend = w("Dynamics")
         spec.time = float(w("Time"))
+        if w("RandomState") is not None:
+            try:
+                spec.random_state = random_state.parse(str(w("RandomState")))
+            except ValueError as exc:
+                self.report.error(w.value("RandomState").loc, str(exc))
 
     def scene_entities(self, root: _Index, spec: SceneSpec) -> None:
         for i, b in enumerate(root.blocks("Camera")):
@@ -773,6 +781,8 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
                 assets.adopt(spec.assets)
                 spec.assets = assets
         engine.insert_resource(spec.world)
-        # a saved state continues at the time it was saved
+        # a saved state continues at the time it was saved, its generator where it stood
         engine.time = engine.physics.time = spec.time
+        if spec.random_state is not None:
+            engine.rng.bit_generator.state = spec.random_state
     return ids

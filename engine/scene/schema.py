@@ -329,6 +329,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "AutoSleep": _f(BOOL_T, 1, "1: bodies at rest fall asleep (and cost nothing)"),
         "Time": _f(FLOAT_T, 0.0, "s, simulated time this state was saved at"),
         "SolverSeed": _f(INT_T, None, "the solver's random state when this state was saved"),
+        "RandomState": _f(STRING_T, None, "the scene's random generator (randInterval and "
+                          "randNormal in text scripts spawn) when this state was saved"),
     },
 }
 

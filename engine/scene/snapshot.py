@@ -3,7 +3,8 @@
 The loaded SceneDB is written self-contained (includes inlined, expressions
 frozen to their values) with each object's current pose and velocities (and,
 where the backend keeps one, its auto-sleep state), the joints' motor settings,
-the solver's random state and the simulated time. Orientation is written exactly
+the solver's random state, the scene's random generator, the simulated time and each
+running script's state (see :mod:`engine.scripting.persist`). Orientation is written exactly
 as ``Quaternion`` (and, for people, as ``Orientation`` degrees), floats with
 full precision, so loading the file continues the motion.
 
@@ -28,6 +29,7 @@ from components import Joint, Name, Transform
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from engine.physics.backend import SleepState, SupportsSleepState
 from engine.rotation import exact_degrees, quat_to_euler
+from engine.scene import random_state
 from engine.scene import schema as sc
 from engine.scene.db import (
     FLOAT,
@@ -367,6 +369,9 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
     _set(world_entry.value.data, "Time", Value(FLOAT, float(engine.time), _HERE))
     if seed is not None:  # the solver shuffles constraints with it
         _set(world_entry.value.data, "SolverSeed", Value(INT, int(seed), _HERE))
+    generator = random_state.text(engine.rng)  # what spawned text's randInterval draws from
+    if generator is not None:
+        _set(world_entry.value.data, "RandomState", _string(generator))
     return _header(spec.db.path, engine.time, dst) + write(root, literal=True)
 
 

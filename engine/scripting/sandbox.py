@@ -432,6 +432,14 @@ local s_rep, t_sort, t_concat = string.rep, table.sort, table.concat
 string.rep = function(...) return charged(clock(), s_rep(...)) end
 table.sort = function(...) return charged(clock(), t_sort(...)) end
 table.concat = function(...) return charged(clock(), t_concat(...)) end
+-- math.random's position cannot be read back (a saved state cannot keep it): count the
+-- draws so saving can say the sequence is not kept.
+local m_random, random_calls = math.random, 0
+math.random = function(...)
+  random_calls = random_calls + 1
+  return m_random(...)
+end
+function K.random_calls() return random_calls end
 local string_copy = {}
 for k, v in pairs(string) do string_copy[k] = v end
 string_copy.dump = nil

@@ -230,3 +230,27 @@ def test_the_saved_time_has_no_float_noise_and_reads_back_exactly(tmp_path: Path
         assert engine.time == 4.0
         engine.run(frames=1)
         assert engine.time == advance(4.0, 0.01)
+
+
+def test_spawned_random_draws_continue_and_math_random_is_told(
+        tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    """Text a script spawns draws randInterval from the engine's generator: its position
+    is saved (World RandomState), so the continued run spawns the same places. Lua's
+    math.random cannot be saved: saving says so."""
+    spawner = ("local n = 0\n"
+               "function onUpdate()\n"
+               "  n = n + 1\n"
+               "  if n % 10 == 0 then spawn(string.format([[Object { ID \"drop%d\" Position "
+               "[randInterval(-2, 2) randInterval(-2, 2) 3] PhysicalAttributes { Mass 1 } }]], "
+               "n)) end\n"
+               "end\n")
+    folder = scripted(tmp_path / "sim", spawner)
+    straight, again, saved = continued(folder, 35, 40, tmp_path)
+    assert_same_poses(straight, again)  # drops 4..7 at the same random places
+    assert load_scene(saved).find("World/RandomState").data.startswith("PCG64 ")
+    (folder / "scripts" / "scene.lua").write_text(
+        "function onUpdate() local _ = math.random() end\n")
+    with caplog.at_level(logging.WARNING, "colosseum"):
+        run(folder, 3, save=tmp_path / "random.scene")
+    assert "scripts drew from math.random, whose position in its sequence cannot be saved" \
+        in caplog.text
