@@ -18,8 +18,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from components import Transform
 from engine.events import ContactBegan, ContactEnded, Contacts
+from engine.physics.backend import BodyState
+from engine.physics.driver import Snapshot
 from engine.system import Phase, System
 
 if TYPE_CHECKING:
@@ -47,24 +48,37 @@ def split(key: int) -> tuple[int, int]:
     return a, (low - (1 << 32) if low >= 1 << 31 else low)
 
 
-def _moved(now: tuple[float, ...] | None, then: tuple[float, ...] | None) -> bool:
-    if now is None or then is None:
-        return now is not then
-    return max(abs(x - y) for x, y in zip(now, then, strict=True)) > MOVED
+def _pose(bodies: BodyState, entity: int) -> np.ndarray | None:
+    """The pose row (x y z qw qx qy qz) of ``entity`` in a physics state, if it is there."""
+    rows = np.flatnonzero(bodies.keys == entity)
+    return bodies.table[rows[0], :7] if len(rows) else None
+
+
+def _moved(then: Snapshot, now: Snapshot, entities: tuple[int, ...]) -> bool:
+    """Whether any of ``entities`` (bodies; -1 is the world) moved by MOVED between the
+    two physics states."""
+    for entity in entities:
+        if entity < 0:
+            continue
+        before, after = _pose(then.bodies, entity), _pose(now.bodies, entity)
+        if before is None or after is None or np.abs(after - before).max() > MOVED:
+            return True
+    return False
 
 
 class ContactEventsSystem(System):
     """Emits ContactBegan / ContactEnded from the frame's Contacts batch."""
 
     phase = Phase.POST_PHYSICS
-    reads = (Transform,)
 
     def __init__(self) -> None:
         self.touching = np.zeros(0, np.int64)  # sorted pair keys touching last frame
         self._frame_keys: list[np.ndarray] = []
         self._frame_impulse: list[np.ndarray] = []
-        #: entity -> its pose (x y z qw qx qy qz) when last seen touching something
-        self._seen_at: dict[int, tuple[float, ...]] = {}
+        #: the physics state of the last frame, where pairs touching then were seen
+        self._previous: Snapshot | None = None
+        #: pairs no longer reported but still touching (asleep): the state last seen in
+        self._kept: dict[int, Snapshot] = {}
 
     def setup(self, engine: Engine) -> None:
         engine.events.subscribe(Contacts, self._collect)
@@ -74,14 +88,8 @@ class ContactEventsSystem(System):
         self._frame_keys.append(pair_keys(batch["a"], batch["b"]))
         self._frame_impulse.append(batch["impulse"])
 
-    def _pose(self, engine: Engine, entity: int) -> tuple[float, ...] | None:
-        """Where a body is now; None for the world or a deleted body."""
-        if entity < 0 or not engine.world.entity_exists(entity):
-            return None
-        t = engine.world.try_component(entity, Transform)
-        return None if t is None else (*t.position.tolist(), *t.orientation.tolist())
-
     def run(self, engine: Engine, dt: float) -> None:
+        snapshot = engine.physics.snapshot
         if self._frame_keys:
             keys = np.concatenate(self._frame_keys)
             impulses = np.concatenate(self._frame_impulse)
@@ -89,30 +97,26 @@ class ContactEventsSystem(System):
             now, inverse = np.unique(keys, return_inverse=True)
             totals = np.bincount(inverse.reshape(-1), weights=impulses, minlength=len(now))
         elif not len(self.touching):
+            self._previous = snapshot
             return
         else:
             now, totals = np.zeros(0, np.int64), np.zeros(0)
         began = ~np.isin(now, self.touching, assume_unique=True)
         missing = self.touching[~np.isin(self.touching, now, assume_unique=True)]
-        kept = []
+        kept: dict[int, Snapshot] = {}
+        exists = engine.world.entity_exists
         for key in missing.tolist():
             a, b = split(key)
-            poses = [(e, self._pose(engine, e)) for e in (a, b) if e >= 0]
-            if any(e >= 0 and not engine.world.entity_exists(e) for e in (a, b)):
+            if not exists(a) or (b >= 0 and not exists(b)):
                 continue  # deleted: its contacts end without an event
-            if all(not _moved(pose, self._seen_at.get(e)) for e, pose in poses):
-                kept.append(key)  # nothing moved: asleep on each other, still touching
+            then = self._kept.get(key, self._previous)
+            if then is not None and not _moved(then, snapshot, (a, b)):
+                kept[key] = then  # nothing moved: asleep on each other, still touching
             else:
                 engine.events.emit(ContactEnded(a, b))
         for key, impulse in zip(now[began].tolist(), totals[began].tolist(), strict=True):
             a, b = split(key)
             engine.events.emit(ContactBegan(a, b, impulse))
-        for key in now.tolist():
-            for entity in split(key):
-                pose = self._pose(engine, entity)
-                if pose is not None:
-                    self._seen_at[entity] = pose
-        self.touching = np.union1d(now, np.asarray(kept, np.int64))
-        if len(self._seen_at) > 4 * len(self.touching) + 64:  # forget bodies long apart
-            alive = {e for key in self.touching.tolist() for e in split(key)}
-            self._seen_at = {e: p for e, p in self._seen_at.items() if e in alive}
+        self._kept = kept
+        self._previous = snapshot
+        self.touching = np.union1d(now, np.fromiter(kept, np.int64, len(kept)))
