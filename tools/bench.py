@@ -27,6 +27,7 @@ BENCHMARKS: dict[str, str] = {
     "scripting": "tools.bench_scripting:run_bench",
     "sound": "tools.bench_sound:run_bench",
     "render": "tools.bench_render:run_bench",
+    "contacts": "tools.bench:bench_contacts",
 }
 
 
@@ -85,6 +86,8 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "sound": _by_row(lambda r: r["case"], "ours_ms", "raw_al_ms", "ms/frame",
                      "raw OpenAL calls for the same sources"),
     "render": _render_figures,
+    "contacts": _by_row(lambda r: f"{r['pairs']} touching pairs", "ms/frame", "unique ms",
+                        "ms/frame", "pair keys and np.unique of the same contacts alone"),
 }
 
 
@@ -262,3 +265,52 @@ def _plain_dict(block: Any) -> dict[str, Any]:
     """A scene block as plain JSON-able data: STRUCTUREs as dicts, vectors as lists."""
     return {e.key: _plain_dict(e.value.data) if e.value.kind == "STRUCTURE" else e.value.py()
             for e in block}
+
+
+def _fastest_ms(fn: Callable[[], None], frames: int, rounds: int = 3) -> float:
+    """The fastest of ``rounds`` rounds of ``frames`` calls, in ms per call."""
+    best = float("inf")
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        for _ in range(frames):
+            fn()
+        best = min(best, (time.perf_counter() - t0) / frames * 1e3)
+    return best
+
+
+def _contacts_case(pairs: int, frames: int) -> dict[str, Any]:
+    """One size of bench_contacts: our tracker and the reference, alternating rounds."""
+    import numpy as np
+
+    from engine.app import EngineConfig
+    from engine.events import Contacts
+    from engine.physics.backend import CONTACT_DTYPE
+    from systems.contacts import ContactEventsSystem, pair_keys
+
+    rng = np.random.default_rng(pairs)
+    batch = np.zeros(2 * pairs, CONTACT_DTYPE)  # two contacts per pair
+    ids = rng.permutation(10 * pairs)[:pairs]
+    batch["a"] = np.repeat(ids, 2)
+    batch["b"] = np.repeat(np.where(rng.random(pairs) < 0.5, -1, ids + 1), 2)
+    batch["impulse"] = 0.1
+    with create_engine(EngineConfig(backend="ballistic", fast=True)) as engine:
+        tracker = ContactEventsSystem()
+
+        def frame() -> None:
+            tracker._collect(Contacts(batch))
+            tracker.run(engine, 0.01)
+
+        frame()  # every pair begins: what follows is the steady state
+        ours = _fastest_ms(frame, frames)
+        ref = _fastest_ms(lambda: np.unique(pair_keys(batch["a"], batch["b"]),
+                                            return_inverse=True), frames)
+    return {"pairs": pairs, "contacts": len(batch), "ms/frame": ours, "unique ms": ref,
+            "ratio": ours / ref}
+
+
+def bench_contacts(quick: bool = False) -> list[dict[str, Any]]:
+    """Contact begin/end tracking (systems.contacts) with every pair touching frame after
+    frame; reference: the least any tracker does, one pair key per contact and np.unique,
+    timed in the same run."""
+    return [_contacts_case(pairs, 50 if quick else 200)
+            for pairs in ((200, 2000) if quick else (200, 2000, 20000))]
