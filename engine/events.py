@@ -30,6 +30,26 @@ class Contacts:
 
 
 @dataclass(frozen=True, slots=True)
+class ContactBegan:
+    """Two bodies touch that did not touch the frame before (``b`` is -1 for static world
+    geometry); ``impulse`` is what they exchanged this frame (N·s, summed over contacts and
+    steps)."""
+
+    a: int
+    b: int
+    impulse: float
+
+
+@dataclass(frozen=True, slots=True)
+class ContactEnded:
+    """Two bodies that touched no longer do (bodies asleep on each other still touch; a
+    deleted body's contacts end without one)."""
+
+    a: int
+    b: int
+
+
+@dataclass(frozen=True, slots=True)
 class KeyEvent:
     """A key went down or up; names are lower case ("space", "up", "f1", "a").
 

@@ -209,3 +209,22 @@ def rotation_vector_between(q_from: np.ndarray, q_to: np.ndarray) -> np.ndarray:
     small = s < 1e-12
     angle = 2.0 * np.arctan2(s, d[..., :1])
     return np.where(small, 2.0 * d[..., 1:], d[..., 1:] / np.where(small, 1.0, s) * angle)
+
+
+def view_problem(forward: Sequence[float]) -> str | None:
+    """Why a camera (or listener) looking along ``forward`` has no well-defined view, or
+    None. Up is +Z: looking along it leaves the picture's roll, and left and right for
+    3D sound, undefined; a zero direction (LookAt at the eye) looks nowhere.
+
+    >>> view_problem((0, 1, 0)) is None, view_problem((0, 0, 0))[:22], view_problem((0, 0, -2))[:21]
+    (True, 'it looks at its own po', 'it looks straight dow')
+    """
+    f = np.asarray(forward, dtype=np.float64)
+    length = float(np.linalg.norm(f))
+    if not length > 1e-9:
+        return "it looks at its own position (LookAt equals where it is), so it looks nowhere"
+    if math.hypot(f[0], f[1]) <= 1e-6 * length:
+        way = "up" if f[2] > 0 else "down"
+        return (f"it looks straight {way}, along the up axis (Z), so which way is up in the "
+                "picture, and left and right for 3D sound, is undefined")
+    return None

@@ -27,6 +27,8 @@ class SceneLoadError(Exception):
 @dataclass(slots=True)
 class LoadedScene:
     spec: SceneSpec
+    #: The content folder the scene runs in (a saved state's ``Content``, else its folder).
+    content: Content
 
     def configure(self, config: EngineConfig, backend: str | None = None,
                   dt: float | None = None) -> None:
@@ -44,14 +46,14 @@ class LoadedScene:
 
 def load_content_scene(content: Content, seed: int = 0) -> LoadedScene:
     """The content's scene, built; its ``systems/*.py`` are imported first, so asset
-    loaders they register read the scene's files."""
-    from engine.content import ContentError, import_systems
-    from engine.scene import SceneError, load_spec
+    loaders they register read the scene's files. A saved state runs in the content
+    folder it names (``Content``)."""
+    from engine.content import ContentError
+    from engine.scene import SceneError
     from engine.scene.diagnostics import sorted_diagnostics
 
     try:
-        import_systems(content.folder)
-        spec = load_spec(content.scene, np.random.default_rng(seed))
+        content, spec = _build(content, np.random.default_rng(seed))
     except ContentError as exc:
         raise SceneLoadError(str(exc)) from exc
     except SceneError as exc:
@@ -59,23 +61,41 @@ def load_content_scene(content: Content, seed: int = 0) -> LoadedScene:
     if spec.db is not None:  # warnings, and assets that failed (what they left out)
         for told in sorted_diagnostics([*spec.db.warnings, *spec.problems]):
             print(told.render(spec.db.sources.get(told.path)), file=sys.stderr)
-    return LoadedScene(spec)
+    return LoadedScene(spec, content)
+
+
+def _build(content: Content, rng: np.random.Generator) -> tuple[Content, SceneSpec]:
+    """Parse, find the content folder, import its systems, check and build. Raises
+    SceneError (the scene's mistakes) or ContentError (its systems')."""
+    from engine.content import import_systems
+    from engine.scene import build_specs, parse_file, validated
+    from engine.scene.snapshot import content_folder
+
+    db = parse_file(content.scene, rng)
+    content = Content(content_folder(db), content.scene)
+    import_systems(content.folder)
+    spec = build_specs(validated(db, content.folder), content.folder)
+    return content, spec
 
 
 def check_path(path: Path) -> int:
     """Print every diagnostic; 0 when there is no error, 1 with errors, 2 for a bad path."""
-    from engine.content import ContentError, import_systems
-    from engine.scene import check, render_all
+    from engine.content import ContentError, resolve
+    from engine.scene import SceneError, render_all
+    from engine.scene.diagnostics import sorted_diagnostics
 
     if not path.exists():
         print(f"colosseum: error: {path}: no such file or folder", file=sys.stderr)
         return 2
-    try:  # the content's asset loaders, so its files are checked as a run reads them
-        import_systems(path if path.is_dir() else path.parent)
+    try:  # as a run reads it: the content's asset loaders first, a saved state's folder
+        _, spec = _build(resolve(path), np.random.default_rng(0))
+        assert spec.db is not None
+        diagnostics = sorted_diagnostics([*spec.db.warnings, *spec.problems])
     except ContentError as exc:
         print(exc, file=sys.stderr)
         return 1
-    diagnostics = check(path)
+    except SceneError as exc:
+        diagnostics = exc.diagnostics
     if diagnostics:
         print(render_all(diagnostics), file=sys.stderr)
     errors = sum(d.is_error for d in diagnostics)

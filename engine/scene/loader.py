@@ -15,6 +15,7 @@ from engine.scene.db import SceneDB
 from engine.scene.diagnostics import Diagnostic, Reporter, SceneError, sorted_diagnostics
 from engine.scene.factory import Pose, SceneSpec, build_specs
 from engine.scene.parser import Limits, parse_file, parse_text, paused_gc
+from engine.scene.snapshot import content_folder
 from engine.scene.validate import validate
 from engine.scene.writer import write
 
@@ -47,16 +48,24 @@ def validated(db: SceneDB, content_dir: Path | None = None,
 def load_scene(path: str | Path, rng: np.random.Generator | None = None,
                limits: Limits | None = None) -> SceneDB:
     """Parse and validate a scene file or content folder. Raises SceneError."""
-    target = scene_path(path)
-    if not target.is_file():
-        raise _missing(target)
-    return validated(parse_file(target, rng, limits))
+    return _with_folder(path, rng, limits)[0]
 
 
 def load_spec(path: str | Path, rng: np.random.Generator | None = None) -> SceneSpec:
     """Parse, validate and build specs (models loaded), ready to instantiate. Raises SceneError."""
-    db = load_scene(path, rng)
-    return build_specs(db, Path(db.path).parent)
+    return build_specs(*_with_folder(path, rng))
+
+
+def _with_folder(path: str | Path, rng: np.random.Generator | None,
+                 limits: Limits | None = None) -> tuple[SceneDB, Path]:
+    """The checked scene and the folder its file names are relative to (a saved state's
+    content folder, else the file's own). Raises SceneError."""
+    target = scene_path(path)
+    if not target.is_file():
+        raise _missing(target)
+    db = parse_file(target, rng, limits)
+    folder = content_folder(db)
+    return validated(db, folder), folder
 
 
 def spec_from_text(text: str, content_dir: str | Path, rng: np.random.Generator | None = None,
@@ -86,8 +95,8 @@ def spec_from_text(text: str, content_dir: str | Path, rng: np.random.Generator 
 def check(path: str | Path, rng: np.random.Generator | None = None) -> list[Diagnostic]:
     """Every error and warning of a scene (parse, schema, references, assets, models)."""
     try:
-        spec_db = load_scene(path, rng)
-        spec = build_specs(spec_db, Path(spec_db.path).parent)
+        spec_db, folder = _with_folder(path, rng)
+        spec = build_specs(spec_db, folder)
     except SceneError as exc:
         return exc.diagnostics
     except RecursionError:  # the limits should make this unreachable; never crash a check

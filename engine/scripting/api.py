@@ -40,14 +40,19 @@ Callbacks a script may define: ``onStart()``, ``onUpdate(dt)``,
 ``onCollision(other, impulse)`` (object scripts) or ``onCollision(a, b,
 impulse)`` (scene scripts; ``b`` is nil for static world geometry), called once
 per frame for every pair of bodies in contact, with the impulse (N s) summed
-over the pair's contacts and steps; ``onKey(key, pressed)``,
-``onButton(device, name, pressed)`` (a glove's pinch, a controller's trigger),
-``onTracker(name, x, y, z, qw, qx, qy, qz)`` (once a frame per tracker that moved,
-calibrated), ``onInput(device, value)`` (``axis:DEVICE/NAME`` values and
-``wheel:NAME`` counts), ``onDeviceLost(name)`` / ``onDeviceFound(name)``,
-``onTimer(name)`` (engine TimerEvents), ``onReload()`` (after the file changed and
-was re-run in the script's environment: write ``count = count or 0`` to keep state
-across reloads).
+over the pair's contacts and steps; ``onCollisionBegin(other, impulse)`` /
+``onCollisionBegin(a, b, impulse)`` once when a pair starts touching and
+``onCollisionEnd(other)`` / ``onCollisionEnd(a, b)`` once when it stops (bodies
+asleep on each other still touch; see :mod:`systems.contacts`);
+``onKey(key, pressed)``, ``onButton(device, name, pressed)`` (a glove's pinch, a
+controller's trigger), ``onTracker(name, x, y, z, qw, qx, qy, qz)`` (once a frame
+per tracker that moved, calibrated), ``onInput(device, value)``
+(``axis:DEVICE/NAME`` values and ``wheel:NAME`` counts), ``onDeviceLost(name)`` /
+``onDeviceFound(name)``, ``onTimer(name)`` (engine TimerEvents), ``onReload()``
+(after the file changed and was re-run in the script's environment: write ``count =
+count or 0`` to keep state across reloads), ``onResume()`` (instead of ``onStart``
+when a saved state runs: the script's variables, timers and handlers are back, see
+:mod:`engine.scripting.persist`).
 
 Input state, any time (nil before a device has said anything)::
 
@@ -510,8 +515,13 @@ class ScriptAPI:
         if found is None and what not in self._warned:
             self._warned.add(what)
             plugin = kind.plugin  # type: ignore[attr-defined]
-            log.warning("%s: the %s plugin is not loaded; the call does nothing "
-                        "(requestPlugin(%r) loads it)", what, plugin, plugin)
+            if plugin == "render" and self.engine.config.headless:  # nothing to look at
+                log.warning("%s: nothing is drawn in this run (headless, without --screenshot "
+                            "or --record-frames), so the call does nothing; run it with a "
+                            "display, or with --screenshot FILE.png, to see it", what)
+            else:
+                log.warning("%s: the %s plugin is not loaded; the call does nothing "
+                            "(requestPlugin(%r) loads it)", what, plugin, plugin)
         return found
 
     def sound(self, entity: int, play: bool) -> None:

@@ -284,7 +284,16 @@ function onUpdate() gone = find("ground") == nil end
         assert script_named(engine, "scripts/d.lua").env.gone is True
         assert runtime_of(engine).messages == type(runtime_of(engine).messages)()
     assert caplog.text.count("playSound: the sound plugin is not loaded") == 1
-    assert caplog.text.count("setUniform: the render plugin is not loaded") == 1
+    # headless, loading the render plugin would draw for no one: say what would show it
+    assert caplog.text.count("setUniform: nothing is drawn in this run (headless, without "
+                             "--screenshot or --record-frames)") == 1
+    assert "requestPlugin('render')" not in caplog.text
+    caplog.clear()
+    with scripted_engine(tmp_path) as engine:
+        engine.config.headless = False  # a display, but no render plugin
+        engine.run(frames=3)
+    assert caplog.text.count("setUniform: the render plugin is not loaded; the call does "
+                             "nothing (requestPlugin('render') loads it)") == 1
 
 
 @pytest.mark.parametrize("mode", ["serial", "threaded"])
