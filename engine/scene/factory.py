@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+import engine.scene.schema as sc
 from components import (
     Camera,
     Controller,
@@ -43,7 +44,6 @@ from engine.physics.backend import (
     WorldSettings,
 )
 from engine.rotation import euler_to_quat, rotate
-from engine.scene import schema as sc
 from engine.scene.db import (
     INCLUDE,
     STRINGVECTOR,

@@ -24,11 +24,11 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import engine.scene.schema as sc
 from components import Joint, Name, Transform
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from engine.physics.backend import SleepState, SupportsSleepState
 from engine.rotation import exact_degrees, quat_to_euler
-from engine.scene import schema as sc
 from engine.scene.db import (
     FLOAT,
     INT,

@@ -74,7 +74,7 @@ def test_comments_survive_in_place():
     text = ("// header\n\nA { /* open */\n  // above b\n  b 1 // after b\n  c [1 // inside\n"
             "  2]\n  // tail of A\n} // after A\n/* end\n  of file */\n")
     out, _ = roundtrip(text)
-    assert out == ("// header\nA { /* open */\n  // above b\n  b 1 // after b\n"
+    assert out == ("// header\n\nA { /* open */\n  // above b\n  b 1 // after b\n"
                    "  // inside\n  c [1 2]\n  // tail of A\n} // after A\n/* end\n  of file */\n")
 
 
