@@ -76,8 +76,13 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--progress", action="store_true",
                      help="print a status line every second (default when stderr is a terminal)")
 
-    check = sub.add_parser("check", help="validate a content folder or scene file")
+    check = sub.add_parser("check", help="validate a content folder or scene file",
+                           epilog="exit codes: 0 no errors (warnings allowed), 1 errors, "
+                                  "2 no such file or folder or a usage error")
     check.add_argument("path")
+    check.add_argument("--format", choices=["text", "json"], default="text",
+                       help="text: path:line:col lines on stderr (default); json: one "
+                            "object on stdout for editors and CI")
     fmt = sub.add_parser("fmt", help="print a scene file in canonical form")
     fmt.add_argument("path")
     fmt.add_argument("--write", action="store_true",
@@ -203,7 +208,7 @@ def _run_limited(engine: Any, args: argparse.Namespace, progress: bool, status_l
 def cmd_check(args: argparse.Namespace) -> int:
     from engine.scene_loading import check_path
 
-    return check_path(Path(args.path))
+    return check_path(Path(args.path), args.format)
 
 
 def cmd_fmt(args: argparse.Namespace) -> int:
