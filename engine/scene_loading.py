@@ -59,10 +59,10 @@ def check_path(path: Path, output: str = "text") -> int:
     """Report every diagnostic of a scene; the exit code says how it went.
 
     ``output`` "text": ``path:line:col: severity: message`` with the line and a caret,
-    then a count, on stderr. "json": one JSON object on stdout (``errors``,
-    ``warnings``, ``diagnostics``: objects with ``path line col severity message``)
-    for editors and CI. Exit codes: 0 no errors (warnings allowed), 1 errors, 2 no
-    such file or folder.
+    then the counts, on stderr. "json": one JSON object on stdout (``errors`` and
+    ``warnings``, all counted; ``diagnostics``, those shown: objects with ``path line
+    col severity message``) for editors and CI. Exit codes: 0 no errors (warnings
+    allowed), 1 errors, 2 no such file or folder.
     """
     from engine.scene import Diagnostic, Report, check
     from engine.scene.paths import NOT_FOUND, file_problem
@@ -76,13 +76,13 @@ def check_path(path: Path, output: str = "text") -> int:
             print(f"colosseum: error: {path}: {message}", file=sys.stderr)
         return 2
     report = check(path)
-    errors = len(report.errors)
+    errors, warnings = report.counts()
     if output == "json":
         print(report.to_json())
     else:
         if report.diagnostics:
             print(report.render(), file=sys.stderr)
-        print(f"{path}: {errors} error(s), {len(report) - errors} warning(s)", file=sys.stderr)
+        print(f"{path}: {errors} error(s), {warnings} warning(s)", file=sys.stderr)
     return 1 if errors else 0
 
 

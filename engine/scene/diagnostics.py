@@ -119,13 +119,25 @@ class Report:
     def errors(self) -> list[Diagnostic]:
         return [d for d in self.diagnostics if d.is_error]
 
+    def counts(self) -> tuple[int, int]:
+        """Errors and warnings found, those not shown included."""
+        errors = warnings = 0
+        for d in self.diagnostics:
+            if isinstance(d, Omitted):
+                errors, warnings = errors + d.errors, warnings + d.warnings
+            elif d.is_error:
+                errors += 1
+            else:
+                warnings += 1
+        return errors, warnings
+
     def render(self) -> str:
         return render_all(self.diagnostics, self.sources)
 
     def to_json(self) -> str:
-        """The report for editors and CI: counts and every diagnostic as an object."""
-        errors = len(self.errors)
-        return json.dumps({"errors": errors, "warnings": len(self.diagnostics) - errors,
+        """The report for editors and CI: counts and every diagnostic shown, as objects."""
+        errors, warnings = self.counts()
+        return json.dumps({"errors": errors, "warnings": warnings,
                            "diagnostics": [d.as_dict() for d in self.diagnostics]}, indent=1)
 
 

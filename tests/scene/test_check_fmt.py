@@ -117,3 +117,12 @@ def test_fmt_write_of_a_scene_file_leaves_a_canonical_one_untouched(tmp_path, ca
     (tmp_path / "other.scene.bak").unlink()
     assert run(capsys, "fmt", str(scene), "--write")[0] == 0
     assert not (tmp_path / "other.scene.bak").exists()
+
+
+def test_check_json_counts_the_errors_not_shown(tmp_path, capsys):
+    (tmp_path / "main.scene").write_text("a $\n" * 1000)
+    code, out, _ = run(capsys, "check", str(tmp_path), "--format", "json")
+    report = json.loads(out)
+    assert code == 1 and report["errors"] == 2000
+    *shown, omitted = report["diagnostics"]
+    assert len(shown) == 100 and omitted["errors"] == 1900
