@@ -81,8 +81,13 @@ def build_parser() -> argparse.ArgumentParser:
                      help="print a status line every second, also into a log or pipe (on a "
                           "terminal: a progress bar when the run has --frames or --seconds)")
 
-    check = sub.add_parser("check", help="validate a content folder or scene file")
+    check = sub.add_parser("check", help="validate a content folder or scene file",
+                           epilog="exit codes: 0 no errors (warnings allowed), 1 errors, "
+                                  "2 no such file or folder or a usage error")
     check.add_argument("path")
+    check.add_argument("--format", choices=["text", "json"], default="text",
+                       help="text: path:line:col lines on stderr (default); json: one "
+                            "object on stdout for editors and CI")
     fmt = sub.add_parser("fmt", help="print a scene file in canonical form")
     fmt.add_argument("path")
     fmt.add_argument("--write", action="store_true",
@@ -250,7 +255,7 @@ def _run_limited(engine: Any, args: argparse.Namespace, progress: bool, status_l
 def cmd_check(args: argparse.Namespace) -> int:
     from engine.scene_loading import check_path
 
-    return check_path(Path(args.path))
+    return check_path(Path(args.path), args.format)
 
 
 def cmd_fmt(args: argparse.Namespace) -> int:

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from engine.content import Content
-from engine.files import write_atomic
+from engine.files import file_mode, write_atomic
 
 if TYPE_CHECKING:
     from engine.app import Engine, EngineConfig
@@ -50,7 +50,7 @@ def load_content_scene(content: Content, seed: int = 0) -> LoadedScene:
     folder it names (``Content``)."""
     from engine.content import ContentError
     from engine.scene import SceneError
-    from engine.scene.diagnostics import sorted_diagnostics
+    from engine.scene.diagnostics import Reporter
 
     try:
         content, spec = _build(content, np.random.default_rng(seed))
@@ -59,7 +59,7 @@ def load_content_scene(content: Content, seed: int = 0) -> LoadedScene:
     except SceneError as exc:
         raise SceneLoadError(exc.render()) from exc
     if spec.db is not None:  # warnings, and assets that failed (what they left out)
-        for told in sorted_diagnostics([*spec.db.warnings, *spec.problems]):
+        for told in Reporter([*spec.db.warnings, *spec.problems]).diagnostics:
             print(told.render(spec.db.sources.get(told.path)), file=sys.stderr)
     return LoadedScene(spec, content)
 
@@ -78,37 +78,58 @@ def _build(content: Content, rng: np.random.Generator) -> tuple[Content, SceneSp
     return content, spec
 
 
-def check_path(path: Path) -> int:
-    """Print every diagnostic; 0 when there is no error, 1 with errors, 2 for a bad path."""
-    from engine.content import ContentError, resolve
-    from engine.scene import SceneError, render_all
-    from engine.scene.diagnostics import sorted_diagnostics
+def check_path(path: Path, output: str = "text") -> int:
+    """Report every diagnostic of a scene; the exit code says how it went.
 
-    if not path.exists():
-        print(f"colosseum: error: {path}: no such file or folder", file=sys.stderr)
+    ``output`` "text": ``path:line:col: severity: message`` with the line and a caret,
+    then the counts, on stderr. "json": one JSON object on stdout (``errors`` and
+    ``warnings``, all counted; ``diagnostics``, those shown: objects with ``path line
+    col severity message``) for editors and CI. Exit codes: 0 no errors (warnings
+    allowed), 1 errors, 2 no such file or folder.
+    """
+    from engine.scene import Diagnostic, Report
+    from engine.scene.paths import NOT_FOUND, file_problem
+
+    if file_problem(path) == NOT_FOUND:
+        message = "no such file or folder"
+        if output == "json":
+            missing = Diagnostic(str(path), 1, 1, "error", message)
+            print(Report([missing]).to_json())
+        else:
+            print(f"colosseum: error: {path}: {message}", file=sys.stderr)
         return 2
+    from engine.content import ContentError, resolve
+    from engine.scene import SceneError
+    from engine.scene.diagnostics import Reporter
+
     try:  # as a run reads it: the content's asset loaders first, a saved state's folder
         _, spec = _build(resolve(path), np.random.default_rng(0))
         assert spec.db is not None
-        diagnostics = sorted_diagnostics([*spec.db.warnings, *spec.problems])
+        report = Report(Reporter([*spec.db.warnings, *spec.problems]).diagnostics,
+                        spec.db.sources)
     except ContentError as exc:
-        print(exc, file=sys.stderr)
-        return 1
+        report = Report([Diagnostic(str(path), 1, 1, "error", str(exc))])
     except SceneError as exc:
-        diagnostics = exc.diagnostics
-    if diagnostics:
-        print(render_all(diagnostics), file=sys.stderr)
-    errors = sum(d.is_error for d in diagnostics)
-    warnings = len(diagnostics) - errors
-    print(f"{path}: {errors} error(s), {warnings} warning(s)", file=sys.stderr)
+        report = Report(exc.diagnostics, exc.sources)
+    errors, warnings = report.counts()
+    if output == "json":
+        print(report.to_json())
+    else:
+        if report.diagnostics:
+            print(report.render(), file=sys.stderr)
+        print(f"{path}: {errors} error(s), {warnings} warning(s)", file=sys.stderr)
     return 1 if errors else 0
 
 
 def format_path(path: Path, write: bool = False) -> int:
-    """Print the canonical form, or rewrite the file in place keeping a ``.bak``."""
-    from engine.scene import SceneError, format_scene, scene_path
+    """Print the canonical form, or rewrite the file in place keeping a ``.bak``.
 
-    if not path.exists():
+    The rewritten file and its ``.bak`` keep the file's mode.
+    """
+    from engine.scene import SceneError, format_scene, scene_path
+    from engine.scene.paths import NOT_FOUND, file_problem
+
+    if file_problem(path) == NOT_FOUND:
         print(f"colosseum: error: {path}: no such file or folder", file=sys.stderr)
         return 2
     try:
@@ -122,8 +143,9 @@ def format_path(path: Path, write: bool = False) -> int:
     target = scene_path(path)
     original = target.read_text(encoding="utf-8")
     if original != text:
-        target.with_name(target.name + ".bak").write_text(original, encoding="utf-8")
-        write_atomic(target, text)
+        mode = file_mode(target)
+        write_atomic(target.with_name(target.name + ".bak"), original, mode)
+        write_atomic(target, text, mode)
     return 0
 
 

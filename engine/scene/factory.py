@@ -24,6 +24,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+import engine.scene.random_state as random_state
+import engine.scene.schema as sc
 from components import (
     Camera,
     Controller,
@@ -46,8 +48,6 @@ from engine.assets.geometry import convex_hull
 from engine.physics.backend import MaterialPair, SleepState, WorldSettings
 from engine.physics.commands import SetSleepState
 from engine.rotation import euler_to_quat, rotate, view_problem
-from engine.scene import random_state
-from engine.scene import schema as sc
 from engine.scene.db import (
     INCLUDE,
     STRINGVECTOR,
@@ -64,7 +64,6 @@ from engine.scene.diagnostics import (
     Diagnostic,
     Loc,
     Reporter,
-    sorted_diagnostics,
 )
 from engine.scene.inputs import InputSpec, read_inputs
 from engine.scene.parser import paused_gc
@@ -276,7 +275,7 @@ def build_specs(db: SceneDB, content_dir: str | Path | None = None,
     b.report.raise_if_errors()
     spec.db = db
     spec.content_dir = folder
-    spec.problems = sorted_diagnostics(b.problems)
+    spec.problems = Reporter(b.problems).diagnostics
     spec.assets = b.assets
     return spec
 

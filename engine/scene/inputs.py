@@ -19,8 +19,8 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
+import engine.scene.schema as sc
 from engine.rotation import IDENTITY, euler_to_quat
-from engine.scene import schema as sc
 from engine.scene.db import Block, Value
 from engine.scene.diagnostics import Loc, Reporter, suggest
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import difflib
 from typing import Any
 
-from engine.scene import schema as sc
+import engine.scene.schema as sc
 
 _TYPES = {
     sc.INT_T: "INT", sc.FLOAT_T: "FLOAT", sc.BOOL_T: "INT 0/1", sc.STRING_T: "STRING",

@@ -25,12 +25,12 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import engine.scene.random_state as random_state
+import engine.scene.schema as sc
 from components import Joint, Name, Transform
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from engine.physics.backend import SleepState, SupportsSleepState
 from engine.rotation import exact_degrees, quat_to_euler
-from engine.scene import random_state
-from engine.scene import schema as sc
 from engine.scene.db import (
     FLOAT,
     INT,
@@ -390,7 +390,7 @@ def content_folder(db: SceneDB) -> Path:
         f"this saved state continues the content folder {named.data!r}, relative to the "
         f"file ({folder}), which does not exist: the file was moved (or its content folder "
         "was). Paths in a saved state are relative to the file; put it back, or change "
-        "Content to the content folder's path from where the file is now")])
+        "Content to the content folder's path from where the file is now")], db.sources)
 
 
 def _header(source: str, time: float, content: Path | None) -> str:

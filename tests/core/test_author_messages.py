@@ -56,7 +56,7 @@ def test_a_camera_a_script_turns_to_look_at_itself_is_told_once(tmp_path: Path) 
         'Script "scripts/aim.lua"\n'
     folder = content(tmp_path / "sim", scene,
                      {"aim.lua": "function onUpdate() setCamera{lookAt = {0, -8, 3}} end\n"})
-    assert check(folder) == []
+    assert list(check(folder)) == []
     result = colosseum("run", folder, "--frames", "5", "--fast", "--headless")
     assert result.stderr.count("camera 'fine': it looks at its own position") == 1
 
