@@ -42,6 +42,7 @@ from engine.physics.backend import (
     SupportsSleepState,
     WorldSettings,
 )
+from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
 from engine.rotation import euler_to_quat, rotate
 from engine.scene import schema as sc
 from engine.scene.db import (
@@ -112,7 +113,7 @@ class SceneSpec:
     backend: str = "ode"
     time: float = 0.0
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
-    #: Object ID -> auto-sleep state a saved state carries (see :class:`SleepState`).
+    #: Object ID -> sleep-rule state a saved state carries (see :class:`SleepState`).
     sleep: dict[str, SleepState] = field(default_factory=dict)
     content_dir: Path | None = None
     db: SceneDB | None = None
@@ -324,7 +325,7 @@ class _Builder:
             comps.append(self.physical(r, phys, size, visual_shapes, model, scale, position,
                                        quat))
             self.physical_ids.add(oid)
-            if r("Asleep") or r("IdleSteps") or r.has("VelocitySamples"):
+            if any(map(r.has, ("Asleep", "SleepVelocity", "SleepTimer", "SleepReference"))):
                 self.sleep[oid] = self.sleep_spec(r)
         self.poses[oid] = (position, quat)
         if r.has("Sound"):
@@ -456,12 +457,22 @@ class _Builder:
         return mesh
 
     def sleep_spec(self, r: _Reader) -> SleepState:
-        """An object's saved auto-sleep state, so a loaded state falls asleep on time."""
-        if r("IdleSteps") < 0:
-            self.report.error(r.value("IdleSteps").loc, "IdleSteps must not be negative")
-        samples = np.array(r("VelocitySamples") or (), np.float64).reshape(-1, 6)
-        samples[:, 3:] = np.radians(samples[:, 3:])  # written in deg/s, like AngularVelocity
-        return SleepState(bool(r("Asleep")), max(int(r("IdleSteps")), 0), samples)
+        """An object's saved sleep-rule state, so a loaded state falls asleep on time."""
+        if not r("SleepTimer") >= 0:
+            self.report.error(r.value("SleepTimer").loc, "SleepTimer must not be negative")
+        if r.has("SleepTimer") and not r.has("SleepReference"):
+            self.report.error(r.value("SleepTimer").loc, "SleepTimer needs the "
+                              "SleepReference its quiet stretch began with")
+
+        def velocity(key: str) -> np.ndarray | None:
+            if not r.has(key):
+                return None
+            v = np.array(r(key), np.float64)
+            v[3:] = np.radians(v[3:])  # written in deg/s, like AngularVelocity
+            return v
+
+        return SleepState(bool(r("Asleep")), velocity("SleepVelocity"),
+                          max(float(r("SleepTimer")), 0.0), velocity("SleepReference"))
 
     # -- joints ------------------------------------------------------------
     def joint(self, blk: Block, index: int, spawned: set[str]) -> JointSpec | None:
@@ -527,11 +538,18 @@ class _Builder:
             pairs.append(MaterialPair(str(p("Material1")), str(p("Material2")),
                                       _opt(p("Friction")), _opt(p("Bounce")),
                                       _opt(p("Softness")), bool(p("Collide"))))
+        for key in ("SleepTime", "SleepLinear", "SleepAngular"):
+            if not (w(key) > 0 and math.isfinite(w(key))):
+                self.report.error(w.value(key).loc, f"{key} must be a positive number")
         spec.world = WorldSettings(gravity=_floats(w("Gravity")), erp=float(w("ERP")),
                                    cfm=float(w("CFM")), iterations=int(w("Iterations")),
                                    max_contacts=int(w("MaxContacts")),
-                                   auto_sleep=bool(w("AutoSleep")), material_pairs=pairs,
-                                   solver_seed=w("SolverSeed"))
+                                   auto_sleep=bool(w("AutoSleep")),
+                                   sleep_time=_positive(w("SleepTime"), SLEEP_TIME),
+                                   sleep_linear=_positive(w("SleepLinear"), SLEEP_LINEAR),
+                                   sleep_angular=math.radians(_positive(
+                                       w("SleepAngular"), math.degrees(SLEEP_ANGULAR))),
+                                   material_pairs=pairs, solver_seed=w("SolverSeed"))
         spec.material_pairs = pairs
         spec.time_step = float(w("TimeStep"))
         spec.backend = w("Dynamics")
@@ -571,6 +589,11 @@ class _Builder:
             sid = f"script{i}"
             spec.entities.append(EntitySpec(sid, [Name(sid), Script(file=e.value.data)],
                                             e.loc))
+
+
+def _positive(value: float, default: float) -> float:
+    """A setting that must be positive, or its default where the file's was refused."""
+    return float(value) if value > 0 and math.isfinite(value) else default
 
 
 def _opt(v: Any) -> float | None:
@@ -659,7 +682,7 @@ def _restore_sleep(states: dict[int, SleepState]) -> Callable[[DynamicsBackend],
         keeps_counters = isinstance(backend, SupportsSleepState)
         for key, state in states.items():
             if keeps_counters:
-                backend.set_sleep_state(key, state.asleep, state.idle_steps, state.samples)
+                backend.set_sleep_state(key, state)
             elif state.asleep:
                 backend.set_sleeping(key, True)
 
