@@ -8,14 +8,19 @@ The reference is ``tools/bench_ode.c``, compiled here with ``cc -O2`` against th
 same libode (pkg-config) into a temporary folder and run in the same session,
 both plain ("C") and with the contact feedback our backend always does to report
 contact impulses ("C+fb": a dJointFeedback per contact joint, impulses summed
-after the step).
+after the step). With sleeping on, the C side runs ODE's own auto-disable with the
+sleep rule's limits (by time, SleepTime; SleepLinear and SleepAngular on each step's
+velocity), ours the rule itself (:mod:`engine.physics.sleep`).
 For each N and with sleeping off and on it reports ms per step of: plain C; our
-raw ``OdeBackend.step``; our step plus the ECS sync (every pose read in C into an
-(N, 7) array, then scattered into a pose table with one numpy assignment, as the
-dynamics system does). Times are the stepping thread's CPU time (C:
-CLOCK_THREAD_CPUTIME_ID, Python: time.thread_time), so other work on a shared
-machine does not count; each variant runs ``repeats`` times, alternating, and
-the fastest run counts.
+raw ``OdeBackend.step``; our step plus the ECS sync (every body's state written in C
+straight into the rows of a pose table, :class:`EcsReadback`). Times are the
+stepping thread's CPU time (C: CLOCK_THREAD_CPUTIME_ID, Python: time.thread_time),
+so other work on a shared machine does not count; each variant runs ``repeats``
+times, alternating, and the fastest run counts.
+
+Then the readback alone, side by side on the settled scene (µs per call, median):
+``read_state`` (fresh arrays) copied into the pose table by ``PoseCopy`` (the path
+the dynamics system takes today) against ``read_state_into`` the table's rows.
 
 Run: ``python -m tools.bench_physics [--n 100 500 2000] [--steps S] [--quick]``.
 """
@@ -33,6 +38,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from engine.physics.backend import BodyState
+from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
 
 DT = 1.0 / 60.0
 SOURCE = Path(__file__).with_name("bench_ode.c")
@@ -62,7 +70,8 @@ def compile_reference(folder: Path) -> Path:
 def run_reference(exe: Path, n: int, steps: int, sleep: bool,
                   feedback: bool = False) -> tuple[float, float]:
     """(ms per step, mean box height at the end) of the plain C program."""
-    out = subprocess.run([str(exe), str(n), str(steps), str(int(sleep)), str(int(feedback))],
+    out = subprocess.run([str(exe), str(n), str(steps), str(int(sleep)), str(int(feedback)),
+                          repr(SLEEP_TIME), repr(SLEEP_LINEAR), repr(SLEEP_ANGULAR)],
                          check=True, capture_output=True, text=True).stdout
     fields = dict(item.split("=") for item in out.split())
     return float(fields["ms_per_step"]), float(fields["mean_z"])
@@ -84,19 +93,51 @@ def build_ours(n: int, sleep: bool) -> Any:
     return backend
 
 
+class EcsReadback:
+    """Every body's state into the ECS pose table, planned once per layout of bodies:
+    straight into the table's rows where the bodies' rows are one run, else through a
+    buffer and :class:`systems.dynamics.PoseCopy`."""
+
+    def __init__(self, backend: Any, poses: Any) -> None:
+        from engine.world import row_index
+        from systems.dynamics import PoseCopy
+
+        keys = backend.keys()
+        rows = poses.rows(keys)
+        index = row_index(rows)
+        self._read = backend.read_state_into
+        if isinstance(index, slice) and (rows >= 0).all():
+            self._out, self._copy = poses.table[index], None
+        else:
+            self._out, self._copy = np.empty((len(keys), 13)), PoseCopy(poses, keys)
+
+    def __call__(self) -> None:
+        keys = self._read(self._out)
+        if self._copy is not None:
+            self._copy(BodyState(keys, self._out))
+
+
+def pose_table(keys: np.ndarray) -> Any:
+    """The ECS pose table with a Transform for every key, adopted in key order."""
+    from components import Transform
+    from engine.world import PoseTable
+
+    poses = PoseTable()
+    ordered = sorted(keys.tolist())
+    poses.adopt_many(ordered, [Transform() for _ in ordered])
+    return poses
+
+
 def time_ours(n: int, steps: int, sleep: bool, sync: bool) -> tuple[float, float]:
-    """(ms per step, mean box height at the end); ``sync`` adds the ECS pose sync."""
+    """(ms per step, mean box height at the end); ``sync`` adds the ECS readback."""
     backend = build_ours(n, sleep)
-    keys = backend.keys()
-    poses = np.empty((n, 7))
-    table = np.zeros((n + 1, 7))  # the world's pose table, rows indexed by entity id
-    step, read = backend.step, backend.read_poses
+    readback = EcsReadback(backend, pose_table(backend.keys()))
+    step = backend.step
     t0 = time.thread_time()
     if sync:
         for _ in range(steps):
             step(DT)
-            read(poses)
-            table[keys] = poses
+            readback()
     else:
         for _ in range(steps):
             step(DT)
@@ -104,6 +145,31 @@ def time_ours(n: int, steps: int, sleep: bool, sync: bool) -> tuple[float, float
     mean_z = float(backend.read_state().position[:, 2].mean()) if n else 0.0
     backend.close()
     return ms, mean_z
+
+
+def time_readback(backend: Any, calls: int = 2000) -> dict[str, float]:
+    """µs per readback of every body's state into the ECS pose table, old path and new,
+    alternating blocks of calls on the same backend; medians of the blocks."""
+    from systems.dynamics import PoseCopy
+
+    poses = pose_table(backend.keys())
+    copy = PoseCopy(poses, backend.keys())
+    readback = EcsReadback(backend, poses)
+
+    def old() -> None:
+        copy(backend.read_state())
+
+    block = 50
+    times: dict[str, list[float]] = {"read_state+copy": [], "read_state_into": []}
+    for _ in range(max(1, calls // block)):
+        for name, fn in (("read_state+copy", old), ("read_state_into", readback)):
+            t0 = time.perf_counter()
+            for _ in range(block):
+                fn()
+            times[name].append((time.perf_counter() - t0) / block * 1e6)
+    old_us, new_us = (float(np.median(times[k])) for k in times)
+    return {"N": backend.body_count(), "read_state+copy us": old_us,
+            "read_state_into us": new_us, "new/old": new_us / old_us}
 
 
 def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
@@ -134,7 +200,7 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
                     ms, ours_z = time_ours(n, steps, sleep, sync=False)
                     raw_ms = min(raw_ms, ms)
                     sync_ms = min(sync_ms, time_ours(n, steps, sleep, sync=True)[0])
-                row = {"N": n, "sleeping": "on" if sleep else "off", "C ms": c_ms,
+                row: dict[str, Any] = {"N": n, "sleeping": "on" if sleep else "off", "C ms": c_ms,
                        "C+fb ms": fb_ms, "ours ms": raw_ms, "ours+sync ms": sync_ms,
                        "ratio": raw_ms / c_ms, "ratio+sync": sync_ms / c_ms,
                        "ratio+sync vs C+fb": sync_ms / fb_ms,
@@ -143,6 +209,16 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
                 print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
                                 for k, v in row.items()), flush=True)
                 rows.append(row)
+    print("\nreadback of every body into the ECS pose table, µs per call (median)")
+    for n in ns:
+        backend = build_ours(n, False)
+        for _ in range(steps):
+            backend.step(DT)
+        row = time_readback(backend, 500 if quick else 4000)
+        backend.close()
+        print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                        for k, v in row.items()), flush=True)
+        rows.append(row)
     return rows
 
 
