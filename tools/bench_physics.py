@@ -20,7 +20,9 @@ times, alternating, and the fastest run counts.
 
 Then the readback alone, side by side on the settled scene (µs per call, median):
 ``read_state`` (fresh arrays) copied into the pose table by ``PoseCopy`` (the path
-the dynamics system takes today) against ``read_state_into`` the table's rows.
+the dynamics system takes today) against ``read_state_into`` the table's rows. And
+the sleep rule's own cost per step (:class:`engine.physics.sleep.SleepRule`, every
+body awake and slow, so every test runs), beside the plain-C step it rides on.
 
 Run: ``python -m tools.bench_physics [--n 100 500 2000] [--steps S] [--quick]``.
 """
@@ -40,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from engine.physics.backend import BodyState
-from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
+from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME, SleepRule
 
 DT = 1.0 / 60.0
 SOURCE = Path(__file__).with_name("bench_ode.c")
@@ -172,6 +174,32 @@ def time_readback(backend: Any, calls: int = 2000) -> dict[str, float]:
             "read_state_into us": new_us, "new/old": new_us / old_us}
 
 
+def time_sleep_rule(n: int, calls: int = 2000, islands: bool = False) -> float:
+    """µs per :meth:`SleepRule.update` for ``n`` awake bodies, slow and jittering: every
+    test of the rule runs each step, and nothing falls asleep.
+
+    Without ``islands`` no body is ever quiet for SleepTime (it is made unreachable),
+    the common step. With them the bodies stand in columns of ten, touching, each
+    column's top body restless: the rest are ready every step, so the islands are looked
+    for every step, and every one is held awake by its top.
+    """
+    rule = SleepRule()
+    rule.configure(1e-9 if islands else 1e9, SLEEP_LINEAR, SLEEP_ANGULAR)
+    rule.layout(np.arange(n), np.ones(n, bool), np.ones(n, bool))
+    rule.awake[:] = True
+    rng = np.random.default_rng(1)
+    jitter = rng.normal(0.0, 2e-5 if islands else 0.01, (8, 6, n))
+    if islands:
+        jitter[::2, 0, 9::10] += 0.02  # a top that keeps changing speed: never steady
+    rows = np.arange(n)
+    touching = np.column_stack([rows, rows + 1])[(rows % 10 != 9) & (rows + 1 < n)]
+    t0 = time.perf_counter()
+    for i in range(calls):
+        rule.velocity[:] = jitter[i % 8]
+        rule.update(DT, None, lambda: touching)
+    return (time.perf_counter() - t0) / calls * 1e6
+
+
 def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
               backend: str = "ode", quick: bool = False, repeats: int = 3) -> list[dict]:
     """Measure every N with sleeping off and on; returns one row per (N, sleeping)."""
@@ -209,13 +237,19 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
                 print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
                                 for k, v in row.items()), flush=True)
                 rows.append(row)
-    print("\nreadback of every body into the ECS pose table, µs per call (median)")
+    print("\nreadback of every body into the ECS pose table, µs per call (median); "
+          "the sleep rule's cost per step beside the plain-C step")
     for n in ns:
         backend = build_ours(n, False)
         for _ in range(steps):
             backend.step(DT)
         row = time_readback(backend, 500 if quick else 4000)
         backend.close()
+        c_ms = next(r["C ms"] for r in rows if r.get("N") == n and r.get("sleeping") == "off")
+        rule_us = time_sleep_rule(n, 200 if quick else 2000)
+        islands_us = time_sleep_rule(n, 100 if quick else 500, islands=True)
+        row.update({"sleep rule us": rule_us, "rule/C step": rule_us * 1e-3 / c_ms,
+                    "+islands us": islands_us, "+islands/C step": islands_us * 1e-3 / c_ms})
         print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
                         for k, v in row.items()), flush=True)
         rows.append(row)

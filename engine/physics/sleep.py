@@ -120,7 +120,7 @@ class SleepRule:
 
     def __init__(self) -> None:
         self.time = SLEEP_TIME
-        self._limits = np.array([[SLEEP_LINEAR**2], [SLEEP_ANGULAR**2]])
+        self._bounds = _bounds(SLEEP_LINEAR, SLEEP_ANGULAR)
         self.keys = np.zeros(0, np.int64)
         self._index = KeyIndex(self.keys)
         self.movable = np.zeros(0, bool)  # dynamic or kinematic: may belong to an island
@@ -132,6 +132,8 @@ class SleepRule:
         self.timer = np.zeros(0)
         self.reference = np.zeros((6, 0))
         self.started = np.zeros(0, bool)  # a quiet stretch is under way (reference set)
+        self._pair = np.zeros((2, 6, 0))
+        self._islands_of: tuple[np.ndarray, np.ndarray] | None = None
 
     def configure(self, time: float, linear: float, angular: float) -> None:
         """Set the limits (s, m/s, rad/s)."""
@@ -140,7 +142,7 @@ class SleepRule:
             if not (value > 0 and math.isfinite(value)):
                 raise ValueError(f"{what} must be a positive number, got {value}")
         self.time = float(time)
-        self._limits = np.array([[linear * linear], [angular * angular]])
+        self._bounds = _bounds(linear, angular)
 
     def layout(self, keys: np.ndarray, movable: np.ndarray, eligible: np.ndarray) -> None:
         """New rows (bodies came or went): the state follows its keys."""
@@ -161,6 +163,8 @@ class SleepRule:
         self.eligible = np.asarray(eligible, bool)
         self.velocity = np.zeros((6, n))
         self.awake = np.zeros(n, bool)
+        self._pair = np.zeros((2, 6, n))  # the smoothed velocity and its drift, stacked
+        self._islands_of = None  # the last edges and their island labels
 
     def rows(self, keys: np.ndarray) -> np.ndarray:
         return self._index.rows(keys)
@@ -172,12 +176,13 @@ class SleepRule:
         self.timer[rows] = 0.0
         self.started[rows] = False
 
-    def _under(self, x: np.ndarray, share: float) -> np.ndarray:
-        """Per column of ``x`` (6, N), whether both halves are under ``share`` of the
-        slow limits."""
-        halves = x.reshape(2, 3, -1)
-        under = np.einsum("kij,kij->kj", halves, halves) < self._limits * (share * share)
-        return under[0] & under[1]
+    @staticmethod
+    def _under(x: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+        """For each stacked (6, N) velocity table in ``x`` (..., 6, N), per column,
+        whether both halves (linear, angular) are under their squared ``bounds``."""
+        halves = x.reshape(*x.shape[:-2], 2, 3, x.shape[-1])
+        under = np.einsum("...kij,...kij->...kj", halves, halves) < bounds
+        return under[..., 0, :] & under[..., 1, :]
 
     def update(self, dt: float, woken: np.ndarray | None,
                edges: Callable[[], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -190,21 +195,24 @@ class SleepRule:
         """
         n = len(self.timer)
         v, s = self.velocity, self.smoothed
+        rest_bound = self._bounds[2]
         # the average snaps to the velocity where it was not calm (an impact, a throw:
         # nothing to smooth; or a new body) and at rest (whatever the average still
         # remembers of how the body got there)
-        snap = ~self.calm
-        snap |= self._under(v, STEADY_SHARE**2)
-        d = v - s
+        snap = self._under(v, rest_bound)
+        snap |= ~self.calm
+        pair = self._pair
+        d = np.subtract(v, s, out=pair[1])
         d *= np.where(snap, 0.0, math.exp(-dt / SMOOTHING))
         np.subtract(v, d, out=s)  # s + (v - s)(1 - e^(-dt/τ)); exactly v where it snaps
-        self.calm = self._under(s, 1.0)
-        self.calm &= self.awake
-        slow = self.calm & self.eligible
+        pair[0] = s
+        np.subtract(s, self.reference, out=d)
+        calm, steady = self._under(pair, self._bounds[:2])  # slow; and steady
+        calm &= self.awake
+        self.calm = calm
+        slow = calm & self.eligible
         if woken is not None:
             slow &= ~woken
-        np.subtract(s, self.reference, out=d)
-        steady = self._under(d, STEADY_SHARE)
         steady &= slow
         steady &= self.started
         self.timer += dt
@@ -235,12 +243,21 @@ class SleepRule:
 
         n = len(self.timer)
         pairs = np.asarray(edges(), np.int64).reshape(-1, 2)
-        pairs = pairs[(pairs >= 0).all(axis=1)]
-        pairs = pairs[self.movable[pairs].all(axis=1)]
+        a, b = pairs[:, 0], pairs[:, 1]
+        inside = (a >= 0) & (b >= 0)  # -1: the world, or no body of ours
+        inside[inside] = self.movable[a[inside]] & self.movable[b[inside]]
+        pairs = pairs[inside]
+        known = self._islands_of
+        if known is not None and np.array_equal(known[0], pairs):
+            return known[1]  # the same contacts as last time (a pile at rest): same islands
         if not len(pairs):
-            return np.arange(n)
-        graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-        return connected_components(graph, directed=False)[1]
+            labels = np.arange(n)
+        else:
+            graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
+                               shape=(n, n))
+            labels = connected_components(graph, directed=False)[1]
+        self._islands_of = (pairs, labels)
+        return labels
 
     # -- saved states ----------------------------------------------------------
     def states(self, asleep: np.ndarray) -> dict[int, SleepState]:
@@ -276,3 +293,9 @@ class SleepRule:
             self.reference[:, row] = state.reference
             self.started[row] = True
         self.timer[row] = state.timer
+
+
+def _bounds(linear: float, angular: float) -> np.ndarray:
+    """Squared (linear, angular) bounds, (3, 2, 1): slow, steady, at rest."""
+    limits = np.array([[linear * linear], [angular * angular]])
+    return np.stack([limits * share**2 for share in (1.0, STEADY_SHARE, STEADY_SHARE**2)])

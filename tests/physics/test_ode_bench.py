@@ -34,6 +34,7 @@ def test_run_bench_reports_every_case(capsys: pytest.CaptureFixture[str]) -> Non
     assert readback["N"] == 20 and readback["read_state_into us"] > 0
     assert readback["new/old"] == pytest.approx(
         readback["read_state_into us"] / readback["read_state+copy us"])
+    assert readback["sleep rule us"] > 0
     assert "N=20" in capsys.readouterr().out
 
 

@@ -181,3 +181,14 @@ def test_a_bad_saved_sleep_state_is_refused_with_its_body() -> None:
         rule.restore(0, SleepState(False, None, -1.0))
     with pytest.raises(ValueError, match="body 10: a reference velocity is 6 finite"):
         rule.restore(0, SleepState(False, np.zeros(6), 0.1, np.full(6, np.nan)))
+
+
+def test_islands_follow_the_contacts_of_each_step() -> None:
+    """Body 10 is ready, 11 keeps moving: touching, 10 is held; apart, 10 sleeps."""
+    rule = _rule(2)
+    rule.velocity[0, 1] = 0.5
+    for _ in range(round(SLEEP_TIME / 0.01) + 2):
+        rows, _ = rule.update(0.01, None, lambda: np.array([[0, 1]]))
+        assert not len(rows)
+    rows, _ = rule.update(0.01, None, lambda: np.zeros((0, 2), np.int64))
+    assert rows.tolist() == [0]

@@ -48,6 +48,7 @@ class OdeBackend:
         self._keys: np.ndarray | None = None  # cached slot order, dropped on add/remove
         self._inert_joints: set[int] = set()
         self._restless: set[int] = set()  # bodies that may not sleep
+        self._joint_pairs: np.ndarray | None = None  # (M, 2) body keys of the joints
         self._rule = SleepRule()
         self._woken = np.zeros(0, np.uint8)
         self._material(MaterialProps())
@@ -154,7 +155,7 @@ class OdeBackend:
         """Remove a body; joints on it are removed with it."""
         _ode.remove_body(self._world, int(key))
         self._restless.discard(int(key))
-        self._keys = None
+        self._keys = self._joint_pairs = None
 
     def body_count(self) -> int:
         return _ode.body_count(self._world)
@@ -229,8 +230,9 @@ class OdeBackend:
     def _touching(self) -> np.ndarray:
         """Row pairs the step's contacts and the joints tie together (the rule's islands)."""
         c = self.contacts()
-        pairs = np.concatenate([np.column_stack([c["a"], c["b"]]),
-                                _ode.joint_bodies(self._world)])
+        if self._joint_pairs is None:
+            self._joint_pairs = _ode.joint_bodies(self._world)
+        pairs = np.concatenate([np.column_stack([c["a"], c["b"]]), self._joint_pairs])
         return self._rule.rows(pairs.ravel()).reshape(-1, 2)
 
     def sleep_states(self) -> dict[int, SleepState]:
@@ -256,12 +258,14 @@ class OdeBackend:
             self._inert_joints.add(int(key))
             return
         joints.create(self._world, int(key), joint)
+        self._joint_pairs = None
 
     def remove_joint(self, key: int) -> None:
         if int(key) in self._inert_joints:
             self._inert_joints.discard(int(key))
             return
         _ode.remove_joint(self._world, int(key))
+        self._joint_pairs = None
 
     def has_joint(self, key: int) -> bool:
         return _ode.has_joint(self._world, int(key)) or int(key) in self._inert_joints

@@ -99,6 +99,7 @@ class PymunkBackend:
         self._sleep_on = True
         self._rule = SleepRule()
         self._woken: set[int] = set()  # keys woken explicitly since the rule last looked
+        self._joint_pairs: np.ndarray | None = None  # (M, 2) body keys of the joints
         self._sliders: dict[int, JointRecord] = {}
         #: The last read that was all finite: keys, and each row's (x, z, θ, vx, vz, ω).
         self._last_good = (np.zeros(0, np.int64), np.zeros((0, 6)))
@@ -402,10 +403,11 @@ class PymunkBackend:
     def _touching(self) -> np.ndarray:
         """Row pairs the step's contacts and the joints tie together (the rule's islands)."""
         c = self.contacts()
-        joints = [(rec.spec.body_a, -1 if rec.spec.body_b is None else rec.spec.body_b)
-                  for rec in self._joints.values()]
-        pairs = np.concatenate([np.column_stack([c["a"], c["b"]]),
-                                np.array(joints, np.int64).reshape(-1, 2)])
+        if self._joint_pairs is None:
+            self._joint_pairs = np.array(
+                [(rec.spec.body_a, -1 if rec.spec.body_b is None else rec.spec.body_b)
+                 for rec in self._joints.values()], np.int64).reshape(-1, 2)
+        pairs = np.concatenate([np.column_stack([c["a"], c["b"]]), self._joint_pairs])
         return self._rule.rows(pairs.ravel()).reshape(-1, 2)
 
     def sleep_states(self) -> dict[int, SleepState]:
@@ -488,6 +490,7 @@ class PymunkBackend:
                 body.angle, body.position = angle, position
         self._space.add(*rec.constraints)
         self._joints[key] = rec
+        self._joint_pairs = None
         if joint.kind == "slider":
             self._sliders[key] = rec
         a.joints.add(key)
@@ -501,6 +504,7 @@ class PymunkBackend:
             raise KeyError(f"no joint with key {key}") from None
         self._sliders.pop(int(key), None)
         self._space.remove(*rec.constraints)
+        self._joint_pairs = None
         self._wake_joint(rec)
         for body_key in (rec.spec.body_a, rec.spec.body_b):
             if body_key is not None and body_key in self._bodies:
