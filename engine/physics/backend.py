@@ -238,4 +238,7 @@ class SupportsSleepState(Protocol):
     def sleep_states(self) -> dict[int, SleepState]:
         """Every body that is asleep or in a quiet stretch."""
 
-    def set_sleep_state(self, key: int, state: SleepState) -> None: ...
+    def set_sleep_state(self, key: int, state: SleepState) -> None:
+        """Restore one body's state, after the saved state's bodies and joints are made:
+        the wakes that making them caused are dropped (they are no wakes of the run the
+        saved state continues)."""

@@ -235,16 +235,19 @@ def set_sleeping(World w, key, bint sleeping) -> None:
 
 
 def restore_sleeping(World w, key, bint sleeping) -> None:
-    """Asleep or awake as a saved state says, without counting it as a wake."""
-    cdef int i = w.slot(key)
-    cdef dBodyID b = w.slots[i].body
-    if b == NULL or w.slots[i].kind != KIND_DYNAMIC:
+    """Asleep or awake as a saved state says. Not a wake, and neither were the wakes
+    that making the saved state's bodies and joints caused: every mark is dropped."""
+    cdef int i
+    cdef int slot = w.slot(key)
+    cdef dBodyID b = w.slots[slot].body
+    for i in range(w.n):
+        w.slots[i].woken = 0
+    if b == NULL or w.slots[slot].kind != KIND_DYNAMIC:
         return
     if sleeping:
         disable(b)
     else:
         dBodyEnable(b)
-    w.slots[i].woken = 0
 
 
 def wake_all(World w) -> None:

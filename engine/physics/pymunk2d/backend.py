@@ -422,7 +422,9 @@ class PymunkBackend:
         rec = self._record(key)
         self._space_reader()
         self._rule.restore(self._row[rec.key], state)
-        self._woken.discard(rec.key)
+        # not a wake, and neither were the wakes that making the saved state's bodies and
+        # joints caused
+        self._woken.clear()
         if rec.body.body_type != pymunk.Body.DYNAMIC:
             return
         if state.asleep and self._sleep_on:
