@@ -1,0 +1,14 @@
+"""Skeletal animation: clips sampled, blended and composed for every avatar at once
+(:mod:`engine.animation.mixer`), the CPU skinning reference (:mod:`.skinning`) and two-bone
+inverse kinematics (:mod:`.ik`).
+
+The data comes from :mod:`engine.assets.skinned` (glTF files); the avatars plugin
+(``systems/avatars.py``) drives it from scene files and scripts; the renderer skins the
+meshes on the GPU with the palettes it produces.
+"""
+
+from engine.animation.library import ClipInfo, Library, Rig
+from engine.animation.mixer import AnimationError, Animator, ClipSettings, Ended, Mixer
+
+__all__ = ["AnimationError", "Animator", "ClipInfo", "ClipSettings", "Ended", "Library",
+           "Mixer", "Rig"]
