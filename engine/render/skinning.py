@@ -133,7 +133,8 @@ class Skinning:
             if group is None:
                 group = self._group(mesh_key, part)
                 self.groups[mesh_key] = group
-            group.members.append(_Member(key, row, local, color))
+            tint = tuple(a * b for a, b in zip(color, part.color, strict=True))
+            group.members.append(_Member(key, row, local, tint))
             keys.append(mesh_key)
         return keys
 
