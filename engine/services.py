@@ -31,3 +31,20 @@ class ShaderControl(Protocol):
     plugin = "render"
 
     def set_uniform(self, state_id: str, name: str, value: UniformValue) -> None: ...
+
+
+#: The methods an avatar's handle has in Lua (``avatar:play("Run", {fade=0.3})``); each is
+#: :meth:`AvatarControl.script_call` with its name and arguments.
+AVATAR_METHODS = ("play", "queue", "blend", "stopAnimation", "animation", "clips", "setPath",
+                  "hold", "release", "driveBone", "releaseBone", "bonePose")
+
+
+class AvatarControl(Protocol):
+    """Animating avatars from scripts (the avatars plugin)."""
+
+    plugin = "avatars"
+
+    def script_call(self, entity: int, method: str, args: list[Any]) -> Any:
+        """Run one of :data:`AVATAR_METHODS` on avatar ``entity``; plain data in and out;
+        raises ValueError (KeyError for an object that is not an avatar) with a message
+        naming what exists."""

@@ -1,11 +1,13 @@
 """Skinned glTF files made from code (pygltflib): the avatars the content and the tests use.
 
-``python -m tools.gltf_samples content/avatars/models`` writes the shipped ones:
+``python -m tools.gltf_samples`` writes the shipped ones:
 
-* ``walker.glb``: a low-poly figure (16 joints: hips, spine, chest, neck, head, arms,
-  legs) with the clips Idle, Walk and Run (root motion: 1.4 and 3.5 m/s), CarryWalk (arms
-  held forward), and Wave (cubic-spline rotations, a STEP hand), its shirt textured;
-* ``walker_lost_texture.gltf`` + ``.bin``: the same, its texture file missing.
+* ``content/avatars/models/walker.glb``: a low-poly figure (17 joints: hips, spine, chest,
+  neck, head, arms, legs) with the clips Idle, Walk and Run (root motion: 1.4 and 3.5 m/s),
+  CarryWalk (arms held forward), and Wave (cubic-spline rotations, a STEP hand), its shirt
+  textured;
+* ``tests/avatars/samples/walker_lost_texture.gltf`` + ``.bin``: the same, its texture file
+  missing (as a model copied without its images).
 
 :func:`two_bone` writes the small two-joint bar the tests compute by hand, optionally broken
 in the ways real files are (no skin, five influences, weights that do not sum to 1,
@@ -382,13 +384,12 @@ def walker(path: Path, texture: bool = True, lost_texture: bool = False) -> Path
     return w.save(path)
 
 
-def write_content(folder: Path) -> list[Path]:
-    """The shipped avatar models."""
-    return [walker(folder / "walker.glb"),
-            walker(folder / "walker_lost_texture.gltf", lost_texture=True)]
+def write_shipped(root: Path) -> list[Path]:
+    """The shipped avatar models, under the repository root ``root``."""
+    return [walker(root / "content/avatars/models/walker.glb"),
+            walker(root / "tests/avatars/samples/walker_lost_texture.gltf", lost_texture=True)]
 
 
 if __name__ == "__main__":
-    for made in write_content(Path(sys.argv[1] if len(sys.argv) > 1 else
-                                   "content/avatars/models")):
+    for made in write_shipped(Path(sys.argv[1] if len(sys.argv) > 1 else ".")):
         print(f"wrote {made} ({made.stat().st_size} bytes)")

@@ -8,7 +8,14 @@ meshes on the GPU with the palettes it produces.
 """
 
 from engine.animation.library import ClipInfo, Library, Rig
-from engine.animation.mixer import AnimationError, Animator, ClipSettings, Ended, Mixer
+from engine.animation.mixer import (
+    AnimationEnded,
+    AnimationError,
+    Animator,
+    ClipSettings,
+    Mixer,
+    Palettes,
+)
 
-__all__ = ["AnimationError", "Animator", "ClipInfo", "ClipSettings", "Ended", "Library",
-           "Mixer", "Rig"]
+__all__ = ["AnimationEnded", "AnimationError", "Animator", "ClipInfo", "ClipSettings",
+           "Library", "Mixer", "Palettes", "Rig"]

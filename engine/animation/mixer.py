@@ -32,10 +32,12 @@ class AnimationError(ValueError):
 
 @dataclass(frozen=True, slots=True)
 class ClipSettings:
-    """How a clip plays unless a call says otherwise."""
+    """How a clip plays unless a call says otherwise; ``ground_speed`` (model units per
+    second at speed 1) replaces the speed measured from its root motion."""
 
     speed: float = 1.0
     loop: bool = True
+    ground_speed: float | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -49,11 +51,23 @@ class Request:
 
 
 @dataclass(frozen=True, slots=True)
-class Ended:
-    """A clip played to its end (a looping one only when something was queued after it)."""
+class AnimationEnded:
+    """A clip played to its end (a looping one only when something was queued after it);
+    an event on the engine's bus, and ``onAnimationEnd`` in Lua."""
 
     avatar: int
     clip: str
+
+
+@dataclass(slots=True)
+class Palettes:
+    """Every avatar's joint matrices this frame, as the renderer takes them: ``matrices``
+    ``(J, 3, 4)`` float32 (the top rows of each 4x4), ``offsets`` entity -> first row.
+    The avatars plugin publishes it as an engine resource; ``version`` counts frames."""
+
+    matrices: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 4), np.float32))
+    offsets: dict[int, int] = field(default_factory=dict)
+    version: int = 0
 
 
 @dataclass(slots=True)
@@ -215,17 +229,21 @@ class Mixer:
                         float(t.weight[row])))
         return out
 
-    def ground_speed(self, key: int) -> float:
-        """How fast (model units per second) the avatar's blend of clips walks."""
+    def ground_speeds(self) -> dict[int, float]:
+        """How fast (model units per second) each avatar's blend of clips walks: the
+        weighted mean of its clips' ground speeds times their playback rates (weights
+        summing to less than 1 walk slower, as the rest pose stands still)."""
+        plan = self._current_plan()
+        rows = plan.layer_rows
+        animators = list(self.animators.values())
+        if not len(rows):
+            return {a.key: 0.0 for a in animators}
         t = self.layers
-        clips = self.library.clips
-        total = speed = 0.0
-        for row in self._rows_of(key):
-            w = float(t.weight[row])
-            clip = clips[int(t.clip[row])]
-            total += w
-            speed += w * clip.ground_speed * float(t.speed[row])
-        return speed / total if total > 1.0 else speed
+        w = t.weight[rows]
+        speed = np.bincount(plan.layer_avatar, w * t.speed[rows] * plan.layer_ground_speed,
+                            len(animators))
+        total = np.maximum(np.bincount(plan.layer_avatar, w, len(animators)), 1.0)
+        return {a.key: float(v) for a, v in zip(animators, speed / total, strict=True)}
 
     # -- internals of control -----------------------------------------------------------
     def _checked(self, animator: Animator, weights: dict[str, float], fade: float | None,
@@ -304,12 +322,12 @@ class Mixer:
         return np.flatnonzero(t.used[:n] & (t.group[:n] == g)).tolist()
 
     # -- per frame ----------------------------------------------------------------------
-    def advance(self, dt: float) -> list[Ended]:
+    def advance(self, dt: float) -> list[AnimationEnded]:
         """Move every fade and phase on by ``dt``; start queued clips of groups that ended.
         Returns the clips that reached their end this frame."""
         plan = self._current_plan()
         rows = plan.layer_rows
-        ended: list[Ended] = []
+        ended: list[AnimationEnded] = []
         if len(rows):
             t, g = self.layers, self.groups
             t.fade_elapsed[rows] += dt
@@ -343,14 +361,14 @@ class Mixer:
                 self._dirty = True
         return ended
 
-    def _ended(self, group: int) -> list[Ended]:
+    def _ended(self, group: int) -> list[AnimationEnded]:
         key = int(self.groups.avatar[group])
         names = [self._names[r] for r in sorted(self._group_layers(group),
                                                 key=lambda r: self.layers.order[r])]
         animator = self.animators.get(key)
         if animator is not None and animator.group == group and animator.queue:
             self._start(animator, animator.queue.popleft())
-        return [Ended(key, name) for name in names]
+        return [AnimationEnded(key, name) for name in names]
 
     def _current_plan(self) -> _Plan:
         if self._dirty or self._plan is None or self._plan.library_version != \
@@ -411,8 +429,13 @@ class _Plan:
             np.zeros(0, np.int64)
         self.layer_rest = np.concatenate([r.rest for r in rigs]) if rigs else np.zeros((0, 4))
         # queries: every track of every layer's clip
-        clips = [lib_clip for lib_clip in (mixer.library.clips[int(c)]
-                                           for c in t.clip[self.layer_rows])]
+        clips = [mixer.library.clips[int(c)] for c in t.clip[self.layer_rows]]
+        ground = []
+        for a, clip, row in zip(layer_avatar, clips, self.layer_rows, strict=True):
+            setting = animators[a].settings.get(mixer._names[int(row)])
+            given = None if setting is None else setting.ground_speed
+            ground.append(clip.ground_speed if given is None else given)
+        self.layer_ground_speed = np.array(ground, np.float64)
         tracks = [np.arange(c.first, c.stop) for c in clips]
         q_track = np.concatenate(tracks) if tracks else np.zeros(0, np.int64)
         q_layer = np.repeat(np.arange(len(clips)), [len(x) for x in tracks]) if tracks else \

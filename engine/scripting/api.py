@@ -19,6 +19,18 @@ Objects (``obj:method(...)``)::
     obj:playSound()                 obj:stopSound()   (its Sound component)
     obj:setGain(gain)               volume of its sound, now and for later plays
 
+Avatars (``Avatar`` blocks; the avatars plugin)::
+
+    avatar:play(clip [, {fade=s, speed=x, loop=bool}])   crossfade to a clip now
+    avatar:queue(clip or {Walk=w, ...} [, opts])         start it when the current ends
+    avatar:blend{Walk=0.7, Run=0.3} [, opts]             clips at once, in step; called
+                                    again with the same clips, only the weights change
+    avatar:stopAnimation([{fade=s}])  avatar:animation() -> clip, seconds   avatar:clips()
+    avatar:setPath({{x, y, z}, ...} [, loop])            walk through points
+    avatar:hold(obj, bone [, {offset={..}, orientation={..}}])   avatar:release(obj)
+    avatar:driveBone(bone, {x, y, z}, {w, x, y, z})      a tracked hand: the arm bends to it
+    avatar:releaseBone(bone)        avatar:bonePose(bone) -> x, y, z, w, x, y, z
+
 Scene and engine::
 
     find(id) -> obj or nil          spawn(sceneText) -> {obj, ...}   (scene format)
@@ -42,7 +54,8 @@ impulse)`` (scene scripts; ``b`` is nil for static world geometry), called once
 per frame for every pair of bodies in contact, with the impulse (N s) summed
 over the pair's contacts and steps; ``onKey(key, pressed)``, ``onButton(name,
 pressed)`` (InputEvents of devices ``button:NAME``), ``onInput(device,
-value)``, ``onTimer(name)`` (engine TimerEvents), ``onReload()`` (after the file
+value)``, ``onTimer(name)``, ``onAnimationEnd(clip)`` (an avatar's scripts; scene scripts
+``onAnimationEnd(avatar, clip)``) (engine TimerEvents), ``onReload()`` (after the file
 changed and was re-run in the script's environment: write ``count = count or 0``
 to keep state across reloads).
 
@@ -69,7 +82,7 @@ from components import Camera, Joint, Name, Physical, Sound, Transform
 from components.joint import SCENE_JOINT_TYPES
 from engine.physics import commands as cmd
 from engine.scripting.runtime import ScriptRuntime, to_python
-from engine.services import ShaderControl, SoundControl
+from engine.services import AVATAR_METHODS, AvatarControl, ShaderControl, SoundControl
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -151,6 +164,12 @@ function Object.delete(h) P.delete(oid("delete", h)) end
 function Object.playSound(h) P.sound(oid("playSound", h), true) end
 function Object.stopSound(h) P.sound(oid("stopSound", h), false) end
 function Object.setGain(h, gain) P.set_gain(oid("setGain", h), gain) end
+for i = 1, #P.avatar_methods do  -- avatar:play("Run", {fade=0.3}), avatar:blend{...}, ...
+  local method = P.avatar_methods[i]
+  Object[method] = function(h, ...)
+    return P.avatar(oid(method, h), method, plain({...}))
+  end
+end
 
 local C = {}
 function C.find(name) return handle(P.find(name)) end
@@ -222,7 +241,8 @@ class ScriptAPI:
             "break_joint": self.break_joint, "set_uniform": self.set_uniform,
             "set_gain": self.set_gain,
             "set_camera": self.set_camera, "request_plugin": self.request_plugin,
-            "time": self.time,
+            "time": self.time, "avatar": self.avatar,
+            "avatar_methods": runtime.lua.table_from(AVATAR_METHODS),
         })
         return runtime.lua.execute(_LUA_API, runtime.kernel, P, name="=colosseum")
 
@@ -485,6 +505,22 @@ class ScriptAPI:
         system = self._service(SoundControl, "setGain")
         if system is not None:
             system.set_gain(entity, float(gain))
+
+    def avatar(self, entity: int, method: str, args: Any) -> Any:
+        """``avatar:method(...)``: the avatars plugin's script call (a list comes back as a
+        Lua table, a tuple as several values)."""
+        control = self._service(AvatarControl, method)
+        if control is None:
+            return None
+        plain = to_python(args)
+        listed = plain if isinstance(plain, list) else [plain[k] for k in sorted(plain)] \
+            if isinstance(plain, dict) else []
+        try:
+            result = control.script_call(self._entity(entity, method), method, listed)
+        except (KeyError, ValueError) as exc:
+            raise ScriptAPIError(f"{method}: {exc.args[0] if exc.args else exc}") from None
+        assert self.runtime is not None
+        return self.runtime.to_lua(result) if isinstance(result, list) else result
 
     def set_uniform(self, state: Any, name: Any, value: Any) -> None:
         system = self._service(ShaderControl, "setUniform")

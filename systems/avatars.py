@@ -1,0 +1,612 @@
+"""The avatars plugin: skinned figures from ``Avatar`` blocks, animated, walking paths over
+the ground, carrying things; scripted from Lua (``avatar:play("Run", {fade=0.3})``).
+
+One system in PRE_PHYSICS, so what it moves (capsules, held objects) reaches this frame's
+step. Each frame, for all avatars at once:
+
+1. clips advance (fades, phases, queues); clips that ended become :class:`AnimationEnded`
+   events (``onAnimationEnd(clip)`` in the avatar's scripts, ``onAnimationEnd(avatar,
+   clip)`` in scene scripts);
+2. avatars with a path turn toward their next point (at most ``TurnRate``) and walk on at
+   the ground speed of the clips they play;
+3. every skeleton is evaluated (:class:`engine.animation.Mixer`);
+4. one physics query casts every ray down — under each ground-following root and each
+   foot — and roots are put on the ground (steps taken over ``Smoothing`` seconds, slopes
+   followed exactly); two-bone IK puts the feet on it, and bones a remote user's tracker
+   drives reach their poses;
+5. joint matrices are published (:class:`engine.animation.Palettes`) for the renderer; held
+   objects follow their bones and capsules their avatars (kinematic targets).
+"""
+
+from __future__ import annotations
+
+import difflib
+import logging
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from components import Avatar, Name, Physical, Shape, Transform, Visual
+from components.physical import BodyKind
+from engine.animation import AnimationEnded, AnimationError, ClipSettings, Mixer, Palettes
+from engine.animation.ik import from_to, make_chains, solve
+from engine.assets import AssetError, Assets, SkinnedModel
+from engine.assets.skinned import AVATAR_AXES
+from engine.messages import MessageLog
+from engine.physics import commands as cmd
+from engine.render.math3d import compose
+from engine.rotation import euler_to_quat, matrix_to_quat, quat_multiply, quat_to_matrix
+from engine.services import AVATAR_METHODS, AvatarControl
+from engine.system import Phase, System
+
+if TYPE_CHECKING:
+    from engine.app import Engine
+
+log = logging.getLogger("colosseum.avatars")
+
+#: Below this distance (m) a path point counts as reached.
+ARRIVE = 0.2
+#: Rays start this far above the highest point they look for and reach this far below.
+RAY_DROP = 5.0
+#: A change of ground height steeper than this (rise per metre walked) is a step.
+MAX_SLOPE = 1.0
+
+
+@dataclass(slots=True)
+class _Held:
+    entity: int
+    node: int
+    offset: np.ndarray
+    rotation: np.ndarray
+    kind: str  # "visual", "kinematic" or "dynamic"
+    last: np.ndarray | None = None
+
+
+@dataclass(slots=True)
+class _Drive:
+    """A bone held at a world pose (a remote user's tracked hand), its two parents bent."""
+
+    node: int
+    position: np.ndarray
+    orientation: np.ndarray
+
+
+@dataclass(slots=True)
+class _Figure:
+    """What the plugin keeps per avatar besides its animation."""
+
+    entity: int
+    spec: Avatar
+    model: SkinnedModel
+    capsule: int | None = None
+    path: list[np.ndarray] = field(default_factory=list)
+    path_loop: bool = True
+    waypoint: int = 0
+    ground: float | None = None  # ground height under the root last frame
+    offset: float = 0.0  # height still to be taken after a step (smoothed away)
+    legs: list[tuple[int, int, int]] = field(default_factory=list)
+    held: list[_Held] = field(default_factory=list)
+    drives: dict[int, _Drive] = field(default_factory=dict)
+    feet: list[tuple[float, np.ndarray] | None] = field(default_factory=list)
+    root_hit: tuple[float, np.ndarray] | None = None
+    last_xy: np.ndarray | None = None  # where the root was when the ground was last seen
+
+
+class AvatarSystem(System):
+    """Animates every entity with an ``Avatar``; the :class:`AvatarControl` of scripts."""
+
+    phase = Phase.PRE_PHYSICS
+    reads = (Avatar, Transform, Name, Physical, Visual)
+    writes = (Transform, Name, Physical)
+
+    def __init__(self) -> None:
+        self.mixer = Mixer()
+        self.palettes = Palettes()
+        self.figures: dict[int, _Figure] = {}
+        self._pending: list[int] = []
+        self._engine: Engine | None = None
+        self._rays: Any = None  # the physics query in flight (threaded mode)
+        self._messages = MessageLog(log)
+
+    # -- lifecycle --------------------------------------------------------------------
+    def setup(self, engine: Engine) -> None:
+        self._engine = engine
+        world = engine.world
+        world.on_add(Avatar, lambda e, _: self._pending.append(e))
+        world.on_remove(Avatar, lambda e, _: self._forget(e))
+        self._pending.extend(e for e, _ in world.get_component(Avatar))
+        engine.events.subscribe(AnimationEnded, self._tell_scripts)
+        engine.insert_resource(self)
+        engine.insert_resource(self, as_type=AvatarControl)
+        engine.insert_resource(self.palettes)
+
+    def _forget(self, entity: int) -> None:
+        figure = self.figures.pop(entity, None)
+        self.mixer.remove(entity)
+        engine = self._engine
+        if figure is not None and figure.capsule is not None and engine is not None:
+            engine.despawn(figure.capsule)
+
+    def _start(self, engine: Engine, entity: int) -> None:
+        world = engine.world
+        spec = world.try_component(entity, Avatar)
+        if spec is None or entity in self.figures:
+            return
+        try:
+            model = Assets.of(engine).skinned(spec.model)
+        except AssetError as exc:
+            self._messages.error(f"avatar {self._name(entity)!r}: {exc.message}; it is not "
+                                 "animated")
+            return
+        if not model.skin_count:
+            self._messages.error(f"avatar {self._name(entity)!r}: model {spec.model!r} has no "
+                                 "skin; it is not animated")
+            return
+        rig = self.mixer.library.rig_for(model)
+        settings = {c.name: ClipSettings(c.speed, c.loop, None if c.ground_speed is None
+                                         else c.ground_speed / spec.scale)
+                    for c in spec.clips if c.name in rig.clips}
+        self.mixer.add(entity, rig, settings, spec.fade)
+        figure = _Figure(entity, spec, model)
+        self.figures[entity] = figure
+        try:
+            if spec.blend:
+                self.mixer.blend(entity, spec.blend, 0.0, spec.speed, spec.loop)
+            elif spec.clip is not None:
+                self.mixer.play(entity, spec.clip, 0.0, spec.speed, spec.loop)
+            for name in spec.queue:
+                self.mixer.queue(entity, name)
+        except AnimationError as exc:
+            self._messages.error(f"avatar {self._name(entity)!r}: {exc}")
+        figure.path = [np.asarray(p, np.float64) for p in spec.path]
+        figure.path_loop = spec.path_loop
+        for hip, knee, ankle in spec.foot_ik:
+            nodes = (model.node(hip), model.node(knee), model.node(ankle))
+            if None not in nodes:
+                figure.legs.append(nodes)  # type: ignore[arg-type]
+        names = {n.id: e for e, n in world.get_component(Name)}
+        for hold in spec.holds:
+            target = names.get(hold.target) if isinstance(hold.target, str) else hold.target
+            try:
+                self.hold(entity, target if target is not None else -1, hold.bone,
+                          hold.offset, hold.rotation)
+            except (KeyError, ValueError) as exc:
+                self._messages.error(f"avatar {self._name(entity)!r}: {exc}")
+        if spec.capsule is not None:
+            figure.capsule = self._capsule(engine, entity, spec.capsule)
+
+    def _capsule(self, engine: Engine, entity: int, capsule: tuple[float, float]) -> int:
+        """A kinematic capsule standing on the avatar's root, moved with it."""
+        radius, length = capsule
+        t = engine.world.component_for_entity(entity, Transform)
+        body = Physical(kind=BodyKind.KINEMATIC, mass=None, gravity=False, can_sleep=False,
+                        shapes=[Shape("capsule", (radius, length),
+                                      offset=(0.0, 0.0, radius + 0.5 * length))])
+        return engine.spawn(Name(f"{self._name(entity)}:capsule"),
+                            Transform(t.position.copy(), t.orientation.copy()), body)
+
+    def _name(self, entity: int) -> str:
+        engine = self._engine
+        named = None if engine is None else engine.world.try_component(entity, Name)
+        return named.id if named is not None else str(entity)
+
+    # -- per frame ----------------------------------------------------------------------
+    def run(self, engine: Engine, dt: float) -> None:
+        if self._pending:
+            pending, self._pending = self._pending, []
+            for entity in pending:
+                if engine.world.entity_exists(entity):
+                    self._start(engine, entity)
+        if not self.figures:
+            return
+        for ended in self.mixer.advance(dt):
+            engine.events.emit(ended)
+        poses = engine.world.poses
+        entities = list(self.figures)
+        rows = poses.rows(entities)
+        self._walk(poses, entities, rows, dt)
+        world, plan = self.mixer.evaluate()
+        self._ground(engine, poses, entities, rows, world, dt)
+        self._drive(poses, entities, rows, world)
+        self._publish(world)
+        self._carry(engine, poses, entities, rows, world, dt)
+
+    def _placement(self, position: np.ndarray, orientation: np.ndarray, scale: float
+                   ) -> np.ndarray:
+        """Model frame -> world: the root's pose, the model's scale and axes."""
+        return compose(position, orientation, np.full(3, scale)) @ AVATAR_AXES
+
+    def _walk(self, poses: Any, entities: list[int], rows: np.ndarray, dt: float) -> None:
+        """Turn toward the next path point and walk on at the clips' ground speed."""
+        speeds = None
+        for entity, row in zip(entities, rows.tolist(), strict=True):
+            figure = self.figures[entity]
+            if not figure.path or row < 0 or figure.waypoint >= len(figure.path):
+                continue
+            if speeds is None:
+                speeds = self.mixer.ground_speeds()
+            position = poses.position[row]
+            q = poses.orientation[row]
+            heading = math.atan2(2 * (q[0] * q[3] + q[1] * q[2]), 1 - 2 * (q[2] ** 2 + q[3] ** 2))
+            to = figure.path[figure.waypoint] - position
+            if math.hypot(to[0], to[1]) < ARRIVE:
+                figure.waypoint += 1
+                if figure.waypoint >= len(figure.path) and figure.path_loop:
+                    figure.waypoint = 0
+                continue
+            want = math.atan2(-to[0], to[1])  # facing +Y at heading 0
+            turn = (want - heading + math.pi) % (2 * math.pi) - math.pi
+            step = figure.spec.turn_rate * dt
+            heading += max(-step, min(step, turn))
+            poses.orientation[row] = (math.cos(heading / 2), 0.0, 0.0, math.sin(heading / 2))
+            speed = speeds.get(entity, 0.0) * figure.spec.scale
+            poses.position[row, 0] -= math.sin(heading) * speed * dt
+            poses.position[row, 1] += math.cos(heading) * speed * dt
+
+    def _ground(self, engine: Engine, poses: Any, entities: list[int], rows: np.ndarray,
+                world: np.ndarray, dt: float) -> None:
+        """Cast every ray down in one query; roots onto the ground, feet by IK."""
+        rays: list[tuple[np.ndarray, float, int | None]] = []
+        owners: list[tuple[_Figure, int]] = []  # (figure, -1 root | leg index)
+        for entity, row in zip(entities, rows.tolist(), strict=True):
+            figure = self.figures[entity]
+            if not figure.spec.ground_follow or row < 0:
+                continue
+            position = poses.position[row]
+            top = position[2] + figure.spec.step_height
+            rays.append((np.array([position[0], position[1], top]),
+                         figure.spec.step_height + RAY_DROP, figure.capsule))
+            owners.append((figure, -1))
+            if figure.legs:
+                place = self._placement(position, poses.orientation[row], figure.spec.scale)
+                base = self.mixer.animators[entity].row
+                for k, (_, _, ankle) in enumerate(figure.legs):
+                    foot = place @ world[base + ankle, :, 3]
+                    rays.append((np.array([foot[0], foot[1], top]),
+                                 figure.spec.step_height + RAY_DROP, figure.capsule))
+                    owners.append((figure, k))
+        if not rays:
+            return
+        hits = self._cast(engine, rays)
+        if hits is not None:
+            for (figure, which), hit in zip(owners, hits, strict=True):
+                found = None if hit is None else (float(hit.position[2]),
+                                                  np.asarray(hit.normal, np.float64))
+                if which < 0:
+                    figure.root_hit = found
+                    figure.feet = [None] * len(figure.legs)
+                else:
+                    figure.feet[which] = found
+        chains, targets, ends = [], [], []
+        for entity, row in zip(entities, rows.tolist(), strict=True):
+            figure = self.figures[entity]
+            if not figure.spec.ground_follow or row < 0 or figure.root_hit is None:
+                continue
+            drop = self._settle(figure, poses, row, dt)
+            if figure.legs and any(f is not None for f in figure.feet):
+                self._feet(figure, poses, row, world, drop, chains, targets, ends)
+        if chains:
+            solve(world, make_chains(chains), np.array(targets), np.array(ends))
+
+    def _cast(self, engine: Engine, rays: list[tuple[np.ndarray, float, int | None]]
+              ) -> list[Any] | None:
+        """The hits of ``rays`` (straight down): now in serial mode; in threaded mode the
+        answer to last frame's query (None while it is not in)."""
+        down = np.array([0.0, 0.0, -1.0])
+
+        def query(backend: Any) -> list[Any]:
+            return [backend.raycast(o, down, length, ignore) for o, length, ignore in rays]
+
+        future = self._rays
+        if future is None or future.done():
+            self._rays = engine.physics.request(query)
+        if future is None:
+            future = self._rays
+        if not future.done():
+            return None
+        try:
+            hits = future.result()
+        except Exception as exc:  # no physics plugin, or a backend without ray casts
+            self._messages.error(f"avatars cannot follow the ground: {exc}")
+            return None
+        return hits if len(hits) == len(rays) else None
+
+    def _settle(self, figure: _Figure, poses: Any, row: int, dt: float) -> float:
+        """Put the root on the ground: slopes exactly, steps over ``Smoothing`` seconds.
+        Returns how far the hips were lowered for a foot below the root's ground."""
+        assert figure.root_hit is not None
+        ground = figure.root_hit[0]
+        position = poses.position[row]
+        if figure.ground is not None and figure.last_xy is not None:
+            walked = float(np.hypot(*(position[:2] - figure.last_xy)))
+            rise = ground - figure.ground
+            if abs(rise) > MAX_SLOPE * walked + 1e-3:  # a step: keep the root where it was
+                figure.offset -= rise
+        tau = figure.spec.smoothing
+        figure.offset *= math.exp(-dt / tau) if tau > 0 else 0.0
+        if abs(figure.offset) < 1e-5:
+            figure.offset = 0.0
+        figure.ground = ground
+        drop = 0.0
+        feet = [f[0] for f in figure.feet if f is not None]
+        if figure.legs and feet:
+            drop = float(np.clip(ground - min(feet), 0.0, figure.spec.step_height))
+        position[2] = ground + figure.offset - drop
+        figure.last_xy = position[:2].copy()
+        return drop
+
+    def _feet(self, figure: _Figure, poses: Any, row: int, world: np.ndarray, drop: float,
+              chains: list, targets: list, ends: list) -> None:
+        """IK targets putting each ankle as high over its ground as the clip has it over
+        the root, the foot turned to the ground's slope."""
+        place = self._placement(poses.position[row], poses.orientation[row], figure.spec.scale)
+        inverse = np.linalg.inv(place)
+        axes = place[:3, :3] / figure.spec.scale  # model frame -> world, a rotation
+        animator = self.mixer.animators[figure.entity]
+        base = animator.row
+        up = axes.T @ np.array([0.0, 0.0, 1.0])
+        for (hip, knee, ankle), hit in zip(figure.legs, figure.feet, strict=True):
+            if hit is None:
+                continue
+            foot = place @ world[base + ankle, :, 3]
+            height = foot[2] - poses.position[row, 2] - drop  # over the root, as animated
+            target = np.array([foot[0], foot[1], hit[0] + height, 1.0])
+            slope = from_to(up[None, :], (axes.T @ hit[1])[None, :])[0]
+            chains.append((base, animator.rig.parents, hip, knee, ankle))
+            targets.append((inverse @ target)[:3])
+            ends.append(slope @ world[base + ankle, :3, :3])
+
+    def _drive(self, poses: Any, entities: list[int], rows: np.ndarray, world: np.ndarray
+               ) -> None:
+        """Bones held at world poses (trackers): their two parents bent to reach."""
+        items, targets, ends = [], [], []
+        for entity, row in zip(entities, rows.tolist(), strict=True):
+            figure = self.figures[entity]
+            if not figure.drives or row < 0:
+                continue
+            place = self._placement(poses.position[row], poses.orientation[row],
+                                    figure.spec.scale)
+            inverse = np.linalg.inv(place)
+            axes = place[:3, :3] / figure.spec.scale
+            animator = self.mixer.animators[entity]
+            parents = animator.rig.parents
+            for drive in figure.drives.values():
+                b = int(parents[drive.node])
+                a = int(parents[b]) if b >= 0 else -1
+                if a < 0:
+                    continue
+                bone = world[animator.row + drive.node, :3, :3]
+                items.append((animator.row, parents, a, b, drive.node))
+                targets.append((inverse @ np.append(drive.position, 1.0))[:3])
+                # the wanted world rotation, in the model frame, keeping the bone's scale
+                ends.append(axes.T @ quat_to_matrix(drive.orientation)
+                            * np.linalg.norm(bone, axis=0))
+        if items:
+            solve(world, make_chains(items), np.array(targets), np.array(ends))
+
+    def _publish(self, world: np.ndarray) -> None:
+        """Joint matrices of every avatar, for the renderer."""
+        rows, ibms, offsets = [], [], {}
+        count = 0
+        for entity, animator in self.mixer.animators.items():
+            model = animator.rig.model
+            rows.append(animator.row + model.palette_nodes)
+            ibms.append(model.inverse_bind)
+            offsets[entity] = count
+            count += len(model.palette_nodes)
+        if not rows:
+            return
+        palette = world[np.concatenate(rows)] @ np.concatenate(ibms)
+        self.palettes.matrices = np.ascontiguousarray(palette[:, :3, :], np.float32)
+        self.palettes.offsets = offsets
+        self.palettes.version += 1
+
+    def _carry(self, engine: Engine, poses: Any, entities: list[int], rows: np.ndarray,
+               world: np.ndarray, dt: float) -> None:
+        """Held objects onto their bones; capsules onto their avatars."""
+        for entity, row in zip(entities, rows.tolist(), strict=True):
+            figure = self.figures[entity]
+            if row < 0:
+                continue
+            position, orientation = poses.position[row], poses.orientation[row]
+            if figure.capsule is not None and engine.world.entity_exists(figure.capsule):
+                self._push(engine, cmd.SetKinematicTarget(figure.capsule, position.copy(),
+                                                          orientation.copy(), dt))
+            if not figure.held:
+                continue
+            place = self._placement(position, orientation, figure.spec.scale)
+            base = self.mixer.animators[entity].row
+            for held in list(figure.held):
+                if not engine.world.entity_exists(held.entity):
+                    figure.held.remove(held)
+                    continue
+                bone = place @ world[base + held.node]
+                rot = bone[:3, :3] / np.linalg.norm(bone[:3, :3], axis=0)
+                at = bone[:3, 3] + rot @ held.offset
+                quat = quat_multiply(matrix_to_quat(rot), held.rotation)
+                self._move(engine, held, at, quat, dt)
+
+    def _move(self, engine: Engine, held: _Held, at: np.ndarray, quat: np.ndarray,
+              dt: float) -> None:
+        if held.kind == "kinematic":
+            self._push(engine, cmd.SetKinematicTarget(held.entity, at, quat, dt))
+        elif held.kind == "dynamic":  # put back each frame, moving as the hand does
+            velocity = np.zeros(3) if held.last is None or dt <= 0 else (at - held.last) / dt
+            engine.physics.set_pose(held.entity, at, quat)
+            engine.physics.set_velocity(held.entity, velocity, np.zeros(3))
+        else:
+            row = engine.world.poses.row_of.get(held.entity)
+            if row is not None:
+                engine.world.poses.position[row] = at
+                engine.world.poses.orientation[row] = quat
+        held.last = at
+
+    def _push(self, engine: Engine, command: cmd.Command) -> None:
+        engine.physics.push(command)
+
+    def _tell_scripts(self, event: AnimationEnded) -> None:
+        """``onAnimationEnd`` in the avatar's own scripts and in scene scripts."""
+        engine = self._engine
+        if engine is None:
+            return
+        from engine.scripting.runtime import ScriptRuntime
+
+        runtime = engine.try_resource(ScriptRuntime)
+        if runtime is None:
+            return
+        for script in list(runtime.scripts):
+            if script.entity == event.avatar:
+                runtime.call(script, "onAnimationEnd", event.clip)
+            elif script.entity is None:
+                runtime.call(script, "onAnimationEnd", runtime.kernel.handle(event.avatar),
+                             event.clip)
+
+    # -- control (Python and Lua) ---------------------------------------------------------
+    def _figure(self, entity: int) -> _Figure:
+        figure = self.figures.get(entity)
+        if figure is None:
+            engine = self._engine
+            if engine is not None and entity in self._pending:
+                self._pending.remove(entity)
+                self._start(engine, entity)
+                figure = self.figures.get(entity)
+            if figure is None:
+                raise KeyError(f"object {self._name(entity)!r} is not an avatar")
+        return figure
+
+    def hold(self, entity: int, target: int, bone: str,
+             offset: Any = (0.0, 0.0, 0.0), rotation: Any = (1.0, 0.0, 0.0, 0.0)) -> None:
+        """Bone ``bone`` of avatar ``entity`` carries object ``target`` at ``offset`` (m)
+        and ``rotation`` in the bone's frame, until :meth:`release`."""
+        figure = self._figure(entity)
+        engine = self._engine
+        assert engine is not None
+        if target < 0 or not engine.world.entity_exists(target):
+            raise ValueError(f"hold: there is no such object to hold ({target})")
+        node = self._bone(figure, bone)
+        body = engine.world.try_component(target, Physical)
+        kind = "visual" if body is None else (
+            "kinematic" if body.kind == BodyKind.KINEMATIC else "dynamic")
+        self.release(entity, target)
+        figure.held.append(_Held(target, node, np.asarray(offset, np.float64),
+                                 np.asarray(rotation, np.float64), kind))
+
+    def release(self, entity: int, target: int) -> None:
+        """Let go of ``target`` (a dynamic body falls, with the hand's velocity)."""
+        figure = self._figure(entity)
+        figure.held = [h for h in figure.held if h.entity != target]
+
+    def drive_bone(self, entity: int, bone: str, position: Any, orientation: Any) -> None:
+        """Hold ``bone`` at a world pose (a tracked hand); its parent and grandparent
+        bend to reach it. Until :meth:`release_bone`."""
+        figure = self._figure(entity)
+        node = self._bone(figure, bone)
+        pose = cmd.SetPose(entity, position, orientation)  # checked: finite, a rotation
+        figure.drives[node] = _Drive(node, np.asarray(pose.position),
+                                     np.asarray(pose.orientation))
+
+    def release_bone(self, entity: int, bone: str) -> None:
+        figure = self._figure(entity)
+        figure.drives.pop(self._bone(figure, bone), None)
+
+    def bone_pose(self, entity: int, bone: str) -> tuple[np.ndarray, np.ndarray]:
+        """World position and orientation of ``bone`` as drawn last frame."""
+        figure = self._figure(entity)
+        node = self._bone(figure, bone)
+        engine = self._engine
+        assert engine is not None
+        t = engine.world.component_for_entity(entity, Transform)
+        world, _ = self.mixer.evaluate()
+        m = self._placement(t.position, t.orientation, figure.spec.scale) @ world[
+            self.mixer.animators[entity].row + node]
+        rot = m[:3, :3] / np.linalg.norm(m[:3, :3], axis=0)
+        return m[:3, 3].copy(), matrix_to_quat(rot)
+
+    def set_path(self, entity: int, points: list[Any], loop: bool = True) -> None:
+        """Walk through ``points`` (world, m) in turn; an empty list stops walking."""
+        figure = self._figure(entity)
+        figure.path = [np.asarray(cmd.SetPose(entity, p, (1, 0, 0, 0)).position)
+                       for p in points]
+        figure.path_loop = bool(loop)
+        figure.waypoint = 0
+
+    def _bone(self, figure: _Figure, bone: str) -> int:
+        node = figure.model.node(str(bone))
+        if node is None:
+            close = difflib.get_close_matches(str(bone), figure.model.node_names, 1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise ValueError(f"model {figure.spec.model!r} has no bone {bone!r}{hint}")
+        return node
+
+    def script_call(self, entity: int, method: str, args: list[Any]) -> Any:
+        """Lua's ``avatar:method(...)`` (see :data:`engine.services.AVATAR_METHODS`)."""
+        self._figure(entity)
+        mixer = self.mixer
+        if method not in AVATAR_METHODS:
+            raise ValueError(f"unknown avatar method {method!r}")
+        first = args[0] if args else None
+        opts = args[1] if len(args) > 1 and isinstance(args[1], dict) else {}
+        unknown = set(opts) - {"fade", "speed", "loop", "offset", "orientation"}
+        if unknown:
+            raise ValueError(f"{method}: unknown option {sorted(unknown)[0]!r} (fade, speed, "
+                             "loop; offset, orientation for hold)")
+        timing = {k: opts[k] for k in ("fade", "speed", "loop") if k in opts}
+        if method in ("play", "queue"):
+            if not isinstance(first, str | dict):
+                raise ValueError(f"{method}: expected a clip name, got {first!r}")
+            if isinstance(first, dict) and method == "play":
+                raise ValueError("play: expected a clip name (use blend{...} for weights)")
+            getattr(mixer, method)(entity, first, **timing)
+        elif method == "blend":
+            if not isinstance(first, dict):
+                raise ValueError("blend: expected a table of weights, {Walk=0.7, Run=0.3}")
+            mixer.blend(entity, first, **timing)
+        elif method == "stopAnimation":
+            mixer.stop(entity, (first or {}).get("fade") if isinstance(first, dict) else None)
+        elif method == "animation":
+            playing = mixer.playing(entity)
+            if not playing:
+                return None
+            name, time, _ = max(playing, key=lambda p: p[2])
+            return name, time
+        elif method == "clips":
+            return list(self.figures[entity].model.clip_names)
+        elif method == "setPath":
+            if not isinstance(first, list):
+                raise ValueError("setPath: expected a list of points {{x, y, z}, ...}")
+            self.set_path(entity, first, bool(args[1]) if len(args) > 1 else True)
+        elif method == "hold":
+            self.hold(entity, int(first) if isinstance(first, int) else -1, str(args[1]) if
+                      len(args) > 1 else "", *self._hold_options(args[2] if len(args) > 2
+                                                                 else {}))
+        elif method == "release":
+            self.release(entity, int(first) if isinstance(first, int) else -1)
+        elif method == "driveBone":
+            if len(args) < 3:
+                raise ValueError("driveBone: expected (bone, {x, y, z}, {w, x, y, z})")
+            self.drive_bone(entity, str(first), args[1], args[2])
+        elif method == "releaseBone":
+            self.release_bone(entity, str(first))
+        elif method == "bonePose":
+            position, orientation = self.bone_pose(entity, str(first))
+            return (*position.tolist(), *orientation.tolist())
+        return None
+
+    @staticmethod
+    def _hold_options(opts: Any) -> tuple[Any, Any]:
+        if not isinstance(opts, dict):
+            raise ValueError("hold: options are a table {offset=, orientation=}")
+        offset = opts.get("offset", (0.0, 0.0, 0.0))
+        rotation = euler_to_quat(opts.get("orientation", (0.0, 0.0, 0.0)))
+        return offset, rotation
+
+
+class AvatarsPlugin:
+    """Animates the scene's avatars (``requestPlugin("avatars")``)."""
+
+    name = "avatars"
+
+    def build(self, engine: Engine) -> None:
+        engine.add_system(AvatarSystem())
