@@ -52,6 +52,10 @@ ARRIVE = 0.2
 RAY_DROP = 5.0
 #: A change of ground height steeper than this (rise per metre walked) is a step.
 MAX_SLOPE = 1.0
+#: Collision category of avatar capsules; the avatars' own rays skip it.
+CAPSULE_CATEGORY = 1 << 30
+#: Dynamic bodies a ray passes through before it gives up (a ball is not ground).
+LOOSE_SKIPS = 3
 
 
 @dataclass(slots=True)
@@ -108,6 +112,7 @@ class AvatarSystem(System):
         self._pending: list[int] = []
         self._engine: Engine | None = None
         self._rays: Any = None  # the physics query in flight (threaded mode)
+        self._loose: set[int] = set()  # dynamic bodies: not ground to stand on
         self._messages = MessageLog(log)
 
     # -- lifecycle --------------------------------------------------------------------
@@ -116,11 +121,19 @@ class AvatarSystem(System):
         world = engine.world
         world.on_add(Avatar, lambda e, _: self._pending.append(e))
         world.on_remove(Avatar, lambda e, _: self._forget(e))
+        world.on_add(Physical, self._body_added)
+        world.on_remove(Physical, lambda e, _: self._loose.discard(e))
+        for entity, body in world.get_component(Physical):
+            self._body_added(entity, body)
         self._pending.extend(e for e, _ in world.get_component(Avatar))
         engine.events.subscribe(AnimationEnded, self._tell_scripts)
         engine.insert_resource(self)
         engine.insert_resource(self, as_type=AvatarControl)
         engine.insert_resource(self.palettes)
+
+    def _body_added(self, entity: int, body: Physical) -> None:
+        if body.kind == BodyKind.DYNAMIC:
+            self._loose.add(entity)
 
     def _forget(self, entity: int) -> None:
         figure = self.figures.pop(entity, None)
@@ -182,7 +195,7 @@ class AvatarSystem(System):
         radius, length = capsule
         t = engine.world.component_for_entity(entity, Transform)
         body = Physical(kind=BodyKind.KINEMATIC, mass=None, gravity=False, can_sleep=False,
-                        shapes=[Shape("capsule", (radius, length),
+                        category=CAPSULE_CATEGORY, shapes=[Shape("capsule", (radius, length),
                                       offset=(0.0, 0.0, radius + 0.5 * length))])
         return engine.spawn(Name(f"{self._name(entity)}:capsule"),
                             Transform(t.position.copy(), t.orientation.copy()), body)
@@ -248,7 +261,7 @@ class AvatarSystem(System):
     def _ground(self, engine: Engine, poses: Any, entities: list[int], rows: np.ndarray,
                 world: np.ndarray, dt: float) -> None:
         """Cast every ray down in one query; roots onto the ground, feet by IK."""
-        rays: list[tuple[np.ndarray, float, int | None]] = []
+        rays: list[tuple[np.ndarray, float]] = []
         owners: list[tuple[_Figure, int]] = []  # (figure, -1 root | leg index)
         for entity, row in zip(entities, rows.tolist(), strict=True):
             figure = self.figures[entity]
@@ -257,7 +270,7 @@ class AvatarSystem(System):
             position = poses.position[row]
             top = position[2] + figure.spec.step_height
             rays.append((np.array([position[0], position[1], top]),
-                         figure.spec.step_height + RAY_DROP, figure.capsule))
+                         figure.spec.step_height + RAY_DROP))
             owners.append((figure, -1))
             if figure.legs:
                 place = self._placement(position, poses.orientation[row], figure.spec.scale)
@@ -265,7 +278,7 @@ class AvatarSystem(System):
                 for k, (_, _, ankle) in enumerate(figure.legs):
                     foot = place @ world[base + ankle, :, 3]
                     rays.append((np.array([foot[0], foot[1], top]),
-                                 figure.spec.step_height + RAY_DROP, figure.capsule))
+                                 figure.spec.step_height + RAY_DROP))
                     owners.append((figure, k))
         if not rays:
             return
@@ -290,14 +303,24 @@ class AvatarSystem(System):
         if chains:
             solve(world, make_chains(chains), np.array(targets), np.array(ends))
 
-    def _cast(self, engine: Engine, rays: list[tuple[np.ndarray, float, int | None]]
-              ) -> list[Any] | None:
-        """The hits of ``rays`` (straight down): now in serial mode; in threaded mode the
-        answer to last frame's query (None while it is not in)."""
+    def _cast(self, engine: Engine, rays: list[tuple[np.ndarray, float]]) -> list[Any] | None:
+        """The hits of ``rays`` (straight down) on what one can stand on — not capsules,
+        not dynamic bodies (a ray goes on past a ball): now in serial mode; in threaded
+        mode the answer to last frame's query (None while it is not in)."""
         down = np.array([0.0, 0.0, -1.0])
+        loose = frozenset(self._loose)
+        mask = 0xFFFFFFFF & ~CAPSULE_CATEGORY
 
         def query(backend: Any) -> list[Any]:
-            return [backend.raycast(o, down, length, ignore) for o, length, ignore in rays]
+            hits = []
+            for origin, length in rays:
+                hit = backend.raycast(origin, down, length, None, mask)
+                for _ in range(LOOSE_SKIPS):
+                    if hit is None or hit.key not in loose:
+                        break
+                    hit = backend.raycast(origin, down, length, hit.key, mask)
+                hits.append(None if hit is not None and hit.key in loose else hit)
+            return hits
 
         future = self._rays
         if future is None or future.done():
@@ -329,11 +352,11 @@ class AvatarSystem(System):
         if abs(figure.offset) < 1e-5:
             figure.offset = 0.0
         figure.ground = ground
-        drop = 0.0
+        root = ground + figure.offset
         feet = [f[0] for f in figure.feet if f is not None]
-        if figure.legs and feet:
-            drop = float(np.clip(ground - min(feet), 0.0, figure.spec.step_height))
-        position[2] = ground + figure.offset - drop
+        # a foot on lower ground than the root: the hips go down so its leg reaches
+        drop = float(np.clip(root - min(feet), 0.0, figure.spec.step_height)) if feet else 0.0
+        position[2] = root - drop
         figure.last_xy = position[:2].copy()
         return drop
 

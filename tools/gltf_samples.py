@@ -26,6 +26,8 @@ import numpy as np
 import pygltflib as gl
 
 FLOAT, USHORT, UINT = 5126, 5123, 5125
+#: The weights of :func:`two_bone` with ``influences=5``: joints root, tip, root, tip, tip.
+FIVE_INFLUENCES = (0.3, 0.25, 0.2, 0.15, 0.1)
 _TYPES = {1: "SCALAR", 2: "VEC2", 3: "VEC3", 4: "VEC4", 16: "MAT4"}
 
 
@@ -125,13 +127,14 @@ def two_bone(path: Path, interpolation: str = "LINEAR", influences: int = 4,
     if skinned:
         attributes["JOINTS_0"] = w.accessor(joints, USHORT)
         attributes["WEIGHTS_0"] = w.accessor(weights * weight_scale)
-        if influences > 4:  # a fifth, small influence in a second set
-            extra = np.zeros((len(vertices), 4))
+        if influences > 4:  # every vertex: five influences, the fifth (0.1) the smallest
+            n = len(vertices)
+            extra = np.zeros((n, 4))
             extra[:, 0] = 0.1
-            attributes["JOINTS_1"] = w.accessor(np.tile([1, 0, 0, 0], (len(vertices), 1)),
-                                                USHORT)
+            attributes["JOINTS_0"] = w.accessor(np.tile([0, 1, 0, 1], (n, 1)), USHORT)
+            attributes["WEIGHTS_0"] = w.accessor(np.tile(FIVE_INFLUENCES[:4], (n, 1)))
+            attributes["JOINTS_1"] = w.accessor(np.tile([1, 0, 0, 0], (n, 1)), USHORT)
             attributes["WEIGHTS_1"] = w.accessor(extra)
-            attributes["WEIGHTS_0"] = w.accessor(weights * 0.9)
     indices = w.accessor(np.array(faces).reshape(-1), USHORT, target=34963)
     g.meshes = [gl.Mesh(name="bar", primitives=[gl.Primitive(
         attributes=gl.Attributes(**attributes), indices=indices)])]

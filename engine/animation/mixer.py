@@ -122,6 +122,10 @@ class _Table:
         self._free.append(row)
 
 
+#: A phase this close to 1 is the end: a rate like 1/1.5 s summed frame by frame must not
+#: end a clip one frame late for the last bit of rounding.
+PHASE_EPSILON = 1e-9
+
 _LAYER_COLUMNS = {"avatar": np.int64, "clip": np.int64, "group": np.int64, "order": np.int64,
                   "speed": np.float64, "duration": np.float64, "weight": np.float64,
                   "weight_from": np.float64, "weight_to": np.float64,
@@ -336,6 +340,7 @@ class Mixer:
                 length > 0, length, 1.0), 1.0), 1.0)
             w = t.weight_from[rows] + (t.weight_to[rows] - t.weight_from[rows]) * k
             t.weight[rows] = w
+            faded_out = rows[(t.weight_to[rows] == 0.0) & (k >= 1.0)]  # before ends re-fade
             groups = t.group[rows]
             dur = t.duration[rows]
             rate = np.where(dur > 0, t.speed[rows] / np.where(dur > 0, dur, 1.0), 0.0)
@@ -350,13 +355,12 @@ class Mixer:
             phase = g.phase[moving] + dt * group_rate[moving]
             loop = g.loop[moving]
             phase[loop] %= 1.0
-            done = ~loop & (phase >= 1.0)
+            done = ~loop & (phase >= 1.0 - PHASE_EPSILON)
             g.phase[moving] = np.minimum(phase, 1.0)
             for group in moving[done].tolist():
                 g.ended[group] = True
                 ended.extend(self._ended(group))
-            finished = rows[(t.weight_to[rows] == 0.0) & (k >= 1.0)]
-            for row in finished.tolist():
+            for row in faded_out.tolist():
                 self._drop_layer(row)
                 self._dirty = True
         return ended

@@ -419,6 +419,7 @@ class _Reader:
             raise ValueError(f"primitive {name!r}: JOINTS/WEIGHTS count differs from POSITION")
         if not np.isfinite(weights).all() or (weights < 0).any():
             raise ValueError(f"primitive {name!r} has weights that are negative or not finite")
+        given = weights.sum(axis=1)  # as the file has them, before any are dropped
         if weights.shape[1] > MAX_INFLUENCES:
             many = int(((weights > 0).sum(axis=1) > MAX_INFLUENCES).sum())
             if many:
@@ -434,11 +435,11 @@ class _Reader:
             weights = np.pad(weights, ((0, 0), (0, pad)))
         total = weights.sum(axis=1)
         empty = total <= 0.0
-        off = ~empty & (np.abs(total - 1.0) > WEIGHT_TOLERANCE)
+        off = ~empty & (np.abs(given - 1.0) > WEIGHT_TOLERANCE)
         if off.any():
             self.warnings.append(
                 f"primitive {name!r}: the weights of {int(off.sum())} vertices sum to "
-                f"{float(total[off].min()):.3g}..{float(total[off].max()):.3g}, not 1; "
+                f"{float(given[off].min()):.3g}..{float(given[off].max()):.3g}, not 1; "
                 "renormalised")
         if empty.any():
             self.warnings.append(f"primitive {name!r}: {int(empty.sum())} vertices have no "
