@@ -113,6 +113,8 @@ class AvatarSystem(System):
         self._engine: Engine | None = None
         self._rays: Any = None  # the physics query in flight (threaded mode)
         self._loose: set[int] = set()  # dynamic bodies: not ground to stand on
+        #: the last frame's final skeletons (IK included) and each avatar's first row
+        self._posed: tuple[np.ndarray, dict[int, int]] = (np.zeros((0, 4, 4)), {})
         self._messages = MessageLog(log)
 
     # -- lifecycle --------------------------------------------------------------------
@@ -220,10 +222,11 @@ class AvatarSystem(System):
         entities = list(self.figures)
         rows = poses.rows(entities)
         self._walk(poses, entities, rows, dt)
-        world, plan = self.mixer.evaluate()
+        world, _ = self.mixer.evaluate()
         self._ground(engine, poses, entities, rows, world, dt)
         self._drive(poses, entities, rows, world)
         self._publish(world)
+        self._posed = (world, {e: a.row for e, a in self.mixer.animators.items()})
         self._carry(engine, poses, entities, rows, world, dt)
 
     def _placement(self, position: np.ndarray, orientation: np.ndarray, scale: float
@@ -297,9 +300,9 @@ class AvatarSystem(System):
             figure = self.figures[entity]
             if not figure.spec.ground_follow or row < 0 or figure.root_hit is None:
                 continue
-            drop = self._settle(figure, poses, row, dt)
+            self._settle(figure, poses, row, dt)
             if figure.legs and any(f is not None for f in figure.feet):
-                self._feet(figure, poses, row, world, drop, chains, targets, ends)
+                self._feet(figure, poses, row, world, chains, targets, ends)
         if chains:
             solve(world, make_chains(chains), np.array(targets), np.array(ends))
 
@@ -322,12 +325,12 @@ class AvatarSystem(System):
                 hits.append(None if hit is not None and hit.key in loose else hit)
             return hits
 
-        future = self._rays
-        if future is None or future.done():
+        previous = self._rays
+        if previous is None or previous.done():
             self._rays = engine.physics.request(query)
-        if future is None:
-            future = self._rays
-        if not future.done():
+        # serial: this frame's answer is in already; threaded: last frame's, once it is
+        future = self._rays if self._rays.done() else previous
+        if future is None or not future.done():
             return None
         try:
             hits = future.result()
@@ -336,9 +339,9 @@ class AvatarSystem(System):
             return None
         return hits if len(hits) == len(rays) else None
 
-    def _settle(self, figure: _Figure, poses: Any, row: int, dt: float) -> float:
-        """Put the root on the ground: slopes exactly, steps over ``Smoothing`` seconds.
-        Returns how far the hips were lowered for a foot below the root's ground."""
+    def _settle(self, figure: _Figure, poses: Any, row: int, dt: float) -> None:
+        """Put the root on the ground: slopes exactly, steps over ``Smoothing`` seconds;
+        lower the hips when a foot stands lower than the root (so its leg reaches)."""
         assert figure.root_hit is not None
         ground = figure.root_hit[0]
         position = poses.position[row]
@@ -358,9 +361,8 @@ class AvatarSystem(System):
         drop = float(np.clip(root - min(feet), 0.0, figure.spec.step_height)) if feet else 0.0
         position[2] = root - drop
         figure.last_xy = position[:2].copy()
-        return drop
 
-    def _feet(self, figure: _Figure, poses: Any, row: int, world: np.ndarray, drop: float,
+    def _feet(self, figure: _Figure, poses: Any, row: int, world: np.ndarray,
               chains: list, targets: list, ends: list) -> None:
         """IK targets putting each ankle as high over its ground as the clip has it over
         the root, the foot turned to the ground's slope."""
@@ -374,7 +376,7 @@ class AvatarSystem(System):
             if hit is None:
                 continue
             foot = place @ world[base + ankle, :, 3]
-            height = foot[2] - poses.position[row, 2] - drop  # over the root, as animated
+            height = foot[2] - poses.position[row, 2]  # over the root, as animated
             target = np.array([foot[0], foot[1], hit[0] + height, 1.0])
             slope = from_to(up[None, :], (axes.T @ hit[1])[None, :])[0]
             chains.append((base, animator.rig.parents, hip, knee, ankle))
@@ -541,9 +543,12 @@ class AvatarSystem(System):
         engine = self._engine
         assert engine is not None
         t = engine.world.component_for_entity(entity, Transform)
-        world, _ = self.mixer.evaluate()
+        world, rows = self._posed
+        if entity not in rows:  # not drawn yet: as its clips have it now
+            world, _ = self.mixer.evaluate()
+            rows = {entity: self.mixer.animators[entity].row}
         m = self._placement(t.position, t.orientation, figure.spec.scale) @ world[
-            self.mixer.animators[entity].row + node]
+            rows[entity] + node]
         rot = m[:3, :3] / np.linalg.norm(m[:3, :3], axis=0)
         return m[:3, 3].copy(), matrix_to_quat(rot)
 
