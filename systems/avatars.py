@@ -509,7 +509,7 @@ class AvatarSystem(System):
         engine = self._engine
         assert engine is not None
         if target < 0 or not engine.world.entity_exists(target):
-            raise ValueError(f"hold: there is no such object to hold ({target})")
+            raise ValueError(f"there is no such object to hold ({target})")
         node = self._bone(figure, bone)
         body = engine.world.try_component(target, Physical)
         kind = "visual" if body is None else (
@@ -578,18 +578,18 @@ class AvatarSystem(System):
         opts = args[1] if len(args) > 1 and isinstance(args[1], dict) else {}
         unknown = set(opts) - {"fade", "speed", "loop", "offset", "orientation"}
         if unknown:
-            raise ValueError(f"{method}: unknown option {sorted(unknown)[0]!r} (fade, speed, "
-                             "loop; offset, orientation for hold)")
+            raise ValueError(f"unknown option {sorted(unknown)[0]!r} (fade, speed, loop; offset, "
+                             "orientation for hold)")
         timing = {k: opts[k] for k in ("fade", "speed", "loop") if k in opts}
         if method in ("play", "queue"):
             if not isinstance(first, str | dict):
-                raise ValueError(f"{method}: expected a clip name, got {first!r}")
+                raise ValueError(f"expected a clip name, got {first!r}")
             if isinstance(first, dict) and method == "play":
-                raise ValueError("play: expected a clip name (use blend{...} for weights)")
+                raise ValueError("expected a clip name (use blend{...} for weights)")
             getattr(mixer, method)(entity, first, **timing)
         elif method == "blend":
             if not isinstance(first, dict):
-                raise ValueError("blend: expected a table of weights, {Walk=0.7, Run=0.3}")
+                raise ValueError("expected a table of weights, {Walk=0.7, Run=0.3}")
             mixer.blend(entity, first, **timing)
         elif method == "stopAnimation":
             mixer.stop(entity, (first or {}).get("fade") if isinstance(first, dict) else None)
@@ -603,7 +603,7 @@ class AvatarSystem(System):
             return list(self.figures[entity].model.clip_names)
         elif method == "setPath":
             if not isinstance(first, list):
-                raise ValueError("setPath: expected a list of points {{x, y, z}, ...}")
+                raise ValueError("expected a list of points {{x, y, z}, ...}")
             self.set_path(entity, first, bool(args[1]) if len(args) > 1 else True)
         elif method == "hold":
             self.hold(entity, int(first) if isinstance(first, int) else -1, str(args[1]) if
@@ -613,7 +613,7 @@ class AvatarSystem(System):
             self.release(entity, int(first) if isinstance(first, int) else -1)
         elif method == "driveBone":
             if len(args) < 3:
-                raise ValueError("driveBone: expected (bone, {x, y, z}, {w, x, y, z})")
+                raise ValueError("expected (bone, {x, y, z}, {w, x, y, z})")
             self.drive_bone(entity, str(first), args[1], args[2])
         elif method == "releaseBone":
             self.release_bone(entity, str(first))
@@ -625,7 +625,7 @@ class AvatarSystem(System):
     @staticmethod
     def _hold_options(opts: Any) -> tuple[Any, Any]:
         if not isinstance(opts, dict):
-            raise ValueError("hold: options are a table {offset=, orientation=}")
+            raise ValueError("options are a table {offset=, orientation=}")
         offset = opts.get("offset", (0.0, 0.0, 0.0))
         rotation = euler_to_quat(opts.get("orientation", (0.0, 0.0, 0.0)))
         return offset, rotation

@@ -66,4 +66,5 @@ def position(engine: Engine, name: str) -> np.ndarray:
 
 
 def avatars(engine: Engine) -> AvatarSystem:
+    engine.start()  # the plugin's system makes itself a resource when set up
     return engine.resource(AvatarSystem)
