@@ -222,10 +222,10 @@ class AvatarSystem(System):
         entities = list(self.figures)
         rows = poses.rows(entities)
         self._walk(poses, entities, rows, dt)
-        world, _ = self.mixer.evaluate()
+        world, plan = self.mixer.evaluate()
         self._ground(engine, poses, entities, rows, world, dt)
         self._drive(poses, entities, rows, world)
-        self._publish(world)
+        self._publish(world, plan)
         self._posed = (world, {e: a.row for e, a in self.mixer.animators.items()})
         self._carry(engine, poses, entities, rows, world, dt)
 
@@ -411,21 +411,11 @@ class AvatarSystem(System):
         if items:
             solve(world, make_chains(items), np.array(targets), np.array(ends))
 
-    def _publish(self, world: np.ndarray) -> None:
+    def _publish(self, world: np.ndarray, plan: Any) -> None:
         """Joint matrices of every avatar, for the renderer."""
-        rows, ibms, offsets = [], [], {}
-        count = 0
-        for entity, animator in self.mixer.animators.items():
-            model = animator.rig.model
-            rows.append(animator.row + model.palette_nodes)
-            ibms.append(model.inverse_bind)
-            offsets[entity] = count
-            count += len(model.palette_nodes)
-        if not rows:
-            return
-        palette = world[np.concatenate(rows)] @ np.concatenate(ibms)
-        self.palettes.matrices = np.ascontiguousarray(palette[:, :3, :], np.float32)
-        self.palettes.offsets = offsets
+        self.palettes.matrices = np.ascontiguousarray(plan.palettes(world)[:, :3, :],
+                                                      np.float32)
+        self.palettes.offsets = plan.palette_offsets
         self.palettes.version += 1
 
     def _carry(self, engine: Engine, poses: Any, entities: list[int], rows: np.ndarray,

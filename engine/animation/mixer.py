@@ -383,13 +383,19 @@ class Mixer:
 
     def evaluate(self) -> tuple[np.ndarray, _Plan]:
         """Every avatar's nodes in the model frame ``(rows, 4, 4)`` (each animator's
-        nodes from ``animator.row``) and the plan that laid them out."""
+        nodes from ``animator.row``) and the plan that laid them out (its ``palettes``
+        turns them into joint matrices)."""
         plan = self._current_plan()
         return plan.evaluate(self), plan
 
 
 class _Plan:
-    """Index arrays for one layout of layers and avatars (rebuilt when it changes)."""
+    """Index arrays for one layout of layers and avatars (rebuilt when it changes).
+
+    Only the rows some layer animates are sampled and blended (each avatar's *animated
+    rows*: node and path pairs its clips have tracks for); every other row keeps the rest
+    pose. Hierarchies are composed over the nodes sorted by depth, each depth one slice.
+    """
 
     def __init__(self, mixer: Mixer) -> None:
         lib = mixer.library.packed()
@@ -399,40 +405,14 @@ class _Plan:
         used = np.flatnonzero(t.used[:n])
         animators = list(mixer.animators.values())
         index = {a.key: i for i, a in enumerate(animators)}
-        keep = np.array([int(t.avatar[r]) in index for r in used], bool) if len(used) else \
-            np.zeros(0, bool)
-        used = used[keep]
+        used = used[np.isin(t.avatar[used], list(index))] if len(used) else used
         # layers by avatar (in the animators' order), then by when they started
-        sort = np.lexsort((t.order[used], [index[int(a)] for a in t.avatar[used]])) if len(
-            used) else np.zeros(0, np.int64)
+        owner = np.array([index[int(a)] for a in t.avatar[used]], np.int64)
+        sort = np.lexsort((t.order[used], owner)) if len(used) else np.zeros(0, np.int64)
         self.layer_rows = used[sort]
-        self.group_rows = np.unique(t.group[self.layer_rows]) if len(used) else np.zeros(
-            0, np.int64)
-        layer_avatar = np.array([index[int(a)] for a in t.avatar[self.layer_rows]], np.int64)
-        self.layer_avatar = layer_avatar
-        # avatar rows: each avatar's nodes in a block
-        row = 0
-        avatar_rest, parents, depth = [], [], []
-        for a in animators:
-            a.row = row
-            rig = a.rig
-            avatar_rest.append(rig.rest)
-            parents.append(np.where(rig.parents >= 0, rig.parents + row, -1))
-            depth.append(rig.depth)
-            row += rig.nodes
-        self.rows = row
-        self.avatar_rest = np.concatenate(avatar_rest) if avatar_rest else np.zeros((0, 4))
-        parents_all = np.concatenate(parents) if parents else np.zeros(0, np.int64)
-        depth_all = np.concatenate(depth) if depth else np.zeros(0, np.int64)
-        self.levels = [(np.flatnonzero(depth_all == d), parents_all[depth_all == d])
-                       for d in range(int(depth_all.max()) + 1 if len(depth_all) else 0)]
-        # layer pose rows, one block of nodes per layer
-        rigs = [animators[a].rig for a in layer_avatar]
-        sizes = np.array([r.nodes for r in rigs], np.int64)
-        self.layer_start = np.concatenate([[0], np.cumsum(sizes)[:-1]]) if len(sizes) else \
-            np.zeros(0, np.int64)
-        self.layer_rest = np.concatenate([r.rest for r in rigs]) if rigs else np.zeros((0, 4))
-        # queries: every track of every layer's clip
+        self.layer_avatar = layer_avatar = owner[sort]
+        self.group_rows = np.unique(t.group[self.layer_rows])
+        self._avatars(animators)
         clips = [mixer.library.clips[int(c)] for c in t.clip[self.layer_rows]]
         ground = []
         for a, clip, row in zip(layer_avatar, clips, self.layer_rows, strict=True):
@@ -440,10 +420,34 @@ class _Plan:
             given = None if setting is None else setting.ground_speed
             ground.append(clip.ground_speed if given is None else given)
         self.layer_ground_speed = np.array(ground, np.float64)
+        # every track of every layer's clip; each avatar's animated rows
         tracks = [np.arange(c.first, c.stop) for c in clips]
         q_track = np.concatenate(tracks) if tracks else np.zeros(0, np.int64)
-        q_layer = np.repeat(np.arange(len(clips)), [len(x) for x in tracks]) if tracks else \
-            np.zeros(0, np.int64)
+        q_layer = np.repeat(np.arange(len(clips)), [len(x) for x in tracks]).astype(np.int64)
+        q_row = lib.track_node[q_track] * 3 + lib.track_path[q_track]  # within its rig
+        animated = [np.unique(q_row[layer_avatar[q_layer] == a]) for a in range(len(animators))]
+        sizes = np.array([len(x) for x in animated], np.int64)
+        avatar_start = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+        self.sparse_rest = np.concatenate(
+            [a.rig.rest[rows] for a, rows in zip(animators, animated, strict=True)]) \
+            if animators else np.zeros((0, 4))
+        self.sparse_full = np.concatenate(
+            [a.row * 3 + rows for a, rows in zip(animators, animated, strict=True)]) \
+            if animators else np.zeros(0, np.int64)
+        layer_size = sizes[layer_avatar]
+        self.layer_start = np.concatenate([[0], np.cumsum(layer_size)[:-1]]).astype(np.int64)
+        self.layer_rest = np.concatenate([self.sparse_rest[avatar_start[a]:avatar_start[a] + m]
+                                          for a, m in zip(layer_avatar, layer_size,
+                                                          strict=True)]) \
+            if len(layer_avatar) else np.zeros((0, 4))
+
+        def slot(layer: np.ndarray, row: np.ndarray) -> np.ndarray:
+            """Where (layer, rig row) sits in the layers' sparse pose array."""
+            a = layer_avatar[layer]
+            return self.layer_start[layer] + np.array(
+                [np.searchsorted(animated[x], r) for x, r in zip(a, row, strict=True)],
+                np.int64).reshape(-1)
+
         self.q_layer = q_layer
         self.q_first = lib.track_first_time[q_track]
         self.q_last = lib.track_last_time[q_track]
@@ -452,7 +456,7 @@ class _Plan:
         self.q_hi = lib.track_hi[q_track]
         self.q_end = lib.track_start[q_track] + lib.track_count[q_track] - 1
         path, interp = lib.track_path[q_track], lib.track_interp[q_track]
-        self.q_dst = (self.layer_start[q_layer] + lib.track_node[q_track]) * 3 + path
+        self.q_dst = slot(q_layer, q_row)
         self.q_step = np.flatnonzero(interp == STEP)
         self.q_cubic = np.flatnonzero(interp == CUBIC)
         self.q_cubic_rot = path[self.q_cubic] == ROTATION
@@ -460,32 +464,60 @@ class _Plan:
         self.q_rot = np.flatnonzero(plain & (path == ROTATION))
         self.q_lin = np.flatnonzero(plain & (path != ROTATION))
         # root motion taken off, per layer whose clip travels
-        moving = [i for i, c in enumerate(clips) if np.any(c.travel_local)]
-        self.rm_layer = np.array(moving, np.int64)
-        self.rm_dst = np.array([(self.layer_start[i] + clips[i].root_node) * 3 for i in moving],
-                               np.int64)
+        moving = np.array([i for i, c in enumerate(clips) if np.any(c.travel_local)], np.int64)
+        self.rm_layer = moving
+        self.rm_dst = slot(moving, np.array([clips[i].root_node * 3 for i in moving], np.int64))
         self.rm_local = np.array([clips[i].travel_local for i in moving]).reshape(-1, 3)
         self.rm_duration = np.array([clips[i].duration for i in moving], np.float64)
-        # blending rounds: the k-th layer of every avatar with at least k
-        counts = np.bincount(layer_avatar, minlength=len(animators)) if len(animators) else \
-            np.zeros(0, np.int64)
-        first_layer = np.concatenate([[0], np.cumsum(counts)[:-1]]) if len(counts) else counts
-        self.layer_seq = np.arange(len(layer_avatar)) - first_layer[layer_avatar] if len(
-            layer_avatar) else np.zeros(0, np.int64)
-        self.first_layer = first_layer
+        # blending rounds: the k-th layer of every avatar with at least k, its animated rows
+        counts = np.bincount(layer_avatar, minlength=len(animators))
+        self.first_layer = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+        layer_seq = np.arange(len(layer_avatar)) - self.first_layer[layer_avatar]
         self.rounds = []
         for k in range(int(counts.max()) if len(counts) else 0):
-            layers = np.flatnonzero(self.layer_seq == k)
-            nodes = sizes[layers]
-            avatar_base = np.array([animators[a].row for a in layer_avatar[layers]], np.int64)
-            offsets = np.concatenate([np.arange(m) for m in nodes]) if len(nodes) else \
-                np.zeros(0, np.int64)
-            which = np.repeat(layers, nodes)
-            dst = (np.repeat(avatar_base, nodes) + offsets) * 3
-            src = (self.layer_start[which] + offsets) * 3
-            self.rounds.append((np.concatenate([dst, dst + 2]), np.concatenate([src, src + 2]),
-                                np.concatenate([which, which]), dst + 1, src + 1, which,
-                                layers))
+            layers = np.flatnonzero(layer_seq == k)
+            m = layer_size[layers]
+            offsets = np.concatenate([np.arange(x) for x in m]).astype(np.int64)
+            which = np.repeat(layers, m)
+            dst = np.repeat(avatar_start[layer_avatar[layers]], m) + offsets
+            src = self.layer_start[which] + offsets
+            rot = np.concatenate([animated[layer_avatar[x]] % 3 == ROTATION for x in layers])
+            self.rounds.append((dst[~rot], src[~rot], which[~rot], dst[rot], src[rot],
+                                which[rot], layers))
+
+    def _avatars(self, animators: list[Animator]) -> None:
+        """Each avatar's nodes as a block (``animator.row``), their rest pose, the depth
+        order the hierarchy is composed in, and where the palettes come from."""
+        row = 0
+        rest, parents, depth, palette_rows, ibms = [], [], [], [], []
+        self.palette_offsets: dict[int, int] = {}
+        joints = 0
+        for a in animators:
+            a.row = row
+            rig = a.rig
+            rest.append(rig.rest)
+            parents.append(np.where(rig.parents >= 0, rig.parents + row, -1))
+            depth.append(rig.depth)
+            palette_rows.append(rig.model.palette_nodes + row)
+            ibms.append(rig.model.inverse_bind)
+            self.palette_offsets[a.key] = joints
+            joints += rig.joints
+            row += rig.nodes
+        self.rows = row
+        self.avatar_rest = np.concatenate(rest) if rest else np.zeros((0, 4))
+        parent = np.concatenate(parents) if parents else np.zeros(0, np.int64)
+        level = np.concatenate(depth) if depth else np.zeros(0, np.int64)
+        self.order = np.argsort(level, kind="stable")  # sorted position -> block row
+        self.unorder = np.argsort(self.order)  # block row -> sorted position
+        bounds = np.searchsorted(level[self.order], np.arange(int(level.max()) + 2)) if len(
+            level) else np.zeros(1, np.int64)
+        self.roots = slice(0, int(bounds[1]) if len(bounds) > 1 else 0)
+        self.levels = [(slice(int(bounds[d]), int(bounds[d + 1])),
+                        self.unorder[parent[self.order[bounds[d]:bounds[d + 1]]]])
+                       for d in range(1, len(bounds) - 1)]
+        self.palette_rows = np.concatenate(palette_rows) if palette_rows else np.zeros(
+            0, np.int64)
+        self.inverse_bind = np.concatenate(ibms) if ibms else np.zeros((0, 4, 4))
 
     def evaluate(self, mixer: Mixer) -> np.ndarray:
         lib = mixer.library
@@ -521,8 +553,8 @@ class _Plan:
         if len(self.rm_layer):
             frac = layer_time[self.rm_layer] / self.rm_duration
             pose[self.rm_dst, :3] -= frac[:, None] * self.rm_local
-        # blend each avatar's layers onto its rest pose
-        avatar = self.avatar_rest.copy()
+        # blend each avatar's layers onto its rest pose, animated rows only
+        sparse = self.sparse_rest.copy()
         if len(rows):
             w = t.weight[rows]
             running = np.maximum(0.0, 1.0 - np.bincount(self.layer_avatar, w,
@@ -533,24 +565,32 @@ class _Plan:
                 f_layer = np.divide(w[layers], running[owners], out=np.zeros(len(layers)),
                                     where=running[owners] > 0)
                 if np.all(f_layer == 1.0):  # the usual first round: nothing to mix with
-                    avatar[ts_dst] = pose[ts_src]
-                    avatar[r_dst] = pose[r_src]
+                    sparse[ts_dst] = pose[ts_src]
+                    sparse[r_dst] = pose[r_src]
                     continue
                 factor = np.zeros(len(rows))
                 factor[layers] = f_layer
-                avatar[ts_dst] += factor[ts_which][:, None] * (pose[ts_src] - avatar[ts_dst])
-                avatar[r_dst] = fast_slerp(avatar[r_dst], pose[r_src], factor[r_which])
-        return self._hierarchy(avatar)
+                sparse[ts_dst] += factor[ts_which][:, None] * (pose[ts_src] - sparse[ts_dst])
+                sparse[r_dst] = fast_slerp(sparse[r_dst], pose[r_src], factor[r_which])
+        full = self.avatar_rest.copy()
+        full[self.sparse_full] = sparse
+        return self._hierarchy(full)
 
     def _hierarchy(self, pose: np.ndarray) -> np.ndarray:
-        local = np.zeros((self.rows, 4, 4))
-        local[:, :3, :3] = quat_to_matrix(pose[1::3]) * pose[2::3, None, :3]
-        local[:, :3, 3] = pose[0::3, :3]
-        local[:, 3, 3] = 1.0
-        world = local
-        for rows, parents in self.levels[1:]:
-            world[rows] = world[parents] @ local[rows]
-        return world
+        """Model-frame matrices of every node, composed down the depths (one slice each)."""
+        ordered = pose.reshape(-1, 3, 4)[self.order]
+        world = np.empty((self.rows, 4, 4))
+        world[:, :3, :3] = quat_to_matrix(ordered[:, ROTATION]) * ordered[:, 2, None, :3]
+        world[:, :3, 3] = ordered[:, 0, :3]
+        world[:, 3, :3] = 0.0
+        world[:, 3, 3] = 1.0
+        for rows, parents in self.levels:
+            world[rows] = world[parents] @ world[rows]
+        return world[self.unorder]
+
+    def palettes(self, world: np.ndarray) -> np.ndarray:
+        """Every avatar's joint matrices ``(J, 4, 4)``, in ``palette_offsets`` order."""
+        return world[self.palette_rows] @ self.inverse_bind
 
 
 def fast_slerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray) -> np.ndarray:
