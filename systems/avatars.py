@@ -31,7 +31,7 @@ import numpy as np
 from components import Avatar, Name, Physical, Shape, Transform, Visual
 from components.physical import BodyKind
 from engine.animation import AnimationEnded, AnimationError, ClipSettings, Mixer, Palettes
-from engine.animation.ik import from_to, make_chains, solve
+from engine.animation.ik import Chains, from_to, make_chains, solve
 from engine.assets import AssetError, Assets, SkinnedModel
 from engine.assets.skinned import AVATAR_AXES
 from engine.messages import MessageLog
@@ -77,6 +77,17 @@ class _Drive:
     orientation: np.ndarray
 
 
+@dataclass(frozen=True, slots=True)
+class _Legs:
+    """The legs of the ground-following avatars: their IK chains, the avatar (among the
+    followers) each belongs to, and each ankle's row."""
+
+    key: tuple
+    chains: Chains
+    owner: np.ndarray
+    ankle: np.ndarray
+
+
 @dataclass(slots=True)
 class _Figure:
     """What the plugin keeps per avatar besides its animation."""
@@ -93,9 +104,7 @@ class _Figure:
     legs: list[tuple[int, int, int]] = field(default_factory=list)
     held: list[_Held] = field(default_factory=list)
     drives: dict[int, _Drive] = field(default_factory=dict)
-    feet: list[tuple[float, np.ndarray] | None] = field(default_factory=list)
-    root_hit: tuple[float, np.ndarray] | None = None
-    last_xy: np.ndarray | None = None  # where the root was when the ground was last seen
+    last_xy: tuple[float, float] | None = None  # where the root was when last on ground
 
 
 class AvatarSystem(System):
@@ -113,6 +122,8 @@ class AvatarSystem(System):
         self._engine: Engine | None = None
         self._rays: Any = None  # the physics query in flight (threaded mode)
         self._loose: set[int] = set()  # dynamic bodies: not ground to stand on
+        self._physics_time: float | None = None
+        self._leg_cache: _Legs | None = None
         #: the last frame's final skeletons (IK included) and each avatar's first row
         self._posed: tuple[np.ndarray, dict[int, int]] = (np.zeros((0, 4, 4)), {})
         self._messages = MessageLog(log)
@@ -261,58 +272,86 @@ class AvatarSystem(System):
             poses.position[row, 0] -= math.sin(heading) * speed * dt
             poses.position[row, 1] += math.cos(heading) * speed * dt
 
+    def _legs(self, followers: list[_Figure]) -> _Legs:
+        """Every leg of the ground-following avatars, laid out for batched IK (kept while
+        the avatars and their skeletons' rows stay)."""
+        key = tuple((f.entity, self.mixer.animators[f.entity].row) for f in followers)
+        if self._leg_cache is not None and self._leg_cache.key == key:
+            return self._leg_cache
+        items, owner, ankles = [], [], []
+        for i, figure in enumerate(followers):
+            animator = self.mixer.animators[figure.entity]
+            for hip, knee, ankle in figure.legs:
+                items.append((animator.row, animator.rig.parents, hip, knee, ankle))
+                owner.append(i)
+                ankles.append(animator.row + ankle)
+        self._leg_cache = _Legs(key, make_chains(items), np.array(owner, np.int64),
+                                np.array(ankles, np.int64))
+        return self._leg_cache
+
     def _ground(self, engine: Engine, poses: Any, entities: list[int], rows: np.ndarray,
                 world: np.ndarray, dt: float) -> None:
-        """Cast every ray down in one query; roots onto the ground, feet by IK."""
-        rays: list[tuple[np.ndarray, float]] = []
-        owners: list[tuple[_Figure, int]] = []  # (figure, -1 root | leg index)
-        for entity, row in zip(entities, rows.tolist(), strict=True):
-            figure = self.figures[entity]
-            if not figure.spec.ground_follow or row < 0:
-                continue
-            position = poses.position[row]
-            top = position[2] + figure.spec.step_height
-            rays.append((np.array([position[0], position[1], top]),
-                         figure.spec.step_height + RAY_DROP))
-            owners.append((figure, -1))
-            if figure.legs:
-                place = self._placement(position, poses.orientation[row], figure.spec.scale)
-                base = self.mixer.animators[entity].row
-                for k, (_, _, ankle) in enumerate(figure.legs):
-                    foot = place @ world[base + ankle, :, 3]
-                    rays.append((np.array([foot[0], foot[1], top]),
-                                 figure.spec.step_height + RAY_DROP))
-                    owners.append((figure, k))
-        if not rays:
+        """One query casts every ray down (under each root and each foot); roots onto the
+        ground, then feet by IK, batched over every avatar."""
+        pairs = [(self.figures[e], r) for e, r in zip(entities, rows.tolist(), strict=True)
+                 if self.figures[e].spec.ground_follow and r >= 0]
+        if not pairs:
             return
-        hits = self._cast(engine, rays)
-        if hits is not None:
-            for (figure, which), hit in zip(owners, hits, strict=True):
-                found = None if hit is None else (float(hit.position[2]),
-                                                  np.asarray(hit.normal, np.float64))
-                if which < 0:
-                    figure.root_hit = found
-                    figure.feet = [None] * len(figure.legs)
-                else:
-                    figure.feet[which] = found
-        chains, targets, ends = [], [], []
-        for entity, row in zip(entities, rows.tolist(), strict=True):
-            figure = self.figures[entity]
-            if not figure.spec.ground_follow or row < 0 or figure.root_hit is None:
-                continue
-            self._settle(figure, poses, row, dt)
-            if figure.legs and any(f is not None for f in figure.feet):
-                self._feet(figure, poses, row, world, chains, targets, ends)
-        if chains:
-            solve(world, make_chains(chains), np.array(targets), np.array(ends))
+        followers = [f for f, _ in pairs]
+        at = np.array([r for _, r in pairs], np.int64)
+        position = poses.position[at].copy()
+        scale = np.array([f.spec.scale for f in followers])
+        step = np.array([f.spec.step_height for f in followers])
+        place = compose(position, poses.orientation[at], scale[:, None] * np.ones(3)) \
+            @ AVATAR_AXES
+        legs = self._legs(followers)
+        ankle = np.einsum("lij,lj->li", place[legs.owner], world[legs.ankle, :, 3])[:, :3]
+        tops = np.concatenate([position[:, 2], position[legs.owner, 2]]) + np.concatenate(
+            [step, step[legs.owner]])
+        origins = np.column_stack([np.concatenate([position[:, :2], ankle[:, :2]]), tops])
+        hits = self._cast(engine, origins, np.concatenate([step, step[legs.owner]]) + RAY_DROP)
+        if hits is None:
+            return
+        n = len(followers)
+        height = np.array([np.nan if h is None else h.position[2] for h in hits])
+        normal = np.array([(0.0, 0.0, 1.0) if h is None else h.normal for h in hits],
+                          np.float64).reshape(-1, 3)
+        foot_ground = height[n:]
+        lowest = np.full(n, np.inf)  # the lowest ground under each avatar's feet
+        np.minimum.at(lowest, legs.owner, np.where(np.isnan(foot_ground), np.inf, foot_ground))
+        for i, figure in enumerate(followers):
+            if not np.isnan(height[i]):
+                position[i, 2] = self._settle(figure, position[i], float(height[i]),
+                                              float(lowest[i]), dt)
+        poses.position[at, 2] = position[:, 2]
+        if not len(legs.owner):
+            return
+        # IK: each ankle as high over its ground as the clip has it over the root, the foot
+        # turned to the slope; a foot with no ground under it keeps its pose
+        rise = ankle[:, 2] - place[legs.owner, 2, 3]  # over the root, as animated
+        ok = ~np.isnan(foot_ground) & ~np.isnan(height[legs.owner])
+        target = ankle.copy()
+        target[ok, 2] = foot_ground[ok] + rise[ok]
+        place[:, 2, 3] = position[:, 2]
+        inverse = np.linalg.inv(place)[legs.owner]
+        local = np.einsum("lij,lj->li", inverse[:, :3, :3], target) + inverse[:, :3, 3]
+        axes = place[legs.owner, :3, :3] / scale[legs.owner, None, None]  # model -> world
+        up = axes[:, 2, :]  # world up in the model frame: the third row of the rotation
+        turned = np.einsum("lji,lj->li", axes, normal[n:])
+        slope = from_to(up, np.where(ok[:, None], turned, up))
+        solve(world, legs.chains, np.where(ok[:, None], local, world[legs.chains.c, :3, 3]),
+              slope @ world[legs.chains.c, :3, :3])
 
-    def _cast(self, engine: Engine, rays: list[tuple[np.ndarray, float]]) -> list[Any] | None:
+    def _cast(self, engine: Engine, origins: np.ndarray, lengths: np.ndarray
+              ) -> list[Any] | None:
         """The hits of ``rays`` (straight down) on what one can stand on — not capsules,
         not dynamic bodies (a ray goes on past a ball): now in serial mode; in threaded
         mode the answer to last frame's query (None while it is not in)."""
         down = np.array([0.0, 0.0, -1.0])
         loose = frozenset(self._loose)
         mask = 0xFFFFFFFF & ~CAPSULE_CATEGORY
+
+        rays = list(zip(origins, lengths.tolist(), strict=True))
 
         def query(backend: Any) -> list[Any]:
             hits = []
@@ -339,14 +378,14 @@ class AvatarSystem(System):
             return None
         return hits if len(hits) == len(rays) else None
 
-    def _settle(self, figure: _Figure, poses: Any, row: int, dt: float) -> None:
-        """Put the root on the ground: slopes exactly, steps over ``Smoothing`` seconds;
-        lower the hips when a foot stands lower than the root (so its leg reaches)."""
-        assert figure.root_hit is not None
-        ground = figure.root_hit[0]
-        position = poses.position[row]
+    def _settle(self, figure: _Figure, position: np.ndarray, ground: float, lowest: float,
+                dt: float) -> float:
+        """The root's height on the ground: slopes exactly, steps over ``Smoothing``
+        seconds, the hips lower when a foot stands lower than the root (so its leg
+        reaches)."""
+        x, y = float(position[0]), float(position[1])
         if figure.ground is not None and figure.last_xy is not None:
-            walked = float(np.hypot(*(position[:2] - figure.last_xy)))
+            walked = math.hypot(x - figure.last_xy[0], y - figure.last_xy[1])
             rise = ground - figure.ground
             if abs(rise) > MAX_SLOPE * walked + 1e-3:  # a step: keep the root where it was
                 figure.offset -= rise
@@ -355,33 +394,11 @@ class AvatarSystem(System):
         if abs(figure.offset) < 1e-5:
             figure.offset = 0.0
         figure.ground = ground
+        figure.last_xy = (x, y)
         root = ground + figure.offset
-        feet = [f[0] for f in figure.feet if f is not None]
-        # a foot on lower ground than the root: the hips go down so its leg reaches
-        drop = float(np.clip(root - min(feet), 0.0, figure.spec.step_height)) if feet else 0.0
-        position[2] = root - drop
-        figure.last_xy = position[:2].copy()
-
-    def _feet(self, figure: _Figure, poses: Any, row: int, world: np.ndarray,
-              chains: list, targets: list, ends: list) -> None:
-        """IK targets putting each ankle as high over its ground as the clip has it over
-        the root, the foot turned to the ground's slope."""
-        place = self._placement(poses.position[row], poses.orientation[row], figure.spec.scale)
-        inverse = np.linalg.inv(place)
-        axes = place[:3, :3] / figure.spec.scale  # model frame -> world, a rotation
-        animator = self.mixer.animators[figure.entity]
-        base = animator.row
-        up = axes.T @ np.array([0.0, 0.0, 1.0])
-        for (hip, knee, ankle), hit in zip(figure.legs, figure.feet, strict=True):
-            if hit is None:
-                continue
-            foot = place @ world[base + ankle, :, 3]
-            height = foot[2] - poses.position[row, 2]  # over the root, as animated
-            target = np.array([foot[0], foot[1], hit[0] + height, 1.0])
-            slope = from_to(up[None, :], (axes.T @ hit[1])[None, :])[0]
-            chains.append((base, animator.rig.parents, hip, knee, ankle))
-            targets.append((inverse @ target)[:3])
-            ends.append(slope @ world[base + ankle, :3, :3])
+        drop = min(max(root - lowest, 0.0), figure.spec.step_height) if lowest < math.inf \
+            else 0.0
+        return root - drop
 
     def _drive(self, poses: Any, entities: list[int], rows: np.ndarray, world: np.ndarray
                ) -> None:
@@ -421,6 +438,7 @@ class AvatarSystem(System):
     def _carry(self, engine: Engine, poses: Any, entities: list[int], rows: np.ndarray,
                world: np.ndarray, dt: float) -> None:
         """Held objects onto their bones; capsules onto their avatars."""
+        dt = self._lead(engine, dt)
         for entity, row in zip(entities, rows.tolist(), strict=True):
             figure = self.figures[entity]
             if row < 0:
@@ -442,6 +460,16 @@ class AvatarSystem(System):
                 at = bone[:3, 3] + rot @ held.offset
                 quat = quat_multiply(matrix_to_quat(rot), held.rotation)
                 self._move(engine, held, at, quat, dt)
+
+    def _lead(self, engine: Engine, dt: float) -> float:
+        """The time a kinematic target is reached in: this frame's step (serial mode); in
+        threaded mode the physics time the last frame took, as the backend keeps the
+        target's velocity for every step it takes until the next frame's target."""
+        now = engine.physics.time
+        last, self._physics_time = self._physics_time, now
+        if engine.config.mode != "threaded" or last is None:
+            return dt
+        return float(np.clip(now - last, engine.config.dt, 1.0))
 
     def _move(self, engine: Engine, held: _Held, at: np.ndarray, quat: np.ndarray,
               dt: float) -> None:
