@@ -299,9 +299,15 @@ class Mixer:
         t.weight_to[row] = target
         t.fade_elapsed[row] = 0.0
         t.fade_length[row] = max(0.0, length)
-        if target == 0.0 and length <= 0.0:
+        if target == 0.0 and length <= 0.0 and not self._current(row):
             self._drop_layer(row)
             self._dirty = True
+
+    def _current(self, row: int) -> bool:
+        """Whether layer ``row`` belongs to what its avatar plays now (a clip blended at
+        weight 0 stays, in step, ready to be weighted up)."""
+        owner = self.animators.get(int(self.layers.avatar[row]))
+        return owner is not None and owner.group == int(self.layers.group[row])
 
     def _drop_layer(self, row: int) -> None:
         if self.layers.used[row]:
@@ -361,8 +367,9 @@ class Mixer:
                 g.ended[group] = True
                 ended.extend(self._ended(group))
             for row in faded_out.tolist():
-                self._drop_layer(row)
-                self._dirty = True
+                if self.layers.used[row] and not self._current(row):
+                    self._drop_layer(row)
+                    self._dirty = True
         return ended
 
     def _ended(self, group: int) -> list[AnimationEnded]:
