@@ -210,8 +210,8 @@ class AvatarSystem(System):
         body = Physical(kind=BodyKind.KINEMATIC, mass=None, gravity=False, can_sleep=False,
                         category=CAPSULE_CATEGORY, shapes=[Shape("capsule", (radius, length),
                                       offset=(0.0, 0.0, radius + 0.5 * length))])
-        return engine.spawn(Name(f"{self._name(entity)}:capsule"),
-                            Transform(t.position.copy(), t.orientation.copy()), body)
+        return engine.spawn(Name(f"{self._name(entity)}:capsule"), Transform(t.position.copy()),
+                            body)
 
     def _name(self, entity: int) -> str:
         engine = self._engine
@@ -445,8 +445,9 @@ class AvatarSystem(System):
                 continue
             position, orientation = poses.position[row], poses.orientation[row]
             if figure.capsule is not None and engine.world.entity_exists(figure.capsule):
-                self._push(engine, cmd.SetKinematicTarget(figure.capsule, position.copy(),
-                                                          orientation.copy(), dt))
+                # upright and round: it never turns (nor leaves a 2D backend's plane)
+                engine.physics.push(cmd.SetKinematicTarget(figure.capsule, position.copy(),
+                                                           (1.0, 0.0, 0.0, 0.0), dt))
             if not figure.held:
                 continue
             place = self._placement(position, orientation, figure.spec.scale)
@@ -474,7 +475,7 @@ class AvatarSystem(System):
     def _move(self, engine: Engine, held: _Held, at: np.ndarray, quat: np.ndarray,
               dt: float) -> None:
         if held.kind == "kinematic":
-            self._push(engine, cmd.SetKinematicTarget(held.entity, at, quat, dt))
+            engine.physics.push(cmd.SetKinematicTarget(held.entity, at, quat, dt))
         elif held.kind == "dynamic":  # put back each frame, moving as the hand does
             velocity = np.zeros(3) if held.last is None or dt <= 0 else (at - held.last) / dt
             engine.physics.set_pose(held.entity, at, quat)
@@ -485,9 +486,6 @@ class AvatarSystem(System):
                 engine.world.poses.position[row] = at
                 engine.world.poses.orientation[row] = quat
         held.last = at
-
-    def _push(self, engine: Engine, command: cmd.Command) -> None:
-        engine.physics.push(command)
 
     def _tell_scripts(self, event: AnimationEnded) -> None:
         """``onAnimationEnd`` in the avatar's own scripts and in scene scripts."""
