@@ -41,26 +41,36 @@ out vec3 o_normal;
 out vec2 o_uv;
 out vec4 o_color;
 
-mat4 joint_matrix(float joint) {
-    if (i_palette < 0.0) return mat4(1.0);  // no pose yet: the bind pose
+// the three rows of joint ``joint``'s 3x4 matrix, weighted, added to r0..r2
+void add_joint(float joint, float weight, inout vec4 r0, inout vec4 r1, inout vec4 r2) {
     int texel = (int(i_palette + 0.5) + int(joint + 0.5)) * 3;
     ivec2 at = ivec2(texel % %(width)d, texel / %(width)d);
-    vec4 r0 = texelFetch(u_palette, at, 0);
-    vec4 r1 = texelFetch(u_palette, at + ivec2(1, 0), 0);
-    vec4 r2 = texelFetch(u_palette, at + ivec2(2, 0), 0);
-    return transpose(mat4(r0, r1, r2, vec4(0.0, 0.0, 0.0, 1.0)));
+    r0 += weight * texelFetch(u_palette, at, 0);
+    r1 += weight * texelFetch(u_palette, at + ivec2(1, 0), 0);
+    r2 += weight * texelFetch(u_palette, at + ivec2(2, 0), 0);
+}
+
+// normals go through the cofactor matrix: the inverse transpose, scaled
+vec3 cofactor(vec3 c0, vec3 c1, vec3 c2, vec3 n) {
+    return cross(c1, c2) * n.x + cross(c2, c0) * n.y + cross(c0, c1) * n.z;
 }
 
 void main() {
-    mat4 skin = in_weights.x * joint_matrix(in_joints.x)
-              + in_weights.y * joint_matrix(in_joints.y)
-              + in_weights.z * joint_matrix(in_joints.z)
-              + in_weights.w * joint_matrix(in_joints.w);
-    mat4 m = i_model * skin;
-    o_position = (m * vec4(in_position, 1.0)).xyz;
-    mat3 l = mat3(m);  // normals by the cofactor matrix: the inverse transpose, scaled
-    vec3 n = cross(l[1], l[2]) * in_normal.x + cross(l[2], l[0]) * in_normal.y
-           + cross(l[0], l[1]) * in_normal.z;
+    vec3 p = in_position;
+    vec3 n = in_normal;
+    if (i_palette >= 0.0) {  // without a pose yet: the bind pose
+        vec4 r0 = vec4(0.0), r1 = vec4(0.0), r2 = vec4(0.0);
+        add_joint(in_joints.x, in_weights.x, r0, r1, r2);
+        add_joint(in_joints.y, in_weights.y, r0, r1, r2);
+        add_joint(in_joints.z, in_weights.z, r0, r1, r2);
+        add_joint(in_joints.w, in_weights.w, r0, r1, r2);
+        p = vec3(dot(r0, vec4(in_position, 1.0)), dot(r1, vec4(in_position, 1.0)),
+                 dot(r2, vec4(in_position, 1.0)));
+        n = cofactor(vec3(r0.x, r1.x, r2.x), vec3(r0.y, r1.y, r2.y), vec3(r0.z, r1.z, r2.z), n);
+    }
+    o_position = (i_model * vec4(p, 1.0)).xyz;
+    mat3 m = mat3(i_model);
+    n = cofactor(m[0], m[1], m[2], n);
     float len = length(n);
     o_normal = len > 0.0 ? n / len : vec3(0.0, 0.0, 1.0);
     o_uv = in_uv;
