@@ -8,6 +8,7 @@ Orientations are unit quaternions ``(w, x, y, z)``. The vocabularies
 :class:`~components.shape.ShapeKind`) live beside the component that uses them.
 """
 
+from components.avatar import Avatar, ClipSpec, Hold
 from components.camera import Camera
 from components.controller import Controller
 from components.hand import Hand
@@ -22,9 +23,12 @@ from components.transform import Transform
 from components.visual import Visual
 
 __all__ = [
+    "Avatar",
     "Camera",
+    "ClipSpec",
     "Controller",
     "Hand",
+    "Hold",
     "Joint",
     "Light",
     "MaterialProps",

@@ -46,3 +46,20 @@ class ScriptStates(Protocol):
         """Entity -> the state of the script it runs; ``object_name`` gives the scene ID
         an entity is written under (None: it is not written)."""
         ...
+
+
+#: The methods an avatar's handle has in Lua (``avatar:play("Run", {fade=0.3})``); each is
+#: :meth:`AvatarControl.script_call` with its name and arguments.
+AVATAR_METHODS = ("play", "queue", "blend", "stopAnimation", "animation", "clips", "setPath",
+                  "hold", "release", "driveBone", "releaseBone", "bonePose")
+
+
+class AvatarControl(Protocol):
+    """Animating avatars from scripts (the avatars plugin)."""
+
+    plugin = "avatars"
+
+    def script_call(self, entity: int, method: str, args: list[Any]) -> Any:
+        """Run one of :data:`AVATAR_METHODS` on avatar ``entity``; plain data in and out;
+        raises ValueError (KeyError for an object that is not an avatar) with a message
+        naming what exists."""

@@ -24,6 +24,7 @@ PLUGINS: dict[str, str] = {
     "render": "systems.render:RenderPlugin",
     "sound": "systems.sound:SoundPlugin",
     "input": "systems.input:InputPlugin",
+    "avatars": "systems.avatars:AvatarsPlugin",
 }
 ALIASES: dict[str, str] = {"osg": "render", "osgsim": "render", "openalpp": "sound",
                            "openal": "sound", "ode": "physics", "dynamics": "physics"}
@@ -60,7 +61,8 @@ def wants_render(config: EngineConfig) -> bool:
 
 def default_plugins(config: EngineConfig) -> list[Plugin]:
     plugins = [RegistryPlugin(), *(load_plugin(name) for name in
-                                   ("input", "physics", "scripting", "controllers", "sound"))]
+                                   ("input", "physics", "scripting", "controllers", "sound",
+                                    "avatars"))]
     if wants_render(config):
         plugins.append(load_plugin("render"))
     return plugins

@@ -18,8 +18,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from components import Camera, Light, Transform, Visual
-from engine.assets import Assets
+from components import Avatar, Camera, Light, Transform, Visual
+from engine.animation import Palettes
+from engine.assets import AssetError, Assets
 from engine.events import KeyEvent
 from engine.input.desktop import WindowDevice
 from engine.realtime import CostLog
@@ -114,7 +115,7 @@ class RenderSystem(System):
     """Keeps a :class:`Renderer` in step with the world and draws a frame per engine frame."""
 
     phase = Phase.RENDER
-    reads = (Visual, Transform, Camera, Light)
+    reads = (Visual, Transform, Camera, Light, Avatar)
     writes = ()
 
     def __init__(self, options: RenderOptions | None = None) -> None:
@@ -135,6 +136,7 @@ class RenderSystem(System):
         self._last = FrameStats()  # what the last frame drawn cost (kept after shutdown)
         self._errors: list[str] = []
         self._drawn = False  # whether the last frame was drawn (headless runs skip frames)
+        self._palette_version = -1
 
     # -- API for scripts and tools --------------------------------------------
     def set_uniform(self, state_id: str, name: str, value: UniformValue) -> None:
@@ -239,6 +241,7 @@ class RenderSystem(System):
         world = engine.world
         self._sync_visuals(engine)
         self._sync_poses(engine)
+        self._sync_palettes(engine)
         renderer.camera = self._camera(engine)
         lights = []
         for entity, (light,) in world.get_components(Light):
@@ -273,7 +276,7 @@ class RenderSystem(System):
                 row = world.poses.row_of.get(entity)
                 pos = (0.0, 0.0, 0.0) if row is None else world.poses.position[row]
                 quat = (1.0, 0.0, 0.0, 0.0) if row is None else world.poses.orientation[row]
-                renderer.add(entity, visual, pos, quat)
+                renderer.add(entity, visual, pos, quat, skin=self._skin(engine, entity))
                 self._visuals[entity] = visual
                 self._signatures[entity] = sig
                 changed = True
@@ -283,6 +286,24 @@ class RenderSystem(System):
         if changed:
             self._keys = np.fromiter(self._visuals, dtype=np.int64, count=len(self._visuals))
             self._rows_cache = None
+
+    @staticmethod
+    def _skin(engine: Engine, entity: int) -> Any:
+        """The skinned model an avatar is drawn with (None: not an avatar, or its model
+        cannot be read, which the scene loader told; then it is drawn as a plain model)."""
+        avatar = engine.world.try_component(entity, Avatar)
+        if avatar is None:
+            return None
+        try:
+            return Assets.of(engine).skinned(avatar.model)
+        except AssetError:
+            return None
+
+    def _sync_palettes(self, engine: Engine) -> None:
+        palettes = engine.try_resource(Palettes)
+        if palettes is not None and palettes.version != self._palette_version:
+            self._require().set_palettes(palettes.matrices, palettes.offsets)
+            self._palette_version = palettes.version
 
     def _sync_poses(self, engine: Engine) -> None:
         renderer = self._require()

@@ -29,6 +29,7 @@ BENCHMARKS: dict[str, str] = {
     "render": "tools.bench_render:run_bench",
     "input": "tools.bench_input:run_bench",
     "contacts": "tools.bench:bench_contacts",
+    "avatars": "tools.bench_avatars:run_bench",
 }
 
 
@@ -98,6 +99,9 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "input": _input_figures,
     "contacts": _by_row(lambda r: f"{r['pairs']} touching pairs", "ms/frame", "unique ms",
                         "ms/frame", "pair keys and np.unique of the same contacts alone"),
+    "avatars": lambda rows: [Figure(f"{r['avatars']} avatars, {r['case']}", r["ms_per_frame"],
+                                    r["reference_ms"], "ms/frame", r["reference"])
+                             for r in rows if r["ms_per_frame"] > 0],
 }
 
 

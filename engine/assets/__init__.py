@@ -7,8 +7,9 @@ that asked for it::
 
     main.scene:12:30: error: cannot load model "rock.obj" (content/x/rock.obj): why
 
-Built in: models through trimesh (.obj .stl .ply .glb .gltf .dae), images through
-Pillow (.png .jpg .bmp .tga .tif .gif .webp), sounds through libsndfile (.wav .ogg
+Built in: models through trimesh (.obj .stl .ply .glb .gltf .dae), skinned and animated
+models for avatars through pygltflib (.glb .gltf .vrm, :mod:`engine.assets.skinned`), images
+through Pillow (.png .jpg .bmp .tga .tif .gif .webp), sounds through libsndfile (.wav .ogg
 .flac .aiff). A new format is one function registered for its extension — put it in a
 content folder's ``systems/*.py`` (imported before the scene is built) or any module
 imported before loading. It returns a :class:`ModelAsset` (:func:`mesh_part` makes a
@@ -39,7 +40,7 @@ could not convert string to float: 'zero'
 >>> unregister_loader("model", ".tri")
 """
 
-from engine.assets import loaders
+from engine.assets import loaders, skinned
 from engine.assets.registry import (
     KINDS,
     Loader,
@@ -50,16 +51,21 @@ from engine.assets.registry import (
     unregister_loader,
 )
 from engine.assets.service import AssetError, Assets, Where, reason
+from engine.assets.skinned import AnimationClip, Channel, SkinnedModel, SkinnedPart
 from engine.assets.types import ImageAsset, MeshPart, ModelAsset, mesh_part, vertex_normals
 
 __all__ = [
     "KINDS",
+    "AnimationClip",
     "AssetError",
     "Assets",
+    "Channel",
     "ImageAsset",
     "Loader",
     "MeshPart",
     "ModelAsset",
+    "SkinnedModel",
+    "SkinnedPart",
     "UnknownExtension",
     "Where",
     "extensions",
@@ -68,6 +74,7 @@ __all__ = [
     "mesh_part",
     "reason",
     "register_loader",
+    "skinned",
     "unregister_loader",
     "vertex_normals",
 ]

@@ -1,7 +1,8 @@
 """Loaders by file extension: which function reads a ``.obj``, a ``.png``, a ``.wav``.
 
 A loader is a function ``load(path) -> asset`` registered for a *kind* (``"model"``,
-``"image"`` or ``"sound"``) and the extensions it reads; :class:`engine.assets.Assets`
+``"image"``, ``"sound"`` or ``"skin"``: a skinned,
+animated model for an avatar) and the extensions it reads; :class:`engine.assets.Assets`
 picks it by the file's extension, calls it once per file and checks what it returned.
 Registering an extension that already has a loader replaces that loader (a user's
 loader may take over a built-in format).
@@ -15,7 +16,8 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 #: The kinds of asset there are loaders for, and what their loaders return.
-KINDS = {"model": "ModelAsset", "image": "ImageAsset", "sound": "SoundInfo"}
+KINDS = {"model": "ModelAsset", "image": "ImageAsset", "sound": "SoundInfo",
+         "skin": "SkinnedModel"}
 
 F = TypeVar("F", bound=Callable[[Path], Any])
 

@@ -18,6 +18,7 @@ from engine.assets.registry import UnknownExtension, loader_for
 from engine.assets.types import ImageAsset, ModelAsset
 
 if TYPE_CHECKING:
+    from engine.assets.skinned import SkinnedModel
     from engine.assets.sound import Clip, SoundInfo
 
 T = TypeVar("T")
@@ -105,6 +106,12 @@ class Assets:
               root: Path | None = None) -> ImageAsset:
         """The image file ``name``: RGBA pixels, its size checked before decoding."""
         return self._load("image", name, where, root, _check_image)
+
+    def skinned(self, name: str | Path, where: Where | None = None,
+                root: Path | None = None) -> SkinnedModel:
+        """The glTF file ``name`` as a skinned, animated model (an avatar's), checked: its
+        parts, palette and clips consistent. What was repaired is in its ``warnings``."""
+        return self._load("skin", name, where, root, _check_skinned)
 
     def sound(self, name: str | Path, where: Where | None = None,
               root: Path | None = None) -> SoundInfo:
@@ -247,6 +254,28 @@ def _check_model(model: ModelAsset) -> None:
             raise ValueError(f"part {part.name!r} has vertices that are not finite numbers")
         if len(f) and (f.min() < 0 or f.max() >= len(v)):
             raise ValueError(f"part {part.name!r} has faces naming vertices it does not have")
+
+
+def _check_skinned(model: SkinnedModel) -> None:
+    from engine.assets.skinned import MAX_INFLUENCES, SkinnedModel
+
+    if not isinstance(model, SkinnedModel):
+        raise TypeError(f"a skin loader returned {type(model).__name__}, not a SkinnedModel")
+    nodes, palette = len(model.parents), len(model.palette_nodes)
+    if len(model.inverse_bind) != palette or (palette and model.palette_nodes.max() >= nodes):
+        raise ValueError("the palette and its inverse bind matrices do not match the nodes")
+    if (model.parents >= np.arange(nodes)).any():
+        raise ValueError("nodes must come after their parents")
+    for part in model.parts:
+        n = len(part.vertices)
+        if part.joints.shape != (n, MAX_INFLUENCES) or part.weights.shape != (n, MAX_INFLUENCES):
+            raise ValueError(f"part {part.name!r}: joints and weights must be (N, "
+                             f"{MAX_INFLUENCES})")
+        if n and (part.joints.min() < 0 or part.joints.max() >= palette):
+            raise ValueError(f"part {part.name!r} names joints outside the palette")
+    for clip in model.clips:
+        if any(c.node >= nodes for c in clip.channels):
+            raise ValueError(f"clip {clip.name!r} animates a node the model does not have")
 
 
 def _check_image(image: ImageAsset) -> None:

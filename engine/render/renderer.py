@@ -18,7 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from engine.assets import AssetError, Assets
+from engine.assets import AssetError, Assets, SkinnedModel
+from engine.assets.skinned import AVATAR_AXES
 from engine.render import glsl, math3d, meshes
 from engine.render.camera import CameraView, Eye
 from engine.render.hud import Hud
@@ -32,6 +33,7 @@ from engine.render.lights import (
 from engine.render.materials import checker_image
 from engine.render.postprocess import PostChain, PostPass
 from engine.render.shaders import ShaderLibrary, ShaderManager, UniformValue, write_uniform
+from engine.render.skinning import Skinning
 
 log = logging.getLogger("colosseum.render")
 
@@ -138,6 +140,12 @@ class Renderer:
         self._scene_depth: Any = None
         self._scene_fbo: Any = None
         self._texture_for(_WHITE)
+        self._skinning = Skinning(self.ctx)
+        self._skinned: dict[int, list[str]] = {}  # object -> the skin groups it is in
+        self._group_keys: dict[str, int] = {}  # skin group -> its internal object key
+        self._group_parts: dict[str, _Part] = {}  # skin group -> the part that draws it
+        self._part_mesh: list[str] = []
+        self._skinned_parts = np.zeros(0, np.int64)  # part indices drawing skin groups
 
     @property
     def instancing(self) -> bool:
@@ -151,10 +159,23 @@ class Renderer:
 
     # ------------------------------------------------------------------ objects
     def add(self, key: int, visual: Any, position: Any = (0.0, 0.0, 0.0),
-            orientation: Any = (1.0, 0.0, 0.0, 0.0)) -> None:
-        """Add (or replace) object ``key`` drawn as ``visual`` (a ``components.Visual``)."""
+            orientation: Any = (1.0, 0.0, 0.0, 0.0), skin: SkinnedModel | None = None) -> None:
+        """Add (or replace) object ``key`` drawn as ``visual`` (a ``components.Visual``);
+        with ``skin``, as that skinned model posed by :meth:`set_palettes`."""
         if key in self._objects:
             self.remove(key)
+        row = self._new_row(key)
+        self._pos[row] = position
+        self._quat[row] = orientation
+        if skin is not None:
+            self._objects[key] = []
+            if visual.visible:
+                self._attach_skin(key, row, visual, skin)
+        else:
+            self._objects[key] = self._parts_for(key, row, visual) if visual.visible else []
+        self._dirty = True
+
+    def _new_row(self, key: int) -> int:
         row = self._free_rows.pop() if self._free_rows else len(self._rows)
         if row >= len(self._pos):
             grow = max(16, 2 * len(self._pos))
@@ -162,14 +183,13 @@ class Renderer:
             self._quat = np.concatenate([self._quat, np.tile([1.0, 0, 0, 0], (grow, 1))])
         self._rows[key] = row
         self._rows_version += 1
-        self._pos[row] = position
-        self._quat[row] = orientation
-        self._objects[key] = self._parts_for(key, row, visual) if visual.visible else []
-        self._dirty = True
+        return row
 
     def remove(self, key: int) -> None:
         if key not in self._objects:
             return
+        if self._skinned.pop(key, None) is not None:
+            self._skinning.detach(key)
         del self._objects[key]
         self._free_rows.append(self._rows.pop(key))
         self._rows_version += 1
@@ -269,6 +289,64 @@ class Renderer:
                 data.name in ("box", "sphere", "capsule", "cylinder"))
         return key
 
+    # ---------------------------------------------------------------- skinned
+    def _attach_skin(self, key: int, row: int, visual: Any, model: SkinnedModel) -> None:
+        """Object ``key`` joins the skin group of each part of ``model`` (one per way of
+        drawing it); a group is drawn as one internal object at the avatars' centre."""
+        local = math3d.compose((0, 0, 0), (1, 0, 0, 0), visual.scale) @ AVATAR_AXES
+        variant = f"{visual.shader_state}|{visual.shadower:d}{visual.shadowed:d}|{visual.texture}"
+        groups = self._skinning.attach(key, row, model, local, tuple(visual.color), variant)
+        self._skinned[key] = groups
+        for mesh_key, part in zip(groups, model.parts, strict=True):
+            if mesh_key in self._group_keys:
+                continue
+            texture = visual.texture or _WHITE
+            if visual.texture is None and part.texture is not None:
+                texture = f"{mesh_key}:texture"
+                if texture not in self._textures:
+                    self._textures[texture] = self._upload_texture(part.texture)
+            self._texture_for(texture)
+            internal = -1 - len(self._group_keys)
+            while internal in self._objects:
+                internal -= 1
+            self._group_keys[mesh_key] = internal
+            self._group_parts[mesh_key] = _Part(self._new_row(internal), mesh_key, texture,
+                                                visual.shader_state, np.eye(4), (1, 1, 1, 1),
+                                                visual.shadower, visual.shadowed)
+            self._objects[internal] = []  # drawn once its buffers fit (_prepare_skins)
+
+    def set_palettes(self, palettes: np.ndarray, offsets: dict[int, int]) -> None:
+        """Pose the skinned objects: every joint matrix ``(J, 3, 4)`` (the top rows of
+        each 4x4) and the first palette entry of each object (an object without one is
+        drawn in its bind pose)."""
+        self._skinning.set_palettes(palettes, offsets)
+
+    def _prepare_skins(self) -> None:
+        """Fit each skin group's buffers to its members before batches are built."""
+        for mesh_key, group in self._skinning.groups.items():
+            internal = self._group_keys[mesh_key]
+            drawn = bool(self._objects[internal])
+            if drawn != bool(group.members):
+                self._objects[internal] = [self._group_parts[mesh_key]] if group.members else []
+                self._dirty = True
+            if group.members and (self._skinning.resize(group) or mesh_key not in self._meshes):
+                self._meshes[mesh_key] = _GpuMesh(group.output, group.indices, group.radius,
+                                                  False, False)
+                self._dirty = True
+
+    def _skin_pass(self) -> None:
+        """Skin every group for this frame's poses; place each group's object at its
+        avatars' centre and size its bounds for shadow fitting."""
+        self._shadow_fbo.use()  # Mesa captures nothing without a complete framebuffer bound
+        for mesh_key, group in self._skinning.groups.items():
+            if not group.members:
+                continue
+            centre, radius = self._skinning.update(group, self._pos, self._quat)
+            self._pos[self._rows[self._group_keys[mesh_key]]] = centre
+            self._meshes[mesh_key].radius = radius
+        for index in self._skinned_parts.tolist():
+            self._part_radius[index] = self._meshes[self._part_mesh[index]].radius
+
     # ---------------------------------------------------------------- textures
     def _upload_texture(self, rgba: np.ndarray, nearest: bool = False) -> Any:
         rgba = np.ascontiguousarray(np.flipud(rgba))  # image rows top-down; GL v=0 is bottom
@@ -343,6 +421,9 @@ class Renderer:
         parts.sort(key=lambda p: (self._meshes[p.mesh].is_plane, p.mesh, p.texture,
                                   p.state or ""))
         n = len(parts)
+        self._part_mesh = [p.mesh for p in parts]
+        self._skinned_parts = np.array([i for i, p in enumerate(parts)
+                                        if p.mesh in self._skinning.groups], np.int64)
         self._part_obj = np.array([p.row for p in parts], dtype=np.int64)
         self._part_local = np.array([p.local for p in parts]).reshape(n, 4, 4)
         extra = np.zeros((n, 8), np.float32)
@@ -535,8 +616,12 @@ class Renderer:
         start = _time.perf_counter()
         self.time += dt if dt is not None else 0.0
         self.stats = FrameStats()
+        if self._skinning.groups:
+            self._prepare_skins()
         if self._dirty:
             self._rebuild()
+        if self._skinning.groups:
+            self._skin_pass()
         size = tuple(self.target.size)
         self._ensure_scene_targets(size)  # type: ignore[arg-type]
         world = self._upload_instances()
@@ -605,9 +690,11 @@ class Renderer:
                 vao.release()
             if batch.buffer is not None:
                 batch.buffer.release()
-        for mesh in self._meshes.values():
-            mesh.vbo.release()
-            mesh.ibo.release()
+        for key, mesh in self._meshes.items():
+            if key not in self._skinning.groups:  # skin groups' buffers are the skinning's
+                mesh.vbo.release()
+                mesh.ibo.release()
+        self._skinning.release()
         for tex in self._textures.values():
             tex.release()
         for obj in (self._scene_fbo, self._scene_tex, self._scene_depth, self._shadow_fbo,

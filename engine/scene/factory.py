@@ -27,9 +27,12 @@ import numpy as np
 import engine.scene.random_state as random_state
 import engine.scene.schema as sc
 from components import (
+    Avatar,
     Camera,
+    ClipSpec,
     Controller,
     Hand,
+    Hold,
     Joint,
     Light,
     MaterialProps,
@@ -65,6 +68,7 @@ from engine.scene.diagnostics import (
     Diagnostic,
     Loc,
     Reporter,
+    suggest,
 )
 from engine.scene.inputs import InputSpec, read_inputs
 from engine.scene.parser import paused_gc
@@ -324,6 +328,8 @@ class _Builder:
         self.world(root, spec)
         self.scene_entities(root, spec)
         spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
+        for i, blk in enumerate(root.blocks("Avatar")):
+            spec.entities.append(self.avatar(blk, i))
         return spec
 
     # -- assets --------------------------------------------------------------
@@ -507,6 +513,113 @@ class _Builder:
         made = self.assets.derived(("shape", path, scale, method), action, file, path,
                                    lambda: _model_shape(model.triangles(), scale, method), loc)
         return _copy_shape(made)
+
+    # -- avatars -------------------------------------------------------------
+    def told(self, loc: Loc, message: str, severity: str = ERROR) -> None:
+        """A problem with a model's content (not the text): told, the run goes on."""
+        self.problems.append(Diagnostic(loc.path, loc.line, loc.col, severity, message))
+
+    def avatar(self, blk: Block, index: int) -> EntitySpec:
+        """An avatar's components; left out (told) when its model cannot be read or has
+        no skin. Names of clips and bones the model lacks are told and ignored."""
+        r = _Reader(blk, "Avatar")
+        aid = r("ID") or f"avatar{index}"
+        file, where = r("Model"), r.value("Model").loc
+        try:
+            model = self.assets.skinned(file, where, self.folder)
+        except AssetError as exc:
+            self.problem(exc, f"avatar '{aid}' is left out")
+            return EntitySpec(aid, [], blk.loc, skipped=True)
+        if not model.skin_count:
+            self.told(where, f'model "{file}" has no skin (no joints to animate); use it in an '
+                             f"Object instead; avatar '{aid}' is left out")
+            return EntitySpec(aid, [], blk.loc, skipped=True)
+        for warning in model.warnings:
+            self.told(where, f'model "{file}": {warning}', WARNING)
+
+        def clip(name: str, loc: Loc) -> bool:
+            if model.clip(name) is not None:
+                return True
+            names = ", ".join(model.clip_names) or "none"
+            self.told(loc, f'model "{file}" has no clip "{name}"{suggest(name, model.clip_names)}'
+                           f" (its clips: {names}); it is not played")
+            return False
+
+        def bone(name: str, loc: Loc) -> bool:
+            if model.node(name) is not None:
+                return True
+            self.told(loc, f'model "{file}" has no bone "{name}"'
+                           f"{suggest(name, model.node_names)}")
+            return False
+
+        first = r("Animation") if r.has("Animation") and clip(
+            r("Animation"), r.value("Animation").loc) else None
+        blend: dict[str, float] = {}
+        if r.has("Blend"):
+            names, weights = r("Blend"), r("Weights") or (1.0,) * len(r("Blend"))
+            if len(weights) != len(names):
+                self.report.error(r.value("Weights").loc if r.has("Weights") else
+                                  r.value("Blend").loc,
+                                  f"Weights has {len(weights)} numbers for {len(names)} Blend "
+                                  "clips")
+            blend = {n: float(w) for n, w, item in zip(names, weights, r.value("Blend").data,
+                                                        strict=False) if clip(n, item.loc)}
+        queue = [n for n, item in zip(r("Queue") or (), r.value("Queue").data if r.has(
+            "Queue") else (), strict=True) if clip(n, item.loc)]
+        clips = []
+        for b in r.blocks("Clip"):
+            c = _Reader(b, "Clip")
+            if clip(c("Name"), c.value("Name").loc):
+                clips.append(ClipSpec(c("Name"), float(c("Speed")), bool(c("Loop")),
+                                      _opt(c("GroundSpeed"))))
+        legs = []
+        if r.has("FootIK"):
+            bones, items = r("FootIK"), r.value("FootIK").data
+            if len(bones) % 3:
+                self.report.error(r.value("FootIK").loc, f"FootIK names bones in threes (hip, "
+                                  f"knee, ankle), got {len(bones)}")
+            for k in range(0, len(bones) - len(bones) % 3, 3):
+                if all([bone(bones[k + j], items[k + j].loc) for j in range(3)]):
+                    legs.append((bones[k], bones[k + 1], bones[k + 2]))
+        path: list[tuple[float, float, float]] = []
+        if r.has("Path"):
+            flat = _floats(r("Path"))
+            if len(flat) % 3:
+                self.report.error(r.value("Path").loc, f"Path is points [x y z ...], got "
+                                                       f"{len(flat)} numbers")
+            path = [(flat[k], flat[k + 1], flat[k + 2]) for k in range(0, len(flat) - 2, 3)]
+        holds = []
+        for b in r.blocks("Hold"):
+            h = _Reader(b, "Hold")
+            if bone(h("Bone"), h.value("Bone").loc):
+                holds.append(Hold(h("Bone"), h("Object"), _floats(h("Offset")),
+                                  euler_to_quat(h("Orientation"))))
+        capsule = None
+        if r.has("Capsule"):
+            diameter, length = _floats(r("Capsule"))
+            if diameter <= 0 or length < 0:
+                self.report.error(r.value("Capsule").loc, "Capsule is [diameter length], "
+                                                          "positive")
+            capsule = (diameter / 2, length)
+        for key in ("Scale", "Speed", "Fade", "StepHeight", "Smoothing", "TurnRate"):
+            if r(key) < 0 or (key == "Scale" and r(key) == 0):
+                self.report.error(r.value(key).loc, f"{key} must be positive, got {r(key)}")
+        scale = float(r("Scale"))
+        avatar = Avatar(model=file, scale=scale, clip=first, loop=bool(r("Loop")),
+                        speed=float(r("Speed")), blend=blend, queue=queue, fade=float(r("Fade")),
+                        clips=clips, ground_follow=bool(r("GroundFollow")),
+                        step_height=float(r("StepHeight")), smoothing=float(r("Smoothing")),
+                        foot_ik=legs, path=path, path_loop=bool(r("PathLoop")),
+                        turn_rate=math.radians(float(r("TurnRate"))), capsule=capsule,
+                        holds=holds)
+        visual = Visual(model=file, scale=(scale,) * 3, color=_color(r("Color")),
+                        shader_state=r("ShaderState"), shadower=bool(r("Shadower")),
+                        shadowed=bool(r("Shadowed")))
+        comps: list[Any] = [Name(aid), Transform(_floats(r("Position")),
+                                                 euler_to_quat(r("Orientation"))), visual, avatar]
+        if r.has("Script"):
+            comps.append(Script(file=r("Script")))
+        return EntitySpec(aid, comps, blk.loc)
 
     def sleep_spec(self, r: _Reader) -> SleepState:
         """An object's saved sleep-rule state, so a loaded state falls asleep on time."""

@@ -104,6 +104,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                          "an input bound to a motor, force or kinematic target", repeat=True,
                          struct="Controller"),
         "World": _f(STRUCT_T, doc="dynamics settings", struct="World"),
+        "Avatar": _f(STRUCT_T, doc="a skinned, animated figure (glTF)", repeat=True,
+                     struct="Avatar"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
         "Input": _f(STRUCT_T, doc="input devices and how their trackers, wheels and buttons "
                     "are calibrated (engine.input)", repeat=True, struct="Input"),
@@ -323,6 +325,52 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Event": _f(STRING_T, None, "the custom event's name (on(name, fn))", required=True),
         "Function": _f(STRING_T, None, "the name of the function it calls", required=True),
     },
+    "Avatar": {
+        "ID": _id("avatar"),
+        "Model": _f(ASSET_T, None, ".glb or .gltf with a skin (Blender, Maya, Mixamo exports)",
+                    required=True),
+        "Position": _f(VEC3_T, (0.0, 0.0, 0.0), "m, where its feet stand"),
+        "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees; unturned it faces +Y"),
+        "Scale": _f(FLOAT_T, 1.0, "uniform scale of the model"),
+        "Animation": _f(STRING_T, None, "clip played first"),
+        "Loop": _f(BOOL_T, 1, "the first clip loops"),
+        "Speed": _f(FLOAT_T, 1.0, "playback rate of the first clip"),
+        "Blend": _f(STRINGVECTOR_T, None, "clips played at once from the start (with Weights)"),
+        "Weights": _f(VECTOR_T, None, "weight of each Blend clip"),
+        "Queue": _f(STRINGVECTOR_T, None, "clips played in turn when the first one ends"),
+        "Fade": _f(FLOAT_T, 0.2, "s, default crossfade between clips"),
+        "Clip": _f(STRUCT_T, doc="how one clip plays", repeat=True, struct="Clip"),
+        "GroundFollow": _f(BOOL_T, 0, "keep the feet on the ground below (ray casts)"),
+        "StepHeight": _f(FLOAT_T, 0.5, "m, highest step it walks up"),
+        "Smoothing": _f(FLOAT_T, 0.1, "s, how fast a step up or down is taken"),
+        "FootIK": _f(STRINGVECTOR_T, None, "bone triples [hip knee ankle ...] whose feet meet "
+                     "slopes and steps"),
+        "Path": _f(VECTOR_T, None, "m, points [x y z x y z ...] walked in turn"),
+        "PathLoop": _f(BOOL_T, 1, "after the last point, walk back to the first"),
+        "TurnRate": _f(FLOAT_T, 180.0, "deg/s, how fast it turns toward the next point"),
+        "Capsule": _f(VECTOR_T, None, "[diameter length] m: a kinematic body dynamic objects "
+                      "bump into", lengths=(2,)),
+        "Hold": _f(STRUCT_T, doc="an object carried by a bone", repeat=True, struct="Hold"),
+        "Color": _f(VECTOR_T, (1.0, 1.0, 1.0, 1.0), "RGB or RGBA, 0..1, times the model's",
+                    lengths=(3, 4)),
+        "ShaderState": _f(REF_T, None, "the shader state it is drawn with", ref="ShaderState"),
+        "Shadower": _f(BOOL_T, 1, "casts shadows"),
+        "Shadowed": _f(BOOL_T, 1, "receives shadows"),
+        "Script": _f(ASSET_T, doc="Lua script attached to this avatar"),
+    },
+    "Clip": {
+        "Name": _f(STRING_T, None, "the clip's name in the model", required=True),
+        "Speed": _f(FLOAT_T, 1.0, "playback rate"),
+        "Loop": _f(BOOL_T, 1, "1: the clip starts again when it ends; 0: it holds its last pose"),
+        "GroundSpeed": _f(FLOAT_T, None, "m/s it walks at speed 1 (default: measured from the "
+                          "clip's root motion)"),
+    },
+    "Hold": {
+        "Object": _f(REF_T, None, "the object carried", required=True, ref="Object"),
+        "Bone": _f(STRING_T, None, "the bone (node name) holding it", required=True),
+        "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, in the bone's frame"),
+        "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees, in the bone's frame"),
+    },
     "World": {
         "Gravity": _f(VEC3_T, (0.0, 0.0, -9.81), "m/s^2"),
         "TimeStep": _f(FLOAT_T, 0.01, "s, fixed dynamics step"),
@@ -422,5 +470,5 @@ SCHEMAS: dict[str, dict[str, Field]] = {
 
 #: Declarations whose ``ID`` others may reference, by the schema name used in ``Field.ref``.
 ID_KINDS = ("Object", "Material", "Joint", "VertexShader", "FragmentShader", "ShaderProgram",
-            "ShaderState", "Sound", "Camera", "Light", "Controller")
+            "ShaderState", "Sound", "Camera", "Light", "Controller", "Avatar")
 

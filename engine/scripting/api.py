@@ -19,6 +19,18 @@ Objects (``obj:method(...)``)::
     obj:playSound()                 obj:stopSound()   (its Sound component)
     obj:setGain(gain)               volume of its sound, now and for later plays
 
+Avatars (``Avatar`` blocks; the avatars plugin)::
+
+    avatar:play(clip [, {fade=s, speed=x, loop=bool}])   crossfade to a clip now
+    avatar:queue(clip or {Walk=w, ...} [, opts])         start it when the current ends
+    avatar:blend{Walk=0.7, Run=0.3} [, opts]             clips at once, in step; called
+                                    again with the same clips, only the weights change
+    avatar:stopAnimation([{fade=s}])  avatar:animation() -> clip, seconds   avatar:clips()
+    avatar:setPath({{x, y, z}, ...} [, loop])            walk through points
+    avatar:hold(obj, bone [, {offset={..}, orientation={..}}])   avatar:release(obj)
+    avatar:driveBone(bone, {x, y, z}, {w, x, y, z})      a tracked hand: the arm bends to it
+    avatar:releaseBone(bone)        avatar:bonePose(bone) -> x, y, z, w, x, y, z
+
 Scene and engine::
 
     find(id) -> obj or nil          spawn(sceneText) -> {obj, ...}   (scene format)
@@ -48,7 +60,9 @@ asleep on each other still touch; see :mod:`systems.contacts`);
 controller's trigger), ``onTracker(name, x, y, z, qw, qx, qy, qz)`` (once a frame
 per tracker that moved, calibrated), ``onInput(device, value)``
 (``axis:DEVICE/NAME`` values and ``wheel:NAME`` counts), ``onDeviceLost(name)`` /
-``onDeviceFound(name)``, ``onTimer(name)`` (engine TimerEvents), ``onReload()``
+``onDeviceFound(name)``, ``onTimer(name)`` (engine TimerEvents),
+``onAnimationEnd(clip)`` (an avatar's scripts; scene scripts ``onAnimationEnd(avatar,
+clip)``), ``onReload()``
 (after the file changed and was re-run in the script's environment: write ``count =
 count or 0`` to keep state across reloads), ``onResume()`` (instead of ``onStart``
 when a saved state runs: the script's variables, timers and handlers are back, see
@@ -84,7 +98,7 @@ from components.joint import SCENE_JOINT_TYPES
 from engine.input.state import InputState
 from engine.physics import commands as cmd
 from engine.scripting.runtime import ScriptRuntime, to_python
-from engine.services import ShaderControl, SoundControl
+from engine.services import AVATAR_METHODS, AvatarControl, ShaderControl, SoundControl
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -166,6 +180,12 @@ function Object.delete(h) P.delete(oid("delete", h)) end
 function Object.playSound(h) P.sound(oid("playSound", h), true) end
 function Object.stopSound(h) P.sound(oid("stopSound", h), false) end
 function Object.setGain(h, gain) P.set_gain(oid("setGain", h), gain) end
+for i = 1, #P.avatar_methods do  -- avatar:play("Run", {fade=0.3}), avatar:blend{...}, ...
+  local method = P.avatar_methods[i]
+  Object[method] = function(h, ...)
+    return P.avatar(oid(method, h), method, plain({...}))
+  end
+end
 
 local C = {}
 function C.find(name) return handle(P.find(name)) end
@@ -247,6 +267,8 @@ class ScriptAPI:
             "set_camera": self.set_camera, "request_plugin": self.request_plugin,
             "time": self.time, "tracker": self.tracker, "wheel": self.wheel,
             "button": self.button, "axis": self.axis, "key": self.key,
+            "avatar": self.avatar,
+            "avatar_methods": runtime.lua.table_from(AVATAR_METHODS),
         })
         return runtime.lua.execute(_LUA_API, runtime.kernel, P, name="=colosseum")
 
@@ -543,6 +565,22 @@ class ScriptAPI:
         system = self._service(SoundControl, "setGain")
         if system is not None:
             system.set_gain(entity, float(gain))
+
+    def avatar(self, entity: int, method: str, args: Any) -> Any:
+        """``avatar:method(...)``: the avatars plugin's script call (a list comes back as a
+        Lua table, a tuple as several values)."""
+        control = self._service(AvatarControl, method)
+        if control is None:
+            return None
+        plain = to_python(args)
+        listed = plain if isinstance(plain, list) else [plain[k] for k in sorted(plain)] \
+            if isinstance(plain, dict) else []
+        try:
+            result = control.script_call(self._entity(entity, method), method, listed)
+        except (KeyError, ValueError) as exc:
+            raise ScriptAPIError(f"{method}: {exc.args[0] if exc.args else exc}") from None
+        assert self.runtime is not None
+        return self.runtime.to_lua(result) if isinstance(result, list) else result
 
     def set_uniform(self, state: Any, name: Any, value: Any) -> None:
         system = self._service(ShaderControl, "setUniform")
