@@ -11,7 +11,7 @@ Orientations are unit quaternions ``(w, x, y, z)``. The vocabularies
 from components.avatar import Avatar, ClipSpec, Hold
 from components.camera import Camera
 from components.controller import Controller
-from components.hand import Hand
+from components.hand import Graspable, Hand, HandState
 from components.joint import Joint
 from components.light import Light
 from components.name import Name
@@ -27,7 +27,9 @@ __all__ = [
     "Camera",
     "ClipSpec",
     "Controller",
+    "Graspable",
     "Hand",
+    "HandState",
     "Hold",
     "Joint",
     "Light",

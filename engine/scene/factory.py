@@ -31,7 +31,9 @@ from components import (
     Camera,
     ClipSpec,
     Controller,
+    Graspable,
     Hand,
+    HandState,
     Hold,
     Joint,
     Light,
@@ -76,6 +78,9 @@ from engine.scene.parser import paused_gc
 if TYPE_CHECKING:
     from engine.app import Engine
 
+#: A virtual hand's body when the author gives none: a palm-sized box (m) of 0.45 kg.
+HAND_SIZE = (0.09, 0.18, 0.03)
+HAND_MASS = 0.45
 #: Shared defaults (tuples: immutable, so every shape and pose may hold the same one).
 _ORIGIN = (0.0, 0.0, 0.0)
 _IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -135,6 +140,8 @@ class SceneSpec:
     #: The scene's random generator when a saved state was written (see random_state).
     random_state: dict[str, object] | None = None
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
+    #: Hand object ID -> the object its tracker is calibrated relative to.
+    hand_frames: dict[str, str] = field(default_factory=dict)
     #: Object ID -> sleep-rule state a saved state carries (see :class:`SleepState`).
     sleep: dict[str, SleepState] = field(default_factory=dict)
     content_dir: Path | None = None
@@ -297,6 +304,7 @@ class _Builder:
         self.poses: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
         self.physical_ids: set[str] = set()
         self.sleep: dict[str, SleepState] = {}
+        self.hand_frames: dict[str, str] = {}
         #: Owner -> the saved state its script resumes from, and the block that said so.
         self.script_states: dict[str, SavedScript] = {}
         self.script_blocks: dict[str, Block] = {}
@@ -324,6 +332,7 @@ class _Builder:
             if js is not None:
                 spec.joints.append(js)
         spec.sleep = self.sleep
+        spec.hand_frames = self.hand_frames
         self.shaders(root, spec)
         self.world(root, spec)
         self.scene_entities(root, spec)
@@ -378,6 +387,9 @@ class _Builder:
             "AngularVelocity") else _ORIGIN
         comps: list[Any] = [Name(oid), Transform(position, quat, r("Velocity"), angular)]
         size = r("Size")
+        hand_blk = r.value("Hand")
+        if hand_blk is not None and size is None:
+            size = HAND_SIZE
         vis_blk, phys_blk = r.value("VisualAttributes"), r.value("PhysicalAttributes")
         bare = vis_blk is None and phys_blk is None
         vis = _Reader(vis_blk.data if vis_blk else None, "Visual")
@@ -393,8 +405,10 @@ class _Builder:
                 shader_state=vis("ShaderState"), shadower=bool(vis("Shadower")),
                 shadowed=bool(vis("Shadowed")), visible=bool(vis("Visible"))))
         if phys_blk is not None or bare:
-            comps.append(self.physical(r, phys, size, visual_shapes, model, scale, position,
-                                       quat))
+            body = self.physical(r, phys, size, visual_shapes, model, scale, position, quat)
+            if hand_blk is not None:
+                self.hand_body(body, phys, oid)
+            comps.append(body)
             self.physical_ids.add(oid)
             if any(map(r.has, ("Asleep", "SleepVelocity", "SleepTimer", "SleepReference"))):
                 self.sleep[oid] = self.sleep_spec(r)
@@ -405,11 +419,11 @@ class _Builder:
                 comps.append(_sound(sr, oid))
         if r.has("Script"):
             comps.append(Script(file=r("Script"), saved=self.script_states.pop(oid, None)))
-        if r.has("Hand"):
-            h = _Reader(r.value("Hand").data, "Hand")
-            comps.append(Hand(tracker=h("Tracker"), max_force=float(h("MaxForce")),
-                              max_torque=float(h("MaxTorque")),
-                              deviation_distance=float(h("DeviationDistance"))))
+        if hand_blk is not None:
+            comps += self.hand(_Reader(hand_blk.data, "Hand"), oid, hand_blk.loc,
+                               phys_blk is not None or bare)
+        if not r("Graspable"):
+            comps.append(Graspable(False))
         if r.has("Controller"):
             comps.append(_controller(_Reader(r.value("Controller").data, "Controller")))
         return EntitySpec(oid, comps, blk.loc)
@@ -429,6 +443,37 @@ class _Builder:
             elif gr.has("Primitive") and gr("Primitive") != "plane":
                 shapes.append(_primitive(gr, size))
         return shapes, model, scale
+
+    def hand(self, h: _Reader, oid: str, loc: Loc, has_body: bool) -> list[Any]:
+        """A Hand and its standing; a hand needs a body (an Object without one is told)."""
+        if not has_body:
+            self.report.error(loc, f"object '{oid}' has a Hand but no PhysicalAttributes: a "
+                                   "virtual hand is a body (leave both Visual- and "
+                                   "PhysicalAttributes out for the default hand box)")
+            return []
+        if h.has("Frame"):
+            self.hand_frames[oid] = h("Frame")
+        models = {key: self.model(h, key) for key in ("ContactModel", "GraspModel")}
+        hand = Hand(tracker=h("Tracker"), glove=h("Glove"), button=h("Button"),
+                    max_force=float(h("MaxForce")), max_torque=float(h("MaxTorque")),
+                    time_constant=float(h("TimeConstant")), max_speed=float(h("MaxSpeed")),
+                    max_spin=math.radians(float(h("MaxSpin"))),
+                    deviation_distance=float(h("DeviationDistance")),
+                    break_force=_opt(h("BreakForce")), marker=bool(h("Marker")),
+                    contact_model=models["ContactModel"], grasp_model=models["GraspModel"],
+                    holding=tuple(h("Holding") or ()))
+        return [hand, HandState()]
+
+    def hand_body(self, body: Physical, phys: _Reader, oid: str) -> None:
+        """A hand floats (its drive holds it up) and never sleeps; it weighs a hand's
+        0.45 kg unless the author gave it a mass."""
+        if phys.has("Gravity") and phys("Gravity"):
+            self.report.warning(phys.value("Gravity").loc, f"object '{oid}' is a hand: hands "
+                                "float, so Gravity 1 is ignored")
+        body.gravity = False
+        body.can_sleep = False
+        if not (phys.has("Mass") or phys.has("Density")):
+            body.mass = HAND_MASS
 
     def physical(self, r: _Reader, phys: _Reader, size: Any, visual_shapes: list[Shape],
                  model: str | None, scale: tuple[float, ...], position: tuple[float, ...],
@@ -491,6 +536,17 @@ class _Builder:
             else:
                 shapes = [_primitive(_Reader(None, "Geometry"), size)]
         return shapes, has_plane
+
+    def model(self, r: _Reader, key: str) -> str | None:
+        """``r(key)``, a model file, if it can be read; else None, told as a problem."""
+        file = r(key)
+        if file is not None:
+            try:
+                self.assets.model(file, r.value(key).loc, self.folder)
+            except AssetError as exc:
+                self.problem(exc, "the object keeps its own look")
+                return None
+        return file
 
     def texture(self, vis: _Reader) -> str | None:
         """The Visual's texture file; one that cannot be read is told here (the renderer
@@ -899,6 +955,9 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     for cam_id, target in spec.camera_follow.items():
         cam = engine.world.component_for_entity(ids[cam_id], Camera)
         cam.follow = ids[target]
+    for hand_id, frame in spec.hand_frames.items():
+        if hand_id in ids and frame in ids:
+            engine.world.component_for_entity(ids[hand_id], Hand).frame = ids[frame]
     joints: dict[str, int] = {}
     for js in spec.joints:
         if js.skipped:

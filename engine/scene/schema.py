@@ -138,7 +138,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                                  struct="Physical"),
         "Sound": _f(STRUCT_T, doc="sound source on this object", struct="Sound"),
         "Script": _f(ASSET_T, doc="Lua script attached to this object"),
-        "Hand": _f(STRUCT_T, None, "a tracked hand driven toward a device's pose", struct="Hand"),
+        "Hand": _f(STRUCT_T, None, "makes the object a virtual hand: a body driven toward a "
+                   "tracker's pose with bounded force, grasping on a glove's button",
+                   struct="Hand"),
+        "Graspable": _f(BOOL_T, 1, "0: hands cannot hold it (dynamic bodies can by default)"),
         "Controller": _f(STRUCT_T, doc="input bound to this object", struct="Controller"),
         "UserData": _f(ANY_T, None, "free-form data for custom systems", repeat=True),
         # The sleep rule's state (engine.physics.sleep; written by --save-state so a
@@ -298,10 +301,33 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "High": _f(FLOAT_T, None, "upper bound of the target value"),
     },
     "Hand": {
-        "Tracker": _f(STRING_T, "", "tracked device driving the hand"),
-        "MaxForce": _f(FLOAT_T, 200.0, "N"),
-        "MaxTorque": _f(FLOAT_T, 20.0, "N*m"),
-        "DeviationDistance": _f(FLOAT_T, 0.3, "m before the hand is reset to the tracker"),
+        "Tracker": _f(STRING_T, None, "the input tracker whose pose the hand follows "
+                      "(Input { Tracker { ID } }, or hand_l/hand_r of the desktop device)",
+                      required=True),
+        "Glove": _f(STRING_T, "", "the input device whose Button holds what the hand touches "
+                    "(glove_l/glove_r: the desktop device's mouse button)"),
+        "Button": _f(STRING_T, "pinch", "the glove's button that grasps while down"),
+        "MaxForce": _f(FLOAT_T, 300.0, "N the drive may push with: a heavier load lags, a "
+                       "wall stops the hand"),
+        "MaxTorque": _f(FLOAT_T, 30.0, "N*m the drive may turn with"),
+        "TimeConstant": _f(FLOAT_T, 0.0, "s the hand's distance to its tracker closes with; "
+                           "0: max(2 TimeStep, 0.03 s)"),
+        "MaxSpeed": _f(FLOAT_T, 10.0, "m/s the drive's correction is capped at (a tracker's "
+                       "own speed comes on top)"),
+        "MaxSpin": _f(FLOAT_T, 1146.0, "deg/s the drive's turning correction is capped at "
+                      "(20 rad/s)"),
+        "DeviationDistance": _f(FLOAT_T, 0.3, "m (D): farther from its tracker the hand passes "
+                                "through things and snaps back; it collides again under "
+                                "0.1 D, and is drawn see-through, on top, from 0.1 D to 0.7 D"),
+        "BreakForce": _f(FLOAT_T, None, "N: a grasp pulled harder lets go (none: never)"),
+        "Marker": _f(BOOL_T, 1, "show a ball where the real hand (the tracker) is"),
+        "ContactModel": _f(ASSET_T, None, "model drawn while the hand touches something it "
+                           "could grasp (an open hand); default: the object's own look"),
+        "GraspModel": _f(ASSET_T, None, "model drawn while it holds something (a closed hand)"),
+        "Frame": _f(REF_T, None, "the object the tracker is calibrated relative to (a "
+                    "wheelchair): the hand follows it", ref="Object"),
+        "Holding": _f(STRINGVECTOR_T, None, "objects held when this state was saved (written "
+                      "by --save-state; they are held again on load)"),
     },
     "ScriptState": {
         "Owner": _f(STRING_T, None, "the object whose script this is, or the scene script's "
