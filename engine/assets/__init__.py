@@ -39,7 +39,7 @@ could not convert string to float: 'zero'
 >>> unregister_loader("model", ".tri")
 """
 
-from engine.assets import loaders
+from engine.assets import gltf, loaders
 from engine.assets.registry import (
     KINDS,
     Loader,
@@ -49,7 +49,14 @@ from engine.assets.registry import (
     register_loader,
     unregister_loader,
 )
-from engine.assets.service import AssetError, Assets, Where, reason
+from engine.assets.service import (
+    AssetError,
+    Assets,
+    Where,
+    nodes_name,
+    reason,
+    split_nodes,
+)
 from engine.assets.types import ImageAsset, MeshPart, ModelAsset, mesh_part, vertex_normals
 
 __all__ = [
@@ -63,11 +70,14 @@ __all__ = [
     "UnknownExtension",
     "Where",
     "extensions",
+    "gltf",
     "loader_for",
     "loaders",
     "mesh_part",
+    "nodes_name",
     "reason",
     "register_loader",
+    "split_nodes",
     "unregister_loader",
     "vertex_normals",
 ]

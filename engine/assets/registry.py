@@ -14,8 +14,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
-#: The kinds of asset there are loaders for, and what their loaders return.
-KINDS = {"model": "ModelAsset", "image": "ImageAsset", "sound": "SoundInfo"}
+#: The kinds of asset there are loaders for, and what their loaders return. A
+#: ``document`` is a model file read as named nodes: anything with
+#: ``node_model(names)`` and ``mesh_model(name)``, each a ModelAsset (see
+#: :mod:`engine.assets.gltf`).
+KINDS = {"model": "ModelAsset", "image": "ImageAsset", "sound": "SoundInfo",
+         "document": "a document of nodes"}
 
 F = TypeVar("F", bound=Callable[[Path], Any])
 
