@@ -83,6 +83,15 @@ def build_parser() -> argparse.ArgumentParser:
     fmt.add_argument("--write", action="store_true",
                      help="rewrite the file in place (keeps a .bak)")
 
+    imp = sub.add_parser("import", help="a scene file from a glTF or Collada model's bodies, "
+                                        "joints, materials and extras")
+    imp.add_argument("model", type=Path, help=".gltf, .glb or .dae file")
+    imp.add_argument("-o", "--output", type=Path,
+                     help="scene file to write (merged with your edits if it exists; "
+                          "default: print)")
+    imp.add_argument("--force", action="store_true",
+                     help="replace an existing scene file no import wrote (keeps a .bak)")
+
     new = sub.add_parser("new", help="scaffold a content folder that runs")
     new.add_argument("name")
 
@@ -213,6 +222,12 @@ def cmd_fmt(args: argparse.Namespace) -> int:
     return format_path(Path(args.path), write=args.write)
 
 
+def cmd_import(args: argparse.Namespace) -> int:
+    from engine.scene_loading import import_path
+
+    return import_path(args.model, args.output, force=args.force)
+
+
 def cmd_new(args: argparse.Namespace) -> int:
     from engine.scaffold import ScaffoldError, scaffold
 
@@ -236,6 +251,7 @@ COMMANDS = {
     "run": cmd_run,
     "check": cmd_check,
     "fmt": cmd_fmt,
+    "import": cmd_import,
     "new": cmd_new,
     "bench": cmd_bench,
 }

@@ -115,3 +115,72 @@ def save_state(engine: Engine, path: Path) -> None:
     if config_dir is not None and path.resolve() == (config_dir / "main.scene").resolve():
         raise OSError(f"{path}: refusing to overwrite the scene being run; choose another file")
     write_atomic(path, write_state(engine, path))
+
+
+def import_path(model: Path, out: Path | None, force: bool = False) -> int:
+    """``colosseum import``: the model's scene blocks written to ``out`` (stdout when
+    None). An existing ``out`` is merged with the new import, keeping the author's edits
+    (:mod:`engine.interchange.merge`); one no import wrote is replaced only with
+    ``force`` (keeping a ``.bak``). 1 when parts of the model were left out."""
+    import os
+
+    from engine.assets import AssetError, Assets
+    from engine.interchange import FORMATS, import_model
+    from engine.interchange.merge import BASE_SUFFIX, merge
+    from engine.scene import SceneError, parse_file, parse_text, render_all, write
+
+    if not model.is_file():
+        print(f"colosseum: error: {model}: no such file", file=sys.stderr)
+        return 2
+    if model.suffix.lower() not in FORMATS:
+        print(f"colosseum: error: {model}: not a model to import (expected "
+              f"{', '.join(FORMATS)})", file=sys.stderr)
+        return 2
+    folder = Path.cwd() if out is None else out.parent.resolve()
+    if not folder.is_dir():
+        print(f"colosseum: error: {out}: folder {out.parent} does not exist", file=sys.stderr)
+        return 2
+    file_ref = Path(os.path.relpath(model.resolve(), folder)).as_posix()
+    try:
+        imported = import_model(file_ref, file_ref, Assets(folder), root=folder, header=True)
+    except AssetError as exc:
+        print(f"colosseum: error: {exc.message}", file=sys.stderr)
+        return 1
+    except SceneError as exc:
+        print(exc.render(), file=sys.stderr)
+        return 1
+    text = write(imported.db)
+    if imported.problems:
+        print(render_all(imported.problems, imported.db.sources), file=sys.stderr)
+    failed = 1 if any(d.is_error for d in imported.problems) else 0
+    if out is None:
+        sys.stdout.write(text)
+        return failed
+    base_path = out.with_name(out.name + BASE_SUFFIX)
+    if out.exists() and not force:
+        if not base_path.is_file():
+            print(f"colosseum: error: {out} exists and no import wrote it (there is no "
+                  f"{base_path.name}); nothing is overwritten: give --force to replace it "
+                  f"(a .bak is kept)", file=sys.stderr)
+            return 1
+        try:
+            result = merge(parse_file(base_path), parse_file(out), parse_text(text, str(out)))
+        except SceneError as exc:
+            print(exc.render(), file=sys.stderr)
+            print(f"colosseum: error: {out} (or {base_path.name}) does not parse; nothing is "
+                  f"overwritten", file=sys.stderr)
+            return 1
+        merged = write(result.db)
+        for note in result.kept:
+            print(f"{out}: kept: {note}", file=sys.stderr)
+        print(f"{out}: {result.added} added, {result.updated} updated, {result.removed} "
+              f"removed from {model.name}", file=sys.stderr)
+        text_out = merged
+    else:
+        text_out = text
+    original = out.read_text(encoding="utf-8") if out.exists() else None
+    if original is not None and original != text_out:
+        out.with_name(out.name + ".bak").write_text(original, encoding="utf-8")
+    write_atomic(out, text_out)
+    write_atomic(base_path, text)
+    return failed

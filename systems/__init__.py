@@ -23,6 +23,7 @@ PLUGINS: dict[str, str] = {
     "controllers": "systems.controllers:ControllersPlugin",
     "render": "systems.render:RenderPlugin",
     "sound": "systems.sound:SoundPlugin",
+    "triggers": "systems.triggers:TriggersPlugin",
 }
 ALIASES: dict[str, str] = {"osg": "render", "osgsim": "render", "openalpp": "sound",
                            "openal": "sound", "ode": "physics", "dynamics": "physics"}
@@ -59,7 +60,8 @@ def wants_render(config: EngineConfig) -> bool:
 
 def default_plugins(config: EngineConfig) -> list[Plugin]:
     plugins = [RegistryPlugin(), *(load_plugin(name) for name in
-                                   ("physics", "scripting", "controllers", "sound"))]
+                                   ("physics", "scripting", "controllers", "sound",
+                                    "triggers"))]
     if wants_render(config):
         plugins.append(load_plugin("render"))
     return plugins

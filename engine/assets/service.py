@@ -221,7 +221,8 @@ class Assets:
             check(asset)
             return asset
         except Exception as exc:  # any loader's error, told as this file's
-            return _Failed(AssetError(f"load {kind}", _called(name), self._shown.get(path, path),
+            what = "model" if kind == "document" else kind  # a model read as its nodes
+            return _Failed(AssetError(f"load {what}", _called(name), self._shown.get(path, path),
                                       reason(exc), where))
 
 

@@ -27,7 +27,7 @@ from typing import Any
 
 from engine.scene import schema as sc
 from engine.scene.db import INCLUDE, STRING, STRUCTURE, Block, Entry, Value
-from engine.scene.diagnostics import Diagnostic, SceneError, suggest
+from engine.scene.diagnostics import ERROR, Diagnostic, SceneError, suggest
 from engine.scene.parser import Limits, parse_text
 from engine.scene.writer import quote
 
@@ -92,9 +92,17 @@ def read_extras(extras: Any, label: str, scene_level: bool = False) -> Extras:
         out.problems.extend(exc.diagnostics)
         return out
     out.problems.extend(db.warnings)
+    known = _SCENE if scene_level else _PHYSICAL | _VISUAL | _OBJECT | {
+        "Geometry", "PhysicalAttributes", "VisualAttributes"}
     for e in db.root.entries:
         if e.key == INCLUDE:
             out.ignored.append("'Include' (extras cannot include files)")
+        elif e.key not in known and not e.key[:1].islower():
+            out.problems.append(Diagnostic(e.loc.path, e.loc.line, e.loc.col, ERROR,
+                                           f"unknown key '{e.key}'{suggest(e.key, known)}; "
+                                           f"left out"))
+        elif e.key[:1].islower():
+            continue  # the author's variable, used by the lines after it
         elif scene_level:
             out.entries.setdefault("Scene", []).append(e)
         elif e.key in ("PhysicalAttributes", "VisualAttributes") and e.value.kind == STRUCTURE:

@@ -703,12 +703,12 @@ class _Importer:
         ``node`` None); told if they cannot be read or belong nowhere."""
         self.extras_sources.update(extras.sources)
         self.problems.items.extend(extras.problems)
-        if extras.problems:
+        if extras.problems and not extras.entries:
             self.problems.error(node, "its extras are left out (see the errors above)")
         if extras.ignored:
             self.problems.warn(node, f"extras {', '.join(extras.ignored)} are no scene keys; "
                                      f"left out")
-        if obj is None or extras.problems:
+        if obj is None:
             return
         for where, entries in extras.entries.items():
             obj.extras.setdefault(where, []).extend(entries)
@@ -796,7 +796,11 @@ class _Importer:
         for drive in desc.get("drives", []) or []:
             if not isinstance(drive, dict):
                 continue
-            dof = (3 if drive.get("type") == "angular" else 0) + int(drive.get("axis", 0))
+            axis = drive.get("axis", 0)
+            if not isinstance(axis, int) or not 0 <= axis <= 2:
+                self.problems.error(name, f"a drive's axis {axis!r} is not 0, 1 or 2; left out")
+                continue
+            dof = (3 if drive.get("type") == "angular" else 0) + axis
             if dof != free:
                 self.problems.warn(name, f"a drive on the joint's {_DOF_NAMES[dof]} axis, "
                                          f"which is not its free axis, is left out")
@@ -809,14 +813,14 @@ class _Importer:
                 self.problems.warn(name, f"a position drive (stiffness {tidy(stiffness)} toward "
                                          f"{drive.get('positionTarget', 0)}) is not represented: "
                                          f"joints here have velocity motors")
-            if force is None:
+            if force is None and velocity:
                 mass = driven.mass if driven.mass is not None else 1.0
                 scale = mass if drive.get("mode") == "acceleration" else 1.0
                 force = damping * abs(velocity) * scale
                 self.problems.warn(name, f"a drive without maxForce: a motor of at most "
                                          f"{tidy(force)} (damping x target velocity"
                                          f"{' x mass' if scale != 1.0 else ''})")
-            if velocity and force > 0:
+            if velocity and force is not None and force > 0:
                 decl.type = "MotorizedHinge" if decl.type == "Hinge" else decl.type
                 decl.motor_velocity = sign * velocity
                 decl.motor_max_force = force
@@ -861,6 +865,10 @@ def _dofs(desc: dict[str, Any], name: str, problems: Problems) -> list[Dof]:
         high = _number(limit.get("max", math.inf)) if "max" in limit else math.inf
         if low is None or high is None:
             problems.error(name, "a joint limit has a min or max that is not a number; left out")
+            continue
+        if low == -math.inf and high == math.inf:
+            problems.once(f"no-range-{name}", name, "a joint limit with neither min nor max "
+                                                    "holds nothing (the axes it names are free)")
             continue
         stiffness = limit.get("stiffness")
         if stiffness is not None and _number(stiffness) not in (None, math.inf):

@@ -213,6 +213,8 @@ class _Blocks:
         self.loc = loc
 
     def num(self, x: float) -> Value:
+        if isinstance(x, int):  # bits and counts, exactly
+            return Value(INT, x, self.loc)
         t = tidy(x)
         return Value(INT if isinstance(t, int) else FLOAT, t, self.loc)
 
@@ -274,8 +276,8 @@ def to_db(scene: ImportedScene, file_ref: str, prefix: str = "",
     if header and entries:
         first = entries[0]
         entries[0] = Entry(first.key, first.value, first.loc,
-                           [*(f"// {h}" if h else "" for h in header), "",
-                            *first.comments], first.trailing, first.included)
+                           [*(f"// {h}" for h in header), *first.comments], first.trailing,
+                           first.included)
     return SceneDB(Block(entries, b.loc), str(scene.source))
 
 
