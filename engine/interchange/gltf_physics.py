@@ -120,6 +120,8 @@ class _Importer:
         self.owner: dict[int, ObjectDecl] = {}  # node -> the object it belongs to
         self.object_node: dict[int, int] = {}  # id(object) -> its node
         self.frames: dict[int, np.ndarray] = {}  # id(object) -> its unscaled 4x4 (Z up)
+        #: Objects that are bodies only through their extras: shaped like their mesh.
+        self.typed_bodies: set[int] = set()
         self.materials: dict[tuple[str, int], str] = {}
         self.systems: dict[str, int] = {}
         self.extras_sources: dict[str, str] = {}
@@ -383,6 +385,7 @@ class _Importer:
                 consumed.update(self._trigger_members(i, role))
             elif extras.physical and (above is None or above.kind is None):
                 made = self._body(i, "dynamic")
+                self.typed_bodies.add(id(made))
             elif above is None and (self.doc.nodes[i].get("mesh") is not None or
                                     extras.entries):
                 made = self._new_object(i, None)
@@ -405,9 +408,10 @@ class _Importer:
                                                  "pose (no skinning on import)")
             if self.doc.nodes[i].get("camera") is not None:
                 self._camera(i)
-        for obj in self.scene.objects:
-            if obj.kind in ("dynamic", "kinematic") and not obj.shapes and not obj.extras.get(
-                    "Physical") and not obj.trigger and obj.visual is None:
+        for obj in self.scene.objects:  # a file's body without colliders collides with nothing
+            if obj.kind in ("dynamic", "kinematic") and not obj.shapes and not obj.trigger and \
+                    id(obj) not in self.typed_bodies and not any(
+                        e.key == "Geometry" for e in obj.extras.get("Physical", [])):
                 self._phantom(obj)
 
     def _label(self, i: int) -> str:
@@ -565,27 +569,30 @@ class _Importer:
         scale = np.abs(rel.scale)
         if np.all(scale == 0):
             return None  # a zero-scaled node disables its shape (the extension says)
+        zero = _zero_size(kind, params)
+        if zero is not None:
+            self.problems.error(name, f"its {kind} collider has zero size ({zero}); left out")
+            return None
         try:
             if kind == "box":
                 size = _vector(params["size"], 3)
-                if size is None:
-                    raise ValueError("box size is not 3 finite numbers")
-                size = np.abs(Y_UP_TO_Z_UP @ np.array(size)) * scale
-                dims: tuple[float, ...] = _tuple(size)
+                if size is None or min(size) < 0:
+                    raise ValueError(f"box size {params['size']} is not 3 positive numbers")
+                dims: tuple[float, ...] = _tuple(np.abs(Y_UP_TO_Z_UP @ np.array(size)) * scale)
             elif kind == "sphere":
                 radius = _positive(params["radius"], "sphere radius")
                 if not np.allclose(scale, scale[0], rtol=1e-6):
                     self.problems.warn(name, f"a sphere scaled unevenly {_tuple(scale)} stays "
                                              f"a sphere, of the largest scale")
-                dims = (tidy(2 * radius * float(scale.max())),)
+                dims = (2 * radius * float(scale.max()),)
             else:
                 dims = self._round(name, kind, params, scale)
         except ValueError as exc:
             self.problems.error(name, f"{exc}; its collider is left out")
             return None
         if min(dims) <= 0:
-            self.problems.error(name, f"its {kind} collider has zero size {list(dims)}; left "
-                                      f"out")
+            self.problems.error(name, f"its {kind} collider is scaled to nothing by its node "
+                                      f"{_tuple(rel.scale)}; left out")
             return None
         return ShapeDecl(kind, dims, _tuple(rel.translation), _quat(rel.rotation))
 
@@ -602,7 +609,7 @@ class _Importer:
             self.problems.warn(name, f"a {kind} scaled unevenly across its axis stays round, "
                                      f"of the larger scale")
         radius = max(top, bottom) * float(max(scale[0], scale[1]))
-        return (tidy(2 * radius), tidy(height * float(scale[2])))
+        return (2 * radius, height * float(scale[2]))
 
     def _plane(self, name: str, params: Any, rel: Frame, obj: ObjectDecl,
                i: int) -> ShapeDecl | None:
@@ -948,6 +955,20 @@ def _start_offset(fj: Frame, fc: Frame, free: int | None) -> float:
     q = matrix_to_quat(relative)
     twist = q[1 + free % 3]
     return 2.0 * math.atan2(float(twist), float(q[0]))
+
+
+def _zero_size(kind: str, params: dict[str, Any]) -> str | None:
+    """What makes an implicit shape degenerate, in the file's own terms (None: nothing)."""
+    if kind == "box":
+        size = params.get("size")
+        return f"size {size}" if isinstance(size, list) and 0 in size else None
+    if kind == "sphere":
+        return "radius 0" if params.get("radius") == 0 else None
+    if params.get("height") == 0:
+        return "height 0"
+    if params.get("radiusTop") == 0 and params.get("radiusBottom") == 0:
+        return "both radii 0"
+    return None
 
 
 def _trivial(key: str, value: Any) -> bool:
