@@ -33,6 +33,15 @@ import numpy as np
 
 from engine.assets.gltf import Y_UP_TO_Z_UP, Frame, GltfDocument, decompose, to_z_up
 from engine.interchange.extras import Extras, read_extras
+from engine.interchange.joints import (
+    DOF_NAMES,
+    FREE,
+    LOCKED,
+    Dof,
+    Frames,
+    WorkingJoint,
+    working_joint,
+)
 from engine.interchange.model import (
     CameraDecl,
     ImportedScene,
@@ -67,8 +76,6 @@ _DEFAULTS = {
             "capsule": {"height": 1.0, "radiusTop": 0.5, "radiusBottom": 0.5},
             "cylinder": {"height": 2.0, "radiusTop": 0.5, "radiusBottom": 0.5}},
 }
-#: The degrees of freedom of a joint frame: linear X Y Z, then angular X Y Z.
-_LINEAR, _ANGULAR = (0, 1, 2), (3, 4, 5)
 #: A motionless body's stand-in shape: the file gives it no collider, so it collides with
 #: nothing (category and mask 0) and only carries mass.
 _PHANTOM_DIAMETER = 0.1
@@ -769,37 +776,24 @@ class _Importer:
         if spec.get("enableCollision"):
             self.problems.once("enable-collision", name, "jointed bodies never collide here "
                                                          "(enableCollision is not represented)")
-        fj = decompose(self.doc.world[i])  # glTF frame: the joint's attachment frames
-        fc = decompose(self.doc.world[connected])
-        axes = Y_UP_TO_Z_UP @ fj.rotation  # joint frame axes, world, Z up
-        anchor = Y_UP_TO_Z_UP @ fj.translation
-        dofs = _dofs(desc, name, self.problems)
-        # the engine measures body 1 relative to body 2, as the extension measures the
-        # connected node relative to the joint node: body 1 is the connected side
-        bodies = [b.id for b in (body_b, body_a) if b is not None]
-        sign = 1.0 if body_b is not None else -1.0
-        decl = _classify(name, dofs, axes, anchor, tuple(bodies), self.problems)
-        if decl is None:
+        # the attachment frames: their axes are the file's local axes, seen in Z-up world
+        fj = decompose(to_z_up(self.doc.world[i]))
+        fc = decompose(to_z_up(self.doc.world[connected]))
+        frames = Frames(fj.rotation @ Y_UP_TO_Z_UP, fj.translation,
+                        fc.rotation @ Y_UP_TO_Z_UP, fc.translation)
+        made = working_joint(name, _dofs(desc, name, self.problems), frames,
+                             body_a.id if body_a else None, body_b.id if body_b else None,
+                             self.problems)
+        if made is None:
             return None
-        free = decl.free_axis
-        offset = _start_offset(fj, fc, free)
-        if decl.low is not None or decl.high is not None:
-            low, high = decl.low, decl.high
-            if sign < 0:
-                low, high = (None if high is None else -high), (None if low is None else -low)
-            decl.low = None if low is None else low - offset
-            decl.high = None if high is None else high - offset
-        self._drive(name, desc, decl, free, sign, body_b or body_a)
-        if decl.type in ("Hinge", "MotorizedHinge", "Universal"):
-            decl.low = None if decl.low is None else tidy(math.degrees(decl.low))
-            decl.high = None if decl.high is None else tidy(math.degrees(decl.high))
-            decl.motor_velocity = tidy(math.degrees(decl.motor_velocity))
+        self._drive(name, desc, made, body_b or body_a)
         unique = not self.doc.node_ref(i).startswith("#")
-        return decl.joint(name if unique else "+".join([*bodies, *(["world"] if len(
-            bodies) == 1 else [])]))
+        return made.decl(name if unique else "+".join(
+            [*made.bodies, *(["world"] if len(made.bodies) == 1 else [])]))
 
-    def _drive(self, name: str, desc: dict[str, Any], decl: _Joint, free: int | None,
-               sign: float, driven: ObjectDecl) -> None:
+    def _drive(self, name: str, desc: dict[str, Any], joint: WorkingJoint,
+               driven: ObjectDecl) -> None:
+        """The file's drive on the joint's free axis as its velocity motor."""
         for drive in desc.get("drives", []) or []:
             if not isinstance(drive, dict):
                 continue
@@ -808,8 +802,8 @@ class _Importer:
                 self.problems.error(name, f"a drive's axis {axis!r} is not 0, 1 or 2; left out")
                 continue
             dof = (3 if drive.get("type") == "angular" else 0) + axis
-            if dof != free:
-                self.problems.warn(name, f"a drive on the joint's {_DOF_NAMES[dof]} axis, "
+            if dof != joint.free:
+                self.problems.warn(name, f"a drive on the joint's {DOF_NAMES[dof]} axis, "
                                          f"which is not its free axis, is left out")
                 continue
             stiffness = _number(drive.get("stiffness", 0.0)) or 0.0
@@ -828,39 +822,12 @@ class _Importer:
                                          f"{tidy(force)} (damping x target velocity"
                                          f"{' x mass' if scale != 1.0 else ''})")
             if velocity and force is not None and force > 0:
-                decl.type = "MotorizedHinge" if decl.type == "Hinge" else decl.type
-                decl.motor_velocity = sign * velocity
-                decl.motor_max_force = force
-
-
-_DOF_NAMES = ("linear X", "linear Y", "linear Z", "angular X", "angular Y", "angular Z")
-Dof = tuple[str, float, float]  # ("free" | "locked" | "limited", low, high)
-
-
-@dataclass(slots=True)
-class _Joint:
-    """A joint being worked out: angles in radians until it is a JointDecl."""
-
-    type: str
-    bodies: tuple[str, ...]
-    anchor: tuple[float, ...]
-    axis: tuple[float, ...]
-    axis2: tuple[float, ...] | None
-    low: float | None
-    high: float | None
-    free_axis: int | None
-    motor_velocity: float = 0.0
-    motor_max_force: float = 0.0
-
-    def joint(self, name: str) -> JointDecl:
-        return JointDecl(name, self.type, self.bodies, _tuple(self.anchor),
-                         _tuple(self.axis), None if self.axis2 is None else _tuple(self.axis2),
-                         self.low, self.high, self.motor_velocity, self.motor_max_force)
+                joint.motor(velocity, force)
 
 
 def _dofs(desc: dict[str, Any], name: str, problems: Problems) -> list[Dof]:
     """Each of the six degrees of freedom: free, locked, or limited (low, high)."""
-    dofs: list[Dof] = [("free", -math.inf, math.inf)] * 6
+    dofs: list[Dof] = [FREE] * 6
     for limit in desc.get("limits", []) or []:
         if not isinstance(limit, dict):
             continue
@@ -884,77 +851,17 @@ def _dofs(desc: dict[str, Any], name: str, problems: Problems) -> list[Dof]:
         if len(axes) == 1:
             state = "locked" if low == high else "limited"
             if state == "locked" and low != 0:
-                problems.warn(name, f"a limit that holds the {_DOF_NAMES[base + axes[0]]} axis "
+                problems.warn(name, f"a limit that holds the {DOF_NAMES[base + axes[0]]} axis "
                                     f"at {low}, not 0, holds it where it starts here")
             dofs[base + axes[0]] = (state, low, high)
         elif high == 0 or (high <= 0 and low <= 0):
             for a in axes:
-                dofs[base + a] = ("locked", 0.0, 0.0)
+                dofs[base + a] = LOCKED
         else:
             kind = "distance" if base == 0 else "cone"
             problems.warn(name, f"a {kind} limit over {len(axes)} axes (up to {tidy(high)}) is "
                                 f"not represented: those axes are free")
     return dofs
-
-
-def _classify(name: str, dofs: list[Dof], axes: np.ndarray, anchor: np.ndarray,
-              bodies: tuple[str, ...], problems: Problems) -> _Joint | None:
-    """The scene joint type holding these degrees of freedom, or the nearest one (told)."""
-    lin_free = [k for k in _LINEAR if dofs[k][0] != "locked"]
-    ang_free = [k for k in _ANGULAR if dofs[k][0] != "locked"]
-
-    def make(kind: str, free: int | None, axis: int = 5, axis2: int | None = None) -> _Joint:
-        low = high = None
-        if free is not None and dofs[free][0] == "limited":
-            low = dofs[free][1] if math.isfinite(dofs[free][1]) else None
-            high = dofs[free][2] if math.isfinite(dofs[free][2]) else None
-        return _Joint(kind, bodies, tuple(anchor), tuple(axes[:, axis % 3]),
-                      None if axis2 is None else tuple(axes[:, axis2 % 3]), low, high, free)
-
-    if lin_free and ang_free:
-        if len(lin_free) == 1 and ang_free == [lin_free[0] + 3]:
-            problems.warn(name, "a joint that slides and turns about one axis (cylindrical) is "
-                                "a slider here: it does not turn")
-            return make("Slider", lin_free[0], lin_free[0])
-        problems.warn(name, f"its joint leaves linear axes free ({_axes(lin_free)}) as well as "
-                            f"angular ones; here the linear ones are held")
-        lin_free = []
-    if not lin_free:
-        if not ang_free:
-            return make("Fixed", None)
-        if len(ang_free) == 1:
-            return make("Hinge", ang_free[0], ang_free[0])
-        if len(ang_free) == 2:
-            if dofs[ang_free[1]][0] == "limited":
-                problems.warn(name, f"a universal joint's limit on its second axis "
-                                    f"({_DOF_NAMES[ang_free[1]]}) is left out")
-            return make("Universal", ang_free[0], ang_free[0], ang_free[1])
-        if any(dofs[k][0] == "limited" for k in ang_free):
-            problems.warn(name, "a ball joint's angular limits are left out")
-        return make("Ball", None)
-    if len(lin_free) == 1:
-        return make("Slider", lin_free[0], lin_free[0])
-    problems.warn(name, f"a joint that holds only rotation (linear axes {_axes(lin_free)} free) "
-                        f"has no joint type here; left out")
-    return None
-
-
-def _axes(dofs: list[int]) -> str:
-    return " ".join("XYZ"[k % 3] for k in dofs)
-
-
-def _start_offset(fj: Frame, fc: Frame, free: int | None) -> float:
-    """Where the free axis starts: the connected frame's offset from the joint frame
-    along it (m), or its angle about it (rad). The engine counts from the start."""
-    if free is None:
-        return 0.0
-    axis = fj.rotation[:, free % 3]
-    if free < 3:
-        return float(axis @ (fc.translation - fj.translation))
-    relative = fj.rotation.T @ fc.rotation  # connected relative to joint, joint axes
-    q = matrix_to_quat(relative)
-    twist = q[1 + free % 3]
-    return 2.0 * math.atan2(float(twist), float(q[0]))
 
 
 def _zero_size(kind: str, params: dict[str, Any]) -> str | None:
