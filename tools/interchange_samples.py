@@ -445,9 +445,146 @@ def many_bodies(path: Path, count: int = 10_000) -> Path:
     return b.write(path)
 
 
+# -- Collada ------------------------------------------------------------------------------
+#: A file's axes from the engine's (Z up): the inverse of engine.assets.dae.UP_AXES.
+_FILE_AXES = {"Z_UP": np.eye(3), "Y_UP": np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])}
+#: :func:`collada`'s door hinge limits (degrees about the post's vertical axis) and spin.
+DOOR_LOW, DOOR_HIGH, DOOR_SPIN = -30.0, 60.0, 90.0
+#: Scene keys typed into :func:`collada`'s Box node (a Collada <extra>).
+BOX_EXTRAS = "Color [1 0 0]"
+#: Where each body of :func:`collada` comes to rest (its centre's height, m).
+COLLADA_REST = {"Box": 0.25, "Ball": 0.25, "Pill": 0.2, "Can": 0.25, "Gem": 0.25,
+                "Pebble": 0.4}
+
+
+def collada(path: Path, up: str = "Z_UP", meter: float = 1.0) -> Path:
+    """A Collada 1.4 physics scene written ``up`` in units of ``meter``: a static plane, a
+    static triangle-mesh slab, every analytic shape and a convex mesh falling on them, and
+    a door hinged to a static post with limits, a spring and a start spin: 10 rigid bodies,
+    1 constraint."""
+    axes = _FILE_AXES[up]
+
+    def pos(p: Sequence[float]) -> str:
+        return " ".join(f"{x:.9g}" for x in axes @ np.asarray(p, np.float64) / meter)
+
+    def size(p: Sequence[float]) -> str:
+        return " ".join(f"{x:.9g}" for x in np.abs(axes @ np.asarray(p, np.float64)) / meter)
+
+    def rotate(axis: Sequence[float], degrees: float) -> str:
+        return f"<rotate>{pos(axis)} {degrees}</rotate>"
+
+    def along(direction: Sequence[float]) -> str:
+        """The rotate turning the file's local Y (a cylinder's axis) onto ``direction``."""
+        d = axes @ np.asarray(direction, np.float64)
+        y = np.array([0.0, 1.0, 0.0])
+        axis = np.cross(y, d)
+        if np.linalg.norm(axis) < 1e-9:
+            return ""
+        angle = math.degrees(math.acos(float(np.clip(y @ d, -1, 1))))
+        return f"<rotate>{' '.join(f'{x:.9g}' for x in axis)} {angle:.9g}</rotate>"
+
+    def geometry(gid: str, vertices: np.ndarray, faces: np.ndarray) -> str:
+        v = " ".join(f"{x:.9g}" for x in (vertices @ axes.T / meter).reshape(-1))
+        return (f'<geometry id="{gid}"><mesh><source id="{gid}-pos"><float_array '
+                f'id="{gid}-arr" count="{vertices.size}">{v}</float_array><technique_common>'
+                f'<accessor source="#{gid}-arr" count="{len(vertices)}" stride="3">'
+                f'<param name="X" type="float"/><param name="Y" type="float"/>'
+                f'<param name="Z" type="float"/></accessor></technique_common></source>'
+                f'<vertices id="{gid}-vtx"><input semantic="POSITION" source="#{gid}-pos"/>'
+                f'</vertices><triangles count="{len(faces)}"><input semantic="VERTEX" '
+                f'source="#{gid}-vtx" offset="0"/><p>{" ".join(map(str, faces.reshape(-1)))}'
+                f'</p></triangles></mesh></geometry>')
+
+    def box(full: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+        v, f = box_mesh(full)
+        return v, f
+
+    bodies = [  # node, position, (rigid body shapes), dynamic, extra technique_common
+        ("Ground", (0, 0, 0), f"<shape><plane><equation>{pos((0, 0, 1))} 0</equation></plane>"
+                              "</shape>", False, ""),
+        ("Slab", (4, 0, 0.1), '<shape><instance_geometry url="#slab"/></shape>', False, ""),
+        ("Box", (-4, 0, 1), f"<shape><box><half_extents>{size((0.25, 0.25, 0.25))}"
+                            "</half_extents></box></shape>", True, "<mass>2</mass>"),
+        ("Ball", (-3, 0, 1), f"<shape><sphere><radius>{0.25 / meter}</radius></sphere></shape>",
+         True, ""),
+        ("Pill", (-2, 0, 1), f"<shape><capsule><height>{0.6 / meter}</height><radius>"
+                             f"{0.2 / meter} {0.2 / meter}</radius></capsule>{along((1, 0, 0))}"
+                             "</shape>", True, ""),
+        ("Can", (-1, 0, 1), f"<shape><cylinder><height>{0.5 / meter}</height><radius>"
+                            f"{0.3 / meter} {0.3 / meter}</radius></cylinder>{along((0, 0, 1))}"
+                            "</shape>", True, ""),
+        ("Gem", (0, 0, 1), '<shape><instance_geometry url="#gem"/></shape>', True, ""),
+        ("Pebble", (4, 0, 2), f"<shape><sphere><radius>{0.2 / meter}</radius></sphere>"
+                              "</shape>", True, ""),
+        ("Post", (8, 0, 1.5), f"<shape><box><half_extents>{size((0.05, 0.05, 0.5))}"
+                              "</half_extents></box></shape>", False, ""),
+        ("Door", (8.5, 0, 1.5), f"<shape><box><half_extents>{size((0.4, 0.05, 0.5))}"
+                                "</half_extents></box></shape>", True, ""),
+    ]
+    geometries = [geometry("cube", *box((0.5, 0.5, 0.5))), geometry("slab", *box((1, 1, 0.2))),
+                  '<geometry id="gem"><convex_mesh convex_hull_of="#cube"/></geometry>']
+    nodes = "".join(f'<node id="{n}" name="{n}"><translate>{pos(p)}</translate>'
+                    f'<instance_geometry url="#{"slab" if n == "Slab" else "cube"}"/>'
+                    + (f'<extra><technique profile="colosseum">{BOX_EXTRAS}</technique></extra>'
+                       if n == "Box" else "") + "</node>" for n, p, *_ in bodies)
+    rigid = "".join(
+        f'<rigid_body sid="{n}-rb" name="{n}"><technique_common><dynamic>'
+        f'{"true" if dyn else "false"}</dynamic>{extra}<instance_physics_material '
+        f'url="#{"rubber" if n == "Ball" else "stone"}"/>{shape}</technique_common>'
+        f'</rigid_body>' for n, _, shape, dyn, extra in bodies)
+    hinge = (f'<rigid_constraint sid="hinge" name="DoorHinge"><ref_attachment '
+             f'rigid_body="Post-rb"><translate>{pos((0.05, 0, 0))}</translate>'
+             f'</ref_attachment><attachment rigid_body="Door-rb"><translate>'
+             f'{pos((-0.45, 0, 0))}</translate></attachment><technique_common>'
+             f'<enabled>true</enabled><interpenetrate>true</interpenetrate><limits>'
+             f'<swing_cone_and_twist><min>{_limits(axes, (0, 0, DOOR_LOW))}</min>'
+             f'<max>{_limits(axes, (0, 0, DOOR_HIGH))}</max></swing_cone_and_twist>'
+             f'<linear><min>0 0 0</min><max>0 0 0</max></linear></limits><spring><angular>'
+             f'<stiffness>2</stiffness><damping>0</damping><target_value>0</target_value>'
+             f'</angular></spring></technique_common></rigid_constraint>')
+    instances = "".join(
+        f'<instance_rigid_body body="{n}-rb" target="#{n}">' +
+        (f'<technique_common><angular_velocity>{_limits(axes, (0, 0, DOOR_SPIN))}'
+         f'</angular_velocity>'
+         f'</technique_common>' if n == "Door" else "") + "</instance_rigid_body>"
+        for n, *_ in bodies)
+    text = f"""<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+<asset><unit meter="{meter}" name="unit"/><up_axis>{up}</up_axis></asset>
+<library_geometries>{"".join(geometries)}</library_geometries>
+<library_visual_scenes><visual_scene id="Scene">{nodes}</visual_scene></library_visual_scenes>
+<library_physics_materials>
+<physics_material id="stone"><technique_common><dynamic_friction>0.6</dynamic_friction>
+<restitution>0</restitution><static_friction>0.6</static_friction></technique_common>
+</physics_material>
+<physics_material id="rubber"><technique_common><dynamic_friction>0.9</dynamic_friction>
+<restitution>0</restitution><static_friction>0.9</static_friction></technique_common>
+</physics_material>
+</library_physics_materials>
+<library_physics_models><physics_model id="Physics">{rigid}{hinge}</physics_model>
+</library_physics_models>
+<library_physics_scenes><physics_scene id="PhysicsScene">
+<instance_physics_model url="#Physics">{instances}
+<instance_rigid_constraint constraint="hinge"/></instance_physics_model>
+<technique_common><gravity>{pos((0, 0, -9.81))}</gravity><time_step>0.01</time_step>
+</technique_common></physics_scene></library_physics_scenes>
+<scene><instance_physics_scene url="#PhysicsScene"/><instance_visual_scene url="#Scene"/>
+</scene>
+</COLLADA>
+"""
+    path.write_text(text)
+    return path
+
+
+def _limits(axes: np.ndarray, engine_degrees: Sequence[float]) -> str:
+    """Per-axis angles (or angular rates) about the engine's X Y Z written on the file's
+    axes (a turn about the engine's Z is about the file's Y in a Y-up file)."""
+    return " ".join(f"{x:.9g}" for x in axes @ np.asarray(engine_degrees, np.float64))
+
+
 SAMPLES = {"shapes.glb": shapes, "joints.glb": joints, "materials.glb": materials,
            "filters.glb": filters, "triggers.glb": triggers, "extras.glb": extras,
-           "omi.gltf": omi}
+           "omi.gltf": omi, "physics.dae": collada}
 
 
 def main(argv: list[str]) -> int:

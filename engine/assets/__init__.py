@@ -9,11 +9,14 @@ that asked for it::
 
 Built in: models through trimesh (.obj .stl .ply .glb .gltf .dae), images through
 Pillow (.png .jpg .bmp .tga .tif .gif .webp), sounds through libsndfile (.wav .ogg
-.flac .aiff). A new format is one function registered for its extension — put it in a
-content folder's ``systems/*.py`` (imported before the scene is built) or any module
-imported before loading. It returns a :class:`ModelAsset` (:func:`mesh_part` makes a
-part from raw triangles), an :class:`ImageAsset` or a ``SoundInfo``; whatever it
-raises becomes the reason in the message:
+.flac .aiff); glTF and Collada files also as documents of named nodes
+(:mod:`engine.assets.gltf`, :mod:`engine.assets.dae`), whose nodes a scene draws with
+``Geometry { File "room.glb" Nodes ["Door"] }`` and importers read. A new format is one
+function registered for its extension — put it in a content folder's ``systems/*.py``
+(imported before the scene is built) or any module imported before loading. It returns a
+:class:`ModelAsset` (:func:`mesh_part` makes a part from raw triangles), an
+:class:`ImageAsset` or a ``SoundInfo``; whatever it raises becomes the reason in the
+message:
 
 >>> import tempfile
 >>> from pathlib import Path
@@ -39,7 +42,7 @@ could not convert string to float: 'zero'
 >>> unregister_loader("model", ".tri")
 """
 
-from engine.assets import gltf, loaders
+from engine.assets import dae, gltf, loaders
 from engine.assets.registry import (
     KINDS,
     Loader,
@@ -69,6 +72,7 @@ __all__ = [
     "ModelAsset",
     "UnknownExtension",
     "Where",
+    "dae",
     "extensions",
     "gltf",
     "loader_for",

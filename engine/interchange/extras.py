@@ -25,6 +25,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from engine.interchange.model import ImportedScene, ObjectDecl, Problems
 from engine.scene import schema as sc
 from engine.scene.db import INCLUDE, STRING, STRUCTURE, Block, Entry, Value
 from engine.scene.diagnostics import ERROR, Diagnostic, SceneError, suggest
@@ -113,6 +114,22 @@ def read_extras(extras: Any, label: str, scene_level: bool = False) -> Extras:
                      else "Object")
             out.entries.setdefault(where, []).append(_sound_block(e))
     return out
+
+
+def attach(extras: Extras, obj: ObjectDecl | None, node: str | None, scene: ImportedScene,
+           problems: Problems) -> None:
+    """Put a node's extras into the object it belongs to, their text into the scene's
+    sources (for the diagnostics' source lines); told if they cannot be read or are no
+    scene keys."""
+    scene.sources.update(extras.sources)
+    problems.items.extend(extras.problems)
+    if extras.problems and not extras.entries:
+        problems.error(node, "its extras are left out (see the errors above)")
+    if extras.ignored:
+        problems.warn(node, f"extras {', '.join(extras.ignored)} are no scene keys; left out")
+    if obj is not None:
+        for where, entries in extras.entries.items():
+            obj.extras.setdefault(where, []).extend(entries)
 
 
 def _field(name: str) -> sc.Field | None:

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from engine.assets.gltf import Y_UP_TO_Z_UP, Frame, GltfDocument, decompose, to_z_up
-from engine.interchange.extras import Extras, read_extras
+from engine.interchange.extras import Extras, attach, read_extras
 from engine.interchange.joints import (
     DOF_NAMES,
     FREE,
@@ -50,10 +50,11 @@ from engine.interchange.model import (
     ObjectDecl,
     Problems,
     ShapeDecl,
+    quaternion,
     tidy,
     unique_ids,
+    vector,
 )
-from engine.rotation import matrix_to_quat
 
 KHR = "KHR_physics_rigid_bodies"
 KHR_SHAPES = "KHR_implicit_shapes"
@@ -131,7 +132,6 @@ class _Importer:
         self.typed_bodies: set[int] = set()
         self.materials: dict[tuple[str, int], str] = {}
         self.systems: dict[str, int] = {}
-        self.extras_sources: dict[str, str] = {}
 
     # -- top level -----------------------------------------------------------------
     def run(self) -> ImportedScene:
@@ -152,9 +152,8 @@ class _Importer:
             o.id = new
         root_extras = read_extras(self.doc.json.get("extras"),
                                   f"{self.doc.path.name} extras", scene_level=True)
-        self._take_extras(root_extras, None, None)
+        attach(root_extras, None, None, self.scene, self.problems)
         self.scene.scene_extras = root_extras.entries.get("Scene", [])
-        self.scene.sources = self.extras_sources
         return self.scene
 
     def _extensions(self) -> None:
@@ -397,7 +396,7 @@ class _Importer:
                                     extras.entries):
                 made = self._new_object(i, None)
             obj = made or above
-            self._take_extras(extras, obj, name)
+            attach(extras, obj, name, self.scene, self.problems)
             if obj is None:
                 continue
             self.owner[i] = obj
@@ -435,7 +434,7 @@ class _Importer:
         if f.sheared:
             self.problems.warn(name, "its parents' non-uniform scale shears it; its shapes "
                                      "and mesh are the nearest unsheared ones")
-        obj = ObjectDecl(name, name, _tuple(f.translation), _quat(f.rotation), kind,
+        obj = ObjectDecl(name, name, vector(f.translation), quaternion(f.rotation), kind,
                          trigger=trigger)
         self.scene.objects.append(obj)
         self.object_node[id(obj)] = i
@@ -490,7 +489,7 @@ class _Importer:
                     self.problems.error(name, f"its {key} is not 3 finite numbers; it starts "
                                               f"at rest")
                 else:
-                    setattr(obj, attr, _tuple(Y_UP_TO_Z_UP @ np.array(v)))
+                    setattr(obj, attr, vector(Y_UP_TO_Z_UP @ np.array(v)))
 
     def _phantom(self, obj: ObjectDecl) -> None:
         self.problems.warn(obj.node, "a body without colliders: it gets a small sphere that "
@@ -585,11 +584,11 @@ class _Importer:
                 size = _vector(params["size"], 3)
                 if size is None or min(size) < 0:
                     raise ValueError(f"box size {params['size']} is not 3 positive numbers")
-                dims: tuple[float, ...] = _tuple(np.abs(Y_UP_TO_Z_UP @ np.array(size)) * scale)
+                dims: tuple[float, ...] = vector(np.abs(Y_UP_TO_Z_UP @ np.array(size)) * scale)
             elif kind == "sphere":
                 radius = _positive(params["radius"], "sphere radius")
                 if not np.allclose(scale, scale[0], rtol=1e-6):
-                    self.problems.warn(name, f"a sphere scaled unevenly {_tuple(scale)} stays "
+                    self.problems.warn(name, f"a sphere scaled unevenly {vector(scale)} stays "
                                              f"a sphere, of the largest scale")
                 dims = (2 * radius * float(scale.max()),)
             else:
@@ -599,9 +598,9 @@ class _Importer:
             return None
         if min(dims) <= 0:
             self.problems.error(name, f"its {kind} collider is scaled to nothing by its node "
-                                      f"{_tuple(rel.scale)}; left out")
+                                      f"{vector(rel.scale)}; left out")
             return None
-        return ShapeDecl(kind, dims, _tuple(rel.translation), _quat(rel.rotation))
+        return ShapeDecl(kind, dims, vector(rel.translation), quaternion(rel.rotation))
 
     def _round(self, name: str, kind: str, params: dict[str, Any],
                scale: np.ndarray) -> tuple[float, ...]:
@@ -631,7 +630,7 @@ class _Importer:
             offset = np.array(rel.translation) - rel.rotation @ np.array(
                 [0.0, 0.0, _PLANE_THICKNESS / 2])
             return ShapeDecl("box", (tidy(sx * scale[0]), tidy(sz * scale[1]),
-                                     _PLANE_THICKNESS), _tuple(offset), _quat(rel.rotation))
+                                     _PLANE_THICKNESS), vector(offset), quaternion(rel.rotation))
         if self.object_node[id(obj)] != i or obj.shapes:
             plane = self._new_object(i, "static")
             plane.id = f"{name}.plane"
@@ -645,7 +644,7 @@ class _Importer:
         the node with its scale) or a node's meshes (``geometry.node``)."""
         name = self._label(i)
         kind = "hull" if shape.convex else "mesh"
-        offset, rotation = _tuple(rel.translation), _quat(rel.rotation)
+        offset, rotation = vector(rel.translation), quaternion(rel.rotation)
         if shape.node is not None:
             if not isinstance(shape.node, int) or not 0 <= shape.node < len(self.doc.nodes):
                 self.problems.error(name, f"its collider names node {shape.node}, which does "
@@ -664,7 +663,7 @@ class _Importer:
             elif isinstance(shape.mesh, int) and 0 <= shape.mesh < len(self.doc.meshes):
                 decl = ShapeDecl(kind, (), offset, rotation, "",
                                  mesh=self.doc.mesh_ref(shape.mesh),
-                                 scale=_tuple(np.abs(rel.scale)))
+                                 scale=vector(np.abs(rel.scale)))
             else:
                 self.problems.error(name, f"its collider names mesh {shape.mesh}, which the "
                                           f"file does not have; left out")
@@ -701,7 +700,7 @@ class _Importer:
         f = self._frame(i)
         forward = f.rotation @ (Y_UP_TO_Z_UP @ np.array([0.0, 0.0, -1.0]))
         self.scene.cameras.append(CameraDecl(
-            self.doc.name(i), _tuple(f.translation), _tuple(f.translation + forward),
+            self.doc.name(i), vector(f.translation), vector(f.translation + forward),
             tidy(math.degrees(yfov or 0.8))))
         if spec.get("type") == "orthographic":
             self.problems.warn(self._label(i), "an orthographic camera is imported as a "
@@ -711,21 +710,6 @@ class _Importer:
     def _node_extras(self, i: int) -> Extras:
         return read_extras(self.doc.nodes[i].get("extras"),
                            f"{self.doc.path.name} node '{self._label(i)}' extras")
-
-    def _take_extras(self, extras: Extras, obj: ObjectDecl | None, node: str | None) -> None:
-        """Put a node's extras into the object it belongs to (the file's own: ``obj`` and
-        ``node`` None); told if they cannot be read or belong nowhere."""
-        self.extras_sources.update(extras.sources)
-        self.problems.items.extend(extras.problems)
-        if extras.problems and not extras.entries:
-            self.problems.error(node, "its extras are left out (see the errors above)")
-        if extras.ignored:
-            self.problems.warn(node, f"extras {', '.join(extras.ignored)} are no scene keys; "
-                                     f"left out")
-        if obj is None:
-            return
-        for where, entries in extras.entries.items():
-            obj.extras.setdefault(where, []).extend(entries)
 
     # -- joints --------------------------------------------------------------------
     def _joints(self, order: list[int]) -> None:
@@ -916,17 +900,3 @@ def _vector(value: Any, n: int) -> list[float] | None:
         return None
     out = [_number(v) for v in value]
     return None if None in out else out  # type: ignore[return-value]
-
-
-def _tuple(v: Any) -> tuple[float, ...]:
-    """Full precision (what is written is tidied then: :func:`tidy`)."""
-    return tuple(float(x) for x in v)
-
-
-def _quat(rotation: np.ndarray) -> tuple[float, float, float, float]:
-    q = matrix_to_quat(rotation)
-    if q[0] < 0:
-        q = -q
-    if np.allclose(q, (1.0, 0.0, 0.0, 0.0), atol=1e-9):
-        return (1.0, 0.0, 0.0, 0.0)
-    return tuple(float(x) for x in q)  # type: ignore[return-value]

@@ -17,7 +17,9 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from engine.rotation import quat_to_euler
+import numpy as np
+
+from engine.rotation import matrix_to_quat, quat_to_euler
 from engine.scene.db import (
     FLOAT,
     INT,
@@ -57,12 +59,19 @@ class ModelDiagnostic(Diagnostic):
 
 class Problems:
     """The diagnostics of one import, each naming the model file and, where there is
-    one, the node."""
+    one, the node (or what ``kind`` of thing the name names)."""
 
-    def __init__(self, path: str) -> None:
+    def __init__(self, path: str, kind: str = "node") -> None:
         self.path = path
+        self.kind = kind
         self.items: list[Diagnostic] = []
         self._said: set[str] = set()
+
+    def about(self, kind: str) -> Problems:
+        """The same diagnostics, naming things of ``kind`` (a Collada rigid_constraint)."""
+        other = Problems(self.path, kind)
+        other.items, other._said = self.items, self._said
+        return other
 
     def warn(self, node: str | None, message: str) -> None:
         """Something the file declares that the engine approximates or leaves out."""
@@ -79,7 +88,7 @@ class Problems:
             self.warn(node, message)
 
     def _add(self, severity: str, node: str | None, message: str) -> None:
-        text = f"node '{node}': {message}" if node is not None else message
+        text = f"{self.kind} '{node}': {message}" if node is not None else message
         self.items.append(ModelDiagnostic(self.path, 0, 0, severity, text))
 
 
@@ -170,6 +179,8 @@ class ImportedScene:
     materials: list[MaterialDecl] = field(default_factory=list)
     joints: list[JointDecl] = field(default_factory=list)
     cameras: list[CameraDecl] = field(default_factory=list)
+    #: World settings the file gives (Collada's gravity and time step), scene units.
+    world: dict[str, float | tuple[float, ...]] = field(default_factory=dict)
     #: Scene-level entries from the file's own extras (materials, world settings).
     scene_extras: list[Entry] = field(default_factory=list)
     #: Extensions (or Collada sections) whose data was read.
@@ -189,6 +200,21 @@ def tidy(x: float) -> float | int:
         return 0
     r = float(f"{x:.7g}")
     return int(r) if r.is_integer() and abs(r) < 1e15 else r
+
+
+def vector(v: Iterable[float]) -> tuple[float, ...]:
+    """Plain floats at full precision (what is written is tidied then: :func:`tidy`)."""
+    return tuple(float(x) for x in v)
+
+
+def quaternion(rotation: np.ndarray) -> Quat:
+    """A rotation matrix as ``(w, x, y, z)``, ``w >= 0``, exactly identity when it is one."""
+    q = matrix_to_quat(rotation)
+    if q[0] < 0:
+        q = -q
+    if np.allclose(q, (1.0, 0.0, 0.0, 0.0), atol=1e-9):
+        return (1.0, 0.0, 0.0, 0.0)
+    return (float(q[0]), float(q[1]), float(q[2]), float(q[3]))
 
 
 def unique_ids(names: Sequence[str], taken: Iterable[str] = ()) -> list[str]:
@@ -269,6 +295,10 @@ def to_db(scene: ImportedScene, file_ref: str, prefix: str = "",
             body += [b.entry("MotorVelocity", b.num(j.motor_velocity)),
                      b.entry("MotorMaxForce", b.num(j.motor_max_force))]
         entries.append(b.entry("Joint", b.block(body)))
+    if scene.world:
+        entries.append(b.entry("World", b.block([
+            b.entry(key, b.vec(value) if isinstance(value, tuple) else b.num(value))
+            for key, value in scene.world.items()])))
     for cam in scene.cameras:
         entries.append(b.entry("Camera", b.block([
             b.entry("ID", b.text(prefix + cam.id)), b.entry("Position", b.vec(cam.position)),
