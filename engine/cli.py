@@ -92,6 +92,11 @@ def build_parser() -> argparse.ArgumentParser:
     imp.add_argument("--force", action="store_true",
                      help="replace an existing scene file no import wrote (keeps a .bak)")
 
+    export = sub.add_parser("export", help="a scene (or saved state) as glTF with physics "
+                                           "extensions, for Blender or Godot")
+    export.add_argument("scene", type=Path, help="content folder or .scene file")
+    export.add_argument("-o", "--output", type=Path, required=True, help="OUT.glb or .gltf")
+
     new = sub.add_parser("new", help="scaffold a content folder that runs")
     new.add_argument("name")
 
@@ -228,6 +233,12 @@ def cmd_import(args: argparse.Namespace) -> int:
     return import_path(args.model, args.output, force=args.force)
 
 
+def cmd_export(args: argparse.Namespace) -> int:
+    from engine.scene_loading import export_path
+
+    return export_path(args.scene, args.output)
+
+
 def cmd_new(args: argparse.Namespace) -> int:
     from engine.scaffold import ScaffoldError, scaffold
 
@@ -252,6 +263,7 @@ COMMANDS = {
     "check": cmd_check,
     "fmt": cmd_fmt,
     "import": cmd_import,
+    "export": cmd_export,
     "new": cmd_new,
     "bench": cmd_bench,
 }

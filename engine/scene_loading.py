@@ -184,3 +184,28 @@ def import_path(model: Path, out: Path | None, force: bool = False) -> int:
     write_atomic(out, text_out)
     write_atomic(base_path, text)
     return failed
+
+
+def export_path(scene: Path, out: Path) -> int:
+    """``colosseum export``: a scene file or content folder (a saved state too) as glTF with
+    physics extensions; what glTF cannot say is told."""
+    from engine.content import ContentError, resolve
+    from engine.interchange.export import export_gltf
+    from engine.scene import render_all
+
+    if out.suffix.lower() not in (".glb", ".gltf"):
+        print(f"colosseum: error: {out}: the output must end in .glb or .gltf", file=sys.stderr)
+        return 2
+    if not out.parent.is_dir():
+        print(f"colosseum: error: {out}: folder {out.parent} does not exist", file=sys.stderr)
+        return 2
+    try:
+        loaded = load_content_scene(resolve(str(scene)))
+    except (ContentError, SceneLoadError) as exc:
+        print(exc, file=sys.stderr)
+        return 1
+    told = export_gltf(loaded.spec, out)
+    if told:
+        print(render_all(told), file=sys.stderr)
+    print(f"wrote {out}", file=sys.stderr)
+    return 0

@@ -43,6 +43,8 @@ from engine.interchange.joints import (
     working_joint,
 )
 from engine.interchange.model import (
+    GEOMETRIC_MEAN,
+    VOLUME_DENSITY,
     CameraDecl,
     ImportedScene,
     JointDecl,
@@ -311,9 +313,13 @@ class _Importer:
                                              f"{tidy(dynamic)}; contacts here have one Coulomb "
                                              f"coefficient, the dynamic one")
                 modes = []
+                ours = m.get("extras") if isinstance(m.get("extras"), dict) else {}
                 for key in ("frictionCombine", "restitutionCombine"):
                     mode = m.get(key, "average" if family == "OMI" else None)
-                    if mode not in (None, "average", "minimum", "maximum", "multiply"):
+                    if ours.get(key) == GEOMETRIC_MEAN:  # written by our export
+                        mode = GEOMETRIC_MEAN
+                    if mode not in (None, "average", "minimum", "maximum", "multiply",
+                                    GEOMETRIC_MEAN):
                         self.problems.warn(None, f"physics material {k}: {key} {mode!r} is "
                                                  f"not average, minimum, maximum or multiply; "
                                                  f"average is used")
@@ -414,6 +420,9 @@ class _Importer:
                                                  "pose (no skinning on import)")
             if self.doc.nodes[i].get("camera") is not None:
                 self._camera(i)
+        for obj in self.scene.objects:
+            if self.systems and obj.kind is not None and obj.category is None:
+                obj.category = 0xFFFFFFFF  # unfiltered: meets every system's mask
         for obj in self.scene.objects:  # a file's body without colliders collides with nothing
             if obj.kind in ("dynamic", "kinematic") and not obj.shapes and not obj.trigger and \
                     id(obj) not in self.typed_bodies and not any(
@@ -467,6 +476,8 @@ class _Importer:
                                           f"from the shapes' volume")
             mass = None
         obj.mass = mass
+        if mass is None:  # the extensions: "calculated by the engine", from the volume
+            obj.density = VOLUME_DENSITY
         for key, what in (("centerOfMass", "centre of mass"),
                           ("inertiaDiagonal", "inertia"), ("inertiaOrientation", "inertia")):
             value = motion.get(key)

@@ -41,9 +41,14 @@ Quat = tuple[float, float, float, float]
 #: KHR and OMI say nothing about combining materials when a file does not; Blender's
 #: exporter and OMI write nothing for their default, which is this.
 DEFAULT_COMBINE = "average"
+#: The engine's friction rule, which KHR cannot name: written in an exported material's
+#: extras as its ``frictionCombine``, read back by the importer.
+GEOMETRIC_MEAN = "geometricMean"
 #: How the engine's backends combine two materials (engine.physics.ode3d, pymunk2d).
 ENGINE_FRICTION = "geometric mean"
 ENGINE_BOUNCE = "maximum"
+#: A body the file gives no mass weighs its shapes' volume at this density (water).
+VOLUME_DENSITY = 1000.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -132,6 +137,8 @@ class ObjectDecl:
     kind: str | None = None
     trigger: bool = False
     mass: float | None = None
+    #: kg/m^3, for a mass the file leaves to the shapes' volume (None: the engine's 1 kg).
+    density: float | None = None
     velocity: Vec3 = (0.0, 0.0, 0.0)
     angular_velocity: Vec3 = (0.0, 0.0, 0.0)
     gravity: bool = True
@@ -341,6 +348,8 @@ def _object(b: _Blocks, o: ObjectDecl, file_ref: str, prefix: str) -> list[Entry
             phys.append(b.entry("Trigger", b.num(1)))
         if o.mass is not None:
             phys.append(b.entry("Mass", b.num(o.mass)))
+        elif o.kind in ("dynamic", "kinematic") and not o.trigger and o.density is not None:
+            phys.append(b.entry("Density", b.num(o.density)))
         if o.material is not None:
             phys.append(b.entry("Material", b.text(
                 o.material if o.material == "default" else prefix + o.material)))
@@ -390,7 +399,9 @@ def _shape(b: _Blocks, s: ShapeDecl, file_ref: str) -> list[Entry]:
 # -- material combination --------------------------------------------------------------
 def combine(mode_a: str | None, mode_b: str | None, a: float, b: float) -> float:
     """Two materials' values combined as KHR_physics_rigid_bodies and OMI say: average
-    wins over minimum, over maximum, over multiply (unsaid: :data:`DEFAULT_COMBINE`)."""
+    wins over minimum, over maximum, over multiply (unsaid: :data:`DEFAULT_COMBINE`);
+    last, the engine's own geometric mean (:data:`GEOMETRIC_MEAN`, which our export
+    writes in a material's extras)."""
     modes = {mode_a or DEFAULT_COMBINE, mode_b or DEFAULT_COMBINE}
     if "average" in modes:
         return (a + b) / 2
@@ -398,7 +409,9 @@ def combine(mode_a: str | None, mode_b: str | None, a: float, b: float) -> float
         return min(a, b)
     if "maximum" in modes:
         return max(a, b)
-    return a * b
+    if "multiply" in modes:
+        return a * b
+    return math.sqrt(a * b)
 
 
 def material_pairs(scene: ImportedScene) -> list[tuple[str, str, float, float]]:
