@@ -11,9 +11,7 @@ written in each format's own (glTF +Y up; Collada says Z_UP).
 
 from __future__ import annotations
 
-import json
 import math
-import struct
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -21,14 +19,13 @@ from typing import Any
 
 import numpy as np
 
-KHR, SHAPES = "KHR_physics_rigid_bodies", "KHR_implicit_shapes"
-OMI_BODY, OMI_SHAPE, OMI_JOINT = "OMI_physics_body", "OMI_physics_shape", "OMI_physics_joint"
+from engine.interchange.export import GltfWriter, to_gltf
+from engine.interchange.gltf_physics import KHR, OMI_BODY, OMI_JOINT, OMI_SHAPE
 
 
 def gl(p: Sequence[float]) -> list[float]:
     """A point in the engine's axes (Z up) in glTF's (+Y up)."""
-    x, y, z = p
-    return [float(x), float(z), float(-y)]
+    return to_gltf(p)
 
 
 def box_mesh(size: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
@@ -40,121 +37,21 @@ def box_mesh(size: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
     return v, f
 
 
-class GltfBuilder:
-    """A glTF document built node by node; written as .glb, or .gltf with a data URI."""
+class GltfBuilder(GltfWriter):
+    """A glTF document built node by node, nodes placed in the engine's axes."""
 
-    def __init__(self, generator: str = "colosseum tools/interchange_samples.py") -> None:
-        self.doc: dict[str, Any] = {"asset": {"version": "2.0", "generator": generator},
-                                    "scene": 0, "scenes": [{"nodes": []}], "nodes": [],
-                                    "meshes": [], "accessors": [], "bufferViews": [],
-                                    "extensionsUsed": []}
-        self.bin = bytearray()
-        self._meshes: dict[tuple, int] = {}
+    def __init__(self) -> None:
+        super().__init__("colosseum tools/interchange_samples.py")
 
-    def use(self, *extensions: str) -> None:
-        for e in extensions:
-            if e not in self.doc["extensionsUsed"]:
-                self.doc["extensionsUsed"].append(e)
-
-    def top(self, extension: str, key: str, item: dict[str, Any]) -> int:
-        """Append ``item`` to the document-level array ``key`` of ``extension``."""
-        self.use(extension)
-        items = self.doc.setdefault("extensions", {}).setdefault(extension, {}).setdefault(
-            key, [])
-        items.append(item)
-        return len(items) - 1
-
-    def _view(self, data: bytes, target: int) -> int:
-        while len(self.bin) % 4:
-            self.bin.append(0)
-        self.doc["bufferViews"].append({"buffer": 0, "byteOffset": len(self.bin),
-                                        "byteLength": len(data), "target": target})
-        self.bin += data
-        return len(self.doc["bufferViews"]) - 1
-
-    def mesh(self, vertices: np.ndarray, faces: np.ndarray, name: str,
-             color: Sequence[float] = (0.8, 0.8, 0.8, 1.0)) -> int:
-        """A triangle mesh (glTF axes); the same geometry given twice is stored once."""
-        key = (vertices.tobytes(), faces.tobytes(), tuple(color))
-        if key in self._meshes:
-            return self._meshes[key]
-        v = np.asarray(vertices, np.float32)
-        f = np.asarray(faces, np.uint16 if len(v) < 65536 else np.uint32)
-        pos = self._view(v.tobytes(), 34962)
-        idx = self._view(f.tobytes(), 34963)
-        acc = self.doc["accessors"]
-        acc.append({"bufferView": pos, "componentType": 5126, "count": len(v), "type": "VEC3",
-                    "min": v.min(axis=0).tolist(), "max": v.max(axis=0).tolist()})
-        acc.append({"bufferView": idx, "componentType": 5123 if f.dtype == np.uint16 else 5125,
-                    "count": int(f.size), "type": "SCALAR"})
-        materials = self.doc.setdefault("materials", [])
-        materials.append({"pbrMetallicRoughness": {"baseColorFactor": list(color)}})
-        self.doc["meshes"].append({"name": name, "primitives": [
-            {"attributes": {"POSITION": len(acc) - 2}, "indices": len(acc) - 1,
-             "material": len(materials) - 1}]})
-        self._meshes[key] = len(self.doc["meshes"]) - 1
-        return self._meshes[key]
-
-    def node(self, name: str, at: Sequence[float] = (0, 0, 0), parent: int | None = None,
-             rotation: Sequence[float] | None = None, scale: Sequence[float] | None = None,
-             mesh: int | None = None, ext: dict[str, Any] | None = None,
-             extras: dict[str, Any] | None = None, in_scene: bool = True) -> int:
+    def node(self, name: str, at: Sequence[float] = (0, 0, 0),  # type: ignore[override]
+             parent: int | None = None, rotation: Sequence[float] | None = None,
+             scale: Sequence[float] | None = None, mesh: int | None = None,
+             ext: dict[str, Any] | None = None, extras: dict[str, Any] | None = None,
+             in_scene: bool = True) -> int:
         """A node at ``at`` (engine axes, relative to ``parent``); ``rotation`` is glTF's
-        (x, y, z, w) in glTF axes."""
-        node: dict[str, Any] = {"name": name, "translation": gl(at)}
-        if rotation is not None:
-            node["rotation"] = [float(r) for r in rotation]
-        if scale is not None:
-            node["scale"] = [float(s) for s in scale]
-        if mesh is not None:
-            node["mesh"] = mesh
-        if ext:
-            node["extensions"] = ext
-            self.use(*ext)
-        if extras is not None:
-            node["extras"] = extras
-        self.doc["nodes"].append(node)
-        index = len(self.doc["nodes"]) - 1
-        if parent is not None:
-            self.doc["nodes"][parent].setdefault("children", []).append(index)
-        elif in_scene:
-            self.doc["scenes"][0]["nodes"].append(index)
-        return index
-
-    def khr(self, index: int, **parts: Any) -> None:
-        """Set ``KHR_physics_rigid_bodies`` parts (motion, collider, trigger, joint)."""
-        self.use(KHR)
-        self.doc["nodes"][index].setdefault("extensions", {}).setdefault(KHR, {}).update(parts)
-
-    def shape(self, kind: str, **params: Any) -> dict[str, Any]:
-        """A collider geometry naming a new KHR_implicit_shapes shape."""
-        return {"shape": self.top(SHAPES, "shapes", {"type": kind, kind: params})}
-
-    def write(self, path: Path) -> Path:
-        doc = json.loads(json.dumps(self.doc))
-        if not doc["extensionsUsed"]:
-            del doc["extensionsUsed"]
-        if self.bin:
-            doc["buffers"] = [{"byteLength": len(self.bin)}]
-        else:
-            for key in ("meshes", "accessors", "bufferViews"):
-                doc.pop(key)
-        if path.suffix == ".gltf":
-            if self.bin:
-                import base64
-
-                doc["buffers"][0]["uri"] = ("data:application/octet-stream;base64," +
-                                            base64.b64encode(bytes(self.bin)).decode())
-            path.write_text(json.dumps(doc, indent=1))
-            return path
-        text = json.dumps(doc, separators=(",", ":")).encode()
-        text += b" " * (-len(text) % 4)
-        data = bytes(self.bin) + b"\0" * (-len(self.bin) % 4)
-        chunks = struct.pack("<II", len(text), 0x4E4F534A) + text
-        if data:
-            chunks += struct.pack("<II", len(data), 0x004E4942) + data
-        path.write_bytes(struct.pack("<4sII", b"glTF", 2, 12 + len(chunks)) + chunks)
-        return path
+        ``[x, y, z, w]`` in glTF axes."""
+        return super().node(name, gl(at), parent, rotation, scale, mesh, ext, extras,
+                            in_scene)
 
 
 def _quat_about(axis: Sequence[float], angle: float) -> list[float]:

@@ -29,13 +29,13 @@ from components import Joint, Physical, Shape, Transform, Trigger, Visual
 from components.joint import JointKind
 from engine.assets import AssetError, Assets
 from engine.assets.gltf import Y_UP_TO_Z_UP
+from engine.interchange.gltf_physics import KHR, KHR_SHAPES
 from engine.interchange.model import GEOMETRIC_MEAN, Problems
 from engine.render.meshes import primitive
 from engine.rotation import matrix_to_quat, quat_to_matrix
 from engine.scene.diagnostics import Diagnostic
 from engine.scene.factory import SceneSpec
 
-KHR, SHAPES = "KHR_physics_rigid_bodies", "KHR_implicit_shapes"
 #: A velocity drive as stiff as a motor: force = damping x velocity error, up to maxForce.
 MOTOR_DAMPING = 1e6
 _ALL_BITS = 0xFFFFFFFF
@@ -149,7 +149,7 @@ class GltfWriter:
 
     def shape(self, kind: str, **params: Any) -> dict[str, Any]:
         """A collider geometry naming a new KHR_implicit_shapes shape."""
-        return {"shape": self.top(SHAPES, "shapes", {"type": kind, kind: params})}
+        return {"shape": self.top(KHR_SHAPES, "shapes", {"type": kind, kind: params})}
 
     def write(self, path: Path) -> Path:
         doc = json.loads(json.dumps(self.doc))

@@ -12,8 +12,9 @@ import pytest
 
 from engine.assets import AssetError, Assets
 from engine.interchange import import_model
+from engine.interchange.gltf_physics import KHR_SHAPES
 from engine.scene_loading import import_path
-from tools.interchange_samples import SHAPES, GltfBuilder, box_mesh
+from tools.interchange_samples import GltfBuilder, box_mesh
 
 
 def two_boxes(folder: Path, name: str = "boxes.gltf") -> tuple[GltfBuilder, Path]:
@@ -74,7 +75,7 @@ def test_a_missing_buffer_leaves_the_meshes_out_and_keeps_the_bodies(tmp_path):
 
 def test_a_collider_of_zero_size_is_told_and_left_out(tmp_path):
     b, path = two_boxes(tmp_path)
-    b.doc["extensions"][SHAPES]["shapes"][0]["box"]["size"] = [0.5, 0, 0.5]
+    b.doc["extensions"][KHR_SHAPES]["shapes"][0]["box"]["size"] = [0.5, 0, 0.5]
     b.write(path)
     result = imported(path)
     said = messages(result)
