@@ -75,6 +75,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--replay", type=Path, help="replay input events recorded with --record")
     run.add_argument("--progress", action="store_true",
                      help="print a status line every second (default when stderr is a terminal)")
+    run.add_argument("--watch", action="store_true",
+                     help="start again from the files when the scene or a model, image or "
+                          "sound it uses changes on disk")
 
     check = sub.add_parser("check", help="validate a content folder or scene file")
     check.add_argument("path")
@@ -160,6 +163,8 @@ def cmd_run(args: argparse.Namespace) -> int:
                  "hud": args.hud, "size": args.size},
     )
     scene.configure(config, backend=args.backend, dt=args.dt)
+    if args.watch:
+        return _run_watching(args, content, config, scene)
     try:
         engine = create_engine(config)
     except BackendUnavailable as exc:
@@ -197,6 +202,45 @@ def cmd_run(args: argparse.Namespace) -> int:
              stats["frames"], stats["sim_seconds"], stats["wall_seconds"],
              stats["real_time_factor"])
     return 0
+
+
+def _run_watching(args: argparse.Namespace, content: Any, config: Any, scene: Any) -> int:
+    """``run --watch``: run the scene; when a file it came from changes, load it again and
+    start over from the new files (a scene with errors is told and the old one runs on).
+    Frames and seconds count across the restarts."""
+    from engine.content import ContentError, load_systems
+    from engine.scene_loading import SceneLoadError, SceneWatcher, load_content_scene
+    from engine.system import SystemFailure
+    from systems import create_engine
+
+    frames, seconds = args.frames, args.seconds
+    while True:
+        watcher = SceneWatcher(scene.spec)
+        engine = create_engine(config)
+        try:
+            load_systems(engine, content.folder)
+            scene.instantiate(engine)
+            engine.run(frames=frames, seconds=seconds, until=watcher.poll)
+        except (ContentError, SystemFailure) as exc:
+            engine.close()
+            return _fail(str(exc), 1)
+        engine.close()
+        if frames is not None:
+            frames -= engine.frame
+        if seconds is not None:
+            seconds -= engine.time
+        if not watcher.changed() or (frames is not None and frames <= 0) or (
+                seconds is not None and seconds <= 1e-9):
+            return 0
+        names = ", ".join(sorted(p.name for p in watcher.changed()))
+        try:
+            scene = load_content_scene(content, seed=args.seed)
+        except SceneLoadError as exc:
+            print(f"{exc}\ncolosseum: {names} changed but has errors; running the last "
+                  f"good scene", file=sys.stderr)
+            continue
+        print(f"colosseum: {names} changed; starting again", file=sys.stderr)
+        scene.configure(config, backend=args.backend, dt=args.dt)
 
 
 def _run_limited(engine: Any, args: argparse.Namespace, progress: bool, status_line: Any) -> None:

@@ -7,6 +7,7 @@ knowledge of command lines, exit codes or terminals.
 from __future__ import annotations
 
 import sys
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -60,6 +61,55 @@ def load_content_scene(content: Content, seed: int = 0) -> LoadedScene:
         for told in sorted_diagnostics([*spec.db.warnings, *spec.problems]):
             print(told.render(spec.db.sources.get(told.path)), file=sys.stderr)
     return LoadedScene(spec)
+
+
+class SceneWatcher:
+    """The files a built scene came from (scene texts, included files, model files its
+    Model blocks import, every model, image and sound it read) and when each was last
+    changed: :meth:`changed` tells which changed since (``colosseum run --watch``)."""
+
+    def __init__(self, spec: SceneSpec) -> None:
+        files = {Path(p) for p in (spec.db.sources if spec.db is not None else ())}
+        if spec.assets is not None:
+            files |= set(spec.assets.loads)
+        if spec.db is not None:
+            files |= {spec.content_dir / file for file in _model_files(spec.db.root.entries)
+                      if spec.content_dir is not None}
+        self.stamps = {f.resolve(): _stamp(f) for f in files if f.is_file()}
+        self._looked = time.monotonic()
+
+    def changed(self) -> list[Path]:
+        return [f for f, stamp in self.stamps.items() if _stamp(f) != stamp]
+
+    def poll(self, engine: object = None, interval: float = 0.5) -> bool:
+        """Whether a file changed, looking at most every ``interval`` wall seconds (an
+        ``until`` for ``Engine.run``)."""
+        now = time.monotonic()
+        if now - self._looked < interval:
+            return False
+        self._looked = now
+        return bool(self.changed())
+
+
+def _model_files(entries: list) -> list[str]:
+    """The files of every ``Model`` block, included files' too (not spliced away)."""
+    found = []
+    for e in entries:
+        if e.key == "Model" and e.value.kind == "STRUCTURE":
+            file = e.value.data.get("File")
+            if isinstance(file, str):
+                found.append(file)
+        elif e.key == "Include" and e.included is not None:
+            found += _model_files(e.included.entries)
+    return found
+
+
+def _stamp(path: Path) -> tuple[int, int] | None:
+    try:
+        info = path.stat()
+    except OSError:
+        return None
+    return info.st_mtime_ns, info.st_size
 
 
 def check_path(path: Path) -> int:

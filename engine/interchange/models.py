@@ -39,6 +39,7 @@ def expand_models(db: SceneDB, folder: Path, report: Reporter,
     if not entries:
         return []
     materials = [str(b.get("ID")) for b in db.root.blocks("Material")]
+    has_world = bool(db.root.blocks("World"))
     materials += list((known or {}).get("Material", ()))
     assets = Assets(folder)
     left_out: list[Diagnostic] = []
@@ -72,7 +73,13 @@ def expand_models(db: SceneDB, folder: Path, report: Reporter,
         report.sources.update(imported.db.sources)
         db.sources.update(imported.db.sources)
         left_out.extend(imported.problems)
-        entry.included = imported.db.root
+        root = imported.db.root
+        if has_world and root.blocks("World"):  # one World: the scene's
+            root.entries = [e for e in root.entries if e.key != "World"]
+            report.warning(file_value.loc, f"the scene's World wins over {file}'s gravity "
+                                           f"and time step")
+        has_world |= bool(root.blocks("World"))
+        entry.included = root
     return left_out
 
 
