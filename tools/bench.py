@@ -21,6 +21,7 @@ BENCHMARKS: dict[str, str] = {
     "scripting": "tools.bench_scripting:run_bench",
     "sound": "tools.bench_sound:run_bench",
     "render": "tools.bench_render:run_bench",
+    "import": "tools.bench_import:run_bench",
 }
 
 

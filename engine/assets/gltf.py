@@ -72,24 +72,35 @@ class Frame:
 def decompose(matrix: np.ndarray) -> Frame:
     """``matrix`` as translation, rotation and scale (columns' lengths, one negated for a
     mirror). Zero scale on an axis keeps that axis of the nearest rotation."""
-    m = np.asarray(matrix, np.float64)
-    basis = m[:3, :3]
+    t, r, s, sheared = decompose_many(np.asarray(matrix, np.float64)[None])
+    return Frame(t[0], r[0], s[0], bool(sheared[0]))
+
+
+def decompose_many(matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                 np.ndarray]:
+    """:func:`decompose` of ``(N, 4, 4)`` matrices at once: translations ``(N, 3)``,
+    rotations ``(N, 3, 3)``, scales ``(N, 3)`` and whether each is sheared ``(N,)``."""
+    basis = matrices[:, :3, :3]
     u, s, vt = np.linalg.svd(basis)
     rotation = u @ vt
-    if np.linalg.det(rotation) < 0:
-        u[:, -1] = -u[:, -1]
-        rotation = u @ vt
-    scale = np.einsum("ij,ij->j", rotation, basis)  # diag(R^T B): signed column lengths
-    sheared = not np.allclose(rotation * scale, basis, atol=1e-6 * max(1.0, float(s.max())))
-    return Frame(m[:3, 3].copy(), rotation, scale, bool(sheared))
+    mirrored = np.linalg.det(rotation) < 0
+    if mirrored.any():
+        u[mirrored, :, -1] *= -1
+        rotation[mirrored] = u[mirrored] @ vt[mirrored]
+    scale = np.einsum("nij,nij->nj", rotation, basis)  # diag(R^T B): signed column lengths
+    error = np.abs(rotation * scale[:, None, :] - basis).max(axis=(1, 2))
+    sheared = error > 1e-6 * np.maximum(1.0, s.max(axis=1))
+    return matrices[:, :3, 3].copy(), rotation, scale, sheared
 
 
 def to_z_up(matrix: np.ndarray) -> np.ndarray:
-    """A glTF-frame transform as the engine's: ``C M C^-1`` (its local axes turned too, so
-    a node upright in glTF is upright here)."""
-    c = np.eye(4)
-    c[:3, :3] = Y_UP_TO_Z_UP
-    return c @ np.asarray(matrix, np.float64) @ c.T
+    """A glTF-frame transform (or ``(N, 4, 4)`` of them) as the engine's: ``C M C^-1``
+    (its local axes turned too, so a node upright in glTF is upright here)."""
+    return _C4 @ np.asarray(matrix, np.float64) @ _C4.T
+
+
+_C4 = np.eye(4)
+_C4[:3, :3] = Y_UP_TO_Z_UP
 
 
 def node_matrix(node: dict[str, Any]) -> np.ndarray:
@@ -140,6 +151,7 @@ class GltfDocument:
         self._buffers: dict[int, bytes] = {}
         self._parts: dict[int, tuple[MeshPart, ...]] = {}
         self._textures: dict[int, np.ndarray | None] = {}
+        self._node_models: dict[tuple, ModelAsset] = {}
         self.nodes: list[dict[str, Any]] = _list(document, "nodes")
         if len(self.nodes) > MAX_NODES:
             raise ValueError(f"it has {len(self.nodes)} nodes, more than {MAX_NODES}; "
@@ -474,18 +486,31 @@ class GltfDocument:
         for i in indices:
             if i in self.bad_nodes:
                 raise ValueError(f"node '{self.name(i)}' cannot be used: {self.bad_nodes[i]}")
-        base = np.linalg.inv(decompose(self.world[indices[0]]).unscaled())
-        parts: list[MeshPart] = []
-        for i in indices:
-            mesh = self.nodes[i].get("mesh")
-            if mesh is None:
-                continue
-            relative = base @ self.world[i]
-            parts.extend(_placed(p, relative) for p in self.mesh_parts(mesh))
+        base = np.linalg.inv(self._rigid[indices[0]])
+        placed = [(self.nodes[i]["mesh"], base @ self.world[i]) for i in indices
+                  if self.nodes[i].get("mesh") is not None]
+        # nodes drawing the same meshes the same way share one model (and the renderer
+        # one copy of it): a file of 10,000 boxes holds one box
+        key = tuple((mesh, np.round(m, 9).tobytes()) for mesh, m in placed)
+        found = self._node_models.get(key)
+        if found is not None:
+            return found
+        parts = [_placed(p, m) for mesh, m in placed for p in self.mesh_parts(mesh)]
         if not parts:
             names = ", ".join(f"'{self.name(i)}'" for i in indices)
             raise ValueError(f"node{'s' if len(indices) > 1 else ''} {names} hold no triangles")
-        return ModelAsset(Path(f"{self.path}#{json.dumps(list(refs))}"), tuple(parts))
+        model = ModelAsset(Path(f"{self.path}#{json.dumps(list(refs))}"), tuple(parts))
+        self._node_models[key] = model
+        return model
+
+    @cached_property
+    def _rigid(self) -> np.ndarray:
+        """Every node's world frame without its scale: ``(N, 4, 4)``."""
+        t, r, _, _ = decompose_many(self.world)
+        out = np.repeat(np.eye(4)[None], len(self.nodes), axis=0)
+        out[:, :3, :3] = r
+        out[:, :3, 3] = t
+        return out
 
 
     def mesh_model(self, ref: str) -> ModelAsset:

@@ -31,7 +31,14 @@ from typing import Any
 
 import numpy as np
 
-from engine.assets.gltf import Y_UP_TO_Z_UP, Frame, GltfDocument, decompose, to_z_up
+from engine.assets.gltf import (
+    Y_UP_TO_Z_UP,
+    Frame,
+    GltfDocument,
+    decompose,
+    decompose_many,
+    to_z_up,
+)
 from engine.interchange.extras import Extras, attach, read_extras
 from engine.interchange.joints import (
     DOF_NAMES,
@@ -132,6 +139,7 @@ class _Importer:
         self.frames: dict[int, np.ndarray] = {}  # id(object) -> its unscaled 4x4 (Z up)
         #: Objects that are bodies only through their extras: shaped like their mesh.
         self.typed_bodies: set[int] = set()
+        self._frames: tuple[np.ndarray, ...] | None = None
         self.materials: dict[tuple[str, int], str] = {}
         self.systems: dict[str, int] = {}
 
@@ -435,7 +443,11 @@ class _Importer:
         return self.doc.name(i) if not ref.startswith("#") else f"{self.doc.name(i)} {ref}"
 
     def _frame(self, i: int) -> Frame:
-        return decompose(to_z_up(self.doc.world[i]))
+        """Node ``i``'s world frame, Z up (all nodes' taken apart at once, when first asked)."""
+        if self._frames is None:
+            self._frames = decompose_many(to_z_up(self.doc.world))
+        t, r, s, sheared = self._frames
+        return Frame(t[i], r[i], s[i], bool(sheared[i]))
 
     def _new_object(self, i: int, kind: str | None, trigger: bool = False) -> ObjectDecl:
         f = self._frame(i)
@@ -531,6 +543,9 @@ class _Importer:
 
     # -- shapes and visuals -------------------------------------------------------------
     def _relative(self, obj: ObjectDecl, i: int) -> Frame:
+        """Node ``i``'s frame in its object's (the object's own node: its scale alone)."""
+        if self.object_node[id(obj)] == i:
+            return Frame(np.zeros(3), np.eye(3), self._frame(i).scale, False)
         base = np.linalg.inv(self.frames[id(obj)])
         return decompose(base @ to_z_up(self.doc.world[i]))
 

@@ -12,6 +12,7 @@ from engine.assets import Assets, Where
 from engine.interchange.model import ImportedScene, MaterialDecl, Problems, to_db
 from engine.scene.db import STRING, SceneDB
 from engine.scene.diagnostics import WARNING, Diagnostic, Loc, Reporter, SceneError
+from engine.scene.parser import paused_gc
 from engine.scene.validate import validate
 
 #: Model formats the importer reads, by extension.
@@ -46,14 +47,23 @@ def read_model(name: str | Path, assets: Assets, where: Where | None = None,
 def import_model(name: str | Path, file_ref: str, assets: Assets | None = None,
                  where: Where | None = None, root: Path | None = None, prefix: str = "",
                  known: Mapping[str, Iterable[str]] | None = None,
-                 header: bool = False, loc: Loc | None = None) -> Imported:
+                 header: bool = False, loc: Loc | None = None, check: bool = True) -> Imported:
     """The model file ``name`` as checked scene blocks naming it ``file_ref`` (relative
     to the scene's folder). ``known`` are IDs the scene declares besides (a scene that
     imports the model may define the materials its extras name); ``header`` puts a
     comment on top saying where the blocks came from; ``loc`` is the place the blocks
     say they come from (default: the model file). Raises ``AssetError`` when the file
-    cannot be read at all."""
-    assets = assets or Assets(root or Path(name).parent)
+    cannot be read at all. ``check`` False leaves the schema check of what the importer
+    made to the caller (a scene checks its Model blocks' with the rest); the author's
+    extras are checked either way."""
+    with paused_gc():  # many small objects that all stay alive
+        return _imported(name, file_ref, assets or Assets(root or Path(name).parent), where,
+                         root, prefix, known, header, loc, check)
+
+
+def _imported(name: str | Path, file_ref: str, assets: Assets, where: Where | None,
+              root: Path | None, prefix: str, known: Mapping[str, Iterable[str]] | None,
+              header: bool, loc: Loc | None, check: bool) -> Imported:
     scene = read_model(name, assets, where, root)
     problems = scene.problems or Problems(str(name))
     _declare_materials(scene, prefix, known or {}, problems)
@@ -62,6 +72,8 @@ def import_model(name: str | Path, file_ref: str, assets: Assets | None = None,
         db = to_db(scene, file_ref, prefix, lines, loc)
         db.sources.update(scene.sources)
         report = Reporter(sources=dict(db.sources))
+        if not check and not scene.sources:
+            break
         validate(db, None, report, known)
         bad = {d.path for d in report.diagnostics if d.is_error and d.path in scene.sources}
         if not bad:

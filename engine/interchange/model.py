@@ -205,7 +205,7 @@ def tidy(x: float) -> float | int:
         raise ValueError(f"{x} is not a finite number")
     if abs(x) < 1e-7:  # float32 noise around zero, 0.1 micrometre
         return 0
-    r = float(f"{x:.7g}")
+    r = round(x, 6 - math.floor(math.log10(abs(x))))
     return int(r) if r.is_integer() and abs(r) < 1e15 else r
 
 
@@ -216,12 +216,12 @@ def vector(v: Iterable[float]) -> tuple[float, ...]:
 
 def quaternion(rotation: np.ndarray) -> Quat:
     """A rotation matrix as ``(w, x, y, z)``, ``w >= 0``, exactly identity when it is one."""
-    q = matrix_to_quat(rotation)
-    if q[0] < 0:
-        q = -q
-    if np.allclose(q, (1.0, 0.0, 0.0, 0.0), atol=1e-9):
+    w, x, y, z = (float(c) for c in matrix_to_quat(rotation))
+    if w < 0:
+        w, x, y, z = -w, -x, -y, -z
+    if abs(x) <= 1e-9 and abs(y) <= 1e-9 and abs(z) <= 1e-9:
         return (1.0, 0.0, 0.0, 0.0)
-    return (float(q[0]), float(q[1]), float(q[2]), float(q[3]))
+    return (w, x, y, z)
 
 
 def unique_ids(names: Sequence[str], taken: Iterable[str] = ()) -> list[str]:

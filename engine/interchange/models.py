@@ -63,7 +63,7 @@ def expand_models(db: SceneDB, folder: Path, report: Reporter,
         try:
             imported = import_model(file, file, assets, file_value.loc, folder,
                                     str(block.get("Prefix", "")), {"Material": materials},
-                                    loc=file_value.loc)
+                                    loc=file_value.loc, check=False)
         except AssetError as exc:
             left_out.append(Diagnostic(file_value.loc.path, file_value.loc.line,
                                        file_value.loc.col, ERROR,
