@@ -99,7 +99,7 @@ def shapes(path: Path) -> Path:
     _body(b, "Box", (-4, 0, 1), b.shape("box", size=[0.4, 0.6, 0.8]), (0.4, 0.6, 0.8), mass=2)
     _body(b, "Sphere", (-3, 0, 1), b.shape("sphere", radius=0.25), (0.5, 0.5, 0.5))
     _body(b, "Capsule", (-2, 0, 1), b.shape("capsule", height=0.6, radiusTop=0.2,
-                                            radiusBottom=0.2), (1.0, 0.4, 0.4),
+                                            radiusBottom=0.2), (0.4, 1.0, 0.4),
           rotation=_quat_about((0, 0, 1), math.pi / 2))  # lying along X
     _body(b, "Cylinder", (-1, 0, 1), b.shape("cylinder", height=0.5, radiusTop=0.3,
                                              radiusBottom=0.3), (0.6, 0.5, 0.6))

@@ -34,6 +34,7 @@ class Run:
     def start(cls, scene: Path, backend: str = "ode", dt: float | None = None) -> Run:
         spec = load_spec(scene, np.random.default_rng(0))
         engine = create_engine(EngineConfig(backend=backend, dt=dt or spec.time_step,
+                                            content_dir=spec.content_dir,
                                             fast=True, world=spec.world))
         return cls(spec, engine, instantiate(engine, spec))
 
