@@ -181,6 +181,9 @@ class _Importer:
             what = "required by the file" if name in required else "used by the file"
             self.problems.warn(None, f"extension {name} ({what}) is not read; what it adds "
                                      f"is left out")
+        if self.doc.json.get("animations"):
+            self.problems.warn(None, "animations are not imported: every node starts where "
+                                     "the file puts it at rest")
         if "KHR_lights_punctual" in used:
             self.problems.warn(None, "lights are not imported (KHR_lights_punctual); the "
                                      "scene's own Light blocks light it")
