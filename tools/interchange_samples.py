@@ -392,10 +392,6 @@ def collada(path: Path, up: str = "Z_UP", meter: float = 1.0) -> Path:
                 f'source="#{gid}-vtx" offset="0"/><p>{" ".join(map(str, faces.reshape(-1)))}'
                 f'</p></triangles></mesh></geometry>')
 
-    def box(full: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
-        v, f = box_mesh(full)
-        return v, f
-
     bodies = [  # node, position, (rigid body shapes), dynamic, extra technique_common
         ("Ground", (0, 0, 0), f"<shape><plane><equation>{pos((0, 0, 1))} 0</equation></plane>"
                               "</shape>", False, ""),
@@ -418,7 +414,8 @@ def collada(path: Path, up: str = "Z_UP", meter: float = 1.0) -> Path:
         ("Door", (8.5, 0, 1.5), f"<shape><box><half_extents>{size((0.4, 0.05, 0.5))}"
                                 "</half_extents></box></shape>", True, ""),
     ]
-    geometries = [geometry("cube", *box((0.5, 0.5, 0.5))), geometry("slab", *box((1, 1, 0.2))),
+    geometries = [geometry("cube", *box_mesh((0.5, 0.5, 0.5))),
+                  geometry("slab", *box_mesh((1, 1, 0.2))),
                   '<geometry id="gem"><convex_mesh convex_hull_of="#cube"/></geometry>']
     nodes = "".join(f'<node id="{n}" name="{n}"><translate>{pos(p)}</translate>'
                     f'<instance_geometry url="#{"slab" if n == "Slab" else "cube"}"/>'
