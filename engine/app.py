@@ -24,7 +24,7 @@ import numpy as np
 from engine.events import Despawned, EventBus, Spawned
 from engine.physics.backend import WorldSettings
 from engine.physics.driver import DetachedPhysics, PhysicsPort
-from engine.realtime import CostLog, Pacing, RealTimeController, Tick
+from engine.realtime import CostLog, Pacing, RealTimeController, Tick, advance
 from engine.system import (
     ANY_COMPONENT,
     Phase,
@@ -226,7 +226,8 @@ class Engine:
                     raise SystemFailure(system.name, exc) from exc
             self._flush()
         self.frame += 1
-        self.time = self.physics.time if self.config.mode == "threaded" else self.time + tick.dt
+        self.time = (self.physics.time if self.config.mode == "threaded"
+                     else advance(self.time, tick.dt))
         self.events.end_frame()
         self.frame_costs.add(self.controller.clock() - t0)
         self.controller.end(tick, self.physics_seconds)

@@ -15,6 +15,7 @@ import traceback
 from pathlib import Path
 from typing import Any
 
+from engine.input.config import input_option
 from engine.physics.backend import BackendName
 
 log = logging.getLogger("colosseum")
@@ -73,14 +74,23 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--stats", type=Path, help="write run statistics as JSON")
     run.add_argument("--record", type=Path, help="record input events to FILE (JSON lines)")
     run.add_argument("--replay", type=Path, help="replay input events recorded with --record")
+    run.add_argument("--input", action="append", default=[], type=input_option,
+                     metavar="KIND[:ARG]", help="open an input device: osc:PORT, "
+                     "serial:PATH[@BAUD], lsl:STREAM[,...], desktop or openxr (repeatable)")
     run.add_argument("--progress", action="store_true",
-                     help="print a status line every second (default when stderr is a terminal)")
+                     help="print a status line every second, also into a log or pipe (on a "
+                          "terminal: a progress bar when the run has --frames or --seconds)")
     run.add_argument("--watch", action="store_true",
                      help="start again from the files when the scene or a model, image or "
                           "sound it uses changes on disk")
 
-    check = sub.add_parser("check", help="validate a content folder or scene file")
+    check = sub.add_parser("check", help="validate a content folder or scene file",
+                           epilog="exit codes: 0 no errors (warnings allowed), 1 errors, "
+                                  "2 no such file or folder or a usage error")
     check.add_argument("path")
+    check.add_argument("--format", choices=["text", "json"], default="text",
+                       help="text: path:line:col lines on stderr (default); json: one "
+                            "object on stdout for editors and CI")
     fmt = sub.add_parser("fmt", help="print a scene file in canonical form")
     fmt.add_argument("path")
     fmt.add_argument("--write", action="store_true",
@@ -100,14 +110,23 @@ def build_parser() -> argparse.ArgumentParser:
     export.add_argument("scene", type=Path, help="content folder or .scene file")
     export.add_argument("-o", "--output", type=Path, required=True, help="OUT.glb or .gltf")
 
+    keys = sub.add_parser("keys", help="the scene keys: every block, or one block's keys with "
+                          "type, default, meaning and an example")
+    keys.add_argument("block", nargs="?", help="a block (Object, Camera, World, ...)")
+
     new = sub.add_parser("new", help="scaffold a content folder that runs")
     new.add_argument("name")
 
     bench = sub.add_parser("bench", help="benchmarks, printed as tables")
     bench.add_argument("what", nargs="?", default="scheduler",
-                       help="scheduler, physics, scene, scripting, sound, render, import")
+                       help="scheduler, physics, scene, scripting, sound, render, contacts, "
+                            "import")
     bench.add_argument("--backend", default=None, help="physics benchmark backend (ode, pymunk)")
     bench.add_argument("--quick", action="store_true", help="fewer sizes and steps")
+    bench.add_argument("--json", nargs="?", const="-", metavar="FILE",
+                       help="the rows and figures as JSON: to FILE, or alone on stdout")
+    bench.add_argument("--plot", type=Path, metavar="FILE.png",
+                       help="our figures beside their references as a bar chart")
     return parser
 
 
@@ -122,6 +141,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("colosseum: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # `colosseum keys | head`: the reader left, nothing to tell
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
 
 
 def _fail(message: str, code: int = USAGE_ERROR) -> int:
@@ -132,10 +154,10 @@ def _fail(message: str, code: int = USAGE_ERROR) -> int:
 def cmd_run(args: argparse.Namespace) -> int:
     from engine.app import EngineConfig
     from engine.content import ContentError, load_systems, resolve
+    from engine.input import InputRecorder, InputReplayer, ReplayError
     from engine.physics import BackendUnavailable
-    from engine.recording import InputRecorder, InputReplayer, ReplayError
     from engine.scene_loading import SceneLoadError, load_content_scene
-    from engine.stats import collect, status_line, write_json
+    from engine.stats import collect, sections, status_line, write_json
     from engine.system import SystemFailure
     from systems import create_engine
 
@@ -154,13 +176,14 @@ def cmd_run(args: argparse.Namespace) -> int:
     except SceneLoadError as exc:
         print(exc, file=sys.stderr)
         return 1
+    content = scene.content  # a saved state runs in the content folder it names
     config = EngineConfig(
         content_dir=content.folder, mode=args.mode, seed=args.seed, fast=args.fast,
         substeps=args.substeps, early=args.early, late=args.late, max_dt=args.max_dt,
         headless=headless, sound=args.sound,
         options={"screenshot": args.screenshot, "record_frames": args.record_frames,
                  "record_every": args.record_every, "interpolate": args.interpolate,
-                 "hud": args.hud, "size": args.size},
+                 "hud": args.hud, "size": args.size, "input": args.input},
     )
     scene.configure(config, backend=args.backend, dt=args.dt)
     if args.watch:
@@ -182,7 +205,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             from engine.scene_loading import save_state
 
             save_state(engine, args.save_state)
-        stats = collect(engine)
+        stats = collect(engine)  # before close(), which empties the world
     except (ContentError, ReplayError) as exc:
         engine.close()
         return _fail(str(exc), 1)
@@ -196,6 +219,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         engine.close()
         raise
     engine.close()
+    stats.update(sections(engine))  # what shutting down did (the --screenshot frame)
     if args.stats is not None:
         write_json(args.stats, stats)
     log.info("ran %d frames, %.2f simulated s in %.2f wall s (real-time factor %.2f)",
@@ -243,18 +267,46 @@ def _run_watching(args: argparse.Namespace, content: Any, config: Any, scene: An
         scene.configure(config, backend=args.backend, dt=args.dt)
 
 
+def _short_status(engine: Any) -> str:
+    """What fits beside a progress bar: simulated time and real-time factor."""
+    return f"t={engine.time:.2f} s  rtf {engine.real_time_factor:.2f}"
+
+
 def _run_limited(engine: Any, args: argparse.Namespace, progress: bool, status_line: Any) -> None:
-    """Run to the requested limit, printing a status line every second when asked."""
+    """Run to the requested limit. On a terminal, a run with a limit shows a progress bar;
+    otherwise ``progress`` prints the status line every second
+    (``--progress``: also into a log or a pipe)."""
+    from engine.progress import on_terminal
+    from engine.progress import progress as progress_bar
+
+    limited = args.frames is not None or args.seconds is not None
+    if on_terminal() and limited:
+        total = args.frames if args.frames is not None else args.seconds
+        start_frame, start_time = engine.frame, engine.time
+        last = [0.0]
+        with progress_bar("running", total) as report:
+            def tick(eng: Any) -> bool:
+                now = time.monotonic()
+                if now - last[0] >= 0.1:
+                    last[0] = now
+                    done = eng.frame - start_frame if args.frames is not None \
+                        else eng.time - start_time
+                    report(done, _short_status(eng))
+                return False
+
+            engine.run(frames=args.frames, seconds=args.seconds, until=tick)
+            report(total, _short_status(engine))
+        return
     last = [time.monotonic()]
 
-    def tick(eng: Any) -> bool:
+    def line(eng: Any) -> bool:
         now = time.monotonic()
         if progress and now - last[0] >= 1.0:
             last[0] = now
             print("\r" + status_line(eng), end="", file=sys.stderr, flush=True)
         return False
 
-    engine.run(frames=args.frames, seconds=args.seconds, until=tick)
+    engine.run(frames=args.frames, seconds=args.seconds, until=line)
     if progress:
         print(file=sys.stderr)
 
@@ -262,7 +314,7 @@ def _run_limited(engine: Any, args: argparse.Namespace, progress: bool, status_l
 def cmd_check(args: argparse.Namespace) -> int:
     from engine.scene_loading import check_path
 
-    return check_path(Path(args.path))
+    return check_path(Path(args.path), args.format)
 
 
 def cmd_fmt(args: argparse.Namespace) -> int:
@@ -283,6 +335,22 @@ def cmd_export(args: argparse.Namespace) -> int:
     return export_path(args.scene, args.output)
 
 
+def cmd_keys(args: argparse.Namespace) -> int:
+    from engine.scene import keys
+
+    if args.block is None:
+        for block in keys.blocks():
+            print(f"{block:<15} {keys.about(block)}")
+        print("\ncolosseum keys BLOCK lists a block's keys; docs/KEYS.md has them all")
+        return 0
+    block = keys.find_block(args.block)
+    if block is None:
+        return _fail(f"no block {args.block!r}{keys.suggest(args.block)} "
+                     f"(blocks: {', '.join(keys.blocks())})")
+    print(keys.block_text(block))
+    return 0
+
+
 def cmd_new(args: argparse.Namespace) -> int:
     from engine.scaffold import ScaffoldError, scaffold
 
@@ -299,7 +367,11 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
     if args.what not in BENCHMARKS:
         return _fail(f"unknown benchmark {args.what!r}; choose from {', '.join(BENCHMARKS)}")
-    return run_benchmark(args.what, backend=args.backend, quick=args.quick)
+    for out in (None if args.json in (None, "-") else Path(args.json), args.plot):
+        if out is not None and not out.parent.exists():
+            return _fail(f"{out}: folder {out.parent} does not exist")
+    return run_benchmark(args.what, backend=args.backend, quick=args.quick,
+                         json_out=args.json, plot_out=args.plot)
 
 
 COMMANDS = {
@@ -308,6 +380,7 @@ COMMANDS = {
     "fmt": cmd_fmt,
     "import": cmd_import,
     "export": cmd_export,
+    "keys": cmd_keys,
     "new": cmd_new,
     "bench": cmd_bench,
 }

@@ -30,19 +30,37 @@ class Contacts:
 
 
 @dataclass(frozen=True, slots=True)
-class KeyEvent:
-    """A key went down or up; names are lower case ("space", "up", "f1", "a")."""
+class ContactBegan:
+    """Two bodies touch that did not touch the frame before (``b`` is -1 for static world
+    geometry); ``impulse`` is what they exchanged this frame (N·s, summed over contacts and
+    steps)."""
 
-    key: str
-    pressed: bool
+    a: int
+    b: int
+    impulse: float
 
 
 @dataclass(frozen=True, slots=True)
-class InputEvent:
-    """A value from an input device: an axis, a tracker pose, a wheel counter."""
+class ContactEnded:
+    """Two bodies that touched no longer do (bodies asleep on each other still touch; a
+    deleted body's contacts end without one)."""
 
-    device: str
-    value: Any
+    a: int
+    b: int
+
+
+@dataclass(frozen=True, slots=True)
+class KeyEvent:
+    """A key went down or up; names are lower case ("space", "up", "f1", "a").
+
+    Also the input layer's typed ``Key`` event (``engine.input.Key``): ``device`` is where
+    it came from, ``timestamp`` when (``time.monotonic()`` seconds, 0 when unknown).
+    """
+
+    key: str
+    pressed: bool
+    device: str = "keyboard"
+    timestamp: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)

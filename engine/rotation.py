@@ -78,6 +78,40 @@ def rotate(q: Sequence[float], v: Sequence[float]) -> tuple[float, float, float]
             vz + w * tz + x * ty - y * tx)
 
 
+
+def quat_product(p: Sequence[float], q: Sequence[float]) -> tuple[float, float, float, float]:
+    """``p ⊗ q`` of plain sequences: :func:`quat_multiply` for one pair, without numpy's
+    per-call cost (the input layer turns a thousand tracker samples a second)."""
+    pw, px, py, pz = p
+    qw, qx, qy, qz = q
+    return (pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw)
+
+
+def rotation_vector(q_from: Sequence[float], q_to: Sequence[float]
+                    ) -> tuple[float, float, float]:
+    """:func:`rotation_vector_between` for one pair of plain sequences."""
+    w, x, y, z = quat_product(q_to, (q_from[0], -q_from[1], -q_from[2], -q_from[3]))
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    s = math.sqrt(x * x + y * y + z * z)
+    if s < 1e-12:
+        return (2.0 * x, 2.0 * y, 2.0 * z)
+    scale = 2.0 * math.atan2(s, w) / s
+    return (x * scale, y * scale, z * scale)
+
+
+def quat_from_rotation_vector(v: Sequence[float]) -> tuple[float, float, float, float]:
+    """The unit quaternion turning by ``|v|`` radians about ``v`` (inverse of the above)."""
+    x, y, z = v
+    angle = math.sqrt(x * x + y * y + z * z)
+    if angle < 1e-12:
+        return (1.0, 0.5 * x, 0.5 * y, 0.5 * z)
+    s = math.sin(0.5 * angle) / angle
+    return (math.cos(0.5 * angle), x * s, y * s, z * s)
+
 # -- quaternion algebra (numpy, broadcasting) -----------------------------------------
 def quat_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Hamilton product ``p ⊗ q`` (apply ``q`` first, then ``p``); broadcasts over rows."""
@@ -175,3 +209,22 @@ def rotation_vector_between(q_from: np.ndarray, q_to: np.ndarray) -> np.ndarray:
     small = s < 1e-12
     angle = 2.0 * np.arctan2(s, d[..., :1])
     return np.where(small, 2.0 * d[..., 1:], d[..., 1:] / np.where(small, 1.0, s) * angle)
+
+
+def view_problem(forward: Sequence[float]) -> str | None:
+    """Why a camera (or listener) looking along ``forward`` has no well-defined view, or
+    None. Up is +Z: looking along it leaves the picture's roll, and left and right for
+    3D sound, undefined; a zero direction (LookAt at the eye) looks nowhere.
+
+    >>> view_problem((0, 1, 0)) is None, view_problem((0, 0, 0))[:22], view_problem((0, 0, -2))[:21]
+    (True, 'it looks at its own po', 'it looks straight dow')
+    """
+    f = np.asarray(forward, dtype=np.float64)
+    length = float(np.linalg.norm(f))
+    if not length > 1e-9:
+        return "it looks at its own position (LookAt equals where it is), so it looks nowhere"
+    if math.hypot(f[0], f[1]) <= 1e-6 * length:
+        way = "up" if f[2] > 0 else "down"
+        return (f"it looks straight {way}, along the up axis (Z), so which way is up in the "
+                "picture, and left and right for 3D sound, is undefined")
+    return None

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from engine.content import Content
-from engine.files import write_atomic
+from engine.files import file_mode, write_atomic
 
 if TYPE_CHECKING:
     from engine.app import Engine, EngineConfig
@@ -28,6 +28,8 @@ class SceneLoadError(Exception):
 @dataclass(slots=True)
 class LoadedScene:
     spec: SceneSpec
+    #: The content folder the scene runs in (a saved state's ``Content``, else its folder).
+    content: Content
 
     def configure(self, config: EngineConfig, backend: str | None = None,
                   dt: float | None = None) -> None:
@@ -45,22 +47,22 @@ class LoadedScene:
 
 def load_content_scene(content: Content, seed: int = 0) -> LoadedScene:
     """The content's scene, built; its ``systems/*.py`` are imported first, so asset
-    loaders they register read the scene's files."""
-    from engine.content import ContentError, import_systems
-    from engine.scene import SceneError, load_spec
-    from engine.scene.diagnostics import sorted_diagnostics
+    loaders they register read the scene's files. A saved state runs in the content
+    folder it names (``Content``)."""
+    from engine.content import ContentError
+    from engine.scene import SceneError
+    from engine.scene.diagnostics import Reporter
 
     try:
-        import_systems(content.folder)
-        spec = load_spec(content.scene, np.random.default_rng(seed))
+        content, spec = _build(content, np.random.default_rng(seed))
     except ContentError as exc:
         raise SceneLoadError(str(exc)) from exc
     except SceneError as exc:
         raise SceneLoadError(exc.render()) from exc
     if spec.db is not None:  # warnings, and assets that failed (what they left out)
-        for told in sorted_diagnostics([*spec.db.warnings, *spec.problems]):
+        for told in Reporter([*spec.db.warnings, *spec.problems]).diagnostics:
             print(told.render(spec.db.sources.get(told.path)), file=sys.stderr)
-    return LoadedScene(spec)
+    return LoadedScene(spec, content)
 
 
 class SceneWatcher:
@@ -112,33 +114,72 @@ def _stamp(path: Path) -> tuple[int, int] | None:
     return info.st_mtime_ns, info.st_size
 
 
-def check_path(path: Path) -> int:
-    """Print every diagnostic; 0 when there is no error, 1 with errors, 2 for a bad path."""
-    from engine.content import ContentError, import_systems
-    from engine.scene import check, render_all
+def _build(content: Content, rng: np.random.Generator) -> tuple[Content, SceneSpec]:
+    """Parse, find the content folder, import its systems, check and build. Raises
+    SceneError (the scene's mistakes) or ContentError (its systems')."""
+    from engine.content import import_systems
+    from engine.scene import build_specs, parse_file, validated
+    from engine.scene.snapshot import content_folder
 
-    if not path.exists():
-        print(f"colosseum: error: {path}: no such file or folder", file=sys.stderr)
+    db = parse_file(content.scene, rng)
+    content = Content(content_folder(db), content.scene)
+    import_systems(content.folder)
+    spec = build_specs(validated(db, content.folder), content.folder)
+    return content, spec
+
+
+def check_path(path: Path, output: str = "text") -> int:
+    """Report every diagnostic of a scene; the exit code says how it went.
+
+    ``output`` "text": ``path:line:col: severity: message`` with the line and a caret,
+    then the counts, on stderr. "json": one JSON object on stdout (``errors`` and
+    ``warnings``, all counted; ``diagnostics``, those shown: objects with ``path line
+    col severity message``) for editors and CI. Exit codes: 0 no errors (warnings
+    allowed), 1 errors, 2 no such file or folder.
+    """
+    from engine.scene import Diagnostic, Report
+    from engine.scene.paths import NOT_FOUND, file_problem
+
+    if file_problem(path) == NOT_FOUND:
+        message = "no such file or folder"
+        if output == "json":
+            missing = Diagnostic(str(path), 1, 1, "error", message)
+            print(Report([missing]).to_json())
+        else:
+            print(f"colosseum: error: {path}: {message}", file=sys.stderr)
         return 2
-    try:  # the content's asset loaders, so its files are checked as a run reads them
-        import_systems(path if path.is_dir() else path.parent)
+    from engine.content import ContentError, resolve
+    from engine.scene import SceneError
+    from engine.scene.diagnostics import Reporter
+
+    try:  # as a run reads it: the content's asset loaders first, a saved state's folder
+        _, spec = _build(resolve(path), np.random.default_rng(0))
+        assert spec.db is not None
+        report = Report(Reporter([*spec.db.warnings, *spec.problems]).diagnostics,
+                        spec.db.sources)
     except ContentError as exc:
-        print(exc, file=sys.stderr)
-        return 1
-    diagnostics = check(path)
-    if diagnostics:
-        print(render_all(diagnostics), file=sys.stderr)
-    errors = sum(d.is_error for d in diagnostics)
-    warnings = len(diagnostics) - errors
-    print(f"{path}: {errors} error(s), {warnings} warning(s)", file=sys.stderr)
+        report = Report([Diagnostic(str(path), 1, 1, "error", str(exc))])
+    except SceneError as exc:
+        report = Report(exc.diagnostics, exc.sources)
+    errors, warnings = report.counts()
+    if output == "json":
+        print(report.to_json())
+    else:
+        if report.diagnostics:
+            print(report.render(), file=sys.stderr)
+        print(f"{path}: {errors} error(s), {warnings} warning(s)", file=sys.stderr)
     return 1 if errors else 0
 
 
 def format_path(path: Path, write: bool = False) -> int:
-    """Print the canonical form, or rewrite the file in place keeping a ``.bak``."""
-    from engine.scene import SceneError, format_scene, scene_path
+    """Print the canonical form, or rewrite the file in place keeping a ``.bak``.
 
-    if not path.exists():
+    The rewritten file and its ``.bak`` keep the file's mode.
+    """
+    from engine.scene import SceneError, format_scene, scene_path
+    from engine.scene.paths import NOT_FOUND, file_problem
+
+    if file_problem(path) == NOT_FOUND:
         print(f"colosseum: error: {path}: no such file or folder", file=sys.stderr)
         return 2
     try:
@@ -152,8 +193,9 @@ def format_path(path: Path, write: bool = False) -> int:
     target = scene_path(path)
     original = target.read_text(encoding="utf-8")
     if original != text:
-        target.with_name(target.name + ".bak").write_text(original, encoding="utf-8")
-        write_atomic(target, text)
+        mode = file_mode(target)
+        write_atomic(target.with_name(target.name + ".bak"), original, mode)
+        write_atomic(target, text, mode)
     return 0
 
 

@@ -8,7 +8,10 @@ core and the services below the plugin layer never import a plugin to find it.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any, Protocol
+
+from components.script import SavedScript
 
 #: A uniform's value: one number or a vector of numbers.
 UniformValue = float | tuple[float, ...]
@@ -31,3 +34,15 @@ class ShaderControl(Protocol):
     plugin = "render"
 
     def set_uniform(self, state_id: str, name: str, value: UniformValue) -> None: ...
+
+
+class ScriptStates(Protocol):
+    """The running scripts' states, for a saved run (the scripting plugin)."""
+
+    plugin = "scripting"
+
+    def saved_scripts(self, object_name: Callable[[int], str | None]
+                      ) -> dict[int, SavedScript]:
+        """Entity -> the state of the script it runs; ``object_name`` gives the scene ID
+        an entity is written under (None: it is not written)."""
+        ...

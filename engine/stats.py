@@ -1,4 +1,9 @@
-"""Run statistics: what ``--stats FILE.json`` writes and the progress line shows."""
+"""Run statistics: what ``--stats FILE.json`` writes and the progress line shows.
+
+:data:`STATS_SCHEMA` is the file's JSON Schema, every key with its unit; docs/STATS.md
+and docs/stats.schema.json are generated from it, and the tests check a real run's file
+against it, so the three cannot drift apart.
+"""
 
 from __future__ import annotations
 
@@ -36,9 +41,14 @@ def collect(engine: Engine) -> dict[str, Any]:
         "substeps": engine.controller.substeps,
         "slept_seconds": engine.controller.slept,
     }
-    for name, source in engine.stat_sources.items():
-        stats[name] = source()
+    stats.update(sections(engine))
     return stats
+
+
+def sections(engine: Engine) -> dict[str, Any]:
+    """The plugins' sections (``render``, ``sound``); read again after ``engine.close()``
+    to count what systems did as they shut down (the frame a --screenshot draws)."""
+    return {name: source() for name, source in engine.stat_sources.items()}
 
 
 def status_line(engine: Engine) -> str:
@@ -50,3 +60,102 @@ def status_line(engine: Engine) -> str:
 
 def write_json(path: Path, data: dict[str, Any]) -> None:
     write_atomic(path, json.dumps(data, indent=2, sort_keys=True) + "\n")
+
+
+def _key(kind: str, unit: str, meaning: str) -> dict[str, Any]:
+    return {"type": kind, "description": f"{meaning} ({unit})" if unit else meaning,
+            "x-unit": unit}
+
+
+def _section(meaning: str, keys: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    return {"type": "object", "description": meaning, "properties": keys,
+            "required": list(keys), "additionalProperties": False}
+
+
+#: The ``--stats`` file (JSON Schema draft 2020-12); "x-unit" is each number's unit.
+STATS_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": "colosseum run --stats",
+    "type": "object",
+    "properties": {
+        "mode": {"enum": ["serial", "threaded"], "description": "where physics ran",
+                 "x-unit": ""},
+        "backend": _key("string", "", "dynamics backend (ode, pymunk, ballistic)"),
+        "frames": _key("integer", "", "frames run"),
+        "steps": _key("integer", "", "physics steps taken (frames times substeps, in serial)"),
+        "sim_seconds": _key("number", "s", "simulated time at the end"),
+        "wall_seconds": _key("number", "s", "wall-clock time the frames took"),
+        "real_time_factor": _key("number", "", "simulated seconds per wall second"),
+        "physics_ms_mean": _key("number", "ms", "mean wall time of one physics step"),
+        "physics_ms_p99": _key("number", "ms", "99th percentile of a physics step"),
+        "frame_ms_mean": _key("number", "ms", "mean wall time of a frame, every phase"),
+        "frame_ms_p99": _key("number", "ms", "99th percentile of a frame"),
+        "bodies": _key("integer", "", "bodies in the physics world at the end"),
+        "entities": _key("integer", "", "entities in the ECS world at the end"),
+        "contacts": _key("integer", "", "contact points reported over the run"),
+        "dt": _key("number", "s", "physics time step at the end (it may grow with --late grow)"),
+        "substeps": _key("integer", "", "physics steps per frame at the end"),
+        "slept_seconds": _key("number", "s", "wall time spent waiting to stay real-time"),
+        "render": _section("drawing (present when the render plugin ran)", {
+            "backend": _key("string", "", "render target: headless or window"),
+            "gl_renderer": _key("string", "", "the OpenGL driver"),
+            "frames_drawn": _key("integer", "", "frames drawn, a --screenshot one included"),
+            "frames_written": _key("integer", "", "frames written by --record-frames"),
+            "render_ms_mean": _key("number", "ms", "mean CPU time to draw a frame"),
+            "render_ms_p99": _key("number", "ms", "99th percentile of drawing a frame"),
+            "render_ms_last": _key("number", "ms", "CPU time of the last frame drawn"),
+            "draw_calls": _key("integer", "", "draw calls of the last frame"),
+            "instances": _key("integer", "", "objects drawn in the last frame"),
+            "fps": _key("number", "1/s", "frames drawn per wall second (smoothed; 0 for one)"),
+            "errors": {"type": "array", "items": {"type": "string"},
+                       "description": "shader and asset problems told while drawing",
+                       "x-unit": ""},
+        }),
+        "sound": _section("sound (present when the sound plugin ran)", {
+            "backend": _key("string", "", "openal, wave or null"),
+            "pool_size": _key("integer", "", "voices that can play at once"),
+            "requests": _key("integer", "", "sounds asked for"),
+            "played": _key("integer", "", "requests that started playing"),
+            "queued": _key("integer", "", "requests that waited for a voice"),
+            "dropped": _key("integer", "", "requests given up (no voice, low priority)"),
+            "stolen": _key("integer", "", "voices taken from a lower-priority sound"),
+            "failed": _key("integer", "", "requests whose file could not be played"),
+            "cancelled": _key("integer", "", "requests stopped before they played"),
+            "waiting": _key("integer", "", "requests still waiting at the end"),
+            "active": _key("integer", "", "voices playing at the end"),
+            "streamed": _key("integer", "", "sounds played by streaming"),
+            "underruns": _key("integer", "", "times a stream ran dry"),
+            "contact_sounds": _key("integer", "", "sounds started by contacts"),
+        }),
+    },
+    "required": ["mode", "backend", "frames", "steps", "sim_seconds", "wall_seconds",
+                 "real_time_factor", "physics_ms_mean", "physics_ms_p99", "frame_ms_mean",
+                 "frame_ms_p99", "bodies", "entities", "contacts", "dt", "substeps",
+                 "slept_seconds"],
+    "additionalProperties": {"type": "object", "description": "a content plugin's section"},
+}
+
+
+def stats_markdown() -> str:
+    """docs/STATS.md: every key of the --stats file, its type and unit."""
+    def rows(props: dict[str, Any], prefix: str = "") -> list[str]:
+        out = []
+        for name, spec in props.items():
+            if spec.get("type") == "object":
+                out.append(f"| `{prefix}{name}` | object | | {spec['description']} |")
+                out += rows(spec["properties"], f"{prefix}{name}.")
+            else:
+                kind = spec.get("type", "string")
+                meaning = spec["description"].removesuffix(f" ({spec['x-unit']})")
+                out.append(f"| `{prefix}{name}` | {kind} | {spec['x-unit']} | {meaning} |")
+        return out
+
+    return "\n".join([
+        "# Run statistics (`--stats FILE.json`)", "",
+        "<!-- generated from engine/stats.py by `python -m tools.docs`; "
+        "tests/core/test_stats_schema.py keeps it equal and checks a real run's file -->", "",
+        "`colosseum run --stats FILE.json` writes one JSON object when the run ends. Its JSON",
+        "Schema is [stats.schema.json](stats.schema.json). Times are wall-clock unless they",
+        "say simulated; a content folder's own plugin may add a section of its own.", "",
+        "| key | type | unit | meaning |", "|---|---|---|---|",
+        *rows(STATS_SCHEMA["properties"]), ""])

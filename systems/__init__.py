@@ -23,6 +23,7 @@ PLUGINS: dict[str, str] = {
     "controllers": "systems.controllers:ControllersPlugin",
     "render": "systems.render:RenderPlugin",
     "sound": "systems.sound:SoundPlugin",
+    "input": "systems.input:InputPlugin",
     "triggers": "systems.triggers:TriggersPlugin",
 }
 ALIASES: dict[str, str] = {"osg": "render", "osgsim": "render", "openalpp": "sound",
@@ -60,7 +61,7 @@ def wants_render(config: EngineConfig) -> bool:
 
 def default_plugins(config: EngineConfig) -> list[Plugin]:
     plugins = [RegistryPlugin(), *(load_plugin(name) for name in
-                                   ("physics", "scripting", "controllers", "sound",
+                                   ("input", "physics", "scripting", "controllers", "sound",
                                     "triggers"))]
     if wants_render(config):
         plugins.append(load_plugin("render"))

@@ -4,15 +4,18 @@ Paper section 3.5 ("Controllers – continuous response of the user's input").
 Each frame a Controller's input is read, scaled by ``gain``, clamped to
 ``[low, high]``, stored in ``Controller.value`` and sent to its actuator.
 
-Inputs (``Controller.input``):
+Inputs (``Controller.input``) are read from the input layer's latest-state table
+(:class:`engine.input.InputState`), so any device — a key, OSC, LSL, a serial
+encoder, a recording — drives a controller the same way:
 
 - ``key:Up/Down`` +1 while the first key is held, -1 while the second is
-  (both: 0); ``key:Space`` is 1 while held. Keys arrive as KeyEvents.
-- ``axis:NAME`` the latest InputEvent value of device ``axis:NAME`` (a number).
-- ``wheel:NAME`` the rate (counts per second) of the counter InputEvents of
-  device ``wheel:NAME`` (a wheelchair's wheel encoder).
-- ``tracker:NAME`` the position part of device ``tracker:NAME``'s pose values;
-  only meaningful with a kinematic target.
+  (both: 0); ``key:Space`` is 1 while held.
+- ``axis:DEVICE/NAME`` an axis's latest value.
+- ``button:DEVICE/NAME`` (or ``button:ID`` of an ``Input { Button }``) 1 while held.
+- ``wheel:NAME`` the wheel's angular velocity (rad/s) from its counts and the device
+  timestamps (``Input { Wheel { CountsPerTurn } }``), not from frame counts.
+- ``tracker:NAME`` the tracker's calibrated position; only meaningful with a
+  kinematic target. An untracked (lost) tracker holds its target still.
 
 Targets (``Controller.target``):
 
@@ -29,18 +32,19 @@ mode. The system runs in PRE_PHYSICS: input read in this frame's INPUT phase act
 in this frame's physics step (new bodies are queued when they are spawned, so a
 controller's command always follows its body's creation). A controller naming an
 unknown input kind, joint or object is reported once and then ignored.
+The input plugin is loaded with this one.
 """
 
 from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from components import Controller, Joint, Name, Transform
-from engine.events import InputEvent, KeyEvent
+from engine.input import Binding, InputState, parse_binding
 from engine.messages import MessageLog
 from engine.physics.commands import (
     ApplyForce,
@@ -63,8 +67,7 @@ log = logging.getLogger("colosseum.controllers")
 class _Binding:
     """A parsed Controller: where its input comes from and where its output goes."""
 
-    input_kind: str
-    input_args: tuple[str, ...]
+    source: Binding
     target_kind: str
     target: int
     direction: np.ndarray | None = None
@@ -78,39 +81,19 @@ class ControllerSystem(System):
     writes = (Controller, Joint)
 
     def __init__(self) -> None:
-        self._keys: set[str] = set()
-        self._values: dict[str, Any] = {}
-        self._wheels: dict[str, tuple[float, float]] = {}  # device -> (last count, counts/s)
-        self._wheel_acc: dict[str, float] = {}
         self._bindings: dict[int, _Binding | None] = {}
         self._bad: set[int] = set()
         self._messages = MessageLog(log)
 
     def setup(self, engine: Engine) -> None:
-        engine.events.subscribe(KeyEvent, self._on_key)
-        engine.events.subscribe(InputEvent, self._on_input)
         engine.world.on_remove(Controller, lambda e, c: self._bindings.pop(e, None))
-
-    def _on_key(self, event: KeyEvent) -> None:
-        key = event.key.lower()  # bindings are written "key:Up/Down" or "key:up/down"
-        if event.pressed:
-            self._keys.add(key)
-        else:
-            self._keys.discard(key)
-
-    def _on_input(self, event: InputEvent) -> None:
-        device = event.device
-        if device.startswith("wheel:"):
-            self._wheel_acc[device] = float(event.value)
-        self._values[device] = event.value
 
     # -- binding ---------------------------------------------------------------
     def _bind(self, engine: Engine, entity: int, c: Controller) -> _Binding | None:
-        kind, _, rest = c.input.partition(":")
-        if kind not in ("key", "axis", "wheel", "tracker") or not rest:
-            return self._refuse(entity, c, f"unknown input {c.input!r} (use key:A/B, axis:N, "
-                                           "wheel:NAME or tracker:NAME)")
-        args = tuple(rest.lower().split("/")) if kind == "key" else (f"{kind}:{rest}",)
+        try:
+            source = parse_binding(c.input)
+        except ValueError as exc:
+            return self._refuse(entity, c, str(exc))
         target_kind, _, name = c.target.partition(":")
         if target_kind not in ("motor", "force", "kinematic") or not name:
             return self._refuse(entity, c, f"unknown target {c.target!r} (use motor:JOINT, "
@@ -123,7 +106,7 @@ class ControllerSystem(System):
         if not found:
             return self._refuse(entity, c, f"no {'joint' if target_kind == 'motor' else 'object'}"
                                            f" {name!r} for target {c.target!r}")
-        binding = _Binding(kind, args, target_kind, found[0])
+        binding = _Binding(source, target_kind, found[0])
         if target_kind == "kinematic":
             t = engine.world.try_component(found[0], Transform)
             binding.origin = np.zeros(3) if t is None else t.position.copy()
@@ -138,45 +121,16 @@ class ControllerSystem(System):
         return None
 
     # -- per frame ---------------------------------------------------------------
-    def _read(self, b: _Binding, dt: float) -> Any:
-        if b.input_kind == "key":
-            keys = self._keys
-            if len(b.input_args) == 1:
-                return 1.0 if b.input_args[0] in keys else 0.0
-            up, down = b.input_args[0], b.input_args[1]
-            return float(up in keys) - float(down in keys)
-        device = b.input_args[0]
-        if b.input_kind == "wheel":
-            count = self._wheel_acc.get(device)
-            if count is None:
-                return 0.0
-            last, rate = self._wheels.get(device, (count, 0.0))
-            if dt > 0:
-                rate = (count - last) / dt
-            self._wheels[device] = (count, rate)
-            return rate
-        value = self._values.get(device)
-        if value is None:
-            return None
-        if b.input_kind == "tracker":
-            return np.asarray(value, dtype=np.float64).reshape(-1)[:3]
-        return float(value)
-
     def run(self, engine: Engine, dt: float) -> None:
         physics = engine.physics
-        seen_wheels: set[str] = set()
+        inputs = engine.resource(InputState)
         for entity, c in engine.world.get_component(Controller):
             if entity not in self._bindings:
                 self._bindings[entity] = self._bind(engine, entity, c)
             b = self._bindings[entity]
             if b is None:
                 continue
-            if b.input_kind == "wheel" and b.input_args[0] in seen_wheels:
-                raw = self._wheels.get(b.input_args[0], (0.0, 0.0))[1]
-            else:
-                raw = self._read(b, dt)
-                if b.input_kind == "wheel":
-                    seen_wheels.add(b.input_args[0])
+            raw = inputs.read(b.source)
             if raw is None:
                 continue
             if isinstance(raw, np.ndarray):  # tracker position -> kinematic target
@@ -223,4 +177,7 @@ class ControllersPlugin:
     name = "controllers"
 
     def build(self, engine: Engine) -> None:
+        from systems.input import InputPlugin
+
+        engine.add_plugin(InputPlugin())  # what controllers read; built once if already in
         engine.add_system(ControllerSystem())

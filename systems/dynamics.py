@@ -39,8 +39,10 @@ from engine.physics.commands import (
     SetVelocity,
 )
 from engine.physics.driver import PhysicsDriver, Snapshot
+from engine.physics.naming import SceneNames, backend_loggers
 from engine.system import Phase, System
 from engine.world import PoseTable, row_index
+from systems.contacts import ContactEventsSystem
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -68,6 +70,7 @@ class DynamicsSystem(System):
         self._moved: set[int] = set()  # entities already told their Transform write is taken
         self.messages = MessageLog(log)
         driver.names = self._names
+        self._scene_names = SceneNames(self._names)  # backends' "body 7" -> "object 'crate'"
 
     @property
     def contacts_total(self) -> int:
@@ -85,6 +88,7 @@ class DynamicsSystem(System):
         world.on_remove(Joint, lambda e, c: self.driver.push(RemoveJoint(e)))
         for entity, name in world.get_component(Name):
             names[entity] = name.id
+        self._scene_names.install(backend_loggers())
         # in the order they were made (esper's sets iterate in hash order), so a solver
         # that depends on constraint order sees the same world however it was built
         for entity, physical in sorted(world.get_component(Physical), key=_first):
@@ -94,6 +98,7 @@ class DynamicsSystem(System):
 
     def shutdown(self, engine: Engine) -> None:
         self.messages.flush()
+        self._scene_names.uninstall()
 
     # -- ECS -> backend ---------------------------------------------------------
     def _add_body(self, engine: Engine, entity: int, physical: Physical,
@@ -303,3 +308,4 @@ class DynamicsPlugin:
         system = DynamicsSystem(driver)
         engine.insert_resource(system)
         engine.add_system(system)
+        engine.add_system(ContactEventsSystem())  # ContactBegan / ContactEnded

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -21,13 +21,15 @@ import numpy as np
 from components import Camera, Light, Transform, Visual
 from engine.assets import Assets
 from engine.events import KeyEvent
+from engine.input.desktop import WindowDevice
+from engine.realtime import CostLog
 from engine.render.camera import CameraView, camera_from_component
 from engine.render.context import create_target
 from engine.render.hud import hud_line
 from engine.render.interpolate import PoseInterpolator
 from engine.render.lights import light_from_component
 from engine.render.postprocess import PostProcessing
-from engine.render.renderer import Renderer
+from engine.render.renderer import FrameStats, Renderer
 from engine.render.shaders import (
     FragmentShader,
     ShaderLibrary,
@@ -128,6 +130,10 @@ class RenderSystem(System):
         self._fps = 0.0
         self.frames_written = 0
         self.frames_drawn = 0
+        #: CPU cost of each frame drawn (s), the --screenshot one at shutdown included.
+        self.render_costs = CostLog()
+        self._last = FrameStats()  # what the last frame drawn cost (kept after shutdown)
+        self._errors: list[str] = []
         self._drawn = False  # whether the last frame was drawn (headless runs skip frames)
 
     # -- API for scripts and tools --------------------------------------------
@@ -175,8 +181,7 @@ class RenderSystem(System):
         post = engine.try_resource(PostProcessing)
         if post is not None:
             self.renderer.set_post_passes(post.passes)
-        self._target.key_callback = lambda key, pressed: engine.events.emit(
-            KeyEvent(key, pressed))
+        self._target.input = engine.try_resource(WindowDevice)  # keys and mouse: input layer
         engine.events.subscribe(KeyEvent, self._on_key)
         engine.world.on_remove(Visual, lambda entity, _: self._forget(entity))
         engine.insert_resource(self)
@@ -203,14 +208,18 @@ class RenderSystem(System):
             self.renderer.remove(entity)
 
     def _stats(self) -> dict[str, Any]:
-        r = self.renderer
-        if r is None:
+        """The ``render`` section of ``--stats`` (see engine.stats.STATS_SCHEMA); also after
+        shutdown, so the frame a --screenshot draws then is counted."""
+        if self._target is None:
             return {}
+        errors = list(self.renderer.errors) if self.renderer is not None else self._errors
         return {"backend": self._target.kind, "gl_renderer": self._target.renderer_name,
-                "draw_calls": r.stats.draw_calls, "instances": r.stats.instances,
-                "render_ms_last": r.stats.frame_ms, "fps": self._fps,
+                "draw_calls": self._last.draw_calls, "instances": self._last.instances,
+                "render_ms_last": self._last.frame_ms,
+                "render_ms_mean": self.render_costs.mean() * 1e3,
+                "render_ms_p99": self.render_costs.percentile(99) * 1e3, "fps": self._fps,
                 "frames_drawn": self.frames_drawn, "frames_written": self.frames_written,
-                "errors": list(r.errors)}
+                "errors": errors}
 
     def run(self, engine: Engine, dt: float) -> None:
         if self.closing:
@@ -249,6 +258,8 @@ class RenderSystem(System):
                                          engine.real_time_factor)
         renderer.render(dt)
         self.frames_drawn += 1
+        self._last = replace(renderer.stats)
+        self.render_costs.add(renderer.stats.frame_ms / 1e3)
 
     def _sync_visuals(self, engine: Engine) -> None:
         renderer = self._require()
@@ -318,6 +329,7 @@ class RenderSystem(System):
                 path = renderer.screenshot(opts.screenshot)
                 log.info("screenshot written to %s", path)
         finally:
+            self._errors = list(renderer.errors)
             renderer.release()
             self._target.close()
             self.renderer = None

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -21,10 +22,21 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from components import Name, Script, Transform
-from engine.events import Contacts, CustomEvent, Despawned, InputEvent, KeyEvent, TimerEvent
+from components.script import SavedScript
+from engine.events import (
+    ContactBegan,
+    ContactEnded,
+    Contacts,
+    CustomEvent,
+    Despawned,
+    KeyEvent,
+    TimerEvent,
+)
+from engine.input.events import Axis, Button, DeviceFound, DeviceLost, TrackerPose, WheelCount
 from engine.scripting.api import ScriptAPI
 from engine.scripting.runtime import Script as LoadedScript
 from engine.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRuntime
+from engine.services import ScriptStates
 from engine.system import ANY_COMPONENT, Phase, System
 
 if TYPE_CHECKING:
@@ -67,6 +79,8 @@ class ScriptingSystem(System):
         self._owners: dict[int, list[LoadedScript]] = {}
         self._next_check = 0.0
         self.contact_events = 0
+        #: This frame's newest pose per tracker: scripts hear each tracker once a frame.
+        self._poses: dict[str, TrackerPose] = {}
 
     # -- setup ------------------------------------------------------------------
     def setup(self, engine: Engine) -> None:
@@ -80,6 +94,7 @@ class ScriptingSystem(System):
         self.runtime = runtime
         engine.insert_resource(runtime)
         engine.insert_resource(self)
+        engine.insert_resource(self, as_type=ScriptStates)
         world = engine.world
         world.on_add(Script, lambda e, c: self._pending.append((e, c)))
         world.on_remove(Script, lambda e, c: self._unload(e))
@@ -87,8 +102,20 @@ class ScriptingSystem(System):
             self._pending.append((entity, script))
         events = engine.events
         events.subscribe(Contacts, self._on_contacts)
+        events.subscribe(ContactBegan, lambda ev: self._on_touch(
+            "onCollisionBegin", ev.a, ev.b, (ev.impulse,)))
+        events.subscribe(ContactEnded, lambda ev: self._on_touch("onCollisionEnd", ev.a, ev.b, ()))
         events.subscribe(KeyEvent, lambda ev: runtime.broadcast("onKey", ev.key, ev.pressed))
-        events.subscribe(InputEvent, self._on_input)
+        events.subscribe(Button, lambda ev: runtime.broadcast("onButton", ev.device, ev.name,
+                                                             ev.pressed))
+        events.subscribe(Axis, lambda ev: runtime.broadcast(
+            "onInput", f"axis:{ev.device}/{ev.name}", ev.value))
+        events.subscribe(WheelCount, lambda ev: runtime.broadcast(
+            "onInput", f"wheel:{ev.device}", ev.count))
+        events.subscribe(TrackerPose, lambda ev: self._poses.__setitem__(ev.device, ev))
+        events.subscribe(DeviceLost, lambda ev: runtime.broadcast("onDeviceLost", ev.device))
+        events.subscribe(DeviceFound, lambda ev: runtime.broadcast("onDeviceFound",
+                                                                   ev.device))
         events.subscribe(TimerEvent, lambda ev: runtime.broadcast("onTimer", ev.name))
         events.subscribe(CustomEvent, lambda ev: runtime.deliver(ev.name, ev.data))
         events.subscribe(Despawned, lambda ev: runtime.kernel.forget(ev.entity))
@@ -97,29 +124,38 @@ class ScriptingSystem(System):
     def run(self, engine: Engine, dt: float) -> None:
         runtime = self.runtime
         assert runtime is not None
+        runtime.time = engine.time  # timers run on the simulation's clock (a saved one too)
         if self._pending:
             self._load_pending(engine)
         now = time.monotonic()
         if now >= self._next_check:
             self._next_check = now + self.reload_interval
             self._check_files(engine)
+        if self._poses:
+            self._deliver_poses(runtime)
         runtime.update(dt)
 
     def _load_pending(self, engine: Engine) -> None:
         runtime = self.runtime
         assert runtime is not None
         pending, self._pending = self._pending, []
-        fresh: list[LoadedScript] = []
+        started: list[tuple[LoadedScript, str]] = []
         for entity, component in pending:
             if not component.enabled or not engine.world.entity_exists(entity):
                 continue
             loaded = self._load(engine, entity, component)
             if loaded is not None:
-                fresh.append(loaded)
+                saved, component.saved = component.saved, None
+                resumed = saved is not None and runtime.resume(loaded, saved, self._find)
+                started.append((loaded, "onResume" if resumed else "onStart"))
                 self._owners.setdefault(entity, []).append(loaded)
         self._reindex(engine)
-        for loaded in fresh:
-            runtime.call(loaded, "onStart")
+        for loaded, callback in started:
+            runtime.call(loaded, callback)
+
+    def _find(self, name: str) -> int:
+        assert self.api is not None
+        return self.api.find(name)
 
     def _load(self, engine: Engine, entity: int, component: Script) -> LoadedScript | None:
         runtime = self.runtime
@@ -257,18 +293,46 @@ class ScriptingSystem(System):
             for ea, eb, j in zip(pa, pb, totals, strict=True):
                 runtime.collide_scene(script, ea, eb, j)
 
-    def _on_input(self, event: InputEvent) -> None:
+    def _deliver_poses(self, runtime: ScriptRuntime) -> None:
+        poses, self._poses = self._poses, {}
+        for name, pose in poses.items():
+            runtime.broadcast("onTracker", name, *pose.position, *pose.orientation)
+
+    def _on_touch(self, callback: str, a: int, b: int, extra: tuple[float, ...]) -> None:
+        """A pair began or stopped touching: each side's object scripts hear the other
+        (``callback(other, ...)``), scene scripts hear both (``callback(a, b, ...)``)."""
         runtime = self.runtime
-        assert runtime is not None
-        device = event.device
-        if device.startswith("button:"):
-            runtime.broadcast("onButton", device[7:], bool(event.value))
-        try:
-            value = runtime.to_lua(event.value)
-        except TypeError as exc:
-            runtime.report(f"input {device!r}: {exc}; not delivered to scripts")
+        if runtime is None:
             return
-        runtime.broadcast("onInput", device, value)
+        for mine, other in ((a, b), (b, a)):
+            for script in self._by_entity.get(mine, ()):
+                runtime.call_objects(script, callback, (other,), *extra)
+        for script in self._scene:
+            runtime.call_objects(script, callback, (a, b), *extra)
+
+
+    def saved_scripts(self, object_name: Callable[[int], str | None]
+                      ) -> dict[int, SavedScript]:
+        """Each running script's state, by the entity it runs on (see
+        :mod:`engine.scripting.persist`); what cannot be saved is told, once per save."""
+        runtime = self.runtime
+        if runtime is None:
+            return {}
+        states: dict[int, SavedScript] = {}
+        if runtime.kernel.random_calls():
+            log.warning("saved state: scripts drew from math.random, whose position in its "
+                        "sequence cannot be saved; the resumed run draws other numbers (seed "
+                        "it in onResume with math.randomseed(n) for a repeatable continuation)")
+        for entity, scripts in self._owners.items():
+            for script in scripts:
+                if script.stopped or script not in runtime.scripts:
+                    continue
+                saved, told = runtime.capture(script, object_name)
+                for message in told:
+                    log.warning("saved state: %s", message)
+                if saved is not None:
+                    states[entity] = saved
+        return states
 
     def shutdown(self, engine: Engine) -> None:
         self._pending.clear()

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from components import Camera, Physical, Sound, Transform
+from components import Camera, Name, Physical, Sound, Transform
 from engine.assets import Assets
 from engine.audio import (
     ContactSoundFilter,
@@ -40,6 +40,7 @@ from engine.audio import (
 )
 from engine.events import Contacts, Spawned
 from engine.physics.backend import CONTACT_DTYPE
+from engine.rotation import view_problem
 from engine.services import SoundControl
 from engine.system import Phase, System
 
@@ -54,7 +55,7 @@ CONTACT_PRIORITY = -1
 
 class SoundSystem(System):
     phase = Phase.POST_PHYSICS
-    reads = (Sound, Transform, Camera, Physical)
+    reads = (Sound, Transform, Camera, Physical, Name)
     writes = ()
 
     def __init__(self, manager: SoundManager,
@@ -71,6 +72,7 @@ class SoundSystem(System):
         self._layout: int | None = None  # pose-table version the cached rows match
         self._rows = np.zeros(0, np.int64)
         self._placed: list[Voice] = []
+        self._told_views: set[int] = set()  # cameras whose view direction was told wrong
 
     # -- life cycle -----------------------------------------------------------
     def setup(self, engine: Engine) -> None:
@@ -200,6 +202,13 @@ class SoundSystem(System):
                 else t.position
             if camera.look_at is not None:
                 forward = np.asarray(camera.look_at, np.float64) - position
+                problem = view_problem(forward) if camera.follow is None else None
+                if problem is not None and entity not in self._told_views:
+                    self._told_views.add(entity)  # once per camera (a script may move it)
+                    named = world.try_component(entity, Name)
+                    log.warning("camera %r: %s; 3D sound is unpanned and the view meaningless "
+                                "until it looks elsewhere", named.id if named else entity,
+                                problem)
                 self.manager.set_listener_axes(position, forward, (0.0, 0.0, 1.0),
                                                t.linear_velocity)
             else:

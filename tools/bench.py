@@ -7,8 +7,14 @@ the ratio, so the numbers mean something on any machine.
 from __future__ import annotations
 
 import importlib
+import json
+import os
+import platform
+import sys
 import time
 from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
 from typing import Any
 
 from systems import create_engine
@@ -21,7 +27,85 @@ BENCHMARKS: dict[str, str] = {
     "scripting": "tools.bench_scripting:run_bench",
     "sound": "tools.bench_sound:run_bench",
     "render": "tools.bench_render:run_bench",
+    "input": "tools.bench_input:run_bench",
+    "contacts": "tools.bench:bench_contacts",
     "import": "tools.bench_import:run_bench",
+}
+
+
+@dataclass(frozen=True, slots=True)
+class Figure:
+    """One measured figure beside its reference, from the same run."""
+
+    label: str
+    ours: float
+    reference: float
+    unit: str
+    reference_is: str
+
+    @property
+    def ratio(self) -> float:
+        return self.ours / self.reference if self.reference else float("inf")
+
+
+def _by_row(label: Callable[[dict[str, Any]], str], ours: str, reference: str, unit: str,
+            reference_is: str) -> Callable[[list[dict[str, Any]]], list[Figure]]:
+    """Figures from rows that each hold our number and the reference's."""
+    return lambda rows: [Figure(label(r), float(r[ours]), float(r[reference]), unit,
+                                reference_is) for r in rows if ours in r and reference in r]
+
+
+def _scene_figures(rows: list[dict[str, Any]]) -> list[Figure]:
+    total = next(r for r in rows if r["stage"] == "total")
+    ref = next(r for r in rows if r["stage"].startswith("json.loads"))
+    return [Figure(f"load {total['objects']} objects", total["cpu s"], ref["cpu s"], "s",
+                   "json.loads of the same data")]
+
+
+def _render_figures(rows: list[dict[str, Any]]) -> list[Figure]:
+    ours = next(r for r in rows if r["case"] == "instanced")
+    ref = next(r for r in rows if r["case"] == "one draw per box")
+    return [Figure(f"{ours['boxes']} boxes, {ours['size']}", ours["ms_per_frame"],
+                   ref["ms_per_frame"], "ms/frame", "one draw call per box")]
+
+
+def _physics_figures(rows: list[dict[str, Any]]) -> list[Figure]:
+    if rows and "C+fb ms" in rows[0]:  # ODE beside plain C
+        return _by_row(lambda r: f"N={r['N']} sleeping {r['sleeping']}", "ours+sync ms",
+                       "C+fb ms", "ms/step", "the same world in plain C (libode)")(rows)
+    return _by_row(lambda r: f"N={r['n']}", "ours_ms", "raw_ms", "ms/step",
+                   "bare pymunk stepping")(rows)
+
+
+def _import_figures(rows: list[dict[str, Any]]) -> list[Figure]:
+    ref = next(r for r in rows if "reference" in r["stage"])
+    return [Figure(f"{r['nodes']} nodes: {r['stage']}", r["s"], ref["s"], "s",
+                   "json.loads of the glTF's JSON") for r in rows if "goal s" in r]
+
+
+def _input_figures(rows: list[dict[str, Any]]) -> list[Figure]:
+    ours = next(r for r in rows if r["path"].startswith("osc -> InputState"))
+    ref = next(r for r in rows if "reference" in r["path"])
+    return [Figure("CPU per OSC event, to InputState", ours["cpu us/event"],
+                   ref["cpu us/event"], "us/event",
+                   "python-osc's own server on the same stream")]
+
+
+#: benchmark -> how its rows become figures (ours beside the reference).
+FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
+    "scheduler": _by_row(lambda r: f"{r['mode']}, {r['systems']} systems", "ms/frame",
+                         "bare loop ms", "ms/frame", "a bare loop calling the same functions"),
+    "physics": _physics_figures,
+    "scene": _scene_figures,
+    "scripting": _by_row(lambda r: r["benchmark"], "us_per_call", "bare_lupa_us", "us/call",
+                         "a bare lupa call"),
+    "sound": _by_row(lambda r: r["case"], "ours_ms", "raw_al_ms", "ms/frame",
+                     "raw OpenAL calls for the same sources"),
+    "render": _render_figures,
+    "input": _input_figures,
+    "contacts": _by_row(lambda r: f"{r['pairs']} touching pairs", "ms/frame", "unique ms",
+                        "ms/frame", "pair keys and np.unique of the same contacts alone"),
+    "import": _import_figures,
 }
 
 
@@ -45,7 +129,10 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
-def run_benchmark(what: str, backend: str | None = None, quick: bool = False) -> int:
+def measure(what: str, backend: str | None = None, quick: bool = False) -> list[dict[str, Any]]:
+    """Run one benchmark (a spinner with the elapsed time on a terminal); its rows."""
+    from engine.progress import progress
+
     module_name, func_name = BENCHMARKS[what].split(":")
     func: Callable[..., list[dict[str, Any]]] = getattr(importlib.import_module(module_name),
                                                         func_name)
@@ -54,9 +141,66 @@ def run_benchmark(what: str, backend: str | None = None, quick: bool = False) ->
         kwargs["backend"] = backend
     if quick:
         kwargs["quick"] = True
-    rows = func(**kwargs)
-    print(f"\ncolosseum bench {what}")
-    print_table(rows)
+    with progress(f"bench {what}"):
+        return func(**kwargs)
+
+
+def report(what: str, rows: list[dict[str, Any]], backend: str | None = None,
+           quick: bool = False) -> dict[str, Any]:
+    """The run as plain data: the rows, our figures beside their references, the machine."""
+    return {"benchmark": what, "backend": backend, "quick": quick, "rows": rows,
+            "figures": [{**asdict(f), "ratio": f.ratio} for f in FIGURES[what](rows)],
+            "machine": {"python": sys.version.split()[0], "platform": platform.platform(),
+                        "cpus": os.cpu_count()}}
+
+
+def plot(data: dict[str, Any], path: Path) -> Path:
+    """Our figures beside their references as grouped bars, each pair's ratio above it."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figures = data["figures"]
+    fig, ax = plt.subplots(figsize=(max(6.0, 1.6 * len(figures) + 2), 4.5))
+    xs = range(len(figures))
+    ours = [f["ours"] for f in figures]
+    refs = [f["reference"] for f in figures]
+    ax.bar([x - 0.2 for x in xs], ours, 0.4, label="colosseum")
+    ax.bar([x + 0.2 for x in xs], refs, 0.4,
+           label=f"reference: {figures[0]['reference_is']}" if figures else "reference")
+    for x, f in zip(xs, figures, strict=True):
+        ax.annotate(f"x{f['ratio']:.2f}", (x, max(f["ours"], f["reference"])),
+                    ha="center", va="bottom")
+    ax.set_xticks(list(xs), [f["label"] for f in figures], rotation=15, ha="right")
+    ax.set_ylabel(figures[0]["unit"] if figures else "")
+    ax.set_title(f"colosseum bench {data['benchmark']} ({data['machine']['platform']})",
+                 fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def run_benchmark(what: str, backend: str | None = None, quick: bool = False,
+                  json_out: str | None = None, plot_out: Path | None = None) -> int:
+    """Measure, then print the table (or the JSON: ``json_out`` "-" is stdout), and plot."""
+    rows = measure(what, backend, quick)
+    data = report(what, rows, backend, quick)
+    if json_out == "-":
+        print(json.dumps(data, indent=2))
+    else:
+        print(f"\ncolosseum bench {what}")
+        print_table(rows)
+        for f in FIGURES[what](rows):
+            print(f"{f.label}: {f.ours:.4g} {f.unit}, reference {f.reference:.4g} "
+                  f"({f.reference_is}): ratio {f.ratio:.3g}")
+        if json_out is not None:
+            Path(json_out).write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+    if plot_out is not None:
+        print(f"plot written to {plot(data, plot_out)}", file=sys.stderr)
     return 0
 
 
@@ -97,6 +241,8 @@ def bench_scene(quick: bool = False, repeats: int = 3) -> list[dict[str, Any]]:
     """Parse, validate, build and instantiate a generated file of 10,000 objects; reference:
     json.loads (a C parser) of the same objects as JSON (a list of dicts with the same keys
     and values), timed in the same run, to show what reading the data costs by itself.
+    A second reference is the scene's own reference parser (the token path, without the
+    compiled fast path) reading the same text, beside the fast path reading it.
 
     Both are run ``repeats`` times and the fastest run is shown, as timeit does (this
     machine's speed swings from minute to minute); the total's median is shown beside it.
@@ -108,6 +254,7 @@ def bench_scene(quick: bool = False, repeats: int = 3) -> list[dict[str, Any]]:
 
     from engine.scene import bench_scene as run
     from engine.scene import generate_scene, parse_text
+    from engine.scene.parser import token_path_only
 
     n = 1_000 if quick else 10_000
     runs = [run(n) for _ in range(1 if quick else repeats)]
@@ -121,6 +268,12 @@ def bench_scene(quick: bool = False, repeats: int = 3) -> list[dict[str, Any]]:
         json.loads(as_json)
         json_s = min(json_s, time.perf_counter() - t0)
         json_cpu_s = min(json_cpu_s, time.process_time() - c0)
+    text = generate_scene(n)
+    fast_cpu_s = token_cpu_s = float("inf")
+    for _ in range(len(runs)):
+        fast_cpu_s = min(fast_cpu_s, _cpu_seconds(lambda: parse_text(text)))
+        with token_path_only():
+            token_cpu_s = min(token_cpu_s, _cpu_seconds(lambda: parse_text(text)))
     target = 1.0 if n == 10_000 else 0.1
     return [{"objects": n, "file MB": r["file_bytes"] / 1e6, "stage": stage,
              "wall s": r[f"{key}_s"], "cpu s": r[f"{key}_cpu_s"]}
@@ -132,10 +285,73 @@ def bench_scene(quick: bool = False, repeats: int = 3) -> list[dict[str, Any]]:
                   f"median of {len(runs)}": median},
                  {"objects": n, "file MB": len(as_json) / 1e6, "stage": "json.loads (reference)",
                   "wall s": json_s, "cpu s": json_cpu_s,
-                  "total/json": r["cpu_s"] / json_cpu_s if json_cpu_s else float("inf")}]
+                  "total/json": r["cpu_s"] / json_cpu_s if json_cpu_s else float("inf")},
+                 {"objects": n, "file MB": r["file_bytes"] / 1e6,
+                  "stage": "parse text, fast path", "cpu s": fast_cpu_s},
+                 {"objects": n, "file MB": r["file_bytes"] / 1e6,
+                  "stage": "parse text, token path (reference)", "cpu s": token_cpu_s,
+                  "reference/fast": token_cpu_s / fast_cpu_s}]
+
+
+def _cpu_seconds(work: Callable[[], object]) -> float:
+    """CPU seconds ``work`` takes (freeing what it returned is not counted)."""
+    c0 = time.process_time()
+    result = work()
+    elapsed = time.process_time() - c0
+    del result
+    return elapsed
 
 
 def _plain_dict(block: Any) -> dict[str, Any]:
     """A scene block as plain JSON-able data: STRUCTUREs as dicts, vectors as lists."""
     return {e.key: _plain_dict(e.value.data) if e.value.kind == "STRUCTURE" else e.value.py()
             for e in block}
+
+
+def _fastest_ms(fn: Callable[[], None], frames: int, rounds: int = 3) -> float:
+    """The fastest of ``rounds`` rounds of ``frames`` calls, in ms per call."""
+    best = float("inf")
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        for _ in range(frames):
+            fn()
+        best = min(best, (time.perf_counter() - t0) / frames * 1e3)
+    return best
+
+
+def _contacts_case(pairs: int, frames: int) -> dict[str, Any]:
+    """One size of bench_contacts: our tracker and the reference, alternating rounds."""
+    import numpy as np
+
+    from engine.app import EngineConfig
+    from engine.events import Contacts
+    from engine.physics.backend import CONTACT_DTYPE
+    from systems.contacts import ContactEventsSystem, pair_keys
+
+    rng = np.random.default_rng(pairs)
+    batch = np.zeros(2 * pairs, CONTACT_DTYPE)  # two contacts per pair
+    ids = rng.permutation(10 * pairs)[:pairs]
+    batch["a"] = np.repeat(ids, 2)
+    batch["b"] = np.repeat(np.where(rng.random(pairs) < 0.5, -1, ids + 1), 2)
+    batch["impulse"] = 0.1
+    with create_engine(EngineConfig(backend="ballistic", fast=True)) as engine:
+        tracker = ContactEventsSystem()
+
+        def frame() -> None:
+            tracker._collect(Contacts(batch))
+            tracker.run(engine, 0.01)
+
+        frame()  # every pair begins: what follows is the steady state
+        ours = _fastest_ms(frame, frames)
+        ref = _fastest_ms(lambda: np.unique(pair_keys(batch["a"], batch["b"]),
+                                            return_inverse=True), frames)
+    return {"pairs": pairs, "contacts": len(batch), "ms/frame": ours, "unique ms": ref,
+            "ratio": ours / ref}
+
+
+def bench_contacts(quick: bool = False) -> list[dict[str, Any]]:
+    """Contact begin/end tracking (systems.contacts) with every pair touching frame after
+    frame; reference: the least any tracker does, one pair key per contact and np.unique,
+    timed in the same run."""
+    return [_contacts_case(pairs, 50 if quick else 200)
+            for pairs in ((200, 2000) if quick else (200, 2000, 20000))]

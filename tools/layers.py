@@ -21,6 +21,7 @@ inside functions are (deferring an import does not remove the dependency).
 from __future__ import annotations
 
 import ast
+import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -83,12 +84,32 @@ def project_modules(root: Path) -> dict[str, Path]:
     return found
 
 
+_IMPORT_START = re.compile(r"^(from\s+[\w.]+\s+import\s|import\s+[\w.]+)")
+
+
 def _cython_imports(path: Path) -> ast.Module:
-    """The Python-level imports of a Cython module (its ``cimport``s are C, not modules)."""
-    lines = [line for line in path.read_text(encoding="utf-8").splitlines()
-             if line.startswith(("import ", "from ")) and " cimport " not in line
-             and not line.startswith("cimport")]
-    return ast.parse("\n".join(lines) or "pass", str(path))
+    """The Python-level imports of a Cython module (its ``cimport``s are C, not modules):
+    the top-level ``import``/``from ... import`` statements, parenthesised ones joined."""
+    statements: list[str] = []
+    pending: list[str] = []
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if pending:
+            pending.append(line)
+            if ")" in line:
+                statements.append(" ".join(pending))
+                pending = []
+        elif _IMPORT_START.match(line):
+            if "(" in line and ")" not in line:
+                pending = [line]
+            else:
+                statements.append(line)
+    body: list[ast.stmt] = []
+    for statement in statements:
+        try:
+            body.extend(ast.parse(statement, str(path)).body)
+        except SyntaxError:  # prose in a docstring that happens to start like an import
+            continue
+    return ast.Module(body=body, type_ignores=[])
 
 
 def _type_checking(node: ast.If) -> bool:

@@ -38,7 +38,7 @@ import numpy as np
 from engine.messages import MessageLog
 from engine.physics import commands as cmd
 from engine.physics.backend import CONTACT_DTYPE, BodyState, DynamicsBackend, SupportsFaults
-from engine.realtime import Pacing, RealTimeController
+from engine.realtime import Pacing, RealTimeController, advance
 
 log = logging.getLogger("colosseum.physics")
 
@@ -331,7 +331,7 @@ class PhysicsDriver(PhysicsPort):
             self.controller.record_step(cost)
             contacts = backend.contacts()
             self.steps += 1
-            self.time += h
+            self.time = advance(self.time, h)
             faults = backend.take_faults() if self._reports_faults else ()
             if len(contacts) or faults:
                 with self._lock:

@@ -8,10 +8,23 @@ from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 BACKENDS = ("auto", "headless", "window")
+#: moderngl-window's mouse button numbers -> names.
+MOUSE_BUTTONS = {1: "left", 2: "right", 3: "middle"}
+
+
+class InputSink(Protocol):
+    """Where a window's keyboard and mouse go (the input layer's window device)."""
+
+    def key(self, name: str, pressed: bool) -> None: ...
+
+    def pointer(self, x: float, y: float) -> None: ...
+
+    def scroll(self, notches: float) -> None: ...
+
+    def mouse_button(self, name: str, pressed: bool) -> None: ...
 
 
 class RenderBackendError(RuntimeError):
@@ -45,7 +58,8 @@ class HeadlessTarget:
         self.ctx = ctx
         self.size = (int(size[0]), int(size[1]))
         self.fbo = self._framebuffer(self.size)
-        self.key_callback: Callable[[str, bool], None] | None = None
+        #: Never called: a headless target has no keyboard or mouse.
+        self.input: InputSink | None = None
 
     def _framebuffer(self, size: tuple[int, int]) -> Any:
         return self.ctx.framebuffer(color_attachments=[self.ctx.renderbuffer(size, 4)],
@@ -101,17 +115,35 @@ class WindowTarget:
         moderngl_window.activate_context(window=window)
         self.window = window
         self.ctx = window.ctx
-        self.key_callback: Callable[[str, bool], None] | None = None
+        self.input: InputSink | None = None
         keys = window.keys
         #: window-library key code -> engine key name ("f1", "a", "space", "up"...)
         self.key_names = {getattr(keys, n): n.lower() for n in dir(keys)
                            if n.isupper() and not n.startswith("ACTION_")}
         window.key_event_func = self._on_key
+        window.mouse_position_event_func = self._on_move
+        window.mouse_drag_event_func = self._on_move
+        window.mouse_press_event_func = lambda x, y, b: self._on_button(b, True)
+        window.mouse_release_event_func = lambda x, y, b: self._on_button(b, False)
+        window.mouse_scroll_event_func = self._on_scroll
 
     def _on_key(self, key: Any, action: Any, modifiers: Any) -> None:
-        if self.key_callback is not None:
-            self.key_callback(self.key_names.get(key, str(key)),
-                              action == self.window.keys.ACTION_PRESS)
+        if self.input is not None:
+            self.input.key(self.key_names.get(key, str(key)),
+                           action == self.window.keys.ACTION_PRESS)
+
+    def _on_move(self, x: int, y: int, dx: int, dy: int) -> None:
+        if self.input is not None:
+            width, height = self.window.size
+            self.input.pointer(x / max(width, 1), y / max(height, 1))
+
+    def _on_button(self, button: int, pressed: bool) -> None:
+        if self.input is not None:
+            self.input.mouse_button(MOUSE_BUTTONS.get(button, str(button)), pressed)
+
+    def _on_scroll(self, x_offset: float, y_offset: float) -> None:
+        if self.input is not None:
+            self.input.scroll(y_offset)
 
     @property
     def size(self) -> tuple[int, int]:

@@ -20,6 +20,120 @@ from __future__ import annotations
 
 MAX_LIGHTS = 8
 
+# -- the contract with a user's shader (docs/GLSL.md is generated from these) --------------
+
+#: The GLSL a modern user shader is written in (older or versionless GLSL is mapped onto it).
+GLSL_VERSION = "#version 330"
+
+#: Per-vertex inputs of every mesh (name -> GLSL type, meaning).
+VERTEX_INPUTS: dict[str, tuple[str, str]] = {
+    "in_position": ("vec3", "vertex position, object frame (m)"),
+    "in_normal": ("vec3", "vertex normal, object frame"),
+    "in_uv": ("vec2", "texture coordinate"),
+    "in_color": ("vec4", "vertex colour (white when the model has none)"),
+}
+
+#: Per-instance inputs: one value per object drawn.
+INSTANCE_INPUTS: dict[str, tuple[str, str]] = {
+    "i_model": ("mat4", "object -> world (position, orientation, scale)"),
+    "i_color": ("vec4", "the object's Color (RGBA)"),
+    "i_flags": ("vec4", "x: casts shadows (Shadower), y: receives them (Shadowed)"),
+}
+
+#: Texture units the engine binds, by the sampler uniform it sets to that unit.
+TEXTURE_UNITS: dict[str, int] = {"u_texture": 0, "u_shadow_map": 1}
+
+#: Every uniform the renderer sets on a mesh program each frame, when the program has it
+#: (name -> GLSL type, meaning); ``Renderer.frame_uniforms`` gives exactly these.
+ENGINE_UNIFORMS: dict[str, tuple[str, str]] = {
+    "u_view": ("mat4", "world -> camera"),
+    "u_proj": ("mat4", "camera -> clip space"),
+    "u_camera_pos": ("vec3", "the eye, world frame (m)"),
+    "u_time": ("float", "seconds the renderer has drawn (s)"),
+    "u_ambient": ("vec3", "ambient light colour"),
+    "u_texture": ("sampler2D", "the object's Texture (white without one), unit 0"),
+    "u_shadow_map": ("sampler2DShadow", "the shadow map (depth compare), unit 1"),
+    "u_shadow_light": ("int", "index of the light casting shadows, -1 for none"),
+    "u_light_vp": ("mat4", "world -> the shadow light's clip space"),
+    "u_light_count": ("int", f"lights in use (at most {MAX_LIGHTS})"),
+    "u_light_kind": (f"int[{MAX_LIGHTS}]", "0 directional, 1 point, 2 spot"),
+    "u_light_pos": (f"vec3[{MAX_LIGHTS}]", "light positions, world frame (m)"),
+    "u_light_dir": (f"vec3[{MAX_LIGHTS}]", "light directions, world frame"),
+    "u_light_color": (f"vec3[{MAX_LIGHTS}]", "light colour times intensity"),
+    "u_light_cos_cutoff": (f"float[{MAX_LIGHTS}]", "cosine of a spot light's cone half-angle"),
+}
+
+#: Per-object matrices a simple shader may take as uniforms instead of ``i_model``; its
+#: objects are then drawn one call each (not instanced). Both spellings are set.
+PER_OBJECT_UNIFORMS: dict[str, tuple[str, str]] = {
+    "mvp": ("mat4", "object -> clip space (also u_mvp)"),
+    "u_mvp": ("mat4", "the same as mvp"),
+    "model": ("mat4", "object -> world (also u_model)"),
+    "u_model": ("mat4", "the same as model"),
+    "normal_matrix": ("mat3", "inverse transpose of model's rotation-scale (also "
+                      "u_normal_matrix)"),
+    "u_normal_matrix": ("mat3", "the same as normal_matrix"),
+}
+
+
+def contract_markdown() -> str:
+    """docs/GLSL.md: what a user's shader gets from the engine (a test keeps the file equal
+    to this, so the page cannot drift from the renderer)."""
+    def table(rows: dict[str, tuple[str, str]], what: str) -> list[str]:
+        out = [f"| {what} | GLSL type | meaning |", "|---|---|---|"]
+        out += [f"| `{name}` | `{kind}` | {meaning} |" for name, (kind, meaning) in rows.items()]
+        return [*out, ""]
+
+    units = ", ".join(f"{unit}: `{name}`" for name, unit in TEXTURE_UNITS.items())
+    return "\n".join([
+        "# The GLSL contract",
+        "",
+        "<!-- generated from engine/render/glsl.py by `python -m tools.docs`; "
+        "tests/render/test_glsl_contract.py keeps it equal -->",
+        "",
+        "A `ShaderProgram` of a scene (`VertexShader`/`FragmentShader` files, paper Listing 3)",
+        "draws the objects whose `VisualAttributes` name its `ShaderState`. This page is what",
+        "the engine gives such a shader.",
+        "",
+        "## Version",
+        "",
+        f"Modern shaders are `{GLSL_VERSION}` (core profile) or later and declare the inputs",
+        "and uniforms below that they use. Shaders without `#version`, or older than 330,",
+        "are fixed-function-era GLSL (`gl_Vertex`, `gl_NormalMatrix`, `ftransform()`,",
+        "`gl_FragColor`, `gl_LightSource[i]`, ...): the engine maps those built-ins onto the",
+        "inputs below, so the paper's OpenSceneGraph shaders run unchanged. A program that",
+        "names only a fragment shader gets the engine's vertex stage, which passes",
+        "`v_world`, `v_normal`, `v_uv` and `v_color` to it.",
+        "",
+        "## Vertex inputs",
+        "",
+        *table(VERTEX_INPUTS, "per vertex"),
+        *table(INSTANCE_INPUTS, "per instance"),
+        "## Uniforms the engine sets",
+        "",
+        "Set before each object batch when the program has them (a compiler drops what a",
+        "shader declares but does not use). Matrices are column-major, as GLSL expects.",
+        "",
+        *table(ENGINE_UNIFORMS, "uniform"),
+        "A simple shader may take per-object matrices instead of `i_model`; its objects are",
+        "then drawn one call each:",
+        "",
+        *table(PER_OBJECT_UNIFORMS, "uniform"),
+        "## Texture units",
+        "",
+        f"{units}. A sampler of your own needs a `Uniform` giving its unit.",
+        "",
+        "## Your own uniforms",
+        "",
+        "Every other uniform is yours: give it a value in the `ShaderState` (`Uniform { ID",
+        "\"Edge\" Value 0.64 }`) or from Lua (`setUniform(\"toon\", \"Edge\", 0.5)`). A uniform",
+        "that neither the engine nor the scene nor a script sets stays 0 (a zero matrix draws",
+        "nothing), so the renderer warns once, naming the uniform, the shader file and the",
+        "closest name the engine supplies (`u_projection`: did you mean `u_proj`?).",
+        "",
+    ])
+
+
 #: Per-vertex and per-instance inputs every mesh program takes (see Renderer's buffers).
 MESH_INPUTS = """
 in vec3 in_position;

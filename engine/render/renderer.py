@@ -464,20 +464,11 @@ class Renderer:
                                                depth_attachment=self._scene_depth)
         self._scene_size = size
 
-    def _frame_uniforms(self, program: Any, eye: Eye, lights: list[LightInfo], shadow_index: int,
-                        light_vp: np.ndarray | None) -> None:
-        w = write_uniform
-        w(program, "u_view", _gl(eye.view))
-        w(program, "u_proj", _gl(eye.proj))
-        w(program, "u_camera_pos", tuple(float(x) for x in eye.position))
-        w(program, "u_time", float(self.time))
-        w(program, "u_ambient", tuple(self.ambient))
-        w(program, "u_texture", 0)
-        w(program, "u_shadow_map", 1)
-        w(program, "u_shadow_light", shadow_index if light_vp is not None else -1)
-        w(program, "u_light_vp", _gl(light_vp if light_vp is not None else np.eye(4)))
+    def frame_uniforms(self, eye: Eye, lights: list[LightInfo], shadow_index: int,
+                       light_vp: np.ndarray | None) -> dict[str, Any]:
+        """The values of :data:`glsl.ENGINE_UNIFORMS` for one eye (arrays as numpy arrays,
+        matrices column-major), every one of them: the contract a user's shader relies on."""
         n = min(len(lights), glsl.MAX_LIGHTS)
-        w(program, "u_light_count", n)
         pad = glsl.MAX_LIGHTS
         kinds = np.zeros(pad, np.int32)
         pos, dirs, cols = np.zeros((pad, 3)), np.zeros((pad, 3)), np.zeros((pad, 3))
@@ -487,11 +478,27 @@ class Renderer:
             pos[i], dirs[i] = light.position, light.direction
             cols[i] = np.asarray(light.color) * light.intensity
             cutoff[i] = np.cos(np.radians(light.cutoff))
-        _write_array(program, "u_light_kind", kinds)
-        _write_array(program, "u_light_pos", pos)
-        _write_array(program, "u_light_dir", dirs)
-        _write_array(program, "u_light_color", cols)
-        _write_array(program, "u_light_cos_cutoff", cutoff)
+        return {
+            "u_view": _gl(eye.view), "u_proj": _gl(eye.proj),
+            "u_camera_pos": tuple(float(x) for x in eye.position),
+            "u_time": float(self.time), "u_ambient": tuple(self.ambient),
+            "u_texture": glsl.TEXTURE_UNITS["u_texture"],
+            "u_shadow_map": glsl.TEXTURE_UNITS["u_shadow_map"],
+            "u_shadow_light": shadow_index if light_vp is not None else -1,
+            "u_light_vp": _gl(light_vp if light_vp is not None else np.eye(4)),
+            "u_light_count": n, "u_light_kind": kinds, "u_light_pos": pos,
+            "u_light_dir": dirs, "u_light_color": cols, "u_light_cos_cutoff": cutoff,
+        }
+
+    def _frame_uniforms(self, program: Any, eye: Eye, lights: list[LightInfo], shadow_index: int,
+                        light_vp: np.ndarray | None) -> None:
+        for name, value in self.frame_uniforms(eye, lights, shadow_index, light_vp).items():
+            if isinstance(value, np.ndarray):
+                _write_array(program, name, value)
+            else:
+                write_uniform(program, name, value)
+        w = write_uniform
+        n = min(len(lights), glsl.MAX_LIGHTS)
         if program.get("c_LightSource[0].position", None) is not None:  # legacy GLSL
             for i, light in enumerate(lights[:n]):
                 if light.kind == "directional":
@@ -543,7 +550,7 @@ class Renderer:
         fbo.viewport = (0, 0, *size)
         fbo.clear(*self.background, 1.0, depth=1.0)
         self.ctx.enable(self.ctx.DEPTH_TEST)
-        self._shadow_tex.use(1)
+        self._shadow_tex.use(glsl.TEXTURE_UNITS["u_shadow_map"])
         lit = self._lit(lights, shadow_index if light_vp is not None else -1)
         for eye in self.camera.eyes(*size):
             fbo.viewport = eye.viewport
@@ -557,7 +564,7 @@ class Renderer:
                 if program.glo not in configured:
                     self._frame_uniforms(program, eye, lights, shadow_index, light_vp)
                     configured.add(program.glo)
-                self._textures[batch.key[1]].use(0)
+                self._textures[batch.key[1]].use(glsl.TEXTURE_UNITS["u_texture"])
                 self._cull(batch)
                 vao = self._vao(batch, program)
                 self.stats.instances += batch.stop - batch.start

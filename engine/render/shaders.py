@@ -222,7 +222,10 @@ def write_uniform(program: Any, name: str, value: UniformValue) -> bool:
 
 #: Per-object matrix uniforms a simple (non-instanced) shader may use instead of ``i_model``;
 #: objects drawn with such a program get one draw call each.
-PER_OBJECT_UNIFORMS = ("mvp", "u_mvp", "model", "u_model", "normal_matrix", "u_normal_matrix")
+PER_OBJECT_UNIFORMS = tuple(glsl.PER_OBJECT_UNIFORMS)
+#: Uniforms no user value is needed for: the engine's, and GLSL's own.
+_SUPPLIED = frozenset(glsl.ENGINE_UNIFORMS) | frozenset(glsl.PER_OBJECT_UNIFORMS)
+_DECLARED = re.compile(r"^[ \t]*uniform\s+(?:(?:lowp|mediump|highp)\s+)?\w+\s+(\w+)", re.MULTILINE)
 
 
 @dataclass(slots=True)
@@ -250,6 +253,8 @@ class ShaderManager:
         self._states: dict[str, CompiledState | None] = {}
         self._uniforms: dict[str, dict[str, UniformValue]] = {}
         self._programs: dict[str, Any] = {}
+        #: Program ID -> its stages' (file name, source), for messages about them.
+        self._sources: dict[str, tuple[tuple[str, str], ...]] = {}
 
     def _read(self, decl: VertexShader | FragmentShader) -> tuple[str, str]:
         if decl.source is not None:
@@ -299,6 +304,30 @@ class ShaderManager:
                     log.warning("%s: shader state %r sets uniform %r that program %r does not use",
                                 state.origin or state.id, state.id, name, state.program)
             self._states[state.id] = compiled
+        for program_id in self._programs:
+            self._warn_unset(program_id, [s for s in library.states if s.program == program_id])
+
+    def _warn_unset(self, program_id: str, states: list[ShaderState]) -> None:
+        """Warn once per uniform a program uses that nothing sets: not the engine (see
+        :data:`glsl.ENGINE_UNIFORMS`), not its shader states. It stays 0, and a matrix of
+        zeros draws nothing: the object silently disappears otherwise."""
+        program = self._programs[program_id]
+        given = {u.id for state in states for u in state.uniforms}
+        for name in program:
+            member = program.get(name, None)
+            if not hasattr(member, "value") or name.startswith(("gl_", "c_")) or \
+                    name in _SUPPLIED or name in given or name.split("[")[0] in _SUPPLIED:
+                continue
+            where = next((f"{file}:{source.count(chr(10), 0, m.start()) + 1}"
+                          for file, source in self._sources[program_id]
+                          for m in _DECLARED.finditer(source) if m.group(1) == name),
+                         self._sources[program_id][-1][0])
+            close = difflib.get_close_matches(name, sorted(_SUPPLIED), n=1, cutoff=0.5)
+            hint = f"; did you mean {close[0]!r}, which the engine supplies?" if close else ""
+            log.warning("%s: uniform %r of program %r is never set: the engine does not supply "
+                        "it and no ShaderState gives it a value, so it stays 0 (a zero matrix "
+                        "draws nothing; a script's setUniform is the only other way)%s",
+                        where, name, program_id, hint)
 
     def _build(self, decl: ShaderProgram, vertex: dict[str, VertexShader],
                fragment: dict[str, FragmentShader]) -> Any:
@@ -311,6 +340,7 @@ class ShaderManager:
                                           f"{decl.fragment_shader!r}"
                                           f"{_did_you_mean(decl.fragment_shader, fragment)}")])
         fs, fs_name = self._read(fragment[decl.fragment_shader])
+        stages: tuple[tuple[str, str], ...] = ((fs_name, fs),)
         if decl.vertex_shader is None:
             vs, vs_name = glsl.DEFAULT_USER_VERTEX, "<default vertex stage>"
         elif decl.vertex_shader not in vertex:
@@ -319,6 +349,8 @@ class ShaderManager:
                                           f"{_did_you_mean(decl.vertex_shader, vertex)}")])
         else:
             vs, vs_name = self._read(vertex[decl.vertex_shader])
+            stages = ((vs_name, vs), *stages)
+        self._sources[decl.id] = stages
         return compile_program(self.ctx, vs, fs, vs_name, fs_name)
 
     def has_state(self, state_id: str) -> bool:

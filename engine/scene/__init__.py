@@ -11,7 +11,7 @@ See :mod:`engine.scene.schema` for every key, its default and the units.
 
 from engine.scene.bench import bench_scene, generate_scene
 from engine.scene.db import Block, Entry, SceneDB, Value
-from engine.scene.diagnostics import Diagnostic, Loc, SceneError, render_all
+from engine.scene.diagnostics import Diagnostic, Loc, Report, SceneError, render_all
 from engine.scene.factory import (
     EntitySpec,
     JointSpec,
@@ -41,6 +41,7 @@ __all__ = [
     "JointSpec",
     "Limits",
     "Loc",
+    "Report",
     "SceneDB",
     "SceneError",
     "SceneIds",

@@ -1,11 +1,17 @@
 # cython: language_level=3, boundscheck=False, wraparound=False
-"""The parser's plain-entry scanner (``parser._scan_plain``), compiled.
+"""The parser's one fast path: plain entries read straight from the text, compiled.
 
-It reads the same entries, with the same places and token counts, and stops at
-the same character, but a character at a time instead of with regular
-expressions, which makes reading a large file several times faster. The
-patterns it follows are ``parser.FAST``, ``parser._NUMBERS`` and
-``parser._ITEM``; the tests check both scanners give the same SceneDB.
+:func:`scan_plain` reads ``KEY "string"``, ``KEY number``, ``KEY [numbers or simple
+items]``, ``KEY {`` and ``}`` a character at a time, without tokens, and stops where
+the text needs the general grammar (comments, expressions, errors, typographic
+quotes), leaving the rest to the token path. It must make exactly what the token
+path (the reference) would: the same entries, places, expression texts, token
+counts and layout marks, and stop at the same character.
+
+Its character classes come from the lexer's definitions (``engine.scene.lexer``),
+read into a table at import. The shapes it follows (a NUMBER, a plain number's
+follow set, a vector item ``[+-]a[*/+-]b``) are restated here as loops; the property
+test in tests/scene/test_fast_path.py is the proof they agree with the token path.
 """
 
 from bisect import bisect_right
@@ -14,18 +20,87 @@ from cpython.ref cimport Py_DECREF, Py_INCREF, PyObject
 from cpython.tuple cimport PyTuple_SET_ITEM
 from libc.math cimport isfinite, isinf
 
-from engine.scene import expr as ex
 from engine.scene.db import FLOAT, INCLUDE, INT, STRING, STRUCTURE, VECTOR, Block, Entry, Value
 from engine.scene.diagnostics import Loc
+from engine.scene.expr import CONSTANTS, OPERATOR_TEXT, number_text, number_value
+from engine.scene.lexer import (
+    BRACKETS,
+    DIGITS,
+    ESCAPE,
+    NAME_CHARS,
+    NAME_START,
+    NEWLINE,
+    PLAIN_QUOTE,
+    QUOTES,
+    SPACE_CHARS,
+)
 
-cdef object _number_value = ex.number_value
-cdef dict _CONSTANTS = ex.CONSTANTS
+cdef object _number_value = number_value
+cdef object _number_text = number_text
+cdef dict _CONSTANTS = CONSTANTS
+cdef dict _OPERATOR_TEXT = OPERATOR_TEXT
 cdef Py_UCS4 _END = 0x110000  # what _at reads past the end of the text
+cdef Py_UCS4 _QUOTE = PLAIN_QUOTE
+cdef tuple _BLANK_LINE = ("",)  # an entry's comments when a blank line is above it
+
+# -- character classes, from the lexer's definitions --------------------------------
+cdef enum:
+    C_SPACE = 1
+    C_NEWLINE = 2
+    C_DIGIT = 4
+    C_NAME_START = 8
+    C_NAME = 16
+    C_QUOTE = 32
+    C_BRACKET = 64
+    C_ESCAPE = 128
+    MAX_WIDE = 16
+
+cdef unsigned char _ascii[128]
+cdef Py_UCS4 _wide[MAX_WIDE]  # the few classified characters past ASCII, and theirs
+cdef unsigned char _wide_class[MAX_WIDE]
+cdef int _n_wide = 0
+
+
+cdef void _mark(str chars, unsigned char flag) except *:
+    global _n_wide
+    cdef Py_UCS4 c
+    cdef int k
+    for c in chars:
+        if c < 128:
+            _ascii[c] |= flag
+            continue
+        for k in range(_n_wide):
+            if _wide[k] == c:
+                _wide_class[k] |= flag
+                break
+        else:
+            if _n_wide == MAX_WIDE:
+                raise ValueError("too many non-ASCII characters in the lexer's classes")
+            _wide[_n_wide] = c
+            _wide_class[_n_wide] = flag
+            _n_wide += 1
+
+
+for _chars, _flag in ((SPACE_CHARS, C_SPACE), (NEWLINE, C_NEWLINE), (DIGITS, C_DIGIT),
+                      (NAME_START, C_NAME_START), (NAME_CHARS, C_NAME), (QUOTES, C_QUOTE),
+                      (BRACKETS, C_BRACKET), (ESCAPE, C_ESCAPE)):
+    _mark(_chars, _flag)
+
+
+cdef inline unsigned char _cls(Py_UCS4 c):
+    cdef int k
+    if c < 128:
+        return _ascii[c]
+    for k in range(_n_wide):
+        if _wide[k] == c:
+            return _wide_class[k]
+    return 0
+
 
 # Places, values, entries and blocks are made here without the calls their classes'
 # __new__/__init__ go through (that costs a file like the benchmark's a fifth of its
 # reading time). Each sets every field of its class, as the class would: the tests
-# compare every field of what both scanners make.
+# compare every field of what both paths make.
 cdef object _object_new = object.__new__
 cdef type _Loc = Loc
 
@@ -59,12 +134,12 @@ cdef inline object _value(object kind, object data, object loc, object expr=None
     return v
 
 
-cdef inline object _entry(object key, object value, object loc):
+cdef inline object _entry(object key, object value, object loc, bint blank):
     cdef object e = _object_new(Entry)
     e.key = key
     e.value = value
     e.loc = loc
-    e.comments = ()
+    e.comments = _BLANK_LINE if blank else ()
     e.trailing = ()
     e.included = None
     return e
@@ -76,6 +151,7 @@ cdef inline object _block(object loc):
     b.loc = loc
     b.open_comment = ()
     b.tail_comments = ()
+    b.inline = False
     return b
 
 
@@ -84,20 +160,20 @@ cdef inline Py_UCS4 _at(str text, Py_ssize_t i, Py_ssize_t n):
 
 
 cdef inline bint _space(Py_UCS4 c):
-    """``parser.SPACE``: whitespace other than newline."""
-    return c == u' ' or c == u'\t' or c == u'\r' or c == u'\f' or c == u'\v' or c == 0xfeff
+    """Whitespace other than newline."""
+    return _cls(c) & C_SPACE
 
 
 cdef inline bint _digit(Py_UCS4 c):
-    return u'0' <= c <= u'9'
+    return _cls(c) & C_DIGIT
 
 
 cdef inline bint _name_start(Py_UCS4 c):
-    return u'a' <= c <= u'z' or u'A' <= c <= u'Z' or c == u'_'
+    return _cls(c) & C_NAME_START
 
 
 cdef inline bint _name_char(Py_UCS4 c):
-    return _name_start(c) or _digit(c)
+    return _cls(c) & C_NAME
 
 
 cdef Py_ssize_t _name_end(str text, Py_ssize_t i, Py_ssize_t n):
@@ -107,7 +183,8 @@ cdef Py_ssize_t _name_end(str text, Py_ssize_t i, Py_ssize_t n):
 
 
 cdef Py_ssize_t _number_end(str text, Py_ssize_t i, Py_ssize_t n, bint *flt):
-    """End of the NUMBER lexeme at ``i`` (``lexer.NUMBER_RE``), or -1; ``flt``: not an INT."""
+    """End of the NUMBER lexeme at ``i`` (``lexer.NUMBER_RE`` restated), or -1; ``flt``:
+    not an INT."""
     cdef Py_UCS4 c = _at(text, i, n)
     cdef Py_ssize_t j
     flt[0] = False
@@ -172,7 +249,7 @@ cdef object _operand(list scopes, str text, Py_ssize_t a, Py_ssize_t b, bint num
     if num:
         v = _number(text, a, b, flt)
         if v is not None:
-            texts.append(str(v) if type(v) is int else repr(v))
+            texts.append(_number_text(v))
         return v
     name = text[a:b]
     texts.append(name)
@@ -192,14 +269,20 @@ cdef Py_ssize_t _operand_end(str text, Py_ssize_t i, Py_ssize_t n, bint *num, bi
 cdef object _vector(list scopes, str text, Py_ssize_t n, Py_ssize_t pos, object loc,
                     object path, Py_ssize_t line, Py_ssize_t line_start, bint signs,
                     Py_ssize_t *end, Py_ssize_t *used):
-    """``parser._fast_vector``: the VECTOR from ``pos`` (after ``[``), or None."""
+    """The VECTOR from ``pos`` (after ``[``), or None if an item is not plain.
+
+    Plain items: signed numbers one space apart (split in one pass), else items
+    ``[+-]a`` or ``[+-]a OP b`` written without spaces, where a and b are numbers or
+    known names and OP one of ``* / + -``. None also where an item has a sign and
+    ``signs`` is false (one more nesting level for the token path, which reports it).
+    """
     cdef list items = []
     cdef Py_ssize_t i = pos, a, e, e2, s2 = 0, signs_used = 0
     cdef Py_UCS4 c, sign, op
     cdef bint flt, flt2, num, num2, plain
     cdef double x, y
     cdef list texts
-    # Only numbers, one space apart (``_NUMBERS``)? Check, then read them.
+    # Only numbers, one space apart? Check, then read them.
     plain = _at(text, i, n) == u']'
     while not plain:
         c = _at(text, i, n)
@@ -232,7 +315,7 @@ cdef object _vector(list scopes, str text, Py_ssize_t n, Py_ssize_t pos, object 
         end[0] = i + 1
         used[0] = 3 + len(items) + signs_used
         return _value(VECTOR, items, loc)
-    # One item at a time (``_ITEM``).
+    # One item at a time.
     i = pos
     used[0] = 3
     while True:
@@ -283,8 +366,7 @@ cdef object _vector(list scopes, str text, Py_ssize_t n, Py_ssize_t pos, object 
             items.append(_value(FLOAT, x, at, u''.join(texts)))
             i = e2
             continue
-        texts.append(u' + ' if op == u'+' else u' - ' if op == u'-' else
-                     u'*' if op == u'*' else u'/')
+        texts.append(_OPERATOR_TEXT[op])
         v = _operand(scopes, text, s2, e2, num2, flt2, texts)
         if v is None:
             return None
@@ -309,8 +391,16 @@ cdef object _vector(list scopes, str text, Py_ssize_t n, Py_ssize_t pos, object 
 
 
 def scan_plain(p, cur, Py_ssize_t pos, Py_ssize_t count, list entries, dict scope,
-               list stack):
-    """See ``parser._scan_plain``: the same arguments, effects and result."""
+               list stack, Py_ssize_t ended):
+    """Plain entries from ``pos`` into ``entries``, until one is not plain.
+
+    ``p`` is the parser and ``cur`` its cursor; ``count`` is the token count so far;
+    blocks opened go on ``stack`` (see ``parser.Open``; their scopes on ``p.scopes``)
+    and are closed at their ``}``. ``ended`` is the line the block's last entry or comment ended on (0:
+    none yet), for blank lines. Returns the position and token count after the last
+    entry read, where a ``}`` closing the block being read stands (-1 if reading
+    stopped elsewhere), and ``ended`` then.
+    """
     lexer = cur.lexer
     cdef str text = cur.text
     path = cur.path
@@ -326,8 +416,8 @@ def scan_plain(p, cur, Py_ssize_t pos, Py_ssize_t count, list entries, dict scop
     while True:
         i = pos
         c = _at(text, i, n)
-        while c == u'\n' or _space(c):
-            if c == u'\n':
+        while _cls(c) & (C_NEWLINE | C_SPACE):
+            if _cls(c) & C_NEWLINE:
                 line += 1
                 line_start = i + 1
             i += 1
@@ -340,7 +430,10 @@ def scan_plain(p, cur, Py_ssize_t pos, Py_ssize_t count, list entries, dict scop
                 break
             pos = i + 1
             count += 1
-            entry, entries, scope = stack.pop()
+            entry, entries, scope, block, opened_on = stack.pop()
+            if <Py_ssize_t>opened_on == line:
+                block.inline = True
+            ended = line
             scopes.pop()
             nesting -= 1
             if entry.key == INCLUDE:
@@ -357,14 +450,13 @@ def scan_plain(p, cur, Py_ssize_t pos, Py_ssize_t count, list entries, dict scop
         vpos = i
         used = 2
         number = opened = False
-        if c == u'"':
+        if c == _QUOTE:
             end = i + 1
             c = _at(text, end, n)
-            while not (c == u'"' or c == u'\\' or c == u'\n' or c == 0x201c or c == 0x201d
-                       or c == _END):
+            while not (_cls(c) & (C_QUOTE | C_ESCAPE | C_NEWLINE) or c == _END):
                 end += 1
                 c = _at(text, end, n)
-            if c != u'"':
+            if c != _QUOTE:
                 break
             value = _value(STRING, text[vpos + 1:end],
                           _loc(path, line, vpos + 1 - line_start))
@@ -375,12 +467,12 @@ def scan_plain(p, cur, Py_ssize_t pos, Py_ssize_t count, list entries, dict scop
                 break
             k = end
             c = _at(text, k, n)
-            while c == u'\n' or _space(c):
+            while _cls(c) & (C_NEWLINE | C_SPACE):
                 k += 1
                 c = _at(text, k, n)
-            if not (k == n or _name_char(c) or c == u'[' or c == u']' or c == u'('
-                    or c == u')' or c == u'{' or c == u'}' or c == u',' or c == u'"'
-                    or c == 0x201c or c == 0x201d
+            # What may follow a plain number: a lexeme that is not an operator, a
+            # comment or a bad character (else it is part of an expression or an error).
+            if not (k == n or _cls(c) & (C_NAME | C_BRACKET | C_QUOTE)
                     or (c == u'.' and _digit(_at(text, k + 1, n)))):
                 break
             lit = _number(text, vpos, end, flt)
@@ -409,17 +501,21 @@ def scan_plain(p, cur, Py_ssize_t pos, Py_ssize_t count, list entries, dict scop
         count += used
         pos = end
         key = text[at:key_end]
-        entry = _entry(key, value, _loc(path, line, at - line_start + 1))
+        entry = _entry(key, value, _loc(path, line, at - line_start + 1),
+                       ended and line > ended + 1)
         entries.append(entry)
+        ended = line
         if number:
             scope[key] = lit
         if opened:
-            stack.append((entry, entries, scope))
-            entries = value.data.entries
+            block = value.data
+            stack.append((entry, entries, scope, block, line))
+            entries = block.entries
             scope = {}
             scopes.append(scope)
             nesting += 1
+            ended = 0
         elif key == INCLUDE:
             entry.included = p._include(value, cur)
     cur.nesting = nesting
-    return pos, count, close
+    return pos, count, close, ended

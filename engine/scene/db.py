@@ -52,7 +52,8 @@ class Value:
 class Entry:
     """``key value`` with its place, the comments above it and a trailing comment.
 
-    Comments default to a shared empty tuple: a large file has few, and a list per
+    An empty string among ``comments`` is a blank line the author left there. Comments
+    default to a shared empty tuple: a large file has few, and a list per
     entry would be most of what reading it allocates. Give a new sequence to change them.
     """
 
@@ -66,12 +67,16 @@ class Entry:
 
 @dataclass(slots=True, eq=False)
 class Block:
-    """A STRUCTURE (or a whole file): ordered entries, repeated keys allowed."""
+    """A STRUCTURE (or a whole file): ordered entries, repeated keys allowed.
+
+    ``inline``: its ``{`` and ``}`` were on one line (the writer keeps a short one so).
+    """
 
     entries: list[Entry] = field(default_factory=list)
     loc: Loc = field(default_factory=lambda: Loc("", 1, 1))
     open_comment: Sequence[str] = ()
     tail_comments: Sequence[str] = ()
+    inline: bool = False
 
     def __iter__(self) -> Iterator[Entry]:
         """Entries in order, with included files' entries spliced in place."""

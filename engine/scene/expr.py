@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from engine.scene.diagnostics import Loc, suggest
+from engine.scene.diagnostics import Loc, quoted, suggest
 from engine.scene.lexer import EOF, IDENT, NUMBER, PUNCT, Lexer, Token
 
 CONSTANTS = {"pi": math.pi, "e": math.e}
@@ -52,30 +52,30 @@ def _rand_int(rng: np.random.Generator, a: float, b: float) -> float:
     return float(rng.integers(lo, hi + 1)) if lo <= hi else float(lo)
 
 
-#: name -> (arity or None for 1+ arguments, function, draws from the rng)
-FUNCTIONS: dict[str, tuple[int | None, Callable[..., float], bool]] = {
-    "randInterval": (2, _rand_interval, True),
-    "randNormal": (2, _rand_normal, True),
-    "randInt": (2, _rand_int, True),
-    "sin": (1, math.sin, False),
-    "cos": (1, math.cos, False),
-    "tan": (1, math.tan, False),
-    "asin": (1, math.asin, False),
-    "acos": (1, math.acos, False),
-    "atan": (1, math.atan, False),
-    "atan2": (2, math.atan2, False),
-    "sqrt": (1, math.sqrt, False),
-    "abs": (1, abs, False),
-    "exp": (1, math.exp, False),
-    "log": (1, math.log, False),
-    "floor": (1, lambda x: float(math.floor(x)), False),
-    "ceil": (1, lambda x: float(math.ceil(x)), False),
-    "round": (1, lambda x: float(round(x)), False),
-    "deg": (1, math.degrees, False),
-    "rad": (1, math.radians, False),
-    "min": (None, min, False),
-    "max": (None, max, False),
-    "clamp": (3, lambda x, lo, hi: min(max(x, lo), hi), False),
+#: name -> (fewest arguments, most (None: no limit), function, draws from the rng)
+FUNCTIONS: dict[str, tuple[int, int | None, Callable[..., float], bool]] = {
+    "randInterval": (2, 2, _rand_interval, True),
+    "randNormal": (2, 2, _rand_normal, True),
+    "randInt": (2, 2, _rand_int, True),
+    "sin": (1, 1, math.sin, False),
+    "cos": (1, 1, math.cos, False),
+    "tan": (1, 1, math.tan, False),
+    "asin": (1, 1, math.asin, False),
+    "acos": (1, 1, math.acos, False),
+    "atan": (1, 1, math.atan, False),
+    "atan2": (2, 2, math.atan2, False),
+    "sqrt": (1, 1, math.sqrt, False),
+    "abs": (1, 1, abs, False),
+    "exp": (1, 1, math.exp, False),
+    "log": (1, 1, math.log, False),
+    "floor": (1, 1, lambda x: float(math.floor(x)), False),
+    "ceil": (1, 1, lambda x: float(math.ceil(x)), False),
+    "round": (1, 1, lambda x: float(round(x)), False),
+    "deg": (1, 1, math.degrees, False),
+    "rad": (1, 1, math.radians, False),
+    "min": (2, None, min, False),
+    "max": (2, None, max, False),
+    "clamp": (3, 3, lambda x, lo, hi: min(max(x, lo), hi), False),
 }
 
 
@@ -176,7 +176,7 @@ class NestingError(ExprError):
 def describe(t: Token) -> str:
     if t.kind == EOF:
         return "end of file"
-    return f"'{t.text}'" if len(t.text) <= 20 else f"'{t.text[:20]}...'"
+    return f"'{quoted(t.text, 20)}'"
 
 
 def parse_expression(cur: Cursor, in_vector: bool = False) -> Node:
@@ -303,9 +303,11 @@ def literal(node: Node) -> int | float | None:
     return None
 
 
-def evaluate(node: Node, lookup: Callable[[str], float | None], names: Callable[[], list[str]],
-             rng: np.random.Generator) -> float:
-    """Evaluate ``node``; ``lookup`` resolves variables. Raises ExprError with a location."""
+def evaluate(node: Node, lookup: Callable[[str], float | None],
+             names: Callable[[Loc], list[str]], rng: np.random.Generator) -> float:
+    """Evaluate ``node``; ``lookup`` resolves variables and ``names`` lists them for a
+    "did you mean" at a place (empty where no hint is wanted). Raises ExprError with a
+    location."""
     try:
         value = _eval(node, lookup, names, rng)
     except (OverflowError, ZeroDivisionError, ValueError) as exc:
@@ -359,21 +361,25 @@ def _eval(node: Node, lookup, names, rng) -> float:
         if v is None:
             v = CONSTANTS.get(node.name)
         if v is None:
-            hint = suggest(node.name, [*names(), *CONSTANTS, *FUNCTIONS])
+            hint = suggest(node.name, [*names(node.loc), *CONSTANTS, *FUNCTIONS])
             if not hint and node.name[:1].isalpha():
-                hint = f' (a string needs quotes: "{node.name}")'
-            raise ExprError(node.loc, f"unknown variable '{node.name}'{hint}")
+                hint = f' (a string needs quotes: "{quoted(node.name)}")'
+            raise ExprError(node.loc, f"unknown variable '{quoted(node.name)}'{hint}")
         return float(v)
     assert isinstance(node, Call)
-    arity, fn, random = FUNCTIONS[node.name]
-    if arity is not None and len(node.args) != arity:
-        raise ExprError(node.loc, f"{node.name}() takes {arity} argument"
-                                  f"{'s' if arity != 1 else ''}, got {len(node.args)}")
+    fewest, most, fn, random = FUNCTIONS[node.name]
+    given = len(node.args)
+    if given < fewest or (most is not None and given > most):
+        takes = (f"at least {fewest} arguments" if most is None else
+                 f"{fewest} argument{'s' if fewest != 1 else ''}")
+        raise ExprError(node.loc, f"{node.name}() takes {takes}, got {given}")
     args = [_eval(a, lookup, names, rng) for a in node.args]
     return float(fn(rng, *args) if random else fn(*args))
 
 
 _PREC = {"+": 1, "-": 1, "*": 2, "/": 2, "^": 4}
+#: How :func:`unparse` writes each binary operator (spaced when it binds loosest).
+OPERATOR_TEXT = {op: f" {op} " if p == 1 else op for op, p in _PREC.items()}
 
 
 def _prec(node: Node) -> int:
@@ -403,5 +409,4 @@ def unparse(node: Node) -> str:
         left = f"({left})"
     if right_paren:
         right = f"({right})"
-    sep = f" {node.op} " if p == 1 else node.op
-    return f"{left}{sep}{right}"
+    return f"{left}{OPERATOR_TEXT[node.op]}{right}"

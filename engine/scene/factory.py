@@ -24,6 +24,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+import engine.scene.random_state as random_state
+import engine.scene.schema as sc
 from components import (
     Camera,
     Controller,
@@ -41,12 +43,12 @@ from components import (
     Visual,
 )
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
+from components.script import SavedScript, ScriptHandler, ScriptTimer
 from engine.assets import AssetError, Assets, nodes_name
 from engine.assets.geometry import convex_hull
 from engine.physics.backend import MaterialPair, SleepState, WorldSettings
 from engine.physics.commands import SetSleepState
-from engine.rotation import euler_to_quat, rotate
-from engine.scene import schema as sc
+from engine.rotation import euler_to_quat, rotate, view_problem
 from engine.scene.db import (
     INCLUDE,
     STRINGVECTOR,
@@ -57,7 +59,14 @@ from engine.scene.db import (
     SceneDB,
     Value,
 )
-from engine.scene.diagnostics import ERROR, Diagnostic, Loc, Reporter, sorted_diagnostics
+from engine.scene.diagnostics import (
+    ERROR,
+    WARNING,
+    Diagnostic,
+    Loc,
+    Reporter,
+)
+from engine.scene.inputs import InputSpec, read_inputs
 from engine.scene.parser import paused_gc
 
 if TYPE_CHECKING:
@@ -119,6 +128,8 @@ class SceneSpec:
     time_step: float = 0.01
     backend: str = "ode"
     time: float = 0.0
+    #: The scene's random generator when a saved state was written (see random_state).
+    random_state: dict[str, object] | None = None
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
     #: Object ID -> auto-sleep state a saved state carries (see :class:`SleepState`).
     sleep: dict[str, SleepState] = field(default_factory=dict)
@@ -128,6 +139,8 @@ class SceneSpec:
     problems: list[Diagnostic] = field(default_factory=list)
     #: The files this spec read; instantiate makes it the engine's Assets resource.
     assets: Assets | None = None
+    #: The ``Input`` and ``Output`` blocks (devices, calibration, published values).
+    input: InputSpec = field(default_factory=InputSpec)
 
 
 @dataclass(slots=True)
@@ -263,7 +276,7 @@ def build_specs(db: SceneDB, content_dir: str | Path | None = None,
     b.report.raise_if_errors()
     spec.db = db
     spec.content_dir = folder
-    spec.problems = sorted_diagnostics(b.problems)
+    spec.problems = Reporter(b.problems).diagnostics
     spec.assets = b.assets
     return spec
 
@@ -280,10 +293,14 @@ class _Builder:
         self.poses: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
         self.physical_ids: set[str] = set()
         self.sleep: dict[str, SleepState] = {}
+        #: Owner -> the saved state its script resumes from, and the block that said so.
+        self.script_states: dict[str, SavedScript] = {}
+        self.script_blocks: dict[str, Block] = {}
 
     def build(self, db: SceneDB) -> SceneSpec:
         spec = SceneSpec()
         root = _Index(db.root)
+        self.script_states = self.saved_scripts(root)
         for blk in root.blocks("Material"):
             r = _Reader(blk, "Material")
             name = str(r("ID"))
@@ -306,6 +323,7 @@ class _Builder:
         self.shaders(root, spec)
         self.world(root, spec)
         self.scene_entities(root, spec)
+        spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
         return spec
 
     # -- assets --------------------------------------------------------------
@@ -382,7 +400,7 @@ class _Builder:
             if self.sound_file(sr, "File", f"object '{oid}' has no sound") is not None:
                 comps.append(_sound(sr, oid))
         if r.has("Script"):
-            comps.append(Script(file=r("Script")))
+            comps.append(Script(file=r("Script"), saved=self.script_states.pop(oid, None)))
         if r.has("Hand"):
             h = _Reader(r.value("Hand").data, "Hand")
             comps.append(Hand(tracker=h("Tracker"), max_force=float(h("MaxForce")),
@@ -584,6 +602,11 @@ class _Builder:
         spec.time_step = float(w("TimeStep"))
         spec.backend = w("Dynamics")
         spec.time = float(w("Time"))
+        if w("RandomState") is not None:
+            try:
+                spec.random_state = random_state.parse(str(w("RandomState")))
+            except ValueError as exc:
+                self.report.error(w.value("RandomState").loc, str(exc))
 
     def scene_entities(self, root: _Index, spec: SceneSpec) -> None:
         for i, b in enumerate(root.blocks("Camera")):
@@ -596,6 +619,7 @@ class _Builder:
                     f"camera '{cid}' follows nothing: object '{r('Follow')}' was left out"))
             elif r.has("Follow"):
                 spec.camera_follow[cid] = r("Follow")
+            self.camera_view(r, cid, b)
             cam = Camera(fov=float(r("Fov")), near=float(r("Near")), far=float(r("Far")),
                          active=bool(r("Active")), offset=_floats(r("Offset")),
                          look_at=_floats(r("LookAt")),
@@ -625,8 +649,44 @@ class _Builder:
             spec.entities.append(EntitySpec(cid, [Name(cid), _controller(r)], b.loc))
         for i, e in enumerate(root.get_all("Script")):
             sid = f"script{i}"
-            spec.entities.append(EntitySpec(sid, [Name(sid), Script(file=e.value.data)],
-                                            e.loc))
+            script = Script(file=e.value.data, saved=self.script_states.pop(sid, None))
+            spec.entities.append(EntitySpec(sid, [Name(sid), script], e.loc))
+        for owner, block in self.script_blocks.items():
+            if owner in self.script_states:  # its owner runs no script (or was left out)
+                self.problems.append(Diagnostic(
+                    block.loc.path, block.loc.line, block.loc.col, WARNING,
+                    f"ScriptState for {owner!r}, which runs no script here; ignored"))
+
+    def camera_view(self, r: _Reader, cid: str, blk: Block) -> None:
+        """Warn about a camera with no well-defined view direction (the picture and the
+        3D sound listener follow it): LookAt at its eye, or straight along Z."""
+        if r.has("Follow"):  # LookAt and Offset are in the followed object's frame
+            if not r.has("LookAt"):
+                return  # it takes the object's orientation
+            eye = r("Offset")
+        else:
+            eye = r("Position")
+        problem = view_problem(np.subtract(r("LookAt"), eye))
+        if problem is not None:
+            where = (r.value("LookAt") or r.value("Position") or blk).loc
+            self.problems.append(Diagnostic(
+                where.path, where.line, where.col, WARNING,
+                f"camera '{cid}': {problem}; the view is meaningless and 3D sound unpanned: "
+                "move its LookAt (or Position) so it looks across, not along, Z"))
+
+    def saved_scripts(self, root: _Index) -> dict[str, SavedScript]:
+        """Owner -> the saved state its script resumes from (a loaded saved state)."""
+        states: dict[str, SavedScript] = {}
+        for blk in root.blocks("ScriptState"):
+            r = _Reader(blk, "ScriptState")
+            timers = tuple(ScriptTimer(str(t("Function")), float(t("Due")), float(t("Period")))
+                           for t in (_Reader(b, "ScriptTimer") for b in r.blocks("Timer")))
+            handlers = tuple(ScriptHandler(str(h("Event")), str(h("Function")))
+                             for h in (_Reader(b, "ScriptHandler") for b in r.blocks("Handler")))
+            owner = str(r("Owner"))
+            states[owner] = SavedScript(str(r("Globals")), str(r("Locals")), timers, handlers)
+            self.script_blocks[owner] = blk
+        return states
 
 
 def _opt(v: Any) -> float | None:
@@ -738,6 +798,8 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
                 assets.adopt(spec.assets)
                 spec.assets = assets
         engine.insert_resource(spec.world)
-        # a saved state continues at the time it was saved
+        # a saved state continues at the time it was saved, its generator where it stood
         engine.time = engine.physics.time = spec.time
+        if spec.random_state is not None:
+            engine.rng.bit_generator.state = spec.random_state
     return ids

@@ -1,10 +1,12 @@
 """Lexer: scene text -> tokens and comments, each with line and column.
 
-One compiled regular expression scans a lexeme at a time, on demand: the parser
-reads plain entries straight from the text (see ``parser.FAST``) and asks for
-tokens only where the text needs the general grammar, so a 10,000-object file
-reads in a fraction of a second. Bad characters and unterminated strings or
-comments are reported and skipped, so one pass finds every lexical mistake.
+The grammar's lexical classes are defined here once (``SPACE_CHARS`` ...
+``NUMBER_RE``); one regular expression built from them scans a lexeme at a time, on
+demand: the parser reads plain entries straight from the text with the compiled
+scanner (``engine/scene/_scan.pyx``, whose character table comes from the same
+definitions) and asks for tokens only where the text needs the general grammar.
+Bad characters and unterminated strings or comments are reported and skipped, so
+one pass finds every lexical mistake; a run of bad characters is one error.
 Typographic quotes (as printed in the paper's listings) are accepted as string
 delimiters with a warning.
 """
@@ -12,6 +14,7 @@ delimiters with a warning.
 from __future__ import annotations
 
 import re
+import string
 from bisect import bisect_right
 from dataclasses import dataclass
 
@@ -24,16 +27,43 @@ IDENT = "IDENT"
 PUNCT = "PUNCT"
 EOF = "EOF"
 
-QUOTES = "\"\u201c\u201d"
-_ESCAPES = {"n": "\n", "t": "\t", "r": "\r"}
+# -- the grammar's lexical definitions, written once -------------------------------
+# The lexer's regular expression below is built from these, and the compiled scanner
+# (engine/scene/_scan.pyx) builds its character table from them at import.
 
-#: Whitespace other than newline, as the body of a regular-expression class (the parser's
-#: fast path uses the same set).
-SPACE = r" \t\r\f\v\ufeff"
-#: A NUMBER lexeme and a name as atomic regular expressions (never shortened to let a
-#: longer pattern match), shared with the parser's fast path.
-NUMBER_RE = r"(?>(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)"
-NAME_RE = r"[A-Za-z_][A-Za-z0-9_]*+"
+#: Whitespace other than the newline (which also ends a line comment and a string).
+SPACE_CHARS = " \t\r\f\v\ufeff"
+NEWLINE = "\n"
+DIGITS = "0123456789"
+NAME_START = string.ascii_letters + "_"
+NAME_CHARS = NAME_START + DIGITS
+#: String delimiters: the plain quote and the typographic ones of the paper's listings
+#: (accepted with a warning).
+PLAIN_QUOTE = '"'
+QUOTES = PLAIN_QUOTE + "\u201c\u201d"
+#: Inside a string, a backslash makes the next character literal (see :func:`decode_string`).
+ESCAPE = "\\"
+OPERATORS = "+-*/^"
+#: Punctuation that is neither an operator nor the start of a comment.
+BRACKETS = "[]{}(),"
+
+
+def char_class(chars: str) -> str:
+    """``chars`` as the body of a regular-expression character class."""
+    return "".join(re.escape(c) for c in chars)
+
+
+_D = f"[{char_class(DIGITS)}]"
+#: A NUMBER lexeme as an atomic regular expression (never shortened to let a longer pattern
+#: match): digits with an optional fraction, or a fraction alone, then an optional exponent.
+#: It is an INT without '.' or exponent (see ``expr.number_value``).
+NUMBER_RE = rf"(?>(?:{_D}+\.?{_D}*|\.{_D}+)(?:[eE][+-]?{_D}+)?)"
+SPACE = char_class(SPACE_CHARS)
+NAME_RE = f"[{char_class(NAME_START)}][{char_class(NAME_CHARS)}]*+"
+_Q = char_class(QUOTES)
+#: Characters a lexeme may start with ('.' only before a digit); any other run of
+#: characters is one "unexpected characters" error, however long.
+_STARTS = char_class(SPACE_CHARS + NEWLINE + NAME_CHARS + QUOTES + OPERATORS + BRACKETS)
 
 #: Whitespace, then one lexeme; the kind of a lexeme follows from its first characters.
 _TOKEN_RE = re.compile(
@@ -42,23 +72,24 @@ _TOKEN_RE = re.compile(
     (
       {NUMBER_RE}
     | {NAME_RE}
-    | [\[\]{{}}(),+\-*^]
-    | ["\u201c\u201d](?:[^"\u201c\u201d\\\n]|\\.)*["\u201c\u201d]
+    | [{char_class(BRACKETS + OPERATORS.replace("/", ""))}]
+    | [{_Q}](?:[^{_Q}\\\n]|\\[^\n])*[{_Q}]
     | //[^\n]*
     | /\*.*?\*/
     | /\*.*
     | /
-    | ["\u201c\u201d][^\n]*
-    | .
+    | [{_Q}][^\n]*
+    | (?:[^{_STARTS}.]|\.(?!{_D}))+
     | \Z
     )
     """,
     re.VERBOSE | re.DOTALL,
 )
-_NEWLINE = re.compile("\n")
-_PUNCT_CHARS = frozenset("[]{}(),+-*^/")
-_DIGITS = frozenset("0123456789")
-_IDENT_START = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_")
+_ESCAPES = {"n": "\n", "t": "\t", "r": "\r"}
+_NEWLINE = re.compile(NEWLINE)
+_PUNCT_CHARS = frozenset(BRACKETS + OPERATORS)
+_DIGITS = frozenset(DIGITS)
+_IDENT_START = frozenset(NAME_START)
 _QUOTE_CHARS = frozenset(QUOTES)
 
 
@@ -152,9 +183,13 @@ class Lexer:
         self._skipped = False
 
     def finish(self) -> None:
-        """Scan to the end, reporting every remaining lexical problem."""
+        """Scan to the end, reporting every remaining lexical problem (the parse is over:
+        the tokens and comments are not kept)."""
+        tokens, comments = self.tokens, self.comments
         while not self.done:
             self.next_token()
+            del tokens[:-1]
+            comments.clear()
 
     def next_token(self) -> Token:
         """Scan the next token (EOF at the end or past the limit) and append it."""
@@ -183,13 +218,13 @@ class Lexer:
             first = lexeme[:1]
             if first in _IDENT_START:
                 token = Token(IDENT, lexeme, None, line, col, start, space)
-            elif first in _DIGITS or (first == "." and len(lexeme) > 1):
+            elif first in _DIGITS or (first == "." and lexeme[1:2] in _DIGITS):
                 token = Token(NUMBER, lexeme, None, line, col, start, space)
             elif first in _PUNCT_CHARS and (first != "/" or lexeme == "/"):
                 token = Token(PUNCT, lexeme, None, line, col, start, space)
             elif first in _QUOTE_CHARS:
                 if len(lexeme) > 1 and lexeme[-1] in _QUOTE_CHARS and _closed(lexeme):
-                    if not self._warned_quotes and (first != '"' or lexeme[-1] != '"'):
+                    if not self._warned_quotes and first + lexeme[-1] != PLAIN_QUOTE * 2:
                         self._warned_quotes = True
                         report.warning(Loc(path, line, col),
                                        "typographic quotes (\u201c \u201d) used as string "
@@ -214,7 +249,7 @@ class Lexer:
             elif not lexeme:
                 token = Token(EOF, "", None, line, len(text) - line_start + 1, len(text), True)
             else:
-                report.error(Loc(path, line, col), f"unexpected character {lexeme!r}")
+                report.error(Loc(path, line, col), _unexpected(lexeme))
                 space = True
         self.pos, self.line, self.line_start = pos, line, line_start
         self._space = False
@@ -231,6 +266,14 @@ class Lexer:
                 self.done = True
         tokens.append(token)
         return token
+
+
+def _unexpected(run: str) -> str:
+    """One message for a run of characters no lexeme starts with (one error, not one each)."""
+    if len(run) == 1:
+        return f"unexpected character {run!r}"
+    shown = repr(run) if len(run) <= 20 else repr(run[:20] + "...")
+    return f"unexpected characters {shown} ({len(run)} in a row)"
 
 
 def _closed(lexeme: str) -> bool:

@@ -12,9 +12,11 @@ from pathlib import Path
 import numpy as np
 
 from engine.scene.db import SceneDB
-from engine.scene.diagnostics import Diagnostic, Reporter, SceneError, sorted_diagnostics
+from engine.scene.diagnostics import Diagnostic, Report, Reporter, SceneError
 from engine.scene.factory import Pose, SceneSpec, build_specs
 from engine.scene.parser import Limits, parse_file, parse_text, paused_gc
+from engine.scene.paths import FOLDER, NOT_FOUND, file_problem, shown
+from engine.scene.snapshot import content_folder
 from engine.scene.validate import validate
 from engine.scene.writer import write
 
@@ -24,12 +26,21 @@ MAIN_SCENE = "main.scene"
 def scene_path(path: str | Path) -> Path:
     """The scene file a PATH names (a content folder means its main.scene)."""
     p = Path(path)
-    return p / MAIN_SCENE if p.is_dir() else p
+    return p / MAIN_SCENE if file_problem(p) == FOLDER else p
 
 
-def _missing(path: Path) -> SceneError:
-    what = "content folder has no main.scene" if path.name == MAIN_SCENE else "no such file"
-    return SceneError([Diagnostic(str(path), 1, 1, "error", f"{what}: {path}")])
+def _unreadable(path: Path) -> SceneError | None:
+    """The error for a scene file that cannot be read, or None when it can."""
+    problem = file_problem(path)
+    if problem is None:
+        return None
+    if problem != NOT_FOUND:
+        message = f"cannot read {shown(path)}: {problem}"
+    elif path.name == MAIN_SCENE:
+        message = f"content folder has no main.scene: {shown(path)}"
+    else:
+        message = f"no such file: {shown(path)}"
+    return SceneError([Diagnostic(str(path), 1, 1, "error", message)])
 
 
 def validated(db: SceneDB, content_dir: Path | None = None,
@@ -45,23 +56,32 @@ def validated(db: SceneDB, content_dir: Path | None = None,
         left_out = expand_models(db, folder, report, known)
         validate(db, folder, report, known)
     report.raise_if_errors()
-    db.warnings = sorted_diagnostics([*report.diagnostics, *left_out])
+    db.warnings = [*report.diagnostics, *left_out]
     return db
 
 
 def load_scene(path: str | Path, rng: np.random.Generator | None = None,
                limits: Limits | None = None) -> SceneDB:
     """Parse and validate a scene file or content folder. Raises SceneError."""
-    target = scene_path(path)
-    if not target.is_file():
-        raise _missing(target)
-    return validated(parse_file(target, rng, limits))
+    return _with_folder(path, rng, limits)[0]
 
 
 def load_spec(path: str | Path, rng: np.random.Generator | None = None) -> SceneSpec:
     """Parse, validate and build specs (models loaded), ready to instantiate. Raises SceneError."""
-    db = load_scene(path, rng)
-    return build_specs(db, Path(db.path).parent)
+    return build_specs(*_with_folder(path, rng))
+
+
+def _with_folder(path: str | Path, rng: np.random.Generator | None,
+                 limits: Limits | None = None) -> tuple[SceneDB, Path]:
+    """The checked scene and the folder its file names are relative to (a saved state's
+    content folder, else the file's own). Raises SceneError."""
+    target = scene_path(path)
+    unreadable = _unreadable(target)
+    if unreadable is not None:
+        raise unreadable
+    db = parse_file(target, rng, limits)
+    folder = content_folder(db)
+    return validated(db, folder), folder
 
 
 def spec_from_text(text: str, content_dir: str | Path, rng: np.random.Generator | None = None,
@@ -88,23 +108,26 @@ def spec_from_text(text: str, content_dir: str | Path, rng: np.random.Generator 
                        scene.assets if scene is not None else None)
 
 
-def check(path: str | Path, rng: np.random.Generator | None = None) -> list[Diagnostic]:
-    """Every error and warning of a scene (parse, schema, references, assets, models)."""
+def check(path: str | Path, rng: np.random.Generator | None = None) -> Report:
+    """Every error and warning of a scene (parse, schema, references, assets, models),
+    with the texts read, so the report renders without reading a file again."""
     try:
-        spec_db = load_scene(path, rng)
-        spec = build_specs(spec_db, Path(spec_db.path).parent)
+        db, folder = _with_folder(path, rng)
+        spec = build_specs(db, folder)
     except SceneError as exc:
-        return exc.diagnostics
+        return Report(exc.diagnostics, exc.sources)
     except RecursionError:  # the limits should make this unreachable; never crash a check
-        return [Diagnostic(str(path), 1, 1, "error", "scene is nested too deeply to read")]
-    return sorted_diagnostics([*spec_db.warnings, *spec.problems])
+        return Report([Diagnostic(str(path), 1, 1, "error",
+                                  "scene is nested too deeply to read")])
+    return Report(Reporter([*db.warnings, *spec.problems]).diagnostics, db.sources)
 
 
 def format_scene(path: str | Path) -> str:
     """Canonical text of a scene file (comments kept, includes not inlined). Raises SceneError."""
     target = scene_path(path)
-    if not target.is_file():
-        raise _missing(target)
+    unreadable = _unreadable(target)
+    if unreadable is not None:
+        raise unreadable
     return write(parse_file(target))
 
 

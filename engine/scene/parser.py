@@ -1,44 +1,47 @@
 """Parser: tokens -> SceneDB, evaluating expressions as it goes.
 
-Grammar::
+Grammar (the lexical classes are defined once, in :mod:`engine.scene.lexer`)::
 
     file   := entry*
     entry  := KEY value
     value  := STRING | '{' entry* '}' | '[' item* ']' | expression
     item   := STRING | expression
 
-Errors do not stop the pass: the parser reports, skips to the next line that
-starts with a key, and carries on, so one run lists every mistake. Limits on
-file size, token count and nesting depth turn hostile or broken input into a
-clear message instead of a crash. ``Include "file"`` splices another file in
-place (relative to the including file; cycles are errors).
+This recursive-descent parser over the lexer's tokens is the reference: it reads
+every file. Errors do not stop the pass: the parser reports, skips to the next line
+that starts with a key, and carries on, so one run lists every mistake. Limits on
+file size, token count and nesting depth turn hostile or broken input into a clear
+message instead of a crash. ``Include "file"`` splices another file in place
+(relative to the including file; cycles are errors).
 
 Speed: most entries of a real file are plain (``KEY "text"``, ``KEY 1.5``,
-``KEY [1 2 3]``, ``KEY {`` ... ``}`` on tidy lines). Those are read straight
-from the text with a few compiled regular expressions (``FAST``), several
-tokens per match and no Token objects; the token path (lexer + recursive
-descent) reads everything else, and both give exactly the same SceneDB, places,
-diagnostics and token count. That reads a 10,000-object file three times faster.
-Built with Cython (``setup.py build_ext``), ``engine/scene/_scan.pyx`` replaces
-that regex scanner (:func:`_scan_plain`) with one reading a character at a time,
-about 2.5 times faster again; without the extension the regex scanner is used.
+``KEY [1 2 3]``, ``KEY {`` ... ``}`` on tidy lines). The one fast path, the compiled
+scanner ``engine/scene/_scan.pyx`` (built by ``tools/dev setup``), reads those
+straight from the text, a character at a time and without tokens, and hands back
+to the token path wherever the text is not plain; it makes exactly the SceneDB,
+places, diagnostics and token count the token path would (a property test over
+generated and mutated scenes checks it), and reads a 10,000-object file about
+seven times faster. Without the extension every entry takes the token path.
+
+Layout the writer keeps (``colosseum fmt``): a blank line between two entries or
+comments is an empty string among the next one's ``comments`` (a run of blank lines
+counts once; blank lines first or last in a block are dropped), and a block whose
+``{`` and ``}`` are on one line is marked :attr:`~engine.scene.db.Block.inline`.
 """
 
 from __future__ import annotations
 
 import gc
 import os
-import re
 from bisect import bisect_right
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
-from math import isfinite
 from pathlib import Path
 
 import numpy as np
 
-from engine.scene import expr as ex
+import engine.scene.expr as ex
 from engine.scene.db import (
     FLOAT,
     INCLUDE,
@@ -52,50 +55,25 @@ from engine.scene.db import (
     SceneDB,
     Value,
 )
-from engine.scene.diagnostics import Loc, Reporter, sorted_diagnostics
-from engine.scene.lexer import (
-    EOF,
-    IDENT,
-    NAME_RE,
-    NUMBER,
-    NUMBER_RE,
-    PUNCT,
-    SPACE,
-    Comment,
-    Lexer,
-    Token,
-)
+from engine.scene.diagnostics import Loc, Reporter, quoted
+from engine.scene.lexer import EOF, IDENT, NUMBER, OPERATORS, PUNCT, Comment, Lexer, Token
 from engine.scene.lexer import STRING as T_STRING
+from engine.scene.paths import NOT_FOUND, file_problem, resolved, shown
 
-_OPERATORS = frozenset("+-*/^")
-_new = tuple.__new__  # Loc(...) without NamedTuple's Python-level __new__ (hot path)
-
-#: A plain entry read straight from the text, without tokens: ``KEY "string"``,
-#: ``KEY number`` (followed by a lexeme that is not an operator, a comment or a bad
-#: character, which the lexer would skip), ``KEY [`` (items: ``_ITEM``) or
-#: ``KEY {`` on one line; or a closing ``}``. Group :attr:`~re.Match.lastindex`
-#: tells which. Anything else (comments, expressions, errors) takes the token path.
-FAST = re.compile(
-    rf"""[{SPACE}\n]*+(?:
-    ({NAME_RE})[{SPACE}]*+(?:
-        "([^"\\\n\u201c\u201d]*+)"
-      | ({NUMBER_RE})(?=[{SPACE}\n]*+(?:[A-Za-z_0-9\[\](){{}},"\u201c\u201d]|\.[0-9]|\Z))
-      | (\{{)
-      | (\[))
-    | (\}}))""", re.VERBOSE)
-_STRING, _NUMBER, _OPEN, _VECTOR, _CLOSE = 2, 3, 4, 5, 6
-
-#: A vector's items when all are numbers (optionally signed) one space apart, then ``]``.
-_NUMBERS = re.compile(rf"((?:[+-]?{NUMBER_RE} )*+[+-]?{NUMBER_RE})?\]")
-
-#: One vector item read from the text: a signed number, or an optionally signed number or
-#: name with at most one operator and operand, written without spaces; or the closing ``]``.
-_ITEM = re.compile(
-    rf"""[{SPACE}]*+(?:
-    (\])
-  | ([+-]?)(?:({NUMBER_RE})|({NAME_RE}))
-    (?:([*/+-])(?:({NUMBER_RE})|({NAME_RE})))?
-    (?=[{SPACE}\]]))""", re.VERBOSE)
+#: A block opened by the scanner and not closed yet: (its entry, the parent's entries, the
+#: parent's scope, the block, the line of its '{').
+Open = tuple[Entry, list[Entry], dict[str, float], Block, int]
+#: The fast path's signature: (parser, cursor, pos, token count, entries, scope, open blocks,
+#: line the last item ended on or 0) -> (pos, token count, closing '}' or -1, last line).
+ScanPlain = Callable[["Parser", "_FileCursor", int, int, list[Entry], dict[str, float],
+                      list[Open], int], tuple[int, int, int, int]]
+#: The plain-entry scanner in use; None reads everything with the token path (the reference).
+scan_plain: ScanPlain | None
+try:  # the compiled scanner, when built (tools/dev setup)
+    from engine.scene._scan import scan_plain
+except ImportError:  # not built: the token path reads every entry
+    scan_plain = None
+_BLANK = ""  # a blank line, among an entry's comments
 
 
 @dataclass(frozen=True, slots=True)
@@ -121,10 +99,18 @@ class _FileCursor(ex.Cursor):
             self.ci += 1
         return self.comments[start:self.ci]
 
+    def forget(self) -> None:
+        """Drop the tokens and comments read (all but the last token): between entries
+        nothing looks further back, and a long file must not keep millions of them."""
+        if self.i > 1:
+            del self.tokens[:self.i - 1]
+            self.i = 1
+        del self.comments[:self.ci]
+        self.ci = 0
+
 
 _CLOSED = -1  # what Parser._plain returns after the block's closing '}'
-#: A block opened by the scanner and not closed yet: (entry, parent's entries, parent's scope).
-Open = tuple[Entry, list[Entry], dict[str, float]]
+_FORGET_AFTER = 4096  # tokens read before the cursor drops them (see _FileCursor.forget)
 
 
 class Parser:
@@ -151,12 +137,12 @@ class Parser:
         try:
             size = path.stat().st_size
             if size > self.limits.max_bytes:
-                self.report.error(where, f"file {path} is {size} bytes, larger than the "
+                self.report.error(where, f"file {shown(path)} is {size} bytes, larger than the "
                                          f"{self.limits.max_bytes}-byte limit")
                 return None
             data = path.read_bytes()
         except OSError as exc:
-            self.report.error(where, f"cannot read {path}: {exc.strerror or exc}")
+            self.report.error(where, f"cannot read {shown(path)}: {exc.strerror or exc}")
             return None
         try:
             return data.decode("utf-8")
@@ -198,34 +184,44 @@ class Parser:
         pending: list[str] = []
         if prev_line is None:
             prev_line = opener.line if opener else -1
+        # The line the last entry or comment of this block ended on (0: none yet), for
+        # blank lines between them.
+        ended = prev_line if prev is not None else 0
         tokens, comments, path = cur.tokens, cur.comments, cur.path
         entries = block.entries
         scope = self.scopes[-1]
         while True:
-            if cur.ci == len(comments) and (cur.i == len(tokens) or (
-                    cur.i == len(tokens) - 1 and tokens[-1].kind is IDENT)):
+            if scan_plain is not None and cur.ci == len(comments) and (
+                    cur.i == len(tokens) or (cur.i == len(tokens) - 1
+                                             and tokens[-1].kind is IDENT)):
                 n = len(entries)
-                last_line = self._plain(cur, block, opener is not None, scope)
+                last_line = self._plain(cur, block, opener is not None, scope, ended)
                 if len(entries) > n:
                     if pending:
-                        entries[n].comments = pending
+                        entries[n].comments = [*pending, *entries[n].comments]
                         pending = []
                     prev = entries[-1]
                 if last_line == _CLOSED:
                     break
                 if last_line is not None:
-                    prev_line = last_line
+                    prev_line = ended = last_line
                     continue
+            if cur.i > _FORGET_AFTER or cur.ci > _FORGET_AFTER:
+                cur.forget()
             t = cur.at(cur.i)
             if cur.ci < len(comments) and comments[cur.ci].pos < t.pos:
                 for c in cur.take_comments(t.pos):
                     if c.trailing and c.line == prev_line:
                         if prev:
                             prev.trailing = [*prev.trailing, c.text]
+                            ended = c.end_line
                         else:
                             block.open_comment = [*block.open_comment, c.text]
-                    else:
-                        pending.append(c.text)
+                        continue
+                    if ended and c.line > ended + 1:
+                        pending.append(_BLANK)
+                    pending.append(c.text)
+                    ended = c.end_line
             kind = t.kind
             if kind != IDENT:
                 if kind == EOF:
@@ -236,6 +232,7 @@ class Parser:
                 if kind == PUNCT and t.text == "}":
                     cur.advance()
                     if opener is not None:
+                        block.inline = t.line == opener.line
                         break
                     self.report.error(cur.loc(t), "'}' without a matching '{'")
                     continue
@@ -255,6 +252,8 @@ class Parser:
                 continue
             key = t.text
             last = tokens[cur.i - 1]
+            if ended and t.line > ended + 1:
+                pending.append(_BLANK)
             if cur.ci < len(comments) and comments[cur.ci].pos < last.pos:
                 # Comments inside a vector or expression move above the key.
                 pending.extend(c.text for c in cur.take_comments(last.pos))
@@ -266,19 +265,21 @@ class Parser:
                 entry.included = self._include(value, cur)
             entries.append(entry)
             prev = entry
-            prev_line = last.line
+            prev_line = ended = last.line
         block.tail_comments = pending or ()
 
     def _plain(self, cur: _FileCursor, block: Block, nested: bool,
-               scope: dict[str, float]) -> int | None:
-        """Read plain entries (see ``FAST``) straight from the text, as many as follow.
+               scope: dict[str, float], ended: int) -> int | None:
+        """Read plain entries straight from the text with the compiled scanner.
 
         Returns None if there was none (nothing consumed), ``_CLOSED`` after the
         block's ``}`` (only if ``nested``), else the line of the last token read.
         Reads exactly what the token path would, with the same places and token
         count. Plain ``KEY {`` blocks are read here too, without recursion; where
-        one stops being plain, :meth:`_block` reads the rest of it.
+        one stops being plain, :meth:`_block` reads the rest of it. ``ended``: the
+        line the block's last entry or comment ended on (0: none yet).
         """
+        assert scan_plain is not None
         lexer, tokens = cur.lexer, cur.tokens
         lookahead = cur.i < len(tokens)  # a key already scanned: read it again from the text
         pos = tokens[-1].pos if lookahead else lexer.pos
@@ -286,7 +287,8 @@ class Parser:
         entries = block.entries
         stack: list[Open] = []  # blocks opened here and not closed yet
         while True:
-            pos, count, close = scan_plain(self, cur, pos, count, entries, scope, stack)
+            pos, count, close, ended = scan_plain(self, cur, pos, count, entries, scope,
+                                                  stack, ended)
             if lookahead and count != start:  # the key was read again from the text
                 tokens.pop()
                 lookahead = False
@@ -297,6 +299,7 @@ class Parser:
                 tokens.append(Token(PUNCT, "}", None, line, close - starts[line - 1] + 1, close,
                                     close > pos))
                 cur.i = len(tokens)
+                block.inline = line == block.loc.line
                 return _CLOSED
             if count == start:
                 return None
@@ -304,8 +307,7 @@ class Parser:
             starts = lexer.line_starts
             last_line = bisect_right(starts, pos - 1)  # of the last token read
             while stack:  # the token path reads the rest of each open block
-                entry, entries, scope = stack.pop()
-                inner: Block = entry.value.data
+                entry, entries, scope, inner, _ = stack.pop()
                 loc = inner.loc
                 opener = Token(PUNCT, "{", None, loc.line, loc.col,
                                starts[loc.line - 1] + loc.col - 1, True)
@@ -320,7 +322,7 @@ class Parser:
                     break  # plain again: read on in the enclosing block
             else:
                 return last_line
-            pos, count = lexer.pos, lexer.count
+            pos, count, ended = lexer.pos, lexer.count, last_line
 
     def _sync(self, cur: _FileCursor, line: int, skip_first: bool = False) -> None:
         """Skip to the next key that starts a line, or the end of the current block."""
@@ -342,6 +344,8 @@ class Parser:
                   and cur.tokens[cur.i - 1].line < t.line):
                 return
             cur.advance()
+            if cur.i > _FORGET_AFTER:
+                cur.forget()
 
     def _lookup(self, name: str) -> float | None:
         for scope in reversed(self.scopes):
@@ -354,7 +358,10 @@ class Parser:
         return (self._lookup(name) is None and name not in ex.CONSTANTS
                 and name not in ex.FUNCTIONS)
 
-    def _names(self) -> list[str]:
+    def _names(self, at: Loc) -> list[str]:
+        """Variables in scope, for a "did you mean" at ``at`` (none if it would not show)."""
+        if not self.report.accepts(at):
+            return []
         return [n for scope in self.scopes for n in scope]
 
     # -- values ------------------------------------------------------------
@@ -381,17 +388,17 @@ class Parser:
                 return self._vector(cur, t)
         if kind == EOF or (kind == PUNCT and t.text == "}") or (
                 kind == IDENT and t.line != key.line and self._unknown(t.text)):
-            raise ex.ExprError(cur.loc(key), f"key '{key.text}' has no value")
+            raise ex.ExprError(cur.loc(key), f"key '{quoted(key.text)}' has no value")
         if kind in (NUMBER, IDENT) or (kind == PUNCT and t.text in "(+-"):
             return self._scalar(cur, in_vector=False)
-        raise ex.ExprError(cur.loc(t), f"expected a value after '{key.text}' but found "
+        raise ex.ExprError(cur.loc(t), f"expected a value after '{quoted(key.text)}' but found "
                                        f"{ex.describe(t)}")
 
     def _scalar(self, cur: _FileCursor, in_vector: bool) -> Value:
         t = cur.at(cur.i)
         if t.kind == NUMBER:  # a plain number not followed by an operator
             nxt = cur.at(cur.i + 1)
-            if nxt.kind != PUNCT or nxt.text not in _OPERATORS or (
+            if nxt.kind != PUNCT or nxt.text not in OPERATORS or (
                     in_vector and nxt.text in "+-" and nxt.space_before
                     and not cur.at(cur.i + 2).space_before):
                 cur.i += 1
@@ -449,10 +456,10 @@ class Parser:
             return None
         base = Path(cur.path).parent if os.path.isfile(cur.path) else (
             self.base_dir or Path.cwd())
-        target = (base / value.data).resolve()
+        target = resolved(base / value.data)
         if str(target) in self.stack:
             chain = " -> ".join(Path(p).name for p in [*self.stack, str(target)])
-            self.report.error(value.loc, f"Include cycle: {chain}")
+            self.report.error(value.loc, f"Include cycle: {quoted(chain, 200)}")
             return None
         if len(self.stack) >= self.limits.max_nesting:
             self.report.error(value.loc, f"Includes nested deeper than "
@@ -462,195 +469,27 @@ class Parser:
             self.report.error(value.loc, f"more than {self.limits.max_files} included files "
                                          "(limit)")
             return None
-        if not target.is_file():
-            self.report.error(value.loc, f"included file not found: {target}")
+        problem = file_problem(target)
+        if problem == NOT_FOUND:
+            self.report.error(value.loc, f"included file not found: {shown(target)}")
+            return None
+        if problem is not None:
+            self.report.error(value.loc, f'cannot include "{quoted(value.data)}": {problem}')
             return None
         return self.parse_file(target, value.loc)
 
 
-
-def _scan_plain(p: Parser, cur: _FileCursor, pos: int, count: int, entries: list[Entry],
-                scope: dict[str, float], stack: list[Open]) -> tuple[int, int, int]:
-    """Plain entries (see ``FAST``) from ``pos`` into ``entries``, until one is not plain.
-
-    ``count`` is the token count so far; blocks opened go on ``stack`` (and their
-    scopes on ``p.scopes``) and are closed at their ``}``. Returns the position and
-    token count after the last entry read, and where a ``}`` closing the block being
-    read stands (-1 if reading stopped elsewhere). ``engine.scene._scan`` is the same
-    scanner compiled, used when built.
-    """
-    lexer = cur.lexer
-    text, path, starts = cur.text, cur.path, lexer.line_starts
-    match = FAST.match
-    max_tokens = lexer.max_tokens
-    scopes = p.scopes
-    while True:
-        m = match(text, pos)
-        if m is None:
-            break
-        kind = m.lastindex
-        if kind == _CLOSE:
-            if count >= max_tokens:
-                break
-            if not stack:
-                return pos, count, m.start(_CLOSE)
-            pos = m.end()
-            count += 1
-            entry, entries, scope = stack.pop()
-            scopes.pop()
-            cur.nesting -= 1
-            if entry.key == INCLUDE:
-                entry.included = p._include(entry.value, cur)
-            continue
-        at = m.start(1)
-        line = bisect_right(starts, at)
-        line_start = starts[line - 1]
-        vpos = m.start(kind)
-        end = m.end()
-        used = 2
-        if kind == _STRING:  # the group is inside the quotes
-            value = Value(STRING, m.group(_STRING), _new(Loc, (path, line, vpos - line_start)))
-        elif kind == _NUMBER:
-            digits = m.group(_NUMBER)
-            lit = (int(digits) if len(digits) < 16 and digits.isdigit()
-                   else ex.number_value(digits))
-            if lit is None:
-                break
-            value = Value(INT if type(lit) is int else FLOAT, lit,
-                          _new(Loc, (path, line, vpos - line_start + 1)))
-        elif cur.nesting >= cur.max_nesting:
-            break  # the token path reports the limit
-        else:
-            vloc = _new(Loc, (path, line, vpos - line_start + 1))
-            if kind == _VECTOR:
-                found = _fast_vector(scopes, text, end, vloc, line_start,
-                                     cur.nesting + 2 <= cur.max_nesting)
-                if found is None:
-                    break
-                value, end, used = found
-            else:
-                value = Value(STRUCTURE, Block([], vloc), vloc)
-        if count + used > max_tokens:
-            break
-        count += used
-        pos = end
-        key = m.group(1)
-        entry = Entry(key, value, _new(Loc, (path, line, at - line_start + 1)))
-        entries.append(entry)
-        if kind == _NUMBER:
-            scope[key] = lit
-        if kind == _OPEN:
-            stack.append((entry, entries, scope))
-            entries = value.data.entries
-            scope = {}
-            scopes.append(scope)
-            cur.nesting += 1
-        elif key == INCLUDE:
-            entry.included = p._include(value, cur)
-    return pos, count, -1
-
-
-def _fast_vector(scopes: list[dict[str, float]], text: str, pos: int, loc: Loc,
-                 line_start: int, signs: bool) -> tuple[Value, int, int] | None:
-    """``KEY [`` ... ``]`` from ``pos`` (just after ``[``) as (VECTOR, end, tokens used).
-
-    None if an item is not plain, or has a sign where ``signs`` is false (a sign is
-    one more nesting level for the token path, which reports the limit).
-    """
-    items: list[Value] = []
-    path, line = loc.path, loc.line
-    m = _NUMBERS.match(text, pos)
-    if m is not None:  # only numbers: split them instead of matching each one
-        numbers = m.group(1)
-        parts = numbers.split(" ") if numbers else []
-        col = pos - line_start + 1
-        signs_used = 0
-        for part in parts:
-            at = col
-            col += len(part) + 1
-            if len(part) < 16 and part.isdigit():
-                items.append(Value(INT, int(part), _new(Loc, (path, line, at))))
-                continue
-            sign = part[0] in "+-"
-            v = ex.number_value(part[1:] if sign else part)
-            if v is None or (sign and not signs):
-                return None
-            if sign:
-                signs_used += 1
-                if part[0] == "-":
-                    v = -v
-            items.append(Value(INT if type(v) is int else FLOAT, v,
-                               _new(Loc, (path, line, at))))
-        return Value(VECTOR, items, loc), m.end(), 3 + len(parts) + signs_used
-    used = 3
-    match = _ITEM.match
-    scopes = scopes[::-1]  # innermost first, as Parser._lookup reads them
-    while True:
-        m = match(text, pos)
-        if m is None:
-            return None
-        pos = m.end()
-        if m.lastindex == 1:  # ']'
-            break
-        sign, num, name, op, num2, name2 = m.group(2, 3, 4, 5, 6, 7)
-        if sign and not signs:
-            return None
-        at = _new(Loc, (path, line, m.start(2) - line_start + 1))
-        if num is not None:
-            a = int(num) if len(num) < 16 and num.isdigit() else ex.number_value(num)
-            if a is None:
-                return None
-            if op is None:
-                used += 2 if sign else 1
-                items.append(Value(INT if type(a) is int else FLOAT,
-                                   -a if sign == "-" else a, at))
-                continue
-            text_a = sign + ex.number_text(a)
-        else:
-            a = _find(scopes, name)
-            if a is None:
-                return None
-            text_a = sign + name
-        x = -float(a) if sign == "-" else float(a)
-        if op is None:
-            used += 2 if sign else 1
-            items.append(Value(FLOAT, x, at, text_a))
-            continue
-        if num2 is not None:
-            b = int(num2) if len(num2) < 16 and num2.isdigit() else ex.number_value(num2)
-            if b is None:
-                return None
-            text_b = ex.number_text(b)
-        else:
-            b = _find(scopes, name2)
-            if b is None:
-                return None
-            text_b = name2
-        y = float(b)
-        if op == "*":
-            x *= y
-        elif op == "/":
-            if y == 0:
-                return None
-            x /= y
-        elif op == "+":
-            x += y
-        else:
-            x -= y
-        if not isfinite(x):
-            return None
-        used += 4 if sign else 3
-        sep = f" {op} " if op in "+-" else op
-        items.append(Value(FLOAT, x, at, f"{text_a}{sep}{text_b}"))
-    return Value(VECTOR, items, loc), pos, used
-
-
-def _find(scopes: list[dict[str, float]], name: str) -> float | None:
-    """A variable from ``scopes`` (innermost first), else a constant; None if unknown."""
-    for scope in scopes:
-        if name in scope:
-            return scope[name]
-    return ex.CONSTANTS.get(name)
+@contextmanager
+def token_path_only() -> Iterator[None]:
+    """Read with the reference parser alone, as if the scanner were not built (the fast
+    path's property test and ``colosseum bench scene`` compare the two). Not for use
+    while another thread parses."""
+    global scan_plain
+    fast, scan_plain = scan_plain, None
+    try:
+        yield
+    finally:
+        scan_plain = fast
 
 
 @contextmanager
@@ -695,7 +534,7 @@ def parse_file(path: str | os.PathLike, rng: np.random.Generator | None = None,
                limits: Limits | None = None) -> SceneDB:
     """Parse a scene file and what it includes. Raises :class:`SceneError`."""
     p = Parser(rng, limits or Limits())
-    target = Path(path).resolve()
+    target = resolved(Path(path))
     with paused_gc():
         root = p.parse_file(target)
     return _finish(p, root, str(target))
@@ -703,10 +542,5 @@ def parse_file(path: str | os.PathLike, rng: np.random.Generator | None = None,
 
 def _finish(p: Parser, root: Block, path: str) -> SceneDB:
     p.report.raise_if_errors()
-    return SceneDB(root, path, p.report.sources, sorted_diagnostics(p.report.diagnostics))
+    return SceneDB(root, path, p.report.sources, p.report.diagnostics)
 
-
-try:  # the compiled scanner (engine/scene/_scan.pyx), when built
-    from engine.scene._scan import scan_plain
-except ImportError:  # not built: the regex scanner above reads the same
-    scan_plain = _scan_plain

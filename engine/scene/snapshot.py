@@ -3,7 +3,8 @@
 The loaded SceneDB is written self-contained (includes inlined, expressions
 frozen to their values) with each object's current pose and velocities (and,
 where the backend keeps one, its auto-sleep state), the joints' motor settings,
-the solver's random state and the simulated time. Orientation is written exactly
+the solver's random state, the scene's random generator, the simulated time and each
+running script's state (see :mod:`engine.scripting.persist`). Orientation is written exactly
 as ``Quaternion`` (and, for people, as ``Orientation`` degrees), floats with
 full precision, so loading the file continues the motion.
 
@@ -24,11 +25,12 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import engine.scene.random_state as random_state
+import engine.scene.schema as sc
 from components import Joint, Name, Transform
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from engine.physics.backend import SleepState, SupportsSleepState
 from engine.rotation import exact_degrees, quat_to_euler
-from engine.scene import schema as sc
 from engine.scene.db import (
     FLOAT,
     INT,
@@ -41,10 +43,11 @@ from engine.scene.db import (
     SceneDB,
     Value,
 )
-from engine.scene.diagnostics import Loc
+from engine.scene.diagnostics import ERROR, Diagnostic, Loc, SceneError
 from engine.scene.factory import SceneIds, SpawnRecord
 from engine.scene.parser import parse_text
 from engine.scene.writer import write
+from engine.services import ScriptStates
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -270,6 +273,35 @@ def _drop_follows(root: Block, written: set[str]) -> None:
             blk.entries = [e for e in blk.entries if e.key != "Follow"]
 
 
+def _script_states(engine: Engine, ids: SceneIds, root: Block, names: dict[int, str]) -> None:
+    """A ``ScriptState`` for each running script of a written object or of the scene, so
+    the saved file resumes its scripts (see :mod:`engine.scripting.persist`)."""
+    scripts = engine.try_resource(ScriptStates)
+    if scripts is None:
+        return
+    scene_ids = {entity: sid for sid, entity in ids.entities.items()}
+    for entity, saved in scripts.saved_scripts(names.get).items():
+        owner = names.get(entity)
+        if owner is None and not engine.world.has_component(entity, Transform):
+            owner = scene_ids.get(entity)  # a scene script (script0, ...)
+        if owner is None:
+            continue
+        entries: list[tuple[str, Value]] = [("Owner", _string(owner))]
+        for key, text in (("Globals", saved.globals), ("Locals", saved.locals)):
+            if text != "{}":
+                entries.append((key, _string(text)))
+        block = _block("ScriptState", entries)
+        for timer in saved.timers:
+            block.value.data.entries.append(_block("Timer", [
+                ("Function", _string(timer.function)),
+                ("Due", Value(FLOAT, float(timer.due), _HERE)),
+                ("Period", Value(FLOAT, float(timer.period), _HERE))]))
+        for handler in saved.handlers:
+            block.value.data.entries.append(_block("Handler", [
+                ("Event", _string(handler.event)), ("Function", _string(handler.function))]))
+        root.entries.append(block)
+
+
 def _taken(ids: SceneIds) -> set[str]:
     """IDs of the file's own entries (those without one are written with the one they
     were given by their place, so loading the saved file keeps every name)."""
@@ -279,14 +311,21 @@ def _taken(ids: SceneIds) -> set[str]:
 def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> str:
     """Scene text of the running simulation; needs a scene loaded with ``instantiate``.
 
-    With ``out_path`` (where the text will be saved), model, sound, script and
-    shader file names are rewritten relative to that file's folder.
+    Model, sound, script and shader file names are relative to the content folder (as
+    its ``main.scene`` names them). With ``out_path`` (where the text will be saved) the
+    file also says where that folder is, relative to it (``Content``), so it runs from
+    anywhere as long as the two keep their places.
     """
     ids: SceneIds = engine.resource(SceneIds)
     spec = ids.spec
     assert spec.db is not None, "write_state needs a spec built from a SceneDB"
-    dst = None if out_path is None else Path(out_path).resolve().parent
+    dst = None if spec.content_dir is None else spec.content_dir.resolve()
     root = _literal(spec.db, spec.content_dir, dst)
+    _drop(root, "Content")
+    if out_path is not None and dst is not None:
+        here = Path(out_path).resolve().parent
+        root.entries.insert(0, Entry("Content", _string(
+            Path(os.path.relpath(dst, here)).as_posix()), _HERE))
     world = engine.world
     # the solver's random state and each body's auto-sleep state, where the backend has them
     seed, sleep = engine.physics.request(lambda backend: (
@@ -322,6 +361,7 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
         else:
             spawns.snippet(rec)
     _drop_follows(root, set(names.values()))
+    _script_states(engine, ids, root, names)
     world_entry = next((e for e in root.entries if e.key == "World"), None)
     if world_entry is None or world_entry.value.kind != STRUCTURE:
         world_entry = Entry("World", Value(STRUCTURE, Block(), _HERE), _HERE)
@@ -329,5 +369,33 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
     _set(world_entry.value.data, "Time", Value(FLOAT, float(engine.time), _HERE))
     if seed is not None:  # the solver shuffles constraints with it
         _set(world_entry.value.data, "SolverSeed", Value(INT, int(seed), _HERE))
-    header = f"// state of {spec.db.path} at t = {spec.time + engine.time!r} s"
-    return header + "\n" + write(root, literal=True)
+    generator = random_state.text(engine.rng)  # what spawned text's randInterval draws from
+    if generator is not None:
+        _set(world_entry.value.data, "RandomState", _string(generator))
+    return _header(spec.db.path, engine.time, dst) + write(root, literal=True)
+
+
+def content_folder(db: SceneDB) -> Path:
+    """The folder a scene's file names are relative to: the content folder a saved state
+    names (``Content``), else the scene file's own. Raises SceneError when a saved
+    state's folder is not there: the file was moved without it."""
+    named = db.root.value("Content")
+    if named is None or not isinstance(named.data, str):  # (the schema check reports one
+        return Path(db.path).parent                        # that is not a string)
+    folder = (Path(db.path).parent / named.data).resolve()
+    if folder.is_dir():
+        return folder
+    raise SceneError([Diagnostic(
+        named.loc.path, named.loc.line, named.loc.col, ERROR,
+        f"this saved state continues the content folder {named.data!r}, relative to the "
+        f"file ({folder}), which does not exist: the file was moved (or its content folder "
+        "was). Paths in a saved state are relative to the file; put it back, or change "
+        "Content to the content folder's path from where the file is now")], db.sources)
+
+
+def _header(source: str, time: float, content: Path | None) -> str:
+    """Where the state came from and when (for people: 12 significant digits; the exact
+    time is World's ``Time``), and what its file names are relative to."""
+    folder = "" if content is None else f" (saved from {content})"
+    return (f"// state of {source} at t = {time:.12g} s\n"
+            f"// file names are relative to the content folder{folder}\n")

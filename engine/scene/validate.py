@@ -12,7 +12,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from engine.scene import schema as sc
+import engine.scene.schema as sc
 from engine.scene.db import (
     FLOAT,
     INCLUDE,
@@ -26,7 +26,9 @@ from engine.scene.db import (
     SceneDB,
     Value,
 )
-from engine.scene.diagnostics import Loc, Reporter, suggest
+from engine.scene.diagnostics import Loc, Reporter, quoted, suggest
+from engine.scene.hints import block_name, unknown_key_hint
+from engine.scene.paths import NOT_FOUND, file_problem, shown
 
 #: Size lengths each primitive accepts (see the schema module doc).
 SIZE_LENGTHS = {"sphere": (1,), "box": (1, 3), "capsule": (2,), "cylinder": (2,)}
@@ -58,8 +60,12 @@ def validate(db: SceneDB, content_dir: Path | None, report: Reporter,
     if content_dir is not None:
         for v in ctx.assets:
             target = content_dir / v.data
-            if not target.is_file():
-                report.error(v.loc, f"file not found: \"{v.data}\" (looked for {target})")
+            problem = file_problem(target)
+            if problem == NOT_FOUND:
+                report.error(v.loc, f'file not found: "{quoted(v.data)}" (looked for '
+                                    f'{shown(target)})')
+            elif problem is not None:
+                report.error(v.loc, f'cannot use file "{quoted(v.data)}": {problem}')
 
 
 def _block(block: Block, name: str, ctx: _Ctx, where: Loc, size: Value | None) -> None:
@@ -75,7 +81,8 @@ def _block(block: Block, name: str, ctx: _Ctx, where: Loc, size: Value | None) -
             lower = key.lower()
             if key[0].islower() and not any(k.lower() == lower for k in fields):
                 continue  # the author's variable
-            ctx.report.error(e.loc, f"unknown key '{key}' in {name}{suggest(key, fields)}")
+            hint = unknown_key_hint(key, name, e.value) if ctx.report.accepts(e.loc) else ""
+            ctx.report.error(e.loc, f"unknown key '{quoted(key)}' in {block_name(name)}{hint}")
             continue
         f, kinds, lengths = check
         if key in seen and not f.repeat:
@@ -99,7 +106,7 @@ def _block(block: Block, name: str, ctx: _Ctx, where: Loc, size: Value | None) -
         key = str(idv.data)
         first = ctx.ids[name].get(key)
         if first is not None:
-            ctx.report.error(idv.loc, f"duplicate {name} ID '{key}' (first declared at "
+            ctx.report.error(idv.loc, f"duplicate {name} ID '{quoted(key)}' (first declared at "
                                       f"{first.path}:{first.line}:{first.col})")
         else:
             ctx.ids[name][key] = idv.loc
@@ -245,8 +252,9 @@ def _value(e: Entry, f: sc.Field, owner: str, ctx: _Ctx, size: Value | None) -> 
     if f.type == sc.STRUCT_T:
         _block(v.data, f.struct, ctx, e.loc, size)
     elif f.type == sc.ENUM_T and v.data not in f.allowed:
-        ctx.report.error(v.loc, f"unknown {e.key} \"{v.data}\"{suggest(v.data, f.allowed)}; "
-                                f"expected one of {', '.join(f.allowed)}")
+        ctx.report.error(v.loc, f"unknown {e.key} \"{quoted(v.data)}\""
+                                f"{suggest(v.data, f.allowed)}; expected one of "
+                                f"{', '.join(f.allowed)}")
     elif f.type == sc.REF_T:
         ctx.refs.append((f.ref, v))
     elif f.type == sc.STRINGVECTOR_T and f.ref:
@@ -267,16 +275,17 @@ def _resolve(ctx: _Ctx) -> None:
             continue
         if kind == "Material" and (v.kind == INT or name == "default"):
             if v.kind == INT:
-                ctx.report.warning(v.loc, f"Material {name} is not declared; default material "
-                                          "properties are used")
+                ctx.report.warning(v.loc, f"Material {quoted(name)} is not declared; default "
+                                          "material properties are used")
             continue
-        ctx.report.error(v.loc, f"unknown {kind} '{name}'{suggest(name, ctx.ids[kind])}")
+        hint = suggest(name, ctx.ids[kind]) if ctx.report.accepts(v.loc) else ""
+        ctx.report.error(v.loc, f"unknown {kind} '{quoted(name)}'{hint}")
     for v in ctx.targets:
         prefix, _, name = v.data.partition(":")
         kind = _TARGET_KINDS.get(prefix)
         if kind is None:
-            ctx.report.error(v.loc, f"controller target \"{v.data}\" must start with motor:, "
-                                    "force: or kinematic:")
+            ctx.report.error(v.loc, f"controller target \"{quoted(v.data)}\" must start with "
+                                    "motor:, force: or kinematic:")
         elif name not in ctx.ids[kind]:
-            ctx.report.error(v.loc, f"unknown {kind} '{name}' in controller target"
-                                    f"{suggest(name, ctx.ids[kind])}")
+            hint = suggest(name, ctx.ids[kind]) if ctx.report.accepts(v.loc) else ""
+            ctx.report.error(v.loc, f"unknown {kind} '{quoted(name)}' in controller target{hint}")

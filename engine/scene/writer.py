@@ -4,10 +4,15 @@ Canonical form: one key per line, two-space indent, ``Key {`` ... ``}`` for
 structures, numbers as Python writes them (floats round-trip exactly),
 expressions as their canonical text, comments kept where they were attached
 (above a key, trailing on its line, after an opening brace, or at a block's
-end). ``Include`` lines are written back as they were, not inlined.
+end). ``Include`` lines are written back as they were, not inlined. The author's
+layout is kept where it reads well: a blank line between entries stays (one for a
+run of them), and a block written on one line stays on one line while it has no
+comments and fits in :data:`LINE_LIMIT` columns.
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 from engine.scene.db import STRINGVECTOR, STRUCTURE, VECTOR, Block, SceneDB, Value
 
@@ -43,8 +48,12 @@ def write(db: SceneDB | Block, literal: bool = False, flatten: bool = False) -> 
     return "\n".join(lines) + "\n" if lines else ""
 
 
-def _comments(texts: list[str], pad: str, lines: list[str]) -> None:
-    lines.extend(pad + t for t in texts)
+#: Widest line a one-line block is kept on (wider ones are written a key per line).
+LINE_LIMIT = 100
+
+
+def _comments(texts: Sequence[str], pad: str, lines: list[str]) -> None:
+    lines.extend(pad + t if t else "" for t in texts)  # "" is a blank line
 
 
 def _block(block: Block, depth: int, lines: list[str], literal: bool, flatten: bool) -> None:
@@ -62,12 +71,35 @@ def _block(block: Block, depth: int, lines: list[str], literal: bool, flatten: b
             if not inner.entries and not inner.tail_comments and not opener:
                 lines.append(f"{pad}{e.key} {{}}{trailing}")
                 continue
+            one_line = _one_line(inner, literal, flatten)
+            if one_line is not None and len(pad) + len(e.key) + len(one_line) + len(
+                    trailing) < LINE_LIMIT:
+                lines.append(f"{pad}{e.key} {one_line}{trailing}")
+                continue
             lines.append(f"{pad}{e.key} {{{opener}")
             _block(inner, depth + 1, lines, literal, flatten)
             lines.append(f"{pad}}}{trailing}")
         else:
             lines.append(f"{pad}{e.key} {value_text(v, literal)}{trailing}")
     _comments(block.tail_comments, pad, lines)
+
+
+def _one_line(block: Block, literal: bool, flatten: bool) -> str | None:
+    """``{ a 1 b { c 2 } }`` for a block written on one line without comments, else None."""
+    if not block.inline or block.open_comment or block.tail_comments:
+        return None
+    parts: list[str] = []
+    for e in block.entries:
+        if e.comments or e.trailing or (flatten and e.included is not None):
+            return None
+        if e.value.kind == STRUCTURE:
+            inner = _one_line(e.value.data, literal, flatten)
+            if inner is None:
+                return None
+            parts.append(f"{e.key} {inner}")
+        else:
+            parts.append(f"{e.key} {value_text(e.value, literal)}")
+    return "{ " + " ".join(parts) + " }" if parts else "{}"
 
 
 def value_text(v: Value, literal: bool = False) -> str:

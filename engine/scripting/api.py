@@ -40,11 +40,25 @@ Callbacks a script may define: ``onStart()``, ``onUpdate(dt)``,
 ``onCollision(other, impulse)`` (object scripts) or ``onCollision(a, b,
 impulse)`` (scene scripts; ``b`` is nil for static world geometry), called once
 per frame for every pair of bodies in contact, with the impulse (N s) summed
-over the pair's contacts and steps; ``onKey(key, pressed)``, ``onButton(name,
-pressed)`` (InputEvents of devices ``button:NAME``), ``onInput(device,
-value)``, ``onTimer(name)`` (engine TimerEvents), ``onReload()`` (after the file
-changed and was re-run in the script's environment: write ``count = count or 0``
-to keep state across reloads).
+over the pair's contacts and steps; ``onCollisionBegin(other, impulse)`` /
+``onCollisionBegin(a, b, impulse)`` once when a pair starts touching and
+``onCollisionEnd(other)`` / ``onCollisionEnd(a, b)`` once when it stops (bodies
+asleep on each other still touch; see :mod:`systems.contacts`);
+``onKey(key, pressed)``, ``onButton(device, name, pressed)`` (a glove's pinch, a
+controller's trigger), ``onTracker(name, x, y, z, qw, qx, qy, qz)`` (once a frame
+per tracker that moved, calibrated), ``onInput(device, value)``
+(``axis:DEVICE/NAME`` values and ``wheel:NAME`` counts), ``onDeviceLost(name)`` /
+``onDeviceFound(name)``, ``onTimer(name)`` (engine TimerEvents), ``onReload()``
+(after the file changed and was re-run in the script's environment: write ``count =
+count or 0`` to keep state across reloads), ``onResume()`` (instead of ``onStart``
+when a saved state runs: the script's variables, timers and handlers are back, see
+:mod:`engine.scripting.persist`).
+
+Input state, any time (nil before a device has said anything)::
+
+    input.tracker(name) -> x, y, z, qw, qx, qy, qz, tracked
+    input.wheel(name) -> rad/s          input.button(device, name) -> bool
+    input.axis(device, name) -> value   input.key(name) -> bool
 
 Limits: each callback runs under an instruction budget (time in C library
 calls counts too); a script exceeding it, or the memory cap, is stopped with one
@@ -67,6 +81,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from components import Camera, Joint, Name, Physical, Sound, Transform
 from components.joint import SCENE_JOINT_TYPES
+from engine.input.state import InputState
 from engine.physics import commands as cmd
 from engine.scripting.runtime import ScriptRuntime, to_python
 from engine.services import ShaderControl, SoundControl
@@ -184,6 +199,14 @@ function C.requestPlugin(name) return P.request_plugin(name) end
 C.requrestPlugin = C.requestPlugin
 function C.time() return P.time() end
 
+local I = {}
+function I.tracker(name) return P.tracker(name) end
+function I.wheel(name) return P.wheel(name) end
+function I.button(device, name) return P.button(device, name) end
+function I.axis(device, name) return P.axis(device, name) end
+function I.key(name) return P.key(name) end
+C.input = I
+
 local G = {colosseum = C}
 for k, v in pairs(C) do G[k] = v end
 return G
@@ -222,7 +245,8 @@ class ScriptAPI:
             "break_joint": self.break_joint, "set_uniform": self.set_uniform,
             "set_gain": self.set_gain,
             "set_camera": self.set_camera, "request_plugin": self.request_plugin,
-            "time": self.time,
+            "time": self.time, "tracker": self.tracker, "wheel": self.wheel,
+            "button": self.button, "axis": self.axis, "key": self.key,
         })
         return runtime.lua.execute(_LUA_API, runtime.kernel, P, name="=colosseum")
 
@@ -455,6 +479,35 @@ class ScriptAPI:
         joint.broken = True
         self.engine.despawn(entity)
 
+    # -- input ------------------------------------------------------------------
+    def _inputs(self) -> InputState | None:
+        return self.engine.try_resource(InputState)
+
+    def tracker(self, name: Any) -> tuple[Any, ...] | None:
+        inputs = self._inputs()
+        pose = None if inputs is None else inputs.tracker(str(name))
+        if pose is None:
+            return None
+        return (*pose.position.tolist(), *pose.orientation.tolist(), pose.tracked)
+
+    def wheel(self, name: Any) -> float | None:
+        inputs = self._inputs()
+        wheel = None if inputs is None else inputs.wheel(str(name))
+        return None if wheel is None else float(wheel.angular_velocity)
+
+    def button(self, device: Any, name: Any = None) -> bool:
+        inputs = self._inputs()
+        return inputs is not None and inputs.button(str(device),
+                                                    None if name is None else str(name))
+
+    def axis(self, device: Any, name: Any) -> float | None:
+        inputs = self._inputs()
+        return None if inputs is None else inputs.axis(str(device), str(name))
+
+    def key(self, name: Any) -> bool:
+        inputs = self._inputs()
+        return inputs is not None and inputs.key(str(name))
+
     # -- optional subsystems ---------------------------------------------------
     def _service(self, kind: type[S], what: str) -> S | None:
         """The plugin service ``kind`` (None, warned once, when its plugin is not loaded)."""
@@ -462,8 +515,13 @@ class ScriptAPI:
         if found is None and what not in self._warned:
             self._warned.add(what)
             plugin = kind.plugin  # type: ignore[attr-defined]
-            log.warning("%s: the %s plugin is not loaded; the call does nothing "
-                        "(requestPlugin(%r) loads it)", what, plugin, plugin)
+            if plugin == "render" and self.engine.config.headless:  # nothing to look at
+                log.warning("%s: nothing is drawn in this run (headless, without --screenshot "
+                            "or --record-frames), so the call does nothing; run it with a "
+                            "display, or with --screenshot FILE.png, to see it", what)
+            else:
+                log.warning("%s: the %s plugin is not loaded; the call does nothing "
+                            "(requestPlugin(%r) loads it)", what, plugin, plugin)
         return found
 
     def sound(self, entity: int, play: bool) -> None:

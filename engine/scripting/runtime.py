@@ -22,6 +22,8 @@ from typing import Any
 
 import lupa.lua54 as lua54
 
+from components.script import SavedScript, ScriptHandler, ScriptTimer
+from engine.scripting.persist import lua_literal
 from engine.scripting.sandbox import (
     BUDGET_MESSAGE,
     HOOK_STEP,
@@ -63,6 +65,10 @@ class Script:
     failures: dict[str, int] = field(default_factory=dict)
     disabled: set[str] = field(default_factory=set)
     mtime: float | None = None
+    #: Names the environment started with (the API): not the script's own (Lua set).
+    base: Any = None
+    #: The script's global functions as its file made them (Lua table name -> function).
+    loaded: Any = None
 
     @property
     def active(self) -> bool:
@@ -76,6 +82,14 @@ class _Timer:
     period: float
     fn: Any
     tid: int
+
+
+@dataclass(eq=False, slots=True)
+class _Handler:
+    script: Script
+    fn: Any
+    #: Registered by the file's top level (made again when the file runs).
+    at_load: bool
 
 
 class ScriptLoadError(RuntimeError):
@@ -156,13 +170,16 @@ class ScriptRuntime:
         self._collide_scene = k.collide_scene
         self._collide_batch = k.collide_batch
         self._call_batch = k.call_batch
+        self._call_handles = k.call_handles
         #: scripts that get onUpdate and their environments as a Lua array; None: rebuild
         self._update_batch: tuple[list[Script], Any] | None = None
         self._collect_pending = False
         self.scripts: list[Script] = []
         self._by_sid: dict[int, Script] = {}
         self._timers: list[_Timer] = []
-        self._handlers: dict[str, list[tuple[Script, Any]]] = {}
+        self._handlers: dict[str, list[_Handler]] = {}
+        #: The script whose file is running (its top level), if any.
+        self._loading: Script | None = None
         self._next_tid = 1
         self.time = 0.0
         #: Every message reported (also logged), newest last; for tools and tests.
@@ -176,6 +193,10 @@ class ScriptRuntime:
         api_globals = api(self) if api is not None else self.lua.table()
         self._make_globals = self.lua.execute(_SCRIPT_GLOBALS, k, P, api_globals,
                                               name="=colosseum")
+        #: object(id) for reading saved variables: the handle of the object of that ID.
+        self._object = self.lua.execute(
+            "local K = ...; return function(find) return function(name) "
+            "return K.handle(find(name)) end end", k, name="=colosseum")
         k.lockdown()
         if seed is not None:  # math.random follows the run's seed (serial runs repeat)
             self.lua.execute("local s = ...; math.randomseed(s)", int(seed) & 0x7FFFFFFF)
@@ -196,12 +217,13 @@ class ScriptRuntime:
         except LuaError as exc:  # the memory cap is reached
             self.kernel.collect()
             raise ScriptLoadError(f"{name}: {exc or MEMORY_MESSAGE}") from None
-        script = Script(sid, name, entity, path, env, source)
+        script = Script(sid, name, entity, path, env, source, base=self.kernel.names(env))
         self._by_sid[sid] = script
         error = self._run_chunk(script, source)
         if error is not None:
             self._drop(script)
             raise ScriptLoadError(error)
+        script.loaded = self.kernel.functions(env)
         self.scripts.append(script)
         self._update_batch = None
         return script
@@ -235,7 +257,11 @@ class ScriptRuntime:
         fn, err = self._compile(script, source)
         if fn is None:
             return err
-        err = self._safe(self._dispatch, fn)
+        self._loading = script
+        try:
+            err = self._safe(self._dispatch, fn)
+        finally:
+            self._loading = None
         if err is not None and self._fatal(err):
             self.kernel.collect()
         return err
@@ -252,6 +278,7 @@ class ScriptRuntime:
             try:
                 script.env = self._make_globals(script.sid, script.entity
                                                 if script.entity is not None else -1)
+                script.base = self.kernel.names(script.env)
             except LuaError as exc:
                 self.kernel.collect()
                 self.report(f"{script.name}: {exc or MEMORY_MESSAGE} (reload failed)")
@@ -269,7 +296,12 @@ class ScriptRuntime:
         self._drop_registrations(script)
         if script not in self.scripts:
             self.scripts.append(script)
-        err = self._safe(self._dispatch, fn)
+        self._loading = script
+        try:
+            err = self._safe(self._dispatch, fn)
+        finally:
+            self._loading = None
+        script.loaded = self.kernel.functions(script.env)
         if err is not None:
             self._failed(script, "<reload>", err)
             return False
@@ -374,6 +406,18 @@ class ScriptRuntime:
             self._failed(scripts[index - 1], "onCollision", err)
             scripts, others, impulses = scripts[index:], others[index:], impulses[index:]
 
+    def call_objects(self, script: Script, callback: str, objects: tuple[int, ...],
+                     *args: Any) -> None:
+        """``callback(objects..., args...)`` with the entities as handles (-1: nil)."""
+        if script.stopped or callback in script.disabled:
+            return
+        try:
+            err = self._call_handles(script.env, callback, len(objects), *objects, *args)
+        except LuaError as exc:
+            err = str(exc) or MEMORY_MESSAGE
+        if err is not None:
+            self._failed(script, callback, err)
+
     def collide_scene(self, script: Script, a: int, b: int, impulse: float) -> None:
         """``onCollision(a, b, impulse)`` on a scene script."""
         if script.stopped or "onCollision" in script.disabled:
@@ -418,6 +462,7 @@ class ScriptRuntime:
                     "continue)")
         self._drop_registrations(script)
         script.env = self.lua.table()  # release what the script held (a memory hoard)
+        script.loaded = None
         self._collect_pending = True
         self.kernel.collect()
 
@@ -439,7 +484,7 @@ class ScriptRuntime:
     def _drop_registrations(self, script: Script) -> None:
         self._timers = [t for t in self._timers if t.script is not script]
         for name, handlers in self._handlers.items():
-            self._handlers[name] = [h for h in handlers if h[0] is not script]
+            self._handlers[name] = [h for h in handlers if h.script is not script]
 
     # -- timers and custom events -----------------------------------------------
     def advance_timers(self, dt: float) -> None:
@@ -468,8 +513,96 @@ class ScriptRuntime:
         except TypeError as exc:
             self.report(f"event {name!r}: {exc}; not delivered to scripts")
             return
-        for script, fn in handlers:
-            self.call_function(script, fn, f"on({name!r})", value, name)
+        for h in handlers:
+            self.call_function(h.script, h.fn, f"on({name!r})", value, name)
+
+    # -- saved states (see engine.scripting.persist) -----------------------------
+    def capture(self, script: Script, object_name: Callable[[int], str | None]
+                ) -> tuple[SavedScript | None, list[str]]:
+        """The script's state for a saved run, and what of it could not be saved (each a
+        message naming the script); None when nothing could be taken."""
+        timers = sorted((t for t in self._timers if t.script is script),
+                        key=lambda t: (t.due, t.tid))
+        handlers = [(event, h) for event, hs in self._handlers.items() for h in hs
+                    if h.script is script and not h.at_load]
+        fns = self.lua.table_from([t.fn for t in timers] + [h.fn for _, h in handlers])
+        out = self.lua.table()
+        err = self._safe(self._dispatch, self.kernel.capture, script.env, script.base,
+                         script.loaded, "@" + script.name, fns, out)
+        if err is not None:
+            return None, [f"{script.name}: its state cannot be saved: {err}; "
+                          "it starts afresh when the saved state runs"]
+        told = [f"{script.name}: {what}; not saved" for what in out.skipped.values()]
+        names = list(out.fn_names.values())
+        lines = list(out.fn_lines.values())
+        saved_timers: list[ScriptTimer] = []
+        for timer, name, line in zip(timers, names, lines, strict=False):
+            if name:
+                saved_timers.append(ScriptTimer(name, timer.due, timer.period))
+            else:
+                kind = "every" if timer.period > 0 else "after"
+                told.append(f"{script.name}:{line}: a pending {kind}() timer (due at "
+                            f"t = {timer.due:.6g} s) calls a function with no name, so it "
+                            "is not saved; give the function a name (local function tick() "
+                            f"... end, then {kind}(sec, tick)) and it is")
+        saved_handlers: list[ScriptHandler] = []
+        for (event, _), name, line in zip(handlers, names[len(timers):],
+                                          lines[len(timers):], strict=False):
+            if name:
+                saved_handlers.append(ScriptHandler(event, name))
+            else:
+                told.append(f"{script.name}:{line}: the on({event!r}) handler calls a function "
+                            "with no name, so it is not saved; name the function (or register "
+                            "it at the file's top level, which runs again) and it is")
+        try:
+            saved = SavedScript(lua_literal(to_python(out.globals), object_name),
+                                lua_literal(to_python(out.locals), object_name),
+                                tuple(saved_timers), tuple(saved_handlers))
+        except (TypeError, ValueError) as exc:
+            return None, [f"{script.name}: its state cannot be saved: {exc}; "
+                          "it starts afresh when the saved state runs"]
+        return saved, told
+
+    def resume(self, script: Script, saved: SavedScript, find: Callable[[str], int]) -> bool:
+        """Put a freshly loaded script back where a saved run left it: its variables, then
+        its timers (replacing those its file's top level started) and handlers. False,
+        with a message, when the saved values do not read back (the script then starts)."""
+        where = f"{script.name} (saved state)"
+        values = []
+        for text in (saved.globals, saved.locals):
+            fn, err = self.kernel.compile("local out = ...; out.value = " + text, "=" + where,
+                                          self.lua.table_from({"object": self._object(find)}))
+            out = self.lua.table()
+            if fn is not None:
+                err = self._safe(self._dispatch, fn, out)
+            if err is not None or lua54.lua_type(out.value) != "table":
+                self.report(f"{where}: its variables do not read back as a Lua table "
+                            f"({err or 'not a table'}); the script starts afresh")
+                return False
+            values.append(out.value)
+        err = self._safe(self._dispatch, self.kernel.restore, script.env, script.base,
+                         "@" + script.name, *values)
+        if err is not None:
+            self.report(f"{where}: {err}; the script starts afresh")
+            return False
+        self._timers = [t for t in self._timers if t.script is not script]
+        source = "@" + script.name
+        for timer in saved.timers:
+            fn = self.kernel.named(script.env, script.base, source, timer.function)
+            if fn is None:
+                self.report(f"{where}: a saved timer calls {timer.function!r}, which the file "
+                            "no longer defines; the timer is dropped")
+                continue
+            self._timers.append(_Timer(script, timer.due, timer.period, fn, self._next_tid))
+            self._next_tid += 1
+        for handler in saved.handlers:
+            fn = self.kernel.named(script.env, script.base, source, handler.function)
+            if fn is None:
+                self.report(f"{where}: a saved on({handler.event!r}) handler calls "
+                            f"{handler.function!r}, which the file no longer defines; dropped")
+                continue
+            self._handlers.setdefault(handler.event, []).append(_Handler(script, fn, False))
+        return True
 
     def to_lua(self, value: Any) -> Any:
         """Plain Python data (numbers, strings, lists, dicts, arrays) as Lua values."""
@@ -503,7 +636,9 @@ class ScriptRuntime:
         self._timers = [t for t in self._timers if not (t.tid == tid and t.script.sid == sid)]
 
     def _lua_on(self, sid: int, name: str, fn: Any) -> None:
-        self._handlers.setdefault(name, []).append((self._script(sid), fn))
+        script = self._script(sid)
+        self._handlers.setdefault(name, []).append(_Handler(script, fn,
+                                                            self._loading is script))
 
     def _lua_emit(self, sid: int, name: str, data: Any) -> None:
         value = to_python(data)

@@ -88,6 +88,8 @@ def resolve_module(scripts_dir: Path | None, name: object) -> Path:
 KERNEL = r"""
 local STEP, LIMIT, BUDGET_MESSAGE, INSTRUCTIONS_PER_SECOND = ...
 local sethook, getinfo, traceback = debug.sethook, debug.getinfo, debug.traceback
+local getupvalue, setupvalue, upvalueid = debug.getupvalue, debug.setupvalue, debug.upvalueid
+local sort = table.sort
 local co_create, co_resume, co_running, co_status = coroutine.create, coroutine.resume,
   coroutine.running, coroutine.status
 local base_load, error, type, tostring, select, pairs = load, error, type, tostring, select, pairs
@@ -285,6 +287,16 @@ local function call_batch(envs, name, n, i, ...)
   return nil
 end
 K.call_batch = call_batch
+-- env[name](...) with its first n arguments (entity ids) given as handles (nil for -1).
+function K.call_handles(env, name, n, ...)
+  local fn = rawget(env, name)
+  if fn == nil then return nil end
+  local args = pack(...)
+  for i = 1, n do args[i] = K.handle(args[i]) end
+  budget = limit
+  return finish(xpcall(fn, handler, unpack(args, 1, args.n)))
+end
+exempt[K.call_handles] = true
 exempt[K.collide] = true; exempt[K.collide_scene] = true; exempt[collide_batch] = true
 exempt[call_batch] = true
 
@@ -420,6 +432,14 @@ local s_rep, t_sort, t_concat = string.rep, table.sort, table.concat
 string.rep = function(...) return charged(clock(), s_rep(...)) end
 table.sort = function(...) return charged(clock(), t_sort(...)) end
 table.concat = function(...) return charged(clock(), t_concat(...)) end
+-- math.random's position cannot be read back (a saved state cannot keep it): count the
+-- draws so saving can say the sequence is not kept.
+local m_random, random_calls = math.random, 0
+math.random = function(...)
+  random_calls = random_calls + 1
+  return m_random(...)
+end
+function K.random_calls() return random_calls end
 local string_copy = {}
 for k, v in pairs(string) do string_copy[k] = v end
 string_copy.dump = nil
@@ -483,6 +503,183 @@ function K.require_with(read_module, extra)
   end
 end
 function K.forget_modules() modules = {} end
+
+-- Saved states (see engine.scripting.persist). A script's state is the data in its own
+-- globals (those not in `base`, the names it started with) and in the file's local
+-- variables its functions use (their upvalues); functions are code, made again when the
+-- file runs, so only their names are kept (for timers and handlers).
+local OBJECT = "\0object"  -- a handle in captured data: {[OBJECT] = entity id}
+K.OBJECT = OBJECT
+local MAX_ENTRIES = 100000
+
+local function string_keys(t)
+  local names = {}
+  for k in next, t do if type(k) == "string" then names[#names + 1] = k end end
+  sort(names)
+  return names
+end
+
+function K.names(env)
+  local set = {}
+  for k in next, env do set[k] = true end
+  return set
+end
+
+function K.functions(env)
+  local set = {}
+  for k, v in next, env do if type(v) == "function" then set[k] = v end end
+  return set
+end
+
+-- The file's local variables, breadth-first from its global functions (and the functions
+-- in its global tables) in name order: an array of {key, fn, index}; a variable is keyed
+-- by its name, "name#2" for the second variable of that name.
+local function own_cells(env, base, source)
+  local queue, seen, cells, count = {}, {}, {}, {}
+  local function push_table(t)
+    if seen[t] or handle_ids[t] then return end
+    seen[t] = true
+    for _, k in ipairs(string_keys(t)) do
+      if type(rawget(t, k)) == "function" then queue[#queue + 1] = rawget(t, k) end
+    end
+  end
+  for _, name in ipairs(string_keys(env)) do
+    local v = rawget(env, name)
+    if not base[name] then
+      if type(v) == "function" then queue[#queue + 1] = v
+      elseif type(v) == "table" then push_table(v) end
+    end
+  end
+  local i = 1
+  while i <= #queue do
+    local f = queue[i]
+    i = i + 1
+    if not seen[f] and getinfo(f, "S").source == source then
+      seen[f] = true
+      local u = 1
+      while true do
+        local name, value = getupvalue(f, u)
+        if name == nil then break end
+        if name ~= "_ENV" then
+          local id = upvalueid(f, u)
+          if not seen[id] then
+            seen[id] = true
+            count[name] = (count[name] or 0) + 1
+            cells[#cells + 1] = {count[name] == 1 and name or name .. "#" .. count[name], f, u}
+          end
+          if type(value) == "function" then queue[#queue + 1] = value
+          elseif type(value) == "table" then push_table(value) end
+        end
+        u = u + 1
+      end
+    end
+  end
+  return cells
+end
+
+-- A copy of v holding only data: handles become {[OBJECT] = id}, functions are left out
+-- (code), anything else that is not data is reported through skip(path, why).
+local function data(v, path, skip, state, depth)
+  local t = type(v)
+  if t == "number" or t == "string" or t == "boolean" then return v end
+  if t ~= "table" then skip(path, "is a " .. t .. ", not data"); return nil end
+  local id = handle_ids[v]
+  if id ~= nil then return {[OBJECT] = id} end
+  if state.open[v] then skip(path, "refers back to a table that holds it"); return nil end
+  if depth > 16 then skip(path, "is nested more than 16 tables deep"); return nil end
+  state.open[v] = true
+  local out = {}
+  for k, x in next, v do
+    state.entries = state.entries + 1
+    if state.entries > MAX_ENTRIES then
+      error(format("more than %d values to save", MAX_ENTRIES), 0)
+    end
+    local kt = type(k)
+    if type(x) == "function" then  -- code: the file makes it again
+    elseif kt == "string" or kt == "number" or kt == "boolean" then
+      out[k] = data(x, path .. "[" .. format("%q", k) .. "]", skip, state, depth + 1)
+    else
+      skip(path, "has a " .. kt .. " key, not data")
+    end
+  end
+  state.open[v] = nil
+  return out
+end
+
+-- Fill `out` with the state of a script: globals, locals, the names of `fns` (timer and
+-- handler functions; false where a function has no name), and what could not be kept.
+function K.capture(env, base, loaded, source, fns, out)
+  local skipped = {}
+  local function skip(path, why) skipped[#skipped + 1] = path .. " " .. why end
+  local state = {open = {}, entries = 0}
+  local names = {}
+  local globals = {}
+  for _, name in ipairs(string_keys(env)) do
+    local v = rawget(env, name)
+    if not base[name] then
+      if type(v) == "function" then
+        if loaded[name] == v then names[v] = name
+        else skip(name, "holds a function made at run time (not saved: only data is)") end
+      else
+        globals[name] = data(v, name, skip, state, 1)
+      end
+    end
+  end
+  local locals = {}
+  for _, cell in ipairs(own_cells(env, base, source)) do
+    local _, v = getupvalue(cell[2], cell[3])
+    if type(v) == "function" then
+      if names[v] == nil then names[v] = cell[1] end
+    else
+      locals[cell[1]] = data(v, "local " .. cell[1], skip, state, 1)
+    end
+  end
+  local fn_names, fn_lines = {}, {}
+  for i = 1, #fns do
+    fn_names[i] = names[fns[i]] or false
+    fn_lines[i] = getinfo(fns[i], "S").linedefined
+  end
+  out.globals, out.locals, out.skipped = globals, locals, skipped
+  out.fn_names, out.fn_lines = fn_names, fn_lines
+end
+
+-- Write saved values back: a table merges into the table the file made (its functions
+-- stay, its data becomes the saved data); anything else replaces the value.
+local function merge(current, saved)
+  if type(saved) ~= "table" or type(current) ~= "table" or handle_ids[saved]
+      or handle_ids[current] then
+    return saved
+  end
+  for k, x in next, current do
+    if type(x) ~= "function" and saved[k] == nil then current[k] = nil end
+  end
+  for k, x in next, saved do current[k] = merge(rawget(current, k), x) end
+  return current
+end
+
+function K.restore(env, base, source, globals, locals)
+  for name, v in next, globals do rawset(env, name, merge(rawget(env, name), v)) end
+  for _, cell in ipairs(own_cells(env, base, source)) do
+    local v = locals[cell[1]]
+    if v ~= nil then
+      local _, current = getupvalue(cell[2], cell[3])
+      setupvalue(cell[2], cell[3], merge(current, v))
+    end
+  end
+end
+
+-- The function a saved timer or handler names (nil when the file has none of that name).
+function K.named(env, base, source, name)
+  local v = rawget(env, name)
+  if type(v) == "function" and not base[name] then return v end
+  for _, cell in ipairs(own_cells(env, base, source)) do
+    if cell[1] == name then
+      local _, f = getupvalue(cell[2], cell[3])
+      if type(f) == "function" then return f end
+    end
+  end
+  return nil
+end
 
 -- Lock down the global table itself (scripts never see it; defence in depth).
 function K.lockdown()

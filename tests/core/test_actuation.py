@@ -11,6 +11,7 @@ import pytest
 from components import Controller, Joint, Name, Physical, Shape, Transform
 from engine import EngineConfig, Phase, system
 from engine.events import KeyEvent
+from engine.input import InputHub
 from engine.physics import commands as cmd
 from systems import create_engine
 
@@ -24,8 +25,10 @@ def wheel_engine(backend: str, mode: str):
     eng.spawn(Name("axle"), Joint(kind="hinge", body_a=wheel, anchor=(0, 0, 1),
                                   axis=(0, 1, 0), motor_max_force=50.0, id="axle"))
     eng.spawn(Name("drive"), Controller(input="key:up/down", target="motor:axle", gain=2.0))
-    eng.add_system(system(Phase.INPUT)(
-        lambda e, dt: e.frame == KEY_FRAME and e.events.emit(KeyEvent("up", True))))
+    # the key reaches the input layer as a device's would, collected in frame KEY_FRAME
+    eng.add_system(system(Phase.INPUT, before=("InputSystem",))(
+        lambda e, dt: e.frame == KEY_FRAME and e.resource(InputHub).inject(
+            KeyEvent("up", True))))
     return eng, wheel
 
 

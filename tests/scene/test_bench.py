@@ -11,4 +11,4 @@ def test_bench_scene_reports_sizes_and_phases(tmp_path):
 
 def test_generated_scene_is_clean(tmp_path):
     (tmp_path / "main.scene").write_text(generate_scene(30))
-    assert check(tmp_path) == []
+    assert check(tmp_path).diagnostics == []

@@ -142,9 +142,10 @@ def test_check_of_a_missing_folder_is_an_error(tmp_path):
 def test_errors_in_an_included_file_point_into_that_file(tmp_path):
     (tmp_path / "main.scene").write_text('a 1\nInclude "parts.scene"\n')
     (tmp_path / "parts.scene").write_text('Object {\n  Mas 3\n}\n')
-    (err,) = [d for d in check(tmp_path) if d.is_error]
+    report = check(tmp_path)
+    (err,) = report.errors
     assert (Path(err.path).name, err.line, err.col) == ("parts.scene", 2, 3)
-    assert err.render().splitlines()[1:] == ["      Mas 3", "      ^"]
+    assert report.render().splitlines()[1:] == ["      Mas 3", "      ^"]
 
 
 def test_tabs_and_crlf_keep_the_caret_under_the_column():

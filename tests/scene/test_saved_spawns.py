@@ -172,8 +172,10 @@ def test_deleted_spawns_are_not_written(tmp_path: Path, mode: str) -> None:
     state = saved(folder, 0.2, tmp_path / "state.scene", "--mode", mode)
     assert list(state) == ["ground", "arm", "keep", "shoulder", "tether", "kept"]
     assert state["kept"]["Bodies"] == ("keep", "arm")
-    # the script's name is rebased to the saved file's folder; the material comes along
-    assert state["keep"]["Script"] == "sim/scripts/idle.lua"
+    # names stay the content folder's, which the file names relative to itself; the
+    # material comes along
+    assert state["keep"]["Script"] == "scripts/idle.lua"
+    assert load_scene(tmp_path / "state.scene").get("Content") == "sim"
     assert load_scene(tmp_path / "state.scene").find("Material[rubber]/Bounce").data == 0.8
     assert check_path(tmp_path / "state.scene") == 0  # what `colosseum check` runs
 

@@ -49,17 +49,11 @@ Object { // Description of a new object
   ID "a sphere object"
   Position [10.2 34.2 s] // uses value of s
   Size [randInterval(s/2, s)] // Random number
-  VisualAttributes {
-    Geometry {
-      Primitive "sphere"
-    }
-  }
+  VisualAttributes { Geometry { Primitive "sphere" } }
   PhysicalAttributes {
     Mass 1.1
     Material 2
-    Geometry {
-      Primitive "sphere"
-    }
+    Geometry { Primitive "sphere" }
   }
 }
 """
@@ -74,7 +68,7 @@ def test_comments_survive_in_place():
     text = ("// header\n\nA { /* open */\n  // above b\n  b 1 // after b\n  c [1 // inside\n"
             "  2]\n  // tail of A\n} // after A\n/* end\n  of file */\n")
     out, _ = roundtrip(text)
-    assert out == ("// header\nA { /* open */\n  // above b\n  b 1 // after b\n"
+    assert out == ("// header\n\nA { /* open */\n  // above b\n  b 1 // after b\n"
                    "  // inside\n  c [1 2]\n  // tail of A\n} // after A\n/* end\n  of file */\n")
 
 
@@ -162,5 +156,5 @@ def test_fmt_of_a_broken_file_raises_scene_error(tmp_path):
 def test_flatten_inlines_includes():
     db = parse_file(DATA / "include" / "main.scene")
     out = write(db, flatten=True)
-    assert "Include" not in out and 'Material {\n  ID "rubber"' in out
+    assert "Include" not in out and 'Material { ID "rubber"' in out
     assert parse_text(out).find("Object/Position").py() == (0, 0, 2.5)

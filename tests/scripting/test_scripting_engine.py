@@ -206,13 +206,17 @@ def test_collision_filter_only_reaches_involved_scripts(tmp_path: Path) -> None:
 
 
 def test_input_timer_and_custom_events_reach_scripts(tmp_path: Path) -> None:
-    from engine.events import CustomEvent, InputEvent, TimerEvent
+    from engine.events import CustomEvent, TimerEvent
+    from engine.input.events import Axis, Button, TrackerPose
 
     script = """
 seen = {}
 local function note(s) seen[#seen + 1] = s end
 function onKey(key, pressed) note("key " .. key .. " " .. tostring(pressed)) end
-function onButton(name, pressed) note("button " .. name .. " " .. tostring(pressed)) end
+function onButton(device, name, pressed)
+  note("button " .. device .. "/" .. name .. " " .. tostring(pressed))
+end
+function onTracker(name, x, y, z, qw) note("tracker " .. name .. " " .. x .. "," .. qw) end
 function onInput(device, value)
   if type(value) == "table" then value = table.concat(value, ",") end
   note("input " .. device .. " " .. tostring(value))
@@ -225,14 +229,15 @@ on("door", function(data) note("door " .. data.state); emit("ack", {n = 1}) end)
     with scripted_engine(tmp_path) as engine:
         engine.events.subscribe(CustomEvent, lambda ev: ev.name == "ack" and acks.append(ev.data))
         engine.run(frames=1)
-        for event in (KeyEvent("space", True), InputEvent("button:trigger", 1),
-                      InputEvent("tracker:hand", (1.0, 2.0, 3.0)), TimerEvent("bell"),
-                      CustomEvent("door", {"state": "open"})):
+        for event in (KeyEvent("space", True), Button("glove", "trigger", True),
+                      Axis("pad", "x", 0.5), TrackerPose("hand", (1.0, 2.0, 3.0),
+                                                         (1.0, 0.0, 0.0, 0.0)),
+                      TimerEvent("bell"), CustomEvent("door", {"state": "open"})):
             engine.events.emit(event)
         engine.run(frames=2)
         seen = list(script_named(engine, "scripts/s.lua").env.seen.values())
-    assert seen == ["key space true", "button trigger true", "input button:trigger 1",
-                    "input tracker:hand 1.0,2.0,3.0", "timer bell", "door open"]
+    assert seen == ["key space true", "button glove/trigger true", "input axis:pad/x 0.5",
+                    "timer bell", "door open", "tracker hand 1.0,1.0"]
     assert acks == [{"n": 1}]
 
 
@@ -279,7 +284,16 @@ function onUpdate() gone = find("ground") == nil end
         assert script_named(engine, "scripts/d.lua").env.gone is True
         assert runtime_of(engine).messages == type(runtime_of(engine).messages)()
     assert caplog.text.count("playSound: the sound plugin is not loaded") == 1
-    assert caplog.text.count("setUniform: the render plugin is not loaded") == 1
+    # headless, loading the render plugin would draw for no one: say what would show it
+    assert caplog.text.count("setUniform: nothing is drawn in this run (headless, without "
+                             "--screenshot or --record-frames)") == 1
+    assert "requestPlugin('render')" not in caplog.text
+    caplog.clear()
+    with scripted_engine(tmp_path) as engine:
+        engine.config.headless = False  # a display, but no render plugin
+        engine.run(frames=3)
+    assert caplog.text.count("setUniform: the render plugin is not loaded; the call does "
+                             "nothing (requestPlugin('render') loads it)") == 1
 
 
 @pytest.mark.parametrize("mode", ["serial", "threaded"])

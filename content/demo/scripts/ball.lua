@@ -1,11 +1,12 @@
 -- Attached to the object "ball" (self). Kicks it toward the tower and counts the bounces.
+-- A saved state (--save-state) keeps `bounces` and the pending kick: run again, the script
+-- resumes (onStart is not called twice). A timer's function needs a name to be saved.
 local bounces = 0
 
+local function kick() self:addImpulse(4, 0, 2) end
+
 function onStart()
-  -- at 0.5 s: a state saved later (--save-state) and run again has had its kick
-  if time() < 0.5 then
-    after(0.5 - time(), function() self:addImpulse(4, 0, 2) end)
-  end
+  after(0.5, kick)
 end
 
 function onCollision(other, impulse)

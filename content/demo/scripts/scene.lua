@@ -4,13 +4,8 @@ requestPlugin("physics")
 requestPlugin("osg")
 requestPlugin("openalpp")
 
--- a crate every 2 s, three in all; counted from the clock, so a saved state that is
--- run again (--save-state) does not drop the ones it already holds a second time
-local dropped
-
-function onStart()
-  dropped = math.min(3, math.floor(time() / 2.0))
-end
+-- a crate every 2 s, three in all (a saved state keeps the count: run again, it goes on)
+local dropped = 0
 
 function onUpdate(dt)
   local t = time()

@@ -1,0 +1,305 @@
+"""The input hub: all devices, drained once per frame, calibrated, filtered, published.
+
+Each frame :meth:`InputHub.step` does two things in a fixed order:
+
+1. *collect* the frame's raw events — from the live devices (and the watchdog's
+   DeviceLost/DeviceFound), or, when replaying, from the recording (live devices are
+   then never opened). What is collected is what a recording holds.
+2. *apply* them: calibration, one-euro filter and prediction per tracker, wheel rates
+   from counts and timestamps, button inversion; the latest-state table
+   (:class:`InputState`) is updated and the processed events are returned for the bus.
+
+Step 2 depends only on what step 1 returned, so replaying a recording in serial mode
+reproduces a live run bit for bit.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import asdict, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from engine.input.calibration import Calibration
+from engine.input.device import MONOTONIC, BadMessages, Clock, DeviceError, InputDevice
+from engine.input.events import (
+    TAGS,
+    AnyInput,
+    Axis,
+    Button,
+    DeviceFound,
+    DeviceLost,
+    KeyEvent,
+    Pointer,
+    TrackerPose,
+    WheelCount,
+)
+from engine.input.filters import OneEuro, OneEuroRotation, Velocity, predict
+from engine.input.record import FrameInput, Recording, RecordWriter
+from engine.input.state import InputState, TrackerState, WheelState
+from engine.input.wheel import WheelRate
+from engine.scene.inputs import InputSpec, TrackerSpec
+
+log = logging.getLogger("colosseum.input")
+
+#: Event types that are never "lost": a keyboard or a mouse is silent when unused.
+_UNWATCHED = (KeyEvent, Pointer)
+
+
+class TrackerPipeline:
+    """Raw device poses of one tracker -> scene poses (calibrated, filtered, predicted)."""
+
+    def __init__(self, spec: TrackerSpec | None) -> None:
+        spec = spec or TrackerSpec("")
+        self.calibration = Calibration.of(spec)
+        self.filters = ((OneEuro(spec.min_cutoff, spec.beta),
+                         OneEuroRotation(spec.min_cutoff, spec.beta))
+                        if spec.filter == "oneeuro" else None)
+        self.lead = spec.predict
+        self.motion = Velocity()
+
+    def __call__(self, raw: TrackerPose) -> TrackerPose:
+        cal = self.calibration
+        p, q, t = raw.position, raw.orientation, raw.timestamp
+        if not cal.is_identity:
+            p, q = cal.position(p), cal.orientation(q)
+        if self.filters is not None:
+            x, y, z = self.filters[0](p, t)
+            p, q = (x, y, z), self.filters[1](q, t)
+        self.motion.update(p, q, t)
+        linear = self.motion.linear if raw.velocity is None else cal.velocity(raw.velocity)
+        if self.lead > 0.0:
+            p, q = predict(p, q, linear, self.motion.angular, self.lead)
+        return TrackerPose(raw.device, p, q, linear, t)
+
+
+class InputHub:
+    """Owns the devices, the watchdog, the pipelines and the latest-state table."""
+
+    def __init__(self, spec: InputSpec, devices: Sequence[InputDevice],
+                 clock: Clock = MONOTONIC, timeouts: dict[str, float] | None = None) -> None:
+        self.spec = spec
+        self.devices = list(devices)
+        self.clock = clock
+        self.state = InputState()
+        self.state.button_ids = {b.id: (b.device, b.name) for b in spec.buttons}
+        self._inverted = {(b.device, b.name) for b in spec.buttons if b.invert}
+        self._tracker_specs = {t.id: t for t in spec.trackers}
+        self._wheel_specs = {w.id: w for w in spec.wheels}
+        self._pipelines: dict[str, TrackerPipeline] = {}
+        self._posed: dict[str, TrackerPose] = {}  # this frame's newest pose per tracker
+        #: transport name -> seconds of silence before its sources are lost
+        self._timeouts = {d.name: (timeouts or {}).get(d.name, spec.lost_after)
+                          for d in self.devices}
+        self._watched = {d.name for d in self.devices if getattr(d, "watched", True)}
+        self._last_heard: dict[str, tuple[float, float]] = {}  # source -> (time, timeout)
+        self._lost: set[str] = set()
+        self._complaints: dict[str, BadMessages] = {}
+        self._replay: Recording | None = None
+        self._writer: RecordWriter | None = None
+        self._started = False
+        self._closed = False
+        self._replay_clock = 0.0
+        self._injected: list[AnyInput] = []
+        self.delivered: Counter[str] = Counter()
+
+    # -- configuration ----------------------------------------------------------
+    def replay(self, recording: Recording) -> None:
+        """Deliver ``recording`` instead of the live devices (which are then never opened)."""
+        if self._started:
+            raise RuntimeError("replay must be chosen before the first frame")
+        self._replay = recording
+        log.info("replaying %d input events over %d frames from %s", recording.event_count,
+                 len(recording.frames), recording.path)
+
+    @property
+    def replaying(self) -> bool:
+        return self._replay is not None
+
+    def record(self, path: Path, header: dict[str, Any]) -> None:
+        """Write every frame's raw input to ``path`` (see :mod:`engine.input.record`)."""
+        self._writer = RecordWriter(path, {**header, "devices": self.describe_devices()})
+
+    def describe_devices(self) -> list[dict[str, Any]]:
+        return [{"id": d.name, "kind": d.kind} for d in self.devices]
+
+    def inject(self, event: AnyInput) -> None:
+        """Feed a raw event as if a device had sent it (a network peer, a tool, a test):
+        collected with the next frame's input (stamped with its clock when the event has
+        no timestamp), recorded and applied like any other; a replay ignores it (the
+        recording already holds the run's input)."""
+        if not isinstance(event, tuple(TAGS)):
+            raise TypeError(f"inject takes a typed input event, got {type(event).__name__}")
+        self._injected.append(event)
+
+    # -- running ------------------------------------------------------------------
+    def start(self) -> None:
+        """Open every device; one that cannot open is reported and left out."""
+        if self._started:
+            return
+        self._started = True
+        if self._replay is not None:
+            return
+        opened = []
+        for device in self.devices:
+            try:
+                device.open()
+            except DeviceError as exc:
+                log.error("%s; the run goes on without it", exc)
+                continue
+            opened.append(device)
+            if getattr(device, "watched", True):
+                log.info("%s open", describe(device))
+        self.devices = opened
+
+    def step(self, frame: int) -> list[AnyInput]:
+        """Collect, record and apply one frame's input; returns the events to publish."""
+        self.start()
+        batch = self.collect(frame)
+        if self._writer is not None:
+            self._writer.write(frame, batch)
+        return self.apply(batch)
+
+    def collect(self, frame: int) -> FrameInput:
+        injected, self._injected = self._injected, []
+        if self._replay is not None:
+            recorded = self._replay.frames.get(frame)
+            if recorded is not None:
+                self._replay_clock = recorded.clock
+                return recorded
+            return FrameInput(self._replay_clock)
+        now = self.clock()
+        events: list[AnyInput] = [e if e.timestamp else replace(e, timestamp=now)
+                                  for e in injected]
+        for device in self.devices:
+            for event in device.poll(now):
+                if not self._wanted(event, device.name):
+                    continue
+                if device.name in self._watched and not isinstance(event, _UNWATCHED):
+                    self._heard(event.device, event.timestamp, device.name, events)
+                events.append(event)
+        for source, (last, timeout) in self._last_heard.items():
+            if source not in self._lost and now - last > timeout:
+                self._lost.add(source)
+                events.append(DeviceLost(source, now))
+        return FrameInput(now, events)
+
+    def _wanted(self, event: AnyInput, transport: str) -> bool:
+        """Drop poses of a tracker bound to another device (``Tracker { Device }``)."""
+        if isinstance(event, TrackerPose):
+            spec = self._tracker_specs.get(event.device)
+            return spec is None or not spec.device or spec.device == transport
+        return True
+
+    def _heard(self, source: str, timestamp: float, transport: str,
+               events: list[AnyInput]) -> None:
+        if source not in self._last_heard or source in self._lost:
+            self._lost.discard(source)
+            events.append(DeviceFound(source, timestamp))
+        self._last_heard[source] = (timestamp, self._timeouts.get(transport, 0.5))
+
+    def apply(self, batch: FrameInput) -> list[AnyInput]:
+        state = self.state
+        state.now = batch.clock
+        out: list[AnyInput] = []
+        self._posed.clear()
+        for event in batch.events:
+            processed = self._apply(event)
+            out.append(processed)
+            self.delivered[TAGS[type(processed)]] += 1
+        for name, pose in self._posed.items():  # the table holds each tracker's newest pose
+            tracker = state.trackers[name]
+            tracker.position = np.array(pose.position)
+            tracker.orientation = np.array(pose.orientation)
+            tracker.velocity = np.array(pose.velocity)
+            tracker.angular_velocity = np.array(self._pipelines[name].motion.angular)
+            tracker.timestamp = pose.timestamp
+        for wheel in state.wheels.values():
+            wheel.angular_velocity = wheel.rate.angular_velocity(batch.clock)
+        for complaints in self._complaints.values():
+            complaints.report(batch.clock)
+        return out
+
+    def _apply(self, event: AnyInput) -> AnyInput:
+        state = self.state
+        if isinstance(event, TrackerPose):
+            pipeline = self._pipelines.get(event.device)
+            if pipeline is None:
+                pipeline = self._pipelines[event.device] = TrackerPipeline(
+                    self._tracker_specs.get(event.device))
+                state.trackers.setdefault(event.device, TrackerState())
+            pose = self._posed[event.device] = pipeline(event)
+            return pose
+        if isinstance(event, WheelCount):
+            wheel = state.wheels.get(event.device)
+            if wheel is None:
+                spec = self._wheel_specs.get(event.device)
+                rate = WheelRate.of(spec) if spec is not None else WheelRate()
+                wheel = state.wheels[event.device] = WheelState(rate)
+            problem = wheel.rate.add(event.count, event.timestamp)
+            if problem is not None:
+                self._complain(event.device, problem, event)
+            wheel.count, wheel.timestamp = event.count, event.timestamp
+            return event
+        if isinstance(event, Button):
+            key = (event.device, event.name)
+            if key in self._inverted:
+                event = Button(event.device, event.name, not event.pressed, event.timestamp)
+            state.buttons[key] = event.pressed
+            return event
+        if isinstance(event, Axis):
+            state.axes[(event.device, event.name)] = event.value
+            return event
+        if isinstance(event, KeyEvent):
+            if event.pressed:
+                state.keys.add(event.key.lower())
+            else:
+                state.keys.discard(event.key.lower())
+            return event
+        if isinstance(event, Pointer):
+            state.pointers[event.device] = (event.x, event.y)
+            return event
+        tracked = isinstance(event, DeviceFound)
+        if tracked:
+            state.lost.discard(event.device)
+            log.info("input source %r found", event.device)
+        else:
+            state.lost.add(event.device)
+            log.warning("input source %r lost: nothing received for its timeout; it is "
+                        "untracked until it sends again", event.device)
+        tracker = state.trackers.get(event.device)
+        if tracker is not None:
+            tracker.tracked = tracked
+        return event
+
+    def _complain(self, source: str, problem: str, event: AnyInput) -> None:
+        complaints = self._complaints.get(source)
+        if complaints is None:
+            complaints = self._complaints[source] = BadMessages(f"input source {source!r}")
+        complaints.note(problem, event)
+
+    def close(self) -> str | None:
+        """Close every device and the recording; returns the recording's summary, if any."""
+        if self._closed:
+            return None
+        self._closed = True
+        if self._started and self._replay is None:
+            for device in self.devices:
+                device.close()
+        return self._writer.close() if self._writer is not None else None
+
+    def stats(self) -> dict[str, Any]:
+        """The ``input`` section of ``--stats``."""
+        return {"devices": [asdict(d.status()) for d in self.devices],
+                "delivered": dict(self.delivered), "lost": sorted(self.state.lost),
+                "replaying": self._replay is not None}
+
+
+def describe(device: InputDevice) -> str:
+    describe_name = getattr(device, "describe_name", None)
+    return describe_name() if describe_name else f"input device {device.name!r} ({device.kind})"
+

@@ -1,0 +1,121 @@
+"""Outputs: named engine values sent every frame over OSC or LSL, and task markers.
+
+Where force feedback starts (the paper's future work): a wheel's torque, a hand's
+contact force or any value a system sets goes out each frame to whatever listens —
+a motor controller, a logger, LabRecorder. ``Output { Kind "osc" Port 9001 Value
+"wheel:left" }`` sends::
+
+    /colosseum/out/wheel/left   value...        (one message per value, every frame)
+    /colosseum/marker           "text"          (task events: grasps, anomaly switches)
+
+With ``Kind "lsl"`` each value is a float32 stream named ``<Name>-<value>`` (type
+``Colosseum``), and markers go to the string stream ``<Name>-markers`` (type
+``Markers``), timestamped on LSL's clock.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from typing import Any, Protocol
+
+from pythonosc.udp_client import SimpleUDPClient
+
+from engine.input.device import DeviceError
+from engine.input.lsl import load_pylsl
+
+log = logging.getLogger("colosseum.input")
+
+OUT_PREFIX = "/colosseum/out/"
+MARKER_ADDRESS = "/colosseum/marker"
+
+
+class Publisher(Protocol):
+    """Where an Output block's values go."""
+
+    def send(self, values: dict[str, Sequence[float]]) -> None: ...
+
+    def marker(self, text: str) -> None: ...
+
+    def close(self) -> None: ...
+
+
+def value_address(name: str) -> str:
+    """``"wheel:left"`` -> ``"/colosseum/out/wheel/left"``."""
+    return OUT_PREFIX + name.replace(":", "/")
+
+
+class OscOutput:
+    """Values and markers as OSC messages to one UDP address."""
+
+    def __init__(self, address: str, port: int) -> None:
+        self.target = f"{address}:{port}"
+        self._client = SimpleUDPClient(address, port)
+        self._failed = False
+
+    def send(self, values: dict[str, Sequence[float]]) -> None:
+        for name, value in values.items():
+            self._send(value_address(name), [float(v) for v in value])
+
+    def marker(self, text: str) -> None:
+        self._send(MARKER_ADDRESS, text)
+
+    def _send(self, address: str, payload: Any) -> None:
+        try:
+            self._client.send_message(address, payload)
+        except OSError as exc:  # an unreachable address: say so once, keep running
+            if not self._failed:
+                self._failed = True
+                log.error("output to %s failed: %s (further failures are not reported)",
+                          self.target, exc)
+
+    def close(self) -> None:
+        self._client.close()
+
+
+class LslOutput:
+    """One float32 outlet per value (made at its first frame) and a marker outlet."""
+
+    def __init__(self, name: str, scope: str = "site") -> None:
+        self.name = name
+        self._lsl = load_pylsl(scope)
+        self._outlets: dict[str, Any] = {}
+        lsl = self._lsl
+        info = lsl.StreamInfo(f"{name}-markers", "Markers", 1, lsl.IRREGULAR_RATE,
+                              lsl.cf_string, f"{name}-markers")
+        self._markers = lsl.StreamOutlet(info)
+
+    def send(self, values: dict[str, Sequence[float]]) -> None:
+        lsl = self._lsl
+        for key, value in values.items():
+            outlet = self._outlets.get(key)
+            if outlet is None:
+                stream = f"{self.name}-{key}"
+                info = lsl.StreamInfo(stream, "Colosseum", len(value), lsl.IRREGULAR_RATE,
+                                      lsl.cf_float32, stream)
+                outlet = self._outlets[key] = lsl.StreamOutlet(info)
+            if len(value) != outlet.channel_count:
+                log.error("output %s: %d values, its stream has %d channels; not sent", key,
+                          len(value), outlet.channel_count)
+                continue
+            outlet.push_sample([float(v) for v in value])
+
+    def marker(self, text: str) -> None:
+        self._markers.push_sample([text])
+
+    def close(self) -> None:
+        self._outlets.clear()
+        self._markers = None
+
+
+def make_publisher(kind: str, address: str, port: int, name: str,
+                   scope: str = "site") -> Publisher:
+    """The publisher of an Output block; DeviceError when its transport cannot start."""
+    if kind == "osc":
+        try:
+            return OscOutput(address, port)
+        except OSError as exc:
+            raise DeviceError(f"output to {address}:{port} (osc): {exc}") from exc
+    if kind == "lsl":
+        return LslOutput(name, scope)
+    raise DeviceError(f"unknown output kind {kind!r} (osc or lsl)")

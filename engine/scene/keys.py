@@ -1,0 +1,199 @@
+"""The scene key reference, generated from the schema: every key of every block with its
+type, default, meaning and an example. ``colosseum keys [BLOCK]`` prints it; docs/KEYS.md
+is :func:`reference_markdown` (a test keeps the page equal to it).
+
+>>> print(block_text("Uniform"))
+Uniform  (inside ShaderState: a uniform's value)
+  ID     STRING, required                 uniform name in the GLSL source
+         e.g. ID "DiffuseColor"
+  Value  FLOAT or VECTOR (1-4), required  a number, or up to 4 numbers (vec2..vec4)
+         e.g. Value [0 0.25 1]
+"""
+
+from __future__ import annotations
+
+import difflib
+from typing import Any
+
+import engine.scene.schema as sc
+
+_TYPES = {
+    sc.INT_T: "INT", sc.FLOAT_T: "FLOAT", sc.BOOL_T: "INT 0/1", sc.STRING_T: "STRING",
+    sc.ASSET_T: "STRING file name", sc.VEC3_T: "VECTOR [x y z]", sc.VECTOR_T: "VECTOR",
+    sc.STRINGVECTOR_T: "STRINGVECTOR", sc.STRUCT_T: "STRUCTURE", sc.ENUM_T: "STRING",
+    sc.REF_T: "STRING ID", sc.NUMBER_OR_VECTOR_T: "FLOAT or VECTOR (1-4)", sc.ANY_T: "anything",
+}
+
+#: Examples where the type and default say too little (block, key) -> value text.
+_EXAMPLES: dict[tuple[str, str], str] = {
+    ("Scene", "Script"): '"scripts/scene.lua"',
+    ("Scene", "Content"): '"../content/demo"',
+    ("Object", "ID"): '"crate1"', ("Object", "Size"): "[1 1 1]",
+    ("Object", "Quaternion"): "[1 0 0 0]", ("Object", "Script"): '"scripts/ball.lua"',
+    ("Object", "VelocitySamples"): "[0 0 0.01 0 0 0]", ("Object", "IdleSteps"): "5",
+    ("Visual", "Texture"): '"textures/wood.png"', ("Visual", "ShaderState"): '"toon"',
+    ("Visual", "Color"): "[0.72 0.52 0.3]",
+    ("Physical", "Mass"): "2", ("Physical", "Density"): "700", ("Physical", "Material"): '"wood"',
+    ("Geometry", "File"): '"models/rock.obj"', ("Geometry", "Size"): "[0.6]",
+    ("Geometry", "ParseMethod"): '"ConvexHull"',
+    ("Material", "ID"): '"wood"', ("Material", "ContactSound"): '"sounds/knock.wav"',
+    ("MaterialPair", "Material1"): '"rubber"', ("MaterialPair", "Material2"): '"wood"',
+    ("MaterialPair", "Friction"): "0.9", ("MaterialPair", "Bounce"): "0.6",
+    ("MaterialPair", "Softness"): "0.001",
+    ("Joint", "ID"): '"pivot"', ("Joint", "Type"): '"Hinge"', ("Joint", "Bodies"): '["lid" "box"]',
+    ("Joint", "Anchor"): "[0.5 2.5 1.5]", ("Joint", "Low"): "-30", ("Joint", "High"): "45",
+    ("Joint", "ReferencePose1"): "[0 0 1 1 0 0 0]", ("Joint", "ReferencePose2"): "[1 0 1 1 0 0 0]",
+    ("VertexShader", "ID"): '"toon_vertex"', ("VertexShader", "File"): '"shaders/toon.vert"',
+    ("FragmentShader", "ID"): '"toon_fragment"',
+    ("FragmentShader", "File"): '"shaders/toon.frag"',
+    ("ShaderProgram", "ID"): '"toon"', ("ShaderProgram", "VertexShader"): '"toon_vertex"',
+    ("ShaderProgram", "FragmentShader"): '"toon_fragment"',
+    ("ShaderState", "ID"): '"toon"', ("ShaderState", "ShaderProgram"): '"toon"',
+    ("Uniform", "ID"): '"DiffuseColor"', ("Uniform", "Value"): "[0 0.25 1]",
+    ("Sound", "ID"): '"hum"', ("Sound", "File"): '"sounds/motor_hum.ogg"',
+    ("Camera", "ID"): '"main"', ("Camera", "Follow"): '"ball"',
+    ("Light", "ID"): '"sun"', ("Controller", "ID"): '"throttle"',
+    ("Controller", "Input"): '"key:Up/Down"', ("Controller", "Target"): '"motor:pivot"',
+    ("Controller", "Low"): "-90", ("Controller", "High"): "90",
+    ("Hand", "Tracker"): '"glove"', ("World", "SolverSeed"): "2767133776",
+    ("World", "Time"): "2.0",
+    ("ScriptState", "Owner"): '"ball"', ("ScriptState", "Globals"): '"{score = 3}"',
+    ("ScriptState", "Locals"): '"{bounces = 2}"',
+    ("ScriptTimer", "Function"): '"kick"', ("ScriptTimer", "Due"): "0.5",
+    ("ScriptTimer", "Period"): "0.25",
+    ("ScriptHandler", "Event"): '"door"', ("ScriptHandler", "Function"): '"opened"',
+}
+
+
+def _number(x: Any) -> str:
+    return f"{x:g}" if isinstance(x, float) else str(x)
+
+
+def _value(value: Any) -> str:
+    if isinstance(value, tuple):
+        return "[" + " ".join(_number(x) for x in value) + "]"
+    if isinstance(value, str):
+        return f'"{value}"'
+    return _number(value)
+
+
+def type_text(field: sc.Field) -> str:
+    """The key's type as an author writes it, with its choices or target."""
+    text = _TYPES[field.type]
+    if field.type == sc.ENUM_T:
+        text += ": " + " | ".join(f'"{a}"' for a in field.allowed)
+    elif field.type == sc.REF_T and field.ref:
+        text += f" of {'an' if field.ref[0] in 'AEIOU' else 'a'} {field.ref}"
+    elif field.type == sc.STRUCT_T and field.struct:
+        text += f" {{ {field.struct} keys }}"
+    elif field.lengths:
+        text += f" ({', '.join(map(str, field.lengths))} numbers)"
+    if field.repeat:
+        text += ", repeatable"
+    if field.required:
+        text += ", required"
+    return text
+
+
+def default_text(field: sc.Field) -> str:
+    return "" if field.default is None else _value(field.default)
+
+
+def example(block: str, key: str, field: sc.Field) -> str:
+    """A line of scene text using the key."""
+    given = _EXAMPLES.get((block, key))
+    if given is not None:
+        return f"{key} {given}"
+    if field.type == sc.STRUCT_T:
+        return f"{key} {{ ... }}"
+    if field.type == sc.ANY_T:
+        return f"{key} {{ gain 2 Labels [\"a\" \"b\"] }}"
+    if field.type == sc.ENUM_T and field.default is None:
+        return f'{key} "{field.allowed[0]}"'
+    if field.default is not None:
+        return f"{key} {_value(field.default)}"
+    typical = {sc.INT_T: 1, sc.FLOAT_T: 1.0, sc.VEC3_T: (0.0, 0.0, 1.0)}
+    return f"{key} {_value(typical.get(field.type, 'name'))}"
+
+
+def _parents() -> dict[str, tuple[str, str]]:
+    """Block -> (the block holding it, the key) where it first appears."""
+    found: dict[str, tuple[str, str]] = {}
+    for block, fields in sc.SCHEMAS.items():
+        for key, field in fields.items():
+            if field.struct and field.struct not in found:
+                found[field.struct] = (block, key)
+    return found
+
+
+def about(block: str) -> str:
+    if block == "Scene":
+        return "the top level of a scene file"
+    parent, key = _parents()[block]
+    doc = sc.SCHEMAS[parent][key].doc
+    where = "at the top level" if parent == "Scene" else f"inside {parent}"
+    return f"{where}{' as ' + key if key != block else ''}: {doc}"
+
+
+def blocks() -> list[str]:
+    return list(sc.SCHEMAS)
+
+
+def find_block(name: str) -> str | None:
+    """The schema block an author means by ``name`` (a block or the key that opens it)."""
+    by_lower = {b.lower(): b for b in sc.SCHEMAS}
+    for fields in sc.SCHEMAS.values():
+        for key, field in fields.items():
+            if field.struct:
+                by_lower.setdefault(key.lower(), field.struct)
+    return by_lower.get(name.lower())
+
+
+def suggest(name: str) -> str:
+    close = difflib.get_close_matches(name, blocks(), n=1)
+    return f"; did you mean {close[0]!r}?" if close else ""
+
+
+def block_text(block: str) -> str:
+    """One block's keys for a terminal: key, type, default and meaning, then an example."""
+    fields = sc.SCHEMAS[block]
+    rows = []
+    for key, field in fields.items():
+        kind = type_text(field)
+        default = default_text(field)
+        if default:
+            kind += f", default {default}"
+        rows.append((key, kind, field.doc, example(block, key, field)))
+    kw = max(len(r[0]) for r in rows)
+    tw = max(len(r[1]) for r in rows)
+    lines = [f"{block}  ({about(block)})"]
+    for key, kind, doc, ex in rows:
+        lines.append(f"  {key:<{kw}}  {kind:<{tw}}  {doc}".rstrip())
+        lines.append(f"  {'':<{kw}}  e.g. {ex}")
+    return "\n".join(lines)
+
+
+def reference_markdown() -> str:
+    """docs/KEYS.md: every block, every key."""
+    out = ["# Scene keys", "",
+           "<!-- generated from engine/scene/schema.py by `python -m tools.docs`; "
+           "tests/scene/test_keys_reference.py keeps it equal -->", "",
+           "Every key a scene file may hold, block by block: its type, its default (a key "
+           "left out takes it), what it means and an example. Units: metres, kilograms, "
+           "seconds, degrees; Z is up. Keys starting with a lower-case letter are your own "
+           "variables. `colosseum keys BLOCK` prints one block in a terminal.", ""]
+    out += ["Blocks: " + ", ".join(f"[{b}](#{b.lower()})" for b in sc.SCHEMAS), ""]
+    for block, fields in sc.SCHEMAS.items():
+        out += [f"## {block}", "", about(block)[0].upper() + about(block)[1:] + ".", "",
+                "| key | type | default | meaning | example |", "|---|---|---|---|---|"]
+        for key, field in fields.items():
+            kind = type_text(field).replace("|", "\\|")
+            if field.struct:
+                kind = kind.replace(f"{{ {field.struct} keys }}",
+                                    f"{{ [{field.struct}](#{field.struct.lower()}) }}")
+            default = default_text(field)
+            shown = f"`{default}`" if default else ""
+            out.append(f"| `{key}` | {kind} | {shown} | {field.doc} "
+                       f"| `{example(block, key, field)}` |")
+        out.append("")
+    return "\n".join(out)

@@ -1,0 +1,57 @@
+"""The latest-state table answers the controller input names, from typed events."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from engine.input import (
+    Axis,
+    Button,
+    DeviceLost,
+    InputHub,
+    Key,
+    TrackerPose,
+    WheelCount,
+    parse_binding,
+)
+from engine.input.record import FrameInput
+from engine.scene.inputs import ButtonSpec, InputSpec, TrackerSpec, WheelSpec
+
+
+def test_every_input_name_reads_its_value():
+    spec = InputSpec(trackers=(TrackerSpec("hand_r", offset=(0.0, 0.0, 1.0)),),
+                     wheels=(WheelSpec("left", counts_per_turn=100),),
+                     buttons=(ButtonSpec("grab", "glove_r", "index", invert=True),))
+    hub = InputHub(spec, [])
+    state = hub.state
+    read = {name: parse_binding(name) for name in (
+        "tracker:hand_r", "wheel:left", "axis:pad/x", "button:glove_r/index", "button:grab",
+        "key:up/down", "key:space")}
+    assert all(state.read(b) is None for n, b in read.items() if n[:2] in ("tr", "wh", "ax"))
+    events = [TrackerPose("hand_r", (0.5, 0.0, 0.2), (1.0, 0.0, 0.0, 0.0), None, 10.0),
+              Axis("pad", "x", -0.5, 10.0), Button("glove_r", "index", False, 10.0),
+              Key("up", True, "keyboard", 10.0)]
+    events += [WheelCount("left", 5 * i, 10.0 + 0.01 * i) for i in range(11)]
+    hub.apply(FrameInput(10.1, events))
+    np.testing.assert_array_equal(state.read(read["tracker:hand_r"]), [0.5, 0.0, 1.2])
+    # 5 counts per 10 ms, 100 counts a turn: 5 turns per second
+    assert state.read(read["wheel:left"]) == pytest.approx(2 * math.pi * 5)
+    assert state.read(read["axis:pad/x"]) == -0.5
+    assert state.read(read["button:glove_r/index"]) == 1.0  # a normally-closed switch read 0
+    assert state.read(read["button:grab"]) == 1.0
+    assert state.read(read["key:up/down"]) == 1.0 and state.read(read["key:space"]) == 0.0
+    hub.apply(FrameInput(10.2, [DeviceLost("hand_r", 10.2)]))
+    assert state.read(read["tracker:hand_r"]) is None  # untracked: nothing to follow
+    assert not state.tracker("hand_r").tracked
+    hub.apply(FrameInput(11.0, []))
+    assert state.read(read["wheel:left"]) == 0.0  # no count for most of a second: standing
+
+
+@pytest.mark.parametrize("name", ["tracker:", "wheel:a/b", "axis:x", "button:a/b/c", "mouse:x",
+                                  "key:", "axis:/x"])
+def test_malformed_input_names_are_refused_with_the_forms_allowed(name: str):
+    with pytest.raises(ValueError, match="use tracker:NAME, wheel:NAME"):
+        parse_binding(name)
