@@ -48,6 +48,7 @@ _COMPONENTS = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16,
                5125: np.uint32, 5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 _TRIANGLES, _STRIP, _FAN = 4, 5, 6
+_ORIGIN, _NO_TURN, _UNIT = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0), (1.0, 1.0, 1.0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -109,19 +110,26 @@ def node_matrix(node: dict[str, Any]) -> np.ndarray:
     if "matrix" in node:
         values = _numbers(node["matrix"], 16, "matrix")
         return np.array(values, np.float64).reshape(4, 4).T  # glTF stores columns
-    t = _numbers(node.get("translation", (0.0, 0.0, 0.0)), 3, "translation")
-    x, y, z, w = _numbers(node.get("rotation", (0.0, 0.0, 0.0, 1.0)), 4, "rotation")
-    s = _numbers(node.get("scale", (1.0, 1.0, 1.0)), 3, "scale")
-    norm = math.sqrt(w * w + x * x + y * y + z * z)
-    if norm == 0.0:
+    t = _numbers(node.get("translation", _ORIGIN), 3, "translation")
+    q = _numbers(node.get("rotation", _NO_TURN), 4, "rotation")
+    s = _numbers(node.get("scale", _UNIT), 3, "scale")
+    if not any(q):
         raise ValueError("its rotation quaternion is all zeros")
-    w, x, y, z = w / norm, x / norm, y / norm, z / norm
-    r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                  [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                  [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
-    m = np.eye(4)
-    m[:3, :3] = r * np.asarray(s)
-    m[:3, 3] = t
+    return trs_matrices(np.array([t]), np.array([q]), np.array([s]))[0]
+
+
+def trs_matrices(t: np.ndarray, q: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """``(N, 4, 4)`` matrices from translations ``(N, 3)``, glTF quaternions ``[x y z w]``
+    ``(N, 4)`` (normalised here; all-zero ones give a scale-only matrix) and scales."""
+    norm = np.linalg.norm(q, axis=1)
+    x, y, z, w = (q / np.where(norm > 0, norm, 1.0)[:, None]).T
+    r = np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+                  2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+                  2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+                 axis=1).reshape(-1, 3, 3)
+    m = np.repeat(np.eye(4)[None], len(t), axis=0)
+    m[:, :3, :3] = r * s[:, None, :]
+    m[:, :3, 3] = t
     return m
 
 
@@ -297,9 +305,44 @@ class GltfDocument:
                     self.parents[child] = i
                     self.children[i].append(child)
 
+    def _local_matrices(self) -> tuple[np.ndarray, dict[int, str]]:
+        """Every node's local matrix, and why the ones that cannot be made are not.
+
+        The translations, rotations and scales of all nodes become matrices in one numpy
+        pass; a node with a ``matrix``, or a value that is not plain numbers, takes
+        :func:`node_matrix`, which says exactly what is wrong."""
+        n = len(self.nodes)
+        local = np.repeat(np.eye(4)[None], n, axis=0)
+        broken: dict[int, str] = {}
+        plain = [i for i, node in enumerate(self.nodes) if "matrix" not in node]
+        try:
+            t = np.array([self.nodes[i].get("translation", _ORIGIN) for i in plain], float)
+            q = np.array([self.nodes[i].get("rotation", _NO_TURN) for i in plain], float)
+            s = np.array([self.nodes[i].get("scale", _UNIT) for i in plain], float)
+            if t.shape != (len(plain), 3) or q.shape != (len(plain), 4) or s.shape != (
+                    len(plain), 3):
+                raise ValueError("not all nodes hold 3, 4 and 3 numbers")
+        except (ValueError, TypeError):  # some node is odd: each on its own
+            plain = []
+        if plain:
+            good = np.isfinite(t).all(1) & np.isfinite(q).all(1) & np.isfinite(s).all(1) & (
+                np.abs(q).sum(1) > 0)
+            with np.errstate(invalid="ignore", over="ignore"):  # the bad rows are redone
+                local[np.array(plain)] = trs_matrices(t, q, s)
+            slow = [i for i, ok in zip(plain, good, strict=True) if not ok]
+        else:
+            slow = list(range(n))
+        for i in slow + [i for i, node in enumerate(self.nodes) if "matrix" in node]:
+            try:
+                local[i] = node_matrix(self.nodes[i])
+            except ValueError as exc:
+                broken[i] = str(exc)
+        return local, broken
+
     def _world_matrices(self) -> np.ndarray:
         """Every node's world matrix (glTF frame); a bad node's subtree is marked bad."""
         n = len(self.nodes)
+        local, unusable = self._local_matrices()
         world = np.repeat(np.eye(4)[None], n, axis=0)
         done = np.zeros(n, bool)
         roots = [i for i in range(n) if self.parents[i] < 0]
@@ -308,11 +351,11 @@ class GltfDocument:
             i, parent, broken = stack.pop()
             done[i] = True
             if broken is None and i not in self.bad_nodes:
-                try:
-                    world[i] = parent @ node_matrix(self.nodes[i])
-                except ValueError as exc:
-                    broken = f"node '{self.name(i)}': {exc}"
-                    self.bad_nodes[i] = str(exc)
+                if i in unusable:
+                    broken = f"node '{self.name(i)}': {unusable[i]}"
+                    self.bad_nodes[i] = unusable[i]
+                else:
+                    world[i] = parent @ local[i]
             elif broken is not None:
                 self.bad_nodes.setdefault(i, f"its ancestor is unusable ({broken})")
             stack.extend((c, world[i], broken) for c in reversed(self.children[i]))

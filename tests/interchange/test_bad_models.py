@@ -101,16 +101,24 @@ def test_a_joint_naming_a_missing_node_is_told_and_left_out(tmp_path):
     assert not result.scene.joints and len(result.scene.objects) == 2
 
 
-def test_nan_in_a_matrix_leaves_that_node_out(tmp_path):
+@pytest.mark.parametrize("key,value", [
+    ("matrix", [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, float("nan"), 0, 0, 1]),
+    ("translation", [0, float("nan"), 0]),
+    ("rotation", [0, 0, 0, 0]),
+])
+def test_nan_in_a_matrix_leaves_that_node_out(tmp_path, key, value):
+    """JSON has no NaN, but writers write it and readers read it: the node is refused."""
     b, path = two_boxes(tmp_path)
-    b.doc["nodes"][0]["matrix"] = [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, float("nan"), 0, 0, 1]
     del b.doc["nodes"][0]["translation"]
+    b.doc["nodes"][0][key] = value
     b.write(path)
-    assert "NaN" in path.read_text()  # JSON has no NaN, but writers and readers let it by
     result = imported(path)
-    assert ("error: node 'Good': its matrix holds a value that is not a finite number (nan); it "
-            "and its children are left out") in messages(result)
+    reason = ("its rotation quaternion is all zeros" if key == "rotation" else
+              f"its {key} holds a value that is not a finite number (nan)")
+    assert (f"error: node 'Good': {reason}; it and its children are left out"
+            in messages(result))
     assert [o.id for o in result.scene.objects] == ["Other"]
+
 
 
 def test_a_file_claiming_more_than_it_holds_is_refused(tmp_path):
