@@ -1,6 +1,8 @@
 """Builds the compiled parts: the private ODE binding against the system libode
-(engine/physics/ode3d/_ode.pyx), the pymunk state copy (engine/physics/pymunk2d/_sync.pyx)
-and the scene scanner (engine/scene/_scan.pyx)."""
+(engine/physics/ode3d/_ode.pyx, which includes the .pxi files beside it, one per concept,
+and cimports their libode.pxd declarations), the pass that turns pymunk.batch buffers into
+engine rows (engine/physics/pymunk2d/_rows.pyx) and the scene scanner
+(engine/scene/_scan.pyx)."""
 
 import shlex
 import subprocess
@@ -40,10 +42,11 @@ def extensions() -> list[Extension]:
     )
     scan = Extension("engine.scene._scan", ["engine/scene/_scan.pyx"],
                      extra_compile_args=["-O3"])
-    sync = Extension("engine.physics.pymunk2d._sync", ["engine/physics/pymunk2d/_sync.pyx"],
+    rows = Extension("engine.physics.pymunk2d._rows", ["engine/physics/pymunk2d/_rows.pyx"],
                      include_dirs=[numpy.get_include()], extra_compile_args=["-O3"],
-                     define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION")])
-    return cythonize([ext, sync, scan], language_level=3,
+                     define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION"),
+                                    ("_GNU_SOURCE", None)])  # sincos
+    return cythonize([ext, rows, scan], language_level=3,
                      compiler_directives={"boundscheck": False, "wraparound": False})
 
 

@@ -4,14 +4,20 @@
  * apart on a square grid, layers 1.1 m apart, the lowest centred at 0.55 m;
  * dt 1/60 s, QuickStep 20 iterations, at most 4 contacts per pair, Coulomb
  * friction mu 0.5 (dContactApprox1). World settings (ERP, CFM, contact surface
- * layer, hash-space levels, auto-disable thresholds) match what
- * engine/physics/ode3d sets, so both sides solve the same problem.
+ * layer, hash-space levels) match what engine/physics/ode3d sets, so both sides
+ * solve the same problem.
+ *
+ * Sleeping is ODE's own auto-disable set up as close to the engine's sleep rule
+ * (engine/physics/sleep.py) as it goes: by time, not steps (AutoDisableSteps 0,
+ * AutoDisableTime = SleepTime), on each step's velocity (AverageSamplesCount 1)
+ * under the same linear and angular limits, passed in by tools/bench_physics.py.
+ * What ODE lacks (the steady test, islands) is the engine's extra work.
  *
  * With FEEDBACK=1 every contact joint also gets a dJointFeedback and the
  * impulse |f|·dt of each contact is computed after the step, which is the
  * extra work the engine does to report contact impulses.
  *
- * Usage: bench_ode N STEPS SLEEP(0|1) [FEEDBACK(0|1)]
+ * Usage: bench_ode N STEPS SLEEP(0|1) FEEDBACK(0|1) SLEEP_TIME SLEEP_LINEAR SLEEP_ANGULAR
  * Prints: ms_per_step=<mean ms> mean_z=<mean box height at the end> contacts=<last step>
  *         impulse=<sum of the last step's contact impulses, 0 without feedback>
  * Built and run by tools/bench_physics.py (cc -O2 $(pkg-config --cflags --libs ode)).
@@ -62,12 +68,15 @@ static double now_ms(void) {
 }
 
 int main(int argc, char **argv) {
-    if (argc != 4 && argc != 5) {
-        fprintf(stderr, "usage: %s N STEPS SLEEP [FEEDBACK]\n", argv[0]);
+    if (argc != 8) {
+        fprintf(stderr, "usage: %s N STEPS SLEEP FEEDBACK SLEEP_TIME SLEEP_LINEAR "
+                "SLEEP_ANGULAR\n", argv[0]);
         return 2;
     }
     int n = atoi(argv[1]), steps = atoi(argv[2]), sleep = atoi(argv[3]);
-    if (argc == 5 && atoi(argv[4])) {
+    double sleep_time = atof(argv[5]), sleep_linear = atof(argv[6]);
+    double sleep_angular = atof(argv[7]);
+    if (atoi(argv[4])) {
         feedback_cap = 8 * n + 64; /* at most 4 contacts per pair, ~2 pairs per box */
         feedback = calloc((size_t)feedback_cap, sizeof(dJointFeedback));
     }
@@ -86,11 +95,11 @@ int main(int argc, char **argv) {
     dWorldSetQuickStepNumIterations(world, 20);
     dWorldSetContactSurfaceLayer(world, 0.001);
     dWorldSetAutoDisableFlag(world, sleep);
-    dWorldSetAutoDisableLinearThreshold(world, 0.05);
-    dWorldSetAutoDisableAngularThreshold(world, 0.05);
-    dWorldSetAutoDisableSteps(world, 20);
-    dWorldSetAutoDisableTime(world, 0.0);
-    dWorldSetAutoDisableAverageSamplesCount(world, 5);
+    dWorldSetAutoDisableLinearThreshold(world, sleep_linear);
+    dWorldSetAutoDisableAngularThreshold(world, sleep_angular);
+    dWorldSetAutoDisableSteps(world, 0);
+    dWorldSetAutoDisableTime(world, sleep_time);
+    dWorldSetAutoDisableAverageSamplesCount(world, 1);
     dCreatePlane(space, 0, 0, 1, 0);
 
     int columns = (n + 9) / 10;

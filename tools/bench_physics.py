@@ -8,14 +8,25 @@ The reference is ``tools/bench_ode.c``, compiled here with ``cc -O2`` against th
 same libode (pkg-config) into a temporary folder and run in the same session,
 both plain ("C") and with the contact feedback our backend always does to report
 contact impulses ("C+fb": a dJointFeedback per contact joint, impulses summed
-after the step).
+after the step). With sleeping on, the C side runs ODE's own auto-disable with the
+sleep rule's limits (by time, SleepTime; SleepLinear and SleepAngular on each step's
+velocity), ours the rule itself (:mod:`engine.physics.sleep`). QuickStep leaves
+these columns of 1 kg, 1 m boxes wobbling at a few cm/s, so neither side puts a box to
+sleep within the run: the "on" rows measure what sleeping costs, the rule's per-step
+work (ODE's C rule costs next to nothing; ours is about twenty numpy calls).
 For each N and with sleeping off and on it reports ms per step of: plain C; our
-raw ``OdeBackend.step``; our step plus the ECS sync (every pose read in C into an
-(N, 7) array, then scattered into a pose table with one numpy assignment, as the
-dynamics system does). Times are the stepping thread's CPU time (C:
-CLOCK_THREAD_CPUTIME_ID, Python: time.thread_time), so other work on a shared
-machine does not count; each variant runs ``repeats`` times, alternating, and
-the fastest run counts.
+raw ``OdeBackend.step``; our step plus the ECS sync (every body's state written in C
+into a snapshot table and copied into the pose table as the physics system
+does, :class:`tools.bench_readback.EcsReadback`). Times are the
+stepping thread's CPU time (C: CLOCK_THREAD_CPUTIME_ID, Python: time.thread_time),
+so other work on a shared machine does not count; each variant runs ``repeats``
+times, alternating, and the fastest run counts.
+
+Then the readback alone, side by side on the settled scene (µs per call, median):
+``read_state`` (fresh arrays) copied into the pose table by ``PoseCopy`` (the path
+the dynamics system takes today) against ``read_state_into`` the table's rows. And
+the sleep rule's own cost per step (:class:`engine.physics.sleep.SleepRule`, every
+body awake and slow, so every test runs), beside the plain-C step it rides on.
 
 Run: ``python -m tools.bench_physics [--n 100 500 2000] [--steps S] [--quick]``.
 """
@@ -33,6 +44,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME, SleepRule
+from tools.bench_readback import EcsReadback, pose_table, time_readback
 
 DT = 1.0 / 60.0
 SOURCE = Path(__file__).with_name("bench_ode.c")
@@ -62,7 +76,8 @@ def compile_reference(folder: Path) -> Path:
 def run_reference(exe: Path, n: int, steps: int, sleep: bool,
                   feedback: bool = False) -> tuple[float, float]:
     """(ms per step, mean box height at the end) of the plain C program."""
-    out = subprocess.run([str(exe), str(n), str(steps), str(int(sleep)), str(int(feedback))],
+    out = subprocess.run([str(exe), str(n), str(steps), str(int(sleep)), str(int(feedback)),
+                          repr(SLEEP_TIME), repr(SLEEP_LINEAR), repr(SLEEP_ANGULAR)],
                          check=True, capture_output=True, text=True).stdout
     fields = dict(item.split("=") for item in out.split())
     return float(fields["ms_per_step"]), float(fields["mean_z"])
@@ -85,18 +100,15 @@ def build_ours(n: int, sleep: bool) -> Any:
 
 
 def time_ours(n: int, steps: int, sleep: bool, sync: bool) -> tuple[float, float]:
-    """(ms per step, mean box height at the end); ``sync`` adds the ECS pose sync."""
+    """(ms per step, mean box height at the end); ``sync`` adds the ECS readback."""
     backend = build_ours(n, sleep)
-    keys = backend.keys()
-    poses = np.empty((n, 7))
-    table = np.zeros((n + 1, 7))  # the world's pose table, rows indexed by entity id
-    step, read = backend.step, backend.read_poses
+    readback = EcsReadback(backend, pose_table(backend.keys()))
+    step = backend.step
     t0 = time.thread_time()
     if sync:
         for _ in range(steps):
             step(DT)
-            read(poses)
-            table[keys] = poses
+            readback()
     else:
         for _ in range(steps):
             step(DT)
@@ -104,6 +116,35 @@ def time_ours(n: int, steps: int, sleep: bool, sync: bool) -> tuple[float, float
     mean_z = float(backend.read_state().position[:, 2].mean()) if n else 0.0
     backend.close()
     return ms, mean_z
+
+
+def time_sleep_rule(n: int, calls: int = 2000, islands: bool = False) -> float:
+    """µs per :meth:`SleepRule.update` for ``n`` awake bodies, slow and jittering: every
+    test of the rule runs each step, and nothing falls asleep.
+
+    Without ``islands`` no body is ever quiet for SleepTime (it is made unreachable),
+    the common step. With them the bodies stand in columns of ten, touching, each
+    column's top body restless: the rest are ready every step, so the islands are looked
+    for every step, and every one is held awake by its top.
+    """
+    rule = SleepRule()
+    rule.configure(1e-9 if islands else 1e9, SLEEP_LINEAR, SLEEP_ANGULAR)
+    rule.layout(np.arange(n), np.ones(n, bool), np.ones(n, bool))
+    rule.awake[:] = True
+    rng = np.random.default_rng(1)
+    jitter = rng.normal(0.0, 2e-5 if islands else 0.01, (8, 6, n))
+    if islands:
+        jitter[::2, 0, 9::10] += 0.02  # a top that keeps changing speed: never steady
+    rows = np.arange(n)
+    touching = np.column_stack([rows, rows + 1])[(rows % 10 != 9) & (rows + 1 < n)]
+    for i in range(3):  # warm: by the third step bodies are ready, and scipy imported
+        rule.velocity[:] = jitter[i]
+        rule.update(DT, None, lambda: touching)
+    t0 = time.perf_counter()
+    for i in range(calls):
+        rule.velocity[:] = jitter[i % 8]
+        rule.update(DT, None, lambda: touching)
+    return (time.perf_counter() - t0) / calls * 1e6
 
 
 def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
@@ -134,7 +175,7 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
                     ms, ours_z = time_ours(n, steps, sleep, sync=False)
                     raw_ms = min(raw_ms, ms)
                     sync_ms = min(sync_ms, time_ours(n, steps, sleep, sync=True)[0])
-                row = {"N": n, "sleeping": "on" if sleep else "off", "C ms": c_ms,
+                row: dict[str, Any] = {"N": n, "sleeping": "on" if sleep else "off", "C ms": c_ms,
                        "C+fb ms": fb_ms, "ours ms": raw_ms, "ours+sync ms": sync_ms,
                        "ratio": raw_ms / c_ms, "ratio+sync": sync_ms / c_ms,
                        "ratio+sync vs C+fb": sync_ms / fb_ms,
@@ -143,6 +184,22 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
                 print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
                                 for k, v in row.items()), flush=True)
                 rows.append(row)
+    print("\nreadback of every body into the ECS pose table, µs per call (median); "
+          "the sleep rule's cost per step beside the plain-C step")
+    for n in ns:
+        backend = build_ours(n, False)
+        for _ in range(steps):
+            backend.step(DT)
+        row = time_readback(backend, 500 if quick else 4000)
+        backend.close()
+        c_ms = next(r["C ms"] for r in rows if r.get("N") == n and r.get("sleeping") == "off")
+        rule_us = time_sleep_rule(n, 200 if quick else 2000)
+        islands_us = time_sleep_rule(n, 100 if quick else 500, islands=True)
+        row.update({"sleep rule us": rule_us, "rule/C step": rule_us * 1e-3 / c_ms,
+                    "+islands us": islands_us, "+islands/C step": islands_us * 1e-3 / c_ms})
+        print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                        for k, v in row.items()), flush=True)
+        rows.append(row)
     return rows
 
 

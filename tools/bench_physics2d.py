@@ -6,12 +6,15 @@ vertically, the lowest centred at z = 0.55 m; Δt = 1/60 s, 20 solver iterations
 sleeping off (``--sleeping`` turns it on in both). Both worlds are built with the
 same pymunk settings and stepped in the same run, alternating every ten steps, so
 they see the same machine and the same simulated phase (they follow bit-identical
-trajectories; the table says so). Ours is timed with the ECS sync the engine does
-each step: ``read_state`` and the dynamics system's own copy of every pose and
-velocity into a pose table of N + 1 Transforms, and then again with ``contacts()``
-too (which the engine collects every step). Times are medians over the blocks and a ratio
-is the median of the blocks' own ratios (this is a shared machine; means are in the
-returned dicts).
+trajectories; the table says so). Ours is timed with the ECS sync: every body's state
+written by ``read_state_into`` straight into the rows of a pose table of N + 1
+Transforms (:class:`tools.bench_readback.EcsReadback`), and then again with
+``contacts()`` too (which the engine collects every step). Times are medians over the
+blocks and a ratio is the median of the blocks' own ratios (this is a shared machine;
+means are in the returned dicts). Then the readback alone, old path beside new
+(:func:`tools.bench_readback.time_readback`). With ``--sleeping`` the raw space sleeps
+by chipmunk's own rule after ``SLEEP_TIME`` and ours by the engine's sleep rule, so
+the two no longer follow the same trajectories.
 
 Run: ``python tools/bench_physics2d.py [--n 100 500 2000] [--steps S] [--sleeping]``.
 """
@@ -31,13 +34,13 @@ import pymunk
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from components import MaterialProps, Physical, Shape, Transform  # noqa: E402
+from components import MaterialProps, Physical, Shape  # noqa: E402
 from engine.physics.backend import WorldSettings  # noqa: E402
 from engine.physics.pymunk2d import PymunkBackend  # noqa: E402
-from engine.physics.pymunk2d.backend import COLLISION_SLOP, SLEEP_TIME  # noqa: E402
+from engine.physics.pymunk2d.backend import COLLISION_SLOP  # noqa: E402
 from engine.physics.pymunk2d.shapes import PLANE_DEPTH, PLANE_HALF_LENGTH  # noqa: E402
-from engine.world import PoseTable  # noqa: E402
-from systems.dynamics import PoseCopy  # noqa: E402
+from engine.physics.sleep import SLEEP_TIME  # noqa: E402
+from tools.bench_readback import EcsReadback, pose_table, time_readback  # noqa: E402
 
 DT = 1.0 / 60.0
 ITERATIONS = 20
@@ -93,10 +96,8 @@ def build_ours(n: int, sleeping: bool = False) -> PymunkBackend:
 def bench_one(n: int, steps: int, sleeping: bool = False) -> dict:
     """Alternate raw and backend blocks of steps; ms per step (medians, and means)."""
     raw, ours = build_raw(n, sleeping), build_ours(n, sleeping)
-    poses = PoseTable()  # the ECS pose table: entity = body key, as in the engine
-    keys = [*range(n), GROUND_KEY]
-    poses.adopt_many(keys, [Transform() for _ in keys])
-    copy = PoseCopy(poses, ours.read_state().keys)  # no body comes or goes here
+    # the ECS pose table (entity = body key, as in the engine); no body comes or goes here
+    readback = EcsReadback(ours, pose_table(ours.keys()))
     clock = time.perf_counter_ns
     blocks = max(1, steps // BLOCK)
     # per block of BLOCK steps, in ns: raw, our step, our sync, our contacts
@@ -107,7 +108,7 @@ def bench_one(n: int, steps: int, sleeping: bool = False) -> dict:
             t1 = clock()
             ours.step(DT)
             t2 = clock()
-            copy(ours.read_state())
+            readback()
             t3 = clock()
             ours.contacts()
             times[i, 1:] += t2 - t1, t3 - t2, clock() - t3
@@ -171,6 +172,16 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
               f"{r['sync_ms']:>7.3f} {r['ratio']:>6.3f}x {r['contacts_ms']:>9.3f} "
               f"{r['ratio_with_contacts']:>7.3f}x {'yes' if r['same_trajectory'] else 'NO':>5}",
               flush=True)
+    print("readback of every body into the ECS pose table, µs per call (median)")
+    for n in ns:
+        backend = build_ours(n, sleeping)
+        for _ in range(60):
+            backend.step(DT)
+        row = time_readback(backend)
+        backend.close()
+        print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                        for k, v in row.items()), flush=True)
+        rows.append(row)
     return rows
 
 

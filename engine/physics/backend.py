@@ -19,6 +19,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from components import Joint, Physical
+from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME, SleepState
 
 
 class BackendName(StrEnum):
@@ -137,6 +138,10 @@ class WorldSettings:
     iterations: int = 20
     max_contacts: int = 4
     auto_sleep: bool = True
+    #: The sleep rule's limits (see :mod:`engine.physics.sleep`): seconds quiet, m/s, rad/s.
+    sleep_time: float = SLEEP_TIME
+    sleep_linear: float = SLEEP_LINEAR
+    sleep_angular: float = SLEEP_ANGULAR
     material_pairs: list[MaterialPair] = field(default_factory=list)
     #: The solver's random state to start from (a saved state restores it); None: fresh.
     solver_seed: int | None = None
@@ -171,7 +176,16 @@ class DynamicsBackend(Protocol):
     def add_torque(self, key: int, torque: np.ndarray) -> None: ...
     def add_impulse(self, key: int, impulse: np.ndarray,
                     point: np.ndarray | None = None) -> None: ...
-    def set_sleeping(self, key: int, sleeping: bool) -> None: ...
+    def set_sleeping(self, key: int, sleeping: bool) -> None:
+        """Put a dynamic body to sleep (at zero velocity) or wake it."""
+
+    def set_collision_enabled(self, key: int, enabled: bool) -> None:
+        """While disabled the body collides with nothing (no contacts, no ray hits) but is
+        still simulated: gravity, joints and forces move it (a virtual hand reaching
+        through a table). Wakes the body."""
+
+    def set_gravity_enabled(self, key: int, enabled: bool) -> None:
+        """Whether world gravity acts on the body. Wakes the body."""
 
     # -- joints ------------------------------------------------------------
     def add_joint(self, key: int, joint: Joint) -> None: ...
@@ -180,9 +194,24 @@ class DynamicsBackend(Protocol):
     def joint_state(self, key: int) -> tuple[float, float]:
         """Position (angle or distance) and rate of a joint's first axis."""
 
+    def set_joint_target(self, key: int, position: np.ndarray, orientation: np.ndarray,
+                         max_force: float | None = None,
+                         max_torque: float | None = None) -> None:
+        """Move a ``six_dof`` joint's target pose (world frame; the virtual hand), and
+        optionally its force (N) and torque (N·m) bounds."""
+
+    def set_drive_limits(self, key: int, max_force: float, max_torque: float) -> None:
+        """Bound a ``six_dof`` joint's force (N) and torque (N·m)."""
+
     # -- batches -----------------------------------------------------------
     def read_state(self) -> BodyState:
-        """Every body's pose and velocity, in a fresh arrays (safe to publish)."""
+        """Every body's pose and velocity, in fresh arrays (safe to publish)."""
+
+    def read_state_into(self, out: np.ndarray) -> np.ndarray:
+        """Write every body's state into the first N rows of ``out`` (C-contiguous
+        float64, at least (N, 13), :class:`BodyState`'s row layout) and return the keys of
+        those rows: the same read-only array until a body is added or removed, so a
+        caller can plan its copy once per layout."""
 
     def write_state(self, state: BodyState) -> None: ...
     def contacts(self) -> np.ndarray:
@@ -201,35 +230,15 @@ class SupportsFaults(Protocol):
     def take_faults(self) -> list[tuple[int, str]]: ...
 
 
-@dataclass(frozen=True, slots=True)
-class SleepState:
-    """A body's standing with auto-sleep: what a saved state needs to sleep on time."""
-
-    asleep: bool
-    #: Steps in a row the body has been at rest; it sleeps at the backend's limit
-    #: (20 steps for ODE).
-    idle_steps: int = 0
-    #: (k, 6) recent centre-of-mass velocities (m/s, then rad/s; world frame), oldest
-    #: first, as many as the backend's rule averages (5 for ODE).
-    samples: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
-
-
 @runtime_checkable
 class SupportsSleepState(Protocol):
-    """Backends that keep their own auto-sleep counters and can hand them over, so a saved
-    state falls asleep exactly when the uninterrupted run would."""
+    """Backends that run the sleep rule (:mod:`engine.physics.sleep`) and can hand its
+    counters over, so a saved state falls asleep exactly when the uninterrupted run would."""
 
-    def sleep_states(self) -> dict[int, SleepState]: ...
+    def sleep_states(self) -> dict[int, SleepState]:
+        """Every body that is asleep or in a quiet stretch."""
 
-    def set_sleep_state(self, key: int, asleep: bool, idle_steps: int = 0,
-                        samples: np.ndarray | None = None) -> None: ...
-
-
-@runtime_checkable
-class SupportsJointTargets(Protocol):
-    """Backends whose six_dof constraint follows a moving target pose (the virtual hand)."""
-
-    def set_joint_target(self, key: int, position: np.ndarray, orientation: np.ndarray,
-                         max_force: float | None = None,
-                         max_torque: float | None = None) -> None: ...
-    def set_drive_limits(self, key: int, max_force: float, max_torque: float) -> None: ...
+    def set_sleep_state(self, key: int, state: SleepState) -> None:
+        """Restore one body's state, after the saved state's bodies and joints are made:
+        the wakes that making them caused are dropped (they are no wakes of the run the
+        saved state continues)."""

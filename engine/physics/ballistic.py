@@ -1,7 +1,8 @@
 """A collision-free backend: rigid bodies as free particles under gravity.
 
 It implements the whole DynamicsBackend protocol with plain numpy and no
-contacts or joints (each joint is refused once, with a warning), which makes it
+contacts or joints (each joint is refused once, with a warning, and calls that
+drive it do nothing), which makes it
 the cheapest deterministic backend for scheduler and tooling tests, and a
 useful ``--backend ballistic`` for scenes of projectiles and flying objects.
 """
@@ -50,7 +51,10 @@ class BallisticBackend:
         self._torque = np.zeros((0, 3))
         self._inv_mass = np.zeros(0)
         self._gravity_on = np.zeros(0)
+        self._dynamic = np.zeros(0, bool)
         self._targets: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._refused_joints: set[int] = set()
+        self._keys_array: np.ndarray | None = None  # cached, dropped on add/remove
 
     def configure(self, settings: WorldSettings) -> None:
         self.settings = settings
@@ -80,6 +84,8 @@ class BallisticBackend:
         self._torque = np.vstack([self._torque, np.zeros((1, 3))])
         self._inv_mass = np.append(self._inv_mass, 1.0 / mass if dynamic else 0.0)
         self._gravity_on = np.append(self._gravity_on, 1.0 if dynamic and body.gravity else 0.0)
+        self._dynamic = np.append(self._dynamic, dynamic)
+        self._keys_array = None
         if body.kind == "static":
             self._vel[-1] = 0.0
             self._ang[-1] = 0.0
@@ -88,10 +94,11 @@ class BallisticBackend:
         i = self._index.pop(key)
         self._keys.pop(i)
         for name in ("_pos", "_quat", "_vel", "_ang", "_force", "_torque",
-                     "_inv_mass", "_gravity_on"):
+                     "_inv_mass", "_gravity_on", "_dynamic"):
             setattr(self, name, np.delete(getattr(self, name), i, axis=0))
         self._index = {k: j for j, k in enumerate(self._keys)}
         self._targets.pop(key, None)
+        self._keys_array = None
 
     def body_count(self) -> int:
         return len(self._keys)
@@ -129,19 +136,44 @@ class BallisticBackend:
         if sleeping:
             self.set_velocity(key, np.zeros(3), np.zeros(3))
 
+    def set_collision_enabled(self, key: int, enabled: bool) -> None:
+        """Particles collide with nothing either way; an unknown key is still refused."""
+        if key not in self._index:
+            raise KeyError(f"no body with key {key}")
+
+    def set_gravity_enabled(self, key: int, enabled: bool) -> None:
+        i = self._index[key]
+        self._gravity_on[i] = 1.0 if enabled and self._dynamic[i] else 0.0
+
     # -- joints ------------------------------------------------------------
     def add_joint(self, key: int, joint: Joint) -> None:
         log.warning("joint %s (%s) ignored: the ballistic backend has no constraints",
                     joint.id or key, joint.kind)
+        self._refused_joints.add(key)
 
     def remove_joint(self, key: int) -> None:
-        return None
+        self._refused(key)
+        self._refused_joints.discard(key)
+
+    def _refused(self, key: int) -> None:
+        """Calls on a refused joint do nothing; on an unknown one they fail as elsewhere."""
+        if key not in self._refused_joints:
+            raise KeyError(f"no joint with key {key}")
 
     def set_motor(self, key: int, velocity: float, max_force: float) -> None:
-        return None
+        self._refused(key)
 
     def joint_state(self, key: int) -> tuple[float, float]:
+        self._refused(key)
         return (0.0, 0.0)
+
+    def set_joint_target(self, key: int, position: np.ndarray, orientation: np.ndarray,
+                         max_force: float | None = None,
+                         max_torque: float | None = None) -> None:
+        self._refused(key)
+
+    def set_drive_limits(self, key: int, max_force: float, max_torque: float) -> None:
+        self._refused(key)
 
     # -- stepping ----------------------------------------------------------
     def step(self, dt: float) -> None:
@@ -165,6 +197,20 @@ class BallisticBackend:
     def read_state(self) -> BodyState:
         return BodyState.from_arrays(np.array(self._keys, np.int64), self._pos, self._quat,
                                      self._vel, self._ang)
+
+    def read_state_into(self, out: np.ndarray) -> np.ndarray:
+        n = len(self._keys)
+        if out.shape[0] < n or out.shape[1:] != (13,):
+            raise ValueError(f"read_state_into needs an array of at least ({n}, 13), "
+                             f"got {out.shape}")
+        out[:n, 0:3] = self._pos
+        out[:n, 3:7] = self._quat
+        out[:n, 7:10] = self._vel
+        out[:n, 10:13] = self._ang
+        if self._keys_array is None:
+            self._keys_array = np.array(self._keys, np.int64)
+            self._keys_array.setflags(write=False)
+        return self._keys_array
 
     def write_state(self, state: BodyState) -> None:
         rows = np.array([self._index[int(k)] for k in state.keys], np.int64)

@@ -25,6 +25,7 @@ whoever forwards it.
 from __future__ import annotations
 
 import logging
+import sys
 import threading
 import time
 from collections import deque
@@ -89,9 +90,37 @@ def _restore_sleep(backend: DynamicsBackend, key: int, state: Any) -> None:
     from engine.physics.backend import SupportsSleepState
 
     if isinstance(backend, SupportsSleepState):
-        backend.set_sleep_state(key, state.asleep, state.idle_steps, state.samples)
+        backend.set_sleep_state(key, state)
     elif state.asleep:
         backend.set_sleeping(key, True)
+
+
+class _Tables:
+    """Buffers for published states, each reused only once nothing refers to it any more.
+
+    A published snapshot is therefore never written again, yet the steady state allocates
+    nothing: two or three buffers take turns, and the backend writes its rows straight
+    into one (``read_state_into``), warm in the cache, instead of into fresh memory.
+    """
+
+    #: Buffers kept; more are let go (a consumer held on to several snapshots).
+    KEEP = 4
+
+    def __init__(self) -> None:
+        self._buffers: list[np.ndarray] = []
+
+    def take(self, n: int) -> np.ndarray:
+        """A writable (n, 13) table no published snapshot refers to."""
+        for buf in self._buffers:
+            # the list, this loop's name and getrefcount's argument: nobody else holds it
+            if buf.shape[0] == n and sys.getrefcount(buf) == 3:
+                buf.setflags(write=True)
+                return buf
+        # the layout changed, or every buffer is still held: keep the newest of this size
+        self._buffers = [b for b in self._buffers if b.shape[0] == n][-(self.KEEP - 1):]
+        fresh = np.empty((n, 13))
+        self._buffers.append(fresh)
+        return fresh
 
 
 @dataclass(frozen=True, slots=True)
@@ -233,6 +262,7 @@ class PhysicsDriver(PhysicsPort):
         self._commands: deque[tuple[cmd.Command | Callable[[DynamicsBackend], Any],
                                     Future | None]] = deque()
         self._waiting: list[tuple[cmd.Command, int]] = []
+        self._tables = _Tables()
         self._contacts: list[np.ndarray] = []
         self._faults: list[tuple[int, str]] = []
         self._lock = threading.Lock()
@@ -339,7 +369,9 @@ class PhysicsDriver(PhysicsPort):
                         self._contacts.append(contacts)
                         self.contacts_total += len(contacts)
                     self._faults.extend(faults)
-        self.snapshot = Snapshot(self.steps, self.time, backend.read_state().freeze())
+        table = self._tables.take(backend.body_count())
+        keys = backend.read_state_into(table)
+        self.snapshot = Snapshot(self.steps, self.time, BodyState(keys, table).freeze())
         return spent
 
     # -- threaded mode ------------------------------------------------------

@@ -48,6 +48,7 @@ from engine.assets import AssetError, Assets, nodes_name
 from engine.assets.geometry import convex_hull
 from engine.physics.backend import MaterialPair, SleepState, WorldSettings
 from engine.physics.commands import SetSleepState
+from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
 from engine.rotation import euler_to_quat, rotate, view_problem
 from engine.scene.db import (
     INCLUDE,
@@ -131,7 +132,7 @@ class SceneSpec:
     #: The scene's random generator when a saved state was written (see random_state).
     random_state: dict[str, object] | None = None
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
-    #: Object ID -> auto-sleep state a saved state carries (see :class:`SleepState`).
+    #: Object ID -> sleep-rule state a saved state carries (see :class:`SleepState`).
     sleep: dict[str, SleepState] = field(default_factory=dict)
     content_dir: Path | None = None
     db: SceneDB | None = None
@@ -392,7 +393,7 @@ class _Builder:
             if phys("Trigger"):
                 comps.append(Trigger(mask=int(phys("Mask"))))
             self.physical_ids.add(oid)
-            if r("Asleep") or r("IdleSteps") or r.has("VelocitySamples"):
+            if any(map(r.has, ("Asleep", "SleepVelocity", "SleepTimer", "SleepReference"))):
                 self.sleep[oid] = self.sleep_spec(r)
         self.poses[oid] = (position, quat)
         if r.has("Sound"):
@@ -515,12 +516,22 @@ class _Builder:
         return _copy_shape(made)
 
     def sleep_spec(self, r: _Reader) -> SleepState:
-        """An object's saved auto-sleep state, so a loaded state falls asleep on time."""
-        if r("IdleSteps") < 0:
-            self.report.error(r.value("IdleSteps").loc, "IdleSteps must not be negative")
-        samples = np.array(r("VelocitySamples") or (), np.float64).reshape(-1, 6)
-        samples[:, 3:] = np.radians(samples[:, 3:])  # written in deg/s, like AngularVelocity
-        return SleepState(bool(r("Asleep")), max(int(r("IdleSteps")), 0), samples)
+        """An object's saved sleep-rule state, so a loaded state falls asleep on time."""
+        if not r("SleepTimer") >= 0:
+            self.report.error(r.value("SleepTimer").loc, "SleepTimer must not be negative")
+        if r.has("SleepTimer") and not r.has("SleepReference"):
+            self.report.error(r.value("SleepTimer").loc, "SleepTimer needs the "
+                              "SleepReference its quiet stretch began with")
+
+        def velocity(key: str) -> np.ndarray | None:
+            if not r.has(key):
+                return None
+            v = np.array(r(key), np.float64)
+            v[3:] = np.radians(v[3:])  # written in deg/s, like AngularVelocity
+            return v
+
+        return SleepState(bool(r("Asleep")), velocity("SleepVelocity"),
+                          max(float(r("SleepTimer")), 0.0), velocity("SleepReference"))
 
     # -- joints ------------------------------------------------------------
     def joint(self, blk: Block, index: int, spawned: set[str]) -> JointSpec | None:
@@ -593,11 +604,18 @@ class _Builder:
             pairs.append(MaterialPair(str(p("Material1")), str(p("Material2")),
                                       _opt(p("Friction")), _opt(p("Bounce")),
                                       _opt(p("Softness")), bool(p("Collide"))))
+        for key in ("SleepTime", "SleepLinear", "SleepAngular"):
+            if not (w(key) > 0 and math.isfinite(w(key))):
+                self.report.error(w.value(key).loc, f"{key} must be a positive number")
         spec.world = WorldSettings(gravity=_floats(w("Gravity")), erp=float(w("ERP")),
                                    cfm=float(w("CFM")), iterations=int(w("Iterations")),
                                    max_contacts=int(w("MaxContacts")),
-                                   auto_sleep=bool(w("AutoSleep")), material_pairs=pairs,
-                                   solver_seed=w("SolverSeed"))
+                                   auto_sleep=bool(w("AutoSleep")),
+                                   sleep_time=_positive(w("SleepTime"), SLEEP_TIME),
+                                   sleep_linear=_positive(w("SleepLinear"), SLEEP_LINEAR),
+                                   sleep_angular=math.radians(_positive(
+                                       w("SleepAngular"), math.degrees(SLEEP_ANGULAR))),
+                                   material_pairs=pairs, solver_seed=w("SolverSeed"))
         spec.material_pairs = pairs
         spec.time_step = float(w("TimeStep"))
         spec.backend = w("Dynamics")
@@ -687,6 +705,11 @@ class _Builder:
             states[owner] = SavedScript(str(r("Globals")), str(r("Locals")), timers, handlers)
             self.script_blocks[owner] = blk
         return states
+
+
+def _positive(value: float, default: float) -> float:
+    """A setting that must be positive, or its default where the file's was refused."""
+    return float(value) if value > 0 and math.isfinite(value) else default
 
 
 def _opt(v: Any) -> float | None:

@@ -17,12 +17,14 @@ later expressions); keys starting with a capital are checked against this schema
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 from components.joint import SCENE_JOINT_TYPES
 from components.shape import ShapeKind
 from engine.physics.backend import BackendName
+from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
 
 # Field types.
 INT_T = "int"
@@ -61,11 +63,6 @@ def _id(kind: str, required: bool = False) -> Field:
     return Field(STRING_T, "", f"name other declarations use to refer to this {kind}",
                  required=required)
 
-
-#: Auto-sleep: a body at rest this many steps in a row falls asleep; the rest test
-#: averages this many velocity samples (mirrors engine.physics.ode3d._ode).
-SLEEP_STEPS = 20
-SLEEP_SAMPLES = 5
 
 PRIMITIVES = (ShapeKind.SPHERE, ShapeKind.BOX, ShapeKind.CAPSULE, ShapeKind.CYLINDER,
               ShapeKind.PLANE)
@@ -144,14 +141,15 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Hand": _f(STRUCT_T, None, "a tracked hand driven toward a device's pose", struct="Hand"),
         "Controller": _f(STRUCT_T, doc="input bound to this object", struct="Controller"),
         "UserData": _f(ANY_T, None, "free-form data for custom systems", repeat=True),
-        # Auto-sleep state (written by --save-state so a loaded state sleeps on time).
+        # The sleep rule's state (engine.physics.sleep; written by --save-state so a
+        # loaded state falls asleep when the uninterrupted run would).
         "Asleep": _f(BOOL_T, 0, "1: the body starts asleep (until something wakes it)"),
-        "IdleSteps": _f(INT_T, 0, f"steps in a row the body has been at rest; it falls "
-                        f"asleep after {SLEEP_STEPS}"),
-        "VelocitySamples": _f(VECTOR_T, None, "the last velocities auto-sleep averages, "
-                              "oldest first: [vx vy vz wx wy wz] per sample, m/s and deg/s "
-                              f"of the centre of mass, at most {SLEEP_SAMPLES} samples",
-                              lengths=tuple(range(6, 6 * SLEEP_SAMPLES + 1, 6))),
+        "SleepVelocity": _f(VECTOR_T, None, "the smoothed velocity of a calm body "
+                            "[vx vy vz wx wy wz] (centre of mass; m/s, deg/s)", lengths=(6,)),
+        "SleepTimer": _f(FLOAT_T, 0.0, "s the body has been quiet (slow and steady); it "
+                         "falls asleep, with what it touches, at the World's SleepTime"),
+        "SleepReference": _f(VECTOR_T, None, "the smoothed velocity its quiet stretch began "
+                             "with [vx vy vz wx wy wz] (m/s, deg/s)", lengths=(6,)),
     },
     "Visual": {
         "Geometry": _f(STRUCT_T, None,
@@ -350,7 +348,14 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "ERP": _f(FLOAT_T, 0.2, "error reduction per step"),
         "CFM": _f(FLOAT_T, 1e-5, "constraint force mixing"),
         "MaxContacts": _f(INT_T, 4, "per pair of geometries"),
-        "AutoSleep": _f(BOOL_T, 1, "1: bodies at rest fall asleep (and cost nothing)"),
+        "AutoSleep": _f(BOOL_T, 1, "bodies that rest fall asleep (stop being simulated) "
+                        "until something wakes them; see engine.physics.sleep"),
+        "SleepTime": _f(FLOAT_T, SLEEP_TIME, "s a body must stay quiet (slow and not "
+                        "accelerated) before it and what it touches fall asleep"),
+        "SleepLinear": _f(FLOAT_T, SLEEP_LINEAR, "m/s: slow means a smoothed speed under "
+                          "this; it is steady when its velocity stays within a tenth of it"),
+        "SleepAngular": _f(FLOAT_T, round(math.degrees(SLEEP_ANGULAR), 12), "deg/s: the same "
+                           "for spin"),
         "Time": _f(FLOAT_T, 0.0, "s, simulated time this state was saved at"),
         "SolverSeed": _f(INT_T, None, "the solver's random state when this state was saved"),
         "RandomState": _f(STRING_T, None, "the scene's random generator (randInterval and "

@@ -89,19 +89,19 @@ def _rebase_assets(block: Block, schema: str, src: Path, dst: Path) -> None:
 
 
 def _sleep_keys(block: Block, state: SleepState | None) -> None:
-    """Write a body's auto-sleep state (``None``: fresh, or a backend that keeps none)."""
-    for key in ("Asleep", "IdleSteps", "VelocitySamples"):
+    """Write a body's sleep-rule state (``None``: fresh, or a backend that keeps none)."""
+    for key in ("Asleep", "SleepVelocity", "SleepTimer", "SleepReference"):
         _drop(block, key)
     if state is None:
         return
     if state.asleep:
         _set(block, "Asleep", Value(INT, 1, _HERE))
-    if state.idle_steps:
-        _set(block, "IdleSteps", Value(INT, int(state.idle_steps), _HERE))
-    if len(state.samples):
-        _set(block, "VelocitySamples", _vec(
-            x if k < 3 else exact_degrees(x)
-            for row in state.samples.tolist() for k, x in enumerate(row)))
+    for key, v in (("SleepVelocity", state.smoothed), ("SleepReference", state.reference)):
+        if v is not None:
+            _set(block, key, _vec(x if k < 3 else exact_degrees(x)
+                                  for k, x in enumerate(v.tolist())))
+    if state.reference is not None:
+        _set(block, "SleepTimer", Value(FLOAT, float(state.timer), _HERE))
 
 
 def _literal(db: SceneDB, src: Path | None, dst: Path | None) -> Block:

@@ -19,6 +19,8 @@ from engine.physics import BackendUnavailable, create_backend
 from engine.physics.backend import DynamicsBackend, WorldSettings
 
 BACKENDS = ["pymunk", "ode"]
+#: Every backend, for what even the collision-free one must do.
+ALL_BACKENDS = [*BACKENDS, "ballistic"]
 G = 9.81
 IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 GROUND = 1000
@@ -83,14 +85,11 @@ def _create(name: str) -> DynamicsBackend:
         pytest.skip(f"{name} backend not importable here: {exc}")
 
 
-@pytest.fixture(params=BACKENDS)
-def make_backend(request: pytest.FixtureRequest) -> Iterator[
-        Callable[..., DynamicsBackend]]:
-    """Factory: a fresh, configured backend of the parametrised kind (closed afterwards)."""
+def _factory(name: str) -> Iterator[Callable[..., DynamicsBackend]]:
     made: list[DynamicsBackend] = []
 
     def make(**settings: object) -> DynamicsBackend:
-        backend = _create(request.param)
+        backend = _create(name)
         settings.setdefault("auto_sleep", False)
         backend.configure(WorldSettings(**settings))  # type: ignore[arg-type]
         made.append(backend)
@@ -99,6 +98,20 @@ def make_backend(request: pytest.FixtureRequest) -> Iterator[
     yield make
     for backend in made:
         backend.close()
+
+
+@pytest.fixture(params=BACKENDS)
+def make_backend(request: pytest.FixtureRequest) -> Iterator[
+        Callable[..., DynamicsBackend]]:
+    """Factory: a fresh, configured backend of the parametrised kind (closed afterwards)."""
+    yield from _factory(request.param)
+
+
+@pytest.fixture(params=ALL_BACKENDS)
+def any_backend(request: pytest.FixtureRequest) -> Iterator[DynamicsBackend]:
+    """A fresh backend of every kind, the collision-free one included."""
+    for make in _factory(request.param):
+        yield make()
 
 
 @pytest.fixture

@@ -28,9 +28,65 @@ from engine.physics.backend import (
 pytestmark = pytest.mark.filterwarnings("error::pytest.PytestUnraisableExceptionWarning")
 
 
-def test_implements_protocol(backend: DynamicsBackend) -> None:
-    assert isinstance(backend, DynamicsBackend)
-    assert isinstance(backend.name, str) and backend.name
+def test_implements_protocol(any_backend: DynamicsBackend) -> None:
+    assert isinstance(any_backend, DynamicsBackend)
+    assert isinstance(any_backend.name, str) and any_backend.name
+
+
+def test_read_state_into_fills_a_callers_table_with_cached_keys(kit, any_backend) -> None:
+    backend = any_backend
+    for key in (5, 3, 9):
+        kit.add(backend, key, kit.sphere(), (float(key), 0.0, 2.0), kit.quat_y(0.1 * key))
+    backend.set_velocity(3, np.array([1.0, 0.0, 0.5]), np.array([0.0, 2.0, 0.0]))
+    backend.step(1 / 60)
+    table = np.full((5, 13), np.nan)  # room to spare: only the first rows are written
+    keys = backend.read_state_into(table)
+    state = backend.read_state()
+    np.testing.assert_array_equal(keys, state.keys)
+    np.testing.assert_array_equal(table[:3], state.table)
+    assert np.isnan(table[3:]).all()
+    backend.step(1 / 60)
+    assert backend.read_state_into(table) is keys  # the same array while no body comes or goes
+    with pytest.raises(ValueError):
+        keys[0] = 1  # read-only: every caller shares it
+    kit.add(backend, 7, kit.sphere(), (7.0, 0.0, 2.0))
+    assert sorted(backend.read_state_into(table).tolist()) == [3, 5, 7, 9]
+    with pytest.raises(ValueError, match="at least"):
+        backend.read_state_into(np.zeros((3, 13)))
+
+
+def test_gravity_off_floats_and_back_on_falls(kit, any_backend) -> None:
+    backend, dt = any_backend, 1 / 240
+    kit.add(backend, 1, kit.sphere(), (0.0, 0.0, 5.0))
+    kit.add(backend, 2, kit.sphere(), (1.0, 0.0, 5.0))
+    backend.set_gravity_enabled(1, False)
+    kit.run(backend, 0.5, dt)
+    assert kit.row(backend, 1)["position"][2] == pytest.approx(5.0, abs=1e-12)
+    assert kit.row(backend, 2)["position"][2] < 5.0 - 0.5 * kit.G * 0.25 + kit.G * dt * 0.5
+    backend.set_gravity_enabled(1, True)
+    kit.run(backend, 0.5, dt)
+    assert kit.row(backend, 1)["linear"][2] == pytest.approx(-kit.G * 0.5, rel=1e-6)
+
+
+def test_a_body_with_collisions_off_falls_through_the_floor(kit, backend) -> None:
+    """Still simulated (it falls, rays miss it), colliding with nothing; back on, it lands."""
+    kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
+    kit.add(backend, 1, kit.box((0.2, 0.2, 0.2)), (0.0, 0.0, 0.5))
+    kit.add(backend, 2, kit.box((0.2, 0.2, 0.2)), (1.0, 0.0, 0.5))
+    kit.add(backend, 3, kit.box((0.2, 0.2, 0.2)), (0.0, 0.0, 1.5))  # above 1, falls onto it
+    backend.set_collision_enabled(1, False)
+    hit = backend.raycast(np.array([0.0, 0.0, 3.0]), np.array([0.0, 0.0, -1.0]), 5.0,
+                          ignore=3)
+    assert hit is not None and hit.key == kit.GROUND  # not body 1, which is in the way
+    kit.run(backend, 1.0, 1 / 240)
+    assert kit.row(backend, 1)["position"][2] < -1.0  # through the floor
+    assert kit.row(backend, 3)["position"][2] == pytest.approx(0.1, abs=0.01)  # and through 1
+    assert kit.row(backend, 2)["position"][2] == pytest.approx(0.1, abs=0.01)
+    assert not [c for c in backend.contacts() if 1 in (c["a"], c["b"])]
+    backend.set_collision_enabled(2, False)
+    backend.set_collision_enabled(2, True)  # back on: it still rests where it was
+    kit.run(backend, 0.5, 1 / 240)
+    assert kit.row(backend, 2)["position"][2] == pytest.approx(0.1, abs=0.01)
 
 
 def test_free_fall_follows_z0_minus_half_g_t_squared(kit, backend: DynamicsBackend) -> None:
@@ -347,10 +403,9 @@ def test_stack_comes_to_rest_and_sleeps(kit, make_backend) -> None:
     kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
     for i in range(3):
         kit.add(backend, i + 1, kit.box((0.5, 0.5, 0.5)), (0.0, 0.0, 0.25 + 0.501 * i))
-    kit.run(backend, 4.0, 1 / 60)
+    kit.run(backend, 4.0, 1 / 100)
     state = backend.read_state()
-    moving = np.abs(state.linear_velocity).max()
-    assert moving < 1e-3
+    assert not state.linear_velocity.any()  # asleep: at rest
     np.testing.assert_allclose(np.sort(state.position[state.keys != kit.GROUND, 2]),
                                [0.25, 0.75, 1.25], atol=0.02)
     # beyond the protocol, but both backends offer it
@@ -472,6 +527,13 @@ def test_six_dof_without_body_b_follows_set_joint_target(kit, backend) -> None:
     backend.set_joint_target(10, np.array([0.5, 0.0, 1.2]), kit.quat_y(0.3), max_force=2.0)
     kit.run(backend, 1.0, 1 / 120)  # 2 N cannot hold 1 kg up: it sinks
     assert kit.row(backend, 1)["position"][2] < 0.9
+    sinking = kit.row(backend, 1)["linear"][2]
+    backend.set_drive_limits(10, 40.0, 40.0)  # far off target: the drive pushes at its bound
+    backend.step(1 / 120)
+    gained = kit.row(backend, 1)["linear"][2] - sinking
+    assert gained == pytest.approx((40.0 - kit.G) / 120, rel=1e-3)
+    with pytest.raises(ValueError):
+        backend.set_drive_limits(10, -1.0, 1.0)
 
 
 def test_keyless_static_plane_is_key_minus_one(kit, backend) -> None:

@@ -128,10 +128,9 @@ def test_write_state_accepts_any_key_order_and_rejects_unknown_keys() -> None:
     with pytest.raises(KeyError, match="123"):
         b.write_state(BodyState.from_arrays(np.array([123]), np.zeros((1, 3)), I4[None],
                                             np.zeros((1, 3)), np.zeros((1, 3))))
-    out = np.empty((3, 7))
-    b.read_poses(out)
-    np.testing.assert_array_equal(out[:, :3], s.position)
-    np.testing.assert_array_equal(b.keys(), s.keys)
+    out = np.empty((3, 13))
+    np.testing.assert_array_equal(b.read_state_into(out), s.keys)
+    np.testing.assert_array_equal(out, s.table)
 
 
 def test_exploding_joint_is_reported_reset_and_disabled_and_the_world_goes_on() -> None:

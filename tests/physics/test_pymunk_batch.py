@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pymunk
-import pymunk.batch
 import pytest
 
 from components import Physical, Shape
@@ -15,48 +14,50 @@ from engine.physics.pymunk2d import PymunkBackend
 pytestmark = pytest.mark.filterwarnings("error::pytest.PytestUnraisableExceptionWarning")
 
 
-def _contacts_from_pymunk_batch(backend: PymunkBackend) -> dict:
-    """The same contacts through pymunk's own batch API: {(a, b): (point, normal, impulse)}."""
-    f = pymunk.batch.ArbiterFields
-    buf = pymunk.batch.Buffer()
-    pymunk.batch.get_space_arbiters(
-        backend._space, f.BODY_A_ID | f.BODY_B_ID | f.CONTACT_COUNT | f.TOTAL_IMPULSE
-        | f.NORMAL | f.POINT_A_1 | f.POINT_B_1 | f.POINT_A_2 | f.POINT_B_2, buf)
-    ints = np.frombuffer(buf.int_buf(), np.int64).reshape(-1, 3)
-    fl = np.frombuffer(buf.float_buf(), np.float64).reshape(-1, 12)
-    key_of = {rec.body.id: key for key, rec in backend._bodies.items()}
+def _contacts_one_arbiter_at_a_time(backend: PymunkBackend) -> dict:
+    """The same contacts through pymunk's per-arbiter API, body by body:
+    {(a, b): (point, normal, impulse)}."""
+    key_of = {rec.body: key for key, rec in backend._bodies.items()}
     moving = {key for key, rec in backend._bodies.items()
               if rec.body.body_type != pymunk.Body.STATIC}
     out = {}
-    for (id_a, id_b, count), row in zip(ints, fl, strict=True):
-        if count == 0:
-            continue
-        ka, kb = key_of.get(int(id_a), -1), key_of.get(int(id_b), -1)
-        normal = -row[2:4]  # pymunk's points from a to b; ours from b to a
+
+    def collect(arbiter: pymunk.Arbiter) -> None:
+        points = arbiter.contact_point_set.points
+        ba, bb = arbiter.bodies
+        if not points or all(b.is_sleeping or b.body_type == pymunk.Body.STATIC
+                             for b in (ba, bb)):
+            return  # sleepers keep their contacts but are not collided (as under ODE)
+        ka, kb = key_of.get(ba, -1), key_of.get(bb, -1)
+        normal = -np.array(arbiter.normal)  # pymunk's points from a to b; ours from b to a
         if (ka not in moving, ka) > (kb not in moving, kb):  # the static side is b
             ka, kb, normal = kb, ka, -normal
-        point = (row[4:6] + row[6:8] + row[8:10] + row[10:12]) / (2 * count)
-        out[ka, kb] = (point, normal, float(np.hypot(*row[:2])))
+        point = sum(np.array(p.point_a) + np.array(p.point_b) for p in points) / (
+            2 * len(points))
+        out[ka, kb] = (point, normal, float(np.hypot(*arbiter.total_impulse)))
+
+    for rec in backend._bodies.values():
+        rec.body.each_arbiter(collect)
     return out
 
 
-def test_contacts_match_pymunks_own_batch_read(kit) -> None:
-    """The compiled arbiter walk finds what pymunk's batch API finds, body for body."""
+def test_contacts_match_pymunks_arbiters_one_by_one(kit) -> None:
+    """The batch read finds what pymunk's per-arbiter API finds, body for body."""
     backend = PymunkBackend()
     backend.configure(WorldSettings(auto_sleep=True))
     kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
-    for i in range(300):  # enough bodies that the pointer table must probe past collisions
+    for i in range(300):  # boxes and balls in rows, falling onto each other
         kit.add(backend, 900 - i, kit.box((0.4, 0.4, 0.4)) if i % 2 else kit.sphere(0.2),
                 (0.5 * (i % 30), 0.0, 0.2 + 0.45 * (i // 30)))
     compared = 0
-    for step in range(120):  # they settle and fall asleep (and drop their arbiters) at ~1 s
+    for step in range(120):  # they settle and fall asleep (and drop their arbiters)
         backend.step(1 / 60)
         if step == 30:
             backend.remove_body(890)
         if step % 20:
             continue
         ours = backend.contacts()
-        theirs = _contacts_from_pymunk_batch(backend)
+        theirs = _contacts_one_arbiter_at_a_time(backend)
         assert len(ours) == len(theirs)
         compared += len(ours)
         for row in ours:
@@ -165,14 +166,13 @@ def test_a_body_gone_non_finite_is_reset_and_reported(kit) -> None:
     assert kit.row(backend, 2)["position"][2] < 5.0
 
 
-def test_read_poses_fills_rows_in_keys_order(kit) -> None:
+def test_read_state_into_fills_rows_in_keys_order(kit) -> None:
     backend = PymunkBackend()
     for key in (5, 3, 9):
         kit.add(backend, key, kit.sphere(), (float(key), 1.0, 2.0), kit.quat_y(0.1 * key))
     backend.step(1 / 60)
-    poses = np.zeros((3, 7))
-    backend.read_poses(poses)
+    table = np.zeros((3, 13))
+    assert backend.read_state_into(table).tolist() == [3, 5, 9]
     state = backend.read_state()
+    np.testing.assert_array_equal(table, state.table)
     np.testing.assert_array_equal(backend.keys(), state.keys)
-    np.testing.assert_array_equal(poses[:, :3], state.position)
-    np.testing.assert_array_equal(poses[:, 3:], state.orientation)

@@ -27,7 +27,7 @@ from engine.scene import (
     write,
     write_state,
 )
-from engine.scene.db import STRUCTURE, VECTOR
+from engine.scene.db import STRUCTURE, VECTOR, SceneDB
 from systems import create_engine
 
 pytest.importorskip("engine.physics.ode3d")
@@ -99,21 +99,24 @@ Object { ID "right" Position [15.5 0.1 2.2]
 Joint { Type "Fixed" Bodies ["left" "right"] }
 """
 
-#: Boxes that slide to rest around t = 2 s: at the save one sleeps, one is counting idle
-#: steps, one still slides. A stack that sleeps at once, until a pebble lands on it at 1.9 s.
+#: Boxes that slide to rest before and around t = 2 s: at the save one sleeps, one is in
+#: its quiet stretch, one still slides. A stack of crates that sleeps by about 1.2 s,
+#: until a pebble lands on it at 1.9 s.
 SETTLING = """\
 World { TimeStep 0.01 }
 Object { ID "ground" Dynamic 0 PhysicalAttributes { Geometry { Primitive "plane" } } }
-Object { ID "slider1" Position [0 0 0.25] Velocity [9.5 0 0]
+Object { ID "slider1" Position [0 0 0.25] Velocity [8 0 0]
   PhysicalAttributes { Mass 1 Geometry { Primitive "box" Size [0.5] } } }
-Object { ID "slider2" Position [0 2 0.25] Velocity [8.6 0 0] AngularVelocity [0 0 40]
+Object { ID "slider2" Position [0 2 0.25] Velocity [6 0 0] AngularVelocity [0 0 40]
   PhysicalAttributes { Mass 1 Geometry { Primitive "box" Size [0.5] } } }
 Object { ID "slider3" Position [0 4 0.25] Velocity [10.4 0 0]
   PhysicalAttributes { Mass 1 Geometry { Primitive "box" Size [0.5] } } }
-Object { ID "base" Position [-3 0 0.5] PhysicalAttributes { Geometry { Primitive "box" } } }
-Object { ID "middle" Position [-3 0.05 1.51] PhysicalAttributes { Geometry { Primitive "box" } } }
+Object { ID "base" Position [-3 0 0.5]
+  PhysicalAttributes { Mass 500 Geometry { Primitive "box" } } }
+Object { ID "middle" Position [-3 0.05 1.51]
+  PhysicalAttributes { Mass 500 Geometry { Primitive "box" } } }
 Object { ID "top" Position [-3 -0.05 2.6] Orientation [0 0 20]
-  PhysicalAttributes { Geometry { Primitive "box" } } }
+  PhysicalAttributes { Mass 500 Geometry { Primitive "box" } } }
 Object { ID "pebble" Position [-3.2 0.1 19.5]
   PhysicalAttributes { Mass 0.05 Geometry { Primitive "sphere" Size [0.2] } } }
 """
@@ -244,14 +247,24 @@ def test_saved_jointed_state_continues_on_the_2d_backend_too(tmp_path: Path) -> 
     np.testing.assert_allclose(again, straight, atol=1e-6, rtol=0)
 
 
+def _asleep(db: SceneDB, oid: str) -> bool:
+    return db.find(f"Object[{oid}]/Asleep") is not None
+
+
 def test_saved_sleeping_state_continues_exactly(tmp_path: Path) -> None:
     straight, _ = run(SETTLING, 3.0, tmp_path)
     again, (saved, end) = resumed(SETTLING, [2.0, 1.0], tmp_path)
     np.testing.assert_allclose(again, straight, atol=1e-6, rtol=0)
-    # at the save one slider sleeps, one counts idle steps, one still slides
-    assert values(saved, "Asleep") == [[1]]
-    assert [5] in values(saved, "IdleSteps") and len(values(saved, "VelocitySamples")) >= 5
-    assert len(values(end, "Asleep")) == 3  # every slider sleeps by 3 s
+    at_save, at_end = parse_text(saved), parse_text(end)
+    # at the save one slider sleeps, one is in its quiet stretch, one still slides; the
+    # stack, asleep from about 1.2 s, was woken by the pebble at 1.9 s and settles again
+    assert [_asleep(at_save, o) for o in ("slider1", "slider2", "slider3", "base")] == \
+        [False, True, False, False]
+    assert at_save.find("Object[slider1]/SleepTimer").data > 0
+    assert len(at_save.find("Object[slider1]/SleepReference").data) == 6
+    assert at_save.find("Object[slider3]/SleepTimer") is None
+    assert at_save.find("Object[base]/SleepTimer") is not None
+    assert all(_asleep(at_end, o) for o in ("slider1", "slider2", "slider3"))  # all by 3 s
 
 
 def test_resaving_keeps_the_first_reference_poses(tmp_path: Path) -> None:
@@ -307,8 +320,9 @@ def test_a_loaded_state_restores_each_bodys_sleep(tmp_path: Path) -> None:
         ids = instantiate(engine, spec)
         engine.run(frames=0)
         states = engine.physics.request(lambda b: b.sleep_states()).result()
-        assert states[ids["slider2"]].asleep and states[ids["slider1"]].idle_steps == 5
-        assert not states[ids["slider1"]].asleep
+        assert states[ids["slider2"]].asleep and not states[ids["slider1"]].asleep
+        assert states[ids["slider1"]].timer == \
+            parse_text(saved).find("Object[slider1]/SleepTimer").data
         assert SceneIds in engine.resources
 
 
@@ -318,7 +332,12 @@ def test_sleep_keys_are_checked_where_they_are_written(tmp_path: Path) -> None:
         path.write_text(text)
         return [(d.line, d.col, d.message) for d in check(path) if d.is_error]
 
-    ((line, col, message),) = errors('Object { ID "a"\n  IdleSteps -3 }\n')
-    assert (line, col, message) == (2, 13, "IdleSteps must not be negative")
-    ((line, col, message),) = errors('Object { ID "a"\n  VelocitySamples [1 2 3] }\n')
-    assert (line, col) == (2, 19) and "6, 12, 18, 24 or 30 numbers" in message
+    ((line, col, message),) = errors(
+        'Object { ID "a"\n  SleepTimer -3 SleepReference [0 0 0 0 0 0] }\n')
+    assert (line, col, message) == (2, 14, "SleepTimer must not be negative")
+    ((line, col, message),) = errors('Object { ID "a"\n  SleepTimer 0.2 }\n')
+    assert (line, col) == (2, 14) and "needs the SleepReference" in message
+    ((line, col, message),) = errors('Object { ID "a"\n  SleepVelocity [1 2 3] }\n')
+    assert (line, col) == (2, 17) and "6 numbers" in message
+    ((line, col, message),) = errors('World {\n  SleepTime 0 }\n')
+    assert (line, col, message) == (2, 13, "SleepTime must be a positive number")

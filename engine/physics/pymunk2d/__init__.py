@@ -5,9 +5,10 @@ Select it with ``--backend pymunk`` or :func:`engine.physics.create_backend`
 and rotation about Y are simulated, Y positions and out-of-plane tilts are kept
 as authored, and anything the plane cannot hold is logged once per object on
 ``colosseum.physics.pymunk``. Beyond the protocol it offers what the ODE backend
-offers, with the same meaning: ``set_joint_target``, ``add_static_plane``,
-``raycast(..., ignore, mask)``, ``is_sleeping``, ``has_joint``, ``keys``,
-``read_poses`` and ``take_faults``.
+offers, with the same meaning: ``add_static_plane``, ``is_sleeping``, ``has_joint``,
+``keys``, ``take_faults``, and the sleep rule's state (``sleep_states``,
+``set_sleep_state``). It uses pymunk's public API only (state and contacts come
+through ``pymunk.batch``).
 """
 
 from engine.physics.pymunk2d.backend import PymunkBackend

@@ -10,6 +10,12 @@ pair pass through each other (``collide=False``). Softness has no pymunk
 counterpart and is ignored (reported once); pymunk bounces at any impact speed, so
 ``bounce_velocity`` is ignored too.
 
+Sleeping is :mod:`engine.physics.sleep`'s rule, as under ODE. chipmunk's own sleeping
+stays on with a timer that never runs out (:data:`NEVER`), so chipmunk keeps its islands
+and wakes a sleeping group that an awake body touches, but only the rule puts bodies to
+sleep: each island as one chipmunk group, so they wake together. The rule reads the
+state through ``batch`` (pymunk's public ``pymunk.batch``), which also tells who sleeps.
+
 Whatever the plane cannot represent is reported once per object on the logger
 ``colosseum.physics.pymunk`` with the approximation used, never raised. Bad calls
 (unknown keys, unknown body or joint kinds) raise KeyError or ValueError naming them.
@@ -23,7 +29,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pymunk
-from pymunk._chipmunk import ffi, lib
 
 from components import Joint, MaterialProps, Physical, Shape
 from engine.physics.backend import (
@@ -33,21 +38,22 @@ from engine.physics.backend import (
     RayHit,
     WorldSettings,
 )
-from engine.physics.pymunk2d import _sync
+from engine.physics.pymunk2d.batch import SpaceReader
 from engine.physics.pymunk2d.joints import JointRecord, build_joint
 from engine.physics.pymunk2d.planar import split_orientation
 from engine.physics.pymunk2d.shapes import BuiltShape, build_shape
+from engine.physics.sleep import SleepRule, SleepState
 
 log = logging.getLogger("colosseum.physics.pymunk")
 
-#: Seconds of rest before a body group falls asleep when ``auto_sleep`` is on.
-SLEEP_TIME = 0.5
 #: Overlap allowed between shapes (m); pymunk's default 0.1 is meant for pixels.
 COLLISION_SLOP = 1e-3
+#: chipmunk's sleep timer while auto-sleep is on: chipmunk keeps its islands and wakes
+#: what an awake body touches, but never decides on its own (the sleep rule does).
+NEVER = 1e300
+#: A shape filter that collides with nothing (``set_collision_enabled(key, False)``).
+NOTHING = pymunk.ShapeFilter(categories=0, mask=0)
 
-#: Addresses of the chipmunk functions the compiled copy calls (pymunk's own chipmunk).
-_FUNCTIONS = tuple(int(ffi.cast("uintptr_t", ffi.addressof(lib, name)))
-                   for name in _sync.FUNCTIONS)
 _KINDS = {
     "dynamic": pymunk.Body.DYNAMIC,
     "static": pymunk.Body.STATIC,
@@ -74,6 +80,9 @@ class PymunkBackend:
     def __init__(self) -> None:
         self._space = pymunk.Space()
         self._space.collision_slop = COLLISION_SLOP
+        # the world's own static body (joints to the world, keyless planes), made now so
+        # pymunk lists it among the static bodies from the first read on
+        self._ground = self._space.static_body
         self._bodies: dict[int, _BodyRecord] = {}
         self._joints: dict[int, JointRecord] = {}
         self._material_types: dict[str, int] = {}
@@ -83,13 +92,18 @@ class PymunkBackend:
         self._contacts: np.ndarray | None = np.zeros(0, CONTACT_DTYPE)
         self._dirty = True
         self._keys = np.zeros(0, np.int64)
+        self._records: list[_BodyRecord] = []  # by row
         self._row: dict[int, int] = {}
-        self._y_ext = np.zeros(1)
-        self._sync: _sync.SpaceSync | None = None
+        self._y = np.zeros(0)
+        self._reader: SpaceReader | None = None
         self._sleep_on = True
+        self._rule = SleepRule()
+        self._woken: set[int] = set()  # keys woken explicitly since the rule last looked
+        self._joint_pairs: np.ndarray | None = None  # (M, 2) body keys of the joints
         self._sliders: dict[int, JointRecord] = {}
-        self._always_awake: list[pymunk.Body] = []
-        self._last_good = BodyState.empty()
+        #: The last read that was all finite: keys, and each row's (x, z, θ, vx, vz, ω).
+        self._last_good = (np.zeros(0, np.int64), np.zeros((0, 6)))
+        self._read_rows = np.zeros((0, 6))  # the next read's rows, swapped in when good
         self._faults: list[tuple[int, str]] = []
         self.configure(WorldSettings())
 
@@ -114,7 +128,14 @@ class PymunkBackend:
         # the share left after one second.
         erp = min(max(settings.erp, 0.0), 0.99)
         space.collision_bias = (1.0 - erp) ** 60
-        space.sleep_time_threshold = SLEEP_TIME if settings.auto_sleep else math.inf
+        self._rule.configure(settings.sleep_time, settings.sleep_linear,
+                             settings.sleep_angular)
+        if self._sleep_on and not settings.auto_sleep:  # everyone awake, nothing counted
+            for rec in self._bodies.values():
+                if rec.body.body_type == pymunk.Body.DYNAMIC:
+                    rec.body.activate()
+            self._rule.forget(slice(None))
+        space.sleep_time_threshold = NEVER if settings.auto_sleep else math.inf
         self._sleep_on = bool(settings.auto_sleep)
         self._pairs.clear()
         for pair in settings.material_pairs:
@@ -143,13 +164,13 @@ class PymunkBackend:
         return ctype
 
     def step(self, dt: float) -> None:
+        """Step the space; then let the sleep rule put quiet islands to sleep."""
         for rec in self._sliders.values():
             rec.drive_slider(dt)
-        if self._sleep_on:
-            for body in self._always_awake:
-                body.activate()
         self._space.step(dt)
         self._contacts = None
+        if self._sleep_on:
+            self._apply_sleep(dt)
 
     def close(self) -> None:
         for key in list(self._joints):
@@ -188,8 +209,7 @@ class PymunkBackend:
         if mat.softness:
             self._warn(f"material {mat.name}", "softness",
                        "softness is not supported by pymunk; ignored")
-        filt = pymunk.ShapeFilter(categories=body.category & 0xFFFFFFFF,
-                                  mask=body.mask & 0xFFFFFFFF)
+        filt = self._filter(body)
         ctype = (self._bouncy(mat.name) if mat.bounce > 0
                  else self._material_types.get(mat.name, 0))
         shapes = [b.shape for b in built]
@@ -205,12 +225,10 @@ class PymunkBackend:
         self._space.add(pbody, *shapes)
         rec = _BodyRecord(key, pbody, shapes, body, float(position[1]), rest)
         self._bodies[key] = rec
-        if not static and not body.can_sleep:
-            self._always_awake.append(pbody)
+        self._dirty = True
         if linear_velocity is not None or angular_velocity is not None:
             self.set_velocity(key, np.zeros(3) if linear_velocity is None else linear_velocity,
                               np.zeros(3) if angular_velocity is None else angular_velocity)
-        self._dirty = True
 
     def _mass_properties(self, obj: str, body: Physical,
                          built: list[BuiltShape]) -> tuple[float, float, tuple[float, float]]:
@@ -243,13 +261,11 @@ class PymunkBackend:
 
     def remove_body(self, key: int) -> None:
         rec = self._record(key)
-        if self._contacts is None:
-            self._contacts = self._space_sync().contacts()
+        if self._contacts is None:  # the last step's, while the reader still knows the body
+            self._contacts = self._space_reader().contacts()
         for jkey in list(rec.joints):
             log.info("joint %s removed with body %s", jkey, key)
             self.remove_joint(jkey)
-        if rec.body in self._always_awake:
-            self._always_awake.remove(rec.body)
         self._space.remove(rec.body, *rec.shapes)
         del self._bodies[rec.key]
         self._dirty = True
@@ -276,11 +292,12 @@ class PymunkBackend:
         self._set_y(rec, float(position[1]))
         if rec.body.body_type == pymunk.Body.STATIC:
             self._space.reindex_shapes_for_body(rec.body)
+        self._woken.add(rec.key)
 
     def _set_y(self, rec: _BodyRecord, y: float) -> None:
         rec.y = y
         if not self._dirty:
-            self._y_ext[self._row[rec.key]] = y
+            self._y[self._row[rec.key]] = y
 
     def set_velocity(self, key: int, linear: np.ndarray, angular: np.ndarray) -> None:
         rec = self._record(key)
@@ -288,6 +305,7 @@ class PymunkBackend:
             return
         self._check_planar(rec.key, "velocity", linear, angular)
         _set_origin_velocity(rec.body, float(linear[0]), float(linear[2]), -float(angular[1]))
+        self._woken.add(rec.key)
 
     def _check_planar(self, key: int, what: str, linear: np.ndarray | None,
                       angular: np.ndarray | None) -> None:
@@ -309,6 +327,7 @@ class PymunkBackend:
         _set_origin_velocity(body, (float(position[0]) - body.position.x) / dt,
                              (float(position[2]) - body.position.y) / dt, turn / dt)
         self._set_y(rec, float(position[1]))
+        self._woken.add(rec.key)
 
     def add_force(self, key: int, force: np.ndarray, point: np.ndarray | None = None) -> None:
         rec = self._record(key)
@@ -318,11 +337,13 @@ class PymunkBackend:
             rec.body.apply_force_at_local_point(f, rec.body.center_of_gravity)
         else:
             rec.body.apply_force_at_world_point(f, (float(point[0]), float(point[2])))
+        self._woken.add(rec.key)
 
     def add_torque(self, key: int, torque: np.ndarray) -> None:
         rec = self._record(key)
         self._check_planar(rec.key, "torque", None, torque)
         rec.body.torque -= float(torque[1])
+        self._woken.add(rec.key)
 
     def add_impulse(self, key: int, impulse: np.ndarray,
                     point: np.ndarray | None = None) -> None:
@@ -333,17 +354,113 @@ class PymunkBackend:
             rec.body.apply_impulse_at_local_point(j, rec.body.center_of_gravity)
         else:
             rec.body.apply_impulse_at_world_point(j, (float(point[0]), float(point[2])))
+        self._woken.add(rec.key)
 
     def set_sleeping(self, key: int, sleeping: bool) -> None:
+        """Put a dynamic body to sleep at rest (alone: what it touches wakes it), or wake it."""
         rec = self._record(key)
         if rec.body.body_type != pymunk.Body.DYNAMIC:
             return
         if not sleeping:
             rec.body.activate()
-        elif self._space.sleep_time_threshold == math.inf:
+            self._woken.add(rec.key)
+        elif not self._sleep_on:
             self._warn(f"body {key}", "sleep", "cannot sleep while auto_sleep is off; ignored")
         else:
+            _stop(rec.body)
             rec.body.sleep()
+
+    def _apply_sleep(self, dt: float) -> None:
+        """The sleep rule after a step: quiet islands go to sleep, each as one chipmunk
+        group (woken together), at rest."""
+        reader = self._space_reader()
+        rule = self._rule
+        raw, awake = reader.read()
+        reader.motion(raw, rule.velocity)
+        rule.awake[:] = awake
+        woken = None
+        if self._woken:
+            woken = np.zeros(len(rule.keys), bool)
+            rows = rule.rows(np.fromiter(self._woken, np.int64, len(self._woken)))
+            woken[rows[rows >= 0]] = True
+            self._woken.clear()
+        rows, labels = rule.update(dt, woken, self._touching)
+        if not len(rows):
+            return
+        asleep = rule.movable & ~awake
+        for label in np.unique(labels[rows]).tolist():
+            group = [self._records[i].body for i in rows[labels[rows] == label].tolist()]
+            sleeping = np.flatnonzero(asleep & (labels == label))
+            root = self._records[sleeping[0]].body if len(sleeping) else None
+            for body in group:
+                _stop(body)
+                if root is None:
+                    body.sleep()
+                    root = body
+                else:
+                    body.sleep_with_group(root)
+
+    def _touching(self) -> np.ndarray:
+        """Row pairs the step's contacts and the joints tie together (the rule's islands)."""
+        c = self.contacts()
+        if self._joint_pairs is None:
+            self._joint_pairs = np.array(
+                [(rec.spec.body_a, -1 if rec.spec.body_b is None else rec.spec.body_b)
+                 for rec in self._joints.values()], np.int64).reshape(-1, 2)
+        pairs = np.concatenate([np.column_stack([c["a"], c["b"]]), self._joint_pairs])
+        return self._rule.rows(pairs.ravel()).reshape(-1, 2)
+
+    def sleep_states(self) -> dict[int, SleepState]:
+        """Every body asleep or in a quiet stretch (see :mod:`engine.physics.sleep`)."""
+        self._space_reader()
+        asleep = np.fromiter((r.body.is_sleeping for r in self._records), bool,
+                             len(self._records))
+        return self._rule.states(asleep)
+
+    def set_sleep_state(self, key: int, state: SleepState) -> None:
+        """Put a body's sleep back as :meth:`sleep_states` reported it (a saved state)."""
+        rec = self._record(key)
+        self._space_reader()
+        self._rule.restore(self._row[rec.key], state)
+        # not a wake, and neither were the wakes that making the saved state's bodies and
+        # joints caused
+        self._woken.clear()
+        if rec.body.body_type != pymunk.Body.DYNAMIC:
+            return
+        if state.asleep and self._sleep_on:
+            _stop(rec.body)
+            rec.body.sleep()
+        elif not state.asleep:
+            rec.body.activate()
+
+    def set_collision_enabled(self, key: int, enabled: bool) -> None:
+        """Off: the body's shapes filter out every other shape (and every ray)."""
+        rec = self._record(key)
+        filt = self._filter(rec.physical) if enabled else NOTHING
+        for shape in rec.shapes:
+            shape.filter = filt
+        self._wake(rec)
+
+    def set_gravity_enabled(self, key: int, enabled: bool) -> None:
+        """Through the body's velocity callback (pymunk has no per-body gravity switch)."""
+        rec = self._record(key)
+        if rec.body.body_type == pymunk.Body.STATIC:
+            return
+        phys = rec.physical
+        rec.body.velocity_func = _velocity_func(bool(enabled), phys.linear_damping,
+                                                phys.angular_damping)
+        self._wake(rec)
+
+    def _wake(self, rec: _BodyRecord) -> None:
+        """An explicit wake: awake now, and its quiet stretch starts over."""
+        if rec.body.body_type == pymunk.Body.DYNAMIC:
+            rec.body.activate()
+        self._woken.add(rec.key)
+
+    @staticmethod
+    def _filter(body: Physical) -> pymunk.ShapeFilter:
+        return pymunk.ShapeFilter(categories=body.category & 0xFFFFFFFF,
+                                  mask=body.mask & 0xFFFFFFFF)
 
     # -- joints ------------------------------------------------------------
     def add_joint(self, key: int, joint: Joint) -> None:
@@ -368,13 +485,14 @@ class PymunkBackend:
             body.angle = split_orientation(np.asarray(pose[3:], np.float64))[0]
             body.position = (float(pose[0]), float(pose[2]))
         try:
-            rec = build_joint(joint, a.body, b.body if b else self._space.static_body,
+            rec = build_joint(joint, a.body, b.body if b else self._ground,
                               lambda t, m: self._warn(obj, t, m))
         finally:
             for body, angle, position in now:
                 body.angle, body.position = angle, position
         self._space.add(*rec.constraints)
         self._joints[key] = rec
+        self._joint_pairs = None
         if joint.kind == "slider":
             self._sliders[key] = rec
         a.joints.add(key)
@@ -388,12 +506,16 @@ class PymunkBackend:
             raise KeyError(f"no joint with key {key}") from None
         self._sliders.pop(int(key), None)
         self._space.remove(*rec.constraints)
-        for body in (rec.a, rec.b):
-            if body.body_type == pymunk.Body.DYNAMIC:
-                body.activate()
+        self._joint_pairs = None
+        self._wake_joint(rec)
         for body_key in (rec.spec.body_a, rec.spec.body_b):
             if body_key is not None and body_key in self._bodies:
                 self._bodies[body_key].joints.discard(int(key))
+
+    def _wake_joint(self, rec: JointRecord) -> None:
+        for body_key in (rec.spec.body_a, rec.spec.body_b):
+            if body_key is not None and body_key in self._bodies:
+                self._wake(self._bodies[body_key])
 
     def _joint(self, key: int) -> JointRecord:
         try:
@@ -402,7 +524,9 @@ class PymunkBackend:
             raise KeyError(f"no joint with key {key}") from None
 
     def set_motor(self, key: int, velocity: float, max_force: float) -> None:
-        self._joint(key).set_motor(float(velocity), float(max_force), self._space)
+        rec = self._joint(key)
+        rec.set_motor(float(velocity), float(max_force), self._space)
+        self._wake_joint(rec)
 
     def joint_state(self, key: int) -> tuple[float, float]:
         return self._joint(key).state()
@@ -417,74 +541,102 @@ class PymunkBackend:
 
         The same call as on the ODE backend, so a hand drives either one.
         """
-        rec = self._joint(key)
-        if rec.spec.kind != "six_dof":
-            raise ValueError(f"joint {rec.spec.id or key}: set_joint_target needs a six_dof "
-                             f"joint, not {rec.spec.kind!r}")
+        rec = self._six_dof(key, "set_joint_target")
         theta, _, planar = split_orientation(orientation)
         if not planar:
             self._warn(f"joint {rec.spec.id or key}", "target-tilt",
                        "target orientation tilts out of the X–Z plane; only its turn about Y "
                        "is followed")
         rec.set_target((float(position[0]), float(position[2])), theta, max_force, max_torque)
+        self._wake_joint(rec)
+
+    def set_drive_limits(self, key: int, max_force: float, max_torque: float) -> None:
+        """Bound a ``six_dof`` joint's force (N) and torque (N·m), e.g. from a Hand."""
+        rec = self._six_dof(key, "set_drive_limits")
+        if not (max_force >= 0.0 and max_torque >= 0.0):
+            raise ValueError("six_dof force and torque bounds must be >= 0")
+        rec.set_drive_limits(float(max_force), float(max_torque))
+        self._wake_joint(rec)
+
+    def _six_dof(self, key: int, what: str) -> JointRecord:
+        rec = self._joint(key)
+        if rec.spec.kind != "six_dof":
+            raise ValueError(f"joint {rec.spec.id or key}: {what} needs a six_dof joint, "
+                             f"not {rec.spec.kind!r}")
+        return rec
 
     # -- state and contacts ---------------------------------------------
     def _reindex(self) -> None:
-        """Rows, and the compiled reader planned for them; rebuilt only as bodies come or go.
+        """Rows, and the reader planned for them; rebuilt only as bodies come or go.
 
         Rows are in key order, so the contacts sort by row and a table filled by key
         takes the state in one slice.
         """
         recs = sorted(self._bodies.values(), key=lambda r: r.key)
         n = len(recs)
+        self._records = recs
         self._keys = np.fromiter((r.key for r in recs), np.int64, n)
         self._keys.setflags(write=False)  # every state read hands out this same array
         self._row = {r.key: i for i, r in enumerate(recs)}
-        # one extra row stands for bodies without a key (the static world)
-        self._y_ext = np.append(np.fromiter((r.y for r in recs), np.float64, n), 0.0)
-        static = np.fromiter((r.body.body_type == pymunk.Body.STATIC for r in recs), bool, n)
-        self._sync = _sync.SpaceSync(
-            _FUNCTIONS, _address(self._space._space), [_address(r.body._body) for r in recs],
-            self._y_ext, np.array([r.rest for r in recs], np.float64).reshape(-1, 4),
-            np.array([tuple(r.body.center_of_gravity) for r in recs]).reshape(-1, 2),
-            np.append(self._keys, -1), np.append(static, True), CONTACT_DTYPE)
+        self._y = np.fromiter((r.y for r in recs), np.float64, n)
+        kind = np.array([r.body.body_type for r in recs], np.int64).reshape(n)
+        static = kind == pymunk.Body.STATIC
+        self._reader = SpaceReader(
+            self._space, [r.body for r in recs], self._keys, self._y,
+            np.array([r.rest for r in recs], np.float64).reshape(-1, 4),
+            np.array([tuple(r.body.center_of_gravity) for r in recs]).reshape(-1, 2), static)
+        self._rule.layout(self._keys, ~static, (kind == pymunk.Body.DYNAMIC) & np.fromiter(
+            (r.physical.can_sleep for r in recs), bool, n))
         self._dirty = False
 
-    def _space_sync(self) -> _sync.SpaceSync:
+    def _space_reader(self) -> SpaceReader:
         if self._dirty:
             self._reindex()
-        return self._sync
+        return self._reader
 
     def read_state(self) -> BodyState:
-        """Every body's pose and velocity; a body gone non-finite is reset first."""
-        table, finite = self._space_sync().read()
-        if not finite and self._reset_broken(table):
-            table, _ = self._space_sync().read()
-        self._last_good = BodyState(self._keys, table)
-        return self._last_good
+        """Every body's pose and velocity, in fresh arrays; a body gone non-finite is reset
+        first."""
+        table = np.empty((len(self._bodies), 13))
+        return BodyState(self.read_state_into(table), table)
 
-    def _reset_broken(self, table: np.ndarray) -> bool:
+    def read_state_into(self, out: np.ndarray) -> np.ndarray:
+        """Every body's state into ``out``'s first rows; the rows' keys (cached)."""
+        reader = self._space_reader()
+        n = len(self._keys)
+        if out.shape[0] < n or out.shape[1:] != (13,) or out.dtype != np.float64:
+            raise ValueError(f"read_state_into needs a float64 array of at least ({n}, 13), "
+                             f"got {out.dtype} {out.shape}")
+        raw, _ = reader.read()
+        keep = self._read_rows
+        if len(keep) != n:
+            keep = self._read_rows = np.empty((n, 6))
+        if not reader.table(raw, out, keep):
+            self._reset_broken(keep)
+            raw, _ = reader.read()
+            reader.table(raw, out, keep)
+        # this read is the last good one now: swap buffers rather than copy
+        self._read_rows, last = self._last_good[1], keep
+        self._last_good = (self._keys, last)
+        return self._keys
+
+    def _reset_broken(self, planar: np.ndarray) -> None:
         """Put bodies whose state turned non-finite back at their last good pose, at rest.
 
-        ``table`` is a state read (a row per body); returns whether any body was reset.
+        ``planar`` is a read, a row per body: (x, z, θ, vx, vz, ω).
         """
-        last = self._last_good
-        broken = np.flatnonzero(~np.isfinite(table).all(axis=1))
-        for i in broken:
+        last_keys, last = self._last_good
+        for i in np.flatnonzero(~np.isfinite(planar).all(axis=1)).tolist():
             key = int(self._keys[i])
-            rec = self._bodies[key]
-            seen = np.flatnonzero(last.keys == key)
-            if seen.size and np.isfinite(last.position[seen[0]]).all():
-                self.set_pose(key, last.position[seen[0]], last.orientation[seen[0]])
-            else:
-                rec.body.angle = 0.0
-                rec.body.position = (0.0, 0.0)
-            rec.body.velocity = (0.0, 0.0)
-            rec.body.angular_velocity = 0.0
+            body = self._bodies[key].body
+            seen = np.flatnonzero(last_keys == key)
+            x, z, angle = last[seen[0], :3] if seen.size else (0.0, 0.0, 0.0)
+            body.angle = float(angle)  # before the position: pymunk turns about the centre
+            body.position = (float(x), float(z))
+            _stop(body)
             message = "state turned non-finite; reset to its last good pose, at rest"
             log.warning("body %s: %s", key, message)
             self._faults.append((key, message))
-        return bool(broken.size)
 
     def take_faults(self) -> list[tuple[int, str]]:
         """Bodies reset since the last call, with why (the engine reports them)."""
@@ -492,16 +644,10 @@ class PymunkBackend:
         return faults
 
     def keys(self) -> np.ndarray:
-        """Body keys in the row order of :meth:`read_state` and :meth:`read_poses`."""
+        """Body keys in row order (read-only; the same array until bodies come or go)."""
         if self._dirty:
             self._reindex()
         return self._keys
-
-    def read_poses(self, out: np.ndarray) -> None:
-        """Fill ``out`` (N, 7) with x y z w x y z per body, in :meth:`keys` order."""
-        state = self.read_state()
-        out[:, :3] = state.position
-        out[:, 3:] = state.orientation
 
     def write_state(self, state: BodyState) -> None:
         missing = [int(k) for k in state.keys if int(k) not in self._bodies]
@@ -517,7 +663,7 @@ class PymunkBackend:
 
     def contacts(self) -> np.ndarray:
         if self._contacts is None:
-            self._contacts = self._space_sync().contacts()
+            self._contacts = self._space_reader().contacts()
         return self._contacts
 
     # -- queries -----------------------------------------------------------
@@ -552,7 +698,7 @@ class PymunkBackend:
                          offset: float = 0.0, material: MaterialProps | None = None) -> None:
         """Keyless ground plane ``normal · x = offset`` (contacts report it as key −1)."""
         mat = material or MaterialProps()
-        built = build_shape(self._space.static_body, Shape("plane", (*normal, offset)),
+        built = build_shape(self._ground, Shape("plane", (*normal, offset)),
                             np.array([1.0, 0.0, 0.0, 0.0]), True,
                             lambda t, m: self._warn("static plane", t, m))
         if built is None:
@@ -600,9 +746,10 @@ def _velocity_func(gravity: bool, linear_damping: float, angular_damping: float)
     return update
 
 
-def _address(pointer: object) -> int:
-    """A cffi pointer (pymunk's ``cpSpace*`` or ``cpBody*``) as the integer the kernel takes."""
-    return int(ffi.cast("uintptr_t", pointer))
+def _stop(body: pymunk.Body) -> None:
+    """At rest (before it sleeps: a sleeping body reports zero velocity)."""
+    body.velocity = (0.0, 0.0)
+    body.angular_velocity = 0.0
 
 
 def _set_origin_velocity(body: pymunk.Body, vx: float, vz: float, w: float) -> None:

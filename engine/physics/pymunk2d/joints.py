@@ -86,11 +86,15 @@ class JointRecord:
         pivot, gear = self.constraints[0], self.constraints[1]
         pivot.anchor_b = self.b.world_to_local(position)
         gear.phase = self.b.angle - angle
+        self.set_drive_limits(max_force, max_torque)
+
+    def set_drive_limits(self, max_force: float | None, max_torque: float | None) -> None:
+        """A six_dof's force (N) and torque (N·m) bounds; None keeps one as it is."""
+        pivot, gear = self.constraints[0], self.constraints[1]
         if max_force is not None:
             pivot.max_force = max_force
         if max_torque is not None:
             gear.max_force = max_torque
-        self.a.activate()
 
     def drive_slider(self, dt: float) -> None:
         """The slider motor: the force that reaches the target rate this step, bounded."""

@@ -1,0 +1,305 @@
+# Bodies: slots, poses and velocities of the entity origin (ODE's body sits at the centre
+# of mass), loads, and the switches for sleep, gravity and collisions.
+
+cdef inline void wake(World w, dBodyID b) noexcept nogil:
+    """Enable a body and mark it woken: an explicit wake restarts its quiet stretch."""
+    dBodyEnable(b)
+    w.slots[<intptr_t>dBodyGetData(b)].woken = 1
+
+
+cdef void store_good(World w, int i) noexcept:
+    cdef Slot* s = &w.slots[i]
+    if s.body == NULL:
+        return
+    memcpy(&s.good[0], dBodyGetPosition(s.body), 3 * sizeof(double))
+    memcpy(&s.good[3], dBodyGetQuaternion(s.body), 4 * sizeof(double))
+
+
+def create_body(World w, int64_t key, int kind, double[::1] pos, double[::1] quat,
+                double[::1] lin, double[::1] ang, double linear_damping,
+                double angular_damping, bint gravity) -> None:
+    """A body at entity pose ``pos``/``quat``; its shapes and mass follow (add_geom,
+    finish_body)."""
+    cdef Slot* s
+    cdef dBodyID b = NULL
+    cdef double q[4]
+    w.check()
+    if key in w.slot_of:
+        raise ValueError(f"body {key} already exists")
+    w.grow()
+    memcpy(q, &quat[0], 4 * sizeof(double))
+    qnormalize(q)
+    s = &w.slots[w.n]
+    memset(s, 0, sizeof(Slot))
+    s.key = key
+    s.kind = kind
+    memcpy(s.pose, &pos[0], 3 * sizeof(double))
+    memcpy(&s.pose[3], q, 4 * sizeof(double))
+    if kind != KIND_STATIC:
+        b = dBodyCreate(w.world)
+        dBodySetPosition(b, pos[0], pos[1], pos[2])
+        dBodySetQuaternion(b, q)
+        dBodySetLinearVel(b, lin[0], lin[1], lin[2])
+        dBodySetAngularVel(b, ang[0], ang[1], ang[2])
+        dBodySetLinearDamping(b, linear_damping)
+        dBodySetAngularDamping(b, angular_damping)
+        dBodySetGravityMode(b, gravity)
+        if kind == KIND_KINEMATIC:
+            dBodySetKinematic(b)
+        dBodySetData(b, <void*><intptr_t>w.n)   # slot index, for wake()
+    s.body = b
+    w.slot_of[key] = w.n
+    w.geoms.append([])
+    w.pending_mass.append(bytearray(sizeof(dMass)))
+    dMassSetZero(<dMass*><char*>w.pending_mass[w.n])
+    w.n += 1
+    store_good(w, w.n - 1)
+
+
+def remove_body(World w, key) -> list:
+    """Destroy a body, its geoms and the joints on it; returns the removed joint keys."""
+    cdef int i = w.slot(key)
+    cdef int last = w.n - 1
+    gone = [jk for jk, rec in w.joints.items() if key in (<_JointRec>rec).bodies]
+    for jk in gone:
+        remove_joint(w, jk)
+    free_geoms(w, i)
+    if w.slots[i].body != NULL:
+        dBodyDestroy(w.slots[i].body)
+    if i != last:
+        w.slots[i] = w.slots[last]
+        if w.slots[i].body != NULL:
+            dBodySetData(w.slots[i].body, <void*><intptr_t>i)
+        w.geoms[i] = w.geoms[last]
+        w.pending_mass[i] = w.pending_mass[last]
+        w.slot_of[w.slots[i].key] = i
+    w.geoms.pop()
+    w.pending_mass.pop()
+    del w.slot_of[key]
+    w.n -= 1
+    return gone
+
+
+def has_body(World w, key) -> bool:
+    return key in w.slot_of
+
+
+def body_count(World w) -> int:
+    return w.n
+
+
+def keys(World w) -> np.ndarray:
+    """Body keys in slot order (the rows of every batch read)."""
+    cdef cnp.ndarray[cnp.int64_t, ndim=1] out = np.empty(w.n, np.int64)
+    cdef int i
+    for i in range(w.n):
+        out[i] = w.slots[i].key
+    return out
+
+
+def kinds(World w) -> np.ndarray:
+    """Each slot's body kind (BODY_DYNAMIC, BODY_STATIC, BODY_KINEMATIC)."""
+    cdef cnp.ndarray[cnp.int8_t, ndim=1] out = np.empty(w.n, np.int8)
+    cdef int i
+    for i in range(w.n):
+        out[i] = w.slots[i].kind
+    return out
+
+
+def slots_for(World w, keys) -> np.ndarray:
+    """Slot index of every key (KeyError naming the first unknown one)."""
+    slot_of = w.slot_of
+    try:
+        return np.fromiter((slot_of[k] for k in keys.tolist()), np.int64, len(keys))
+    except KeyError as exc:
+        raise KeyError(f"no body with key {exc.args[0]}") from None
+
+
+# -- poses and velocities ---------------------------------------------------------------
+cdef void set_slot_pose(World w, int i, const double* pos, const double* quat) noexcept:
+    cdef Slot* s = &w.slots[i]
+    cdef double q[4]
+    cdef double wc[3]
+    memcpy(q, quat, 4 * sizeof(double))
+    qnormalize(q)
+    if s.body == NULL:
+        memcpy(s.pose, pos, 3 * sizeof(double))
+        memcpy(&s.pose[3], q, 4 * sizeof(double))
+        for entry in w.geoms[i]:
+            place_static_geom(s, entry)
+        return
+    qrotate(q, s.com, wc)
+    dBodySetPosition(s.body, pos[0] + wc[0], pos[1] + wc[1], pos[2] + wc[2])
+    dBodySetQuaternion(s.body, q)
+    wake(w, s.body)
+
+
+cdef void set_slot_velocity(World w, int i, const double* lin, const double* ang) noexcept:
+    """Entity-origin velocities -> COM velocity (v_com = v + w x R c)."""
+    cdef Slot* s = &w.slots[i]
+    cdef double wc[3]
+    if s.body == NULL:
+        return
+    qrotate(dBodyGetQuaternion(s.body), s.com, wc)
+    dBodySetLinearVel(s.body, lin[0] + ang[1] * wc[2] - ang[2] * wc[1],
+                      lin[1] + ang[2] * wc[0] - ang[0] * wc[2],
+                      lin[2] + ang[0] * wc[1] - ang[1] * wc[0])
+    dBodySetAngularVel(s.body, ang[0], ang[1], ang[2])
+    wake(w, s.body)
+
+
+def set_pose(World w, key, double[::1] pos, double[::1] quat) -> None:
+    set_slot_pose(w, w.slot(key), &pos[0], &quat[0])
+
+
+def set_velocity(World w, key, double[::1] lin, double[::1] ang) -> None:
+    set_slot_velocity(w, w.slot(key), &lin[0], &ang[0])
+
+
+def pose(World w, key) -> tuple:
+    """(position, orientation) of one body's entity frame."""
+    cdef double out[13]
+    read_slot(w, w.slot(key), out)
+    return np.array([out[0], out[1], out[2]]), np.array([out[3], out[4], out[5], out[6]])
+
+
+# -- loads ------------------------------------------------------------------------------
+cdef dBodyID body_of(World w, key) except? NULL:
+    return w.slots[w.slot(key)].body
+
+
+cdef void check_load(World w, key, dBodyID b) except *:
+    """Refuse a force or torque that would fling the body past MAX_SPEED in one step.
+
+    ODE aborts the process on a non-finite quaternion, so absurd loads are
+    stopped at the door (the accumulators are cleared) rather than in the step.
+    """
+    cdef dMass m
+    cdef double inertia
+    dBodyGetMass(b, &m)
+    inertia = min(m.I[0], min(m.I[5], m.I[10]))
+    if (norm3(dBodyGetForce(b)) * w.last_dt < MAX_SPEED * m.mass
+            and norm3(dBodyGetTorque(b)) * w.last_dt < MAX_SPEED * inertia):
+        return
+    dBodySetForce(b, 0.0, 0.0, 0.0)
+    dBodySetTorque(b, 0.0, 0.0, 0.0)
+    raise ValueError(f"body {key}: force or torque would push it past "
+                     f"{MAX_SPEED:g} m/s (or rad/s) in one step; load discarded")
+
+
+def add_force(World w, key, double fx, double fy, double fz, point=None) -> None:
+    cdef dBodyID b = body_of(w, key)
+    if b == NULL or dBodyIsKinematic(b):
+        return
+    wake(w, b)
+    if point is None:
+        dBodyAddForce(b, fx, fy, fz)
+    else:
+        dBodyAddForceAtPos(b, fx, fy, fz, point[0], point[1], point[2])
+    check_load(w, key, b)
+
+
+def add_torque(World w, key, double tx, double ty, double tz) -> None:
+    cdef dBodyID b = body_of(w, key)
+    if b == NULL or dBodyIsKinematic(b):
+        return
+    wake(w, b)
+    dBodyAddTorque(b, tx, ty, tz)
+    check_load(w, key, b)
+
+
+def add_impulse(World w, key, double ix, double iy, double iz, point=None) -> None:
+    """Impulse as the force that delivers it over the next step (of the last step's dt)."""
+    cdef dVector3 f
+    dWorldImpulseToForce(w.world, w.last_dt, ix, iy, iz, f)
+    add_force(w, key, f[0], f[1], f[2], point)
+
+
+# -- switches ---------------------------------------------------------------------------
+cdef void disable(dBodyID b) noexcept nogil:
+    """Asleep, at rest: a sleeping body reports zero velocity."""
+    dBodyDisable(b)
+    dBodySetLinearVel(b, 0.0, 0.0, 0.0)
+    dBodySetAngularVel(b, 0.0, 0.0, 0.0)
+
+
+def set_sleeping(World w, key, bint sleeping) -> None:
+    """Put a dynamic body to sleep at rest, or wake it (an explicit wake)."""
+    cdef dBodyID b = body_of(w, key)
+    if b == NULL or w.slots[w.slot(key)].kind != KIND_DYNAMIC:
+        return
+    if sleeping:
+        disable(b)
+    else:
+        wake(w, b)
+
+
+def restore_sleeping(World w, key, bint sleeping) -> None:
+    """Asleep or awake as a saved state says. Not a wake, and neither were the wakes
+    that making the saved state's bodies and joints caused: every mark is dropped."""
+    cdef int i
+    cdef int slot = w.slot(key)
+    cdef dBodyID b = w.slots[slot].body
+    for i in range(w.n):
+        w.slots[i].woken = 0
+    if b == NULL or w.slots[slot].kind != KIND_DYNAMIC:
+        return
+    if sleeping:
+        disable(b)
+    else:
+        dBodyEnable(b)
+
+
+def wake_all(World w) -> None:
+    """Every body awake (sleeping turned off); not counted as explicit wakes."""
+    cdef int i
+    for i in range(w.n):
+        if w.slots[i].body != NULL:
+            dBodyEnable(w.slots[i].body)
+            w.slots[i].woken = 0
+
+
+def is_sleeping(World w, key) -> bool:
+    cdef dBodyID b = body_of(w, key)
+    return b != NULL and not dBodyIsEnabled(b)
+
+
+def sleeping_count(World w) -> int:
+    cdef int i, c = 0
+    for i in range(w.n):
+        if w.slots[i].body != NULL and not dBodyIsEnabled(w.slots[i].body):
+            c += 1
+    return c
+
+
+def set_gravity(World w, key, bint enabled) -> None:
+    cdef dBodyID b = body_of(w, key)
+    if b == NULL:
+        return
+    dBodySetGravityMode(b, enabled)
+    wake(w, b)
+
+
+def set_collision(World w, key, bint enabled) -> None:
+    """Every geom of the body in or out of collision (ODE skips disabled geoms in
+    dSpaceCollide and ray casts); the body itself moves on."""
+    cdef int i = w.slot(key)
+    cdef dGeomID g
+    for entry in w.geoms[i]:
+        g = <dGeomID><size_t>entry[0]
+        if enabled:
+            dGeomEnable(g)
+        else:
+            dGeomDisable(g)
+    if w.slots[i].body != NULL:
+        wake(w, w.slots[i].body)
+
+
+def sleeping(World w) -> np.ndarray:
+    """Per slot, whether a moving body is asleep (disabled) now."""
+    cdef cnp.ndarray[cnp.uint8_t, ndim=1] out = np.zeros(w.n, np.uint8)
+    cdef int i
+    for i in range(w.n):
+        if w.slots[i].body != NULL:
+            out[i] = not dBodyIsEnabled(w.slots[i].body)
+    return out.view(bool)

@@ -1,0 +1,229 @@
+# The World: one ODE world with its hash space, contact group and body slots; its
+# settings and the step. The records every concept shares are declared here.
+
+cdef struct GeomInfo:
+    int64_t key          # body key, -1 for keyless static geometry
+    int material
+    uint32_t category
+    uint32_t mask
+    int movable          # 1 for dynamic bodies (kinematic and static never collide together)
+
+
+cdef struct Pair:
+    int collide
+    int mode
+    double mu, bounce, bounce_vel, soft_erp, soft_cfm
+
+
+cdef struct ContactRec:   # byte layout of engine.physics.backend.CONTACT_DTYPE
+    int64_t a
+    int64_t b
+    double pos[3]
+    double normal[3]
+    double depth
+    double impulse
+
+
+cdef struct Slot:
+    dBodyID body         # NULL for static bodies
+    int64_t key
+    int kind
+    uint8_t woken        # explicitly woken since the sleep rule last looked (read_motion)
+    double pose[7]       # static bodies: entity pose (x y z w x y z)
+    double com[3]        # centre of mass in the entity frame (ODE bodies sit at the COM)
+    double good[7]       # last sane pose of the ODE body (position, quaternion)
+
+
+cdef struct Ctx:         # what the near callback needs, passed through ODE's void*
+    dWorldID world
+    dJointGroupID group
+    Pair* pairs
+    int nmat
+    int max_contacts
+    dContact* buf
+    ContactRec* recs
+    int nrec
+    int caprec
+    dJointFeedback** chunks
+    int nchunks
+    int oom
+
+
+@cython.no_gc_clear  # __dealloc__ walks the geoms and joints to free their C memory
+cdef class World:
+    """One ODE world with its hash space, contact group and body slots."""
+
+    cdef dWorldID world
+    cdef dSpaceID space
+    cdef Ctx ctx
+    cdef Slot* slots
+    cdef int n
+    cdef int cap
+    cdef int* faults           # slots reset by the last step
+    cdef unsigned long seed
+    cdef double last_dt
+    cdef dict slot_of          # key -> slot index
+    cdef list geoms            # slot -> list of (geom address, keep-alive object or None)
+    cdef dict joints           # key -> _JointRec
+    cdef list pending_mass     # slot -> dMass accumulated by add_geom (as a bytes buffer)
+    cdef list static_geoms     # keyless static geometry, kept until close
+
+    def __cinit__(self) -> None:
+        self.world = dWorldCreate()
+        self.space = dHashSpaceCreate(NULL)
+        dHashSpaceSetLevels(self.space, -1, 6)
+        dSpaceSetCleanup(self.space, 0)
+        memset(&self.ctx, 0, sizeof(Ctx))
+        self.ctx.world = self.world
+        self.ctx.group = dJointGroupCreate(0)
+        self.ctx.max_contacts = 4
+        self.ctx.buf = <dContact*>calloc(4, sizeof(dContact))
+        self.ctx.nmat = 1
+        self.ctx.pairs = <Pair*>calloc(1, sizeof(Pair))
+        self.ctx.pairs[0].collide = 1
+        self.ctx.pairs[0].mode = dContactApprox1
+        self.ctx.pairs[0].mu = 0.5
+        self.slots = NULL
+        self.faults = NULL
+        self.n = 0
+        self.cap = 0
+        self.seed = 0
+        self.last_dt = 1.0 / 60.0
+        self.slot_of = {}
+        self.geoms = []
+        self.joints = {}
+        self.pending_mass = []
+        self.static_geoms = []
+        dWorldSetContactSurfaceLayer(self.world, 0.001)
+        dWorldSetAutoDisableFlag(self.world, 0)   # bodies sleep by engine.physics.sleep
+
+    def __dealloc__(self) -> None:
+        self._destroy()
+
+    cdef void _destroy(self) noexcept:
+        cdef int i
+        if self.world == NULL:
+            return
+        for rec in self.joints.values():
+            free_joint(<_JointRec>rec)
+        self.joints.clear()
+        for i in range(self.n):
+            free_geoms(self, i)
+            if self.slots[i].body != NULL:
+                dBodyDestroy(self.slots[i].body)
+        for entry in self.static_geoms:
+            free_geom(entry)
+        self.static_geoms = []
+        dJointGroupDestroy(self.ctx.group)
+        dSpaceDestroy(self.space)
+        dWorldDestroy(self.world)
+        self.world = NULL
+        for i in range(self.ctx.nchunks):
+            free(self.ctx.chunks[i])
+        free(self.ctx.chunks)
+        free(self.ctx.recs)
+        free(self.ctx.buf)
+        free(self.ctx.pairs)
+        free(self.slots)
+        free(self.faults)
+        self.n = 0
+
+    def close(self) -> None:
+        self._destroy()
+
+    cdef void check(self) except *:
+        if self.world == NULL:
+            raise RuntimeError("the ODE world is closed")
+
+    cdef int slot(self, key) except -1:
+        try:
+            return self.slot_of[key]
+        except KeyError:
+            raise KeyError(f"no body with key {key}") from None
+
+    cdef void grow(self) except *:
+        """Room for one more slot."""
+        cdef int newcap
+        cdef Slot* grown
+        cdef int* fgrown
+        if self.n < self.cap:
+            return
+        newcap = max(64, self.cap * 2)
+        grown = <Slot*>realloc(self.slots, newcap * sizeof(Slot))
+        if grown == NULL:
+            raise MemoryError()
+        self.slots = grown
+        fgrown = <int*>realloc(self.faults, newcap * sizeof(int))
+        if fgrown == NULL:
+            raise MemoryError()
+        self.faults = fgrown
+        self.cap = newcap
+
+    # -- settings -------------------------------------------------------------------
+    def configure(self, gravity, double erp, double cfm, int iterations,
+                  int max_contacts) -> None:
+        self.check()
+        if max_contacts < 1:
+            raise ValueError(f"max_contacts must be at least 1, got {max_contacts}")
+        dWorldSetGravity(self.world, gravity[0], gravity[1], gravity[2])
+        dWorldSetERP(self.world, erp)
+        dWorldSetCFM(self.world, cfm)
+        dWorldSetQuickStepNumIterations(self.world, iterations)
+        free(self.ctx.buf)
+        self.ctx.buf = <dContact*>calloc(max_contacts, sizeof(dContact))
+        self.ctx.max_contacts = max_contacts
+
+    def set_pairs(self, cnp.ndarray[cnp.float64_t, ndim=3] table) -> None:
+        """Install the (M, M, 7) material pair table (columns: ``PAIR_COLUMNS``)."""
+        cdef int m = table.shape[0]
+        cdef int i, k
+        cdef Pair* pairs = <Pair*>calloc(m * m, sizeof(Pair))
+        if pairs == NULL:
+            raise MemoryError()
+        for i in range(m):
+            for k in range(m):
+                pairs[i * m + k].collide = <int>table[i, k, 0]
+                pairs[i * m + k].mode = <int>table[i, k, 1]
+                pairs[i * m + k].mu = table[i, k, 2]
+                pairs[i * m + k].bounce = table[i, k, 3]
+                pairs[i * m + k].bounce_vel = table[i, k, 4]
+                pairs[i * m + k].soft_erp = table[i, k, 5]
+                pairs[i * m + k].soft_cfm = table[i, k, 6]
+        free(self.ctx.pairs)
+        self.ctx.pairs = pairs
+        self.ctx.nmat = m
+
+    @property
+    def solver_seed(self) -> int:
+        """ODE's random state for this world (QuickStep shuffles constraints with it)."""
+        return self.seed
+
+    @solver_seed.setter
+    def solver_seed(self, unsigned long value) -> None:
+        self.seed = value
+
+    # -- the step -------------------------------------------------------------------
+    def step(self, double dt) -> list:
+        """Aim the drives, collide and QuickStep with the GIL released, then record the
+        contact impulses and check every moving body; returns the keys of bodies reset."""
+        cdef int nf
+        self.check()
+        if not dt > 0.0:
+            raise ValueError(f"dt must be positive, got {dt}")
+        dAllocateODEDataForThread(dAllocateMaskAll)
+        dJointGroupEmpty(self.ctx.group)
+        self.ctx.nrec = 0
+        self.ctx.oom = 0
+        self.last_dt = dt
+        if self.joints:
+            drive_joints(self, dt)
+        dRandSetSeed(self.seed)
+        with nogil:
+            dSpaceCollide(self.space, &self.ctx, near_callback)
+            dWorldQuickStep(self.world, dt)
+            record_impulses(&self.ctx, dt)
+            nf = check_bodies(self)
+        self.seed = dRandGetSeed()
+        if self.ctx.oom:
+            raise MemoryError("out of memory while recording contacts")
+        return [(self.slots[self.faults[k]].key) for k in range(nf)]

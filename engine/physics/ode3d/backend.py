@@ -1,0 +1,365 @@
+"""OdeBackend: the DynamicsBackend protocol over ODE (3D, double precision).
+
+It turns components into calls on the raw binding (``_ode``), keeps the material
+table, runs the sleep rule after each step and wraps batches in :class:`BodyState`.
+See ``shapes``, ``materials`` and ``joints`` for how each concept maps onto ODE.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from components import Joint, MaterialProps, Physical
+from engine.physics.backend import (
+    CONTACT_DTYPE,
+    BodyState,
+    RayHit,
+    WorldSettings,
+)
+from engine.physics.ode3d import _ode, joints, shapes
+from engine.physics.ode3d.materials import MaterialTable
+from engine.physics.ode3d.values import check_speed, vec
+from engine.physics.sleep import SleepRule, SleepState
+from engine.rotation import rotation_vector_between
+
+log = logging.getLogger("colosseum.physics.ode")
+
+if CONTACT_DTYPE.itemsize != _ode.CONTACT_RECORD_SIZE:  # pragma: no cover - build mismatch
+    raise ImportError("engine.physics.ode3d._ode was built against a different CONTACT_DTYPE; "
+                      "rebuild it with `python setup.py build_ext --inplace`")
+
+_BODY_KINDS = {"dynamic": _ode.BODY_DYNAMIC, "static": _ode.BODY_STATIC,
+               "kinematic": _ode.BODY_KINEMATIC}
+_ALL_BITS = 0xFFFFFFFF
+
+
+class OdeBackend:
+    """DynamicsBackend over ODE (3D, double precision). One owner thread at a time."""
+
+    name = "ode"
+
+    def __init__(self, settings: WorldSettings | None = None) -> None:
+        self._world = _ode.World()
+        self._settings = WorldSettings()
+        self._materials = MaterialTable()
+        self._faults: list[tuple[int, str]] = []
+        self._keys: np.ndarray | None = None  # cached slot order, dropped on add/remove
+        self._inert_joints: set[int] = set()
+        self._restless: set[int] = set()  # bodies that may not sleep
+        self._joint_pairs: np.ndarray | None = None  # (M, 2) body keys of the joints
+        self._rule = SleepRule()
+        self._woken = np.zeros(0, np.uint8)
+        self._material(MaterialProps())
+        self.configure(settings or WorldSettings())
+
+    # -- world -------------------------------------------------------------
+    def configure(self, settings: WorldSettings) -> None:
+        """Apply gravity, ERP/CFM, iterations, contacts per pair, sleeping and material pairs."""
+        if settings.iterations < 1:
+            raise ValueError(f"iterations must be at least 1, got {settings.iterations}")
+        self._rule.configure(settings.sleep_time, settings.sleep_linear,
+                             settings.sleep_angular)
+        self._settings = settings
+        self._world.configure(vec(settings.gravity, 3, "gravity"), settings.erp, settings.cfm,
+                              settings.iterations, settings.max_contacts)
+        if not settings.auto_sleep:  # everyone awake, nothing counted
+            _ode.wake_all(self._world)
+            self._rule.forget(slice(None))
+        if settings.solver_seed is not None:
+            self._world.solver_seed = settings.solver_seed
+        self._rebuild_pairs()
+
+    @property
+    def solver_seed(self) -> int:
+        """The solver's random state; saved states restore it so runs continue exactly."""
+        return self._world.solver_seed
+
+    def step(self, dt: float) -> None:
+        """Collide and solve in C with the GIL released; record contacts and faults; then
+        let the sleep rule put quiet islands to sleep."""
+        bad = self._world.step(dt)
+        if bad:
+            self._faults.extend(
+                (key, "non-finite or runaway state; reset to its last good pose and disabled")
+                for key in bad)
+            for key in bad:
+                log.warning("body %d went non-finite or ran away; reset and disabled", key)
+        if self._settings.auto_sleep:
+            rule = self._sleep_rule()
+            _ode.read_motion(self._world, rule.velocity, rule.awake.view(np.uint8),
+                             self._woken)
+            rows, _ = rule.update(dt, self._woken.view(bool), self._touching)
+            if len(rows):
+                _ode.sleep_slots(self._world, rows)
+
+    def close(self) -> None:
+        self._world.close()
+
+    # -- materials ---------------------------------------------------------
+    def _material(self, m: MaterialProps) -> int:
+        idx, new = self._materials.index(m)
+        if new and idx:
+            self._rebuild_pairs()
+        return idx
+
+    def _rebuild_pairs(self) -> None:
+        self._world.set_pairs(self._materials.pair_table(self._settings.erp,
+                                                         self._settings.material_pairs))
+
+    # -- bodies ------------------------------------------------------------
+    def add_body(self, key: int, body: Physical, position: np.ndarray,
+                 orientation: np.ndarray, linear_velocity: np.ndarray | None = None,
+                 angular_velocity: np.ndarray | None = None) -> None:
+        """Create a body with all its shapes; mass from ``body.mass`` or material density."""
+        kind = _BODY_KINDS.get(body.kind)
+        if kind is None:
+            raise ValueError(f"body {key}: unknown kind {body.kind!r} "
+                             f"(expected one of {', '.join(_BODY_KINDS)})")
+        if kind == _ode.BODY_DYNAMIC and not body.shapes and not body.mass:
+            raise ValueError(f"body {key}: a dynamic body needs shapes or a mass")
+        material = self._material(body.material)
+        geoms = [shapes.prepare(key, s) for s in body.shapes]
+        zero = np.zeros(3)
+        _ode.create_body(
+            self._world, int(key), kind, vec(position, 3, "position"),
+            vec(orientation, 4, "orientation"),
+            zero if linear_velocity is None else vec(linear_velocity, 3, "linear velocity"),
+            zero if angular_velocity is None else vec(angular_velocity, 3, "angular velocity"),
+            float(body.linear_damping), float(body.angular_damping), bool(body.gravity))
+        self._keys = None
+        try:
+            for g in geoms:
+                _ode.add_geom(
+                    self._world, int(key), g.kind, g.dims, vec(g.shape.offset, 3, "shape offset"),
+                    vec(g.shape.rotation, 4, "shape rotation"), float(body.material.density),
+                    material, body.category & _ALL_BITS, body.mask & _ALL_BITS, **g.extra)
+            mass = float(body.mass) if body.mass else -1.0
+            _ode.finish_body(self._world, int(key), mass)
+        except ValueError as exc:
+            _ode.remove_body(self._world, int(key))
+            raise ValueError(f"body {key}: {exc}") from None
+        if not body.can_sleep:
+            self._restless.add(int(key))
+
+    def add_static_plane(self, normal: tuple[float, float, float] = (0.0, 0.0, 1.0),
+                         offset: float = 0.0, material: MaterialProps | None = None) -> None:
+        """Keyless ground plane ``normal · x = offset`` (contacts report it as key -1)."""
+        n = vec(normal, 3, "plane normal")
+        n /= np.linalg.norm(n)
+        idx = self._material(material or MaterialProps())
+        _ode.add_static_plane(self._world, n[0], n[1], n[2], float(offset), idx, 1, _ALL_BITS)
+
+    def remove_body(self, key: int) -> None:
+        """Remove a body; joints on it are removed with it."""
+        _ode.remove_body(self._world, int(key))
+        self._restless.discard(int(key))
+        self._keys = self._joint_pairs = None
+
+    def body_count(self) -> int:
+        return _ode.body_count(self._world)
+
+    def set_pose(self, key: int, position: np.ndarray, orientation: np.ndarray) -> None:
+        _ode.set_pose(self._world, int(key), vec(position, 3, "position"),
+                      vec(orientation, 4, "orientation"))
+
+    def set_velocity(self, key: int, linear: np.ndarray, angular: np.ndarray) -> None:
+        lin = vec(linear, 3, "linear velocity")
+        ang = vec(angular, 3, "angular velocity")
+        check_speed(key, lin, ang)
+        _ode.set_velocity(self._world, int(key), lin, ang)
+
+    def set_kinematic_target(self, key: int, position: np.ndarray,
+                             orientation: np.ndarray, dt: float) -> None:
+        """Give the body the velocities that carry it to the target pose in ``dt``."""
+        if not dt > 0:
+            raise ValueError(f"dt must be positive, got {dt}")
+        pos, quat = _ode.pose(self._world, int(key))
+        target = vec(position, 3, "position")
+        q = vec(orientation, 4, "orientation")
+        q /= np.linalg.norm(q)
+        lin, ang = (target - pos) / dt, rotation_vector_between(quat, q) / dt
+        check_speed(key, lin, ang)
+        _ode.set_velocity(self._world, int(key), lin, ang)
+
+    def add_force(self, key: int, force: np.ndarray, point: np.ndarray | None = None) -> None:
+        f = vec(force, 3, "force")
+        p = None if point is None else vec(point, 3, "point")
+        _ode.add_force(self._world, int(key), f[0], f[1], f[2], p)
+
+    def add_torque(self, key: int, torque: np.ndarray) -> None:
+        t = vec(torque, 3, "torque")
+        _ode.add_torque(self._world, int(key), t[0], t[1], t[2])
+
+    def add_impulse(self, key: int, impulse: np.ndarray,
+                    point: np.ndarray | None = None) -> None:
+        """Deliver ``impulse`` (N·s) over the next step, assumed as long as the last one."""
+        j = vec(impulse, 3, "impulse")
+        p = None if point is None else vec(point, 3, "point")
+        _ode.add_impulse(self._world, int(key), j[0], j[1], j[2], p)
+
+    def set_collision_enabled(self, key: int, enabled: bool) -> None:
+        _ode.set_collision(self._world, int(key), bool(enabled))
+
+    def set_gravity_enabled(self, key: int, enabled: bool) -> None:
+        _ode.set_gravity(self._world, int(key), bool(enabled))
+
+    # -- sleep -------------------------------------------------------------
+    def set_sleeping(self, key: int, sleeping: bool) -> None:
+        _ode.set_sleeping(self._world, int(key), bool(sleeping))
+
+    def is_sleeping(self, key: int) -> bool:
+        return _ode.is_sleeping(self._world, int(key))
+
+    def sleeping_count(self) -> int:
+        return _ode.sleeping_count(self._world)
+
+    def _sleep_rule(self) -> SleepRule:
+        """The rule, laid out for the current slots."""
+        keys = self.keys()
+        rule = self._rule
+        if rule.keys is not keys:
+            kinds = _ode.kinds(self._world)
+            restless = np.isin(keys, np.fromiter(self._restless, np.int64, len(self._restless)))
+            rule.layout(keys, kinds != _ode.BODY_STATIC,
+                        (kinds == _ode.BODY_DYNAMIC) & ~restless)
+            self._woken = np.zeros(len(keys), np.uint8)
+        return rule
+
+    def _touching(self) -> np.ndarray:
+        """Row pairs the step's contacts and the joints tie together (the rule's islands)."""
+        c = self.contacts()
+        if self._joint_pairs is None:
+            self._joint_pairs = _ode.joint_bodies(self._world)
+        pairs = np.concatenate([np.column_stack([c["a"], c["b"]]), self._joint_pairs])
+        return self._rule.rows(pairs.ravel()).reshape(-1, 2)
+
+    def sleep_states(self) -> dict[int, SleepState]:
+        """Every body asleep or in a quiet stretch (see :mod:`engine.physics.sleep`)."""
+        return self._sleep_rule().states(_ode.sleeping(self._world))
+
+    def set_sleep_state(self, key: int, state: SleepState) -> None:
+        """Put a body's sleep back as :meth:`sleep_states` reported it (a saved state)."""
+        if not _ode.has_body(self._world, int(key)):
+            raise KeyError(f"no body with key {key}")
+        rule = self._sleep_rule()
+        rule.restore(int(rule.rows(np.array([key]))[0]), state)
+        _ode.restore_sleeping(self._world, int(key), bool(state.asleep))
+
+    # -- joints ------------------------------------------------------------
+    def add_joint(self, key: int, joint: Joint) -> None:
+        """Create a joint from its component: anchor and axes are world-frame, with the
+        bodies at ``joint.reference`` (the poses when it was first made) or where they are."""
+        if joint.kind not in joints.JOINT_KINDS:
+            raise ValueError(f"joint {joint.id or key}: unknown kind {joint.kind!r} "
+                             f"(expected one of {', '.join(joints.JOINT_KINDS)})")
+        if joint.broken:
+            self._inert_joints.add(int(key))
+            return
+        joints.create(self._world, int(key), joint)
+        self._joint_pairs = None
+
+    def remove_joint(self, key: int) -> None:
+        if int(key) in self._inert_joints:
+            self._inert_joints.discard(int(key))
+            return
+        _ode.remove_joint(self._world, int(key))
+        self._joint_pairs = None
+
+    def has_joint(self, key: int) -> bool:
+        return _ode.has_joint(self._world, int(key)) or int(key) in self._inert_joints
+
+    def set_motor(self, key: int, velocity: float, max_force: float) -> None:
+        _ode.set_motor(self._world, int(key), float(velocity), float(max_force))
+
+    def joint_state(self, key: int) -> tuple[float, float]:
+        return _ode.joint_state(self._world, int(key))
+
+    def set_joint_target(self, key: int, position: np.ndarray, orientation: np.ndarray,
+                         max_force: float | None = None,
+                         max_torque: float | None = None) -> None:
+        """Move a ``six_dof`` joint's target pose (and optionally its force/torque bounds)."""
+        _ode.set_target(self._world, int(key), vec(position, 3, "target position"),
+                        vec(orientation, 4, "target orientation"),
+                        -1.0 if max_force is None else float(max_force),
+                        -1.0 if max_torque is None else float(max_torque))
+
+    def set_drive_limits(self, key: int, max_force: float, max_torque: float) -> None:
+        """Bound a ``six_dof`` joint's force (N) and torque (N·m), e.g. from a Hand."""
+        _ode.set_drive_limits(self._world, int(key), float(max_force), float(max_torque))
+
+    # -- batches -----------------------------------------------------------
+    def read_state(self) -> BodyState:
+        """Every body's pose and velocity (static ones included) in fresh arrays."""
+        keys, table = _ode.read_state(self._world)
+        return BodyState(keys, table)
+
+    def read_state_into(self, out: np.ndarray) -> np.ndarray:
+        """Every body's state into ``out``'s first rows, in C; the rows' keys (cached)."""
+        _ode.read_state_into(self._world, out)
+        return self.keys()
+
+    def keys(self) -> np.ndarray:
+        """Body keys in row order (read-only; the same array until bodies come or go)."""
+        if self._keys is None:
+            self._keys = _ode.keys(self._world)
+            self._keys.setflags(write=False)
+        return self._keys
+
+    def write_state(self, state: BodyState) -> None:
+        """Set poses and velocities of the bodies named in ``state.keys``."""
+        keys = np.asarray(state.keys, dtype=np.int64)
+        mine = self.keys()
+        if keys.shape == mine.shape and np.array_equal(keys, mine):
+            slots = np.arange(len(keys), dtype=np.int64)
+        else:
+            slots = _ode.slots_for(self._world, keys)
+        n = len(keys)
+
+        def rows(a: np.ndarray, w: int, what: str) -> np.ndarray:
+            arr = np.ascontiguousarray(a, dtype=np.float64)
+            if arr.shape != (n, w):
+                raise ValueError(f"write_state: {what} must have shape ({n}, {w})")
+            bad = ~np.isfinite(arr).all(axis=1)
+            if bad.any():
+                raise ValueError(f"write_state: non-finite {what} for bodies "
+                                 f"{keys[bad].tolist()}")
+            return arr
+
+        lin = rows(state.linear_velocity, 3, "linear_velocity")
+        ang = rows(state.angular_velocity, 3, "angular_velocity")
+        with np.errstate(over="ignore"):
+            fast = (np.linalg.norm(lin, axis=1) > _ode.MAX_BODY_SPEED) | \
+                (np.linalg.norm(ang, axis=1) > _ode.MAX_BODY_SPEED)
+        if fast.any():
+            raise ValueError(f"write_state: bodies {keys[fast].tolist()} move faster than "
+                             f"{_ode.MAX_BODY_SPEED:g} m/s or rad/s")
+        _ode.write_state(self._world, slots, rows(state.position, 3, "position"),
+                         rows(state.orientation, 4, "orientation"), lin, ang)
+
+    def contacts(self) -> np.ndarray:
+        return _ode.contacts(self._world).view(CONTACT_DTYPE)
+
+    def take_faults(self) -> list[tuple[int, str]]:
+        """Bodies reset since the last call, as (key, reason); the list is then cleared."""
+        faults, self._faults = self._faults, []
+        return faults
+
+    # -- queries -----------------------------------------------------------
+    def raycast(self, origin: np.ndarray, direction: np.ndarray, max_distance: float,
+                ignore: int | None = None, mask: int = _ALL_BITS) -> RayHit | None:
+        """Closest hit along the ray, skipping body ``ignore`` and categories outside ``mask``."""
+        o = vec(origin, 3, "ray origin")
+        d = vec(direction, 3, "ray direction")
+        norm = float(np.linalg.norm(d))
+        if norm == 0 or not max_distance > 0:
+            return None
+        d = d / norm
+        hit = _ode.raycast(self._world, o[0], o[1], o[2], d[0], d[1], d[2],
+                           float(max_distance), -1 if ignore is None else int(ignore),
+                           mask & _ALL_BITS)
+        if hit is None:
+            return None
+        key, pos, normal, dist = hit
+        return RayHit(int(key), pos, normal, float(dist))

@@ -1,0 +1,222 @@
+"""Declarations of the libode 0.16 API (double precision) that the binding uses."""
+
+from libc.stdint cimport uint32_t
+
+
+cdef extern from "stdarg.h":
+    ctypedef struct va_list:
+        pass
+
+
+cdef extern from "ode/ode.h" nogil:
+    ctypedef double dReal
+    ctypedef dReal dVector3[4]
+    ctypedef dReal dMatrix3[12]
+    ctypedef dReal dQuaternion[4]
+    ctypedef uint32_t dTriIndex
+
+    cdef struct dxWorld
+    cdef struct dxSpace
+    cdef struct dxBody
+    cdef struct dxGeom
+    cdef struct dxJoint
+    cdef struct dxJointGroup
+    cdef struct dxTriMeshData
+    ctypedef dxWorld* dWorldID
+    ctypedef dxSpace* dSpaceID
+    ctypedef dxBody* dBodyID
+    ctypedef dxGeom* dGeomID
+    ctypedef dxJoint* dJointID
+    ctypedef dxJointGroup* dJointGroupID
+    ctypedef dxTriMeshData* dTriMeshDataID
+
+    ctypedef struct dMass:
+        dReal mass
+        dVector3 c
+        dMatrix3 I
+
+    ctypedef struct dSurfaceParameters:
+        int mode
+        dReal mu, mu2, rho, rho2, rhoN, bounce, bounce_vel, soft_erp, soft_cfm
+        dReal motion1, motion2, motionN, slip1, slip2
+
+    ctypedef struct dContactGeom:
+        dVector3 pos
+        dVector3 normal
+        dReal depth
+        dGeomID g1
+        dGeomID g2
+        int side1, side2
+
+    ctypedef struct dContact:
+        dSurfaceParameters surface
+        dContactGeom geom
+        dVector3 fdir1
+
+    ctypedef struct dJointFeedback:
+        dVector3 f1
+        dVector3 t1
+        dVector3 f2
+        dVector3 t2
+
+    ctypedef void dNearCallback(void* data, dGeomID o1, dGeomID o2) noexcept nogil
+    ctypedef void dMessageFunction(int errnum, const char* msg, va_list ap) noexcept nogil
+
+    enum:
+        dContactBounce, dContactSoftERP, dContactSoftCFM, dContactApprox1
+        dJointTypeContact
+        dAllocateMaskAll
+        dAMotorUser
+        dParamLoStop, dParamHiStop, dParamVel, dParamFMax
+        dParamLoStop2, dParamHiStop2, dParamVel2, dParamFMax2
+        dParamVel3, dParamFMax3
+
+    int dInitODE2(unsigned int flags)
+    int dAllocateODEDataForThread(unsigned int mask)
+    void dSetMessageHandler(dMessageFunction* fn)
+    void dRandSetSeed(unsigned long s)
+    unsigned long dRandGetSeed()
+
+    dWorldID dWorldCreate()
+    void dWorldDestroy(dWorldID)
+    void dWorldSetGravity(dWorldID, dReal, dReal, dReal)
+    void dWorldSetERP(dWorldID, dReal)
+    void dWorldSetCFM(dWorldID, dReal)
+    void dWorldSetQuickStepNumIterations(dWorldID, int)
+    int dWorldQuickStep(dWorldID, dReal)
+    void dWorldSetAutoDisableFlag(dWorldID, int)
+    void dWorldSetContactSurfaceLayer(dWorldID, dReal)
+    void dWorldImpulseToForce(dWorldID, dReal stepsize, dReal ix, dReal iy, dReal iz,
+                              dVector3 force)
+
+    dSpaceID dHashSpaceCreate(dSpaceID)
+    void dHashSpaceSetLevels(dSpaceID, int minlevel, int maxlevel)
+    void dSpaceDestroy(dSpaceID)
+    void dSpaceSetCleanup(dSpaceID, int)
+    void dSpaceCollide(dSpaceID, void* data, dNearCallback* cb)
+    void dSpaceCollide2(dGeomID, dGeomID, void* data, dNearCallback* cb)
+
+    dJointGroupID dJointGroupCreate(int)
+    void dJointGroupDestroy(dJointGroupID)
+    void dJointGroupEmpty(dJointGroupID)
+
+    dBodyID dBodyCreate(dWorldID)
+    void dBodyDestroy(dBodyID)
+    void dBodySetPosition(dBodyID, dReal, dReal, dReal)
+    void dBodySetQuaternion(dBodyID, const dQuaternion)
+    void dBodySetLinearVel(dBodyID, dReal, dReal, dReal)
+    void dBodySetAngularVel(dBodyID, dReal, dReal, dReal)
+    const dReal* dBodyGetPosition(dBodyID)
+    const dReal* dBodyGetQuaternion(dBodyID)
+    const dReal* dBodyGetLinearVel(dBodyID)
+    const dReal* dBodyGetAngularVel(dBodyID)
+    void dBodySetMass(dBodyID, const dMass*)
+    void dBodyAddForce(dBodyID, dReal, dReal, dReal)
+    void dBodyAddForceAtPos(dBodyID, dReal, dReal, dReal, dReal, dReal, dReal)
+    void dBodyAddTorque(dBodyID, dReal, dReal, dReal)
+    void dBodyEnable(dBodyID)
+    void dBodyDisable(dBodyID)
+    int dBodyIsEnabled(dBodyID)
+    void dBodySetData(dBodyID, void*)
+    void* dBodyGetData(dBodyID)
+    void dBodySetKinematic(dBodyID)
+    int dBodyIsKinematic(dBodyID)
+    void dBodySetGravityMode(dBodyID, int)
+    void dBodySetLinearDamping(dBodyID, dReal)
+    const dReal* dBodyGetForce(dBodyID)
+    const dReal* dBodyGetTorque(dBodyID)
+    void dBodySetForce(dBodyID, dReal, dReal, dReal)
+    void dBodySetTorque(dBodyID, dReal, dReal, dReal)
+    void dBodyGetMass(dBodyID, dMass*)
+    void dBodySetAngularDamping(dBodyID, dReal)
+
+    void dMassSetZero(dMass*)
+    void dMassSetSphere(dMass*, dReal density, dReal radius)
+    void dMassSetBox(dMass*, dReal density, dReal lx, dReal ly, dReal lz)
+    void dMassSetCapsule(dMass*, dReal density, int direction, dReal radius, dReal length)
+    void dMassSetCylinder(dMass*, dReal density, int direction, dReal radius, dReal length)
+    void dMassSetTrimesh(dMass*, dReal density, dGeomID)
+    void dMassAdjust(dMass*, dReal)
+    void dMassTranslate(dMass*, dReal, dReal, dReal)
+    void dMassRotate(dMass*, const dMatrix3)
+    void dMassAdd(dMass*, const dMass*)
+    int dMassCheck(const dMass*)
+    void dRfromQ(dMatrix3, const dQuaternion)
+    void dNormalize4(dReal* q)
+
+    dGeomID dCreateSphere(dSpaceID, dReal)
+    dGeomID dCreateBox(dSpaceID, dReal, dReal, dReal)
+    dGeomID dCreateCapsule(dSpaceID, dReal, dReal)
+    dGeomID dCreateCylinder(dSpaceID, dReal, dReal)
+    dGeomID dCreatePlane(dSpaceID, dReal, dReal, dReal, dReal)
+    dGeomID dCreateRay(dSpaceID, dReal)
+    dGeomID dCreateConvex(dSpaceID, const dReal* planes, unsigned int planecount,
+                          const dReal* points, unsigned int pointcount,
+                          const unsigned int* polygons)
+    dTriMeshDataID dGeomTriMeshDataCreate()
+    void dGeomTriMeshDataDestroy(dTriMeshDataID)
+    void dGeomTriMeshDataBuildDouble(dTriMeshDataID, const void* vertices, int vstride,
+                                     int vcount, const void* indices, int icount, int tstride)
+    dGeomID dCreateTriMesh(dSpaceID, dTriMeshDataID, void*, void*, void*)
+    void dGeomDestroy(dGeomID)
+    void dGeomSetBody(dGeomID, dBodyID)
+    dBodyID dGeomGetBody(dGeomID)
+    void dGeomSetData(dGeomID, void*)
+    void* dGeomGetData(dGeomID)
+    void dGeomSetPosition(dGeomID, dReal, dReal, dReal)
+    void dGeomSetQuaternion(dGeomID, const dQuaternion)
+    void dGeomSetOffsetPosition(dGeomID, dReal, dReal, dReal)
+    void dGeomSetOffsetQuaternion(dGeomID, const dQuaternion)
+    void dGeomSetCategoryBits(dGeomID, unsigned long)
+    void dGeomSetCollideBits(dGeomID, unsigned long)
+    void dGeomEnable(dGeomID)
+    void dGeomDisable(dGeomID)
+    int dGeomIsSpace(dGeomID)
+    void dGeomRaySet(dGeomID, dReal, dReal, dReal, dReal, dReal, dReal)
+    void dGeomRaySetLength(dGeomID, dReal)
+    void dGeomRaySetClosestHit(dGeomID, int)
+    int dCollide(dGeomID, dGeomID, int flags, dContactGeom* contact, int skip)
+
+    dJointID dJointCreateContact(dWorldID, dJointGroupID, const dContact*)
+    dJointID dJointCreateHinge(dWorldID, dJointGroupID)
+    dJointID dJointCreateBall(dWorldID, dJointGroupID)
+    dJointID dJointCreateSlider(dWorldID, dJointGroupID)
+    dJointID dJointCreateUniversal(dWorldID, dJointGroupID)
+    dJointID dJointCreateHinge2(dWorldID, dJointGroupID)
+    dJointID dJointCreateFixed(dWorldID, dJointGroupID)
+    dJointID dJointCreateAMotor(dWorldID, dJointGroupID)
+    dJointID dJointCreateLMotor(dWorldID, dJointGroupID)
+    void dJointDestroy(dJointID)
+    void dJointAttach(dJointID, dBodyID, dBodyID)
+    void dJointSetFeedback(dJointID, dJointFeedback*)
+    int dAreConnectedExcluding(dBodyID, dBodyID, int)
+
+    void dJointSetHingeAnchor(dJointID, dReal, dReal, dReal)
+    void dJointSetHingeAxis(dJointID, dReal, dReal, dReal)
+    void dJointSetHingeParam(dJointID, int, dReal)
+    dReal dJointGetHingeAngle(dJointID)
+    dReal dJointGetHingeAngleRate(dJointID)
+    void dJointSetBallAnchor(dJointID, dReal, dReal, dReal)
+    void dJointSetSliderAxis(dJointID, dReal, dReal, dReal)
+    void dJointSetSliderParam(dJointID, int, dReal)
+    dReal dJointGetSliderPosition(dJointID)
+    dReal dJointGetSliderPositionRate(dJointID)
+    void dJointSetUniversalAnchor(dJointID, dReal, dReal, dReal)
+    void dJointSetUniversalAxis1(dJointID, dReal, dReal, dReal)
+    void dJointSetUniversalAxis2(dJointID, dReal, dReal, dReal)
+    void dJointSetUniversalParam(dJointID, int, dReal)
+    dReal dJointGetUniversalAngle1(dJointID)
+    dReal dJointGetUniversalAngle1Rate(dJointID)
+    void dJointSetHinge2Anchor(dJointID, dReal, dReal, dReal)
+    void dJointSetHinge2Axes(dJointID, const dReal*, const dReal*)
+    void dJointSetHinge2Param(dJointID, int, dReal)
+    dReal dJointGetHinge2Angle1(dJointID)
+    dReal dJointGetHinge2Angle1Rate(dJointID)
+    void dJointSetFixed(dJointID)
+    void dJointSetAMotorMode(dJointID, int)
+    void dJointSetAMotorNumAxes(dJointID, int)
+    void dJointSetAMotorAxis(dJointID, int anum, int rel, dReal, dReal, dReal)
+    void dJointSetAMotorParam(dJointID, int, dReal)
+    void dJointSetLMotorNumAxes(dJointID, int)
+    void dJointSetLMotorAxis(dJointID, int anum, int rel, dReal, dReal, dReal)
+    void dJointSetLMotorParam(dJointID, int, dReal)

@@ -1,0 +1,104 @@
+"""A pymunk space read in batches through pymunk's public ``pymunk.batch`` API.
+
+One call copies every body's position, angle and velocities (with its id) into a
+buffer, one call every arbiter's bodies, normal, points and impulse; a compiled pass
+(``_rows``, on those plain arrays) turns them into our rows. pymunk lists bodies in
+chipmunk's own
+order, awake bodies first, then static ones, then sleeping ones, and that order
+changes as bodies fall asleep and wake; a :class:`SpaceReader` keeps the
+permutation to our rows and rebuilds it only when the ids come out in a new order,
+which also tells which bodies are asleep.
+
+A reader is planned for a fixed list of bodies, rows in key order (the backend plans
+a new one when bodies come or go).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pymunk
+import pymunk.batch
+
+from engine.physics.backend import CONTACT_DTYPE
+from engine.physics.pymunk2d import _rows
+
+_BODY = (pymunk.batch.BodyFields.BODY_ID | pymunk.batch.BodyFields.POSITION
+         | pymunk.batch.BodyFields.ANGLE | pymunk.batch.BodyFields.VELOCITY
+         | pymunk.batch.BodyFields.ANGULAR_VELOCITY)
+_ARB = pymunk.batch.ArbiterFields
+_ARBITER = (_ARB.BODY_A_ID | _ARB.BODY_B_ID | _ARB.CONTACT_COUNT | _ARB.TOTAL_IMPULSE
+            | _ARB.NORMAL | _ARB.POINT_A_1 | _ARB.POINT_B_1 | _ARB.DISTANCE_1
+            | _ARB.POINT_A_2 | _ARB.POINT_B_2 | _ARB.DISTANCE_2)
+
+
+class SpaceReader:
+    """Reads one space's bodies (row ``i`` is ``bodies[i]``, rows in key order) and its
+    contacts; the per-row work is done by :class:`_rows.Rows`.
+
+    ``y`` holds each row's Y (kept as authored; the backend writes it in place),
+    ``rest`` (n, 4) each body's fixed tilt, applied after the turn about Y, ``cog``
+    (n, 2) its centre of mass in the body frame, ``static`` whether each row is a
+    static body.
+    """
+
+    def __init__(self, space: pymunk.Space, bodies: list[pymunk.Body], keys: np.ndarray,
+                 y: np.ndarray, rest: np.ndarray, cog: np.ndarray, static: np.ndarray) -> None:
+        self._space = space
+        self._buffer = pymunk.batch.Buffer()
+        self._arbiters = pymunk.batch.Buffer()
+        ids = np.fromiter((b.id for b in bodies), np.int64, len(bodies))
+        self._rows = _rows.Rows(ids, keys, static, y, rest, cog, CONTACT_DTYPE)
+        # the static bodies pymunk lists between the awake and the sleeping ones: ours
+        # and the space's own
+        self._static_ids = np.sort(np.append(ids[static], space.static_body.id))
+        self._order = np.zeros(0, np.int64)
+        self.gather = np.zeros(len(bodies), np.intp)  # row -> place in pymunk's list
+        self._awake = np.zeros(len(bodies), bool)
+
+    def _plan_order(self, ids: np.ndarray) -> None:
+        """pymunk listed the bodies in a new order: where each row is, and who sleeps."""
+        gather = np.full(len(self.gather), -1, np.intp)
+        others = self._rows.order(ids, gather)
+        if others != 1 or (gather < 0).any():
+            raise RuntimeError("pymunk lists other bodies than the backend planned for")
+        static = np.isin(ids, self._static_ids)
+        first = int(np.argmax(static))
+        if not static[first:first + len(self._static_ids)].all() or \
+                static[first + len(self._static_ids):].any():
+            raise RuntimeError("pymunk no longer lists static bodies in one run between the "
+                               "awake and the sleeping ones; the backend cannot tell who sleeps")
+        self.gather = gather
+        self._awake = gather < first
+        self._order = ids.copy()
+
+    def read(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every body's (x, z, θ, vx, vz, ω) as pymunk has them (velocity of the centre of
+        mass), in pymunk's order (row ``i`` is at ``gather[i]``); and which rows are
+        awake. Valid until the next read."""
+        buffer = self._buffer
+        buffer.clear()
+        pymunk.batch.get_space_bodies(self._space, _BODY, buffer)
+        ids = np.frombuffer(buffer.int_buf(), np.int64)
+        if not np.array_equal(ids, self._order):
+            self._plan_order(ids)
+        return np.frombuffer(buffer.float_buf(), np.float64).reshape(-1, 6), self._awake
+
+    def table(self, raw: np.ndarray, out: np.ndarray, keep: np.ndarray) -> bool:
+        """A read as state rows (BodyState's layout) in ``out[:n]``, and in row order as
+        it is in ``keep`` (n, 6); whether all finite."""
+        return self._rows.table(raw, self.gather, out, keep)
+
+    def motion(self, raw: np.ndarray, velocity: np.ndarray) -> None:
+        """A read's centre-of-mass velocities as the sleep rule keeps them, (6, n)."""
+        self._rows.motion(raw, self.gather, velocity)
+
+    def contacts(self) -> np.ndarray:
+        """One CONTACT_DTYPE row per touching shape pair, sorted by keys then place (see
+        :meth:`_rows.Rows.contacts`)."""
+        buffer = self._arbiters
+        buffer.clear()
+        pymunk.batch.get_space_arbiters(self._space, _ARBITER, buffer)
+        ints = np.frombuffer(buffer.int_buf(), np.int64).reshape(-1, _rows.ARBITER_INTS)
+        floats = np.frombuffer(buffer.float_buf(), np.float64).reshape(-1,
+                                                                        _rows.ARBITER_FLOATS)
+        return self._rows.contacts(ints, floats)
