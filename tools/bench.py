@@ -79,7 +79,7 @@ def _physics_figures(rows: list[dict[str, Any]]) -> list[Figure]:
 
 def _import_figures(rows: list[dict[str, Any]]) -> list[Figure]:
     ref = next(r for r in rows if "reference" in r["stage"])
-    return [Figure(f"{r['nodes']} nodes: {r['stage']}", r["s"], ref["s"], "s",
+    return [Figure(f"{r['nodes']} nodes: {r['stage']}", r["cpu s"], ref["cpu s"], "cpu s",
                    "json.loads of the glTF's JSON") for r in rows if "goal s" in r]
 
 
