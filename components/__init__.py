@@ -20,6 +20,7 @@ from components.script import Script
 from components.shape import Shape
 from components.sound import Sound
 from components.transform import Transform
+from components.trigger import Trigger
 from components.visual import Visual
 
 __all__ = [
@@ -40,5 +41,6 @@ __all__ = [
     "Shape",
     "Sound",
     "Transform",
+    "Trigger",
     "Visual",
 ]

@@ -44,11 +44,12 @@ from components import (
     Shape,
     Sound,
     Transform,
+    Trigger,
     Visual,
 )
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from components.script import SavedScript, ScriptHandler, ScriptTimer
-from engine.assets import AssetError, Assets
+from engine.assets import AssetError, Assets, nodes_name
 from engine.assets.geometry import convex_hull
 from engine.physics.backend import MaterialPair, SleepState, WorldSettings
 from engine.physics.commands import SetSleepState
@@ -409,6 +410,8 @@ class _Builder:
             if hand_blk is not None:
                 self.hand_body(body, phys, oid)
             comps.append(body)
+            if phys("Trigger"):
+                comps.append(Trigger(mask=int(phys("Mask"))))
             self.physical_ids.add(oid)
             if any(map(r.has, ("Asleep", "SleepVelocity", "SleepTimer", "SleepReference"))):
                 self.sleep[oid] = self.sleep_spec(r)
@@ -438,7 +441,7 @@ class _Builder:
             gr = _Reader(g, "Geometry")
             if gr.has("File"):
                 if model is None:
-                    model, scale = gr("File"), _floats(gr("Scale"))
+                    model, scale = _model_name(gr), _floats(gr("Scale"))
                     self.assets.model(model, gr.value("File").loc, self.folder)
             elif gr.has("Primitive") and gr("Primitive") != "plane":
                 shapes.append(_primitive(gr, size))
@@ -495,6 +498,9 @@ class _Builder:
             kind = "static"
         elif r("Kinematic"):
             kind = "kinematic"
+        if phys("Trigger"):  # detects what its Mask names; nothing collides with it
+            return Physical(kind="kinematic" if r("Kinematic") else "static", mass=mass,
+                            shapes=shapes, material=material, category=0, mask=0)
         return Physical(kind=kind, mass=mass, shapes=shapes, material=material,
                         linear_damping=float(phys("LinearDamping")),
                         angular_damping=float(phys("AngularDamping")),
@@ -510,7 +516,8 @@ class _Builder:
             gr = _Reader(g, "Geometry")
             if gr.has("File") or gr.has("ParseMethod"):
                 file_v = gr.value("File")
-                file, fscale = (gr("File"), _floats(gr("Scale"))) if file_v else (model, scale)
+                file, fscale = (_model_name(gr), _floats(gr("Scale"))) if file_v else (model,
+                                                                                     scale)
                 loc = file_v.loc if file_v else g.loc
                 if file is None:
                     self.report.error(loc, "ParseMethod needs a model: give File here or in "
@@ -907,6 +914,13 @@ def _model_shape(triangles: tuple[np.ndarray, np.ndarray], scale: tuple[float, .
         return Shape("box", tuple(float(e) for e in hi - lo), offset=center)
     radius = float(np.linalg.norm(vertices - (lo + hi) / 2, axis=1).max())
     return Shape("sphere", (radius,), offset=center)
+
+
+def _model_name(gr: _Reader) -> str:
+    """A Geometry's model: its File, or only the File's ``Nodes`` or ``Mesh``."""
+    if gr.has("Nodes"):
+        return nodes_name(gr("File"), gr("Nodes"))
+    return nodes_name(gr("File"), [gr("Mesh")], mesh=True) if gr.has("Mesh") else gr("File")
 
 
 def _primitive(gr: _Reader, size: Any) -> Shape:

@@ -106,6 +106,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "World": _f(STRUCT_T, doc="dynamics settings", struct="World"),
         "Avatar": _f(STRUCT_T, doc="a skinned, animated figure (glTF)", repeat=True,
                      struct="Avatar"),
+        "Model": _f(STRUCT_T, doc="a model file (glTF, Collada) whose bodies, joints and "
+                    "materials join the scene", repeat=True, struct="Model"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
         "Input": _f(STRUCT_T, doc="input devices and how their trackers, wheels and buttons "
                     "are calibrated (engine.input)", repeat=True, struct="Input"),
@@ -179,16 +181,30 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Category": _f(INT_T, 1, "collision category bits"),
         "Mask": _f(INT_T, 0xFFFFFFFF, "collides with these category bits"),
         "Gravity": _f(BOOL_T, 1, "0: gravity does not act on this body"),
+        "Trigger": _f(BOOL_T, 0, "1: a sensor: nothing collides with it; bodies whose "
+                      "Category meets its Mask are told entering and leaving it (Lua: "
+                      "on(\"trigger\", fn)); static unless Kinematic"),
     },
     "Geometry": {
         "Primitive": _f(ENUM_T, None, "shape kind (default box)", allowed=PRIMITIVES),
         "File": _f(ASSET_T, None, "model file (loaded with trimesh)"),
+        "Nodes": _f(STRINGVECTOR_T, None, "only these nodes of the File (glTF, Collada): "
+                    "their own meshes, placed as in the file relative to the first node "
+                    "(its scale included); a name, or #INDEX for an unnamed or repeated one"),
+        "Mesh": _f(STRING_T, None, "only this mesh of the File (glTF), in its own space: a "
+                   "name, or #INDEX"),
         "Scale": _f(VEC3_T, (1.0, 1.0, 1.0), "model scale"),
         "Size": _f(VECTOR_T, None, "primitive size (see module doc)", lengths=(1, 2, 3)),
         "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, in the object's frame"),
         "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees, in the object's frame"),
         "ParseMethod": _f(ENUM_T, None, "physics shape derived from the model",
                           allowed=PARSE_METHODS),
+    },
+    "Model": {
+        "File": _f(ASSET_T, None, "a .gltf, .glb or .dae file", required=True),
+        "Import": _f(BOOL_T, 1, "1: its bodies, joints, materials and extras become the "
+                     "scene's, as `colosseum import` writes them; 0: drawn whole, as scenery"),
+        "Prefix": _f(STRING_T, "", "put before every ID it declares (to import a model twice)"),
     },
     "Material": {
         "ID": Field(STRING_T, None, "name or number objects use to refer to it", required=True),
