@@ -159,6 +159,10 @@ cdef extern from "ode/ode.h" nogil:
     void dGeomTriMeshDataBuildDouble(dTriMeshDataID, const void* vertices, int vstride,
                                      int vcount, const void* indices, int icount, int tstride)
     dGeomID dCreateTriMesh(dSpaceID, dTriMeshDataID, void*, void*, void*)
+    int dGeomTriMeshDataPreprocess2(dTriMeshDataID, unsigned int build, const void* extra)
+    enum:
+        dTRIDATAPREPROCESS_BUILD_CONCAVE_EDGES
+        dTRIDATAPREPROCESS_BUILD_FACE_ANGLES
     void dGeomDestroy(dGeomID)
     void dGeomSetBody(dGeomID, dBodyID)
     dBodyID dGeomGetBody(dGeomID)
