@@ -63,3 +63,14 @@ class AvatarControl(Protocol):
         """Run one of :data:`AVATAR_METHODS` on avatar ``entity``; plain data in and out;
         raises ValueError (KeyError for an object that is not an avatar) with a message
         naming what exists."""
+
+
+class HandControl(Protocol):
+    """Virtual hands asked from scripts (the hands plugin)."""
+
+    plugin = "hands"
+
+    def state(self, hand: int) -> str: ...
+    def held(self, hand: int) -> tuple[int, ...]: ...
+    def grasp(self, hand: int, obj: int) -> None: ...
+    def release(self, hand: int) -> None: ...

@@ -4,13 +4,12 @@
 cdef class _Drive:
     """A six-DOF drive: linear + angular velocity motors aiming a body at a target pose.
 
-    Each step the motors ask for ``v = v_ff + error / τ``: the error closes with time
-    constant τ (at least the step; 0 means the step), the correction capped at
-    ``max_speed`` and ``max_spin``; ``v_ff`` is the target's own motion. The motors'
-    force and torque are bounded, so a blocked body pushes but never fights. With a
-    second body the target rides on it (the relative pose at creation is kept) and moves
-    with its velocity (the feed-forward); without one the target is a world pose set by
-    :func:`set_target`, at rest.
+    Each step the motors ask for ``v = error / τ``: the error closes with time constant τ
+    (at least the step; 0 means the step), the correction capped at ``max_speed`` and
+    ``max_spin``. The motors' force and torque are bounded, so a blocked body pushes but
+    never fights. With a second body the target rides on it (the relative pose at
+    creation is kept) and the motors hold velocities relative to it, so its own motion is
+    fed forward; without one the target is a world pose set by :func:`set_target`.
     """
     cdef dBodyID body
     cdef dBodyID other
@@ -344,14 +343,14 @@ cdef inline void capped(double* v, double cap) noexcept nogil:
 
 
 cdef void drive_joints(World w, double dt):
-    """Aim every six-DOF drive: v = v_ff + error / τ (correction capped), force bounded."""
+    """Aim every six-DOF drive: v = error / τ (capped), force bounded. The motors hold the
+    body's velocity relative to ``other`` when there is one, so the target body's own
+    motion is fed forward by the constraint itself."""
     cdef _Drive d
     cdef _JointRec rec
     cdef const dReal* p
-    cdef const dReal* av
     cdef double rv[3]
     cdef double lin[3]
-    cdef double ff[4]
     cdef double tau
     cdef int k
     for obj in w.joints.values():
@@ -360,19 +359,13 @@ cdef void drive_joints(World w, double dt):
             continue
         d = rec.drive
         tau = max(d.tau, dt)
-        p = dBodyGetPosition(d.body)
         if d.other != NULL:
             qmul(dBodyGetQuaternion(d.other), &d.rel[3], &d.target[3])
             qrotate(dBodyGetQuaternion(d.other), d.rel, d.target)
             p = dBodyGetPosition(d.other)
             for k in range(3):
                 d.target[k] += p[k]
-            dBodyGetPointVel(d.other, d.target[0], d.target[1], d.target[2], ff)
-            av = dBodyGetAngularVel(d.other)
-            p = dBodyGetPosition(d.body)
-        else:
-            ff[0] = ff[1] = ff[2] = 0.0
-            av = NULL
+        p = dBodyGetPosition(d.body)
         for k in range(3):
             lin[k] = (d.target[k] - p[k]) / tau
         capped(lin, d.max_speed)
@@ -380,12 +373,12 @@ cdef void drive_joints(World w, double dt):
         for k in range(3):
             rv[k] /= tau
         capped(rv, d.max_spin)
-        dJointSetLMotorParam(d.lmotor, dParamVel, clamp_speed(ff[0] + lin[0]))
-        dJointSetLMotorParam(d.lmotor, dParamVel2, clamp_speed(ff[1] + lin[1]))
-        dJointSetLMotorParam(d.lmotor, dParamVel3, clamp_speed(ff[2] + lin[2]))
-        dJointSetAMotorParam(d.amotor, dParamVel, clamp_speed(rv[0] + (av[0] if av else 0.0)))
-        dJointSetAMotorParam(d.amotor, dParamVel2, clamp_speed(rv[1] + (av[1] if av else 0.0)))
-        dJointSetAMotorParam(d.amotor, dParamVel3, clamp_speed(rv[2] + (av[2] if av else 0.0)))
+        dJointSetLMotorParam(d.lmotor, dParamVel, clamp_speed(lin[0]))
+        dJointSetLMotorParam(d.lmotor, dParamVel2, clamp_speed(lin[1]))
+        dJointSetLMotorParam(d.lmotor, dParamVel3, clamp_speed(lin[2]))
+        dJointSetAMotorParam(d.amotor, dParamVel, clamp_speed(rv[0]))
+        dJointSetAMotorParam(d.amotor, dParamVel2, clamp_speed(rv[1]))
+        dJointSetAMotorParam(d.amotor, dParamVel3, clamp_speed(rv[2]))
         for k in range(3):
             dJointSetLMotorParam(d.lmotor, dParamFMax + 0x100 * k, d.max_force)
             dJointSetAMotorParam(d.amotor, dParamFMax + 0x100 * k, d.max_torque)

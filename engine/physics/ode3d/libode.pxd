@@ -110,7 +110,6 @@ cdef extern from "ode/ode.h" nogil:
     const dReal* dBodyGetQuaternion(dBodyID)
     const dReal* dBodyGetLinearVel(dBodyID)
     const dReal* dBodyGetAngularVel(dBodyID)
-    void dBodyGetPointVel(dBodyID, dReal, dReal, dReal, dVector3)
     void dBodySetMass(dBodyID, const dMass*)
     void dBodyAddForce(dBodyID, dReal, dReal, dReal)
     void dBodyAddForceAtPos(dBodyID, dReal, dReal, dReal, dReal, dReal, dReal)
