@@ -122,16 +122,22 @@ class Hands:
     def _rig(self, hand: int) -> _Rig:
         rig = self.rigs.get(hand)
         if rig is None:
-            raise KeyError(f"object {hand} is not a hand")
+            self._state(hand)  # not a hand at all: says so
+            raise ValueError("the hand starts holding from its first physics frame on")
         return rig
 
-    def state(self, hand: int) -> str:
-        self._rig(hand)
+    def _state(self, hand: int) -> HandState:
         assert self._engine is not None
-        return str(self._engine.world.component_for_entity(hand, HandState).mode)
+        state = self._engine.world.try_component(hand, HandState)
+        if state is None:
+            raise KeyError(f"object {_name(self._engine.world, hand)!r} is not a hand")
+        return state
+
+    def state(self, hand: int) -> str:
+        return str(self._state(hand).mode)
 
     def held(self, hand: int) -> tuple[int, ...]:
-        return tuple(self._rig(hand).grasps)
+        return self._state(hand).held
 
     def grasp(self, hand: int, obj: int) -> None:
         assert self._engine is not None

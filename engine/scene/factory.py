@@ -73,7 +73,7 @@ from engine.scene.diagnostics import (
     Reporter,
     suggest,
 )
-from engine.scene.inputs import InputSpec, read_inputs
+from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS, InputSpec, read_inputs
 from engine.scene.parser import paused_gc
 
 if TYPE_CHECKING:
@@ -306,6 +306,7 @@ class _Builder:
         self.physical_ids: set[str] = set()
         self.sleep: dict[str, SleepState] = {}
         self.hand_frames: dict[str, str] = {}
+        self.hand_inputs: list[tuple[str, _Reader]] = []  # what each hand's Hand names
         #: Owner -> the saved state its script resumes from, and the block that said so.
         self.script_states: dict[str, SavedScript] = {}
         self.script_blocks: dict[str, Block] = {}
@@ -338,6 +339,7 @@ class _Builder:
         self.world(root, spec)
         self.scene_entities(root, spec)
         spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
+        self.check_hand_inputs(spec.input)
         for i, blk in enumerate(root.blocks("Avatar")):
             spec.entities.append(self.avatar(blk, i))
         return spec
@@ -456,6 +458,7 @@ class _Builder:
             return []
         if h.has("Frame"):
             self.hand_frames[oid] = h("Frame")
+        self.hand_inputs.append((oid, h))
         models = {key: self.model(h, key) for key in ("ContactModel", "GraspModel")}
         hand = Hand(tracker=h("Tracker"), glove=h("Glove"), button=h("Button"),
                     max_force=float(h("MaxForce")), max_torque=float(h("MaxTorque")),
@@ -466,6 +469,29 @@ class _Builder:
                     contact_model=models["ContactModel"], grasp_model=models["GraspModel"],
                     holding=tuple(h("Holding") or ()))
         return [hand, HandState()]
+
+    def check_hand_inputs(self, inputs: InputSpec) -> None:
+        """A hand's tracker and glove must be ones the scene declares (or the desktop
+        device's); with none declared, names from a device that sends them (OSC, LSL) are
+        expected, and a name nothing declares is told as a warning."""
+        trackers = {t.id for t in inputs.trackers}
+        gloves = {b.device for b in inputs.buttons}
+        for oid, h in self.hand_inputs:
+            for key, declared, desktop in (("Tracker", trackers, DESKTOP_TRACKERS),
+                                           ("Glove", gloves, DESKTOP_GLOVES)):
+                name = h(key)
+                if not name or name in declared or name in desktop:
+                    continue
+                known = ", ".join(sorted({*declared, *desktop}))
+                what = "tracker" if key == "Tracker" else "glove"
+                hint = suggest(name, sorted({*declared, *desktop}))
+                if declared:
+                    self.report.error(h.value(key).loc, f"hand '{oid}': no {what} {name!r} "
+                                      f"in this scene's Input (known: {known}){hint}")
+                else:
+                    self.report.warning(h.value(key).loc, f"hand '{oid}': {what} {name!r} is "
+                                        f"declared nowhere; it must come from a device that "
+                                        f"sends it (known here: {known}){hint}")
 
     def hand_body(self, body: Physical, phys: _Reader, oid: str) -> None:
         """A hand floats (its drive holds it up) and never sleeps; it weighs a hand's

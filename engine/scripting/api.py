@@ -97,7 +97,7 @@ import difflib
 import logging
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from components import Camera, Joint, Name, Physical, Sound, Transform
+from components import Camera, Hand, Joint, Name, Physical, Sound, Transform
 from components.joint import SCENE_JOINT_TYPES
 from engine.input.state import InputState
 from engine.physics import commands as cmd
@@ -192,12 +192,17 @@ function Object.getHeld(h)
   return out
 end
 function Object.grasp(h, other) P.hand_grasp(oid("grasp", h), oid("grasp", other)) end
-function Object.release(h) P.hand_release(oid("release", h)) end
 for i = 1, #P.avatar_methods do  -- avatar:play("Run", {fade=0.3}), avatar:blend{...}, ...
   local method = P.avatar_methods[i]
   Object[method] = function(h, ...)
     return P.avatar(oid(method, h), method, plain({...}))
   end
+end
+local avatar_release = Object.release
+function Object.release(h, ...)  -- a hand lets go of all it holds; an avatar, its object
+  local id = oid("release", h)
+  if P.is_hand(id) then return P.hand_release(id) end
+  return avatar_release(h, ...)
 end
 
 local C = {}
@@ -278,7 +283,7 @@ class ScriptAPI:
             "break_joint": self.break_joint, "set_uniform": self.set_uniform,
             "set_gain": self.set_gain, "hand_state": self.hand_state,
             "hand_held": self.hand_held, "hand_grasp": self.hand_grasp,
-            "hand_release": self.hand_release,
+            "hand_release": self.hand_release, "is_hand": self.is_hand,
             "set_camera": self.set_camera, "request_plugin": self.request_plugin,
             "time": self.time, "tracker": self.tracker, "wheel": self.wheel,
             "button": self.button, "axis": self.axis, "key": self.key,
@@ -530,6 +535,9 @@ class ScriptAPI:
             return call(self._hands(what, entity))
         except (KeyError, ValueError) as exc:
             raise ScriptAPIError(f"{what}: {exc.args[0] if exc.args else exc}") from None
+
+    def is_hand(self, entity: int) -> bool:
+        return self.engine.world.has_component(self._entity(entity, "release"), Hand)
 
     def hand_state(self, entity: int) -> str:
         return self._hand_call("getHandState", entity, lambda h: h.state(entity))
