@@ -293,12 +293,14 @@ class HandDriveSystem(System):
     def _limit_step(engine: Engine) -> None:
         """Hands are simulated at 1/120 s or finer: more substeps per frame if needed."""
         needed = math.ceil(engine.config.dt / MAX_STEP - 1e-9)
+        raised = False
         for controller in (engine.controller, engine.physics.controller):
             if controller.substeps < needed:
+                raised = True
                 controller.substeps = needed
                 controller.pacing.substeps = needed
                 controller.pacing.max_substeps = max(controller.pacing.max_substeps, needed)
-        if engine.controller.substeps == needed and needed > 1:
+        if raised:
             log.info("hands: physics steps at %.4g s (%d per frame of %.4g s)",
                      engine.config.dt / needed, needed, engine.config.dt)
 

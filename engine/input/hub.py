@@ -47,7 +47,8 @@ from engine.scene.inputs import InputSpec, TrackerSpec
 log = logging.getLogger("colosseum.input")
 
 #: Event types that are never "lost": a keyboard or a mouse is silent when unused.
-_UNWATCHED = (KeyEvent, Pointer)
+#: Events that come when something changes, not as a stream: their silence says nothing.
+_UNWATCHED = (KeyEvent, Pointer, Button, Axis)
 
 
 class TrackerPipeline:
