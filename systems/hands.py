@@ -213,10 +213,17 @@ class HandDriveSystem(System):
     def setup(self, engine: Engine) -> None:
         self.hands._engine = engine
         world = engine.world
-        world.on_add(Hand, lambda e, h: self._new.append(e))
+        world.on_add(Hand, lambda e, h: self._added(engine, e))
         world.on_remove(Hand, lambda e, h: self._forget(engine, e))
         world.on_remove(Physical, lambda e, p: self._dropped(engine, e))
-        self._new.extend(sorted(e for e, _ in world.get_component(Hand)))
+        for entity in sorted(e for e, _ in world.get_component(Hand)):
+            self._added(engine, entity)
+
+    def _added(self, engine: Engine, entity: int) -> None:
+        """Rigged at the next PRE_PHYSICS; the step is shortened now, before any frame
+        steps with the longer one (a saved state resumes with the same steps)."""
+        self._limit_step(engine)
+        self._new.append(entity)
 
     def run(self, engine: Engine, dt: float) -> None:
         if self._new:
@@ -260,7 +267,6 @@ class HandDriveSystem(System):
             t = world.try_component(entity, Transform)
             if hand is None or t is None or not world.has_component(entity, Physical):
                 continue
-            self._limit_step(engine)
             name = _name(world, entity)
             control = engine.spawn(
                 Name(f"{name} tracker"), Transform(t.position.copy(), t.orientation.copy()),
