@@ -374,8 +374,7 @@ class HandDriveSystem(System):
             state.colliding = False
         elif not state.colliding and d < COLLIDE_AGAIN * limit:
             self._collide_again(engine, rig, state)
-        physics.push(SetPose(rig.control, position, orientation))
-        physics.push(SetVelocity(rig.control, velocity, spin))
+        physics.push(SetPose(rig.control, position, orientation, velocity, spin))
         self._look(engine, rig, hand, state)
 
     def _collide_again(self, engine: Engine, rig: _Rig, state: HandState) -> None:

@@ -30,6 +30,7 @@ BENCHMARKS: dict[str, str] = {
     "input": "tools.bench_input:run_bench",
     "contacts": "tools.bench:bench_contacts",
     "avatars": "tools.bench_avatars:run_bench",
+    "hands": "tools.bench_hands:run_bench",
     "import": "tools.bench_import:run_bench",
 }
 
@@ -106,6 +107,9 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "input": _input_figures,
     "contacts": _by_row(lambda r: f"{r['pairs']} touching pairs", "ms/frame", "unique ms",
                         "ms/frame", "pair keys and np.unique of the same contacts alone"),
+    "hands": lambda rows: [Figure(r["case"], r["ms_per_step"], r["without_hands_ms"],
+                                  "ms/step", "the same scene without the hands")
+                           for r in rows if "ms_per_step" in r],
     "avatars": lambda rows: [Figure(f"{r['avatars']} avatars, {r['case']}", r["ms_per_frame"],
                                     r["reference_ms"], "ms/frame", r["reference"])
                              for r in rows if r["ms_per_frame"] > 0],

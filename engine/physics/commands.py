@@ -46,10 +46,12 @@ class CommandError(ValueError):
 
 def _vector(command: str, what: str, value: Any, n: int) -> tuple[float, ...]:
     try:
-        out = tuple(float(v) for v in value)
+        out = tuple(map(float, value.tolist() if isinstance(value, np.ndarray) else value))
     except (TypeError, ValueError):
         raise CommandError(f"{command}: {what} must be {n} numbers, got {value!r}") from None
-    if len(out) != n or not all(math.isfinite(v) for v in out):
+    # a sum is finite exactly when every term is (short of overflowing: 1e308 * 2, far
+    # outside any world, is refused too)
+    if len(out) != n or not math.isfinite(sum(out)):
         raise CommandError(f"{command}: {what} must be {n} finite numbers, got {value!r}")
     return out
 
@@ -226,16 +228,25 @@ class ApplyImpulse(Command):
 
 @dataclass(frozen=True, slots=True)
 class SetPose(Command):
-    """Teleport a body: its origin to ``position``, turned to ``orientation``."""
+    """Teleport a body: its origin to ``position``, turned to ``orientation``; with
+    velocities (m/s, rad/s), moving at those from there (a kinematic body carried along a
+    tracked path in one command)."""
 
     key: int
     position: Vec3
     orientation: Quat
+    linear: Vec3 | None = None
+    angular: Vec3 | None = None
 
     def __post_init__(self) -> None:
         self._check_key()
         self._set("position", _vector("SetPose", "position", self.position, 3))
         self._set("orientation", _quaternion("SetPose", self.orientation))
+        if (self.linear is None) != (self.angular is None):
+            raise CommandError("SetPose: give both velocities or neither")
+        if self.linear is not None:
+            self._set("linear", _vector("SetPose", "linear velocity", self.linear, 3))
+            self._set("angular", _vector("SetPose", "angular velocity", self.angular, 3))
 
 
 @dataclass(frozen=True, slots=True)
