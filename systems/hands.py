@@ -108,6 +108,13 @@ class _Rig:
     pressed: bool = False
     lost_for: float = 0.0
     overlap: Future | None = None
+    shown: tuple[str, bool, bool] | None = None  # the mode, tracking and see-through drawn
+    force_output: str = field(init=False)
+    grasp_output: str = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.force_output, self.grasp_output = f"hand:{self.name}/force", \
+            f"hand:{self.name}/grasp"
 
 
 class Hands:
@@ -362,7 +369,7 @@ class HandDriveSystem(System):
             return
         position, orientation, velocity, spin = pose
         state.tracked, rig.lost_for = True, 0.0
-        d = float(np.linalg.norm(t.position - position))
+        d = math.dist(t.position.tolist(), position.tolist())
         state.deviation = d
         limit = hand.deviation_distance
         if d > TELEPORT_DISTANCE:
@@ -395,7 +402,15 @@ class HandDriveSystem(System):
     @staticmethod
     def _look(engine: Engine, rig: _Rig, hand: Hand, state: HandState) -> None:
         """The hand's look: its mode's model (or tint), see-through in the band of 5.4,
-        grey while untracked. Written only when it changes (a change rebuilds its draw)."""
+        grey while untracked. Written only when one of those changes (a change rebuilds its
+        draw; a script may recolour the hand in between)."""
+        low, high = SEE_THROUGH
+        through = low * hand.deviation_distance <= state.deviation <= \
+            high * hand.deviation_distance
+        shown = (state.mode, state.tracked, through)
+        if shown == rig.shown:
+            return
+        rig.shown = shown
         visual = engine.world.try_component(rig.hand, Visual)
         if visual is None:
             return
@@ -408,9 +423,6 @@ class HandDriveSystem(System):
             color = (*TINTS[mode], color[3])
         if not state.tracked:
             color = (*UNTRACKED, color[3])
-        low, high = SEE_THROUGH
-        through = low * hand.deviation_distance <= state.deviation <= \
-            high * hand.deviation_distance
         if through:
             color = (*color[:3], SEE_THROUGH_ALPHA)
         if (visual.model, tuple(visual.color), visual.overlay) != (model, color, through):
@@ -432,33 +444,50 @@ class HandContactSystem(System):
         rigs = self.hands.rigs
         if not rigs:
             return
-        batches = [c.batch for c in engine.events.frame(Contacts)]
-        contacts = np.concatenate(batches) if batches else None
+        touches = _hand_contacts(engine.events.frame(Contacts), rigs)
         world = engine.world
         outputs = _outputs(engine)
         for rig in rigs.values():
             state = world.try_component(rig.hand, HandState)
             if state is None:
                 continue
-            touching: list[int] = []
-            force = 0.0
-            if contacts is not None and len(contacts):
-                a, b = contacts["a"], contacts["b"]
-                mine = (a == rig.hand) | (b == rig.hand)
-                if mine.any():
-                    force = float(contacts["impulse"][mine].sum()) / dt if dt > 0 else 0.0
-                    others = np.where(a[mine] == rig.hand, b[mine], a[mine])
-                    touching = [int(o) for o in np.unique(others) if _graspable(world, int(o))]
-            for obj in set(touching) - set(state.touching):
-                engine.events.emit(HandTouched(rig.hand, obj))
-            state.touching = tuple(touching)
+            impulse, others = touches.get(rig.hand, (0.0, ()))
+            force = impulse / dt if dt > 0 else 0.0
+            touching = tuple(o for o in sorted(set(others)) if _graspable(world, o))
+            if touching != state.touching:
+                for obj in set(touching) - set(state.touching):
+                    engine.events.emit(HandTouched(rig.hand, obj))
+                state.touching = touching
             state.contact_force = force
             state.held = tuple(rig.grasps)
             state.mode = HandMode.GRASP if rig.grasps else HandMode.CONTACT if touching \
                 else HandMode.NEUTRAL
             if outputs is not None:
-                outputs.set(f"hand:{rig.name}/force", force)
-                outputs.set(f"hand:{rig.name}/grasp", float(bool(rig.grasps)))
+                outputs.set(rig.force_output, force)
+                outputs.set(rig.grasp_output, 1.0 if rig.grasps else 0.0)
+
+
+def _hand_contacts(frames: list[Contacts], rigs: dict[int, _Rig]
+                   ) -> dict[int, tuple[float, list[int]]]:
+    """Each hand in a contact this step: its contacts' summed impulse and what it touched.
+    Hands are a few entity ids among the step's contacts: a range test in numpy narrows
+    the contacts to those near the hands' ids, a set picks the hands' own."""
+    batches = [c.batch for c in frames if len(c.batch)]
+    if not batches:
+        return {}
+    contacts = np.concatenate(batches) if len(batches) > 1 else batches[0]
+    a, b = contacts["a"], contacts["b"]
+    low, high = min(rigs), max(rigs)
+    rows = np.flatnonzero(((a >= low) & (a <= high)) | ((b >= low) & (b <= high)))
+    out: dict[int, tuple[float, list[int]]] = {}
+    impulses = contacts["impulse"][rows].tolist()
+    for x, y, impulse in zip(a[rows].tolist(), b[rows].tolist(), impulses, strict=True):
+        for hand, other in ((x, y), (y, x)):
+            if hand in rigs:
+                total, others = out.get(hand, (0.0, []))
+                others.append(other)
+                out[hand] = (total + impulse, others)
+    return out
 
 
 def _graspable(world: Any, entity: int) -> bool:

@@ -38,6 +38,7 @@ from engine.physics.backend import SleepState
 
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
+_FLOAT = np.dtype(np.float64)
 
 
 class CommandError(ValueError):
@@ -46,7 +47,9 @@ class CommandError(ValueError):
 
 def _vector(command: str, what: str, value: Any, n: int) -> tuple[float, ...]:
     try:
-        out = tuple(map(float, value.tolist() if isinstance(value, np.ndarray) else value))
+        # an array of floats is already floats (the per-frame case: kept cheap)
+        out = tuple(value.tolist()) if type(value) is np.ndarray and value.dtype == _FLOAT \
+            else tuple(map(float, value))
     except (TypeError, ValueError):
         raise CommandError(f"{command}: {what} must be {n} numbers, got {value!r}") from None
     # a sum is finite exactly when every term is (short of overflowing: 1e308 * 2, far
@@ -57,11 +60,11 @@ def _vector(command: str, what: str, value: Any, n: int) -> tuple[float, ...]:
 
 
 def _quaternion(command: str, value: Any) -> Quat:
-    q = _vector(command, "orientation", value, 4)
-    norm = math.sqrt(sum(c * c for c in q))
+    w, x, y, z = _vector(command, "orientation", value, 4)
+    norm = math.hypot(w, x, y, z)
     if norm == 0.0:
         raise CommandError(f"{command}: orientation must be a non-zero quaternion w, x, y, z")
-    return q if norm == 1.0 else tuple(c / norm for c in q)  # type: ignore[return-value]
+    return (w, x, y, z) if norm == 1.0 else (w / norm, x / norm, y / norm, z / norm)
 
 
 def _scalar(command: str, what: str, value: Any, low: float = -math.inf) -> float:

@@ -156,6 +156,33 @@ def set_velocity(World w, key, double[::1] lin, double[::1] ang) -> None:
     set_slot_velocity(w, w.slot(key), &lin[0], &ang[0])
 
 
+def set_pose_values(World w, key, double x, double y, double z, double qw, double qx,
+                    double qy, double qz) -> None:
+    """``set_pose`` from seven numbers, checked finite here: a tracked body moved every
+    step pays no array building (ValueError when one is not finite)."""
+    cdef double pos[3]
+    cdef double q[4]
+    pos[0], pos[1], pos[2] = x, y, z
+    q[0], q[1], q[2], q[3] = qw, qx, qy, qz
+    if not (isfinite(x + y + z) and isfinite(qw + qx + qy + qz)):
+        raise ValueError("a pose must be finite numbers")
+    set_slot_pose(w, w.slot(key), pos, q)
+
+
+def set_velocity_values(World w, key, double vx, double vy, double vz, double wx,
+                        double wy, double wz) -> None:
+    """``set_velocity`` from six numbers, checked finite and under MAX_SPEED here
+    (ValueError otherwise)."""
+    cdef double lin[3]
+    cdef double ang[3]
+    lin[0], lin[1], lin[2] = vx, vy, vz
+    ang[0], ang[1], ang[2] = wx, wy, wz
+    if not (sqrt(vx * vx + vy * vy + vz * vz) <= MAX_SPEED
+            and sqrt(wx * wx + wy * wy + wz * wz) <= MAX_SPEED):  # NaN fails too
+        raise ValueError("velocities must be finite and under MAX_SPEED")
+    set_slot_velocity(w, w.slot(key), lin, ang)
+
+
 def pose(World w, key) -> tuple:
     """(position, orientation) of one body's entity frame."""
     cdef double out[13]

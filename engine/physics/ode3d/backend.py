@@ -161,10 +161,18 @@ class OdeBackend:
         return _ode.body_count(self._world)
 
     def set_pose(self, key: int, position: np.ndarray, orientation: np.ndarray) -> None:
-        _ode.set_pose(self._world, int(key), vec(position, 3, "position"),
-                      vec(orientation, 4, "orientation"))
+        try:  # seven numbers straight to C; anything else the checked way, for its message
+            _ode.set_pose_values(self._world, int(key), *position, *orientation)
+        except (TypeError, ValueError):
+            _ode.set_pose(self._world, int(key), vec(position, 3, "position"),
+                          vec(orientation, 4, "orientation"))
 
     def set_velocity(self, key: int, linear: np.ndarray, angular: np.ndarray) -> None:
+        try:
+            _ode.set_velocity_values(self._world, int(key), *linear, *angular)
+            return
+        except (TypeError, ValueError):
+            pass
         lin = vec(linear, 3, "linear velocity")
         ang = vec(angular, 3, "angular velocity")
         check_speed(key, lin, ang)
