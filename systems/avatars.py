@@ -122,7 +122,6 @@ class AvatarSystem(System):
         self._engine: Engine | None = None
         self._rays: Any = None  # the physics query in flight (threaded mode)
         self._loose: set[int] = set()  # dynamic bodies: not ground to stand on
-        self._physics_time: float | None = None
         self._leg_cache: _Legs | None = None
         #: the last frame's final skeletons (IK included) and each avatar's first row
         self._posed: tuple[np.ndarray, dict[int, int]] = (np.zeros((0, 4, 4)), {})
@@ -437,8 +436,9 @@ class AvatarSystem(System):
 
     def _carry(self, engine: Engine, poses: Any, entities: list[int], rows: np.ndarray,
                world: np.ndarray, dt: float) -> None:
-        """Held objects onto their bones; capsules onto their avatars."""
-        dt = self._lead(engine, dt)
+        """Held objects onto their bones; capsules onto their avatars (kinematic targets
+        reached as this frame's time passes, then waiting there however many steps the
+        physics thread takes)."""
         for entity, row in zip(entities, rows.tolist(), strict=True):
             figure = self.figures[entity]
             if row < 0:
@@ -461,16 +461,6 @@ class AvatarSystem(System):
                 at = bone[:3, 3] + rot @ held.offset
                 quat = quat_multiply(matrix_to_quat(rot), held.rotation)
                 self._move(engine, held, at, quat, dt)
-
-    def _lead(self, engine: Engine, dt: float) -> float:
-        """The time a kinematic target is reached in: this frame's step (serial mode); in
-        threaded mode the physics time the last frame took, as the backend keeps the
-        target's velocity for every step it takes until the next frame's target."""
-        now = engine.physics.time
-        last, self._physics_time = self._physics_time, now
-        if engine.config.mode != "threaded" or last is None:
-            return dt
-        return float(np.clip(now - last, engine.config.dt, 1.0))
 
     def _move(self, engine: Engine, held: _Held, at: np.ndarray, quat: np.ndarray,
               dt: float) -> None:
