@@ -25,12 +25,8 @@ from systems import create_engine
 
 pytest.importorskip("engine.physics.ode3d")
 
-CONTENT_FOLDERS = [
-    pytest.param(p, marks=pytest.mark.xfail(
-        strict=True, reason="avatars' animation and path state is not saved yet"))
-    if p.name == "avatars" else p
-    for p in sorted(p for p in (REPO_ROOT / "content").iterdir()
-                    if (p / "main.scene").is_file())]
+CONTENT_FOLDERS = sorted(p for p in (REPO_ROOT / "content").iterdir()
+                         if (p / "main.scene").is_file())
 
 
 def start(path: Path) -> Engine:
