@@ -16,11 +16,9 @@ from avatar_helpers import GROUND, MODELS, content
 
 from components import Name, Transform
 from engine.animation import AnimationEnded
-from engine.app import Engine, EngineConfig
-from engine.content import load_systems, resolve
+from engine.app import Engine
 from engine.scene import format_scene, load_scene
-from engine.scene_loading import SceneLoadError, check_path, load_content_scene, save_state
-from systems import create_engine
+from engine.scene_loading import SceneLoadError, check_path, content_engine, save_state
 from systems.avatars import AvatarSystem
 
 pytest.importorskip("engine.physics.ode3d")
@@ -79,17 +77,6 @@ SAVES = (45, 100, 250)  # mid-crossfade; mid-wave with two queued; the queue pla
 LATER = (1, 7, 60, 160, 260)  # frames after the save at which the runs are compared
 
 
-def start(path: Path) -> Engine:
-    """An engine running ``path`` as ``colosseum run PATH --fast`` sets it up."""
-    scene = load_content_scene(resolve(path))
-    config = EngineConfig(content_dir=scene.content.folder, fast=True, headless=True)
-    scene.configure(config)
-    engine = create_engine(config)
-    load_systems(engine, scene.content.folder)
-    scene.instantiate(engine)
-    return engine
-
-
 def by_name(engine: Engine) -> dict[str, int]:
     return {n.id: e for e, n in engine.world.get_component(Name)}
 
@@ -137,7 +124,7 @@ def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def straight(folder: Path) -> tuple[dict[int, Any], list]:
     """The run that never stops, observed at every frame the resumed runs are."""
     ended: list = []
-    with start(folder) as engine:
+    with content_engine(folder) as engine:
         seen = run(engine, max(SAVES) + max(LATER),
                    {save + k for save in SAVES for k in LATER}, ended)
     return seen, ended
@@ -148,11 +135,11 @@ def test_a_resumed_avatar_moves_as_if_never_stopped(folder: Path, straight: tupl
                                                     save: int, tmp_path: Path) -> None:
     saved = tmp_path / "saves" / "state.scene"
     saved.parent.mkdir()
-    with start(folder) as engine:
+    with content_engine(folder) as engine:
         engine.run(frames=save)
         save_state(engine, saved)
     ended: list = []
-    with start(saved) as engine:
+    with content_engine(saved) as engine:
         again = run(engine, max(LATER), set(LATER), ended)
     seen, straight_ended = straight
     for k in LATER:
@@ -176,7 +163,7 @@ def test_the_saved_state_says_what_it_resumes_and_is_checked_and_canonical(
     requests queued, a step being smoothed, the hand driven, two things carried."""
     saved = tmp_path / "saves" / "state.scene"
     saved.parent.mkdir()
-    with start(folder) as engine:
+    with content_engine(folder) as engine:
         engine.run(frames=100)
         save_state(engine, saved)
     assert check_path(saved) == 0
@@ -203,7 +190,7 @@ def test_a_broken_avatar_state_is_told_at_its_line(folder: Path, tmp_path: Path,
     a number out of range: an error at its line, the file does not start."""
     saved = tmp_path / "saves" / "state.scene"
     saved.parent.mkdir()
-    with start(folder) as engine:
+    with content_engine(folder) as engine:
         engine.run(frames=100)
         save_state(engine, saved)
     text = saved.read_text(encoding="utf-8")
@@ -212,7 +199,7 @@ def test_a_broken_avatar_state_is_told_at_its_line(folder: Path, tmp_path: Path,
     drive = next(i for i, line in enumerate(lines, 1) if line == '    Bone "hand.L"')
     saved.write_text(text.replace('Clip "Wave"', 'Clip "Wavy"').replace(
         'Bone "hand.L"', 'Bone "hand.X"'), encoding="utf-8")
-    with start(saved) as engine:
+    with content_engine(saved) as engine:
         engine.run(frames=5)
         system = engine.resource(AvatarSystem)
         walker = by_name(engine)["walker"]
@@ -225,4 +212,4 @@ def test_a_broken_avatar_state_is_told_at_its_line(folder: Path, tmp_path: Path,
     phase = next(line for line in lines if line.strip().startswith("Phase "))
     saved.write_text(text.replace(phase, "    Phase 1.5", 1), encoding="utf-8")
     with pytest.raises(SceneLoadError, match=r"Phase is 0\.\.1, got 1\.5"):
-        start(saved)
+        content_engine(saved)
