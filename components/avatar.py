@@ -117,8 +117,9 @@ class SavedAvatar:
 class Avatar:
     """A glTF model with a skin, animated by the avatars plugin.
 
-    ``clip`` (or ``blend``, clip -> weight) plays first, then ``queue`` one after another;
-    ``fade`` is the default crossfade in seconds. ``path`` is a list of world points walked
+    ``clip`` (or ``blend``, clip -> weight) plays first, at ``speed`` and ``loop`` (None:
+    as its ``clips`` entry says), then ``queue`` one after another; ``fade`` is the default
+    crossfade in seconds. ``path`` is a list of world points walked
     in turn (``path_loop``: back to the first), turning at ``turn_rate`` (rad/s) and moving
     at the clips' ground speed. With ``ground_follow`` the root is kept on the ground below
     it (rays cast down from ``step_height`` above it; steps are smoothed over
@@ -130,8 +131,8 @@ class Avatar:
     model: str
     scale: float = 1.0
     clip: str | None = None
-    loop: bool = True
-    speed: float = 1.0
+    loop: bool | None = None
+    speed: float | None = None
     blend: dict[str, float] = field(default_factory=dict)
     queue: list[str] = field(default_factory=list)
     fade: float = 0.2

@@ -607,12 +607,13 @@ class _Builder:
                                                           "positive")
             capsule = (diameter / 2, length)
         for key in ("Scale", "Speed", "Fade", "StepHeight", "Smoothing", "TurnRate"):
-            if r(key) < 0 or (key == "Scale" and r(key) == 0):
+            if r(key) is not None and (r(key) < 0 or (key == "Scale" and r(key) == 0)):
                 self.report.error(r.value(key).loc, f"{key} must be positive, got {r(key)}")
         scale = float(r("Scale"))
         state = self.avatar_states.pop(aid, None)
-        avatar = Avatar(model=file, scale=scale, clip=first, loop=bool(r("Loop")),
-                        speed=float(r("Speed")), blend=blend, queue=queue, fade=float(r("Fade")),
+        avatar = Avatar(model=file, scale=scale, clip=first,
+                        loop=None if r("Loop") is None else bool(r("Loop")),
+                        speed=_opt(r("Speed")), blend=blend, queue=queue, fade=float(r("Fade")),
                         clips=clips, ground_follow=bool(r("GroundFollow")),
                         step_height=float(r("StepHeight")), smoothing=float(r("Smoothing")),
                         foot_ik=legs, path=path, path_loop=bool(r("PathLoop")),

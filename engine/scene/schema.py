@@ -338,8 +338,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                          lengths=(4,)),
         "Scale": _f(FLOAT_T, 1.0, "uniform scale of the model"),
         "Animation": _f(STRING_T, None, "clip played first"),
-        "Loop": _f(BOOL_T, 1, "the first clip loops"),
-        "Speed": _f(FLOAT_T, 1.0, "playback rate of the first clip"),
+        "Loop": _f(BOOL_T, None, "1: the first clip loops, 0: it does not (default: as its "
+                   "Clip block says, else 1)"),
+        "Speed": _f(FLOAT_T, None, "playback rate of the first clip (default: its Clip "
+                    "block's Speed, else 1)"),
         "Blend": _f(STRINGVECTOR_T, None, "clips played at once from the start (with Weights)"),
         "Weights": _f(VECTOR_T, None, "weight of each Blend clip"),
         "Queue": _f(STRINGVECTOR_T, None, "clips played in turn when the first one ends"),
