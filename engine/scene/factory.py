@@ -160,15 +160,17 @@ class SpawnRecord:
     """What one script call made at run time, kept so a saved state writes it too.
 
     ``spawn(text)``: the snippet's SceneDB, the folder its asset names are relative to,
-    and the entity its i-th ``Object`` block (``objects[i]``) and i-th ``Joint`` block
-    (``joints[i]``) became. ``createJoint``: ``db`` None and ``joints`` its one joint
-    entity, whose Joint component holds all a ``Joint`` block needs.
+    and the entity its i-th ``Object`` block (``objects[i]``), i-th ``Joint`` block
+    (``joints[i]``) and i-th ``Avatar`` block (``avatars[i]``) became. ``createJoint``:
+    ``db`` None and ``joints`` its one joint entity, whose Joint component holds all a
+    ``Joint`` block needs.
     """
 
     db: SceneDB | None
     content_dir: Path | None
     objects: list[int]
     joints: list[int]
+    avatars: list[int] = field(default_factory=list)
 
 
 @dataclass(slots=True)
@@ -191,7 +193,7 @@ class SceneIds:
         self.spawned.append(made)
         if len(self.spawned) >= 2 * self._kept:
             self.spawned = [r for r in self.spawned
-                            if any(exists(e) for e in (*r.objects, *r.joints))]
+                            if any(exists(e) for e in (*r.objects, *r.joints, *r.avatars))]
             self._kept = max(len(self.spawned), 16)
 
 

@@ -200,6 +200,8 @@ class _Spawns:
                  sleep: dict[int, SleepState] | None, dst: Path | None):
         self.world, self.root, self.names, self.taken = world, root, names, taken
         self.sleep, self.dst = sleep, dst
+        #: avatar entity -> the ID its spawned Avatar block is written with
+        self.avatars: dict[int, str] = {}
         #: material ID written -> its definition (see _definition)
         self.materials = {str(b.get("ID")): _definition(b) for b in root.blocks("Material")}
 
@@ -213,9 +215,10 @@ class _Spawns:
         return Value(STRINGVECTOR, [_string(i) for i in ids], _HERE)
 
     def snippet(self, rec: SpawnRecord) -> None:
-        """A ``spawn(text)``: its objects and joints still there, and the materials it
-        declared. One whose ID is written already with another definition is written
-        as ``wood~2`` (and its objects refer to that); an identical one is not repeated."""
+        """A ``spawn(text)``: its objects, joints and avatars still there, and the materials
+        it declared. One whose ID is written already with another definition is written
+        as ``wood~2`` (and its objects refer to that); an identical one is not repeated.
+        An avatar's holds are left to its AvatarState (its objects may be renamed)."""
         assert rec.db is not None
         root = _literal(rec.db, rec.content_dir, self.dst)
         out: list[Entry] = []
@@ -253,6 +256,16 @@ class _Spawns:
             _set(blk, "ID", _string(self.name(entity, "joint")))
             _set(blk, "Bodies", self.bodies(joint))
             _write_joint(blk, joint)
+            out.append(entry)
+        for entry, entity in zip(root.get_all("Avatar"), rec.avatars, strict=True):
+            t = _transform(self.world, entity)
+            if t is None:
+                continue
+            blk = entry.value.data
+            self.avatars[entity] = aid = self.name(entity, "avatar")
+            _set(blk, "ID", _string(aid))
+            _write_pose(blk, t)
+            _drop(blk, "Hold")
             out.append(entry)
         self.root.entries.extend(out)
 
@@ -453,14 +466,15 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
         if entry.value.data.value("ID") is None:
             _set(entry.value.data, "ID", _string(js.id))
         _write_joint(entry.value.data, joint)
+    avatars = _avatars(world, ids, root, set(names.values()))  # before spawned ones come
     spawns = _Spawns(world, root, names, _taken(ids), sleep, dst)
     for rec in ids.spawned:
         if rec.db is None:
             spawns.joint(rec.joints[0])
         else:
             spawns.snippet(rec)
+    avatars.update(spawns.avatars)
     _drop_follows(root, set(names.values()))
-    avatars = _avatars(world, ids, root, set(names.values()))
     _avatar_states(engine, root, avatars, names)
     _script_states(engine, ids, root, names | avatars)
     world_entry = next((e for e in root.entries if e.key == "World"), None)

@@ -81,36 +81,49 @@ def by_name(engine: Engine) -> dict[str, int]:
     return {n.id: e for e, n in engine.world.get_component(Name)}
 
 
-def observe(engine: Engine) -> dict[str, Any]:
+def observe(engine: Engine, figures: tuple[str, ...] = ("walker", "fox"),
+            things: tuple[str, ...] = ("crate", "lamp")) -> dict[str, Any]:
     """What the avatars look like now: joint matrices, roots, capsules, carried objects,
     and each clip's time and weight."""
     system = engine.resource(AvatarSystem)
     names = by_name(engine)
     seen: dict[str, Any] = {}
-    for name in ("walker", "fox"):
+    for name in figures:
         entity = names[name]
         first = system.palettes.offsets[entity]
         joints = system.mixer.animators[entity].rig.joints
         seen[f"{name} joints"] = system.palettes.matrices[first:first + joints].copy()
         seen[f"{name} clips"] = system.mixer.playing(entity)
-    for name in ("walker", "fox", "walker:capsule", "fox:capsule", "crate", "lamp"):
+    for name in (*figures, *(f"{f}:capsule" for f in figures), *things):
         t = engine.world.component_for_entity(names[name], Transform)
         seen[name] = np.concatenate([t.position, t.orientation])
     return seen
 
 
-def run(engine: Engine, frames: int, marks: set[int], ended: list) -> dict[int, Any]:
-    """Run ``frames`` frames, observing after each frame in ``marks``; the clips that end
-    are appended to ``ended`` (time, avatar, clip)."""
-    names = {e: n for n, e in by_name(engine).items()}
+def run(engine: Engine, frames: int, marks: set[int], ended: list,
+        look: Any = observe) -> dict[int, Any]:
+    """Run ``frames`` frames, observing (``look``) after each frame in ``marks``; the clips
+    that end are appended to ``ended`` (time, avatar, clip)."""
     engine.events.subscribe(AnimationEnded, lambda ev: ended.append(
-        (round(engine.time, 9), names[ev.avatar], ev.clip)))
+        (round(engine.time, 9), engine.world.component_for_entity(ev.avatar, Name).id,
+         ev.clip)))
     seen = {}
     for frame in range(1, frames + 1):
         engine.step()
         if frame in marks:
-            seen[frame] = observe(engine)
+            seen[frame] = look(engine)
     return seen
+
+
+def assert_same(want: dict[str, Any], got: dict[str, Any], when: str) -> None:
+    """Clips (name, time, weight) exactly; matrices and poses within 1e-9."""
+    assert got.keys() == want.keys()
+    for what in want:
+        if what.endswith("clips"):
+            assert got[what] == want[what], f"{what} {when}"
+        else:
+            np.testing.assert_allclose(got[what], want[what], rtol=0, atol=1e-9,
+                                       err_msg=f"{what} {when}")
 
 
 @pytest.fixture(scope="module")
@@ -143,14 +156,7 @@ def test_a_resumed_avatar_moves_as_if_never_stopped(folder: Path, straight: tupl
         again = run(engine, max(LATER), set(LATER), ended)
     seen, straight_ended = straight
     for k in LATER:
-        want, got = seen[save + k], again[k]
-        assert got.keys() == want.keys()
-        for what in want:
-            if what.endswith("clips"):  # clip, time (s), weight: exactly
-                assert got[what] == want[what], f"{what} {k} frames after the save"
-            else:
-                np.testing.assert_allclose(got[what], want[what], rtol=0, atol=1e-9,
-                                           err_msg=f"{what} {k} frames after the save")
+        assert_same(seen[save + k], again[k], f"{k} frames after the save")
     start_at, end_at = round(save * 0.01, 9), round((save + max(LATER)) * 0.01, 9)
     assert ended == [e for e in straight_ended if start_at < e[0] <= end_at]
     if save == 100:  # the wave ended, then the blend queued after it (both its clips)
@@ -213,3 +219,45 @@ def test_a_broken_avatar_state_is_told_at_its_line(folder: Path, tmp_path: Path,
     saved.write_text(text.replace(phase, "    Phase 1.5", 1), encoding="utf-8")
     with pytest.raises(SceneLoadError, match=r"Phase is 0\.\.1, got 1\.5"):
         content_engine(saved)
+
+
+#: A script that makes an avatar carrying a box it makes with it, at frame 10.
+SPAWNER = """\
+local frame = 0
+function onUpdate(dt)
+  frame = frame + 1
+  if frame == 10 then
+    spawn([[
+      Object { ID "box" Position [1 1 1] Size [0.2]
+        PhysicalAttributes { Mass 1 Geometry { Primitive "box" } } }
+      Avatar { ID "visitor" Model "models/walker.glb" Position [1 0 0] Animation "CarryWalk"
+        Path [1 0 0  1 3 0  -1 3 0] GroundFollow 1 Capsule [0.4 1.0]
+        Hold { Object "box" Bone "hand.R" Offset [0 -0.12 0] } }
+    ]])
+  end
+end
+"""
+
+
+def test_an_avatar_a_script_made_is_saved_and_continues(tmp_path: Path) -> None:
+    folder = content(tmp_path / "sim", "\n".join([
+        "World { TimeStep 0.01 }", GROUND, 'Script "scripts/spawner.lua"']),
+        {"spawner.lua": SPAWNER})
+    saved = tmp_path / "state.scene"
+
+    def look(engine: Engine) -> dict[str, Any]:
+        return observe(engine, ("visitor",), ("box",))
+
+    with content_engine(folder) as engine:
+        straight = run(engine, 60 + max(LATER), {60 + k for k in LATER}, [], look)
+    with content_engine(folder) as engine:
+        engine.run(frames=60)
+        save_state(engine, saved)
+    with content_engine(saved) as engine:
+        again = run(engine, max(LATER), set(LATER), [], look)
+    for k in LATER:
+        assert_same(straight[60 + k], again[k], f"{k} frames after the save")
+    state = load_scene(saved)
+    assert [b.get("ID") for b in state.blocks("Avatar")] == ["visitor"]
+    (visitor,) = state.blocks("AvatarState")
+    assert [h.get("Object") for h in visitor.blocks("Hold")] == ["box"]
