@@ -179,18 +179,8 @@ class AvatarSystem(System):
         self.mixer.add(entity, rig, settings, spec.fade)
         figure = _Figure(entity, spec, model)
         self.figures[entity] = figure
+        self._animate(entity, spec)
         saved = spec.saved
-        try:
-            if saved is not None:
-                self.mixer.restore(entity, saved.groups, saved.queue)
-            elif spec.blend:
-                self.mixer.blend(entity, spec.blend, 0.0, spec.speed, spec.loop)
-            elif spec.clip is not None:
-                self.mixer.play(entity, spec.clip, 0.0, spec.speed, spec.loop)
-            for name in spec.queue if saved is None else ():
-                self.mixer.queue(entity, name)
-        except AnimationError as exc:
-            self._messages.error(f"avatar {self._name(entity)!r}: {exc}")
         for hip, knee, ankle in spec.foot_ik:
             nodes = (model.node(hip), model.node(knee), model.node(ankle))
             if None not in nodes:
@@ -217,6 +207,21 @@ class AvatarSystem(System):
         if spec.capsule is not None:
             figure.capsule = self._capsule(engine, entity, spec.capsule,
                                            None if saved is None else saved.capsule)
+
+    def _animate(self, entity: int, spec: Avatar) -> None:
+        """Its clips: where a saved run left them, else as its block says."""
+        try:
+            if spec.saved is not None:
+                self.mixer.restore(entity, spec.saved.groups, spec.saved.queue)
+                return
+            if spec.blend:
+                self.mixer.blend(entity, spec.blend, 0.0, spec.speed, spec.loop)
+            elif spec.clip is not None:
+                self.mixer.play(entity, spec.clip, 0.0, spec.speed, spec.loop)
+            for name in spec.queue:
+                self.mixer.queue(entity, name)
+        except AnimationError as exc:
+            self._messages.error(f"avatar {self._name(entity)!r}: {exc}")
 
     def _resume(self, figure: _Figure, saved: SavedAvatar) -> None:
         """Where a saved run left the avatar's walk, its ground following and its driven

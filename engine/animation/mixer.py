@@ -328,9 +328,9 @@ class Mixer:
         """Put avatar ``key`` (just added) where :meth:`capture` found one; raises
         AnimationError for a clip its model lacks (nothing restored then)."""
         animator = self.animators[key]
-        for group in groups:
-            for layer in group.layers:
-                animator.clip_id(layer.clip)
+        for name in [layer.clip for group in groups for layer in group.layers] + [
+                name for request in queue for name, _ in request.weights]:
+            animator.clip_id(name)
         for saved in groups:
             g = self._add_group(animator, saved.phase, saved.loop, saved.ended)
             if saved.current:
