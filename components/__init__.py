@@ -11,7 +11,7 @@ Orientations are unit quaternions ``(w, x, y, z)``. The vocabularies
 from components.avatar import Avatar, ClipSpec, Hold
 from components.camera import Camera
 from components.controller import Controller
-from components.hand import Hand
+from components.hand import Graspable, Hand, HandState
 from components.joint import Joint
 from components.light import Light
 from components.name import Name
@@ -20,6 +20,7 @@ from components.script import Script
 from components.shape import Shape
 from components.sound import Sound
 from components.transform import Transform
+from components.trigger import Trigger
 from components.visual import Visual
 
 __all__ = [
@@ -27,7 +28,9 @@ __all__ = [
     "Camera",
     "ClipSpec",
     "Controller",
+    "Graspable",
     "Hand",
+    "HandState",
     "Hold",
     "Joint",
     "Light",
@@ -38,5 +41,6 @@ __all__ = [
     "Shape",
     "Sound",
     "Transform",
+    "Trigger",
     "Visual",
 ]

@@ -25,9 +25,12 @@ PLUGINS: dict[str, str] = {
     "sound": "systems.sound:SoundPlugin",
     "input": "systems.input:InputPlugin",
     "avatars": "systems.avatars:AvatarsPlugin",
+    "triggers": "systems.triggers:TriggersPlugin",
+    "hands": "systems.hands:HandsPlugin",
 }
 ALIASES: dict[str, str] = {"osg": "render", "osgsim": "render", "openalpp": "sound",
-                           "openal": "sound", "ode": "physics", "dynamics": "physics"}
+                           "openal": "sound", "ode": "physics", "dynamics": "physics",
+                           "interaction": "hands"}
 
 
 def load_plugin(name: str) -> Any:
@@ -62,7 +65,7 @@ def wants_render(config: EngineConfig) -> bool:
 def default_plugins(config: EngineConfig) -> list[Plugin]:
     plugins = [RegistryPlugin(), *(load_plugin(name) for name in
                                    ("input", "physics", "scripting", "controllers", "sound",
-                                    "avatars"))]
+                                    "avatars", "triggers", "hands"))]
     if wants_render(config):
         plugins.append(load_plugin("render"))
     return plugins

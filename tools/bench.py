@@ -30,6 +30,7 @@ BENCHMARKS: dict[str, str] = {
     "input": "tools.bench_input:run_bench",
     "contacts": "tools.bench:bench_contacts",
     "avatars": "tools.bench_avatars:run_bench",
+    "import": "tools.bench_import:run_bench",
 }
 
 
@@ -77,6 +78,12 @@ def _physics_figures(rows: list[dict[str, Any]]) -> list[Figure]:
                    "bare pymunk stepping")(rows)
 
 
+def _import_figures(rows: list[dict[str, Any]]) -> list[Figure]:
+    ref = next(r for r in rows if "reference" in r["stage"])
+    return [Figure(f"{r['nodes']} nodes: {r['stage']}", r["cpu s"], ref["cpu s"], "cpu s",
+                   "json.loads of the glTF's JSON") for r in rows if "goal s" in r]
+
+
 def _input_figures(rows: list[dict[str, Any]]) -> list[Figure]:
     ours = next(r for r in rows if r["path"].startswith("osc -> InputState"))
     ref = next(r for r in rows if "reference" in r["path"])
@@ -102,6 +109,7 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "avatars": lambda rows: [Figure(f"{r['avatars']} avatars, {r['case']}", r["ms_per_frame"],
                                     r["reference_ms"], "ms/frame", r["reference"])
                              for r in rows if r["ms_per_frame"] > 0],
+    "import": _import_figures,
 }
 
 

@@ -185,7 +185,9 @@ class BallisticBackend:
                          max_torque: float | None = None) -> None:
         self._refused(key)
 
-    def set_drive_limits(self, key: int, max_force: float, max_torque: float) -> None:
+    def set_drive_limits(self, key: int, max_force: float, max_torque: float,
+                         time_constant: float | None = None, max_speed: float | None = None,
+                         max_spin: float | None = None) -> None:
         self._refused(key)
 
     # -- stepping ----------------------------------------------------------
@@ -246,6 +248,12 @@ class BallisticBackend:
 
     def contacts(self) -> np.ndarray:
         return np.zeros(0, CONTACT_DTYPE)
+
+    def overlapping(self, key: int) -> list[int]:
+        """Particles have no extent: nothing ever overlaps."""
+        if key not in self._index:
+            raise KeyError(f"no body with key {key}")
+        return []
 
     def raycast(self, origin: np.ndarray, direction: np.ndarray, max_distance: float,
                 ignore: int | None = None, mask: int = 0xFFFFFFFF) -> RayHit | None:

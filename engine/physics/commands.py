@@ -335,17 +335,26 @@ class SetJointTarget(Command):
 
 @dataclass(frozen=True, slots=True)
 class SetDriveLimits(Command):
-    """Bound a six_dof joint's force (N) and torque (N·m)."""
+    """Bound a six_dof joint's force (N) and torque (N·m), and set how it responds: the
+    time constant (s) its error closes with, caps on the correcting speed (m/s) and spin
+    (rad/s); None keeps what the joint has."""
 
     key: int
     max_force: float
     max_torque: float
+    time_constant: float | None = None
+    max_speed: float | None = None
+    max_spin: float | None = None
     on_joint: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         self._check_key()
         self._set("max_force", _scalar("SetDriveLimits", "max_force", self.max_force, 0.0))
         self._set("max_torque", _scalar("SetDriveLimits", "max_torque", self.max_torque, 0.0))
+        for name in ("time_constant", "max_speed", "max_spin"):
+            value = getattr(self, name)
+            if value is not None:
+                self._set(name, _scalar("SetDriveLimits", name, value, 0.0))
 
 
 @dataclass(frozen=True, slots=True)

@@ -76,7 +76,9 @@ _APPLY: dict[type, Callable[[DynamicsBackend, Any], Any]] = {
     cmd.SetSleepState: lambda b, c: _restore_sleep(b, c.key, c.state),
     cmd.SetJointTarget: lambda b, c: b.set_joint_target(
         c.key, np.array(c.position), np.array(c.orientation), c.max_force, c.max_torque),
-    cmd.SetDriveLimits: lambda b, c: b.set_drive_limits(c.key, c.max_force, c.max_torque),
+    cmd.SetDriveLimits: lambda b, c: b.set_drive_limits(c.key, c.max_force, c.max_torque,
+                                                         c.time_constant, c.max_speed,
+                                                         c.max_spin),
 }
 
 

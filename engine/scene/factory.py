@@ -31,7 +31,9 @@ from components import (
     Camera,
     ClipSpec,
     Controller,
+    Graspable,
     Hand,
+    HandState,
     Hold,
     Joint,
     Light,
@@ -42,6 +44,7 @@ from components import (
     Shape,
     Sound,
     Transform,
+    Trigger,
     Visual,
 )
 from components.avatar import (
@@ -54,7 +57,7 @@ from components.avatar import (
 )
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from components.script import SavedScript, ScriptHandler, ScriptTimer
-from engine.assets import AssetError, Assets
+from engine.assets import AssetError, Assets, nodes_name
 from engine.assets.geometry import convex_hull
 from engine.physics.backend import MaterialPair, SleepState, WorldSettings
 from engine.physics.commands import SetSleepState
@@ -78,12 +81,15 @@ from engine.scene.diagnostics import (
     Reporter,
     suggest,
 )
-from engine.scene.inputs import InputSpec, read_inputs
+from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS, InputSpec, read_inputs
 from engine.scene.parser import paused_gc
 
 if TYPE_CHECKING:
     from engine.app import Engine
 
+#: A virtual hand's body when the author gives none: a palm-sized box (m) of 0.45 kg.
+HAND_SIZE = (0.09, 0.18, 0.03)
+HAND_MASS = 0.45
 #: Shared defaults (tuples: immutable, so every shape and pose may hold the same one).
 _ORIGIN = (0.0, 0.0, 0.0)
 _IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -143,6 +149,8 @@ class SceneSpec:
     #: The scene's random generator when a saved state was written (see random_state).
     random_state: dict[str, object] | None = None
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
+    #: Hand object ID -> the object its tracker is calibrated relative to.
+    hand_frames: dict[str, str] = field(default_factory=dict)
     #: Object ID -> sleep-rule state a saved state carries (see :class:`SleepState`).
     sleep: dict[str, SleepState] = field(default_factory=dict)
     content_dir: Path | None = None
@@ -307,6 +315,8 @@ class _Builder:
         self.poses: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
         self.physical_ids: set[str] = set()
         self.sleep: dict[str, SleepState] = {}
+        self.hand_frames: dict[str, str] = {}
+        self.hand_inputs: list[tuple[str, _Reader]] = []  # what each hand's Hand names
         #: Owner -> the saved state its script resumes from, and the block that said so.
         self.script_states: dict[str, SavedScript] = {}
         self.script_blocks: dict[str, Block] = {}
@@ -338,10 +348,12 @@ class _Builder:
             if js is not None:
                 spec.joints.append(js)
         spec.sleep = self.sleep
+        spec.hand_frames = self.hand_frames
         self.shaders(root, spec)
         self.world(root, spec)
         self.scene_entities(root, spec)
         spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
+        self.check_hand_inputs(spec.input)
         for i, blk in enumerate(root.blocks("Avatar")):
             spec.entities.append(self.avatar(blk, i))
         self.unclaimed_script_states()
@@ -400,6 +412,9 @@ class _Builder:
             "AngularVelocity") else _ORIGIN
         comps: list[Any] = [Name(oid), Transform(position, quat, r("Velocity"), angular)]
         size = r("Size")
+        hand_blk = r.value("Hand")
+        if hand_blk is not None and size is None:
+            size = HAND_SIZE
         vis_blk, phys_blk = r.value("VisualAttributes"), r.value("PhysicalAttributes")
         bare = vis_blk is None and phys_blk is None
         vis = _Reader(vis_blk.data if vis_blk else None, "Visual")
@@ -415,8 +430,12 @@ class _Builder:
                 shader_state=vis("ShaderState"), shadower=bool(vis("Shadower")),
                 shadowed=bool(vis("Shadowed")), visible=bool(vis("Visible"))))
         if phys_blk is not None or bare:
-            comps.append(self.physical(r, phys, size, visual_shapes, model, scale, position,
-                                       quat))
+            body = self.physical(r, phys, size, visual_shapes, model, scale, position, quat)
+            if hand_blk is not None:
+                self.hand_body(body, phys, oid)
+            comps.append(body)
+            if phys("Trigger"):
+                comps.append(Trigger(mask=int(phys("Mask"))))
             self.physical_ids.add(oid)
             if any(map(r.has, ("Asleep", "SleepVelocity", "SleepTimer", "SleepReference"))):
                 self.sleep[oid] = self.sleep_spec(r)
@@ -427,11 +446,11 @@ class _Builder:
                 comps.append(_sound(sr, oid))
         if r.has("Script"):
             comps.append(Script(file=r("Script"), saved=self.script_states.pop(oid, None)))
-        if r.has("Hand"):
-            h = _Reader(r.value("Hand").data, "Hand")
-            comps.append(Hand(tracker=h("Tracker"), max_force=float(h("MaxForce")),
-                              max_torque=float(h("MaxTorque")),
-                              deviation_distance=float(h("DeviationDistance"))))
+        if hand_blk is not None:
+            comps += self.hand(_Reader(hand_blk.data, "Hand"), oid, hand_blk.loc,
+                               phys_blk is not None or bare)
+        if not r("Graspable"):
+            comps.append(Graspable(False))
         if r.has("Controller"):
             comps.append(_controller(_Reader(r.value("Controller").data, "Controller")))
         return EntitySpec(oid, comps, blk.loc)
@@ -446,11 +465,66 @@ class _Builder:
             gr = _Reader(g, "Geometry")
             if gr.has("File"):
                 if model is None:
-                    model, scale = gr("File"), _floats(gr("Scale"))
+                    model, scale = _model_name(gr), _floats(gr("Scale"))
                     self.assets.model(model, gr.value("File").loc, self.folder)
             elif gr.has("Primitive") and gr("Primitive") != "plane":
                 shapes.append(_primitive(gr, size))
         return shapes, model, scale
+
+    def hand(self, h: _Reader, oid: str, loc: Loc, has_body: bool) -> list[Any]:
+        """A Hand and its standing; a hand needs a body (an Object without one is told)."""
+        if not has_body:
+            self.report.error(loc, f"object '{oid}' has a Hand but no PhysicalAttributes: a "
+                                   "virtual hand is a body (leave both Visual- and "
+                                   "PhysicalAttributes out for the default hand box)")
+            return []
+        if h.has("Frame"):
+            self.hand_frames[oid] = h("Frame")
+        self.hand_inputs.append((oid, h))
+        models = {key: self.model(h, key) for key in ("ContactModel", "GraspModel")}
+        hand = Hand(tracker=h("Tracker"), glove=h("Glove"), button=h("Button"),
+                    max_force=float(h("MaxForce")), max_torque=float(h("MaxTorque")),
+                    time_constant=float(h("TimeConstant")), max_speed=float(h("MaxSpeed")),
+                    max_spin=math.radians(float(h("MaxSpin"))),
+                    deviation_distance=float(h("DeviationDistance")),
+                    break_force=_opt(h("BreakForce")), marker=bool(h("Marker")),
+                    contact_model=models["ContactModel"], grasp_model=models["GraspModel"],
+                    holding=tuple(h("Holding") or ()))
+        return [hand, HandState()]
+
+    def check_hand_inputs(self, inputs: InputSpec) -> None:
+        """A hand's tracker and glove must be ones the scene declares (or the desktop
+        device's); with none declared, names from a device that sends them (OSC, LSL) are
+        expected, and a name nothing declares is told as a warning."""
+        trackers = {t.id for t in inputs.trackers}
+        gloves = {b.device for b in inputs.buttons}
+        for oid, h in self.hand_inputs:
+            for key, declared, desktop in (("Tracker", trackers, DESKTOP_TRACKERS),
+                                           ("Glove", gloves, DESKTOP_GLOVES)):
+                name = h(key)
+                if not name or name in declared or name in desktop:
+                    continue
+                known = ", ".join(sorted({*declared, *desktop}))
+                what = "tracker" if key == "Tracker" else "glove"
+                hint = suggest(name, sorted({*declared, *desktop}))
+                if declared:
+                    self.report.error(h.value(key).loc, f"hand '{oid}': no {what} {name!r} "
+                                      f"in this scene's Input (known: {known}){hint}")
+                else:
+                    self.report.warning(h.value(key).loc, f"hand '{oid}': {what} {name!r} is "
+                                        f"declared nowhere; it must come from a device that "
+                                        f"sends it (known here: {known}){hint}")
+
+    def hand_body(self, body: Physical, phys: _Reader, oid: str) -> None:
+        """A hand floats (its drive holds it up) and never sleeps; it weighs a hand's
+        0.45 kg unless the author gave it a mass."""
+        if phys.has("Gravity") and phys("Gravity"):
+            self.report.warning(phys.value("Gravity").loc, f"object '{oid}' is a hand: hands "
+                                "float, so Gravity 1 is ignored")
+        body.gravity = False
+        body.can_sleep = False
+        if not (phys.has("Mass") or phys.has("Density")):
+            body.mass = HAND_MASS
 
     def physical(self, r: _Reader, phys: _Reader, size: Any, visual_shapes: list[Shape],
                  model: str | None, scale: tuple[float, ...], position: tuple[float, ...],
@@ -472,6 +546,9 @@ class _Builder:
             kind = "static"
         elif r("Kinematic"):
             kind = "kinematic"
+        if phys("Trigger"):  # detects what its Mask names; nothing collides with it
+            return Physical(kind="kinematic" if r("Kinematic") else "static", mass=mass,
+                            shapes=shapes, material=material, category=0, mask=0)
         return Physical(kind=kind, mass=mass, shapes=shapes, material=material,
                         linear_damping=float(phys("LinearDamping")),
                         angular_damping=float(phys("AngularDamping")),
@@ -487,7 +564,8 @@ class _Builder:
             gr = _Reader(g, "Geometry")
             if gr.has("File") or gr.has("ParseMethod"):
                 file_v = gr.value("File")
-                file, fscale = (gr("File"), _floats(gr("Scale"))) if file_v else (model, scale)
+                file, fscale = (_model_name(gr), _floats(gr("Scale"))) if file_v else (model,
+                                                                                     scale)
                 loc = file_v.loc if file_v else g.loc
                 if file is None:
                     self.report.error(loc, "ParseMethod needs a model: give File here or in "
@@ -513,6 +591,17 @@ class _Builder:
             else:
                 shapes = [_primitive(_Reader(None, "Geometry"), size)]
         return shapes, has_plane
+
+    def model(self, r: _Reader, key: str) -> str | None:
+        """``r(key)``, a model file, if it can be read; else None, told as a problem."""
+        file = r(key)
+        if file is not None:
+            try:
+                self.assets.model(file, r.value(key).loc, self.folder)
+            except AssetError as exc:
+                self.problem(exc, "the object keeps its own look")
+                return None
+        return file
 
     def texture(self, vis: _Reader) -> str | None:
         """The Visual's texture file; one that cannot be read is told here (the renderer
@@ -950,6 +1039,13 @@ def _model_shape(triangles: tuple[np.ndarray, np.ndarray], scale: tuple[float, .
     return Shape("sphere", (radius,), offset=center)
 
 
+def _model_name(gr: _Reader) -> str:
+    """A Geometry's model: its File, or only the File's ``Nodes`` or ``Mesh``."""
+    if gr.has("Nodes"):
+        return nodes_name(gr("File"), gr("Nodes"))
+    return nodes_name(gr("File"), [gr("Mesh")], mesh=True) if gr.has("Mesh") else gr("File")
+
+
 def _primitive(gr: _Reader, size: Any) -> Shape:
     """A primitive Shape from the format's sizes (diameters) to the component's (radii)."""
     kind = gr("Primitive") or "box"
@@ -996,6 +1092,9 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     for cam_id, target in spec.camera_follow.items():
         cam = engine.world.component_for_entity(ids[cam_id], Camera)
         cam.follow = ids[target]
+    for hand_id, frame in spec.hand_frames.items():
+        if hand_id in ids and frame in ids:
+            engine.world.component_for_entity(ids[hand_id], Hand).frame = ids[frame]
     joints: dict[str, int] = {}
     for js in spec.joints:
         if js.skipped:

@@ -106,6 +106,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "World": _f(STRUCT_T, doc="dynamics settings", struct="World"),
         "Avatar": _f(STRUCT_T, doc="a skinned, animated figure (glTF)", repeat=True,
                      struct="Avatar"),
+        "Model": _f(STRUCT_T, doc="a model file (glTF, Collada) whose bodies, joints and "
+                    "materials join the scene", repeat=True, struct="Model"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
         "Input": _f(STRUCT_T, doc="input devices and how their trackers, wheels and buttons "
                     "are calibrated (engine.input)", repeat=True, struct="Input"),
@@ -141,7 +143,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                                  struct="Physical"),
         "Sound": _f(STRUCT_T, doc="sound source on this object", struct="Sound"),
         "Script": _f(ASSET_T, doc="Lua script attached to this object"),
-        "Hand": _f(STRUCT_T, None, "a tracked hand driven toward a device's pose", struct="Hand"),
+        "Hand": _f(STRUCT_T, None, "makes the object a virtual hand: a body driven toward a "
+                   "tracker's pose with bounded force, grasping on a glove's button",
+                   struct="Hand"),
+        "Graspable": _f(BOOL_T, 1, "0: hands cannot hold it (dynamic bodies can by default)"),
         "Controller": _f(STRUCT_T, doc="input bound to this object", struct="Controller"),
         "UserData": _f(ANY_T, None, "free-form data for custom systems", repeat=True),
         # The sleep rule's state (engine.physics.sleep; written by --save-state so a
@@ -179,16 +184,30 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Category": _f(INT_T, 1, "collision category bits"),
         "Mask": _f(INT_T, 0xFFFFFFFF, "collides with these category bits"),
         "Gravity": _f(BOOL_T, 1, "0: gravity does not act on this body"),
+        "Trigger": _f(BOOL_T, 0, "1: a sensor: nothing collides with it; bodies whose "
+                      "Category meets its Mask are told entering and leaving it (Lua: "
+                      "on(\"trigger\", fn)); static unless Kinematic"),
     },
     "Geometry": {
         "Primitive": _f(ENUM_T, None, "shape kind (default box)", allowed=PRIMITIVES),
         "File": _f(ASSET_T, None, "model file (loaded with trimesh)"),
+        "Nodes": _f(STRINGVECTOR_T, None, "only these nodes of the File (glTF, Collada): "
+                    "their own meshes, placed as in the file relative to the first node "
+                    "(its scale included); a name, or #INDEX for an unnamed or repeated one"),
+        "Mesh": _f(STRING_T, None, "only this mesh of the File (glTF), in its own space: a "
+                   "name, or #INDEX"),
         "Scale": _f(VEC3_T, (1.0, 1.0, 1.0), "model scale"),
         "Size": _f(VECTOR_T, None, "primitive size (see module doc)", lengths=(1, 2, 3)),
         "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, in the object's frame"),
         "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees, in the object's frame"),
         "ParseMethod": _f(ENUM_T, None, "physics shape derived from the model",
                           allowed=PARSE_METHODS),
+    },
+    "Model": {
+        "File": _f(ASSET_T, None, "a .gltf, .glb or .dae file", required=True),
+        "Import": _f(BOOL_T, 1, "1: its bodies, joints, materials and extras become the "
+                     "scene's, as `colosseum import` writes them; 0: drawn whole, as scenery"),
+        "Prefix": _f(STRING_T, "", "put before every ID it declares (to import a model twice)"),
     },
     "Material": {
         "ID": Field(STRING_T, None, "name or number objects use to refer to it", required=True),
@@ -301,10 +320,33 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "High": _f(FLOAT_T, None, "upper bound of the target value"),
     },
     "Hand": {
-        "Tracker": _f(STRING_T, "", "tracked device driving the hand"),
-        "MaxForce": _f(FLOAT_T, 200.0, "N"),
-        "MaxTorque": _f(FLOAT_T, 20.0, "N*m"),
-        "DeviationDistance": _f(FLOAT_T, 0.3, "m before the hand is reset to the tracker"),
+        "Tracker": _f(STRING_T, None, "the input tracker whose pose the hand follows "
+                      "(Input { Tracker { ID } }, or hand_l/hand_r of the desktop device)",
+                      required=True),
+        "Glove": _f(STRING_T, "", "the input device whose Button holds what the hand touches "
+                    "(glove_l/glove_r: the desktop device's mouse button)"),
+        "Button": _f(STRING_T, "pinch", "the glove's button that grasps while down"),
+        "MaxForce": _f(FLOAT_T, 300.0, "N the drive may push with: a heavier load lags, a "
+                       "wall stops the hand"),
+        "MaxTorque": _f(FLOAT_T, 30.0, "N*m the drive may turn with"),
+        "TimeConstant": _f(FLOAT_T, 0.0, "s the hand's distance to its tracker closes with; "
+                           "0: max(2 TimeStep, 0.03 s)"),
+        "MaxSpeed": _f(FLOAT_T, 10.0, "m/s the drive's correction is capped at (a tracker's "
+                       "own speed comes on top)"),
+        "MaxSpin": _f(FLOAT_T, 1146.0, "deg/s the drive's turning correction is capped at "
+                      "(20 rad/s)"),
+        "DeviationDistance": _f(FLOAT_T, 0.3, "m (D): farther from its tracker the hand passes "
+                                "through things and snaps back; it collides again under "
+                                "0.1 D, and is drawn see-through, on top, from 0.1 D to 0.7 D"),
+        "BreakForce": _f(FLOAT_T, None, "N: a grasp pulled harder lets go (none: never)"),
+        "Marker": _f(BOOL_T, 1, "show a ball where the real hand (the tracker) is"),
+        "ContactModel": _f(ASSET_T, None, "model drawn while the hand touches something it "
+                           "could grasp (an open hand); default: the object's own look"),
+        "GraspModel": _f(ASSET_T, None, "model drawn while it holds something (a closed hand)"),
+        "Frame": _f(REF_T, None, "the object the tracker is calibrated relative to (a "
+                    "wheelchair): the hand follows it", ref="Object"),
+        "Holding": _f(STRINGVECTOR_T, None, "objects held when this state was saved (written "
+                      "by --save-state; they are held again on load)"),
     },
     "ScriptState": {
         "Owner": _f(STRING_T, None, "the object whose script this is, or the scene script's "

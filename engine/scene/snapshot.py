@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING
 
 import engine.scene.random_state as random_state
 import engine.scene.schema as sc
-from components import Joint, Name, Transform
+from components import HandState, Joint, Name, Transform
 from components.avatar import SavedAvatar
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from engine.physics.backend import SleepState, SupportsSleepState
@@ -414,6 +414,20 @@ def _avatar_states(engine: Engine, root: Block, avatars: dict[int, str],
             root.entries.append(_avatar_state(avatars[entity], saved))
 
 
+def _holding(world: World, hands: dict[int, Block], names: dict[int, str]) -> None:
+    """Each hand's ``Holding``: what it holds now (by the IDs written), held again on load."""
+    for eid, blk in hands.items():
+        entry = blk.value("Hand")
+        if entry is None or entry.kind != STRUCTURE:
+            continue
+        held = [names[e] for e in world.component_for_entity(eid, HandState).held
+                if e in names]
+        _drop(entry.data, "Holding")
+        if held:
+            _set(entry.data, "Holding", Value(STRINGVECTOR, [_string(n) for n in held],
+                                              _HERE))
+
+
 def _taken(ids: SceneIds) -> set[str]:
     """IDs of the file's own entries (those without one are written with the one they
     were given by their place, so loading the saved file keeps every name)."""
@@ -445,6 +459,7 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
         backend.sleep_states() if isinstance(backend, SupportsSleepState) else None)
     ).result(5.0)
     names: dict[int, str] = {}  # entity -> the object ID written for it
+    hands: dict[int, Block] = {}  # hand entity -> its written Object block
     objects = [e for e in root.entries if e.key == "Object"]
     for index, entry in enumerate(objects):
         eid = ids.entities.get(spec.entities[index].id)
@@ -457,6 +472,8 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
         if blk.value("ID") is None:  # its name by place would move as others are left out
             _set(blk, "ID", _string(oid))
         _write_body(blk, t, None if sleep is None else sleep.get(eid))
+        if world.has_component(eid, HandState):
+            hands[eid] = blk
     joints = [e for e in root.entries if e.key == "Joint"]
     for js, entry in zip(spec.joints, joints, strict=False):
         joint = _live_joint(world, ids.joints.get(js.id), names)
@@ -475,6 +492,7 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
             spawns.snippet(rec)
     avatars.update(spawns.avatars)
     _drop_follows(root, set(names.values()))
+    _holding(world, hands, names)
     _avatar_states(engine, root, avatars, names)
     _script_states(engine, ids, root, names | avatars)
     world_entry = next((e for e in root.entries if e.key == "World"), None)

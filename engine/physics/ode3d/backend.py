@@ -286,9 +286,15 @@ class OdeBackend:
                         -1.0 if max_force is None else float(max_force),
                         -1.0 if max_torque is None else float(max_torque))
 
-    def set_drive_limits(self, key: int, max_force: float, max_torque: float) -> None:
-        """Bound a ``six_dof`` joint's force (N) and torque (N·m), e.g. from a Hand."""
-        _ode.set_drive_limits(self._world, int(key), float(max_force), float(max_torque))
+    def set_drive_limits(self, key: int, max_force: float, max_torque: float,
+                         time_constant: float | None = None, max_speed: float | None = None,
+                         max_spin: float | None = None) -> None:
+        """Bound a ``six_dof`` joint's force (N) and torque (N·m), e.g. from a Hand; and its
+        response: the time constant (s) its error closes with, the correction's speed
+        (m/s) and spin (rad/s) caps. None keeps what it has."""
+        _ode.set_drive_limits(self._world, int(key), float(max_force), float(max_torque),
+                              *(-1.0 if v is None else float(v)
+                                for v in (time_constant, max_speed, max_spin)))
 
     # -- batches -----------------------------------------------------------
     def read_state(self) -> BodyState:
@@ -348,6 +354,11 @@ class OdeBackend:
         return faults
 
     # -- queries -----------------------------------------------------------
+    def overlapping(self, key: int) -> list[int]:
+        """Keys of the bodies (-1: static geometry) the body intersects now, its own
+        collisions on or off, as its collision bits allow."""
+        return _ode.overlapping(self._world, int(key))
+
     def raycast(self, origin: np.ndarray, direction: np.ndarray, max_distance: float,
                 ignore: int | None = None, mask: int = _ALL_BITS) -> RayHit | None:
         """Closest hit along the ray, skipping body ``ignore`` and categories outside ``mask``."""

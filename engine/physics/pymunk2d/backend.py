@@ -596,12 +596,16 @@ class PymunkBackend:
         rec.set_target((float(position[0]), float(position[2])), theta, max_force, max_torque)
         self._wake_joint(rec)
 
-    def set_drive_limits(self, key: int, max_force: float, max_torque: float) -> None:
-        """Bound a ``six_dof`` joint's force (N) and torque (N·m), e.g. from a Hand."""
+    def set_drive_limits(self, key: int, max_force: float, max_torque: float,
+                         time_constant: float | None = None, max_speed: float | None = None,
+                         max_spin: float | None = None) -> None:
+        """Bound a ``six_dof`` joint's force (N) and torque (N·m), e.g. from a Hand, and its
+        response (see :meth:`JointRecord.set_drive_response`); None keeps what it has."""
         rec = self._six_dof(key, "set_drive_limits")
         if not (max_force >= 0.0 and max_torque >= 0.0):
             raise ValueError("six_dof force and torque bounds must be >= 0")
         rec.set_drive_limits(float(max_force), float(max_torque))
+        rec.set_drive_response(time_constant, max_speed, max_spin)
         self._wake_joint(rec)
 
     def _six_dof(self, key: int, what: str) -> JointRecord:
@@ -713,6 +717,24 @@ class PymunkBackend:
         return self._contacts
 
     # -- queries -----------------------------------------------------------
+    def overlapping(self, key: int) -> list[int]:
+        """Keys of the bodies (-1: static geometry) the body's shapes intersect now, its own
+        collisions on or off, as its collision bits allow."""
+        rec = self._record(key)
+        wanted = self._filter(rec.physical)
+        found: set[int] = set()
+        for shape in rec.shapes:
+            own, shape.filter = shape.filter, wanted
+            try:
+                hits = self._space.shape_query(shape)
+            finally:
+                shape.filter = own
+            for hit in hits:
+                if hit.shape is not None and hit.shape.body is not rec.body:
+                    found.add(next((r.key for r in self._bodies.values()
+                                    if r.body is hit.shape.body), -1))
+        return sorted(found)
+
     def raycast(self, origin: np.ndarray, direction: np.ndarray, max_distance: float,
                 ignore: int | None = None, mask: int = 0xFFFFFFFF) -> RayHit | None:
         """Closest hit along the ray (skipping body ``ignore`` and categories outside
