@@ -65,6 +65,25 @@ def load_content_scene(content: Content, seed: int = 0) -> LoadedScene:
     return LoadedScene(spec, content)
 
 
+def content_engine(path: str | Path, seed: int = 0) -> Engine:
+    """An engine running ``path`` (a content folder or scene file, a saved state too) as
+    ``colosseum run PATH --fast --headless`` sets it up: the scene's World settings, the
+    default plugins, the folder's ``systems/``, the scene loaded. Raises SceneLoadError
+    (the scene's mistakes) or ContentError (a path that is no content)."""
+    from engine.app import EngineConfig
+    from engine.content import load_systems, resolve
+    from systems import create_engine
+
+    scene = load_content_scene(resolve(path), seed)
+    config = EngineConfig(content_dir=scene.content.folder, seed=seed, fast=True,
+                          headless=True)
+    scene.configure(config)
+    engine = create_engine(config)
+    load_systems(engine, scene.content.folder)
+    scene.instantiate(engine)
+    return engine
+
+
 class SceneWatcher:
     """The files a built scene came from (scene texts, included files, model files its
     Model blocks import, every model, image and sound it read) and when each was last

@@ -31,6 +31,10 @@ class BackendName(StrEnum):
     BALLISTIC = "ballistic"
 
 
+#: A kinematic target this close to its time (a share of the step) is reached in this
+#: step: steps sum to a target's ``dt`` only to rounding (the ODE binding has its own).
+ARRIVE_SLACK = 1e-6
+
 #: One contact between two bodies in one step. ``b`` is -1 for the static world
 #: (ground planes and static geometry without a key).
 CONTACT_DTYPE = np.dtype(
@@ -170,7 +174,10 @@ class DynamicsBackend(Protocol):
     def set_velocity(self, key: int, linear: np.ndarray, angular: np.ndarray) -> None: ...
     def set_kinematic_target(self, key: int, position: np.ndarray,
                              orientation: np.ndarray, dt: float) -> None:
-        """Move a kinematic body so it reaches the target pose after ``dt``."""
+        """Move a kinematic body so it reaches the target pose after ``dt`` of stepping
+        (at least one step) and stops there, exactly at it and at rest, until the next
+        target (or pose, or velocity) comes: however many steps a frame takes, it never
+        overshoots. A dynamic body only gets the velocities that would carry it there."""
 
     def add_force(self, key: int, force: np.ndarray, point: np.ndarray | None = None) -> None: ...
     def add_torque(self, key: int, torque: np.ndarray) -> None: ...

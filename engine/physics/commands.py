@@ -266,7 +266,8 @@ class SetVelocity(Command):
 
 @dataclass(frozen=True, slots=True)
 class SetKinematicTarget(Command):
-    """Move a kinematic body so it reaches the pose after ``dt`` seconds."""
+    """Move a kinematic body so it reaches the pose after ``dt`` seconds and stays there,
+    at rest, however many steps follow before the next command."""
 
     key: int
     position: Vec3

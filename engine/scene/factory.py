@@ -47,6 +47,14 @@ from components import (
     Trigger,
     Visual,
 )
+from components.avatar import (
+    SavedAvatar,
+    SavedDrive,
+    SavedGroup,
+    SavedHold,
+    SavedLayer,
+    SavedRequest,
+)
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from components.script import SavedScript, ScriptHandler, ScriptTimer
 from engine.assets import AssetError, Assets, nodes_name
@@ -160,15 +168,17 @@ class SpawnRecord:
     """What one script call made at run time, kept so a saved state writes it too.
 
     ``spawn(text)``: the snippet's SceneDB, the folder its asset names are relative to,
-    and the entity its i-th ``Object`` block (``objects[i]``) and i-th ``Joint`` block
-    (``joints[i]``) became. ``createJoint``: ``db`` None and ``joints`` its one joint
-    entity, whose Joint component holds all a ``Joint`` block needs.
+    and the entity its i-th ``Object`` block (``objects[i]``), i-th ``Joint`` block
+    (``joints[i]``) and i-th ``Avatar`` block (``avatars[i]``) became. ``createJoint``:
+    ``db`` None and ``joints`` its one joint entity, whose Joint component holds all a
+    ``Joint`` block needs.
     """
 
     db: SceneDB | None
     content_dir: Path | None
     objects: list[int]
     joints: list[int]
+    avatars: list[int] = field(default_factory=list)
 
 
 @dataclass(slots=True)
@@ -191,7 +201,7 @@ class SceneIds:
         self.spawned.append(made)
         if len(self.spawned) >= 2 * self._kept:
             self.spawned = [r for r in self.spawned
-                            if any(exists(e) for e in (*r.objects, *r.joints))]
+                            if any(exists(e) for e in (*r.objects, *r.joints, *r.avatars))]
             self._kept = max(len(self.spawned), 16)
 
 
@@ -310,11 +320,15 @@ class _Builder:
         #: Owner -> the saved state its script resumes from, and the block that said so.
         self.script_states: dict[str, SavedScript] = {}
         self.script_blocks: dict[str, Block] = {}
+        #: Avatar ID -> the AvatarState block it resumes from (a loaded saved state).
+        self.avatar_states: dict[str, Block] = {}
 
     def build(self, db: SceneDB) -> SceneSpec:
         spec = SceneSpec()
         root = _Index(db.root)
         self.script_states = self.saved_scripts(root)
+        self.avatar_states = {str(_Reader(b, "AvatarState")("Owner")): b
+                              for b in root.blocks("AvatarState")}
         for blk in root.blocks("Material"):
             r = _Reader(blk, "Material")
             name = str(r("ID"))
@@ -342,6 +356,7 @@ class _Builder:
         self.check_hand_inputs(spec.input)
         for i, blk in enumerate(root.blocks("Avatar")):
             spec.entities.append(self.avatar(blk, i))
+        self.unclaimed_script_states()
         return spec
 
     # -- assets --------------------------------------------------------------
@@ -375,17 +390,24 @@ class _Builder:
             self.skipped.add(oid)
             return EntitySpec(oid, [], blk.loc, skipped=True)
 
+    def quaternion(self, r: _Reader, key: str) -> tuple[float, ...]:
+        """``r(key)`` as a unit quaternion (one already unit kept bit-exact, as a saved
+        state wrote it); all zeros is an error."""
+        quat = _floats(r(key))
+        norm = math.sqrt(sum(q * q for q in quat))
+        if norm == 0.0:
+            self.report.error(r.value(key).loc, f"{key} must not be all zeros")
+            return _IDENTITY
+        return quat if abs(norm - 1.0) <= 1e-12 else tuple(q / norm for q in quat)
+
+    def orientation(self, r: _Reader) -> tuple[float, ...]:
+        """The exact ``Quaternion`` where one is written, else ``Orientation`` (degrees)."""
+        return self.quaternion(r, "Quaternion") if r.has("Quaternion") else euler_to_quat(
+            r("Orientation"))
+
     def object_components(self, r: _Reader, oid: str, blk: Block) -> EntitySpec:
         position = _floats(r("Position"))
-        quat = _floats(r("Quaternion")) if r.has("Quaternion") else euler_to_quat(
-            r("Orientation"))
-        w, x, y, z = quat
-        norm = math.sqrt(w * w + x * x + y * y + z * z)
-        if norm == 0.0:
-            self.report.error(r.value("Quaternion").loc, "Quaternion must not be all zeros")
-            norm = 1.0
-        if abs(norm - 1.0) > 1e-12:  # keep a saved state's quaternion bit-exact
-            quat = tuple(q / norm for q in quat)
+        quat = self.orientation(r)
         angular = tuple(map(math.radians, r("AngularVelocity"))) if r.has(
             "AngularVelocity") else _ORIGIN
         comps: list[Any] = [Name(oid), Transform(position, quat, r("Velocity"), angular)]
@@ -643,16 +665,7 @@ class _Builder:
 
         first = r("Animation") if r.has("Animation") and clip(
             r("Animation"), r.value("Animation").loc) else None
-        blend: dict[str, float] = {}
-        if r.has("Blend"):
-            names, weights = r("Blend"), r("Weights") or (1.0,) * len(r("Blend"))
-            if len(weights) != len(names):
-                self.report.error(r.value("Weights").loc if r.has("Weights") else
-                                  r.value("Blend").loc,
-                                  f"Weights has {len(weights)} numbers for {len(names)} Blend "
-                                  "clips")
-            blend = {n: float(w) for n, w, item in zip(names, weights, r.value("Blend").data,
-                                                        strict=False) if clip(n, item.loc)}
+        blend = dict(self.weights(r, "Blend", clip)) if r.has("Blend") else {}
         queue = [n for n, item in zip(r("Queue") or (), r.value("Queue").data if r.has(
             "Queue") else (), strict=True) if clip(n, item.loc)]
         clips = []
@@ -670,13 +683,7 @@ class _Builder:
             for k in range(0, len(bones) - len(bones) % 3, 3):
                 if all([bone(bones[k + j], items[k + j].loc) for j in range(3)]):
                     legs.append((bones[k], bones[k + 1], bones[k + 2]))
-        path: list[tuple[float, float, float]] = []
-        if r.has("Path"):
-            flat = _floats(r("Path"))
-            if len(flat) % 3:
-                self.report.error(r.value("Path").loc, f"Path is points [x y z ...], got "
-                                                       f"{len(flat)} numbers")
-            path = [(flat[k], flat[k + 1], flat[k + 2]) for k in range(0, len(flat) - 2, 3)]
+        path = self.points(r, "Path")
         holds = []
         for b in r.blocks("Hold"):
             h = _Reader(b, "Hold")
@@ -691,24 +698,111 @@ class _Builder:
                                                           "positive")
             capsule = (diameter / 2, length)
         for key in ("Scale", "Speed", "Fade", "StepHeight", "Smoothing", "TurnRate"):
-            if r(key) < 0 or (key == "Scale" and r(key) == 0):
+            if r(key) is not None and (r(key) < 0 or (key == "Scale" and r(key) == 0)):
                 self.report.error(r.value(key).loc, f"{key} must be positive, got {r(key)}")
         scale = float(r("Scale"))
-        avatar = Avatar(model=file, scale=scale, clip=first, loop=bool(r("Loop")),
-                        speed=float(r("Speed")), blend=blend, queue=queue, fade=float(r("Fade")),
+        state = self.avatar_states.pop(aid, None)
+        avatar = Avatar(model=file, scale=scale, clip=first,
+                        loop=None if r("Loop") is None else bool(r("Loop")),
+                        speed=_opt(r("Speed")), blend=blend, queue=queue, fade=float(r("Fade")),
                         clips=clips, ground_follow=bool(r("GroundFollow")),
                         step_height=float(r("StepHeight")), smoothing=float(r("Smoothing")),
                         foot_ik=legs, path=path, path_loop=bool(r("PathLoop")),
                         turn_rate=math.radians(float(r("TurnRate"))), capsule=capsule,
-                        holds=holds)
+                        holds=holds, saved=None if state is None else self.saved_avatar(
+                            state, clip, bone))
         visual = Visual(model=file, scale=(scale,) * 3, color=_color(r("Color")),
                         shader_state=r("ShaderState"), shadower=bool(r("Shadower")),
                         shadowed=bool(r("Shadowed")))
-        comps: list[Any] = [Name(aid), Transform(_floats(r("Position")),
-                                                 euler_to_quat(r("Orientation"))), visual, avatar]
+        comps: list[Any] = [Name(aid), Transform(_floats(r("Position")), self.orientation(r)),
+                            visual, avatar]
         if r.has("Script"):
-            comps.append(Script(file=r("Script")))
+            comps.append(Script(file=r("Script"), saved=self.script_states.pop(aid, None)))
         return EntitySpec(aid, comps, blk.loc)
+
+    def weights(self, r: _Reader, key: str, clip: Callable[[str, Loc], bool]
+                ) -> list[tuple[str, float]]:
+        """Clips named by ``key`` with their ``Weights`` (1 each by default); clips the
+        model lacks are told (``clip``) and left out."""
+        names, weights = r(key), r("Weights") or (1.0,) * len(r(key))
+        if len(weights) != len(names):
+            self.report.error(r.value("Weights").loc if r.has("Weights") else r.value(key).loc,
+                              f"Weights has {len(weights)} numbers for {len(names)} {key} "
+                              "clips")
+        return [(n, float(w)) for n, w, item in zip(names, weights, r.value(key).data,
+                                                     strict=False) if clip(n, item.loc)]
+
+    def points(self, r: _Reader, key: str) -> list[tuple[float, float, float]]:
+        """A path: ``r(key)`` as points [x y z ...]."""
+        if not r.has(key):
+            return []
+        flat = _floats(r(key))
+        if len(flat) % 3:
+            self.report.error(r.value(key).loc, f"{key} is points [x y z ...], got {len(flat)} "
+                                                "numbers")
+        return [(flat[k], flat[k + 1], flat[k + 2]) for k in range(0, len(flat) - 2, 3)]
+
+    def not_negative(self, r: _Reader, *keys: str) -> None:
+        for key in keys:
+            if r(key) is not None and not r(key) >= 0:
+                self.report.error(r.value(key).loc, f"{key} must not be negative, got {r(key)}")
+
+    def saved_avatar(self, blk: Block, clip: Callable[[str, Loc], bool],
+                     bone: Callable[[str, Loc], bool]) -> SavedAvatar:
+        """An ``AvatarState`` as its avatar resumes from it. Clips and bones its model
+        lacks are told and left out; numbers out of range are errors."""
+        r = _Reader(blk, "AvatarState")
+        groups = []
+        for b in r.blocks("Group"):
+            g = _Reader(b, "AnimationGroup")
+            if not 0.0 <= g("Phase") <= 1.0:
+                self.report.error(g.value("Phase").loc, f"Phase is 0..1, got {g('Phase')}")
+            layers = []
+            for lb in g.blocks("Layer"):
+                c = _Reader(lb, "AnimationLayer")
+                self.not_negative(c, "Speed", "Weight", "FadeFrom", "FadeTo", "FadeTime",
+                                  "FadeLength")
+                if clip(c("Clip"), c.value("Clip").loc):
+                    layers.append(SavedLayer(c("Clip"), float(c("Speed")), float(c("Weight")),
+                                             float(c("FadeFrom")), float(c("FadeTo")),
+                                             float(c("FadeTime")), float(c("FadeLength"))))
+            if layers:
+                groups.append(SavedGroup(tuple(layers), float(g("Phase")), bool(g("Loop")),
+                                         bool(g("Ended")), bool(g("Current"))))
+        queue = []
+        for b in r.blocks("Queued"):
+            q = _Reader(b, "AnimationRequest")
+            self.not_negative(q, "Fade", "Speed")
+            weights = self.weights(q, "Clips", clip)
+            if weights:
+                queue.append(SavedRequest(tuple(weights), float(q("Fade")), _opt(q("Speed")),
+                                          None if q("Loop") is None else bool(q("Loop"))))
+        path = self.points(r, "Path")
+        if not 0 <= r("Waypoint") <= len(path):
+            self.report.error(r.value("Waypoint").loc, f"Waypoint is a point of Path (0 to "
+                              f"{len(path)}), got {r('Waypoint')}")
+        holds = []
+        for b in r.blocks("Hold"):
+            h = _Reader(b, "HeldState")
+            if bone(h("Bone"), h.value("Bone").loc):
+                holds.append(SavedHold(Hold(h("Bone"), h("Object"), _floats(h("Offset")),
+                                            self.quaternion(h, "Quaternion")),
+                                       None if h("Last") is None else _floats(h("Last"))))
+        drives = []
+        for b in r.blocks("Drive"):
+            d = _Reader(b, "BoneDrive")
+            if bone(d("Bone"), d.value("Bone").loc):
+                drives.append(SavedDrive(d("Bone"), _floats(d("Position")),
+                                         self.quaternion(d, "Quaternion")))
+        capsule = None
+        if r.has("CapsulePosition"):
+            turn = self.quaternion(r, "CapsuleQuaternion") if r.has("CapsuleQuaternion") \
+                else _IDENTITY
+            capsule = (_floats(r("CapsulePosition")), turn)
+        return SavedAvatar(tuple(groups), tuple(queue), tuple(path), bool(r("PathLoop")),
+                           int(r("Waypoint")), _opt(r("Ground")),
+                           None if r("GroundAt") is None else _floats(r("GroundAt")),
+                           float(r("StepOffset")), tuple(holds), tuple(drives), capsule)
 
     def sleep_spec(self, r: _Reader) -> SleepState:
         """An object's saved sleep-rule state, so a loaded state falls asleep on time."""
@@ -864,6 +958,9 @@ class _Builder:
             sid = f"script{i}"
             script = Script(file=e.value.data, saved=self.script_states.pop(sid, None))
             spec.entities.append(EntitySpec(sid, [Name(sid), script], e.loc))
+
+    def unclaimed_script_states(self) -> None:
+        """Warn of each ScriptState no script took (after every script's owner is built)."""
         for owner, block in self.script_blocks.items():
             if owner in self.script_states:  # its owner runs no script (or was left out)
                 self.problems.append(Diagnostic(

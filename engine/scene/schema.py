@@ -119,6 +119,9 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "ScriptState": _f(STRUCT_T, doc="where a script stood when this state was saved "
                           "(written by --save-state): it resumes instead of starting",
                           repeat=True, struct="ScriptState"),
+        "AvatarState": _f(STRUCT_T, doc="where an avatar stood when this state was saved "
+                          "(written by --save-state): it resumes instead of starting",
+                          repeat=True, struct="AvatarState"),
     },
     "Object": {
         "ID": _id("object"),
@@ -373,10 +376,14 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                     required=True),
         "Position": _f(VEC3_T, (0.0, 0.0, 0.0), "m, where its feet stand"),
         "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees; unturned it faces +Y"),
+        "Quaternion": _f(VECTOR_T, None, "exact orientation [w x y z]; wins over Orientation",
+                         lengths=(4,)),
         "Scale": _f(FLOAT_T, 1.0, "uniform scale of the model"),
         "Animation": _f(STRING_T, None, "clip played first"),
-        "Loop": _f(BOOL_T, 1, "the first clip loops"),
-        "Speed": _f(FLOAT_T, 1.0, "playback rate of the first clip"),
+        "Loop": _f(BOOL_T, None, "1: the first clip loops, 0: it does not (default: as its "
+                   "Clip block says, else 1)"),
+        "Speed": _f(FLOAT_T, None, "playback rate of the first clip (default: its Clip "
+                    "block's Speed, else 1)"),
         "Blend": _f(STRINGVECTOR_T, None, "clips played at once from the start (with Weights)"),
         "Weights": _f(VECTOR_T, None, "weight of each Blend clip"),
         "Queue": _f(STRINGVECTOR_T, None, "clips played in turn when the first one ends"),
@@ -412,6 +419,72 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Bone": _f(STRING_T, None, "the bone (node name) holding it", required=True),
         "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, in the bone's frame"),
         "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees, in the bone's frame"),
+    },
+    # -- saved avatars (written by --save-state; engine.scene.snapshot) --
+    "AvatarState": {
+        "Owner": _f(REF_T, None, "the avatar (its ID) this is the state of; its clips, queue, "
+                    "path and held objects come from here, not from its block",
+                    required=True, ref="Avatar"),
+        "Group": _f(STRUCT_T, None, "clips started together (a play, queue or blend), oldest "
+                    "first", repeat=True, struct="AnimationGroup"),
+        "Queued": _f(STRUCT_T, None, "clips to start when what plays now ends, in turn",
+                     repeat=True, struct="AnimationRequest"),
+        "Path": _f(VECTOR_T, None, "m, the points [x y z ...] it walks now (no Path: it "
+                   "does not walk)"),
+        "PathLoop": _f(BOOL_T, 1, "after the last point, walk back to the first"),
+        "Waypoint": _f(INT_T, 0, "the point of Path it walks to now (0: the first; the "
+                       "number of points: it has arrived)"),
+        "Ground": _f(FLOAT_T, None, "m, the ground height under its root last frame "
+                     "(ground following; none: not found yet)"),
+        "GroundAt": _f(VECTOR_T, None, "[x y] m, where its root stood over that ground",
+                       lengths=(2,)),
+        "StepOffset": _f(FLOAT_T, 0.0, "m, the height of a step still to be taken (smoothed "
+                         "away over the avatar's Smoothing)"),
+        "Hold": _f(STRUCT_T, None, "an object it carries", repeat=True, struct="HeldState"),
+        "Drive": _f(STRUCT_T, None, "a bone held at a world pose (a tracked hand)",
+                    repeat=True, struct="BoneDrive"),
+        "CapsulePosition": _f(VEC3_T, None, "m, where its capsule's body is"),
+        "CapsuleQuaternion": _f(VECTOR_T, None, "its capsule's orientation [w x y z]",
+                                lengths=(4,)),
+    },
+    "AnimationGroup": {
+        "Phase": _f(FLOAT_T, 0.0, "how far through its clips, 0..1 (a clip's time is this "
+                    "times its length)"),
+        "Loop": _f(BOOL_T, 1, "1: it starts again at its end; 0: it ends there"),
+        "Ended": _f(BOOL_T, 0, "1: it reached its end (onAnimationEnd was called)"),
+        "Current": _f(BOOL_T, 0, "1: what the avatar plays now (the other groups fade out)"),
+        "Layer": _f(STRUCT_T, None, "one of its clips", repeat=True, struct="AnimationLayer"),
+    },
+    "AnimationLayer": {
+        "Clip": _f(STRING_T, None, "the clip's name in the model", required=True),
+        "Speed": _f(FLOAT_T, 1.0, "playback rate"),
+        "Weight": _f(FLOAT_T, 1.0, "its weight in the blend now"),
+        "FadeFrom": _f(FLOAT_T, 1.0, "the weight its fade started at"),
+        "FadeTo": _f(FLOAT_T, 1.0, "the weight its fade ends at (0: fading out)"),
+        "FadeTime": _f(FLOAT_T, 0.0, "s of its fade gone"),
+        "FadeLength": _f(FLOAT_T, 0.0, "s its fade takes (0: none)"),
+    },
+    "AnimationRequest": {
+        "Clips": _f(STRINGVECTOR_T, None, "the clips it starts together", required=True),
+        "Weights": _f(VECTOR_T, None, "the weight of each clip (default: 1 each)"),
+        "Fade": _f(FLOAT_T, 0.0, "s, the crossfade it starts with"),
+        "Speed": _f(FLOAT_T, None, "playback rate (default: each clip's)"),
+        "Loop": _f(BOOL_T, None, "1 or 0 (default: the first clip's)"),
+    },
+    "HeldState": {
+        "Object": _f(REF_T, None, "the object carried", required=True, ref="Object"),
+        "Bone": _f(STRING_T, None, "the bone (node name) holding it", required=True),
+        "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, in the bone's frame"),
+        "Quaternion": _f(VECTOR_T, (1.0, 0.0, 0.0, 0.0), "its orientation in the bone's "
+                         "frame [w x y z]", lengths=(4,)),
+        "Last": _f(VEC3_T, None, "m, where it was put last frame (a dynamic object moves on "
+                   "at the hand's velocity)"),
+    },
+    "BoneDrive": {
+        "Bone": _f(STRING_T, None, "the bone held", required=True),
+        "Position": _f(VEC3_T, None, "m, world frame", required=True),
+        "Quaternion": _f(VECTOR_T, None, "world orientation [w x y z]", required=True,
+                         lengths=(4,)),
     },
     "World": {
         "Gravity": _f(VEC3_T, (0.0, 0.0, -9.81), "m/s^2"),

@@ -427,6 +427,8 @@ class ScriptAPI:
             ids[es.id] = -1 if es.skipped else self.engine.spawn(*es.components)
             made.append(ids[es.id])
         objects = made[:len(spec.db.blocks("Object"))] if spec.db is not None else []
+        avatars = made[len(made) - len(spec.db.blocks("Avatar")):] if spec.db is not None \
+            else []  # the factory makes avatars last
         joints: list[int] = []
         for js in spec.joints:
             if js.skipped:
@@ -442,7 +444,7 @@ class ScriptAPI:
         made = [e for e in (*made, *joints) if e >= 0]
         self._names.update({name: e for name, e in ids.items() if e >= 0})
         if scene is not None:
-            scene.record(SpawnRecord(spec.db, spec.content_dir, objects, joints),
+            scene.record(SpawnRecord(spec.db, spec.content_dir, objects, joints, avatars),
                          self.engine.world.entity_exists)
         assert self.runtime is not None
         return self.runtime.lua.table_from(made)

@@ -180,7 +180,8 @@ class OdeBackend:
 
     def set_kinematic_target(self, key: int, position: np.ndarray,
                              orientation: np.ndarray, dt: float) -> None:
-        """Give the body the velocities that carry it to the target pose in ``dt``."""
+        """Give the body the velocities that carry it to the target pose in ``dt``; a
+        kinematic body stops there (exactly at the target) unless told otherwise first."""
         if not dt > 0:
             raise ValueError(f"dt must be positive, got {dt}")
         pos, quat = _ode.pose(self._world, int(key))
@@ -189,7 +190,7 @@ class OdeBackend:
         q /= np.linalg.norm(q)
         lin, ang = (target - pos) / dt, rotation_vector_between(quat, q) / dt
         check_speed(key, lin, ang)
-        _ode.set_velocity(self._world, int(key), lin, ang)
+        _ode.aim_kinematic(self._world, int(key), target, q, lin, ang, float(dt))
 
     def add_force(self, key: int, force: np.ndarray, point: np.ndarray | None = None) -> None:
         f = vec(force, 3, "force")
