@@ -82,6 +82,9 @@ MIN_TIME_CONSTANT = 0.03
 TELEPORT_DISTANCE = 1.0
 #: Seconds a hand whose tracker is lost keeps holding what it holds.
 RELEASE_AFTER = 1.0
+#: Friction coefficient of an object pressed against the palm: a grip's shear up to this
+#: times the press does not count toward its BreakForce (skin on most things: 0.5–1).
+GRIP_FRICTION = 1.0
 #: The see-through band, as shares of the deviation distance D (paper section 5.4), the
 #: share under which a hand collides again, and how see-through it is drawn.
 SEE_THROUGH = (0.1, 0.7)
@@ -108,6 +111,7 @@ class _Rig:
     pressed: bool = False
     lost_for: float = 0.0
     overlap: Future | None = None
+    strain: tuple[dict[int, int], Future] | None = None  # grips asked their force, answer
     shown: tuple[str, bool, bool] | None = None  # the mode, tracking and see-through drawn
     force_output: str = field(init=False)
     grasp_output: str = field(init=False)
@@ -431,11 +435,12 @@ class HandDriveSystem(System):
 
 class HandContactSystem(System):
     """POST_PHYSICS: what each hand touches (its mode) and the force its contacts pushed
-    with; :class:`HandTouched` for what it begins to touch."""
+    with; :class:`HandTouched` for what it begins to touch; grips pulled beyond the
+    hand's ``BreakForce`` let go."""
 
     phase = Phase.POST_PHYSICS
-    reads = (Hand, HandState, Physical, Graspable)
-    writes = (HandState,)
+    reads = (Hand, HandState, Physical, Graspable, Transform, Name, Joint)
+    writes = (HandState, Name, Joint)
 
     def __init__(self, hands: Hands) -> None:
         self.hands = hands
@@ -465,6 +470,52 @@ class HandContactSystem(System):
             if outputs is not None:
                 outputs.set(rig.force_output, force)
                 outputs.set(rig.grasp_output, 1.0 if rig.grasps else 0.0)
+            hand = world.try_component(rig.hand, Hand)
+            if hand is not None and hand.break_force is not None and rig.grasps:
+                self._strain(engine, rig, hand.break_force)
+
+    def _strain(self, engine: Engine, rig: _Rig, limit: float) -> None:
+        """Let go of what a grip carried more than ``limit`` N for in the last step (see
+        :func:`_grip_load`; asked of the backend, in threaded mode a frame later)."""
+        if rig.strain is None:
+            grips = dict(rig.grasps)
+            rig.strain = grips, engine.physics.request(lambda backend: {
+                obj: backend.joint_force(joint) for obj, joint in grips.items()
+                if backend.has_joint(joint)})
+        grips, future = rig.strain
+        if not future.done():
+            return
+        rig.strain = None
+        if future.exception() is not None:
+            self.hands.messages.error(f"hand {rig.name!r}: its grips' force could not be "
+                                      f"measured ({future.exception()}); BreakForce is not "
+                                      "applied")
+            return
+        world = engine.world
+        hand = world.component_for_entity(rig.hand, Transform).position
+        for obj, on_hand in future.result().items():
+            t = world.try_component(obj, Transform)
+            if t is None or rig.grasps.get(obj) != grips[obj]:
+                continue
+            load = _grip_load(-on_hand, t.position - hand)
+            if load > limit:
+                log.info("hand %r: its grip on %r carried %.4g N > BreakForce %.4g N; it "
+                         "lets go", rig.name, _name(world, obj), load, limit)
+                self.hands.let_go(engine, rig, [obj])
+
+
+def _grip_load(on_object: np.ndarray, away: np.ndarray) -> float:
+    """The force a grip carries, from what it puts on the object (N) and ``away`` (from
+    the hand to the object): the pull toward the hand, and the shear beyond what
+    friction of the object pressed against the palm holds (:data:`GRIP_FRICTION` times
+    the press). A press alone the palm takes (a held cup pushed into a table)."""
+    n = float(np.linalg.norm(away))
+    if n == 0.0:
+        return float(np.linalg.norm(on_object))
+    d = away / n
+    along = float(on_object @ d)  # > 0: pressed away from the hand
+    shear = float(np.linalg.norm(on_object - along * d))
+    return math.hypot(max(-along, 0.0), max(shear - GRIP_FRICTION * max(along, 0.0), 0.0))
 
 
 def _hand_contacts(frames: list[Contacts], rigs: dict[int, _Rig]

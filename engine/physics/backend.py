@@ -201,6 +201,11 @@ class DynamicsBackend(Protocol):
     def joint_state(self, key: int) -> tuple[float, float]:
         """Position (angle or distance) and rate of a joint's first axis."""
 
+    def joint_force(self, key: int) -> np.ndarray:
+        """The force (N, world frame) the joint's constraint put on its body_a in the last
+        step (a hand's grip breaks beyond its BreakForce). A backend may start measuring a
+        joint when first asked: zero until a step has run since."""
+
     def set_joint_target(self, key: int, position: np.ndarray, orientation: np.ndarray,
                          max_force: float | None = None,
                          max_torque: float | None = None) -> None:

@@ -180,6 +180,10 @@ class BallisticBackend:
         self._refused(key)
         return (0.0, 0.0)
 
+    def joint_force(self, key: int) -> np.ndarray:
+        self._refused(key)
+        return np.zeros(3)
+
     def set_joint_target(self, key: int, position: np.ndarray, orientation: np.ndarray,
                          max_force: float | None = None,
                          max_torque: float | None = None) -> None:

@@ -338,7 +338,9 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "DeviationDistance": _f(FLOAT_T, 0.3, "m (D): farther from its tracker the hand passes "
                                 "through things and snaps back; it collides again under "
                                 "0.1 D, and is drawn see-through, on top, from 0.1 D to 0.7 D"),
-        "BreakForce": _f(FLOAT_T, None, "N: a grasp pulled harder lets go (none: never)"),
+        "BreakForce": _f(FLOAT_T, None, "N a grip carries before it lets go: the pull "
+                         "toward the hand and any shear beyond what pressing the object "
+                         "against the palm holds (none: never)"),
         "Marker": _f(BOOL_T, 1, "show a ball where the real hand (the tracker) is"),
         "ContactModel": _f(ASSET_T, None, "model drawn while the hand touches something it "
                            "could grasp (an open hand); default: the object's own look"),

@@ -12,7 +12,9 @@ from hand_helpers import G, Rig, between, ramp, waypoints
 from components import Transform
 from components.hand import HandMode
 from engine import Phase
+from engine.events import HandReleased
 from engine.rotation import local_axis
+from systems.hands import Hands
 
 BACKENDS = ["ode", "pymunk"]
 FLOOR = 'Object { ID "floor" PhysicalAttributes { Geometry { Primitive "plane" } } }\n'
@@ -96,6 +98,45 @@ def test_a_grasp_lifts_a_cup_and_a_release_drops_it(tmp_path: Path, backend):
     z = np.array(s["cup"][free:free + 13])
     h = s["t"][1] - s["t"][0]
     assert np.diff(z[1:], 2) / h**2 == pytest.approx(-G, rel=0.01)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize(("share", "holds"), [(0.85, False), (3.0, True)],
+                         ids=["under its weight", "three times its weight"])
+def test_a_grip_carries_the_cups_weight_and_breaks_beyond_break_force(
+        tmp_path: Path, backend, share: float, holds: bool):
+    """Held still, the grip pulls the cup up with its weight m g (measured by the backend);
+    a BreakForce under that weight lets go as the lift begins, one over it holds through a
+    smooth lift (at most 2.8 m/s² up: m (g + a) = 3.8 N)."""
+    def path(t: float) -> np.ndarray:
+        s = min(max((t - 0.6) / 0.8, 0.0), 1.0)
+        return np.array([0.0, 0.0, (0.9 - 0.048 * min(t / 0.4, 1.0)) if t < 0.6
+                         else 0.852 + 0.3 * s * s * (3 - 2 * s)])
+
+    weight = 0.3 * G
+    limit = share * weight
+    scene = TABLE + CUP + hand("hand_r", 0, 0.9, f"BreakForce {limit}")
+    with Rig(scene, tmp_path, backend, paths={"hand_r": path},
+             gloves={"glove_r": between(0.5)}) as rig:
+        released: list[float] = []
+        rig.engine.events.subscribe(HandReleased, lambda e: released.append(
+            rig.engine.time))
+        rig.run(2.2)
+        if holds:
+            assert not released and rig.state("hand_r").held == (rig.ids["cup"],)
+            # lifted by its top (0.05 m from its middle), under the hand's 0.015 m
+            # half-thickness (less the few mm a soft contact gave under the press)
+            assert rig.position("hand_r")[2] == pytest.approx(1.152, abs=2e-3)
+            assert rig.position("hand_r")[2] - rig.position("cup")[2] == pytest.approx(
+                0.065, abs=5e-3)
+            joint = rig.engine.resource(Hands).rigs[rig.ids["hand_r"]].grasps[
+                rig.ids["cup"]]
+            force = rig.engine.physics.request(lambda b: b.joint_force(joint)).result()
+            # the cup hangs on the hand: pulls it down by its weight
+            assert force == pytest.approx([0, 0, -weight], abs=0.02 * weight)
+        else:  # let go as it began to rise, well before the glove opened
+            assert len(released) == 1 and 0.5 < released[0] < 0.8
+            assert rig.position("cup")[2] == pytest.approx(0.8, abs=0.01)
 
 
 def test_serial_and_threaded_runs_lift_alike(tmp_path: Path):

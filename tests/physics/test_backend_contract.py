@@ -474,6 +474,35 @@ def test_fixed_joint_holds_relative_pose(kit, backend: DynamicsBackend) -> None:
         pytest.approx(1.0, abs=1e-3)
 
 
+@pytest.mark.parametrize("to_world", [False, True], ids=["between bodies", "to the world"])
+def test_joint_force_is_what_the_joint_carries(kit, backend: DynamicsBackend,
+                                               to_world: bool) -> None:
+    """A 2 kg ball hanging from a fixed joint: the joint holds it up with m g, and puts
+    the opposite on whatever it hangs from; swinging on a hinge at ω it carries
+    m (g + ω² L) at the bottom."""
+    m, length = 2.0, 0.5
+    kit.add(backend, 1, kit.sphere(radius=0.1, mass=m), (0.0, 0.0, 3.0 - length))
+    if not to_world:
+        kit.add(backend, 2, kit.box((0.2, 0.2, 0.2), kind="kinematic", mass=None),
+                (0.0, 0.0, 3.0))
+    support = None if to_world else 2
+    backend.add_joint(10, Joint(kind="fixed", body_a=1, body_b=support, anchor=(0, 0, 3.0)))
+    assert backend.joint_force(10) == pytest.approx([0, 0, 0])  # measured from now on
+    kit.run(backend, 0.5, 1 / 240)
+    assert backend.joint_force(10) == pytest.approx([0, 0, m * kit.G], rel=1e-3, abs=1e-6)
+    backend.remove_joint(10)
+    backend.add_joint(11, kit.hinge(1, (0.0, 0.0, 3.0), b=support))
+    backend.joint_force(11)
+    omega = 2.0
+    backend.set_velocity(1, np.array([omega * length, 0.0, 0.0]), np.array([0, -omega, 0]))
+    kit.run(backend, 0.01, 1 / 1000)  # (a velocity-level solver needs a step or two to
+    # turn the ball: the first only holds its weight) 0.02 rad past the bottom
+    expected = m * (kit.G + omega ** 2 * length)
+    assert float(np.linalg.norm(backend.joint_force(11))) == pytest.approx(expected, rel=0.02)
+    with pytest.raises(KeyError):
+        backend.joint_force(99)
+
+
 def test_six_dof_follows_target_with_bounded_force(kit, backend: DynamicsBackend) -> None:
     hand = kit.box((0.2, 0.2, 0.2), mass=1.0)
     hand.category, hand.mask = 2, 0xFFFFFFFF & ~2  # the hand ignores its own target

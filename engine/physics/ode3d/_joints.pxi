@@ -31,6 +31,8 @@ cdef class _JointRec:
     cdef double sign        # -1 where ODE's body order is the reverse of (body_a, body_b)
     cdef public object bodies   # (key_a, key_b or None)
     cdef _Drive drive
+    cdef dJointFeedback feedback  # written by each step once asked for (joint_force)
+    cdef bint watched
 
 
 cdef void relative_pose(dBodyID base, dBodyID body, double* out) noexcept nogil:
@@ -288,6 +290,28 @@ def joint_state(World w, key) -> tuple:
     if rec.kind == JOINT_HINGE2:
         return rec.sign * dJointGetHinge2Angle1(j), rec.sign * dJointGetHinge2Angle1Rate(j)
     return 0.0, 0.0
+
+
+def joint_force(World w, key) -> np.ndarray:
+    """The force (N, world frame) the joint put on its body_a in the last step (a drive:
+    its linear motor's). ODE measures a joint from the first time it is asked: zero
+    until a step has run since."""
+    cdef _JointRec rec = joint_of(w, key)
+    cdef dJointID j = rec.drive.lmotor if rec.drive is not None else rec.joint
+    cdef dBodyID a = NULL
+    if rec.bodies[0] in w.slot_of:
+        a = w.slots[w.slot_of[rec.bodies[0]]].body
+    if not rec.watched:
+        memset(&rec.feedback, 0, sizeof(dJointFeedback))
+        dJointSetFeedback(j, &rec.feedback)
+        rec.watched = True
+    cdef const dReal* f = &rec.feedback.f1[0]
+    cdef double s = 1.0
+    if a != NULL and dJointGetBody(j, 1) == a:
+        f = &rec.feedback.f2[0]
+    elif a == NULL or dJointGetBody(j, 0) != a:  # body_a is the world: the other's, reversed
+        s = -1.0
+    return np.array([s * f[0], s * f[1], s * f[2]])
 
 
 def set_target(World w, key, double[::1] pos, double[::1] quat, double max_force,

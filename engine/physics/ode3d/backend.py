@@ -285,6 +285,9 @@ class OdeBackend:
     def joint_state(self, key: int) -> tuple[float, float]:
         return _ode.joint_state(self._world, int(key))
 
+    def joint_force(self, key: int) -> np.ndarray:
+        return _ode.joint_force(self._world, int(key))
+
     def set_joint_target(self, key: int, position: np.ndarray, orientation: np.ndarray,
                          max_force: float | None = None,
                          max_torque: float | None = None) -> None:

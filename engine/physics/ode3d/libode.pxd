@@ -194,6 +194,7 @@ cdef extern from "ode/ode.h" nogil:
     void dJointDestroy(dJointID)
     void dJointAttach(dJointID, dBodyID, dBodyID)
     void dJointSetFeedback(dJointID, dJointFeedback*)
+    dBodyID dJointGetBody(dJointID, int index)
     int dAreConnectedExcluding(dBodyID, dBodyID, int)
 
     void dJointSetHingeAnchor(dJointID, dReal, dReal, dReal)

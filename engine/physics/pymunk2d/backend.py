@@ -91,6 +91,8 @@ class PymunkBackend:
     def __init__(self) -> None:
         self._space = pymunk.Space()
         self._space.collision_slop = COLLISION_SLOP
+        # joints asked for their force -> that force on body_a after the last step
+        self._strained: dict[int, np.ndarray | None] = {}
         # the world's own static body (joints to the world, keyless planes), made now so
         # pymunk lists it among the static bodies from the first read on
         self._ground = self._space.static_body
@@ -181,12 +183,44 @@ class PymunkBackend:
             rec.drive_slider(dt)
         if self._aims:
             self._lead_aims(dt)
+        strained = self._strain_before(dt) if self._strained else None
         self._space.step(dt)
+        if strained:
+            self._strain_after(strained, dt)
         if self._aims:
             self._arrive(dt)
         self._contacts = None
         if self._sleep_on:
             self._apply_sleep(dt)
+
+    def _strain_before(self, dt: float) -> list[tuple[int, pymunk.Body, float, pymunk.Vec2d]]:
+        """For each measured joint, its moving body and the velocity the step would give
+        it with no contact or constraint (its own velocity callback, run and undone)."""
+        out = []
+        for key in list(self._strained):
+            rec = self._joints.get(key)
+            if rec is None:
+                del self._strained[key]
+                continue
+            body, sign = (rec.b, -1.0) if rec.b.body_type == pymunk.Body.DYNAMIC else \
+                (rec.a, 1.0)
+            v, w = body.velocity, body.angular_velocity
+            body.velocity_func(body, self._space.gravity, self._space.damping, dt)
+            out.append((key, body, sign, body.velocity))
+            body.velocity, body.angular_velocity = v, w
+        return out
+
+    def _strain_after(self, strained: list[tuple[int, pymunk.Body, float, pymunk.Vec2d]],
+                      dt: float) -> None:
+        for key, body, sign, free in strained:
+            rec = self._joints[key]
+            impulse = (body.velocity - free) * body.mass - _contact_impulse(body)
+            size = sum(c.impulse for c in rec.constraints
+                       if isinstance(c, pymunk.PivotJoint | pymunk.GrooveJoint))
+            length = impulse.length
+            f = impulse * (sign * size / (length * dt)) if length > 0.0 else \
+                pymunk.Vec2d(0.0, 0.0)
+            self._strained[key] = np.array([f.x, 0.0, f.y])
 
     def _lead_aims(self, dt: float) -> None:
         """Bodies whose target is due within this step slow down to arrive with it."""
@@ -577,6 +611,15 @@ class PymunkBackend:
     def joint_state(self, key: int) -> tuple[float, float]:
         return self._joint(key).state()
 
+    def joint_force(self, key: int) -> np.ndarray:
+        """pymunk keeps only the size of a constraint's impulse: its direction comes from
+        the momentum balance of the joint's moving body over the step (what its velocity
+        changed by beyond gravity, damping and forces, less its contacts' impulses; with
+        other joints on that body, theirs mixes in). Measured from the first time asked."""
+        self._joint(key)  # KeyError naming an unknown one
+        force = self._strained.setdefault(int(key), None)
+        return np.zeros(3) if force is None else force.copy()
+
     def has_joint(self, key: int) -> bool:
         return int(key) in self._joints
 
@@ -797,6 +840,16 @@ def _material_pre_solve(arbiter: pymunk.Arbiter, space: pymunk.Space,
             arbiter.friction = pair.friction
         if pair.bounce is not None:
             arbiter.restitution = pair.bounce
+
+
+def _contact_impulse(body: pymunk.Body) -> pymunk.Vec2d:
+    """The impulse ``body``'s contacts gave it in the last step."""
+    arbiters: list[pymunk.Arbiter] = []
+    body.each_arbiter(arbiters.append)
+    total = pymunk.Vec2d(0.0, 0.0)
+    for arb in arbiters:
+        total += arb.total_impulse if arb.shapes[0].body is body else -arb.total_impulse
+    return total
 
 
 def _velocity_func(gravity: bool, linear_damping: float, angular_damping: float):
