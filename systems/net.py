@@ -128,16 +128,15 @@ class ServeInputSystem(System):
 
     phase = Phase.INPUT
     before = ("InputSystem",)
+    reads = (ANY_COMPONENT,)  # a node's full state is the whole scene
 
     def __init__(self, server: NetServer) -> None:
         self.server = server
         self.hub: InputHub | None = None
         self.messages = MessageLog(log)
 
-    def setup(self, engine: Engine) -> None:
-        self.hub = engine.try_resource(InputHub)
-
     def run(self, engine: Engine, dt: float) -> None:
+        self.hub = engine.try_resource(InputHub)  # the input system's (set up after this)
         server = self.server
         for peer, records in server.poll():
             for record in records[:1000]:
@@ -453,6 +452,8 @@ class FollowSystem(System):
         try:
             self.decoder.decode(blob)
         except Gap:
+            if self.decoder.seq < 0:
+                return None  # joined between keyframes: the hello asked for the next one
             self.counts["gaps"] += 1
             if self._frame - self._key_asked > 10:
                 self._key_asked = self._frame
@@ -538,27 +539,29 @@ class FollowSystem(System):
                     self.counts["barrier misses"] += 1
                 else:
                     shown = found
-            ids, poses, when = shown.ids, shown.poses, shown.time
+            ids, when = shown.ids, shown.time
+            rows = np.zeros((len(ids), 13))
+            rows[:, :7] = shown.poses
             self.counts["stale"] += max(newest.frame - shown.frame, 0)
             self.shown_frame = shown.frame
         else:
             server_time = follower.server_time(wall)
             assert server_time is not None
-            ids, poses, when = follower.at(server_time)
+            ids, rows, when = follower.at(server_time)
             self.shown_frame = follower.frames[-1].frame
         self.shown_time = when
-        self._write(engine, ids, poses)
+        self._write(engine, ids, rows)
 
-    def _write(self, engine: Engine, ids: np.ndarray, poses: np.ndarray) -> None:
+    def _write(self, engine: Engine, ids: np.ndarray, rows: np.ndarray) -> None:
         table = engine.world.poses
         cached = self._rows
         if cached is None or cached[:2] != (self._layout, table.version) or \
                 len(cached[3]) != len(ids) or (cached[3] != ids).any():
-            rows = table.rows([self.entity_of.get(int(n), -1) for n in ids.tolist()])
-            cached = self._rows = (self._layout, table.version, rows, ids)
-        rows = cached[2]
-        have = rows >= 0
-        table.table[rows[have], :7] = poses[have]
+            found = table.rows([self.entity_of.get(int(n), -1) for n in ids.tolist()])
+            cached = self._rows = (self._layout, table.version, found, ids)
+        where = cached[2]
+        have = where >= 0
+        table.table[where[have]] = rows[have]
 
     def _resync(self, engine: Engine, welcome: dict[str, Any]) -> None:
         """Another server (a restart) or a lost place: build the world from its state."""
@@ -592,14 +595,20 @@ class FollowSystem(System):
 
 
 def node_scene(welcome: dict[str, Any], folder: Path) -> Any:
-    """The spec of the server's full state, run in the node's content ``folder``. Raises
-    SceneError when this folder cannot build it."""
+    """The spec of the server's full state, run in the node's content ``folder`` (without
+    the scripts' saved states: scripts run on the server). Raises SceneError when this
+    folder cannot build it."""
     from engine.scene import build_specs, parse_text, validated
 
     text = welcome["text"]
     if not isinstance(text, str):
         raise TypeError("the server's state is not text")
-    db = parse_text(text, "<server state>", base_dir=folder)
+    lines = text.splitlines(keepends=True)
+    while lines and lines[0].startswith("//"):  # the server's header: where it saved from
+        lines.pop(0)
+    db = parse_text("".join(lines), "<server state>", base_dir=folder)
+    # scripts run on the server alone; a node's saved state starts them afresh
+    db.root.entries = [e for e in db.root.entries if e.key != "ScriptState"]
     return build_specs(validated(db, folder), folder)
 
 

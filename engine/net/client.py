@@ -93,7 +93,8 @@ class NetClient:
     def join(self, wait: float = 5.0) -> dict[str, Any]:
         """Say hello; the server's welcome (``epoch``, ``text``, ``names``, ``frame``,
         ``time``, ``dt``). Raises NetError when refused or when nothing answers."""
-        self._connect()
+        if self._dealer is None:
+            self._connect()
         assert self._dealer is not None
         self._dealer.send(protocol.encode({
             "type": "hello", "v": protocol.VERSION, "user": self.user,
@@ -124,6 +125,8 @@ class NetClient:
             if self._monitor in ready:
                 event = recv_monitor_message(self._monitor)
                 problem = _HANDSHAKE_FAILED.get(event["event"])
+                if event["event"] == zmq.EVENT_HANDSHAKE_FAILED_NO_DETAIL and self.keys is None:
+                    problem = None  # a connection closed while it was made: it is retried
                 if problem is not None:
                     raise NetError(f"cannot join {self.address}: {problem}")
             if self._dealer in ready:

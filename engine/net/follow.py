@@ -12,8 +12,9 @@ shows one frame exactly (:meth:`Follower.frame`), the one every display draws.
 >>> ids = np.array([1], np.uint32)
 >>> f.push(1, 0.0, ids, np.array([[0.0, 0, 0, 1, 0, 0, 0]]), wall=10.0)
 >>> f.push(2, 0.1, ids, np.array([[1.0, 0, 0, 1, 0, 0, 0]]), wall=10.1)
->>> float(f.at(0.05)[1][0, 0])
-0.5
+>>> ids, rows, shown = f.at(0.05)
+>>> float(rows[0, 0]), float(rows[0, 7]), shown      # x, its velocity (m/s), the time
+(0.5, 10.0, 0.05)
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from engine.rotation import slerp
+from engine.rotation import rotation_vector_between, slerp
 
 
 @dataclass(frozen=True, slots=True)
@@ -68,25 +69,25 @@ class Follower:
         return min(time, time - self.delay + max(wall - arrived, 0.0))
 
     def at(self, time: float) -> tuple[np.ndarray, np.ndarray, float]:
-        """(ids, poses, time shown) at server ``time``: between the two frames around it,
-        or the nearest frame when ``time`` is outside those held (or the bodies changed
-        between them)."""
+        """(ids, rows, time shown) at server ``time``: between the two frames around it,
+        or the nearest frame when ``time`` is outside those held. A row is a pose and the
+        velocities that take the frame before to the frame after (zero where the bodies
+        changed between them), ``x y z qw qx qy qz vx vy vz wx wy wz`` as a pose table's."""
         frames = self.frames
-        newest = frames[-1]
-        if time >= newest.time or len(frames) == 1:
-            return newest.ids, newest.poses, newest.time
         after = next((i for i, f in enumerate(frames) if f.time > time), len(frames) - 1)
-        if after == 0:
-            first = frames[0]
-            return first.ids, first.poses, first.time
-        a, b = frames[after - 1], frames[after]
-        if len(a.ids) != len(b.ids) or (a.ids != b.ids).any():
-            return b.ids, b.poses, b.time
-        alpha = (time - a.time) / (b.time - a.time) if b.time > a.time else 1.0
-        poses = np.empty_like(b.poses)
-        poses[:, :3] = a.poses[:, :3] + (b.poses[:, :3] - a.poses[:, :3]) * alpha
-        poses[:, 3:] = slerp(a.poses[:, 3:], b.poses[:, 3:], alpha)
-        return b.ids, poses, time
+        b = frames[after]
+        a = frames[after - 1] if after > 0 else b
+        rows = np.zeros((len(b.ids), 13))
+        if a is b or len(a.ids) != len(b.ids) or (a.ids != b.ids).any() or b.time <= a.time:
+            rows[:, :7] = b.poses
+            return b.ids, rows, b.time
+        span = b.time - a.time
+        alpha = min(max((time - a.time) / span, 0.0), 1.0)
+        rows[:, :3] = a.poses[:, :3] + (b.poses[:, :3] - a.poses[:, :3]) * alpha
+        rows[:, 3:7] = slerp(a.poses[:, 3:], b.poses[:, 3:], alpha)
+        rows[:, 7:10] = (b.poses[:, :3] - a.poses[:, :3]) / span
+        rows[:, 10:13] = rotation_vector_between(a.poses[:, 3:], b.poses[:, 3:]) / span
+        return b.ids, rows, a.time + alpha * span
 
     def frame(self, number: int) -> Shown | None:
         """Frame ``number`` if it is still held."""
