@@ -23,6 +23,21 @@ log = logging.getLogger("colosseum.net")
 
 
 def serve(args: argparse.Namespace) -> int:
+    made = serving_engine(args)
+    if isinstance(made, int):
+        return made
+    engine, server, scene = made
+    try:
+        log.info("serving %s on %s (nodes join with: colosseum join %s --user NAME)",
+                 scene.content.folder, args.bind, args.bind)
+        return execute_run(engine, args, scene)
+    finally:
+        server.close()
+
+
+def serving_engine(args: argparse.Namespace) -> Any:
+    """(engine, bound server, scene) for ``serve``'s flags — the scene not yet in the
+    engine — or an exit code, the problem told."""
     from engine.net.keys import KeyProblem, server_keys
     from engine.net.protocol import content_fingerprint, endpoints, is_loopback
     from engine.net.server import NetError, NetServer
@@ -54,16 +69,12 @@ def serve(args: argparse.Namespace) -> int:
     except NetError as exc:
         return fail(str(exc), 1)
     try:
-        try:
-            engine = create_engine(config)
-        except BackendUnavailable as exc:
-            return fail(str(exc), 1)
-        engine.add_plugin(ServerPlugin(server))
-        log.info("serving %s on %s (nodes join with: colosseum join %s --user NAME)",
-                 scene.content.folder, args.bind, args.bind)
-        return execute_run(engine, args, scene)
-    finally:
+        engine = create_engine(config)
+    except BackendUnavailable as exc:
         server.close()
+        return fail(str(exc), 1)
+    engine.add_plugin(ServerPlugin(server))
+    return engine, server, scene
 
 
 def join(args: argparse.Namespace) -> int:

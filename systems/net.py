@@ -49,6 +49,7 @@ from engine.net.follow import Follower
 from engine.net.server import NetServer, Peer
 from engine.realtime import CostLog
 from engine.scene import SceneIds
+from engine.scene.factory import SpawnRecord
 from engine.services import ShaderControl, SoundControl, UniformValue
 from engine.system import ANY_COMPONENT, Phase, System
 
@@ -502,9 +503,15 @@ class FollowSystem(System):
         except SceneError as exc:
             self.messages.error(f"an object the server spawned cannot be made here: {exc}")
             return
+        made = []
         for net, es in zip(objects, spec.entities, strict=False):
+            entity = -1
             if net >= 0 and not es.skipped:
-                self.entity_of[int(net)] = engine.spawn(*es.components)
+                entity = self.entity_of[int(net)] = engine.spawn(*es.components)
+            made.append(entity)
+        # recorded as the server's scripts record it, so a saved state writes it too
+        ids.record(SpawnRecord(spec.db, spec.content_dir, made, []),
+                   engine.world.entity_exists)
         self._layout += 1
 
     def _sound(self, engine: Engine, sound: list[Any]) -> None:

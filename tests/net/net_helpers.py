@@ -6,6 +6,7 @@ import contextlib
 import json
 import os
 import re
+import signal
 import socket
 import subprocess
 import sys
@@ -46,7 +47,8 @@ class Processes:
         proc = subprocess.Popen(["timeout", "-s", "KILL", str(int(PROCESS_LIMIT)),
                                  sys.executable, "-m", "engine.cli", *map(str, args)],
                                 cwd=ROOT, stdout=out, stderr=subprocess.STDOUT,
-                                env={**os.environ, "PYTHONUNBUFFERED": "1"})
+                                env={**os.environ, "PYTHONUNBUFFERED": "1"},
+                                start_new_session=True)
         out.close()
         self.procs.append((proc, log))
         return proc
@@ -59,7 +61,7 @@ class Processes:
         try:
             return proc.wait(timeout)
         except subprocess.TimeoutExpired:
-            proc.kill()
+            self.signal(proc, signal.SIGKILL)
             raise AssertionError(f"process did not end in {timeout} s:\n{self.log(proc)}")
 
     def wait_log(self, proc: subprocess.Popen, pattern: str, timeout: float = 20.0) -> str:
@@ -68,10 +70,15 @@ class Processes:
                         timeout, f"{pattern!r} in the log of {proc.args}",
                         lambda: self.log(proc))
 
+    def signal(self, proc: subprocess.Popen, number: int) -> None:
+        """Signal the process and the one it runs (``timeout`` wraps each)."""
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, number)
+
     def close(self) -> None:
         for proc, _ in self.procs:
-            if proc.poll() is None:
-                proc.kill()
+            self.signal(proc, signal.SIGKILL)
+            with contextlib.suppress(subprocess.TimeoutExpired):
                 proc.wait(10)
 
 
@@ -123,3 +130,47 @@ def saved_time(scene_text: str) -> float:
     match = re.search(r"^\s*Time ([0-9.e+-]+)", scene_text, re.M)
     assert match, "the saved state has no World Time"
     return float(match.group(1))
+
+
+class LocalServer:
+    """``colosseum serve`` in this process, stepped by the test (its state inspectable)."""
+
+    def __init__(self, port: int, *flags: Any, content: Path = MULTIUSER) -> None:
+        from engine.cli import build_parser
+        from engine.cli_net import serving_engine
+
+        args = build_parser().parse_args([str(a) for a in serve_args(port, *flags,
+                                                                     content=content)])
+        made = serving_engine(args)
+        assert not isinstance(made, int), f"the server did not start (exit code {made})"
+        self.engine, self.server, scene = made
+        scene.instantiate(self.engine)
+        self.engine.start()
+
+    def step_until(self, predicate: Callable[[Any], Any], timeout: float, what: str) -> Any:
+        """Step frames (in real time) until ``predicate(engine)`` holds."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            self.engine.step()
+            value = predicate(self.engine)
+            if value:
+                return value
+        raise AssertionError(f"the server stepped {timeout} s and {what} did not happen")
+
+    def run_for(self, seconds: float) -> None:
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.engine.step()
+
+    def close(self) -> None:
+        self.engine.close()
+        self.server.close()
+
+
+@contextlib.contextmanager
+def local_server(port: int, *flags: Any, content: Path = MULTIUSER) -> Iterator[LocalServer]:
+    server = LocalServer(port, *flags, content=content)
+    try:
+        yield server
+    finally:
+        server.close()
