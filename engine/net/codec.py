@@ -52,6 +52,8 @@ class CodecError(ValueError):
 
 def _planes(array: np.ndarray) -> bytes:
     """The bytes of ``array`` (little-endian rows) as byte planes: byte 0 of every row, ..."""
+    if not len(array):
+        return b""
     raw = np.ascontiguousarray(array).view(np.uint8).reshape(len(array), -1)
     return raw.T.tobytes()
 
@@ -95,6 +97,13 @@ def _apply_change(before: np.ndarray, steps: np.ndarray, rotation: np.ndarray) -
 _CONJ = np.array([1.0, -1.0, -1.0, -1.0])
 
 
+def _from_key(exact: np.ndarray) -> np.ndarray:
+    """A keyframe's float32 poses as both ends hold them: float64, unit quaternions."""
+    poses = exact.astype(np.float64)
+    poses[:, 3:] /= np.linalg.norm(poses[:, 3:], axis=1, keepdims=True)
+    return poses
+
+
 class PoseCoder:
     """The server side: encodes each frame's poses against what the nodes hold."""
 
@@ -114,7 +123,7 @@ class PoseCoder:
         if self.key_wanted or len(ids) != len(self.ids) or (ids != self.ids).any():
             self.key_wanted = False
             exact = np.asarray(poses, np.float32)
-            self.ids, self.mirror = ids.copy(), exact.astype(np.float64)
+            self.ids, self.mirror = ids.copy(), _from_key(exact)
             body = _planes(_id_deltas(ids)[:, None]) + exact.tobytes()
             return _HEAD.pack(_KEY, self.seq, 0, len(ids)) + zlib.compress(body, 1)
         mirror = self.mirror
@@ -159,7 +168,7 @@ class PoseDecoder:
             raise CodecError(f"pose blob holds {len(body)} bytes, not {n} bodies")
         ids = np.cumsum(_unplanes(body, n, np.dtype("<u4"), 1)[:, 0], dtype=np.uint32)
         if kind == _KEY:
-            poses = np.frombuffer(body[4 * n:], "<f4").reshape(n, 7).astype(np.float64)
+            poses = _from_key(np.frombuffer(body[4 * n:], "<f4").reshape(n, 7))
             self.seq, self.ids, self.poses = seq, ids, poses
             return ids, poses.copy()
         where = np.searchsorted(self.ids, ids)

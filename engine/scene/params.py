@@ -34,12 +34,14 @@ class ParamError(ValueError):
     """A parameter that names no variable of the scene, or one that cannot be set."""
 
 
-def _variables(path: Path) -> dict[str, Entry]:
-    """The scene file's own top-level variables (the last definition of each)."""
+def _variables(path: Path) -> tuple[dict[str, Entry], set[int]]:
+    """The scene file's own top-level variables (the last definition of each), and the
+    lines holding more than one top-level entry."""
     db = parse_file(path, np.random.default_rng(0))
-    own = str(path)
-    return {e.key: e for e in db.root.entries
-            if e.key[:1].islower() and e.loc.path == own}
+    own = [e for e in db.root.entries if e.loc.path == str(path)]
+    lines = [e.loc.line for e in own]
+    return ({e.key: e for e in own if e.key[:1].islower()},
+            {line for line in lines if lines.count(line) > 1})
 
 
 def with_params(path: Path, params: dict[str, str]) -> str:
@@ -47,7 +49,7 @@ def with_params(path: Path, params: dict[str, str]) -> str:
     (text: a number or an expression). Raises ParamError naming a variable the file does
     not define (with the closest ones), SceneError when the file does not parse."""
     path = Path(path)
-    variables = _variables(path)
+    variables, shared = _variables(path)
     lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
     for key, value in params.items():
         entry = variables.get(key)
@@ -57,6 +59,9 @@ def with_params(path: Path, params: dict[str, str]) -> str:
             known = ", ".join(sorted(variables)) or "none"
             raise ParamError(f"no scene variable {key!r} in {path.as_posix()}{hint} "
                              f"(variables: {known})")
+        if entry.loc.line in shared:
+            raise ParamError(f"cannot set {key} in {path.as_posix()}:{entry.loc.line}: the "
+                             "line holds more than the variable; put it on a line of its own")
         line = lines[entry.loc.line - 1]
         start = entry.loc.col - 1
         comment = line.find("//", start)
@@ -65,14 +70,9 @@ def with_params(path: Path, params: dict[str, str]) -> str:
         lines[entry.loc.line - 1] = f"{line[:start]}{key} {value}{gap}{tail}"
     text = "".join(lines)
     try:
-        changed = parse_text(text, str(path), np.random.default_rng(0))
+        parse_text(text, str(path), np.random.default_rng(0))
     except SceneError as exc:
         bad = ", ".join(f"{k}={v}" for k, v in params.items())
         raise ParamError(f"{path.as_posix()} does not parse with {bad}: "
                          f"{exc.diagnostics[0].message}") from None
-    before = parse_file(path, np.random.default_rng(0))
-    if len(changed.root.entries) != len(before.root.entries):
-        keys = ", ".join(params)
-        raise ParamError(f"cannot set {keys} in {path.as_posix()}: its line holds more than "
-                         "the variable; put the variable on a line of its own")
     return text

@@ -62,7 +62,8 @@ class Processes:
             return proc.wait(timeout)
         except subprocess.TimeoutExpired:
             self.signal(proc, signal.SIGKILL)
-            raise AssertionError(f"process did not end in {timeout} s:\n{self.log(proc)}")
+            raise AssertionError(f"process did not end in {timeout} s:\n{self.log(proc)}"
+                                 ) from None
 
     def wait_log(self, proc: subprocess.Popen, pattern: str, timeout: float = 20.0) -> str:
         """Wait until the process logged a line matching ``pattern``; returns the log."""
@@ -106,8 +107,9 @@ def serve_args(port: int, *extra: Any, content: Path = MULTIUSER) -> list[Any]:
     return ["serve", content, "--bind", f"tcp://127.0.0.1:{port}", *extra]
 
 
-def join_args(port: int, user: str, *extra: Any) -> list[Any]:
-    return ["join", f"tcp://127.0.0.1:{port}", "--user", user, "--headless", *extra]
+def join_args(port: int, user: str, *extra: Any, path: Path | None = None) -> list[Any]:
+    return ["join", f"tcp://127.0.0.1:{port}", *([] if path is None else [path]),
+            "--user", user, "--headless", *extra]
 
 
 def stats(path: Path) -> dict[str, Any]:

@@ -65,7 +65,7 @@ def test_two_nodes_follow_the_server_and_lift_the_crate_together(tmp_path: Path)
             send_tracker(clients["alice"], -0.6, 0.25 + lift)
             send_tracker(clients["bob"], 0.6, 0.25 + lift)
             time.sleep(1 / 60)
-        for user, node in nodes.items():
+        for node in nodes.values():
             assert procs.wait(node, 30) == 0, procs.log(node)
         assert procs.wait(server, 30) == 0, procs.log(server)
 
