@@ -28,7 +28,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from collections import Counter
+from collections import Counter, deque
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -377,6 +377,8 @@ class FollowSystem(System):
         self.follower = Follower(delay=1.5 * float(welcome.get("dt") or 1 / 60))
         self.entity_of: dict[int, int] = {}
         self.shown_frame = -1
+        #: The server frames a display drew, newest last (the frame lock's record).
+        self.shown_frames: deque[int] = deque(maxlen=3600)
         self.shown_time = float(welcome.get("time", 0.0))
         self.counts: Counter[str] = Counter()
         self.latency = CostLog()
@@ -551,6 +553,7 @@ class FollowSystem(System):
             rows[:, :7] = shown.poses
             self.counts["stale"] += max(newest.frame - shown.frame, 0)
             self.shown_frame = shown.frame
+            self.shown_frames.append(shown.frame)
         else:
             server_time = follower.server_time(wall)
             assert server_time is not None
@@ -597,6 +600,7 @@ class FollowSystem(System):
                 self.client.malformed, "resyncs": self.counts["resyncs"],
                 "barrier_misses": self.counts["barrier misses"],
                 "shown_frame": self.shown_frame, "shown_time": self.shown_time,
+                "shown_frames": list(self.shown_frames),
                 "latency_ms_p50": self.latency.percentile(50) * 1e3,
                 "latency_ms_p99": self.latency.percentile(99) * 1e3}
 

@@ -31,6 +31,7 @@ from components import (
     Camera,
     ClipSpec,
     Controller,
+    Display,
     Hand,
     Hold,
     Joint,
@@ -135,6 +136,7 @@ class SceneSpec:
     #: The scene's random generator when a saved state was written (see random_state).
     random_state: dict[str, object] | None = None
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
+    display_heads: dict[str, str] = field(default_factory=dict)  # display ID -> object ID
     #: Object ID -> sleep-rule state a saved state carries (see :class:`SleepState`).
     sleep: dict[str, SleepState] = field(default_factory=dict)
     content_dir: Path | None = None
@@ -750,6 +752,14 @@ class _Builder:
                          eye_separation=float(r("EyeSeparation")))
             spec.entities.append(EntitySpec(cid, [Name(cid), Transform(r("Position")), cam],
                                             b.loc))
+        for b in root.blocks("Display"):
+            r = _Reader(b, "Display")
+            display = Display(_floats(r("LowerLeft")), _floats(r("LowerRight")),
+                              _floats(r("UpperLeft")), None, r("Tracker"), _floats(r("Eye")),
+                              float(r("Near")), float(r("Far")))
+            if r.has("Head"):
+                spec.display_heads[r("ID")] = r("Head")
+            spec.entities.append(EntitySpec(r("ID"), [Name(r("ID")), display], b.loc))
         for i, b in enumerate(root.blocks("Light")):
             r = _Reader(b, "Light")
             lid = r("ID") or f"light{i}"
@@ -899,6 +909,9 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     for cam_id, target in spec.camera_follow.items():
         cam = engine.world.component_for_entity(ids[cam_id], Camera)
         cam.follow = ids[target]
+    for display_id, head in spec.display_heads.items():
+        if head in ids:
+            engine.world.component_for_entity(ids[display_id], Display).head = ids[head]
     joints: dict[str, int] = {}
     for js in spec.joints:
         if js.skipped:
