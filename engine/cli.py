@@ -162,6 +162,30 @@ def build_parser() -> argparse.ArgumentParser:
                       help="seconds without frames before the server counts as gone")
     add_run_flags(join, JOIN_FLAGS)
 
+    sweep = sub.add_parser("sweep", help="run a content folder many times over parameters "
+                           "and seeds on Dask; one results table and a plot")
+    sweep.add_argument("path", help="content folder or .scene file")
+    sweep.add_argument("--param", action="append", default=[], metavar="KEY=v1,v2,...",
+                       help="a scene variable and the values it takes (repeatable: every "
+                            "combination runs)")
+    sweep.add_argument("--seeds", default="0", metavar="A..B",
+                       help="seeds of each combination: A..B, N or N,M (default: 0)")
+    sweep_limit = sweep.add_mutually_exclusive_group()
+    sweep_limit.add_argument("--frames", type=_positive(int), help="frames each run takes")
+    sweep_limit.add_argument("--seconds", type=_positive(float),
+                             help="simulated seconds each run takes")
+    sweep.add_argument("--out", type=Path, required=True, metavar="DIR",
+                       help="where results.csv and results.png go")
+    sweep.add_argument("--scheduler", metavar="ADDRESS",
+                       help="a running Dask scheduler (tcp://HOST:8786); default: a "
+                            "LocalCluster on this machine")
+    sweep.add_argument("--workers", type=_positive(int), default=2,
+                       help="worker processes of the LocalCluster (default: 2)")
+    sweep.add_argument("--backend", choices=list(BackendName), default=None,
+                       help="dynamics backend (default: the scene's)")
+    sweep.add_argument("--dt", type=_positive(float), default=None,
+                       help="physics time step (s)")
+
     keygen = sub.add_parser("keygen", help="make CURVE keys for serve --key and join --key")
     keygen.add_argument("folder", type=Path)
     keygen.add_argument("--user", action="append", default=[], help="a user (repeatable)")
@@ -292,6 +316,12 @@ def cmd_join(args: argparse.Namespace) -> int:
     return join(args)
 
 
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from engine.sweep import sweep
+
+    return sweep(args)
+
+
 def cmd_keygen(args: argparse.Namespace) -> int:
     from engine.cli_net import keygen
 
@@ -302,6 +332,7 @@ COMMANDS = {
     "run": cmd_run,
     "serve": cmd_serve,
     "join": cmd_join,
+    "sweep": cmd_sweep,
     "keygen": cmd_keygen,
     "check": cmd_check,
     "fmt": cmd_fmt,

@@ -25,6 +25,7 @@ PLUGINS: dict[str, str] = {
     "sound": "systems.sound:SoundPlugin",
     "input": "systems.input:InputPlugin",
     "avatars": "systems.avatars:AvatarsPlugin",
+    "measures": "systems.measures:MeasuresPlugin",
 }
 ALIASES: dict[str, str] = {"osg": "render", "osgsim": "render", "openalpp": "sound",
                            "openal": "sound", "ode": "physics", "dynamics": "physics"}
@@ -62,7 +63,7 @@ def wants_render(config: EngineConfig) -> bool:
 def default_plugins(config: EngineConfig) -> list[Plugin]:
     plugins = [RegistryPlugin(), *(load_plugin(name) for name in
                                    ("input", "physics", "scripting", "controllers", "sound",
-                                    "avatars"))]
+                                    "avatars", "measures"))]
     if wants_render(config):
         plugins.append(load_plugin("render"))
     return plugins

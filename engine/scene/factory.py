@@ -49,6 +49,7 @@ from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from components.script import SavedScript, ScriptHandler, ScriptTimer
 from engine.assets import AssetError, Assets
 from engine.assets.geometry import convex_hull
+from engine.measures import MeasureSpec
 from engine.physics.backend import MaterialPair, SleepState, WorldSettings
 from engine.physics.commands import SetSleepState
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
@@ -147,6 +148,8 @@ class SceneSpec:
     assets: Assets | None = None
     #: The ``Input`` and ``Output`` blocks (devices, calibration, published values).
     input: InputSpec = field(default_factory=InputSpec)
+    #: The ``Measure`` blocks: values the run reports at its end.
+    measures: list[MeasureSpec] = field(default_factory=list)
 
 
 @dataclass(slots=True)
@@ -752,6 +755,9 @@ class _Builder:
                          eye_separation=float(r("EyeSeparation")))
             spec.entities.append(EntitySpec(cid, [Name(cid), Transform(r("Position")), cam],
                                             b.loc))
+        for b in root.blocks("Measure"):
+            r = _Reader(b, "Measure")
+            spec.measures.append(MeasureSpec(r("ID"), r("Object"), r("Value")))
         for b in root.blocks("Display"):
             r = _Reader(b, "Display")
             display = Display(_floats(r("LowerLeft")), _floats(r("LowerRight")),
