@@ -139,9 +139,14 @@ STATS_SCHEMA: dict[str, Any] = {
                     "frames_sent": _key("integer", "", "server: frames published"),
                     "bytes_sent": _key("integer", "B", "server: bytes published (each "
                                        "node receives them all)"),
-                    "publish_ms_mean": _key("number", "ms", "server: mean time to gather, "
-                                            "encode and publish a frame"),
+                    "publish_ms_mean": _key("number", "ms", "server: mean time its frame "
+                                            "spent gathering a frame for the sender"),
                     "publish_ms_p99": _key("number", "ms", "server: 99th percentile of it"),
+                    "send_ms_mean": _key("number", "ms", "server: mean time its sender "
+                                         "thread took to encode and send a frame"),
+                    "send_ms_p99": _key("number", "ms", "server: 99th percentile of it"),
+                    "frames_merged": _key("integer", "", "server: frames that took the "
+                                          "place of one the sender had not sent yet"),
                     "inputs": _key("integer", "", "server: input messages from nodes"),
                     "refused": _key("integer", "", "server: nodes refused at hello"),
                     "oversized": _key("integer", "", "server: messages over the size "

@@ -44,7 +44,7 @@ from engine.input.record import FrameInput, event_from_record, event_record
 from engine.messages import MessageLog
 from engine.net import protocol
 from engine.net.client import NetClient
-from engine.net.codec import CodecError, Gap, PoseCoder, PoseDecoder
+from engine.net.codec import CodecError, Gap, PoseDecoder
 from engine.net.follow import Follower
 from engine.net.server import NetServer, Peer
 from engine.realtime import CostLog
@@ -192,7 +192,6 @@ class PublishSystem(System):
 
     def __init__(self, server: NetServer) -> None:
         self.server = server
-        self.coder = PoseCoder()
         self.events = FrameEvents()
         self.contacts = ContactSoundFilter()
         #: entity -> net id, for every replicated entity; and the ids sorted with their
@@ -250,17 +249,12 @@ class PublishSystem(System):
         self._contact_sounds(engine)
         self._custom(engine)
         server = self.server
+        events = self.events.take()
         if server.peers:
-            if server.key_wanted or engine.frame % KEY_EVERY == 0:
-                self.coder.key_wanted, server.key_wanted = True, False
             ids, poses = self._poses(engine)
-            header = protocol.state_header(server.epoch, engine.frame,
-                                           engine.physics.snapshot.time, time.time(),
-                                           self.events.take())
-            server.publish(header, self.coder.encode(ids, poses))
+            server.submit(engine.frame, engine.physics.snapshot.time, ids, poses, events,
+                          key=engine.frame % KEY_EVERY == 0)
             server.barrier()
-        else:
-            self.events.take()
         self.publish_costs.add(time.perf_counter() - t0)
 
     def _poses(self, engine: Engine) -> tuple[np.ndarray, np.ndarray]:
@@ -278,7 +272,7 @@ class PublishSystem(System):
                 self._layout += 1
                 return self._poses(engine)
             self._rows = (self._layout, poses.version, rows)
-        return self._ids, poses.table[self._rows[2], :7]
+        return self._ids, poses.table[self._rows[2], :7]  # a copy: the sender's own
 
     def _spawn_records(self, engine: Engine) -> None:
         """Objects a script spawned since the last frame go out as their scene text."""

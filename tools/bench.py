@@ -30,6 +30,8 @@ BENCHMARKS: dict[str, str] = {
     "input": "tools.bench_input:run_bench",
     "contacts": "tools.bench:bench_contacts",
     "avatars": "tools.bench_avatars:run_bench",
+    "net": "tools.bench_net:run_bench",
+    "sweep": "tools.bench_sweep:run_bench",
 }
 
 
@@ -85,6 +87,19 @@ def _input_figures(rows: list[dict[str, Any]]) -> list[Figure]:
                    "python-osc's own server on the same stream")]
 
 
+def _net_figures(rows: list[dict[str, Any]]) -> list[Figure]:
+    out = []
+    for r in rows:
+        n = r["nodes"]
+        out += [Figure(f"{n} node(s): latency p99", r["latency p99 ms"], r["bare zmq p99 ms"],
+                       "ms", "a bare pyzmq PUB/SUB of the same bytes to as many processes"),
+                Figure(f"{n} node(s): bytes/s per node", r["bytes/s per node"],
+                       r["float32 bytes/s"], "B/s", "the bodies as plain float32 arrays"),
+                Figure(f"{n} node(s): server frame", r["server ms/frame"], r["alone ms/frame"],
+                       "ms/frame", "the same server with no node")]
+    return out
+
+
 #: benchmark -> how its rows become figures (ours beside the reference).
 FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "scheduler": _by_row(lambda r: f"{r['mode']}, {r['systems']} systems", "ms/frame",
@@ -102,6 +117,9 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "avatars": lambda rows: [Figure(f"{r['avatars']} avatars, {r['case']}", r["ms_per_frame"],
                                     r["reference_ms"], "ms/frame", r["reference"])
                              for r in rows if r["ms_per_frame"] > 0],
+    "net": _net_figures,
+    "sweep": _by_row(lambda r: f"{r['runs']} runs on {r['workers']} Dask workers",
+                     "runs/min", "loop runs/min", "runs/min", "the same runs in a plain loop"),
 }
 
 

@@ -179,6 +179,11 @@ class NetClient:
         except MessageError:
             self.malformed += 1
 
+    def wait(self, timeout: float) -> bool:
+        """Block until a message is there to :meth:`receive` (at most ``timeout`` s)."""
+        assert self._sub is not None
+        return bool(self._held) or bool(self._sub.poll(int(timeout * 1000)))
+
     def wait_barrier(self, frame: int, wait: float) -> int | None:
         """Tell the server this display is ready to draw ``frame`` and wait (at most
         ``wait`` s) for the frame every display holds; None when the wait ran out.

@@ -16,17 +16,21 @@ from __future__ import annotations
 
 import logging
 import os
+import threading
 import time
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
 import zmq
 
 from engine.net import protocol
+from engine.net.codec import PoseCoder
 from engine.net.keys import ServerKeys
 from engine.net.protocol import MessageError
+from engine.realtime import CostLog
 
 log = logging.getLogger("colosseum.net")
 
@@ -61,8 +65,28 @@ class Peer:
     ready: int | None = None
 
 
+@dataclass(slots=True)
+class Outgoing:
+    """A frame handed to the sender thread: the bodies' poses and the frame's events."""
+
+    frame: int
+    time: float
+    sent: float
+    ids: np.ndarray
+    poses: np.ndarray
+    events: dict[str, list[Any]]
+    key: bool
+
+
 class NetServer:
-    """The state and control sockets of ``colosseum serve``."""
+    """The state and control sockets of ``colosseum serve``.
+
+    Frames are encoded and sent by a thread of their own (:meth:`submit` hands one over
+    and returns), so the server's frame pays only for gathering its poses; encoding runs
+    beside the next physics step. When the sender is still busy with a frame, the next
+    one takes its place and their events are joined: poses are encoded against what the
+    nodes hold, so a frame skipped so never breaks their chain.
+    """
 
     def __init__(self, address: str, content: str, keys: ServerKeys | None = None,
                  timeout: float = 2.0, clock: Callable[[], float] = time.monotonic) -> None:
@@ -83,12 +107,21 @@ class NetServer:
         self.joined: list[Peer] = []
         #: Returns (state text, object ID -> net id, frame, time) for a node that asks.
         self.full_state: Callable[[], dict[str, Any]] = lambda: {}
-        #: Set when a node asked for a keyframe (it missed a frame, or just came).
+        #: Set when a node asked for a keyframe (it missed a frame, or just came); the next
+        #: frame submitted is one.
         self.key_wanted = False
         self.counts: Counter[str] = Counter()
         self.bytes_sent = 0
         self.frames_sent = 0
         self._barrier_since: float | None = None
+        self.coder = PoseCoder()
+        #: Wall seconds the sender thread spent encoding and sending each frame.
+        self.send_costs = CostLog()
+        self._outgoing: Outgoing | None = None
+        self._releases: list[int] = []
+        self._wake = threading.Condition()
+        self._stopping = False
+        self._sender: threading.Thread | None = None
         self._ctx: zmq.Context | None = None
         self._auth: Any = None
         self._pub: zmq.Socket | None = None
@@ -109,6 +142,9 @@ class NetServer:
         self._pub.sndhwm = STATE_QUEUE
         self._router = self._socket(zmq.ROUTER, control_at)
         self._router.setsockopt(zmq.ROUTER_MANDATORY, 0)
+        self._sender = threading.Thread(target=self._send_loop, name="colosseum-net-send",
+                                        daemon=True)
+        self._sender.start()
 
     def _socket(self, kind: int, endpoint: str) -> zmq.Socket:
         assert self._ctx is not None
@@ -132,6 +168,12 @@ class NetServer:
         return sock
 
     def close(self) -> None:
+        if self._sender is not None:
+            with self._wake:
+                self._stopping = True
+                self._wake.notify()
+            self._sender.join(5.0)
+            self._sender = None
         for sock in (self._pub, self._router):
             if sock is not None:
                 sock.close(0)
@@ -243,16 +285,54 @@ class NetServer:
         except zmq.Again:
             self.counts["replies dropped"] += 1
 
-    def publish(self, header: bytes, poses: bytes) -> None:
-        """Send one frame's state to every node (never blocks)."""
+    def submit(self, frame: int, time_: float, ids: np.ndarray, poses: np.ndarray,
+               events: dict[str, list[Any]], key: bool = False) -> None:
+        """Hand a frame to the sender thread (``poses`` must not change afterwards);
+        returns at once. ``key``: send every body (a keyframe)."""
+        key = key or self.key_wanted
+        self.key_wanted = False
+        with self._wake:
+            waiting = self._outgoing
+            if waiting is not None:  # the sender is behind: this frame takes its place
+                self.counts["frames merged"] += 1
+                for name, items in waiting.events.items():
+                    events[name] = [*items, *events.get(name, ())]
+                key = key or waiting.key
+            self._outgoing = Outgoing(frame, time_, time.time(), ids, poses, events, key)
+            self._wake.notify()
+
+    def _send_loop(self) -> None:
+        while True:
+            with self._wake:
+                while self._outgoing is None and not self._releases and not self._stopping:
+                    self._wake.wait()
+                if self._stopping:
+                    return
+                out, self._outgoing = self._outgoing, None
+                releases, self._releases = self._releases, []
+            for frame in releases:
+                self._send([protocol.BARRIER, protocol.encode({"frame": frame})])
+            if out is not None:
+                t0 = time.perf_counter()
+                if out.key:
+                    self.coder.key_wanted = True
+                poses = self.coder.encode(out.ids, out.poses)
+                header = protocol.state_header(self.epoch, out.frame, out.time, out.sent,
+                                               out.events)
+                if self._send([protocol.STATE, header, poses]):
+                    self.frames_sent += 1
+                    self.bytes_sent += len(header) + len(poses) + 1
+                self.send_costs.add(time.perf_counter() - t0)
+
+    def _send(self, frames: list[bytes]) -> bool:
+        """Send on the state socket (the sender thread's alone); never blocks."""
         assert self._pub is not None
         try:
-            self._pub.send_multipart([protocol.STATE, header, poses], zmq.NOBLOCK, copy=False)
+            self._pub.send_multipart(frames, zmq.NOBLOCK, copy=False)
         except zmq.Again:
             self.counts["frames dropped"] += 1
-            return
-        self.frames_sent += 1
-        self.bytes_sent += len(header) + len(poses) + 1
+            return False
+        return True
 
     def barrier(self) -> int | None:
         """Release the displays waiting at the swap barrier: when each one is ready (or
@@ -273,12 +353,9 @@ class NetServer:
         for peer in displays:
             peer.ready = None
         self._barrier_since = None
-        assert self._pub is not None
-        try:
-            self._pub.send_multipart([protocol.BARRIER, protocol.encode({"frame": frame})],
-                                     zmq.NOBLOCK)
-        except zmq.Again:
-            self.counts["frames dropped"] += 1
+        with self._wake:
+            self._releases.append(frame)
+            self._wake.notify()
         return frame
 
     def stats(self) -> dict[str, Any]:
@@ -286,4 +363,7 @@ class NetServer:
                 "frames_sent": self.frames_sent, "bytes_sent": self.bytes_sent,
                 "malformed": self.counts["malformed"], "oversized": self.counts["oversized"],
                 "refused": self.counts["refused"], "inputs": self.counts["input"],
-                "barrier_timeouts": self.counts["barrier timeouts"]}
+                "barrier_timeouts": self.counts["barrier timeouts"],
+                "send_ms_mean": self.send_costs.mean() * 1e3,
+                "send_ms_p99": self.send_costs.percentile(99) * 1e3,
+                "frames_merged": self.counts["frames merged"]}
