@@ -205,10 +205,9 @@ class PublishSystem(System):
         self._announced: set[int] = set()  # spawned entities whose record went out
         self.publish_costs = CostLog()
         self.messages = MessageLog(log)
-        self._engine: Engine | None = None
+        self._full: tuple[int, dict[str, Any]] | None = None
 
     def setup(self, engine: Engine) -> None:
-        self._engine = engine
         sound = engine.try_resource(SoundControl)  # type: ignore[type-abstract]
         engine.insert_resource(SoundRelay(sound, self), as_type=SoundControl)
         shader = engine.try_resource(ShaderControl)  # type: ignore[type-abstract]
@@ -324,15 +323,19 @@ class PublishSystem(System):
 
     def full_state(self, engine: Engine) -> dict[str, Any]:
         """What a node builds its world from: the saved-state text and which object ID is
-        which net id."""
+        which net id (made once a frame however many nodes ask)."""
         from engine.scene.snapshot import write_state
 
+        if self._full is not None and self._full[0] == engine.frame:
+            return self._full[1]
         written: dict[int, str] = {}
         text = write_state(engine, None, written)
         names = {name: self.net_of[e] for e, name in written.items() if e in self.net_of}
         folder = engine.config.content_dir
-        return {"text": text, "names": names, "frame": engine.frame, "time": engine.time,
-                "dt": engine.config.dt, "content_dir": None if folder is None else str(folder)}
+        state = {"text": text, "names": names, "frame": engine.frame, "time": engine.time,
+                 "dt": engine.config.dt, "content_dir": None if folder is None else str(folder)}
+        self._full = (engine.frame, state)
+        return state
 
     def stats(self) -> dict[str, Any]:
         return {**self.server.stats(), "replicated": len(self.net_of),

@@ -238,6 +238,7 @@ class NetClient:
 
     def close(self) -> None:
         if self._dealer is not None and self.epoch is not None:
+            self._dealer.linger = 200  # long enough for the bye to leave
             self.send({"type": "bye"})
         self._close_sockets()
         self._ctx.term()
@@ -247,5 +248,5 @@ class NetClient:
             self._dealer.disable_monitor()
         for sock in (self._monitor, self._sub, self._dealer):
             if sock is not None:
-                sock.close(0)
+                sock.close()
         self._dealer = self._sub = self._monitor = None

@@ -2,8 +2,10 @@
 
 A *keyframe* carries every replicated body's pose as float32 (position, orientation
 ``w x y z``). Each frame after it carries only the bodies that moved since the frame
-before, each as its change: the position in steps of :data:`POSITION_STEP` m (int32) and
-the rotation ``conj(q_before) ⊗ q`` as three int16 components (``w`` implied, >= 0).
+before, each as its change: the position in steps of :data:`POSITION_STEP` m and the
+rotation ``conj(q_before) ⊗ q`` as three components in steps of 1/:data:`ROTATION_SCALE`
+(``w`` implied, >= 0) — sent as the difference from the body's change the frame before,
+which a body moving or spinning steadily makes nearly 0.
 The server encodes every change from what the nodes will have decoded (it keeps their
 copy, :attr:`PoseCoder.mirror`), so rounding never adds up over frames, and a body that
 came to rest is sent until the nodes hold its exact resting pose (to a step).
@@ -104,6 +106,16 @@ def _from_key(exact: np.ndarray) -> np.ndarray:
     return poses
 
 
+def _predicted(last: np.ndarray, moved: np.ndarray, change: np.ndarray) -> np.ndarray:
+    """What is sent of each moved body's change: its difference from the body's change the
+    frame before (0 for a body that did not move then), which is about 0 for anything
+    moving steadily. ``last`` becomes this frame's changes."""
+    residual = change - last[moved]
+    last[:] = 0.0
+    last[moved] = change
+    return residual
+
+
 class PoseCoder:
     """The server side: encodes each frame's poses against what the nodes hold."""
 
@@ -112,6 +124,7 @@ class PoseCoder:
         #: The replicated bodies' ids (sorted) and poses as the nodes decode them.
         self.ids = np.zeros(0, np.uint32)
         self.mirror = np.zeros((0, 7))
+        self.last = np.zeros((0, 6))
         self.key_wanted = True
 
     def encode(self, ids: np.ndarray, poses: np.ndarray) -> bytes:
@@ -124,6 +137,7 @@ class PoseCoder:
             self.key_wanted = False
             exact = np.asarray(poses, np.float32)
             self.ids, self.mirror = ids.copy(), _from_key(exact)
+            self.last = np.zeros((len(ids), 6))
             body = _planes(_id_deltas(ids)[:, None]) + exact.tobytes()
             return _HEAD.pack(_KEY, self.seq, 0, len(ids)) + zlib.compress(body, 1)
         mirror = self.mirror
@@ -131,11 +145,10 @@ class PoseCoder:
         turn = _turn(mirror[:, 3:], poses[:, 3:7])
         rotation = np.rint(turn[:, 1:] * ROTATION_SCALE)
         moved = np.flatnonzero((steps != 0).any(axis=1) | (rotation != 0).any(axis=1))
-        steps = np.clip(steps[moved], -2**31, 2**31 - 1)
-        rotation = rotation[moved]
-        mirror[moved] = _apply_change(mirror[moved], steps, rotation)
-        body = (_planes(_id_deltas(ids[moved])[:, None]) + _planes(steps.astype("<i4"))
-                + _planes(rotation.astype("<i2")))
+        change = np.column_stack([np.clip(steps[moved], -2**30, 2**30), rotation[moved]])
+        mirror[moved] = _apply_change(mirror[moved], change[:, :3], change[:, 3:])
+        residual = _predicted(self.last, moved, change)
+        body = _planes(_id_deltas(ids[moved])[:, None]) + _planes(residual.astype("<i4"))
         return _HEAD.pack(_DELTA, self.seq, self.seq - 1, len(moved)) + zlib.compress(body, 1)
 
 
@@ -146,6 +159,7 @@ class PoseDecoder:
         self.seq = -1
         self.ids = np.zeros(0, np.uint32)
         self.poses = np.zeros((0, 7))
+        self.last = np.zeros((0, 6))
 
     def decode(self, blob: bytes | memoryview) -> tuple[np.ndarray, np.ndarray]:
         """The ids the message names and their poses now (float64). Raises :class:`Gap`
@@ -156,7 +170,7 @@ class PoseDecoder:
         kind, seq, ref, n = _HEAD.unpack_from(blob)
         if kind == _DELTA and ref != self.seq:
             raise Gap(f"change {seq} is on top of {ref}; this node holds {self.seq}")
-        row = 4 + (28 if kind == _KEY else 18)
+        row = 4 + (28 if kind == _KEY else 24)
         if kind not in (_KEY, _DELTA) or n > (1 << 24):
             raise CodecError(f"pose blob of unknown kind {kind} or size {n}")
         try:
@@ -170,13 +184,16 @@ class PoseDecoder:
         if kind == _KEY:
             poses = _from_key(np.frombuffer(body[4 * n:], "<f4").reshape(n, 7))
             self.seq, self.ids, self.poses = seq, ids, poses
+            self.last = np.zeros((n, 6))
             return ids, poses.copy()
         where = np.searchsorted(self.ids, ids)
         if len(ids) and (where.max() >= len(self.ids) or (self.ids[where] != ids).any()):
             raise CodecError("a change names bodies its keyframe does not hold")
-        steps = _unplanes(body[4 * n:], n, np.dtype("<i4"), 3).astype(np.float64)
-        rotation = _unplanes(body[16 * n:], n, np.dtype("<i2"), 3).astype(np.float64)
-        after = _apply_change(self.poses[where], steps, rotation)
+        residual = _unplanes(body[4 * n:], n, np.dtype("<i4"), 6).astype(np.float64)
+        change = residual + self.last[where]
+        self.last[:] = 0.0
+        self.last[where] = change
+        after = _apply_change(self.poses[where], change[:, :3], change[:, 3:])
         self.poses[where] = after
         self.seq = seq
         return ids, after

@@ -61,12 +61,7 @@ def decode_request(frames: list[bytes]) -> dict[str, Any]:
     raw = frames[0]
     if len(raw) > MAX_MESSAGE:
         raise MessageError(f"request of {len(raw)} bytes is over the {MAX_MESSAGE} limit")
-    try:
-        message = json.loads(raw)
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise MessageError(f"request is not JSON ({exc})") from None
-    if not isinstance(message, dict):
-        raise MessageError("a request must be a JSON object")
+    message = decode_json(raw)
     kind = message.get("type")
     if kind not in REQUESTS:
         raise MessageError(f"unknown request type {kind!r} (known: {', '.join(REQUESTS)})")
@@ -77,7 +72,7 @@ def decode_request(frames: list[bytes]) -> dict[str, Any]:
 
 
 def decode_json(raw: bytes) -> dict[str, Any]:
-    """A JSON object the server sent (a reply, a frame's header)."""
+    """A JSON object (a request, a reply, a frame's header)."""
     try:
         message = json.loads(raw)
     except (ValueError, UnicodeDecodeError) as exc:

@@ -12,6 +12,7 @@ from pythonosc.udp_client import SimpleUDPClient
 
 from engine.net.codec import POSITION_STEP
 from tests.net.net_helpers import (
+    ROOT,
     free_port,
     join_args,
     object_block,
@@ -89,3 +90,24 @@ def test_two_nodes_follow_the_server_and_lift_the_crate_together(tmp_path: Path)
     assert abs(crate["Quaternion"][0]) == pytest.approx(1.0, abs=1e-3)
     served = stats(tmp_path / "server.json")["net"]
     assert served["inputs"] > 50 and served["malformed"] == 0, served
+
+
+@pytest.mark.slow
+def test_a_node_plays_the_servers_sounds(tmp_path: Path) -> None:
+    """The demo's ball knocks on the ground on the server; the node, with no physics of
+    its own, plays those knocks into its own mix."""
+    import soundfile
+
+    port = free_port()
+    demo = ROOT / "content" / "demo"
+    with processes(tmp_path) as procs:
+        server = procs.start("server", *serve_args(port, "--seconds", 8, content=demo))
+        procs.wait_log(server, "serving")
+        node = procs.start("node", *join_args(port, "ear", "--frames", 300, "--sound",
+                                              f"wave:{tmp_path / 'mix.wav'}", "--stats",
+                                              tmp_path / "ear.json"))
+        assert procs.wait(node, 40) == 0, procs.log(node)
+    heard = stats(tmp_path / "ear.json")["sound"]
+    assert heard["contact_sounds"] > 0 and heard["played"] > 0, heard
+    mix, _ = soundfile.read(tmp_path / "mix.wav")
+    assert float(abs(mix).max()) > 0.01
