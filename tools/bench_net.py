@@ -12,8 +12,10 @@ what the network costs, not drawing. Rows, per node count:
   most 5 % slower with 8 nodes;
 * ``bytes/s per node``: what each node received, beside the bodies as plain float32
   arrays (a uint32 id and seven float32 per body per frame): the goal is 1 MB/s;
-* ``latency p50/p99``: from the server's send to the node holding the decoded frame
-  (both clocks are this machine's), beside a bare pyzmq PUB/SUB of the same number of
+* ``publish ms`` is what the server's frame spends handing a frame over, ``send ms``
+  what its sender thread spends encoding and sending it (beside the next frame);
+* ``latency p50/p99``: from the end of the server's frame to the node holding the decoded
+  frame (both clocks are this machine's), beside a bare pyzmq PUB/SUB of the same number of
   bytes at the same rate to the same number of receiving processes: the goal is a p99 of
   2 ms.
 """
@@ -156,6 +158,7 @@ def _window(engine: Any, seconds: float) -> float:
 def run_bench(quick: bool = False) -> list[dict[str, Any]]:
     from engine.cli import build_parser
     from engine.cli_net import serving_engine
+    from engine.realtime import CostLog
 
     counts = (1, 4) if quick else (1, 4, 8)
     seconds = 2.0 if quick else 4.0
@@ -187,7 +190,9 @@ def run_bench(quick: bool = False) -> list[dict[str, Any]]:
                     engine.step()
                 _window(engine, 0.5)  # every node past its first keyframe
                 sent_before = server.bytes_sent
+                server.send_costs = CostLog()
                 with_nodes = _window(engine, seconds)
+                send_ms = server.send_costs.mean() * 1e3
                 frame_bytes = (server.bytes_sent - sent_before) / max(seconds * RATE, 1)
                 results = [out.get(timeout=60) for _ in procs]
                 for proc in procs:
@@ -202,6 +207,7 @@ def run_bench(quick: bool = False) -> list[dict[str, Any]]:
                     "server ms/frame": with_nodes, "alone ms/frame": alone,
                     "slowdown %": (with_nodes / alone - 1) * 100,
                     "publish ms": engine.stat_sources["net"]()["publish_ms_mean"],
+                    "send ms": send_ms,
                     "bytes/s per node": received,
                     "float32 bytes/s": n * 32 * RATE,
                     "latency p50 ms": float(np.percentile(latencies, 50)),
