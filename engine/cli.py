@@ -212,7 +212,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="benchmarks, printed as tables")
     bench.add_argument("what", nargs="?", default="scheduler",
                        help="scheduler, physics, scene, scripting, sound, render, input, "
-                            "contacts, avatars")
+                            "contacts, avatars, net, sweep")
     bench.add_argument("--backend", default=None, help="physics benchmark backend (ode, pymunk)")
     bench.add_argument("--quick", action="store_true", help="fewer sizes and steps")
     bench.add_argument("--json", nargs="?", const="-", metavar="FILE",

@@ -145,7 +145,10 @@ def _distribute(scene: str, runs: list[tuple[dict[str, str], int]],
 
     from engine.progress import on_terminal, progress
 
+    # one run per worker thread at a time (none queued on it), so a worker that dies takes
+    # down only the run it was running, which is retried once
     with dask.config.set({"distributed.scheduler.allowed-failures": 1,
+                          "distributed.scheduler.worker-saturation": 1.0,
                           "distributed.worker.daemon": False,
                           "distributed.logging.distributed": "error"}):
         if args.scheduler:
