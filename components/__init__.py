@@ -12,7 +12,7 @@ from components.avatar import Avatar, ClipSpec, Hold
 from components.camera import Camera
 from components.controller import Controller
 from components.display import Display
-from components.hand import Hand
+from components.hand import Graspable, Hand, HandState
 from components.joint import Joint
 from components.light import Light
 from components.name import Name
@@ -21,6 +21,7 @@ from components.script import Script
 from components.shape import Shape
 from components.sound import Sound
 from components.transform import Transform
+from components.trigger import Trigger
 from components.visual import Visual
 
 __all__ = [
@@ -29,7 +30,9 @@ __all__ = [
     "ClipSpec",
     "Controller",
     "Display",
+    "Graspable",
     "Hand",
+    "HandState",
     "Hold",
     "Joint",
     "Light",
@@ -40,5 +43,6 @@ __all__ = [
     "Shape",
     "Sound",
     "Transform",
+    "Trigger",
     "Visual",
 ]

@@ -9,7 +9,9 @@ from components.shape import Shape
 
 @dataclass(slots=True)
 class Visual:
-    """A primitive or a model file, and how to shade it."""
+    """A primitive or a model file, and how to shade it. ``overlay`` draws it after
+    everything else, blended by its colour's alpha and never hidden behind other objects
+    (a virtual hand pushed into a table shows through it)."""
 
     shapes: list[Shape] = field(default_factory=list)
     model: str | None = None
@@ -20,3 +22,4 @@ class Visual:
     shadower: bool = True
     shadowed: bool = True
     visible: bool = True
+    overlay: bool = False

@@ -127,6 +127,9 @@ def build_parser() -> argparse.ArgumentParser:
     run = sub.add_parser("run", help="run a content folder (default: the bundled demo)")
     run.add_argument("path", nargs="?", help="content folder or .scene file")
     add_run_flags(run, RUN_FLAGS)
+    run.add_argument("--watch", action="store_true",
+                     help="start again from the files when the scene or a model, image or "
+                          "sound it uses changes on disk")
     run.add_argument("--param", action="append", default=[], type=param_option,
                      metavar="KEY=VALUE", help="set a scene variable before the scene is "
                      "built (repeatable; what colosseum sweep varies)")
@@ -202,6 +205,20 @@ def build_parser() -> argparse.ArgumentParser:
     fmt.add_argument("--write", action="store_true",
                      help="rewrite the file in place (keeps a .bak)")
 
+    imp = sub.add_parser("import", help="a scene file from a glTF or Collada model's bodies, "
+                                        "joints, materials and extras")
+    imp.add_argument("model", type=Path, help=".gltf, .glb or .dae file")
+    imp.add_argument("-o", "--output", type=Path,
+                     help="scene file to write (merged with your edits if it exists; "
+                          "default: print)")
+    imp.add_argument("--force", action="store_true",
+                     help="replace an existing scene file no import wrote (keeps a .bak)")
+
+    export = sub.add_parser("export", help="a scene (or saved state) as glTF with physics "
+                                           "extensions, for Blender or Godot")
+    export.add_argument("scene", type=Path, help="content folder or .scene file")
+    export.add_argument("-o", "--output", type=Path, required=True, help="OUT.glb or .gltf")
+
     keys = sub.add_parser("keys", help="the scene keys: every block, or one block's keys with "
                           "type, default, meaning and an example")
     keys.add_argument("block", nargs="?", help="a block (Object, Camera, World, ...)")
@@ -212,7 +229,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="benchmarks, printed as tables")
     bench.add_argument("what", nargs="?", default="scheduler",
                        help="scheduler, physics, scene, scripting, sound, render, input, "
-                            "contacts, avatars, net, sweep")
+                            "contacts, avatars, import, hands, net, sweep")
     bench.add_argument("--backend", default=None, help="physics benchmark backend (ode, pymunk)")
     bench.add_argument("--quick", action="store_true", help="fewer sizes and steps")
     bench.add_argument("--json", nargs="?", const="-", metavar="FILE",
@@ -246,11 +263,52 @@ def cmd_run(args: argparse.Namespace) -> int:
     if isinstance(prepared, int):
         return prepared
     scene, config = prepared
+    if args.watch:
+        return _run_watching(args, scene.content, config, scene)
     try:
         engine = create_engine(config)
     except BackendUnavailable as exc:
         return fail(str(exc), 1)
     return execute_run(engine, args, scene)
+
+
+def _run_watching(args: argparse.Namespace, content: Any, config: Any, scene: Any) -> int:
+    """``run --watch``: run the scene; when a file it came from changes, load it again and
+    start over from the new files (a scene with errors is told and the old one runs on).
+    Frames and seconds count across the restarts."""
+    from engine.content import ContentError, load_systems
+    from engine.scene_loading import SceneLoadError, SceneWatcher, load_content_scene
+    from engine.system import SystemFailure
+    from systems import create_engine
+
+    frames, seconds = args.frames, args.seconds
+    while True:
+        watcher = SceneWatcher(scene.spec)
+        engine = create_engine(config)
+        try:
+            load_systems(engine, content.folder)
+            scene.instantiate(engine)
+            engine.run(frames=frames, seconds=seconds, until=watcher.poll)
+        except (ContentError, SystemFailure) as exc:
+            engine.close()
+            return fail(str(exc), 1)
+        engine.close()
+        if frames is not None:
+            frames -= engine.frame
+        if seconds is not None:
+            seconds -= engine.time
+        if not watcher.changed() or (frames is not None and frames <= 0) or (
+                seconds is not None and seconds <= 1e-9):
+            return 0
+        names = ", ".join(sorted(p.name for p in watcher.changed()))
+        try:
+            scene = load_content_scene(content, seed=args.seed, params=dict(args.param))
+        except SceneLoadError as exc:
+            print(f"{exc}\ncolosseum: {names} changed but has errors; running the last "
+                  f"good scene", file=sys.stderr)
+            continue
+        print(f"colosseum: {names} changed; starting again", file=sys.stderr)
+        scene.configure(config, backend=args.backend, dt=args.dt)
 
 
 def cmd_check(args: argparse.Namespace) -> int:
@@ -263,6 +321,18 @@ def cmd_fmt(args: argparse.Namespace) -> int:
     from engine.scene_loading import format_path
 
     return format_path(Path(args.path), write=args.write)
+
+
+def cmd_import(args: argparse.Namespace) -> int:
+    from engine.scene_loading import import_path
+
+    return import_path(args.model, args.output, force=args.force)
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from engine.scene_loading import export_path
+
+    return export_path(args.scene, args.output)
 
 
 def cmd_keys(args: argparse.Namespace) -> int:
@@ -336,6 +406,8 @@ COMMANDS = {
     "keygen": cmd_keygen,
     "check": cmd_check,
     "fmt": cmd_fmt,
+    "import": cmd_import,
+    "export": cmd_export,
     "keys": cmd_keys,
     "new": cmd_new,
     "bench": cmd_bench,

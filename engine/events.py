@@ -50,6 +50,30 @@ class ContactEnded:
 
 
 @dataclass(frozen=True, slots=True)
+class HandTouched:
+    """A virtual hand began touching an object it could grasp."""
+
+    hand: int
+    object: int
+
+
+@dataclass(frozen=True, slots=True)
+class HandGrasped:
+    """A virtual hand took hold of an object (the glove's button, or a script)."""
+
+    hand: int
+    object: int
+
+
+@dataclass(frozen=True, slots=True)
+class HandReleased:
+    """A virtual hand let go of an object (button up, a script, a lost tracker, a break)."""
+
+    hand: int
+    object: int
+
+
+@dataclass(frozen=True, slots=True)
 class KeyEvent:
     """A key went down or up; names are lower case ("space", "up", "f1", "a").
 

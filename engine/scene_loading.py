@@ -7,6 +7,7 @@ knowledge of command lines, exit codes or terminals.
 from __future__ import annotations
 
 import sys
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -64,6 +65,74 @@ def load_content_scene(content: Content, seed: int = 0,
         for told in Reporter([*spec.db.warnings, *spec.problems]).diagnostics:
             print(told.render(spec.db.sources.get(told.path)), file=sys.stderr)
     return LoadedScene(spec, content)
+
+
+def content_engine(path: str | Path, seed: int = 0) -> Engine:
+    """An engine running ``path`` (a content folder or scene file, a saved state too) as
+    ``colosseum run PATH --fast --headless`` sets it up: the scene's World settings, the
+    default plugins, the folder's ``systems/``, the scene loaded. Raises SceneLoadError
+    (the scene's mistakes) or ContentError (a path that is no content)."""
+    from engine.app import EngineConfig
+    from engine.content import load_systems, resolve
+    from systems import create_engine
+
+    scene = load_content_scene(resolve(path), seed)
+    config = EngineConfig(content_dir=scene.content.folder, seed=seed, fast=True,
+                          headless=True)
+    scene.configure(config)
+    engine = create_engine(config)
+    load_systems(engine, scene.content.folder)
+    scene.instantiate(engine)
+    return engine
+
+
+class SceneWatcher:
+    """The files a built scene came from (scene texts, included files, model files its
+    Model blocks import, every model, image and sound it read) and when each was last
+    changed: :meth:`changed` tells which changed since (``colosseum run --watch``)."""
+
+    def __init__(self, spec: SceneSpec) -> None:
+        files = {Path(p) for p in (spec.db.sources if spec.db is not None else ())}
+        if spec.assets is not None:
+            files |= set(spec.assets.loads)
+        if spec.db is not None:
+            files |= {spec.content_dir / file for file in _model_files(spec.db.root.entries)
+                      if spec.content_dir is not None}
+        self.stamps = {f.resolve(): _stamp(f) for f in files if f.is_file()}
+        self._looked = time.monotonic()
+
+    def changed(self) -> list[Path]:
+        return [f for f, stamp in self.stamps.items() if _stamp(f) != stamp]
+
+    def poll(self, engine: object = None, interval: float = 0.5) -> bool:
+        """Whether a file changed, looking at most every ``interval`` wall seconds (an
+        ``until`` for ``Engine.run``)."""
+        now = time.monotonic()
+        if now - self._looked < interval:
+            return False
+        self._looked = now
+        return bool(self.changed())
+
+
+def _model_files(entries: list) -> list[str]:
+    """The files of every ``Model`` block, included files' too (not spliced away)."""
+    found = []
+    for e in entries:
+        if e.key == "Model" and e.value.kind == "STRUCTURE":
+            file = e.value.data.get("File")
+            if isinstance(file, str):
+                found.append(file)
+        elif e.key == "Include" and e.included is not None:
+            found += _model_files(e.included.entries)
+    return found
+
+
+def _stamp(path: Path) -> tuple[int, int] | None:
+    try:
+        info = path.stat()
+    except OSError:
+        return None
+    return info.st_mtime_ns, info.st_size
 
 
 def _build(content: Content, rng: np.random.Generator,
@@ -162,3 +231,97 @@ def save_state(engine: Engine, path: Path) -> None:
     if config_dir is not None and path.resolve() == (config_dir / "main.scene").resolve():
         raise OSError(f"{path}: refusing to overwrite the scene being run; choose another file")
     write_atomic(path, write_state(engine, path))
+
+
+def import_path(model: Path, out: Path | None, force: bool = False) -> int:
+    """``colosseum import``: the model's scene blocks written to ``out`` (stdout when
+    None). An existing ``out`` is merged with the new import, keeping the author's edits
+    (:mod:`engine.interchange.merge`); one no import wrote is replaced only with
+    ``force`` (keeping a ``.bak``). 1 when parts of the model were left out."""
+    import os
+
+    from engine.assets import AssetError, Assets
+    from engine.interchange import FORMATS, import_model
+    from engine.interchange.merge import BASE_SUFFIX, merge
+    from engine.scene import SceneError, parse_file, parse_text, render_all, write
+
+    if not model.is_file():
+        print(f"colosseum: error: {model}: no such file", file=sys.stderr)
+        return 2
+    if model.suffix.lower() not in FORMATS:
+        print(f"colosseum: error: {model}: not a model to import (expected "
+              f"{', '.join(FORMATS)})", file=sys.stderr)
+        return 2
+    folder = Path.cwd() if out is None else out.parent.resolve()
+    if not folder.is_dir():
+        print(f"colosseum: error: {out}: folder {out.parent} does not exist", file=sys.stderr)
+        return 2
+    file_ref = Path(os.path.relpath(model.resolve(), folder)).as_posix()
+    try:
+        imported = import_model(file_ref, file_ref, Assets(folder), root=folder, header=True)
+    except AssetError as exc:
+        print(f"colosseum: error: {exc.message}", file=sys.stderr)
+        return 1
+    except SceneError as exc:
+        print(exc.render(), file=sys.stderr)
+        return 1
+    text = write(imported.db)
+    if imported.problems:
+        print(render_all(imported.problems, imported.db.sources), file=sys.stderr)
+    failed = 1 if any(d.is_error for d in imported.problems) else 0
+    if out is None:
+        sys.stdout.write(text)
+        return failed
+    base_path = out.with_name(out.name + BASE_SUFFIX)
+    if out.exists() and not force:
+        if not base_path.is_file():
+            print(f"colosseum: error: {out} exists and no import wrote it (there is no "
+                  f"{base_path.name}); nothing is overwritten: give --force to replace it "
+                  f"(a .bak is kept)", file=sys.stderr)
+            return 1
+        try:
+            result = merge(parse_file(base_path), parse_file(out), parse_text(text, str(out)))
+        except SceneError as exc:
+            print(exc.render(), file=sys.stderr)
+            print(f"colosseum: error: {out} (or {base_path.name}) does not parse; nothing is "
+                  f"overwritten", file=sys.stderr)
+            return 1
+        merged = write(result.db)
+        for note in result.kept:
+            print(f"{out}: kept: {note}", file=sys.stderr)
+        print(f"{out}: {result.added} added, {result.updated} updated, {result.removed} "
+              f"removed from {model.name}", file=sys.stderr)
+        text_out = merged
+    else:
+        text_out = text
+    original = out.read_text(encoding="utf-8") if out.exists() else None
+    if original is not None and original != text_out:
+        out.with_name(out.name + ".bak").write_text(original, encoding="utf-8")
+    write_atomic(out, text_out)
+    write_atomic(base_path, text)
+    return failed
+
+
+def export_path(scene: Path, out: Path) -> int:
+    """``colosseum export``: a scene file or content folder (a saved state too) as glTF with
+    physics extensions; what glTF cannot say is told."""
+    from engine.content import ContentError, resolve
+    from engine.interchange.export import export_gltf
+    from engine.scene import render_all
+
+    if out.suffix.lower() not in (".glb", ".gltf"):
+        print(f"colosseum: error: {out}: the output must end in .glb or .gltf", file=sys.stderr)
+        return 2
+    if not out.parent.is_dir():
+        print(f"colosseum: error: {out}: folder {out.parent} does not exist", file=sys.stderr)
+        return 2
+    try:
+        loaded = load_content_scene(resolve(str(scene)))
+    except (ContentError, SceneLoadError) as exc:
+        print(exc, file=sys.stderr)
+        return 1
+    told = export_gltf(loaded.spec, out)
+    if told:
+        print(render_all(told), file=sys.stderr)
+    print(f"wrote {out}", file=sys.stderr)
+    return 0

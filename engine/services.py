@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, Protocol
 
+from components.avatar import SavedAvatar
 from components.script import SavedScript
 
 #: A uniform's value: one number or a vector of numbers.
@@ -63,3 +64,27 @@ class AvatarControl(Protocol):
         """Run one of :data:`AVATAR_METHODS` on avatar ``entity``; plain data in and out;
         raises ValueError (KeyError for an object that is not an avatar) with a message
         naming what exists."""
+
+
+class AvatarStates(Protocol):
+    """The avatars' states, for a saved run (the avatars plugin)."""
+
+    plugin = "avatars"
+
+    def saved_avatars(self, object_name: Callable[[int], str | None]
+                      ) -> dict[int, SavedAvatar]:
+        """Avatar entity -> where it stands (see :class:`components.avatar.SavedAvatar`);
+        ``object_name`` gives the scene ID an object is written under (None: it is not
+        written, so an avatar holding it lets go in the saved state, with a message)."""
+        ...
+
+
+class HandControl(Protocol):
+    """Virtual hands asked from scripts (the hands plugin)."""
+
+    plugin = "hands"
+
+    def state(self, hand: int) -> str: ...
+    def held(self, hand: int) -> tuple[int, ...]: ...
+    def grasp(self, hand: int, obj: int) -> None: ...
+    def release(self, hand: int) -> None: ...

@@ -23,12 +23,14 @@ from __future__ import annotations
 import difflib
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from components import Avatar, Name, Physical, Shape, Transform, Visual
+from components import Avatar, Hold, Name, Physical, Shape, Transform, Visual
+from components.avatar import SavedAvatar, SavedDrive, SavedHold
 from components.physical import BodyKind
 from engine.animation import AnimationEnded, AnimationError, ClipSettings, Mixer, Palettes
 from engine.animation.ik import Chains, from_to, make_chains, solve
@@ -38,7 +40,7 @@ from engine.messages import MessageLog
 from engine.physics import commands as cmd
 from engine.render.math3d import compose
 from engine.rotation import euler_to_quat, matrix_to_quat, quat_multiply, quat_to_matrix
-from engine.services import AVATAR_METHODS, AvatarControl
+from engine.services import AVATAR_METHODS, AvatarControl, AvatarStates
 from engine.system import Phase, System
 
 if TYPE_CHECKING:
@@ -122,7 +124,6 @@ class AvatarSystem(System):
         self._engine: Engine | None = None
         self._rays: Any = None  # the physics query in flight (threaded mode)
         self._loose: set[int] = set()  # dynamic bodies: not ground to stand on
-        self._physics_time: float | None = None
         self._leg_cache: _Legs | None = None
         #: the last frame's final skeletons (IK included) and each avatar's first row
         self._posed: tuple[np.ndarray, dict[int, int]] = (np.zeros((0, 4, 4)), {})
@@ -142,6 +143,7 @@ class AvatarSystem(System):
         engine.events.subscribe(AnimationEnded, self._tell_scripts)
         engine.insert_resource(self)
         engine.insert_resource(self, as_type=AvatarControl)
+        engine.insert_resource(self, as_type=AvatarStates)
         engine.insert_resource(self.palettes)
 
     def _body_added(self, entity: int, body: Physical) -> None:
@@ -177,7 +179,41 @@ class AvatarSystem(System):
         self.mixer.add(entity, rig, settings, spec.fade)
         figure = _Figure(entity, spec, model)
         self.figures[entity] = figure
+        self._animate(entity, spec)
+        saved = spec.saved
+        for hip, knee, ankle in spec.foot_ik:
+            nodes = (model.node(hip), model.node(knee), model.node(ankle))
+            if None not in nodes:
+                figure.legs.append(nodes)  # type: ignore[arg-type]
+        if saved is None:
+            figure.path = [np.asarray(p, np.float64) for p in spec.path]
+            figure.path_loop = spec.path_loop
+            holds = [SavedHold(h) for h in spec.holds]
+        else:
+            self._resume(figure, saved)
+            holds = list(saved.holds)
+        names = {n.id: e for e, n in world.get_component(Name)}
+        for held in holds:
+            hold = held.hold
+            target = names.get(hold.target) if isinstance(hold.target, str) else hold.target
+            try:
+                self.hold(entity, target if target is not None else -1, hold.bone,
+                          hold.offset, hold.rotation)
+            except (KeyError, ValueError) as exc:
+                self._messages.error(f"avatar {self._name(entity)!r}: {exc}")
+                continue
+            if held.last is not None:  # (hold() put it last)
+                figure.held[-1].last = np.asarray(held.last, np.float64)
+        if spec.capsule is not None:
+            figure.capsule = self._capsule(engine, entity, spec.capsule,
+                                           None if saved is None else saved.capsule)
+
+    def _animate(self, entity: int, spec: Avatar) -> None:
+        """Its clips: where a saved run left them, else as its block says."""
         try:
+            if spec.saved is not None:
+                self.mixer.restore(entity, spec.saved.groups, spec.saved.queue)
+                return
             if spec.blend:
                 self.mixer.blend(entity, spec.blend, 0.0, spec.speed, spec.loop)
             elif spec.clip is not None:
@@ -186,32 +222,65 @@ class AvatarSystem(System):
                 self.mixer.queue(entity, name)
         except AnimationError as exc:
             self._messages.error(f"avatar {self._name(entity)!r}: {exc}")
-        figure.path = [np.asarray(p, np.float64) for p in spec.path]
-        figure.path_loop = spec.path_loop
-        for hip, knee, ankle in spec.foot_ik:
-            nodes = (model.node(hip), model.node(knee), model.node(ankle))
-            if None not in nodes:
-                figure.legs.append(nodes)  # type: ignore[arg-type]
-        names = {n.id: e for e, n in world.get_component(Name)}
-        for hold in spec.holds:
-            target = names.get(hold.target) if isinstance(hold.target, str) else hold.target
-            try:
-                self.hold(entity, target if target is not None else -1, hold.bone,
-                          hold.offset, hold.rotation)
-            except (KeyError, ValueError) as exc:
-                self._messages.error(f"avatar {self._name(entity)!r}: {exc}")
-        if spec.capsule is not None:
-            figure.capsule = self._capsule(engine, entity, spec.capsule)
 
-    def _capsule(self, engine: Engine, entity: int, capsule: tuple[float, float]) -> int:
-        """A kinematic capsule standing on the avatar's root, moved with it."""
+    def _resume(self, figure: _Figure, saved: SavedAvatar) -> None:
+        """Where a saved run left the avatar's walk, its ground following and its driven
+        bones (its clips and held objects are restored beside this)."""
+        figure.path = [np.asarray(p, np.float64) for p in saved.path]
+        figure.path_loop, figure.waypoint = saved.path_loop, saved.waypoint
+        figure.ground, figure.last_xy = saved.ground, saved.ground_at
+        figure.offset = saved.step_offset
+        for drive in saved.drives:
+            try:
+                self.drive_bone(figure.entity, drive.bone, drive.position, drive.orientation)
+            except ValueError as exc:
+                self._messages.error(f"avatar {self._name(figure.entity)!r}: {exc}")
+
+    def _capsule(self, engine: Engine, entity: int, capsule: tuple[float, float],
+                 pose: tuple[Any, Any] | None = None) -> int:
+        """A kinematic capsule standing on the avatar's root (or at a saved ``pose``),
+        moved with it."""
         radius, length = capsule
-        t = engine.world.component_for_entity(entity, Transform)
+        if pose is None:
+            pose = (engine.world.component_for_entity(entity, Transform).position.copy(),
+                    (1.0, 0.0, 0.0, 0.0))
         body = Physical(kind=BodyKind.KINEMATIC, mass=None, gravity=False, can_sleep=False,
                         category=CAPSULE_CATEGORY, shapes=[Shape("capsule", (radius, length),
                                       offset=(0.0, 0.0, radius + 0.5 * length))])
-        return engine.spawn(Name(f"{self._name(entity)}:capsule"), Transform(t.position.copy()),
-                            body)
+        return engine.spawn(Name(f"{self._name(entity)}:capsule"), Transform(*pose), body)
+
+    # -- saved states -------------------------------------------------------------------
+    def saved_avatars(self, object_name: Callable[[int], str | None]
+                      ) -> dict[int, SavedAvatar]:
+        """Every animated avatar's state (see :class:`AvatarStates`); one not started yet
+        has none (it starts as its block says)."""
+        engine = self._engine
+        states: dict[int, SavedAvatar] = {}
+        for entity, figure in self.figures.items():
+            groups, queue = self.mixer.capture(entity)
+            bones = figure.model.node_names
+            holds = []
+            for held in figure.held:
+                name = object_name(held.entity)
+                if name is None:
+                    log.warning("saved state: avatar %r holds an object that is not saved "
+                                "(%s); it lets go of it", self._name(entity),
+                                self._name(held.entity))
+                    continue
+                holds.append(SavedHold(Hold(bones[held.node], name, _floats(held.offset),
+                                            _floats(held.rotation)),
+                                       None if held.last is None else _floats(held.last)))
+            capsule = None
+            if figure.capsule is not None and engine is not None and \
+                    engine.world.entity_exists(figure.capsule):
+                t = engine.world.component_for_entity(figure.capsule, Transform)
+                capsule = (_floats(t.position), _floats(t.orientation))
+            states[entity] = SavedAvatar(
+                groups, queue, tuple(_floats(p) for p in figure.path), figure.path_loop,
+                figure.waypoint, figure.ground, figure.last_xy, figure.offset, tuple(holds),
+                tuple(SavedDrive(bones[d.node], _floats(d.position), _floats(d.orientation))
+                      for d in figure.drives.values()), capsule)
+        return states
 
     def _name(self, entity: int) -> str:
         engine = self._engine
@@ -437,8 +506,9 @@ class AvatarSystem(System):
 
     def _carry(self, engine: Engine, poses: Any, entities: list[int], rows: np.ndarray,
                world: np.ndarray, dt: float) -> None:
-        """Held objects onto their bones; capsules onto their avatars."""
-        dt = self._lead(engine, dt)
+        """Held objects onto their bones; capsules onto their avatars (kinematic targets
+        reached as this frame's time passes, then waiting there however many steps the
+        physics thread takes)."""
         for entity, row in zip(entities, rows.tolist(), strict=True):
             figure = self.figures[entity]
             if row < 0:
@@ -461,16 +531,6 @@ class AvatarSystem(System):
                 at = bone[:3, 3] + rot @ held.offset
                 quat = quat_multiply(matrix_to_quat(rot), held.rotation)
                 self._move(engine, held, at, quat, dt)
-
-    def _lead(self, engine: Engine, dt: float) -> float:
-        """The time a kinematic target is reached in: this frame's step (serial mode); in
-        threaded mode the physics time the last frame took, as the backend keeps the
-        target's velocity for every step it takes until the next frame's target."""
-        now = engine.physics.time
-        last, self._physics_time = self._physics_time, now
-        if engine.config.mode != "threaded" or last is None:
-            return dt
-        return float(np.clip(now - last, engine.config.dt, 1.0))
 
     def _move(self, engine: Engine, held: _Held, at: np.ndarray, quat: np.ndarray,
               dt: float) -> None:
@@ -654,3 +714,8 @@ class AvatarsPlugin:
 
     def build(self, engine: Engine) -> None:
         engine.add_system(AvatarSystem())
+
+
+def _floats(values: Any) -> Any:
+    """A vector as a tuple of plain floats (what a saved state holds)."""
+    return tuple(float(x) for x in values)

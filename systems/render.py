@@ -90,7 +90,8 @@ class RenderOptions:
 def _signature(visual: Visual) -> tuple:
     """What, when changed, makes the renderer rebuild an entity's parts."""
     return (visual.model, visual.texture, visual.shader_state, visual.shadower, visual.shadowed,
-            visual.visible, tuple(visual.color), tuple(visual.scale), len(visual.shapes))
+            visual.visible, visual.overlay, tuple(visual.color), tuple(visual.scale),
+            len(visual.shapes))
 
 
 def library_from_scene_spec(spec: Any) -> ShaderLibrary:

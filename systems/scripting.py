@@ -29,6 +29,9 @@ from engine.events import (
     Contacts,
     CustomEvent,
     Despawned,
+    HandGrasped,
+    HandReleased,
+    HandTouched,
     KeyEvent,
     TimerEvent,
 )
@@ -105,6 +108,9 @@ class ScriptingSystem(System):
         events.subscribe(ContactBegan, lambda ev: self._on_touch(
             "onCollisionBegin", ev.a, ev.b, (ev.impulse,)))
         events.subscribe(ContactEnded, lambda ev: self._on_touch("onCollisionEnd", ev.a, ev.b, ()))
+        for kind, callback in ((HandTouched, "onTouch"), (HandGrasped, "onGrasp"),
+                               (HandReleased, "onRelease")):
+            events.subscribe(kind, lambda ev, c=callback: self._on_hand(c, ev.hand, ev.object))
         events.subscribe(KeyEvent, lambda ev: runtime.broadcast("onKey", ev.key, ev.pressed))
         events.subscribe(Button, lambda ev: runtime.broadcast("onButton", ev.device, ev.name,
                                                              ev.pressed))
@@ -297,6 +303,15 @@ class ScriptingSystem(System):
         poses, self._poses = self._poses, {}
         for name, pose in poses.items():
             runtime.broadcast("onTracker", name, *pose.position, *pose.orientation)
+
+    def _on_hand(self, callback: str, hand: int, obj: int) -> None:
+        """``callback(hand, object)`` for the hand's scripts, the object's and the scene's."""
+        runtime = self.runtime
+        if runtime is None:
+            return
+        for script in (*self._by_entity.get(hand, ()), *self._by_entity.get(obj, ()),
+                       *self._scene):
+            runtime.call_objects(script, callback, (hand, obj))
 
     def _on_touch(self, callback: str, a: int, b: int, extra: tuple[float, ...]) -> None:
         """A pair began or stopped touching: each side's object scripts hear the other

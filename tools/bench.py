@@ -30,6 +30,8 @@ BENCHMARKS: dict[str, str] = {
     "input": "tools.bench_input:run_bench",
     "contacts": "tools.bench:bench_contacts",
     "avatars": "tools.bench_avatars:run_bench",
+    "hands": "tools.bench_hands:run_bench",
+    "import": "tools.bench_import:run_bench",
     "net": "tools.bench_net:run_bench",
     "sweep": "tools.bench_sweep:run_bench",
 }
@@ -79,6 +81,12 @@ def _physics_figures(rows: list[dict[str, Any]]) -> list[Figure]:
                    "bare pymunk stepping")(rows)
 
 
+def _import_figures(rows: list[dict[str, Any]]) -> list[Figure]:
+    ref = next(r for r in rows if "reference" in r["stage"])
+    return [Figure(f"{r['nodes']} nodes: {r['stage']}", r["cpu s"], ref["cpu s"], "cpu s",
+                   "json.loads of the glTF's JSON") for r in rows if "goal s" in r]
+
+
 def _input_figures(rows: list[dict[str, Any]]) -> list[Figure]:
     ours = next(r for r in rows if r["path"].startswith("osc -> InputState"))
     ref = next(r for r in rows if "reference" in r["path"])
@@ -114,9 +122,13 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "input": _input_figures,
     "contacts": _by_row(lambda r: f"{r['pairs']} touching pairs", "ms/frame", "unique ms",
                         "ms/frame", "pair keys and np.unique of the same contacts alone"),
+    "hands": lambda rows: [Figure(r["case"], r["ms_per_step"], r["without_hands_ms"],
+                                  "ms/step", "the same scene without the hands")
+                           for r in rows if "ms_per_step" in r],
     "avatars": lambda rows: [Figure(f"{r['avatars']} avatars, {r['case']}", r["ms_per_frame"],
                                     r["reference_ms"], "ms/frame", r["reference"])
                              for r in rows if r["ms_per_frame"] > 0],
+    "import": _import_figures,
     "net": _net_figures,
     "sweep": _by_row(lambda r: f"{r['runs']} runs on {r['workers']} Dask workers",
                      "runs/min", "loop runs/min", "runs/min", "the same runs in a plain loop"),

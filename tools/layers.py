@@ -5,7 +5,9 @@ Layers, lowest first (docs/ARCHITECTURE.md draws them)::
     components  <-  engine core  <-  engine services  <-  systems  <-  CLI and tools
 
 The asset layer (``engine.assets``) is core: the scene factory builds physics shapes
-from models with it, as the renderer and the sound service do.
+from models with it, as the renderer and the sound service do. So are the importers
+(``engine.interchange``: a scene's ``Model`` block imports when it is checked); the
+exporter draws primitives with the renderer's meshes, a service.
 
 A module may import its own layer and the ones below; an import of a higher layer
 is an error, and so is any import cycle among the project's modules. Imports under
@@ -40,7 +42,7 @@ LAYERS = (
     Layer(0, "components", ("components",)),
     Layer(1, "engine core", ("engine",)),
     Layer(2, "engine services", ("engine.render", "engine.audio", "engine.scripting",
-                                 "engine.input", "engine.net")),
+                                 "engine.input", "engine.net", "engine.interchange.export")),
     Layer(3, "systems", ("systems",)),
     Layer(4, "CLI and tools", ("engine.cli", "engine.cli_net", "engine.runner",
                                "engine.sweep", "engine.scene_loading", "engine.scaffold",

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from components.avatar import SavedGroup, SavedLayer, SavedRequest
 from engine.animation.library import CUBIC, ROTATION, STEP, Library, Rig
 from engine.animation.sampling import hermite
 from engine.rotation import quat_normalize, quat_to_matrix
@@ -130,7 +131,8 @@ _LAYER_COLUMNS = {"avatar": np.int64, "clip": np.int64, "group": np.int64, "orde
                   "speed": np.float64, "duration": np.float64, "weight": np.float64,
                   "weight_from": np.float64, "weight_to": np.float64,
                   "fade_elapsed": np.float64, "fade_length": np.float64}
-_GROUP_COLUMNS = {"avatar": np.int64, "phase": np.float64, "loop": bool, "ended": bool}
+_GROUP_COLUMNS = {"avatar": np.int64, "order": np.int64, "phase": np.float64, "loop": bool,
+                  "ended": bool}
 
 
 class Mixer:
@@ -255,8 +257,9 @@ class Mixer:
         if not weights:
             raise AnimationError("no clip given")
         out = {}
-        for name, w in weights.items():
-            animator.clip_id(str(name))
+        # in the model's order, whatever the caller's (a Lua table has none that repeats):
+        # layers are slerped in turn, which depends on their order
+        for name, w in sorted(weights.items(), key=lambda item: animator.clip_id(str(item[0]))):
             if not isinstance(w, int | float) or not 0.0 <= float(w) < 1e6:
                 raise AnimationError(f"weight of {name!r} must be a number >= 0, got {w!r}")
             out[str(name)] = float(w)
@@ -276,18 +279,69 @@ class Mixer:
         loop = setting.loop if request.loop is None else request.loop
         if animator.queue:
             loop = False
-        g = self.groups.add(avatar=animator.key, phase=0.0, loop=loop, ended=False)
-        animator.group = g
+        g = animator.group = self._add_group(animator, 0.0, loop)
         for name, w in request.weights:
-            clip = animator.clip_id(name)
             speed = animator.settings.get(name, ClipSettings()).speed \
                 if request.speed is None else request.speed
-            row = self.layers.add(avatar=animator.key, clip=clip, group=g, order=self._order,
-                                  speed=speed, duration=self.library.clips[clip].duration)
-            self._order += 1
-            self._names[row] = name
+            row = self._add_layer(animator, g, name, speed)
             self._fade(row, w, request.fade, start=0.0)
+
+    def _add_group(self, animator: Animator, phase: float, loop: bool, ended: bool = False
+                   ) -> int:
         self._dirty = True
+        self._order += 1
+        return self.groups.add(avatar=animator.key, order=self._order, phase=phase, loop=loop,
+                               ended=ended)
+
+    def _add_layer(self, animator: Animator, group: int, name: str, speed: float,
+                   **weights: float) -> int:
+        """A layer playing clip ``name`` in ``group`` (started after every other layer)."""
+        clip = animator.clip_id(name)
+        row = self.layers.add(avatar=animator.key, clip=clip, group=group, order=self._order,
+                              speed=speed, duration=self.library.clips[clip].duration,
+                              **weights)
+        self._order += 1
+        self._names[row] = name
+        self._dirty = True
+        return row
+
+    # -- saved states ---------------------------------------------------------------------
+    def capture(self, key: int) -> tuple[tuple[SavedGroup, ...], tuple[SavedRequest, ...]]:
+        """Avatar ``key``'s groups (oldest first, each layer's weight and fade) and queue:
+        everything :meth:`restore` needs to continue its animation exactly."""
+        animator = self.animators[key]
+        t, g = self.layers, self.groups
+        layers: dict[int, list[SavedLayer]] = {}
+        for row in sorted(self._rows_of(key), key=lambda r: t.order[r]):
+            layers.setdefault(int(t.group[row]), []).append(SavedLayer(
+                self._names[row], float(t.speed[row]), float(t.weight[row]),
+                float(t.weight_from[row]), float(t.weight_to[row]),
+                float(t.fade_elapsed[row]), float(t.fade_length[row])))
+        groups = tuple(SavedGroup(tuple(rows), float(g.phase[x]), bool(g.loop[x]),
+                                  bool(g.ended[x]), x == animator.group)
+                       for x, rows in layers.items())
+        queue = tuple(SavedRequest(r.weights, r.fade, r.speed, r.loop) for r in animator.queue)
+        return groups, queue
+
+    def restore(self, key: int, groups: tuple[SavedGroup, ...],
+                queue: tuple[SavedRequest, ...]) -> None:
+        """Put avatar ``key`` (just added) where :meth:`capture` found one; raises
+        AnimationError for a clip its model lacks (nothing restored then)."""
+        animator = self.animators[key]
+        for name in [layer.clip for group in groups for layer in group.layers] + [
+                name for request in queue for name, _ in request.weights]:
+            animator.clip_id(name)
+        for saved in groups:
+            g = self._add_group(animator, saved.phase, saved.loop, saved.ended)
+            if saved.current:
+                animator.group = g
+            for layer in saved.layers:
+                self._add_layer(animator, g, layer.clip, layer.speed, weight=layer.weight,
+                                weight_from=layer.fade_from, weight_to=layer.fade_to,
+                                fade_elapsed=layer.fade_time, fade_length=layer.fade_length)
+        animator.queue.extend(Request(r.weights, r.fade, r.speed, r.loop) for r in queue)
+        if animator.group < 0 and animator.queue:  # nothing current (a clip left out): on
+            self._start(animator, animator.queue.popleft())
 
     def _fade(self, row: int, target: float, length: float, start: float | None = None) -> None:
         t = self.layers
@@ -363,7 +417,10 @@ class Mixer:
             phase[loop] %= 1.0
             done = ~loop & (phase >= 1.0 - PHASE_EPSILON)
             g.phase[moving] = np.minimum(phase, 1.0)
-            for group in moving[done].tolist():
+            # by avatar (in the order they were made), then oldest first: the order a saved
+            # state's clips end in too
+            finished = moving[done]
+            for group in finished[np.lexsort((g.order[finished], g.avatar[finished]))].tolist():
                 g.ended[group] = True
                 ended.extend(self._ended(group))
             for row in faded_out.tolist():

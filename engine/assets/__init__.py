@@ -10,11 +10,14 @@ that asked for it::
 Built in: models through trimesh (.obj .stl .ply .glb .gltf .dae), skinned and animated
 models for avatars through pygltflib (.glb .gltf .vrm, :mod:`engine.assets.skinned`), images
 through Pillow (.png .jpg .bmp .tga .tif .gif .webp), sounds through libsndfile (.wav .ogg
-.flac .aiff). A new format is one function registered for its extension — put it in a
-content folder's ``systems/*.py`` (imported before the scene is built) or any module
-imported before loading. It returns a :class:`ModelAsset` (:func:`mesh_part` makes a
-part from raw triangles), an :class:`ImageAsset` or a ``SoundInfo``; whatever it
-raises becomes the reason in the message:
+.flac .aiff); glTF and Collada files also as documents of named nodes
+(:mod:`engine.assets.gltf`, :mod:`engine.assets.dae`), whose nodes a scene draws with
+``Geometry { File "room.glb" Nodes ["Door"] }`` and importers read. A new format is one
+function registered for its extension — put it in a content folder's ``systems/*.py``
+(imported before the scene is built) or any module imported before loading. It returns a
+:class:`ModelAsset` (:func:`mesh_part` makes a part from raw triangles), an
+:class:`ImageAsset` or a ``SoundInfo``; whatever it raises becomes the reason in the
+message:
 
 >>> import tempfile
 >>> from pathlib import Path
@@ -40,7 +43,7 @@ could not convert string to float: 'zero'
 >>> unregister_loader("model", ".tri")
 """
 
-from engine.assets import loaders, skinned
+from engine.assets import dae, gltf, loaders, skinned
 from engine.assets.registry import (
     KINDS,
     Loader,
@@ -50,7 +53,14 @@ from engine.assets.registry import (
     register_loader,
     unregister_loader,
 )
-from engine.assets.service import AssetError, Assets, Where, reason
+from engine.assets.service import (
+    AssetError,
+    Assets,
+    Where,
+    nodes_name,
+    reason,
+    split_nodes,
+)
 from engine.assets.skinned import AnimationClip, Channel, SkinnedModel, SkinnedPart
 from engine.assets.types import ImageAsset, MeshPart, ModelAsset, mesh_part, vertex_normals
 
@@ -68,13 +78,17 @@ __all__ = [
     "SkinnedPart",
     "UnknownExtension",
     "Where",
+    "dae",
     "extensions",
+    "gltf",
     "loader_for",
     "loaders",
     "mesh_part",
+    "nodes_name",
     "reason",
     "register_loader",
     "skinned",
+    "split_nodes",
     "unregister_loader",
     "vertex_normals",
 ]

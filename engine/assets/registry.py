@@ -15,9 +15,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
-#: The kinds of asset there are loaders for, and what their loaders return.
+#: The kinds of asset there are loaders for, and what their loaders return. A
+#: ``document`` is a model file read as named nodes: anything with
+#: ``node_model(names)`` and ``mesh_model(name)``, each a ModelAsset (see
+#: :mod:`engine.assets.gltf`).
 KINDS = {"model": "ModelAsset", "image": "ImageAsset", "sound": "SoundInfo",
-         "skin": "SkinnedModel"}
+         "skin": "SkinnedModel", "document": "a document of nodes"}
 
 F = TypeVar("F", bound=Callable[[Path], Any])
 

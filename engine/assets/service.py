@@ -5,8 +5,9 @@ same way: ``scene:line:col: error: cannot load model "rock.obj" (models/rock.obj
 
 from __future__ import annotations
 
+import json
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, TypeVar
@@ -99,8 +100,27 @@ class Assets:
     # -- typed entry points ----------------------------------------------------
     def model(self, name: str | Path, where: Where | None = None,
               root: Path | None = None) -> ModelAsset:
-        """The model file ``name``: its parts, checked non-empty and finite."""
-        return self._load("model", name, where, root, _check_model)
+        """The model file ``name``: its parts, checked non-empty and finite. A name made by
+        :func:`nodes_name` is some nodes of a file (its document, read once)."""
+        file, nodes, mesh = split_nodes(str(name))
+        if nodes is None:
+            return self._load("model", name, where, root, _check_model)
+        document = self.document(file, where, root)
+        path = self.resolve(file, root)
+
+        def build() -> ModelAsset:
+            model = document.mesh_model(nodes[0]) if mesh else document.node_model(nodes)
+            _check_model(model)
+            return model
+
+        return self.derived(("nodes", path, nodes, mesh), "load model", _called(name), path,
+                            build, where)
+
+    def document(self, name: str | Path, where: Where | None = None,
+                 root: Path | None = None) -> Any:
+        """The model file ``name`` read as a document of named nodes (a glTF or Collada
+        file: :class:`engine.assets.gltf.GltfDocument`), for importers and node models."""
+        return self._load("document", name, where, root, _check_document)
 
     def image(self, name: str | Path, where: Where | None = None,
               root: Path | None = None) -> ImageAsset:
@@ -208,8 +228,30 @@ class Assets:
             check(asset)
             return asset
         except Exception as exc:  # any loader's error, told as this file's
-            return _Failed(AssetError(f"load {kind}", _called(name), self._shown.get(path, path),
+            what = "model" if kind == "document" else kind  # a model read as its nodes
+            return _Failed(AssetError(f"load {what}", _called(name), self._shown.get(path, path),
                                       reason(exc), where))
+
+
+def nodes_name(file: str, nodes: Sequence[str], mesh: bool = False) -> str:
+    """The model name of some nodes of a model file, ``room.glb#["Door", "Handle"]``: what a
+    scene's ``Geometry { File "room.glb" Nodes ["Door" "Handle"] }`` draws; with ``mesh``,
+    one mesh in its own space, ``room.glb#mesh["Cube"]`` (``Mesh "Cube"``)."""
+    return f"{file}#{'mesh' if mesh else ''}{json.dumps(list(nodes), ensure_ascii=False)}"
+
+
+def split_nodes(name: str) -> tuple[str, tuple[str, ...] | None, bool]:
+    """``(file, nodes, mesh)`` of a :func:`nodes_name`; ``(name, None, False)`` for a plain
+    file name."""
+    for mark, mesh in (('#["', False), ('#mesh["', True)):
+        file, found, rest = name.partition(mark)
+        if found and rest.endswith("]"):
+            try:
+                items = json.loads('["' + rest)
+            except ValueError:
+                continue
+            return file, tuple(str(n) for n in items), mesh
+    return name, None, False
 
 
 def _called(name: str | Path) -> str:
@@ -276,6 +318,12 @@ def _check_skinned(model: SkinnedModel) -> None:
     for clip in model.clips:
         if any(c.node >= nodes for c in clip.channels):
             raise ValueError(f"clip {clip.name!r} animates a node the model does not have")
+
+
+def _check_document(document: Any) -> None:
+    if not callable(getattr(document, "node_model", None)):
+        raise TypeError(f"a document loader returned {type(document).__name__}, which has no "
+                        f"node_model(names) and mesh_model(name)")
 
 
 def _check_image(image: ImageAsset) -> None:

@@ -25,9 +25,9 @@ import numpy as np
 from engine.input.device import MONOTONIC, Clock, DeviceStatus, QueuedDevice
 from engine.input.events import AnyInput, Button, KeyEvent, Pointer, TrackerPose, WheelCount
 from engine.rotation import quat_to_matrix
+from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS
 
-HANDS = ("hand_l", "hand_r")
-GLOVES = ("glove_l", "glove_r")
+HANDS, GLOVES = DESKTOP_TRACKERS, DESKTOP_GLOVES
 WHEELS = ("left", "right")
 #: Metres the hand moves in depth per scroll notch, and the depth's bounds.
 DEPTH_STEP = 0.05

@@ -49,7 +49,8 @@ log = logging.getLogger("colosseum.input")
 S = TypeVar("S")
 
 #: Event types that are never "lost": a keyboard or a mouse is silent when unused.
-_UNWATCHED = (KeyEvent, Pointer)
+#: Events that come when something changes, not as a stream: their silence says nothing.
+_UNWATCHED = (KeyEvent, Pointer, Button, Axis)
 
 
 class TrackerPipeline:
@@ -79,6 +80,10 @@ class TrackerPipeline:
         return TrackerPose(raw.device, p, q, linear, t)
 
 
+#: The transport name of injected events (:meth:`InputHub.inject`).
+INJECTED = "injected"
+
+
 class InputHub:
     """Owns the devices, the watchdog, the pipelines and the latest-state table."""
 
@@ -97,6 +102,7 @@ class InputHub:
         #: transport name -> seconds of silence before its sources are lost
         self._timeouts = {d.name: (timeouts or {}).get(d.name, spec.lost_after)
                           for d in self.devices}
+        self._timeouts[INJECTED] = spec.lost_after
         self._watched = {d.name for d in self.devices if getattr(d, "watched", True)}
         self._last_heard: dict[str, tuple[float, float]] = {}  # source -> (time, timeout)
         self._lost: set[str] = set()
@@ -134,8 +140,9 @@ class InputHub:
     def inject(self, event: AnyInput) -> None:
         """Feed a raw event as if a device had sent it (a network peer, a tool, a test):
         collected with the next frame's input (stamped with its clock when the event has
-        no timestamp), recorded and applied like any other; a replay ignores it (the
-        recording already holds the run's input)."""
+        no timestamp), watched for silence (DeviceLost after ``LostAfter``), recorded and
+        applied like any other; a replay ignores it (the recording already holds the
+        run's input)."""
         if not isinstance(event, tuple(TAGS)):
             raise TypeError(f"inject takes a typed input event, got {type(event).__name__}")
         self._injected.append(event)
@@ -179,8 +186,12 @@ class InputHub:
                 return recorded
             return FrameInput(self._replay_clock)
         now = self.clock()
-        events: list[AnyInput] = [e if e.timestamp else replace(e, timestamp=now)
-                                  for e in injected]
+        events: list[AnyInput] = []
+        for event in injected:  # a peer's sources are watched like a device's
+            event = event if event.timestamp else replace(event, timestamp=now)
+            if not isinstance(event, (*_UNWATCHED, DeviceLost, DeviceFound)):
+                self._heard(event.device, event.timestamp, INJECTED, events)
+            events.append(event)
         for device in self.devices:
             for event in device.poll(now):
                 if not self._wanted(event, device.name):

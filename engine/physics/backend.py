@@ -31,6 +31,10 @@ class BackendName(StrEnum):
     BALLISTIC = "ballistic"
 
 
+#: A kinematic target this close to its time (a share of the step) is reached in this
+#: step: steps sum to a target's ``dt`` only to rounding (the ODE binding has its own).
+ARRIVE_SLACK = 1e-6
+
 #: One contact between two bodies in one step. ``b`` is -1 for the static world
 #: (ground planes and static geometry without a key).
 CONTACT_DTYPE = np.dtype(
@@ -170,7 +174,10 @@ class DynamicsBackend(Protocol):
     def set_velocity(self, key: int, linear: np.ndarray, angular: np.ndarray) -> None: ...
     def set_kinematic_target(self, key: int, position: np.ndarray,
                              orientation: np.ndarray, dt: float) -> None:
-        """Move a kinematic body so it reaches the target pose after ``dt``."""
+        """Move a kinematic body so it reaches the target pose after ``dt`` of stepping
+        (at least one step) and stops there, exactly at it and at rest, until the next
+        target (or pose, or velocity) comes: however many steps a frame takes, it never
+        overshoots. A dynamic body only gets the velocities that would carry it there."""
 
     def add_force(self, key: int, force: np.ndarray, point: np.ndarray | None = None) -> None: ...
     def add_torque(self, key: int, torque: np.ndarray) -> None: ...
@@ -200,8 +207,13 @@ class DynamicsBackend(Protocol):
         """Move a ``six_dof`` joint's target pose (world frame; the virtual hand), and
         optionally its force (N) and torque (N·m) bounds."""
 
-    def set_drive_limits(self, key: int, max_force: float, max_torque: float) -> None:
-        """Bound a ``six_dof`` joint's force (N) and torque (N·m)."""
+    def set_drive_limits(self, key: int, max_force: float, max_torque: float,
+                         time_constant: float | None = None, max_speed: float | None = None,
+                         max_spin: float | None = None) -> None:
+        """Bound a ``six_dof`` joint's force (N) and torque (N·m), and set how it responds:
+        the time constant (s) its pose error closes with (at least the step), and caps on
+        the correcting speed (m/s) and spin (rad/s). None keeps what it has. With a
+        ``body_b`` the target moves with that body, whose velocity is fed forward."""
 
     # -- batches -----------------------------------------------------------
     def read_state(self) -> BodyState:
@@ -218,6 +230,11 @@ class DynamicsBackend(Protocol):
         """Contacts of the last step as a CONTACT_DTYPE array."""
 
     # -- queries -----------------------------------------------------------
+    def overlapping(self, key: int) -> list[int]:
+        """Keys of the bodies (-1: static geometry) body ``key`` intersects now, whether its
+        own collisions are on or off (a body that passed through things asks before it
+        collides again), as collision categories and masks allow."""
+
     def raycast(self, origin: np.ndarray, direction: np.ndarray, max_distance: float,
                 ignore: int | None = None, mask: int = 0xFFFFFFFF) -> RayHit | None:
         """Closest hit along the ray, skipping body ``ignore`` and categories not in ``mask``."""

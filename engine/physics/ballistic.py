@@ -14,7 +14,8 @@ import logging
 import numpy as np
 
 from components import Joint, Physical
-from engine.physics.backend import CONTACT_DTYPE, BodyState, RayHit, WorldSettings
+from engine.physics.backend import ARRIVE_SLACK, CONTACT_DTYPE, BodyState, RayHit, WorldSettings
+from engine.rotation import rotation_vector_between
 
 log = logging.getLogger("colosseum.physics.ballistic")
 
@@ -52,7 +53,8 @@ class BallisticBackend:
         self._inv_mass = np.zeros(0)
         self._gravity_on = np.zeros(0)
         self._dynamic = np.zeros(0, bool)
-        self._targets: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        #: kinematic bodies on their way: key -> target position, orientation, s left
+        self._targets: dict[int, tuple[np.ndarray, np.ndarray, float]] = {}
         self._refused_joints: set[int] = set()
         self._keys_array: np.ndarray | None = None  # cached, dropped on add/remove
 
@@ -107,17 +109,28 @@ class BallisticBackend:
         i = self._index[key]
         self._pos[i] = position
         self._quat[i] = orientation
+        self._targets.pop(key, None)
 
     def set_velocity(self, key: int, linear: np.ndarray, angular: np.ndarray) -> None:
         i = self._index[key]
         self._vel[i] = linear
         self._ang[i] = angular
+        self._targets.pop(key, None)
 
     def set_kinematic_target(self, key: int, position: np.ndarray, orientation: np.ndarray,
                              dt: float) -> None:
+        """Velocities that carry the body to the target in ``dt``; a kinematic one stops
+        there (exactly at it) unless told otherwise first."""
+        if not dt > 0:
+            raise ValueError(f"dt must be positive, got {dt}")
         i = self._index[key]
-        self._vel[i] = (np.asarray(position) - self._pos[i]) / dt
-        self._targets[key] = (np.asarray(position, float), np.asarray(orientation, float))
+        target = np.asarray(position, float)
+        turn = np.asarray(orientation, float)
+        turn = turn / np.linalg.norm(turn)
+        self.set_velocity(key, (target - self._pos[i]) / dt,
+                          rotation_vector_between(self._quat[i], turn) / dt)
+        if not self._dynamic[i]:
+            self._targets[key] = (target, turn, float(dt))
 
     def add_force(self, key: int, force: np.ndarray, point: np.ndarray | None = None) -> None:
         i = self._index[key]
@@ -172,13 +185,20 @@ class BallisticBackend:
                          max_torque: float | None = None) -> None:
         self._refused(key)
 
-    def set_drive_limits(self, key: int, max_force: float, max_torque: float) -> None:
+    def set_drive_limits(self, key: int, max_force: float, max_torque: float,
+                         time_constant: float | None = None, max_speed: float | None = None,
+                         max_spin: float | None = None) -> None:
         self._refused(key)
 
     # -- stepping ----------------------------------------------------------
     def step(self, dt: float) -> None:
         if not self._keys:
             return
+        for key, (_, _, left) in self._targets.items():  # due within this step: slow down
+            if left < dt * (1.0 - ARRIVE_SLACK):
+                i = self._index[key]
+                self._vel[i] *= left / dt
+                self._ang[i] *= left / dt
         g = np.asarray(self.settings.gravity, float)
         accel = self._force * self._inv_mass[:, None] + g * self._gravity_on[:, None]
         self._vel += accel * dt
@@ -186,12 +206,17 @@ class BallisticBackend:
         self._quat = _integrate_orientation(self._quat, self._ang, dt)
         self._force[:] = 0.0
         self._torque[:] = 0.0
-        for key, (position, orientation) in self._targets.items():
+        for key, (position, orientation, left) in list(self._targets.items()):
+            left -= dt
+            if left > dt * ARRIVE_SLACK:
+                self._targets[key] = (position, orientation, left)
+                continue
+            del self._targets[key]  # due in this step: exactly there, at rest
             i = self._index[key]
             self._pos[i] = position
             self._quat[i] = orientation
             self._vel[i] = 0.0
-        self._targets.clear()
+            self._ang[i] = 0.0
 
     # -- batches -----------------------------------------------------------
     def read_state(self) -> BodyState:
@@ -214,6 +239,8 @@ class BallisticBackend:
 
     def write_state(self, state: BodyState) -> None:
         rows = np.array([self._index[int(k)] for k in state.keys], np.int64)
+        for key in np.asarray(state.keys).tolist():  # put where it says: no longer on its way
+            self._targets.pop(key, None)
         self._pos[rows] = state.position
         self._quat[rows] = state.orientation
         self._vel[rows] = state.linear_velocity
@@ -221,6 +248,12 @@ class BallisticBackend:
 
     def contacts(self) -> np.ndarray:
         return np.zeros(0, CONTACT_DTYPE)
+
+    def overlapping(self, key: int) -> list[int]:
+        """Particles have no extent: nothing ever overlaps."""
+        if key not in self._index:
+            raise KeyError(f"no body with key {key}")
+        return []
 
     def raycast(self, origin: np.ndarray, direction: np.ndarray, max_distance: float,
                 ignore: int | None = None, mask: int = 0xFFFFFFFF) -> RayHit | None:

@@ -38,6 +38,7 @@ from engine.physics.backend import SleepState
 
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
+_FLOAT = np.dtype(np.float64)
 
 
 class CommandError(ValueError):
@@ -46,20 +47,24 @@ class CommandError(ValueError):
 
 def _vector(command: str, what: str, value: Any, n: int) -> tuple[float, ...]:
     try:
-        out = tuple(float(v) for v in value)
+        # an array of floats is already floats (the per-frame case: kept cheap)
+        out = tuple(value.tolist()) if type(value) is np.ndarray and value.dtype == _FLOAT \
+            else tuple(map(float, value))
     except (TypeError, ValueError):
         raise CommandError(f"{command}: {what} must be {n} numbers, got {value!r}") from None
-    if len(out) != n or not all(math.isfinite(v) for v in out):
+    # a sum is finite exactly when every term is (short of overflowing: 1e308 * 2, far
+    # outside any world, is refused too)
+    if len(out) != n or not math.isfinite(sum(out)):
         raise CommandError(f"{command}: {what} must be {n} finite numbers, got {value!r}")
     return out
 
 
 def _quaternion(command: str, value: Any) -> Quat:
-    q = _vector(command, "orientation", value, 4)
-    norm = math.sqrt(sum(c * c for c in q))
+    w, x, y, z = _vector(command, "orientation", value, 4)
+    norm = math.hypot(w, x, y, z)
     if norm == 0.0:
         raise CommandError(f"{command}: orientation must be a non-zero quaternion w, x, y, z")
-    return q if norm == 1.0 else tuple(c / norm for c in q)  # type: ignore[return-value]
+    return (w, x, y, z) if norm == 1.0 else (w / norm, x / norm, y / norm, z / norm)
 
 
 def _scalar(command: str, what: str, value: Any, low: float = -math.inf) -> float:
@@ -226,16 +231,25 @@ class ApplyImpulse(Command):
 
 @dataclass(frozen=True, slots=True)
 class SetPose(Command):
-    """Teleport a body: its origin to ``position``, turned to ``orientation``."""
+    """Teleport a body: its origin to ``position``, turned to ``orientation``; with
+    velocities (m/s, rad/s), moving at those from there (a kinematic body carried along a
+    tracked path in one command)."""
 
     key: int
     position: Vec3
     orientation: Quat
+    linear: Vec3 | None = None
+    angular: Vec3 | None = None
 
     def __post_init__(self) -> None:
         self._check_key()
         self._set("position", _vector("SetPose", "position", self.position, 3))
         self._set("orientation", _quaternion("SetPose", self.orientation))
+        if (self.linear is None) != (self.angular is None):
+            raise CommandError("SetPose: give both velocities or neither")
+        if self.linear is not None:
+            self._set("linear", _vector("SetPose", "linear velocity", self.linear, 3))
+            self._set("angular", _vector("SetPose", "angular velocity", self.angular, 3))
 
 
 @dataclass(frozen=True, slots=True)
@@ -252,7 +266,8 @@ class SetVelocity(Command):
 
 @dataclass(frozen=True, slots=True)
 class SetKinematicTarget(Command):
-    """Move a kinematic body so it reaches the pose after ``dt`` seconds."""
+    """Move a kinematic body so it reaches the pose after ``dt`` seconds and stays there,
+    at rest, however many steps follow before the next command."""
 
     key: int
     position: Vec3
@@ -334,17 +349,26 @@ class SetJointTarget(Command):
 
 @dataclass(frozen=True, slots=True)
 class SetDriveLimits(Command):
-    """Bound a six_dof joint's force (N) and torque (N·m)."""
+    """Bound a six_dof joint's force (N) and torque (N·m), and set how it responds: the
+    time constant (s) its error closes with, caps on the correcting speed (m/s) and spin
+    (rad/s); None keeps what the joint has."""
 
     key: int
     max_force: float
     max_torque: float
+    time_constant: float | None = None
+    max_speed: float | None = None
+    max_spin: float | None = None
     on_joint: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         self._check_key()
         self._set("max_force", _scalar("SetDriveLimits", "max_force", self.max_force, 0.0))
         self._set("max_torque", _scalar("SetDriveLimits", "max_torque", self.max_torque, 0.0))
+        for name in ("time_constant", "max_speed", "max_spin"):
+            value = getattr(self, name)
+            if value is not None:
+                self._set(name, _scalar("SetDriveLimits", name, value, 0.0))
 
 
 @dataclass(frozen=True, slots=True)

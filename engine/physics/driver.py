@@ -65,7 +65,7 @@ _APPLY: dict[type, Callable[[DynamicsBackend, Any], Any]] = {
     cmd.ApplyForce: lambda b, c: b.add_force(c.key, np.array(c.force), _vec(c.point)),
     cmd.ApplyTorque: lambda b, c: b.add_torque(c.key, np.array(c.torque)),
     cmd.ApplyImpulse: lambda b, c: b.add_impulse(c.key, np.array(c.impulse), _vec(c.point)),
-    cmd.SetPose: lambda b, c: b.set_pose(c.key, np.array(c.position), np.array(c.orientation)),
+    cmd.SetPose: lambda b, c: _set_pose(b, c),
     cmd.SetVelocity: lambda b, c: b.set_velocity(c.key, np.array(c.linear),
                                                  np.array(c.angular)),
     cmd.SetKinematicTarget: lambda b, c: b.set_kinematic_target(
@@ -76,8 +76,16 @@ _APPLY: dict[type, Callable[[DynamicsBackend, Any], Any]] = {
     cmd.SetSleepState: lambda b, c: _restore_sleep(b, c.key, c.state),
     cmd.SetJointTarget: lambda b, c: b.set_joint_target(
         c.key, np.array(c.position), np.array(c.orientation), c.max_force, c.max_torque),
-    cmd.SetDriveLimits: lambda b, c: b.set_drive_limits(c.key, c.max_force, c.max_torque),
+    cmd.SetDriveLimits: lambda b, c: b.set_drive_limits(c.key, c.max_force, c.max_torque,
+                                                         c.time_constant, c.max_speed,
+                                                         c.max_spin),
 }
+
+
+def _set_pose(backend: DynamicsBackend, c: cmd.SetPose) -> None:
+    backend.set_pose(c.key, np.array(c.position), np.array(c.orientation))
+    if c.linear is not None:
+        backend.set_velocity(c.key, np.array(c.linear), np.array(c.angular))
 
 
 def apply(command: cmd.Command, backend: DynamicsBackend) -> Any:

@@ -64,11 +64,12 @@ class _Part:
     color: tuple[float, float, float, float]
     shadower: bool
     shadowed: bool
+    overlay: bool = False
 
 
 @dataclass(slots=True)
 class _Batch:
-    key: tuple[str, str, str | None]
+    key: tuple[str, str, str | None, bool]
     start: int
     stop: int
     buffer: Any = None
@@ -239,7 +240,7 @@ class Renderer:
             local = math3d.compose(shape.offset, shape.rotation, scale)
             parts.append(_Part(row, mesh, texture, visual.shader_state, local, color,
                                visual.shadower and not self._meshes[mesh].is_plane,
-                               visual.shadowed))
+                               visual.shadowed, visual.overlay))
         if visual.model:
             local = math3d.compose((0, 0, 0), (1, 0, 0, 0), scale)
             try:
@@ -249,7 +250,8 @@ class Renderer:
                 self._mesh_for_shape_key("box:placeholder", lambda: meshes.box((1, 1, 1)))
                 self._texture_for(_PLACEHOLDER)
                 return parts + [_Part(row, "box:placeholder", _PLACEHOLDER, None, local,
-                                      (1, 1, 1, 1), visual.shadower, visual.shadowed)]
+                                      (1, 1, 1, 1), visual.shadower, visual.shadowed,
+                                      visual.overlay)]
             for i, part in enumerate(model.parts):
                 mkey = f"model:{model.path}#{i}"
                 self._mesh_for_shape_key(mkey, lambda p=part: meshes.from_part(p))
@@ -260,7 +262,7 @@ class Renderer:
                         self._textures[tex] = self._upload_texture(part.texture)
                 part_color = tuple(a * b for a, b in zip(color, part.color, strict=True))
                 parts.append(_Part(row, mkey, tex, visual.shader_state, local, part_color,
-                                   visual.shadower, visual.shadowed))
+                                   visual.shadower, visual.shadowed, visual.overlay))
         for part in parts:
             self._texture_for(part.texture)
         return parts
@@ -417,9 +419,9 @@ class Renderer:
                 batch.buffer.release()
         parts = [p for ps in self._objects.values() for p in ps]
         # planes last: they cover the screen, and drawing them after the objects lets the
-        # depth test skip shading the floor hidden behind them
-        parts.sort(key=lambda p: (self._meshes[p.mesh].is_plane, p.mesh, p.texture,
-                                  p.state or ""))
+        # depth test skip shading the floor hidden behind them; overlays after everything
+        parts.sort(key=lambda p: (p.overlay, self._meshes[p.mesh].is_plane, p.mesh,
+                                  p.texture, p.state or ""))
         n = len(parts)
         self._part_mesh = [p.mesh for p in parts]
         self._skinned_parts = np.array([i for i, p in enumerate(parts)
@@ -440,7 +442,7 @@ class Renderer:
                 log.warning("unknown shader state %r; its objects use the default material", state)
         self._batches = []
         for i, p in enumerate(parts):
-            key = (p.mesh, p.texture, p.state)
+            key = (p.mesh, p.texture, p.state, p.overlay)
             if self._instancing and self._batches and self._batches[-1].key == key:
                 self._batches[-1].stop = i + 1
             else:
@@ -597,6 +599,12 @@ class Renderer:
                   tuple(eye.view[:3, :3] @ np.asarray(light.direction, np.float64)))
                 w(program, prefix + "spotCutoff", light.cutoff if light.kind == "spot" else 180.0)
 
+    def _begin_overlay(self) -> None:
+        """Overlays (sorted last) are blended by their alpha and drawn over everything."""
+        self.ctx.disable(self.ctx.DEPTH_TEST)
+        self.ctx.enable(self.ctx.BLEND)
+        self.ctx.blend_func = self.ctx.SRC_ALPHA, self.ctx.ONE_MINUS_SRC_ALPHA
+
     def _draw_per_object(self, program: Any, vao: Any, eye: Eye, world: np.ndarray) -> None:
         """One draw per object for shaders that take their matrices as uniforms."""
         view_proj = eye.proj @ eye.view
@@ -641,6 +649,8 @@ class Renderer:
             fbo.viewport = eye.viewport
             configured: set[int] = set()
             for batch in self._batches:
+                if batch.key[3]:
+                    self._begin_overlay()
                 program = lit
                 compiled = self.shaders.state(batch.key[2]) if batch.key[2] else None
                 if compiled is not None:
@@ -658,6 +668,8 @@ class Renderer:
                     continue
                 vao.render(instances=batch.stop - batch.start)
                 self.stats.draw_calls += 1
+            self.ctx.enable(self.ctx.DEPTH_TEST)
+            self.ctx.disable(self.ctx.BLEND)
         self.ctx.disable(self.ctx.CULL_FACE)
         self.stats.batches = len(self._batches)
         out = self.post.run(self._scene_tex, self._scene_depth, size, self.time) \

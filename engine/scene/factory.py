@@ -32,7 +32,9 @@ from components import (
     ClipSpec,
     Controller,
     Display,
+    Graspable,
     Hand,
+    HandState,
     Hold,
     Joint,
     Light,
@@ -43,11 +45,20 @@ from components import (
     Shape,
     Sound,
     Transform,
+    Trigger,
     Visual,
+)
+from components.avatar import (
+    SavedAvatar,
+    SavedDrive,
+    SavedGroup,
+    SavedHold,
+    SavedLayer,
+    SavedRequest,
 )
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from components.script import SavedScript, ScriptHandler, ScriptTimer
-from engine.assets import AssetError, Assets
+from engine.assets import AssetError, Assets, nodes_name
 from engine.assets.geometry import convex_hull
 from engine.measures import MeasureSpec
 from engine.physics.backend import MaterialPair, SleepState, WorldSettings
@@ -72,12 +83,15 @@ from engine.scene.diagnostics import (
     Reporter,
     suggest,
 )
-from engine.scene.inputs import InputSpec, read_inputs
+from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS, InputSpec, read_inputs
 from engine.scene.parser import paused_gc
 
 if TYPE_CHECKING:
     from engine.app import Engine
 
+#: A virtual hand's body when the author gives none: a palm-sized box (m) of 0.45 kg.
+HAND_SIZE = (0.09, 0.18, 0.03)
+HAND_MASS = 0.45
 #: Shared defaults (tuples: immutable, so every shape and pose may hold the same one).
 _ORIGIN = (0.0, 0.0, 0.0)
 _IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -138,6 +152,8 @@ class SceneSpec:
     random_state: dict[str, object] | None = None
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
     display_heads: dict[str, str] = field(default_factory=dict)  # display ID -> object ID
+    #: Hand object ID -> the object its tracker is calibrated relative to.
+    hand_frames: dict[str, str] = field(default_factory=dict)
     #: Object ID -> sleep-rule state a saved state carries (see :class:`SleepState`).
     sleep: dict[str, SleepState] = field(default_factory=dict)
     content_dir: Path | None = None
@@ -157,15 +173,17 @@ class SpawnRecord:
     """What one script call made at run time, kept so a saved state writes it too.
 
     ``spawn(text)``: the snippet's SceneDB, the folder its asset names are relative to,
-    and the entity its i-th ``Object`` block (``objects[i]``) and i-th ``Joint`` block
-    (``joints[i]``) became. ``createJoint``: ``db`` None and ``joints`` its one joint
-    entity, whose Joint component holds all a ``Joint`` block needs.
+    and the entity its i-th ``Object`` block (``objects[i]``), i-th ``Joint`` block
+    (``joints[i]``) and i-th ``Avatar`` block (``avatars[i]``) became. ``createJoint``:
+    ``db`` None and ``joints`` its one joint entity, whose Joint component holds all a
+    ``Joint`` block needs.
     """
 
     db: SceneDB | None
     content_dir: Path | None
     objects: list[int]
     joints: list[int]
+    avatars: list[int] = field(default_factory=list)
 
 
 @dataclass(slots=True)
@@ -188,7 +206,7 @@ class SceneIds:
         self.spawned.append(made)
         if len(self.spawned) >= 2 * self._kept:
             self.spawned = [r for r in self.spawned
-                            if any(exists(e) for e in (*r.objects, *r.joints))]
+                            if any(exists(e) for e in (*r.objects, *r.joints, *r.avatars))]
             self._kept = max(len(self.spawned), 16)
 
 
@@ -302,14 +320,20 @@ class _Builder:
         self.poses: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
         self.physical_ids: set[str] = set()
         self.sleep: dict[str, SleepState] = {}
+        self.hand_frames: dict[str, str] = {}
+        self.hand_inputs: list[tuple[str, _Reader]] = []  # what each hand's Hand names
         #: Owner -> the saved state its script resumes from, and the block that said so.
         self.script_states: dict[str, SavedScript] = {}
         self.script_blocks: dict[str, Block] = {}
+        #: Avatar ID -> the AvatarState block it resumes from (a loaded saved state).
+        self.avatar_states: dict[str, Block] = {}
 
     def build(self, db: SceneDB) -> SceneSpec:
         spec = SceneSpec()
         root = _Index(db.root)
         self.script_states = self.saved_scripts(root)
+        self.avatar_states = {str(_Reader(b, "AvatarState")("Owner")): b
+                              for b in root.blocks("AvatarState")}
         for blk in root.blocks("Material"):
             r = _Reader(blk, "Material")
             name = str(r("ID"))
@@ -329,12 +353,15 @@ class _Builder:
             if js is not None:
                 spec.joints.append(js)
         spec.sleep = self.sleep
+        spec.hand_frames = self.hand_frames
         self.shaders(root, spec)
         self.world(root, spec)
         self.scene_entities(root, spec)
         spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
+        self.check_hand_inputs(spec.input)
         for i, blk in enumerate(root.blocks("Avatar")):
             spec.entities.append(self.avatar(blk, i))
+        self.unclaimed_script_states()
         return spec
 
     # -- assets --------------------------------------------------------------
@@ -368,21 +395,31 @@ class _Builder:
             self.skipped.add(oid)
             return EntitySpec(oid, [], blk.loc, skipped=True)
 
+    def quaternion(self, r: _Reader, key: str) -> tuple[float, ...]:
+        """``r(key)`` as a unit quaternion (one already unit kept bit-exact, as a saved
+        state wrote it); all zeros is an error."""
+        quat = _floats(r(key))
+        norm = math.sqrt(sum(q * q for q in quat))
+        if norm == 0.0:
+            self.report.error(r.value(key).loc, f"{key} must not be all zeros")
+            return _IDENTITY
+        return quat if abs(norm - 1.0) <= 1e-12 else tuple(q / norm for q in quat)
+
+    def orientation(self, r: _Reader) -> tuple[float, ...]:
+        """The exact ``Quaternion`` where one is written, else ``Orientation`` (degrees)."""
+        return self.quaternion(r, "Quaternion") if r.has("Quaternion") else euler_to_quat(
+            r("Orientation"))
+
     def object_components(self, r: _Reader, oid: str, blk: Block) -> EntitySpec:
         position = _floats(r("Position"))
-        quat = _floats(r("Quaternion")) if r.has("Quaternion") else euler_to_quat(
-            r("Orientation"))
-        w, x, y, z = quat
-        norm = math.sqrt(w * w + x * x + y * y + z * z)
-        if norm == 0.0:
-            self.report.error(r.value("Quaternion").loc, "Quaternion must not be all zeros")
-            norm = 1.0
-        if abs(norm - 1.0) > 1e-12:  # keep a saved state's quaternion bit-exact
-            quat = tuple(q / norm for q in quat)
+        quat = self.orientation(r)
         angular = tuple(map(math.radians, r("AngularVelocity"))) if r.has(
             "AngularVelocity") else _ORIGIN
         comps: list[Any] = [Name(oid), Transform(position, quat, r("Velocity"), angular)]
         size = r("Size")
+        hand_blk = r.value("Hand")
+        if hand_blk is not None and size is None:
+            size = HAND_SIZE
         vis_blk, phys_blk = r.value("VisualAttributes"), r.value("PhysicalAttributes")
         bare = vis_blk is None and phys_blk is None
         vis = _Reader(vis_blk.data if vis_blk else None, "Visual")
@@ -398,8 +435,12 @@ class _Builder:
                 shader_state=vis("ShaderState"), shadower=bool(vis("Shadower")),
                 shadowed=bool(vis("Shadowed")), visible=bool(vis("Visible"))))
         if phys_blk is not None or bare:
-            comps.append(self.physical(r, phys, size, visual_shapes, model, scale, position,
-                                       quat))
+            body = self.physical(r, phys, size, visual_shapes, model, scale, position, quat)
+            if hand_blk is not None:
+                self.hand_body(body, phys, oid)
+            comps.append(body)
+            if phys("Trigger"):
+                comps.append(Trigger(mask=int(phys("Mask"))))
             self.physical_ids.add(oid)
             if any(map(r.has, ("Asleep", "SleepVelocity", "SleepTimer", "SleepReference"))):
                 self.sleep[oid] = self.sleep_spec(r)
@@ -410,11 +451,11 @@ class _Builder:
                 comps.append(_sound(sr, oid))
         if r.has("Script"):
             comps.append(Script(file=r("Script"), saved=self.script_states.pop(oid, None)))
-        if r.has("Hand"):
-            h = _Reader(r.value("Hand").data, "Hand")
-            comps.append(Hand(tracker=h("Tracker"), max_force=float(h("MaxForce")),
-                              max_torque=float(h("MaxTorque")),
-                              deviation_distance=float(h("DeviationDistance"))))
+        if hand_blk is not None:
+            comps += self.hand(_Reader(hand_blk.data, "Hand"), oid, hand_blk.loc,
+                               phys_blk is not None or bare)
+        if not r("Graspable"):
+            comps.append(Graspable(False))
         if r.has("Controller"):
             comps.append(_controller(_Reader(r.value("Controller").data, "Controller")))
         return EntitySpec(oid, comps, blk.loc)
@@ -429,11 +470,66 @@ class _Builder:
             gr = _Reader(g, "Geometry")
             if gr.has("File"):
                 if model is None:
-                    model, scale = gr("File"), _floats(gr("Scale"))
+                    model, scale = _model_name(gr), _floats(gr("Scale"))
                     self.assets.model(model, gr.value("File").loc, self.folder)
             elif gr.has("Primitive") and gr("Primitive") != "plane":
                 shapes.append(_primitive(gr, size))
         return shapes, model, scale
+
+    def hand(self, h: _Reader, oid: str, loc: Loc, has_body: bool) -> list[Any]:
+        """A Hand and its standing; a hand needs a body (an Object without one is told)."""
+        if not has_body:
+            self.report.error(loc, f"object '{oid}' has a Hand but no PhysicalAttributes: a "
+                                   "virtual hand is a body (leave both Visual- and "
+                                   "PhysicalAttributes out for the default hand box)")
+            return []
+        if h.has("Frame"):
+            self.hand_frames[oid] = h("Frame")
+        self.hand_inputs.append((oid, h))
+        models = {key: self.model(h, key) for key in ("ContactModel", "GraspModel")}
+        hand = Hand(tracker=h("Tracker"), glove=h("Glove"), button=h("Button"),
+                    max_force=float(h("MaxForce")), max_torque=float(h("MaxTorque")),
+                    time_constant=float(h("TimeConstant")), max_speed=float(h("MaxSpeed")),
+                    max_spin=math.radians(float(h("MaxSpin"))),
+                    deviation_distance=float(h("DeviationDistance")),
+                    break_force=_opt(h("BreakForce")), marker=bool(h("Marker")),
+                    contact_model=models["ContactModel"], grasp_model=models["GraspModel"],
+                    holding=tuple(h("Holding") or ()))
+        return [hand, HandState()]
+
+    def check_hand_inputs(self, inputs: InputSpec) -> None:
+        """A hand's tracker and glove must be ones the scene declares (or the desktop
+        device's); with none declared, names from a device that sends them (OSC, LSL) are
+        expected, and a name nothing declares is told as a warning."""
+        trackers = {t.id for t in inputs.trackers}
+        gloves = {b.device for b in inputs.buttons}
+        for oid, h in self.hand_inputs:
+            for key, declared, desktop in (("Tracker", trackers, DESKTOP_TRACKERS),
+                                           ("Glove", gloves, DESKTOP_GLOVES)):
+                name = h(key)
+                if not name or name in declared or name in desktop:
+                    continue
+                known = ", ".join(sorted({*declared, *desktop}))
+                what = "tracker" if key == "Tracker" else "glove"
+                hint = suggest(name, sorted({*declared, *desktop}))
+                if declared:
+                    self.report.error(h.value(key).loc, f"hand '{oid}': no {what} {name!r} "
+                                      f"in this scene's Input (known: {known}){hint}")
+                else:
+                    self.report.warning(h.value(key).loc, f"hand '{oid}': {what} {name!r} is "
+                                        f"declared nowhere; it must come from a device that "
+                                        f"sends it (known here: {known}){hint}")
+
+    def hand_body(self, body: Physical, phys: _Reader, oid: str) -> None:
+        """A hand floats (its drive holds it up) and never sleeps; it weighs a hand's
+        0.45 kg unless the author gave it a mass."""
+        if phys.has("Gravity") and phys("Gravity"):
+            self.report.warning(phys.value("Gravity").loc, f"object '{oid}' is a hand: hands "
+                                "float, so Gravity 1 is ignored")
+        body.gravity = False
+        body.can_sleep = False
+        if not (phys.has("Mass") or phys.has("Density")):
+            body.mass = HAND_MASS
 
     def physical(self, r: _Reader, phys: _Reader, size: Any, visual_shapes: list[Shape],
                  model: str | None, scale: tuple[float, ...], position: tuple[float, ...],
@@ -455,6 +551,9 @@ class _Builder:
             kind = "static"
         elif r("Kinematic"):
             kind = "kinematic"
+        if phys("Trigger"):  # detects what its Mask names; nothing collides with it
+            return Physical(kind="kinematic" if r("Kinematic") else "static", mass=mass,
+                            shapes=shapes, material=material, category=0, mask=0)
         return Physical(kind=kind, mass=mass, shapes=shapes, material=material,
                         linear_damping=float(phys("LinearDamping")),
                         angular_damping=float(phys("AngularDamping")),
@@ -470,7 +569,8 @@ class _Builder:
             gr = _Reader(g, "Geometry")
             if gr.has("File") or gr.has("ParseMethod"):
                 file_v = gr.value("File")
-                file, fscale = (gr("File"), _floats(gr("Scale"))) if file_v else (model, scale)
+                file, fscale = (_model_name(gr), _floats(gr("Scale"))) if file_v else (model,
+                                                                                     scale)
                 loc = file_v.loc if file_v else g.loc
                 if file is None:
                     self.report.error(loc, "ParseMethod needs a model: give File here or in "
@@ -496,6 +596,17 @@ class _Builder:
             else:
                 shapes = [_primitive(_Reader(None, "Geometry"), size)]
         return shapes, has_plane
+
+    def model(self, r: _Reader, key: str) -> str | None:
+        """``r(key)``, a model file, if it can be read; else None, told as a problem."""
+        file = r(key)
+        if file is not None:
+            try:
+                self.assets.model(file, r.value(key).loc, self.folder)
+            except AssetError as exc:
+                self.problem(exc, "the object keeps its own look")
+                return None
+        return file
 
     def texture(self, vis: _Reader) -> str | None:
         """The Visual's texture file; one that cannot be read is told here (the renderer
@@ -559,16 +670,7 @@ class _Builder:
 
         first = r("Animation") if r.has("Animation") and clip(
             r("Animation"), r.value("Animation").loc) else None
-        blend: dict[str, float] = {}
-        if r.has("Blend"):
-            names, weights = r("Blend"), r("Weights") or (1.0,) * len(r("Blend"))
-            if len(weights) != len(names):
-                self.report.error(r.value("Weights").loc if r.has("Weights") else
-                                  r.value("Blend").loc,
-                                  f"Weights has {len(weights)} numbers for {len(names)} Blend "
-                                  "clips")
-            blend = {n: float(w) for n, w, item in zip(names, weights, r.value("Blend").data,
-                                                        strict=False) if clip(n, item.loc)}
+        blend = dict(self.weights(r, "Blend", clip)) if r.has("Blend") else {}
         queue = [n for n, item in zip(r("Queue") or (), r.value("Queue").data if r.has(
             "Queue") else (), strict=True) if clip(n, item.loc)]
         clips = []
@@ -586,13 +688,7 @@ class _Builder:
             for k in range(0, len(bones) - len(bones) % 3, 3):
                 if all([bone(bones[k + j], items[k + j].loc) for j in range(3)]):
                     legs.append((bones[k], bones[k + 1], bones[k + 2]))
-        path: list[tuple[float, float, float]] = []
-        if r.has("Path"):
-            flat = _floats(r("Path"))
-            if len(flat) % 3:
-                self.report.error(r.value("Path").loc, f"Path is points [x y z ...], got "
-                                                       f"{len(flat)} numbers")
-            path = [(flat[k], flat[k + 1], flat[k + 2]) for k in range(0, len(flat) - 2, 3)]
+        path = self.points(r, "Path")
         holds = []
         for b in r.blocks("Hold"):
             h = _Reader(b, "Hold")
@@ -607,24 +703,111 @@ class _Builder:
                                                           "positive")
             capsule = (diameter / 2, length)
         for key in ("Scale", "Speed", "Fade", "StepHeight", "Smoothing", "TurnRate"):
-            if r(key) < 0 or (key == "Scale" and r(key) == 0):
+            if r(key) is not None and (r(key) < 0 or (key == "Scale" and r(key) == 0)):
                 self.report.error(r.value(key).loc, f"{key} must be positive, got {r(key)}")
         scale = float(r("Scale"))
-        avatar = Avatar(model=file, scale=scale, clip=first, loop=bool(r("Loop")),
-                        speed=float(r("Speed")), blend=blend, queue=queue, fade=float(r("Fade")),
+        state = self.avatar_states.pop(aid, None)
+        avatar = Avatar(model=file, scale=scale, clip=first,
+                        loop=None if r("Loop") is None else bool(r("Loop")),
+                        speed=_opt(r("Speed")), blend=blend, queue=queue, fade=float(r("Fade")),
                         clips=clips, ground_follow=bool(r("GroundFollow")),
                         step_height=float(r("StepHeight")), smoothing=float(r("Smoothing")),
                         foot_ik=legs, path=path, path_loop=bool(r("PathLoop")),
                         turn_rate=math.radians(float(r("TurnRate"))), capsule=capsule,
-                        holds=holds)
+                        holds=holds, saved=None if state is None else self.saved_avatar(
+                            state, clip, bone))
         visual = Visual(model=file, scale=(scale,) * 3, color=_color(r("Color")),
                         shader_state=r("ShaderState"), shadower=bool(r("Shadower")),
                         shadowed=bool(r("Shadowed")))
-        comps: list[Any] = [Name(aid), Transform(_floats(r("Position")),
-                                                 euler_to_quat(r("Orientation"))), visual, avatar]
+        comps: list[Any] = [Name(aid), Transform(_floats(r("Position")), self.orientation(r)),
+                            visual, avatar]
         if r.has("Script"):
-            comps.append(Script(file=r("Script")))
+            comps.append(Script(file=r("Script"), saved=self.script_states.pop(aid, None)))
         return EntitySpec(aid, comps, blk.loc)
+
+    def weights(self, r: _Reader, key: str, clip: Callable[[str, Loc], bool]
+                ) -> list[tuple[str, float]]:
+        """Clips named by ``key`` with their ``Weights`` (1 each by default); clips the
+        model lacks are told (``clip``) and left out."""
+        names, weights = r(key), r("Weights") or (1.0,) * len(r(key))
+        if len(weights) != len(names):
+            self.report.error(r.value("Weights").loc if r.has("Weights") else r.value(key).loc,
+                              f"Weights has {len(weights)} numbers for {len(names)} {key} "
+                              "clips")
+        return [(n, float(w)) for n, w, item in zip(names, weights, r.value(key).data,
+                                                     strict=False) if clip(n, item.loc)]
+
+    def points(self, r: _Reader, key: str) -> list[tuple[float, float, float]]:
+        """A path: ``r(key)`` as points [x y z ...]."""
+        if not r.has(key):
+            return []
+        flat = _floats(r(key))
+        if len(flat) % 3:
+            self.report.error(r.value(key).loc, f"{key} is points [x y z ...], got {len(flat)} "
+                                                "numbers")
+        return [(flat[k], flat[k + 1], flat[k + 2]) for k in range(0, len(flat) - 2, 3)]
+
+    def not_negative(self, r: _Reader, *keys: str) -> None:
+        for key in keys:
+            if r(key) is not None and not r(key) >= 0:
+                self.report.error(r.value(key).loc, f"{key} must not be negative, got {r(key)}")
+
+    def saved_avatar(self, blk: Block, clip: Callable[[str, Loc], bool],
+                     bone: Callable[[str, Loc], bool]) -> SavedAvatar:
+        """An ``AvatarState`` as its avatar resumes from it. Clips and bones its model
+        lacks are told and left out; numbers out of range are errors."""
+        r = _Reader(blk, "AvatarState")
+        groups = []
+        for b in r.blocks("Group"):
+            g = _Reader(b, "AnimationGroup")
+            if not 0.0 <= g("Phase") <= 1.0:
+                self.report.error(g.value("Phase").loc, f"Phase is 0..1, got {g('Phase')}")
+            layers = []
+            for lb in g.blocks("Layer"):
+                c = _Reader(lb, "AnimationLayer")
+                self.not_negative(c, "Speed", "Weight", "FadeFrom", "FadeTo", "FadeTime",
+                                  "FadeLength")
+                if clip(c("Clip"), c.value("Clip").loc):
+                    layers.append(SavedLayer(c("Clip"), float(c("Speed")), float(c("Weight")),
+                                             float(c("FadeFrom")), float(c("FadeTo")),
+                                             float(c("FadeTime")), float(c("FadeLength"))))
+            if layers:
+                groups.append(SavedGroup(tuple(layers), float(g("Phase")), bool(g("Loop")),
+                                         bool(g("Ended")), bool(g("Current"))))
+        queue = []
+        for b in r.blocks("Queued"):
+            q = _Reader(b, "AnimationRequest")
+            self.not_negative(q, "Fade", "Speed")
+            weights = self.weights(q, "Clips", clip)
+            if weights:
+                queue.append(SavedRequest(tuple(weights), float(q("Fade")), _opt(q("Speed")),
+                                          None if q("Loop") is None else bool(q("Loop"))))
+        path = self.points(r, "Path")
+        if not 0 <= r("Waypoint") <= len(path):
+            self.report.error(r.value("Waypoint").loc, f"Waypoint is a point of Path (0 to "
+                              f"{len(path)}), got {r('Waypoint')}")
+        holds = []
+        for b in r.blocks("Hold"):
+            h = _Reader(b, "HeldState")
+            if bone(h("Bone"), h.value("Bone").loc):
+                holds.append(SavedHold(Hold(h("Bone"), h("Object"), _floats(h("Offset")),
+                                            self.quaternion(h, "Quaternion")),
+                                       None if h("Last") is None else _floats(h("Last"))))
+        drives = []
+        for b in r.blocks("Drive"):
+            d = _Reader(b, "BoneDrive")
+            if bone(d("Bone"), d.value("Bone").loc):
+                drives.append(SavedDrive(d("Bone"), _floats(d("Position")),
+                                         self.quaternion(d, "Quaternion")))
+        capsule = None
+        if r.has("CapsulePosition"):
+            turn = self.quaternion(r, "CapsuleQuaternion") if r.has("CapsuleQuaternion") \
+                else _IDENTITY
+            capsule = (_floats(r("CapsulePosition")), turn)
+        return SavedAvatar(tuple(groups), tuple(queue), tuple(path), bool(r("PathLoop")),
+                           int(r("Waypoint")), _opt(r("Ground")),
+                           None if r("GroundAt") is None else _floats(r("GroundAt")),
+                           float(r("StepOffset")), tuple(holds), tuple(drives), capsule)
 
     def sleep_spec(self, r: _Reader) -> SleepState:
         """An object's saved sleep-rule state, so a loaded state falls asleep on time."""
@@ -791,6 +974,9 @@ class _Builder:
             sid = f"script{i}"
             script = Script(file=e.value.data, saved=self.script_states.pop(sid, None))
             spec.entities.append(EntitySpec(sid, [Name(sid), script], e.loc))
+
+    def unclaimed_script_states(self) -> None:
+        """Warn of each ScriptState no script took (after every script's owner is built)."""
         for owner, block in self.script_blocks.items():
             if owner in self.script_states:  # its owner runs no script (or was left out)
                 self.problems.append(Diagnostic(
@@ -869,6 +1055,13 @@ def _model_shape(triangles: tuple[np.ndarray, np.ndarray], scale: tuple[float, .
     return Shape("sphere", (radius,), offset=center)
 
 
+def _model_name(gr: _Reader) -> str:
+    """A Geometry's model: its File, or only the File's ``Nodes`` or ``Mesh``."""
+    if gr.has("Nodes"):
+        return nodes_name(gr("File"), gr("Nodes"))
+    return nodes_name(gr("File"), [gr("Mesh")], mesh=True) if gr.has("Mesh") else gr("File")
+
+
 def _primitive(gr: _Reader, size: Any) -> Shape:
     """A primitive Shape from the format's sizes (diameters) to the component's (radii)."""
     kind = gr("Primitive") or "box"
@@ -918,6 +1111,9 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     for display_id, head in spec.display_heads.items():
         if head in ids:
             engine.world.component_for_entity(ids[display_id], Display).head = ids[head]
+    for hand_id, frame in spec.hand_frames.items():
+        if hand_id in ids and frame in ids:
+            engine.world.component_for_entity(ids[hand_id], Hand).frame = ids[frame]
     joints: dict[str, int] = {}
     for js in spec.joints:
         if js.skipped:

@@ -24,6 +24,11 @@ from engine.rotation import IDENTITY, euler_to_quat
 from engine.scene.db import Block, Value
 from engine.scene.diagnostics import Loc, Reporter, suggest
 
+#: The trackers and gloves the desktop device emulates (the mouse drives one hand at a
+#: time, its left button is that hand's glove ``pinch``), known to every scene.
+DESKTOP_TRACKERS = ("hand_l", "hand_r")
+DESKTOP_GLOVES = ("glove_l", "glove_r")
+
 #: Fields a serial ``Line`` may hold, and what each one reads.
 LINE_FIELDS = ("name", "count", "button", "pressed", "axis", "value",
                "x", "y", "z", "qw", "qx", "qy", "qz")

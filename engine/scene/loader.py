@@ -45,13 +45,18 @@ def _unreadable(path: Path) -> SceneError | None:
 
 def validated(db: SceneDB, content_dir: Path | None = None,
               known: Mapping[str, Iterable[str]] | None = None) -> SceneDB:
-    """Check ``db`` against the schema; raises SceneError (with warnings kept) on errors."""
+    """Check ``db`` against the schema; raises SceneError (with warnings kept) on errors.
+    ``Model`` blocks are imported first (their blocks checked with the rest); what their
+    files leave out is kept with the warnings."""
+    from engine.interchange.models import expand_models
+
+    folder = content_dir if content_dir is not None else Path(db.path).parent
     report = Reporter(list(db.warnings), dict(db.sources))
     with paused_gc():
-        validate(db, content_dir if content_dir is not None else Path(db.path).parent, report,
-                 known)
+        left_out = expand_models(db, folder, report, known)
+        validate(db, folder, report, known)
     report.raise_if_errors()
-    db.warnings = report.diagnostics
+    db.warnings = [*report.diagnostics, *left_out]
     return db
 
 

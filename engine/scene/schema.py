@@ -112,6 +112,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "World": _f(STRUCT_T, doc="dynamics settings", struct="World"),
         "Avatar": _f(STRUCT_T, doc="a skinned, animated figure (glTF)", repeat=True,
                      struct="Avatar"),
+        "Model": _f(STRUCT_T, doc="a model file (glTF, Collada) whose bodies, joints and "
+                    "materials join the scene", repeat=True, struct="Model"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
         "Input": _f(STRUCT_T, doc="input devices and how their trackers, wheels and buttons "
                     "are calibrated (engine.input)", repeat=True, struct="Input"),
@@ -123,6 +125,9 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "ScriptState": _f(STRUCT_T, doc="where a script stood when this state was saved "
                           "(written by --save-state): it resumes instead of starting",
                           repeat=True, struct="ScriptState"),
+        "AvatarState": _f(STRUCT_T, doc="where an avatar stood when this state was saved "
+                          "(written by --save-state): it resumes instead of starting",
+                          repeat=True, struct="AvatarState"),
     },
     "Object": {
         "ID": _id("object"),
@@ -144,7 +149,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                                  struct="Physical"),
         "Sound": _f(STRUCT_T, doc="sound source on this object", struct="Sound"),
         "Script": _f(ASSET_T, doc="Lua script attached to this object"),
-        "Hand": _f(STRUCT_T, None, "a tracked hand driven toward a device's pose", struct="Hand"),
+        "Hand": _f(STRUCT_T, None, "makes the object a virtual hand: a body driven toward a "
+                   "tracker's pose with bounded force, grasping on a glove's button",
+                   struct="Hand"),
+        "Graspable": _f(BOOL_T, 1, "0: hands cannot hold it (dynamic bodies can by default)"),
         "Controller": _f(STRUCT_T, doc="input bound to this object", struct="Controller"),
         "UserData": _f(ANY_T, None, "free-form data for custom systems", repeat=True),
         # The sleep rule's state (engine.physics.sleep; written by --save-state so a
@@ -182,16 +190,30 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Category": _f(INT_T, 1, "collision category bits"),
         "Mask": _f(INT_T, 0xFFFFFFFF, "collides with these category bits"),
         "Gravity": _f(BOOL_T, 1, "0: gravity does not act on this body"),
+        "Trigger": _f(BOOL_T, 0, "1: a sensor: nothing collides with it; bodies whose "
+                      "Category meets its Mask are told entering and leaving it (Lua: "
+                      "on(\"trigger\", fn)); static unless Kinematic"),
     },
     "Geometry": {
         "Primitive": _f(ENUM_T, None, "shape kind (default box)", allowed=PRIMITIVES),
         "File": _f(ASSET_T, None, "model file (loaded with trimesh)"),
+        "Nodes": _f(STRINGVECTOR_T, None, "only these nodes of the File (glTF, Collada): "
+                    "their own meshes, placed as in the file relative to the first node "
+                    "(its scale included); a name, or #INDEX for an unnamed or repeated one"),
+        "Mesh": _f(STRING_T, None, "only this mesh of the File (glTF), in its own space: a "
+                   "name, or #INDEX"),
         "Scale": _f(VEC3_T, (1.0, 1.0, 1.0), "model scale"),
         "Size": _f(VECTOR_T, None, "primitive size (see module doc)", lengths=(1, 2, 3)),
         "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, in the object's frame"),
         "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees, in the object's frame"),
         "ParseMethod": _f(ENUM_T, None, "physics shape derived from the model",
                           allowed=PARSE_METHODS),
+    },
+    "Model": {
+        "File": _f(ASSET_T, None, "a .gltf, .glb or .dae file", required=True),
+        "Import": _f(BOOL_T, 1, "1: its bodies, joints, materials and extras become the "
+                     "scene's, as `colosseum import` writes them; 0: drawn whole, as scenery"),
+        "Prefix": _f(STRING_T, "", "put before every ID it declares (to import a model twice)"),
     },
     "Material": {
         "ID": Field(STRING_T, None, "name or number objects use to refer to it", required=True),
@@ -325,10 +347,33 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "High": _f(FLOAT_T, None, "upper bound of the target value"),
     },
     "Hand": {
-        "Tracker": _f(STRING_T, "", "tracked device driving the hand"),
-        "MaxForce": _f(FLOAT_T, 200.0, "N"),
-        "MaxTorque": _f(FLOAT_T, 20.0, "N*m"),
-        "DeviationDistance": _f(FLOAT_T, 0.3, "m before the hand is reset to the tracker"),
+        "Tracker": _f(STRING_T, None, "the input tracker whose pose the hand follows "
+                      "(Input { Tracker { ID } }, or hand_l/hand_r of the desktop device)",
+                      required=True),
+        "Glove": _f(STRING_T, "", "the input device whose Button holds what the hand touches "
+                    "(glove_l/glove_r: the desktop device's mouse button)"),
+        "Button": _f(STRING_T, "pinch", "the glove's button that grasps while down"),
+        "MaxForce": _f(FLOAT_T, 300.0, "N the drive may push with: a heavier load lags, a "
+                       "wall stops the hand"),
+        "MaxTorque": _f(FLOAT_T, 30.0, "N*m the drive may turn with"),
+        "TimeConstant": _f(FLOAT_T, 0.0, "s the hand's distance to its tracker closes with; "
+                           "0: max(2 TimeStep, 0.03 s)"),
+        "MaxSpeed": _f(FLOAT_T, 10.0, "m/s the drive's correction is capped at (a tracker's "
+                       "own speed comes on top)"),
+        "MaxSpin": _f(FLOAT_T, 1146.0, "deg/s the drive's turning correction is capped at "
+                      "(20 rad/s)"),
+        "DeviationDistance": _f(FLOAT_T, 0.3, "m (D): farther from its tracker the hand passes "
+                                "through things and snaps back; it collides again under "
+                                "0.1 D, and is drawn see-through, on top, from 0.1 D to 0.7 D"),
+        "BreakForce": _f(FLOAT_T, None, "N: a grasp pulled harder lets go (none: never)"),
+        "Marker": _f(BOOL_T, 1, "show a ball where the real hand (the tracker) is"),
+        "ContactModel": _f(ASSET_T, None, "model drawn while the hand touches something it "
+                           "could grasp (an open hand); default: the object's own look"),
+        "GraspModel": _f(ASSET_T, None, "model drawn while it holds something (a closed hand)"),
+        "Frame": _f(REF_T, None, "the object the tracker is calibrated relative to (a "
+                    "wheelchair): the hand follows it", ref="Object"),
+        "Holding": _f(STRINGVECTOR_T, None, "objects held when this state was saved (written "
+                      "by --save-state; they are held again on load)"),
     },
     "ScriptState": {
         "Owner": _f(STRING_T, None, "the object whose script this is, or the scene script's "
@@ -358,10 +403,14 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                     required=True),
         "Position": _f(VEC3_T, (0.0, 0.0, 0.0), "m, where its feet stand"),
         "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees; unturned it faces +Y"),
+        "Quaternion": _f(VECTOR_T, None, "exact orientation [w x y z]; wins over Orientation",
+                         lengths=(4,)),
         "Scale": _f(FLOAT_T, 1.0, "uniform scale of the model"),
         "Animation": _f(STRING_T, None, "clip played first"),
-        "Loop": _f(BOOL_T, 1, "the first clip loops"),
-        "Speed": _f(FLOAT_T, 1.0, "playback rate of the first clip"),
+        "Loop": _f(BOOL_T, None, "1: the first clip loops, 0: it does not (default: as its "
+                   "Clip block says, else 1)"),
+        "Speed": _f(FLOAT_T, None, "playback rate of the first clip (default: its Clip "
+                    "block's Speed, else 1)"),
         "Blend": _f(STRINGVECTOR_T, None, "clips played at once from the start (with Weights)"),
         "Weights": _f(VECTOR_T, None, "weight of each Blend clip"),
         "Queue": _f(STRINGVECTOR_T, None, "clips played in turn when the first one ends"),
@@ -397,6 +446,72 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Bone": _f(STRING_T, None, "the bone (node name) holding it", required=True),
         "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, in the bone's frame"),
         "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees, in the bone's frame"),
+    },
+    # -- saved avatars (written by --save-state; engine.scene.snapshot) --
+    "AvatarState": {
+        "Owner": _f(REF_T, None, "the avatar (its ID) this is the state of; its clips, queue, "
+                    "path and held objects come from here, not from its block",
+                    required=True, ref="Avatar"),
+        "Group": _f(STRUCT_T, None, "clips started together (a play, queue or blend), oldest "
+                    "first", repeat=True, struct="AnimationGroup"),
+        "Queued": _f(STRUCT_T, None, "clips to start when what plays now ends, in turn",
+                     repeat=True, struct="AnimationRequest"),
+        "Path": _f(VECTOR_T, None, "m, the points [x y z ...] it walks now (no Path: it "
+                   "does not walk)"),
+        "PathLoop": _f(BOOL_T, 1, "after the last point, walk back to the first"),
+        "Waypoint": _f(INT_T, 0, "the point of Path it walks to now (0: the first; the "
+                       "number of points: it has arrived)"),
+        "Ground": _f(FLOAT_T, None, "m, the ground height under its root last frame "
+                     "(ground following; none: not found yet)"),
+        "GroundAt": _f(VECTOR_T, None, "[x y] m, where its root stood over that ground",
+                       lengths=(2,)),
+        "StepOffset": _f(FLOAT_T, 0.0, "m, the height of a step still to be taken (smoothed "
+                         "away over the avatar's Smoothing)"),
+        "Hold": _f(STRUCT_T, None, "an object it carries", repeat=True, struct="HeldState"),
+        "Drive": _f(STRUCT_T, None, "a bone held at a world pose (a tracked hand)",
+                    repeat=True, struct="BoneDrive"),
+        "CapsulePosition": _f(VEC3_T, None, "m, where its capsule's body is"),
+        "CapsuleQuaternion": _f(VECTOR_T, None, "its capsule's orientation [w x y z]",
+                                lengths=(4,)),
+    },
+    "AnimationGroup": {
+        "Phase": _f(FLOAT_T, 0.0, "how far through its clips, 0..1 (a clip's time is this "
+                    "times its length)"),
+        "Loop": _f(BOOL_T, 1, "1: it starts again at its end; 0: it ends there"),
+        "Ended": _f(BOOL_T, 0, "1: it reached its end (onAnimationEnd was called)"),
+        "Current": _f(BOOL_T, 0, "1: what the avatar plays now (the other groups fade out)"),
+        "Layer": _f(STRUCT_T, None, "one of its clips", repeat=True, struct="AnimationLayer"),
+    },
+    "AnimationLayer": {
+        "Clip": _f(STRING_T, None, "the clip's name in the model", required=True),
+        "Speed": _f(FLOAT_T, 1.0, "playback rate"),
+        "Weight": _f(FLOAT_T, 1.0, "its weight in the blend now"),
+        "FadeFrom": _f(FLOAT_T, 1.0, "the weight its fade started at"),
+        "FadeTo": _f(FLOAT_T, 1.0, "the weight its fade ends at (0: fading out)"),
+        "FadeTime": _f(FLOAT_T, 0.0, "s of its fade gone"),
+        "FadeLength": _f(FLOAT_T, 0.0, "s its fade takes (0: none)"),
+    },
+    "AnimationRequest": {
+        "Clips": _f(STRINGVECTOR_T, None, "the clips it starts together", required=True),
+        "Weights": _f(VECTOR_T, None, "the weight of each clip (default: 1 each)"),
+        "Fade": _f(FLOAT_T, 0.0, "s, the crossfade it starts with"),
+        "Speed": _f(FLOAT_T, None, "playback rate (default: each clip's)"),
+        "Loop": _f(BOOL_T, None, "1 or 0 (default: the first clip's)"),
+    },
+    "HeldState": {
+        "Object": _f(REF_T, None, "the object carried", required=True, ref="Object"),
+        "Bone": _f(STRING_T, None, "the bone (node name) holding it", required=True),
+        "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, in the bone's frame"),
+        "Quaternion": _f(VECTOR_T, (1.0, 0.0, 0.0, 0.0), "its orientation in the bone's "
+                         "frame [w x y z]", lengths=(4,)),
+        "Last": _f(VEC3_T, None, "m, where it was put last frame (a dynamic object moves on "
+                   "at the hand's velocity)"),
+    },
+    "BoneDrive": {
+        "Bone": _f(STRING_T, None, "the bone held", required=True),
+        "Position": _f(VEC3_T, None, "m, world frame", required=True),
+        "Quaternion": _f(VECTOR_T, None, "world orientation [w x y z]", required=True,
+                         lengths=(4,)),
     },
     "World": {
         "Gravity": _f(VEC3_T, (0.0, 0.0, -9.81), "m/s^2"),

@@ -17,6 +17,11 @@ in :attr:`SceneIds.spawned`) follows the file's own objects and joints, oldest f
 written the same way; what was deleted since (or a broken joint) is left out. IDs
 stay unique: a taken one gets ``~2``, ``~3``, ... (``ball``, ``ball~2``) and the joints
 naming that object are written to match.
+
+An avatar's block gets its root pose; an ``AvatarState`` says what it was doing (its
+clips, fades and queue, its path, ground following, held objects, driven bones and its
+capsule's pose; see :class:`components.avatar.SavedAvatar`), so it continues instead of
+starting as its block says.
 """
 
 from __future__ import annotations
@@ -27,7 +32,8 @@ from typing import TYPE_CHECKING
 
 import engine.scene.random_state as random_state
 import engine.scene.schema as sc
-from components import Joint, Name, Transform
+from components import HandState, Joint, Name, Transform
+from components.avatar import SavedAvatar
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from engine.physics.backend import SleepState, SupportsSleepState
 from engine.physics.driver import PhysicsUnavailable
@@ -48,7 +54,7 @@ from engine.scene.diagnostics import ERROR, Diagnostic, Loc, SceneError
 from engine.scene.factory import SceneIds, SpawnRecord
 from engine.scene.parser import parse_text
 from engine.scene.writer import write
-from engine.services import ScriptStates
+from engine.services import AvatarStates, ScriptStates
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -120,12 +126,17 @@ def _transform(world: World, entity: int | None) -> Transform | None:
     return world.try_component(entity, Transform)
 
 
-def _write_body(blk: Block, t: Transform, sleep: SleepState | None) -> None:
-    """An object's pose, velocities and auto-sleep state now."""
+def _write_pose(blk: Block, t: Transform) -> None:
+    """Where an object or avatar stands: exactly (``Quaternion``) and for people."""
     q = [float(x) for x in t.orientation]
     _set(blk, "Position", _vec(t.position))
     _set(blk, "Orientation", _vec(quat_to_euler(q)))
     _set(blk, "Quaternion", _vec(q))
+
+
+def _write_body(blk: Block, t: Transform, sleep: SleepState | None) -> None:
+    """An object's pose, velocities and auto-sleep state now."""
+    _write_pose(blk, t)
     _set(blk, "Velocity", _vec(t.linear_velocity))
     _set(blk, "AngularVelocity", _vec(exact_degrees(float(w)) for w in t.angular_velocity))
     _sleep_keys(blk, sleep)
@@ -190,6 +201,8 @@ class _Spawns:
                  sleep: dict[int, SleepState] | None, dst: Path | None):
         self.world, self.root, self.names, self.taken = world, root, names, taken
         self.sleep, self.dst = sleep, dst
+        #: avatar entity -> the ID its spawned Avatar block is written with
+        self.avatars: dict[int, str] = {}
         #: material ID written -> its definition (see _definition)
         self.materials = {str(b.get("ID")): _definition(b) for b in root.blocks("Material")}
 
@@ -203,9 +216,10 @@ class _Spawns:
         return Value(STRINGVECTOR, [_string(i) for i in ids], _HERE)
 
     def snippet(self, rec: SpawnRecord) -> None:
-        """A ``spawn(text)``: its objects and joints still there, and the materials it
-        declared. One whose ID is written already with another definition is written
-        as ``wood~2`` (and its objects refer to that); an identical one is not repeated."""
+        """A ``spawn(text)``: its objects, joints and avatars still there, and the materials
+        it declared. One whose ID is written already with another definition is written
+        as ``wood~2`` (and its objects refer to that); an identical one is not repeated.
+        An avatar's holds are left to its AvatarState (its objects may be renamed)."""
         assert rec.db is not None
         root = _literal(rec.db, rec.content_dir, self.dst)
         out: list[Entry] = []
@@ -243,6 +257,16 @@ class _Spawns:
             _set(blk, "ID", _string(self.name(entity, "joint")))
             _set(blk, "Bodies", self.bodies(joint))
             _write_joint(blk, joint)
+            out.append(entry)
+        for entry, entity in zip(root.get_all("Avatar"), rec.avatars, strict=True):
+            t = _transform(self.world, entity)
+            if t is None:
+                continue
+            blk = entry.value.data
+            self.avatars[entity] = aid = self.name(entity, "avatar")
+            _set(blk, "ID", _string(aid))
+            _write_pose(blk, t)
+            _drop(blk, "Hold")
             out.append(entry)
         self.root.entries.extend(out)
 
@@ -303,6 +327,108 @@ def _script_states(engine: Engine, ids: SceneIds, root: Block, names: dict[int, 
         root.entries.append(block)
 
 
+def _number(x: float) -> Value:
+    return Value(FLOAT, float(x), _HERE)
+
+
+def _flag(on: bool) -> Value:
+    return Value(INT, int(bool(on)), _HERE)
+
+
+def _avatars(world: World, ids: SceneIds, root: Block, objects: set[str]) -> dict[int, str]:
+    """Each avatar block with its root pose now (those deleted or left out are left out);
+    returns avatar entity -> ID. Authored holds of objects no longer written are dropped,
+    so the file names no missing object."""
+    written: dict[int, str] = {}
+    for index, entry in enumerate([e for e in root.entries if e.key == "Avatar"]):
+        blk = entry.value.data
+        aid = str(blk.get("ID") or f"avatar{index}")  # the factory's name by place
+        eid = ids.entities.get(aid)
+        t = _transform(world, eid)
+        if eid is None or t is None:
+            root.entries.remove(entry)
+            continue
+        written[eid] = aid
+        if blk.value("ID") is None:
+            _set(blk, "ID", _string(aid))
+        _write_pose(blk, t)
+        blk.entries = [e for e in blk.entries if e.key != "Hold" or e.value.kind != STRUCTURE
+                       or e.value.data.get("Object") in objects]
+    return written
+
+
+def _avatar_state(owner: str, saved: SavedAvatar) -> Entry:
+    """An ``AvatarState`` block: what ``saved`` holds, every number exact."""
+    entries: list[tuple[str, Value]] = [("Owner", _string(owner))]
+    if saved.path:
+        entries.append(("Path", _vec(x for p in saved.path for x in p)))
+    entries += [("PathLoop", _flag(saved.path_loop)),
+                ("Waypoint", Value(INT, int(saved.waypoint), _HERE))]
+    if saved.ground is not None:
+        entries.append(("Ground", _number(saved.ground)))
+    if saved.ground_at is not None:
+        entries.append(("GroundAt", _vec(saved.ground_at)))
+    entries.append(("StepOffset", _number(saved.step_offset)))
+    if saved.capsule is not None:
+        entries += [("CapsulePosition", _vec(saved.capsule[0])),
+                    ("CapsuleQuaternion", _vec(saved.capsule[1]))]
+    block = _block("AvatarState", entries)
+    inner = block.value.data.entries
+    for group in saved.groups:
+        g = _block("Group", [("Phase", _number(group.phase)), ("Loop", _flag(group.loop)),
+                            ("Ended", _flag(group.ended)), ("Current", _flag(group.current))])
+        g.value.data.entries += [_block("Layer", [
+            ("Clip", _string(layer.clip)), ("Speed", _number(layer.speed)),
+            ("Weight", _number(layer.weight)), ("FadeFrom", _number(layer.fade_from)),
+            ("FadeTo", _number(layer.fade_to)), ("FadeTime", _number(layer.fade_time)),
+            ("FadeLength", _number(layer.fade_length))]) for layer in group.layers]
+        inner.append(g)
+    for request in saved.queue:
+        fields = [("Clips", Value(STRINGVECTOR, [_string(c) for c, _ in request.weights],
+                                  _HERE)),
+                  ("Weights", _vec(w for _, w in request.weights)),
+                  ("Fade", _number(request.fade))]
+        if request.speed is not None:
+            fields.append(("Speed", _number(request.speed)))
+        if request.loop is not None:
+            fields.append(("Loop", _flag(request.loop)))
+        inner.append(_block("Queued", fields))
+    for held in saved.holds:
+        fields = [("Object", _string(str(held.hold.target))), ("Bone", _string(held.hold.bone)),
+                  ("Offset", _vec(held.hold.offset)), ("Quaternion", _vec(held.hold.rotation))]
+        if held.last is not None:
+            fields.append(("Last", _vec(held.last)))
+        inner.append(_block("Hold", fields))
+    inner += [_block("Drive", [("Bone", _string(d.bone)), ("Position", _vec(d.position)),
+                               ("Quaternion", _vec(d.orientation))]) for d in saved.drives]
+    return block
+
+
+def _avatar_states(engine: Engine, root: Block, avatars: dict[int, str],
+                   objects: dict[int, str]) -> None:
+    """An ``AvatarState`` for each written avatar the avatars plugin animates."""
+    states = engine.try_resource(AvatarStates)
+    if states is None:
+        return
+    for entity, saved in states.saved_avatars(objects.get).items():
+        if entity in avatars:
+            root.entries.append(_avatar_state(avatars[entity], saved))
+
+
+def _holding(world: World, hands: dict[int, Block], names: dict[int, str]) -> None:
+    """Each hand's ``Holding``: what it holds now (by the IDs written), held again on load."""
+    for eid, blk in hands.items():
+        entry = blk.value("Hand")
+        if entry is None or entry.kind != STRUCTURE:
+            continue
+        held = [names[e] for e in world.component_for_entity(eid, HandState).held
+                if e in names]
+        _drop(entry.data, "Holding")
+        if held:
+            _set(entry.data, "Holding", Value(STRINGVECTOR, [_string(n) for n in held],
+                                              _HERE))
+
+
 def _taken(ids: SceneIds) -> set[str]:
     """IDs of the file's own entries (those without one are written with the one they
     were given by their place, so loading the saved file keeps every name)."""
@@ -340,6 +466,7 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
     except PhysicsUnavailable:
         seed, sleep = None, None
     names = {} if names is None else names  # entity -> the object ID written for it
+    hands: dict[int, Block] = {}  # hand entity -> its written Object block
     objects = [e for e in root.entries if e.key == "Object"]
     for index, entry in enumerate(objects):
         eid = ids.entities.get(spec.entities[index].id)
@@ -352,6 +479,8 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
         if blk.value("ID") is None:  # its name by place would move as others are left out
             _set(blk, "ID", _string(oid))
         _write_body(blk, t, None if sleep is None else sleep.get(eid))
+        if world.has_component(eid, HandState):
+            hands[eid] = blk
     joints = [e for e in root.entries if e.key == "Joint"]
     for js, entry in zip(spec.joints, joints, strict=False):
         joint = _live_joint(world, ids.joints.get(js.id), names)
@@ -361,14 +490,18 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
         if entry.value.data.value("ID") is None:
             _set(entry.value.data, "ID", _string(js.id))
         _write_joint(entry.value.data, joint)
+    avatars = _avatars(world, ids, root, set(names.values()))  # before spawned ones come
     spawns = _Spawns(world, root, names, _taken(ids), sleep, dst)
     for rec in ids.spawned:
         if rec.db is None:
             spawns.joint(rec.joints[0])
         else:
             spawns.snippet(rec)
+    avatars.update(spawns.avatars)
     _drop_follows(root, set(names.values()))
-    _script_states(engine, ids, root, names)
+    _holding(world, hands, names)
+    _avatar_states(engine, root, avatars, names)
+    _script_states(engine, ids, root, names | avatars)
     world_entry = next((e for e in root.entries if e.key == "World"), None)
     if world_entry is None or world_entry.value.kind != STRUCTURE:
         world_entry = Entry("World", Value(STRUCTURE, Block(), _HERE), _HERE)

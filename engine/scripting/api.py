@@ -18,6 +18,8 @@ Objects (``obj:method(...)``)::
     obj:setKinematicTarget(x, y, z) obj:delete()
     obj:playSound()                 obj:stopSound()   (its Sound component)
     obj:setGain(gain)               volume of its sound, now and for later plays
+    hand:getHandState() -> "neutral" | "contact" | "grasp"   (a virtual hand's mode)
+    hand:getHeld() -> {obj, ...}    hand:grasp(obj)   hand:release()
 
 Avatars (``Avatar`` blocks; the avatars plugin)::
 
@@ -61,7 +63,9 @@ asleep on each other still touch; see :mod:`systems.contacts`);
 controller's trigger), ``onTracker(name, x, y, z, qw, qx, qy, qz)`` (once a frame
 per tracker that moved, calibrated), ``onInput(device, value)``
 (``axis:DEVICE/NAME`` values and ``wheel:NAME`` counts), ``onDeviceLost(name)`` /
-``onDeviceFound(name)``, ``onTimer(name)`` (engine TimerEvents),
+``onDeviceFound(name)``, ``onTouch(hand, object)`` / ``onGrasp(hand, object)`` /
+``onRelease(hand, object)`` (a virtual hand's, told to the hand's scripts, the object's
+and the scene's), ``onTimer(name)`` (engine TimerEvents),
 ``onAnimationEnd(clip)`` (an avatar's scripts; scene scripts ``onAnimationEnd(avatar,
 clip)``), ``onReload()``
 (after the file changed and was re-run in the script's environment: write ``count =
@@ -94,12 +98,12 @@ import difflib
 import logging
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from components import Camera, Joint, Name, Physical, Sound, Transform
+from components import Camera, Hand, Joint, Name, Physical, Sound, Transform
 from components.joint import SCENE_JOINT_TYPES
 from engine.input.state import InputState
 from engine.physics import commands as cmd
 from engine.scripting.runtime import ScriptRuntime, to_python
-from engine.services import AVATAR_METHODS, AvatarControl, ShaderControl, SoundControl
+from engine.services import AVATAR_METHODS, AvatarControl, HandControl, ShaderControl, SoundControl
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -181,11 +185,25 @@ function Object.delete(h) P.delete(oid("delete", h)) end
 function Object.playSound(h) P.sound(oid("playSound", h), true) end
 function Object.stopSound(h) P.sound(oid("stopSound", h), false) end
 function Object.setGain(h, gain) P.set_gain(oid("setGain", h), gain) end
+function Object.getHandState(h) return P.hand_state(oid("getHandState", h)) end
+function Object.getHeld(h)
+  local ids = P.hand_held(oid("getHeld", h))
+  local out = {}
+  for i = 1, #ids do out[i] = handle(ids[i]) end
+  return out
+end
+function Object.grasp(h, other) P.hand_grasp(oid("grasp", h), oid("grasp", other)) end
 for i = 1, #P.avatar_methods do  -- avatar:play("Run", {fade=0.3}), avatar:blend{...}, ...
   local method = P.avatar_methods[i]
   Object[method] = function(h, ...)
     return P.avatar(oid(method, h), method, plain({...}))
   end
+end
+local avatar_release = Object.release
+function Object.release(h, ...)  -- a hand lets go of all it holds; an avatar, its object
+  local id = oid("release", h)
+  if P.is_hand(id) then return P.hand_release(id) end
+  return avatar_release(h, ...)
 end
 
 local C = {}
@@ -265,7 +283,9 @@ class ScriptAPI:
             "sound": self.sound, "find": self.find, "spawn": self.spawn,
             "set_motor": self.set_motor, "create_joint": self.create_joint,
             "break_joint": self.break_joint, "set_uniform": self.set_uniform,
-            "set_gain": self.set_gain,
+            "set_gain": self.set_gain, "hand_state": self.hand_state,
+            "hand_held": self.hand_held, "hand_grasp": self.hand_grasp,
+            "hand_release": self.hand_release, "is_hand": self.is_hand,
             "set_camera": self.set_camera, "request_plugin": self.request_plugin,
             "time": self.time, "measure": self.measure, "tracker": self.tracker,
             "wheel": self.wheel,
@@ -423,6 +443,8 @@ class ScriptAPI:
             ids[es.id] = -1 if es.skipped else self.engine.spawn(*es.components)
             made.append(ids[es.id])
         objects = made[:len(spec.db.blocks("Object"))] if spec.db is not None else []
+        avatars = made[len(made) - len(spec.db.blocks("Avatar")):] if spec.db is not None \
+            else []  # the factory makes avatars last
         joints: list[int] = []
         for js in spec.joints:
             if js.skipped:
@@ -438,7 +460,7 @@ class ScriptAPI:
         made = [e for e in (*made, *joints) if e >= 0]
         self._names.update({name: e for name, e in ids.items() if e >= 0})
         if scene is not None:
-            scene.record(SpawnRecord(spec.db, spec.content_dir, objects, joints),
+            scene.record(SpawnRecord(spec.db, spec.content_dir, objects, joints, avatars),
                          self.engine.world.entity_exists)
         assert self.runtime is not None
         return self.runtime.lua.table_from(made)
@@ -516,6 +538,39 @@ class ScriptAPI:
         entity, joint = self._joint(ref, "breakJoint")
         joint.broken = True
         self.engine.despawn(entity)
+
+    # -- virtual hands -------------------------------------------------------------
+    def _hands(self, what: str, entity: int) -> HandControl:
+        hands = self.engine.try_resource(HandControl)
+        self._entity(entity, what)
+        if hands is None:
+            raise ScriptAPIError(f"{what}: the hands plugin is not loaded "
+                                 "(requestPlugin('hands') loads it)")
+        return hands
+
+    def _hand_call(self, what: str, entity: int, call: Any) -> Any:
+        try:
+            return call(self._hands(what, entity))
+        except (KeyError, ValueError) as exc:
+            raise ScriptAPIError(f"{what}: {exc.args[0] if exc.args else exc}") from None
+
+    def is_hand(self, entity: int) -> bool:
+        return self.engine.world.has_component(self._entity(entity, "release"), Hand)
+
+    def hand_state(self, entity: int) -> str:
+        return self._hand_call("getHandState", entity, lambda h: h.state(entity))
+
+    def hand_held(self, entity: int) -> Any:
+        assert self.runtime is not None
+        held = self._hand_call("getHeld", entity, lambda h: h.held(entity))
+        return self.runtime.lua.table_from(list(held))
+
+    def hand_grasp(self, entity: int, obj: int) -> None:
+        self._entity(obj, "grasp")
+        self._hand_call("grasp", entity, lambda h: h.grasp(entity, obj))
+
+    def hand_release(self, entity: int) -> None:
+        self._hand_call("release", entity, lambda h: h.release(entity))
 
     # -- input ------------------------------------------------------------------
     def _inputs(self) -> InputState | None:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from avatar_helpers import GROUND, MODELS, avatar_engine, content, entity
+from avatar_helpers import GROUND, MODELS, avatar_engine, avatars, content, entity
 
 from engine.animation import AnimationEnded, AnimationError, Mixer
 from engine.animation.mixer import fast_slerp
@@ -216,6 +216,23 @@ def test_blended_clips_keep_one_phase_whatever_their_lengths():
     assert t_walk == pytest.approx(20 * DT * rate)
 
 
+def test_a_blend_is_the_same_whatever_order_its_weights_are_given_in():
+    """Layers are folded in one by one, and slerps taken in turn depend on their order
+    (1e-5 here); a Lua table has no order that repeats from one run to the next. The
+    model's order is used."""
+    walker = Assets(MODELS).skinned("walker.glb")
+    poses = []
+    for weights in ({"Walk": 0.3, "Run": 0.6, "Idle": 0.1},
+                    {"Idle": 0.1, "Run": 0.6, "Walk": 0.3}):
+        mixer = Mixer()
+        mixer.add(1, mixer.library.rig_for(walker))
+        mixer.blend(1, weights)
+        mixer.advance(0.37)
+        poses.append(mixer.evaluate()[0])
+        assert [name for name, _, _ in mixer.playing(1)] == ["Idle", "Walk", "Run"]
+    np.testing.assert_array_equal(poses[0], poses[1])
+
+
 SCRIPT = """
 ends = {}
 function onStart()
@@ -256,3 +273,18 @@ def test_lua_hears_onanimationend_in_the_frame_the_clip_ends(tmp_path: Path):
     assert [(f, e.clip, e.avatar == w) for f, e in events] == [(95, "Wave", True)]
     assert ends == [f"Wave@{95 * DT:.6f}"]
     assert heard == ["w:Wave"]
+
+
+@pytest.mark.parametrize(("given", "rate"), [("", 0.5), ("Speed 2", 2.0)])
+def test_the_first_clip_plays_at_its_clip_blocks_speed_unless_the_avatar_gives_one(
+        tmp_path: Path, given: str, rate: float):
+    folder = content(tmp_path, "\n".join([
+        GROUND, f'Avatar {{ ID "w" Model "models/walker.glb" Animation "Walk" {given} '
+                'Clip { Name "Walk" Speed 0.5 Loop 0 } }']))
+    with avatar_engine(folder, dt=DT) as engine:
+        engine.run(frames=40)  # 0.625 s
+        system = avatars(engine)
+        ((clip, t, _),) = system.mixer.playing(entity(engine, "w"))
+        ended = system.mixer.groups.ended[system.mixer.animators[entity(engine, "w")].group]
+    assert clip == "Walk" and t == pytest.approx(min(40 * DT * rate, 1.0))
+    assert ended == (rate == 2.0)  # Walk is 1 s long and played once (Loop 0)

@@ -42,6 +42,29 @@ def test_a_capsule_pushes_a_ball_aside_without_launching_it(tmp_path: Path, back
     assert highest < 0.6  # rolled or slid, never thrown into the air
 
 
+def test_a_capsule_waits_at_its_avatar_however_many_steps_physics_takes(
+        tmp_path: Path, backend_name: str):
+    """In threaded mode the physics thread may take several steps while a frame takes one:
+    the capsule reaches where its avatar stands in the frame's time and waits there (it
+    used to keep the target's velocity and walk on ahead, alone)."""
+    folder = content(tmp_path, "\n".join([GROUND, WALKER.format(
+        extra='Animation "Walk" Path [0 0 0  4 3 0] PathLoop 0 Capsule [0.4 1.0]')]))
+    dt = 1 / 60
+    with avatar_engine(folder, backend=backend_name, dt=dt) as engine:
+        engine.step()
+        capsule = entity(engine, "w:capsule")
+        for _ in range(30):
+            engine.step()
+            for _ in range(3):  # the physics thread's steps before the next frame's target
+                engine.physics.step(dt)
+            state = engine.physics.request(lambda b: b.read_state()).result(1.0)
+            (row,) = np.flatnonzero(state.keys == capsule)
+            np.testing.assert_allclose(state.position[row], position(engine, "w"), rtol=0,
+                                       atol=1e-9)
+            assert not state.linear_velocity[row].any()
+        assert position(engine, "w")[0] > 0.3  # it walked (across the 2D backend's plane too)
+
+
 def test_a_carried_crate_follows_the_hand_and_falls_when_let_go(tmp_path: Path):
     folder = content(tmp_path, "\n".join([
         GROUND,

@@ -262,6 +262,33 @@ def test_kinematic_body_reaches_its_target_and_ignores_gravity(kit,
     assert abs(float(np.dot(r["orientation"], target_q))) == pytest.approx(1.0, abs=1e-6)
 
 
+@pytest.mark.parametrize("lead", [3, 2.5], ids=["three steps", "two and a half steps"])
+def test_kinematic_body_stops_at_its_target(kit, any_backend: DynamicsBackend,
+                                            lead: float) -> None:
+    """One target, then many steps (threaded mode takes several a frame): it moves at a
+    steady speed, arrives after ``lead`` steps (a part step taken slower) and stays there,
+    exactly at the target and at rest; it never passes it."""
+    backend, dt = any_backend, 1 / 60
+    start = np.array([0.0, 0.0, 1.0])
+    kit.add(backend, 1, kit.box((0.5, 0.5, 0.5), kind="kinematic", mass=None), tuple(start))
+    target, turn = np.array([0.6, 0.0, 1.3]), kit.quat_y(0.4)
+    backend.set_kinematic_target(1, target, turn, lead * dt)
+    for k in range(1, 9):
+        backend.step(dt)
+        r = kit.row(backend, 1)
+        if k < lead:
+            np.testing.assert_allclose(r["position"], start + (target - start) * k / lead,
+                                       atol=1e-9)
+            np.testing.assert_allclose(r["linear"], (target - start) / (lead * dt), rtol=1e-9)
+            continue
+        np.testing.assert_allclose(r["position"], target, rtol=0, atol=1e-12)
+        assert abs(float(np.dot(r["orientation"], turn))) == pytest.approx(1.0, abs=1e-12)
+        assert not r["linear"].any() and not r["angular"].any(), f"moving after step {k}"
+    backend.set_kinematic_target(1, start, kit.IDENTITY, dt)  # and a new target moves it
+    backend.step(dt)
+    np.testing.assert_allclose(kit.row(backend, 1)["position"], start, rtol=0, atol=1e-12)
+
+
 def test_kinematic_body_pushes_dynamic_body(kit, backend: DynamicsBackend) -> None:
     kit.add(backend, kit.GROUND, kit.ground_plane(friction=0.0), (0.0, 0.0, 0.0))
     kit.add(backend, 1, kit.box((0.5, 1.0, 0.5), kind="kinematic", mass=None), (0.0, 0.0, 0.25))

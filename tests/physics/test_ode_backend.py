@@ -76,6 +76,20 @@ def test_static_trimesh_ground_and_dynamic_trimesh_body() -> None:
                                                                    rel=1e-6)
 
 
+def test_a_convex_hull_rests_on_a_static_trimesh() -> None:
+    """ODE needs the mesh's edge angles for hull-mesh contacts; without them it aborted
+    the process the first time the two touched."""
+    b = make()
+    slab = trimesh.creation.box((2, 2, 0.2)).subdivide().subdivide()  # top face at z = 0
+    b.add_body(1, Physical(kind="static", mass=None, shapes=[Shape(
+        "mesh", vertices=slab.vertices - [0, 0, 0.1], faces=slab.faces)]), np.zeros(3), I4)
+    cube = trimesh.creation.box((0.4, 0.4, 0.4))
+    b.add_body(2, Physical(shapes=[Shape("hull", vertices=cube.vertices, faces=cube.faces)]),
+               np.array([0, 0, 0.5]), I4)
+    run(b, 120)
+    assert z_of(b, 2) == pytest.approx(0.2, abs=0.01)
+
+
 def test_convex_hull_body_settles_on_a_face() -> None:
     b = make()
     b.add_static_plane()

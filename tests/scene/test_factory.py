@@ -13,6 +13,7 @@ from components import (
     Camera,
     Controller,
     Hand,
+    HandState,
     Joint,
     Light,
     Name,
@@ -51,10 +52,11 @@ def rep():
 
 
 def test_objects_get_the_components_they_declare(rep):
-    assert [e.id for e in rep.entities] == ["ground", "crate", "door", "wheel", "eye",
-                                            "light0", "push"]
+    assert [e.id for e in rep.entities] == ["ground", "crate", "door", "wheel", "right hand",
+                                            "eye", "light0", "push"]
     assert set(comps(rep, "door")) == {Name, Transform, Physical, Script}
-    assert set(comps(rep, "wheel")) == {Name, Transform, Visual, Hand}
+    assert set(comps(rep, "wheel")) == {Name, Transform, Visual}
+    assert set(comps(rep, "right hand")) == {Name, Transform, Visual, Physical, Hand, HandState}
     assert set(comps(rep, "crate")) == {Name, Transform, Visual, Physical, Sound}
 
 
@@ -77,7 +79,13 @@ def test_primitives_sizes_and_materials(rep):
     wheel = comps(rep, "wheel")
     assert (wheel[Visual].shapes[0].kind, wheel[Visual].shapes[0].size) == ("cylinder",
                                                                           (0.3, 0.1))
-    assert wheel[Hand].tracker == "hand_r" and wheel[Hand].max_force == 100.0
+    hand = comps(rep, "right hand")
+    assert (hand[Hand].tracker, hand[Hand].glove, hand[Hand].max_force) == ("hand_r", "glove_r",
+                                                                            100.0)
+    # a hand without a body of its own gets a palm-sized box of 0.45 kg that floats
+    body = hand[Physical]
+    assert (body.mass, body.gravity, body.can_sleep) == (0.45, False, False)
+    assert (body.shapes[0].kind, body.shapes[0].size) == ("box", (0.09, 0.18, 0.03))
 
 
 def test_model_derived_physics_shape(rep):

@@ -16,32 +16,22 @@ import numpy as np
 import pytest
 
 from components import Name, Physical, Transform
-from engine.app import Engine, EngineConfig
-from engine.content import DEMO, REPO_ROOT, load_systems, resolve
+from engine.app import Engine
+from engine.content import DEMO, REPO_ROOT, resolve
 from engine.realtime import advance
 from engine.scene import load_scene
-from engine.scene_loading import SceneLoadError, check_path, load_content_scene, save_state
-from systems import create_engine
+from engine.scene_loading import (
+    SceneLoadError,
+    check_path,
+    content_engine,
+    load_content_scene,
+    save_state,
+)
 
 pytest.importorskip("engine.physics.ode3d")
 
-CONTENT_FOLDERS = [
-    pytest.param(p, marks=pytest.mark.xfail(
-        strict=True, reason="avatars' animation and path state is not saved yet"))
-    if p.name == "avatars" else p
-    for p in sorted(p for p in (REPO_ROOT / "content").iterdir()
-                    if (p / "main.scene").is_file())]
-
-
-def start(path: Path) -> Engine:
-    """An engine running ``path`` as ``colosseum run PATH --fast`` sets it up."""
-    scene = load_content_scene(resolve(path))
-    config = EngineConfig(content_dir=scene.content.folder, fast=True, headless=True)
-    scene.configure(config)
-    engine = create_engine(config)
-    load_systems(engine, scene.content.folder)
-    scene.instantiate(engine)
-    return engine
+CONTENT_FOLDERS = sorted(p for p in (REPO_ROOT / "content").iterdir()
+                         if (p / "main.scene").is_file())
 
 
 def poses(engine: Engine) -> dict[str, np.ndarray]:
@@ -50,7 +40,7 @@ def poses(engine: Engine) -> dict[str, np.ndarray]:
 
 
 def run(path: Path, frames: int, save: Path | None = None) -> dict[str, np.ndarray]:
-    with start(path) as engine:
+    with content_engine(path) as engine:
         engine.run(frames=frames)
         if save is not None:
             save_state(engine, save)
@@ -230,7 +220,7 @@ def test_the_saved_time_has_no_float_noise_and_reads_back_exactly(tmp_path: Path
     text = saved.read_text()
     assert text.startswith("// state of ") and " at t = 4 s\n" in text.splitlines()[0] + "\n"
     assert load_scene(saved).find("World/Time").data == 4.0
-    with start(saved) as engine:
+    with content_engine(saved) as engine:
         assert engine.time == 4.0
         engine.run(frames=1)
         assert engine.time == advance(4.0, 0.01)

@@ -122,6 +122,7 @@ cdef void set_slot_pose(World w, int i, const double* pos, const double* quat) n
     cdef double wc[3]
     memcpy(q, quat, 4 * sizeof(double))
     qnormalize(q)
+    s.target_left = 0.0  # put somewhere else: no longer on its way to a target
     if s.body == NULL:
         memcpy(s.pose, pos, 3 * sizeof(double))
         memcpy(&s.pose[3], q, 4 * sizeof(double))
@@ -138,6 +139,7 @@ cdef void set_slot_velocity(World w, int i, const double* lin, const double* ang
     """Entity-origin velocities -> COM velocity (v_com = v + w x R c)."""
     cdef Slot* s = &w.slots[i]
     cdef double wc[3]
+    s.target_left = 0.0  # moving as told now, not toward a target
     if s.body == NULL:
         return
     qrotate(dBodyGetQuaternion(s.body), s.com, wc)
@@ -154,6 +156,91 @@ def set_pose(World w, key, double[::1] pos, double[::1] quat) -> None:
 
 def set_velocity(World w, key, double[::1] lin, double[::1] ang) -> None:
     set_slot_velocity(w, w.slot(key), &lin[0], &ang[0])
+
+
+def set_pose_values(World w, key, double x, double y, double z, double qw, double qx,
+                    double qy, double qz) -> None:
+    """``set_pose`` from seven numbers, checked finite here: a tracked body moved every
+    step pays no array building (ValueError when one is not finite)."""
+    cdef double pos[3]
+    cdef double q[4]
+    pos[0], pos[1], pos[2] = x, y, z
+    q[0], q[1], q[2], q[3] = qw, qx, qy, qz
+    if not (isfinite(x + y + z) and isfinite(qw + qx + qy + qz)):
+        raise ValueError("a pose must be finite numbers")
+    set_slot_pose(w, w.slot(key), pos, q)
+
+
+def set_velocity_values(World w, key, double vx, double vy, double vz, double wx,
+                        double wy, double wz) -> None:
+    """``set_velocity`` from six numbers, checked finite and under MAX_SPEED here
+    (ValueError otherwise)."""
+    cdef double lin[3]
+    cdef double ang[3]
+    lin[0], lin[1], lin[2] = vx, vy, vz
+    ang[0], ang[1], ang[2] = wx, wy, wz
+    if not (sqrt(vx * vx + vy * vy + vz * vz) <= MAX_SPEED
+            and sqrt(wx * wx + wy * wy + wz * wz) <= MAX_SPEED):  # NaN fails too
+        raise ValueError("velocities must be finite and under MAX_SPEED")
+    set_slot_velocity(w, w.slot(key), lin, ang)
+
+
+def aim_kinematic(World w, key, double[::1] pos, double[::1] quat, double[::1] lin,
+                  double[::1] ang, double dt) -> None:
+    """Give a body the velocities ``lin``/``ang`` that carry it to ``pos``/``quat`` in
+    ``dt`` s. A kinematic one is then put exactly there and stopped by the step that
+    reaches it (``kinematic_arrive``), unless another command moves it first."""
+    cdef int i = w.slot(key)
+    cdef Slot* s = &w.slots[i]
+    set_slot_velocity(w, i, &lin[0], &ang[0])
+    if s.kind != KIND_KINEMATIC or not dt > 0.0:
+        return
+    memcpy(s.target, &pos[0], 3 * sizeof(double))
+    memcpy(&s.target[3], &quat[0], 4 * sizeof(double))
+    qnormalize(&s.target[3])
+    s.target_left = dt
+
+
+#: A target this close to its time (a share of the step) counts as reached this step:
+#: a sum of steps meets a target's time only to rounding.
+cdef double ARRIVE_SLACK = 1e-6
+
+
+cdef void kinematic_lead(World w, double dt) noexcept nogil:
+    """Bodies whose target is due within this step slow down to arrive with it, not past."""
+    cdef int i
+    cdef Slot* s
+    cdef double f
+    cdef const dReal* v
+    for i in range(w.n):
+        s = &w.slots[i]
+        if s.target_left > 0.0 and s.target_left < dt * (1.0 - ARRIVE_SLACK):
+            f = s.target_left / dt
+            v = dBodyGetLinearVel(s.body)
+            dBodySetLinearVel(s.body, v[0] * f, v[1] * f, v[2] * f)
+            v = dBodyGetAngularVel(s.body)
+            dBodySetAngularVel(s.body, v[0] * f, v[1] * f, v[2] * f)
+
+
+cdef void kinematic_arrive(World w, double dt) noexcept nogil:
+    """Bodies whose target was due in this step: exactly at it, at rest."""
+    cdef int i
+    cdef Slot* s
+    cdef double wc[3]
+    for i in range(w.n):
+        s = &w.slots[i]
+        if s.target_left <= 0.0:
+            continue
+        s.target_left -= dt
+        if s.target_left > dt * ARRIVE_SLACK:
+            continue
+        s.target_left = 0.0
+        qrotate(&s.target[3], s.com, wc)
+        dBodySetPosition(s.body, s.target[0] + wc[0], s.target[1] + wc[1],
+                         s.target[2] + wc[2])
+        dBodySetQuaternion(s.body, &s.target[3])
+        dBodySetLinearVel(s.body, 0.0, 0.0, 0.0)
+        dBodySetAngularVel(s.body, 0.0, 0.0, 0.0)
 
 
 def pose(World w, key) -> tuple:

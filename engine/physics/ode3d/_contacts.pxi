@@ -125,6 +125,56 @@ cdef void ray_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
         r.normal[k] = cg.normal[k]
 
 
+cdef struct OverlapCtx:
+    dGeomID geom
+    int64_t key
+    uint32_t category
+    uint32_t mask
+    int64_t found[16]
+    int n
+
+
+cdef void overlap_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
+    cdef OverlapCtx* o = <OverlapCtx*>data
+    cdef dGeomID other = o2 if o1 == o.geom else o1
+    cdef GeomInfo* g = <GeomInfo*>dGeomGetData(other)
+    cdef dContactGeom cg
+    if g == NULL or (g.key == o.key and g.key >= 0) or o.n >= 16:
+        return
+    if (g.category & o.mask) == 0 or (o.category & g.mask) == 0:
+        return
+    if dCollide(o.geom, other, 1, &cg, sizeof(dContactGeom)) > 0:
+        o.found[o.n] = g.key
+        o.n += 1
+
+
+def overlapping(World w, key) -> list:
+    """Keys of what the body's geoms intersect now (-1: static geometry), whether its own
+    collisions are on or off: a body passing through things asks before it collides again."""
+    cdef int i = w.slot(key)
+    cdef OverlapCtx o
+    cdef GeomInfo* info
+    cdef dGeomID g
+    cdef int enabled, k
+    found = set()
+    for entry in w.geoms[i]:
+        g = <dGeomID><size_t>entry[0]
+        info = <GeomInfo*>dGeomGetData(g)
+        memset(&o, 0, sizeof(OverlapCtx))
+        o.geom = g
+        o.key = info.key
+        o.category = info.category
+        o.mask = info.mask
+        enabled = dGeomIsEnabled(g)
+        dGeomEnable(g)
+        dSpaceCollide2(g, <dGeomID>w.space, &o, overlap_callback)
+        if not enabled:
+            dGeomDisable(g)
+        for k in range(o.n):
+            found.add(o.found[k])
+    return sorted(found)
+
+
 cdef void record_impulses(Ctx* c, double dt) noexcept nogil:
     """Each contact's impulse, |f|·dt from its joint's feedback (the larger side)."""
     cdef int i

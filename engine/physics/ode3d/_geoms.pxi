@@ -47,6 +47,10 @@ def add_geom(World w, key, int kind, double[::1] dims, double[::1] offset, doubl
         td = dGeomTriMeshDataCreate()
         dGeomTriMeshDataBuildDouble(td, verts.data, 3 * sizeof(double), verts.shape[0],
                                     idx.data, idx.shape[0] * 3, 3 * sizeof(dTriIndex))
+        # the edge angles convex-trimesh collision needs (without them ODE aborts the
+        # process when a hull touches the mesh), and the concave edges capsules use
+        dGeomTriMeshDataPreprocess2(td, (1 << dTRIDATAPREPROCESS_BUILD_FACE_ANGLES)
+                                    | (1 << dTRIDATAPREPROCESS_BUILD_CONCAVE_EDGES), NULL)
         g = dCreateTriMesh(w.space, td, NULL, NULL, NULL)
         if s.body != NULL:
             dMassSetTrimesh(&m, density, g)

@@ -4,9 +4,12 @@
 cdef class _Drive:
     """A six-DOF drive: linear + angular velocity motors aiming a body at a target pose.
 
-    With a second body the target rides on it (the relative pose at creation is
-    kept, like a fixed joint whose force is bounded); without one the target is a
-    world pose set by :func:`set_target`.
+    Each step the motors ask for ``v = error / τ``: the error closes with time constant τ
+    (at least the step; 0 means the step), the correction capped at ``max_speed`` and
+    ``max_spin``. The motors' force and torque are bounded, so a blocked body pushes but
+    never fights. With a second body the target rides on it (the relative pose at
+    creation is kept) and the motors hold velocities relative to it, so its own motion is
+    fed forward; without one the target is a world pose set by :func:`set_target`.
     """
     cdef dBodyID body
     cdef dBodyID other
@@ -16,6 +19,9 @@ cdef class _Drive:
     cdef double target[7]
     cdef double max_force
     cdef double max_torque
+    cdef double tau
+    cdef double max_speed
+    cdef double max_spin
     cdef double com[3]       # the body's centre of mass in its entity frame
 
 
@@ -155,6 +161,9 @@ def create_joint(World w, key, int kind, key_a, key_b, anchor, axis, axis2, low,
             memcpy(&d.target[3], dBodyGetQuaternion(ba), 4 * sizeof(double))
             d.max_force = max_force
             d.max_torque = max_force
+            d.tau = 0.0
+            d.max_speed = MAX_SPEED
+            d.max_spin = MAX_SPEED
             memcpy(d.com, w.slots[ia].com, 3 * sizeof(double))
             d.other = bb
             if bb != NULL:
@@ -304,7 +313,9 @@ def set_target(World w, key, double[::1] pos, double[::1] quat, double max_force
     wake(w, d.body)
 
 
-def set_drive_limits(World w, key, double max_force, double max_torque) -> None:
+def set_drive_limits(World w, key, double max_force, double max_torque, double tau=-1.0,
+                     double max_speed=-1.0, double max_spin=-1.0) -> None:
+    """Bound a drive's force and torque; a negative time constant or cap keeps its own."""
     cdef _JointRec rec = joint_of(w, key)
     cdef _Drive d = rec.drive
     if d is None:
@@ -313,21 +324,41 @@ def set_drive_limits(World w, key, double max_force, double max_torque) -> None:
         raise ValueError("six_dof force and torque bounds must be >= 0")
     d.max_force = max_force
     d.max_torque = max_torque
+    if tau >= 0.0:
+        d.tau = tau
+    if max_speed >= 0.0:
+        d.max_speed = min(max_speed, MAX_SPEED)
+    if max_spin >= 0.0:
+        d.max_spin = min(max_spin, MAX_SPEED)
     wake(w, d.body)
 
 
+cdef inline void capped(double* v, double cap) noexcept nogil:
+    """Scale ``v`` (3) down to length ``cap`` if it is longer."""
+    cdef double n = norm3(v)
+    cdef int k
+    if n > cap:
+        for k in range(3):
+            v[k] *= cap / n
+
+
 cdef void drive_joints(World w, double dt):
-    """Aim every six-DOF drive: velocity = pose error / dt, force bounded by the motors."""
+    """Aim every six-DOF drive: v = error / τ (capped), force bounded. The motors hold the
+    body's velocity relative to ``other`` when there is one, so the target body's own
+    motion is fed forward by the constraint itself."""
     cdef _Drive d
     cdef _JointRec rec
     cdef const dReal* p
     cdef double rv[3]
+    cdef double lin[3]
+    cdef double tau
     cdef int k
     for obj in w.joints.values():
         rec = <_JointRec>obj
         if rec.drive is None:
             continue
         d = rec.drive
+        tau = max(d.tau, dt)
         if d.other != NULL:
             qmul(dBodyGetQuaternion(d.other), &d.rel[3], &d.target[3])
             qrotate(dBodyGetQuaternion(d.other), d.rel, d.target)
@@ -335,13 +366,19 @@ cdef void drive_joints(World w, double dt):
             for k in range(3):
                 d.target[k] += p[k]
         p = dBodyGetPosition(d.body)
+        for k in range(3):
+            lin[k] = (d.target[k] - p[k]) / tau
+        capped(lin, d.max_speed)
         rotvec_between(dBodyGetQuaternion(d.body), &d.target[3], rv)
-        dJointSetLMotorParam(d.lmotor, dParamVel, clamp_speed((d.target[0] - p[0]) / dt))
-        dJointSetLMotorParam(d.lmotor, dParamVel2, clamp_speed((d.target[1] - p[1]) / dt))
-        dJointSetLMotorParam(d.lmotor, dParamVel3, clamp_speed((d.target[2] - p[2]) / dt))
-        dJointSetAMotorParam(d.amotor, dParamVel, rv[0] / dt)
-        dJointSetAMotorParam(d.amotor, dParamVel2, rv[1] / dt)
-        dJointSetAMotorParam(d.amotor, dParamVel3, rv[2] / dt)
+        for k in range(3):
+            rv[k] /= tau
+        capped(rv, d.max_spin)
+        dJointSetLMotorParam(d.lmotor, dParamVel, clamp_speed(lin[0]))
+        dJointSetLMotorParam(d.lmotor, dParamVel2, clamp_speed(lin[1]))
+        dJointSetLMotorParam(d.lmotor, dParamVel3, clamp_speed(lin[2]))
+        dJointSetAMotorParam(d.amotor, dParamVel, clamp_speed(rv[0]))
+        dJointSetAMotorParam(d.amotor, dParamVel2, clamp_speed(rv[1]))
+        dJointSetAMotorParam(d.amotor, dParamVel3, clamp_speed(rv[2]))
         for k in range(3):
             dJointSetLMotorParam(d.lmotor, dParamFMax + 0x100 * k, d.max_force)
             dJointSetAMotorParam(d.amotor, dParamFMax + 0x100 * k, d.max_torque)

@@ -32,6 +32,8 @@ cdef struct Slot:
     double pose[7]       # static bodies: entity pose (x y z w x y z)
     double com[3]        # centre of mass in the entity frame (ODE bodies sit at the COM)
     double good[7]       # last sane pose of the ODE body (position, quaternion)
+    double target[7]     # kinematic target: entity pose it arrives at (x y z w x y z)
+    double target_left   # s of stepping until it is there (0: no target; see aim_kinematic)
 
 
 cdef struct Ctx:         # what the near callback needs, passed through ODE's void*
@@ -219,8 +221,10 @@ cdef class World:
             drive_joints(self, dt)
         dRandSetSeed(self.seed)
         with nogil:
+            kinematic_lead(self, dt)
             dSpaceCollide(self.space, &self.ctx, near_callback)
             dWorldQuickStep(self.world, dt)
+            kinematic_arrive(self, dt)
             record_impulses(&self.ctx, dt)
             nf = check_bodies(self)
         self.seed = dRandGetSeed()

@@ -161,10 +161,18 @@ class OdeBackend:
         return _ode.body_count(self._world)
 
     def set_pose(self, key: int, position: np.ndarray, orientation: np.ndarray) -> None:
-        _ode.set_pose(self._world, int(key), vec(position, 3, "position"),
-                      vec(orientation, 4, "orientation"))
+        try:  # seven numbers straight to C; anything else the checked way, for its message
+            _ode.set_pose_values(self._world, int(key), *position, *orientation)
+        except (TypeError, ValueError):
+            _ode.set_pose(self._world, int(key), vec(position, 3, "position"),
+                          vec(orientation, 4, "orientation"))
 
     def set_velocity(self, key: int, linear: np.ndarray, angular: np.ndarray) -> None:
+        try:
+            _ode.set_velocity_values(self._world, int(key), *linear, *angular)
+            return
+        except (TypeError, ValueError):
+            pass
         lin = vec(linear, 3, "linear velocity")
         ang = vec(angular, 3, "angular velocity")
         check_speed(key, lin, ang)
@@ -172,7 +180,8 @@ class OdeBackend:
 
     def set_kinematic_target(self, key: int, position: np.ndarray,
                              orientation: np.ndarray, dt: float) -> None:
-        """Give the body the velocities that carry it to the target pose in ``dt``."""
+        """Give the body the velocities that carry it to the target pose in ``dt``; a
+        kinematic body stops there (exactly at the target) unless told otherwise first."""
         if not dt > 0:
             raise ValueError(f"dt must be positive, got {dt}")
         pos, quat = _ode.pose(self._world, int(key))
@@ -181,7 +190,7 @@ class OdeBackend:
         q /= np.linalg.norm(q)
         lin, ang = (target - pos) / dt, rotation_vector_between(quat, q) / dt
         check_speed(key, lin, ang)
-        _ode.set_velocity(self._world, int(key), lin, ang)
+        _ode.aim_kinematic(self._world, int(key), target, q, lin, ang, float(dt))
 
     def add_force(self, key: int, force: np.ndarray, point: np.ndarray | None = None) -> None:
         f = vec(force, 3, "force")
@@ -285,9 +294,15 @@ class OdeBackend:
                         -1.0 if max_force is None else float(max_force),
                         -1.0 if max_torque is None else float(max_torque))
 
-    def set_drive_limits(self, key: int, max_force: float, max_torque: float) -> None:
-        """Bound a ``six_dof`` joint's force (N) and torque (N·m), e.g. from a Hand."""
-        _ode.set_drive_limits(self._world, int(key), float(max_force), float(max_torque))
+    def set_drive_limits(self, key: int, max_force: float, max_torque: float,
+                         time_constant: float | None = None, max_speed: float | None = None,
+                         max_spin: float | None = None) -> None:
+        """Bound a ``six_dof`` joint's force (N) and torque (N·m), e.g. from a Hand; and its
+        response: the time constant (s) its error closes with, the correction's speed
+        (m/s) and spin (rad/s) caps. None keeps what it has."""
+        _ode.set_drive_limits(self._world, int(key), float(max_force), float(max_torque),
+                              *(-1.0 if v is None else float(v)
+                                for v in (time_constant, max_speed, max_spin)))
 
     # -- batches -----------------------------------------------------------
     def read_state(self) -> BodyState:
@@ -347,6 +362,11 @@ class OdeBackend:
         return faults
 
     # -- queries -----------------------------------------------------------
+    def overlapping(self, key: int) -> list[int]:
+        """Keys of the bodies (-1: static geometry) the body intersects now, its own
+        collisions on or off, as its collision bits allow."""
+        return _ode.overlapping(self._world, int(key))
+
     def raycast(self, origin: np.ndarray, direction: np.ndarray, max_distance: float,
                 ignore: int | None = None, mask: int = _ALL_BITS) -> RayHit | None:
         """Closest hit along the ray, skipping body ``ignore`` and categories outside ``mask``."""

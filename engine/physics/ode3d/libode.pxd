@@ -158,6 +158,10 @@ cdef extern from "ode/ode.h" nogil:
     void dGeomTriMeshDataBuildDouble(dTriMeshDataID, const void* vertices, int vstride,
                                      int vcount, const void* indices, int icount, int tstride)
     dGeomID dCreateTriMesh(dSpaceID, dTriMeshDataID, void*, void*, void*)
+    int dGeomTriMeshDataPreprocess2(dTriMeshDataID, unsigned int build, const void* extra)
+    enum:
+        dTRIDATAPREPROCESS_BUILD_CONCAVE_EDGES
+        dTRIDATAPREPROCESS_BUILD_FACE_ANGLES
     void dGeomDestroy(dGeomID)
     void dGeomSetBody(dGeomID, dBodyID)
     dBodyID dGeomGetBody(dGeomID)
@@ -171,6 +175,7 @@ cdef extern from "ode/ode.h" nogil:
     void dGeomSetCollideBits(dGeomID, unsigned long)
     void dGeomEnable(dGeomID)
     void dGeomDisable(dGeomID)
+    int dGeomIsEnabled(dGeomID)
     int dGeomIsSpace(dGeomID)
     void dGeomRaySet(dGeomID, dReal, dReal, dReal, dReal, dReal, dReal)
     void dGeomRaySetLength(dGeomID, dReal)

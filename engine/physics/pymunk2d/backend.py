@@ -32,6 +32,7 @@ import pymunk
 
 from components import Joint, MaterialProps, Physical, Shape
 from engine.physics.backend import (
+    ARRIVE_SLACK,
     CONTACT_DTYPE,
     BodyState,
     MaterialPair,
@@ -72,6 +73,16 @@ class _BodyRecord:
     joints: set[int] = field(default_factory=set)
 
 
+@dataclass(slots=True)
+class _Aim:
+    """A kinematic body on its way to a target in the plane, due in ``left`` s."""
+
+    x: float
+    z: float
+    angle: float
+    left: float
+
+
 class PymunkBackend:
     """A 2D side-view world: pymunk space in X–Z, Y kept per body as authored."""
 
@@ -101,6 +112,7 @@ class PymunkBackend:
         self._woken: set[int] = set()  # keys woken explicitly since the rule last looked
         self._joint_pairs: np.ndarray | None = None  # (M, 2) body keys of the joints
         self._sliders: dict[int, JointRecord] = {}
+        self._aims: dict[int, _Aim] = {}  # kinematic bodies on their way to a target
         #: The last read that was all finite: keys, and each row's (x, z, θ, vx, vz, ω).
         self._last_good = (np.zeros(0, np.int64), np.zeros((0, 6)))
         self._read_rows = np.zeros((0, 6))  # the next read's rows, swapped in when good
@@ -167,10 +179,35 @@ class PymunkBackend:
         """Step the space; then let the sleep rule put quiet islands to sleep."""
         for rec in self._sliders.values():
             rec.drive_slider(dt)
+        if self._aims:
+            self._lead_aims(dt)
         self._space.step(dt)
+        if self._aims:
+            self._arrive(dt)
         self._contacts = None
         if self._sleep_on:
             self._apply_sleep(dt)
+
+    def _lead_aims(self, dt: float) -> None:
+        """Bodies whose target is due within this step slow down to arrive with it."""
+        for key, aim in self._aims.items():
+            if aim.left < dt * (1.0 - ARRIVE_SLACK):
+                body = self._bodies[key].body
+                body.velocity = body.velocity * (aim.left / dt)
+                body.angular_velocity *= aim.left / dt
+
+    def _arrive(self, dt: float) -> None:
+        """Bodies whose target was due in this step: exactly at it, at rest."""
+        for key, aim in list(self._aims.items()):
+            aim.left -= dt
+            if aim.left > dt * ARRIVE_SLACK:
+                continue
+            del self._aims[key]
+            body = self._bodies[key].body
+            body.angle = aim.angle
+            body.position = (aim.x, aim.z)
+            body.velocity = (0.0, 0.0)
+            body.angular_velocity = 0.0
 
     def close(self) -> None:
         for key in list(self._joints):
@@ -268,6 +305,7 @@ class PymunkBackend:
             self.remove_joint(jkey)
         self._space.remove(rec.body, *rec.shapes)
         del self._bodies[rec.key]
+        self._aims.pop(rec.key, None)
         self._dirty = True
 
     def body_count(self) -> int:
@@ -293,6 +331,7 @@ class PymunkBackend:
         if rec.body.body_type == pymunk.Body.STATIC:
             self._space.reindex_shapes_for_body(rec.body)
         self._woken.add(rec.key)
+        self._aims.pop(rec.key, None)
 
     def _set_y(self, rec: _BodyRecord, y: float) -> None:
         rec.y = y
@@ -306,6 +345,7 @@ class PymunkBackend:
         self._check_planar(rec.key, "velocity", linear, angular)
         _set_origin_velocity(rec.body, float(linear[0]), float(linear[2]), -float(angular[1]))
         self._woken.add(rec.key)
+        self._aims.pop(rec.key, None)
 
     def _check_planar(self, key: int, what: str, linear: np.ndarray | None,
                       angular: np.ndarray | None) -> None:
@@ -316,7 +356,8 @@ class PymunkBackend:
 
     def set_kinematic_target(self, key: int, position: np.ndarray,
                              orientation: np.ndarray, dt: float) -> None:
-        """Give the body the velocities that carry it to the target in ``dt`` (Y jumps)."""
+        """Give the body the velocities that carry it to the target in ``dt`` (Y jumps); a
+        kinematic body stops there (exactly at the target) unless told otherwise first."""
         rec = self._record(key)
         if dt <= 0.0 or rec.body.body_type == pymunk.Body.STATIC:
             self.set_pose(key, position, orientation)
@@ -324,10 +365,15 @@ class PymunkBackend:
         body = rec.body
         theta = self._set_orientation(rec, orientation)
         turn = math.remainder(theta - body.angle, 2.0 * math.pi)
-        _set_origin_velocity(body, (float(position[0]) - body.position.x) / dt,
-                             (float(position[2]) - body.position.y) / dt, turn / dt)
+        x, z = float(position[0]), float(position[2])
+        _set_origin_velocity(body, (x - body.position.x) / dt, (z - body.position.y) / dt,
+                             turn / dt)
         self._set_y(rec, float(position[1]))
         self._woken.add(rec.key)
+        if body.body_type == pymunk.Body.KINEMATIC:
+            self._aims[rec.key] = _Aim(x, z, body.angle + turn, float(dt))
+        else:
+            self._aims.pop(rec.key, None)
 
     def add_force(self, key: int, force: np.ndarray, point: np.ndarray | None = None) -> None:
         rec = self._record(key)
@@ -550,12 +596,16 @@ class PymunkBackend:
         rec.set_target((float(position[0]), float(position[2])), theta, max_force, max_torque)
         self._wake_joint(rec)
 
-    def set_drive_limits(self, key: int, max_force: float, max_torque: float) -> None:
-        """Bound a ``six_dof`` joint's force (N) and torque (N·m), e.g. from a Hand."""
+    def set_drive_limits(self, key: int, max_force: float, max_torque: float,
+                         time_constant: float | None = None, max_speed: float | None = None,
+                         max_spin: float | None = None) -> None:
+        """Bound a ``six_dof`` joint's force (N) and torque (N·m), e.g. from a Hand, and its
+        response (see :meth:`JointRecord.set_drive_response`); None keeps what it has."""
         rec = self._six_dof(key, "set_drive_limits")
         if not (max_force >= 0.0 and max_torque >= 0.0):
             raise ValueError("six_dof force and torque bounds must be >= 0")
         rec.set_drive_limits(float(max_force), float(max_torque))
+        rec.set_drive_response(time_constant, max_speed, max_spin)
         self._wake_joint(rec)
 
     def _six_dof(self, key: int, what: str) -> JointRecord:
@@ -667,6 +717,24 @@ class PymunkBackend:
         return self._contacts
 
     # -- queries -----------------------------------------------------------
+    def overlapping(self, key: int) -> list[int]:
+        """Keys of the bodies (-1: static geometry) the body's shapes intersect now, its own
+        collisions on or off, as its collision bits allow."""
+        rec = self._record(key)
+        wanted = self._filter(rec.physical)
+        found: set[int] = set()
+        for shape in rec.shapes:
+            own, shape.filter = shape.filter, wanted
+            try:
+                hits = self._space.shape_query(shape)
+            finally:
+                shape.filter = own
+            for hit in hits:
+                if hit.shape is not None and hit.shape.body is not rec.body:
+                    found.add(next((r.key for r in self._bodies.values()
+                                    if r.body is hit.shape.body), -1))
+        return sorted(found)
+
     def raycast(self, origin: np.ndarray, direction: np.ndarray, max_distance: float,
                 ignore: int | None = None, mask: int = 0xFFFFFFFF) -> RayHit | None:
         """Closest hit along the ray (skipping body ``ignore`` and categories outside

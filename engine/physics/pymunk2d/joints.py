@@ -96,6 +96,21 @@ class JointRecord:
         if max_torque is not None:
             gear.max_force = max_torque
 
+    def set_drive_response(self, time_constant: float | None, max_speed: float | None,
+                           max_spin: float | None) -> None:
+        """A six_dof's response: its error closes with ``time_constant`` (s; chipmunk's
+        ``error_bias`` is the share left after a second, e^(-1/τ)), the correcting speed
+        (m/s) and spin (rad/s) capped (``max_bias``); None keeps one as it is. The
+        control body's own velocity is matched by the constraints: the feed-forward."""
+        pivot, gear = self.constraints[0], self.constraints[1]
+        if time_constant is not None:
+            bias = math.exp(-1.0 / time_constant) if time_constant > 0.0 else 0.0
+            pivot.error_bias = gear.error_bias = bias
+        if max_speed is not None:
+            pivot.max_bias = max_speed
+        if max_spin is not None:
+            gear.max_bias = max_spin
+
     def drive_slider(self, dt: float) -> None:
         """The slider motor: the force that reaches the target rate this step, bounded."""
         if self.slider_max_force <= 0.0:

@@ -1,0 +1,523 @@
+"""Virtual hands (paper section 5): physically simulated hands a person's trackers drive.
+
+A hand is an object with a :class:`~components.Hand` (the scene's ``Object { Hand {...} }``):
+its own dynamic body, floating, that collides with the world. This plugin gives each hand
+a *control body*, kinematic and colliding with nothing, that follows the hand's tracker
+(pose and velocity; it is also the marker showing where the real hand is), and a six_dof
+drive from the hand to it: the hand's pose error closes with a time constant τ, the
+correction capped, the control body's velocity fed forward, and the force and torque
+bounded — so a hand tracks a moving tracker closely, but a heavy load lags and a wall
+stops it, instead of the solver fighting (the same drive on ODE and pymunk, through the
+backend protocol). While hands exist the physics step is at most 1/120 s.
+
+Each frame, in PRE_PHYSICS (so this frame's tracker pose and glove reach this frame's
+step): the control body is put at the tracker's pose (relative to the hand's ``Frame``
+object, a wheelchair, when it has one); the real/virtual discrepancy rule of section 5.4
+runs with D = ``DeviationDistance`` — farther than D from its tracker the hand stops
+colliding and is pulled back through whatever held it; it collides again once it is
+within 0.1 D and overlaps nothing; between 0.1 D and 0.7 D it is drawn see-through and
+on top of everything; beyond 1 m (tracking jumped) it is put at the tracker — and a
+pinch of the glove's button grasps what the hand touches: each object is attached by a
+fixed joint at its current pose relative to the hand (a ball joint at the hand where a
+second hand holds it already, so two grips do not over-constrain it), and released when
+the button comes up. In POST_PHYSICS the step's contacts say what each hand touches
+(mode contact: drawn with ``ContactModel``), and the force its contacts pushed with,
+published for haptic gloves as the output ``hand:ID/force`` (and ``hand:ID/grasp``).
+
+A hand whose tracker is lost holds still (drawn grey) and lets go after
+:data:`RELEASE_AFTER` seconds. Events :class:`~engine.events.HandTouched`,
+:class:`~engine.events.HandGrasped`, :class:`~engine.events.HandReleased` reach Python
+and Lua (``onTouch``, ``onGrasp``, ``onRelease``).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from concurrent.futures import Future
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from components import (
+    Graspable,
+    Hand,
+    HandState,
+    Joint,
+    Name,
+    Physical,
+    Shape,
+    Transform,
+    Visual,
+)
+from components.hand import HandMode
+from components.joint import JointKind
+from components.physical import BodyKind
+from engine.events import Contacts, HandGrasped, HandReleased, HandTouched
+from engine.input import InputState
+from engine.messages import MessageLog
+from engine.physics.commands import (
+    CommandError,
+    SetCollisionEnabled,
+    SetDriveLimits,
+    SetPose,
+    SetVelocity,
+)
+from engine.rotation import quat_multiply, quat_to_matrix
+from engine.services import HandControl
+from engine.system import Phase, System
+
+if TYPE_CHECKING:
+    from engine.app import Engine
+
+log = logging.getLogger("colosseum.hands")
+
+#: The longest physics step hands are simulated with (s).
+MAX_STEP = 1.0 / 120.0
+#: The drive's time constant when the hand names none: max(2 Δt, this) seconds.
+MIN_TIME_CONSTANT = 0.03
+#: Farther than this from its tracker (m) a hand is taken to have lost track: it is put
+#: at the tracker instead of being pulled there.
+TELEPORT_DISTANCE = 1.0
+#: Seconds a hand whose tracker is lost keeps holding what it holds.
+RELEASE_AFTER = 1.0
+#: The see-through band, as shares of the deviation distance D (paper section 5.4), the
+#: share under which a hand collides again, and how see-through it is drawn.
+SEE_THROUGH = (0.1, 0.7)
+COLLIDE_AGAIN = 0.1
+SEE_THROUGH_ALPHA = 0.45
+#: Colours a hand without models of its own is tinted with per mode, and when untracked.
+TINTS = {HandMode.CONTACT: (0.55, 0.85, 0.55), HandMode.GRASP: (0.95, 0.6, 0.3)}
+UNTRACKED = (0.55, 0.55, 0.55)
+#: The marker: a ball of this diameter (m) where the real hand is.
+MARKER_SIZE = 0.03
+MARKER_COLOR = (1.0, 0.85, 0.2, 1.0)
+
+
+@dataclass(slots=True, eq=False)
+class _Rig:
+    """What this plugin made for one hand, and what it remembers between frames."""
+
+    hand: int
+    name: str
+    control: int
+    drive: int
+    look: tuple[str | None, tuple[float, float, float, float]]  # the author's model, colour
+    grasps: dict[int, int] = field(default_factory=dict)  # object -> its grasp joint
+    pressed: bool = False
+    lost_for: float = 0.0
+    overlap: Future | None = None
+    shown: tuple[str, bool, bool] | None = None  # the mode, tracking and see-through drawn
+    force_output: str = field(init=False)
+    grasp_output: str = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.force_output, self.grasp_output = f"hand:{self.name}/force", \
+            f"hand:{self.name}/grasp"
+
+
+class Hands:
+    """The hands' shared state (a resource, and the scripts' HandControl)."""
+
+    def __init__(self) -> None:
+        self.rigs: dict[int, _Rig] = {}
+        self.messages = MessageLog(log)
+        self._engine: Engine | None = None
+
+    # -- HandControl (scripts) ----------------------------------------------------
+    def _rig(self, hand: int) -> _Rig:
+        rig = self.rigs.get(hand)
+        if rig is None:
+            self._state(hand)  # not a hand at all: says so
+            raise ValueError("the hand starts holding from its first physics frame on")
+        return rig
+
+    def _state(self, hand: int) -> HandState:
+        assert self._engine is not None
+        state = self._engine.world.try_component(hand, HandState)
+        if state is None:
+            raise KeyError(f"object {_name(self._engine.world, hand)!r} is not a hand")
+        return state
+
+    def state(self, hand: int) -> str:
+        return str(self._state(hand).mode)
+
+    def held(self, hand: int) -> tuple[int, ...]:
+        return self._state(hand).held
+
+    def grasp(self, hand: int, obj: int) -> None:
+        assert self._engine is not None
+        self.attach(self._engine, self._rig(hand), obj)
+
+    def release(self, hand: int) -> None:
+        assert self._engine is not None
+        self.let_go(self._engine, self._rig(hand))
+
+    # -- grasping -----------------------------------------------------------------
+    def attach(self, engine: Engine, rig: _Rig, obj: int) -> None:
+        """Hold ``obj``: a fixed joint at its pose relative to the hand now, or a ball joint
+        at the hand where another hand holds it already."""
+        world = engine.world
+        if obj in rig.grasps or not world.entity_exists(obj):
+            return
+        physical = world.try_component(obj, Physical)
+        if physical is None or physical.kind != BodyKind.DYNAMIC:
+            raise ValueError(f"object {_name(world, obj)!r} is not a dynamic body; a hand "
+                             "holds only what can move")
+        others = [r for r in self.rigs.values() if obj in r.grasps]
+        kind = JointKind.BALL if others else JointKind.FIXED
+        rig.grasps[obj] = self._joint(engine, rig, obj, kind)
+        for other in others:  # a second grip: the first becomes a grip point too
+            if self._kind(world, other.grasps[obj]) == JointKind.FIXED:
+                engine.despawn(other.grasps[obj])
+                other.grasps[obj] = self._joint(engine, other, obj, JointKind.BALL)
+        engine.events.emit(HandGrasped(rig.hand, obj))
+
+    def let_go(self, engine: Engine, rig: _Rig, objects: list[int] | None = None) -> None:
+        """Release ``objects`` (default: all); a single grip left on one becomes fixed."""
+        for obj in list(rig.grasps) if objects is None else objects:
+            joint = rig.grasps.pop(obj, None)
+            if joint is None:
+                continue
+            engine.despawn(joint)
+            engine.events.emit(HandReleased(rig.hand, obj))
+            remaining = [r for r in self.rigs.values() if obj in r.grasps]
+            if len(remaining) == 1 and engine.world.entity_exists(obj):
+                last = remaining[0]
+                engine.despawn(last.grasps[obj])
+                last.grasps[obj] = self._joint(engine, last, obj, JointKind.FIXED)
+
+    @staticmethod
+    def _kind(world: Any, joint: int) -> str | None:
+        j = world.try_component(joint, Joint)
+        return None if j is None else j.kind
+
+    @staticmethod
+    def _joint(engine: Engine, rig: _Rig, obj: int, kind: JointKind) -> int:
+        anchor = tuple(engine.world.component_for_entity(rig.hand, Transform).position)
+        label = f"{rig.name} holds {_name(engine.world, obj)}"
+        return engine.spawn(Name(label), Joint(kind=kind, body_a=rig.hand, body_b=obj,
+                                               anchor=anchor, id=label))
+
+
+def _name(world: Any, entity: int) -> str:
+    name = world.try_component(entity, Name)
+    return name.id if name is not None else f"entity {entity}"
+
+
+class HandDriveSystem(System):
+    """PRE_PHYSICS: trackers move the control bodies; discrepancy rule; grasp and release."""
+
+    phase = Phase.PRE_PHYSICS
+    reads = (Hand, HandState, Transform, Name, Physical, Graspable, Joint, Visual)
+    writes = (HandState, Visual, Name, Transform, Physical, Joint)
+
+    def __init__(self, hands: Hands) -> None:
+        self.hands = hands
+        self._new: list[int] = []
+
+    def setup(self, engine: Engine) -> None:
+        self.hands._engine = engine
+        world = engine.world
+        world.on_add(Hand, lambda e, h: self._added(engine, e))
+        world.on_remove(Hand, lambda e, h: self._forget(engine, e))
+        world.on_remove(Physical, lambda e, p: self._dropped(engine, e))
+        for entity in sorted(e for e, _ in world.get_component(Hand)):
+            self._added(engine, entity)
+
+    def _added(self, engine: Engine, entity: int) -> None:
+        """Rigged at the next PRE_PHYSICS; the step is shortened now, before any frame
+        steps with the longer one (a saved state resumes with the same steps)."""
+        self._limit_step(engine)
+        self._new.append(entity)
+
+    def run(self, engine: Engine, dt: float) -> None:
+        if self._new:
+            self._rig_new(engine)
+        inputs = engine.try_resource(InputState)
+        world = engine.world
+        for rig in self.hands.rigs.values():
+            hand = world.try_component(rig.hand, Hand)
+            state = world.try_component(rig.hand, HandState)
+            t = world.try_component(rig.hand, Transform)
+            if hand is None or state is None or t is None:
+                continue
+            pose = None if inputs is None else self._tracker_pose(engine, hand, inputs)
+            try:
+                self._drive(engine, rig, hand, state, t, pose, dt)
+            except CommandError as exc:  # a tracker pose no body can take (never NaN: the
+                self.hands.messages.error(  # input layer refuses those); the hand holds
+                    f"hand {rig.name!r}: {exc}; it holds still", f"frame {engine.frame}: ")
+            pressed = inputs is not None and hand.glove != "" and inputs.button(hand.glove,
+                                                                                hand.button)
+            if pressed and not rig.pressed:
+                for obj in state.touching:
+                    self._grasp(engine, rig, obj)
+            elif rig.pressed and not pressed:
+                self.hands.let_go(engine, rig)
+            rig.pressed = pressed
+            state.held = tuple(rig.grasps)
+
+    def _grasp(self, engine: Engine, rig: _Rig, obj: int) -> None:
+        try:
+            self.hands.attach(engine, rig, obj)
+        except ValueError as exc:
+            self.hands.messages.warn(f"hand {rig.name!r}: {exc}")
+
+    # -- rigs -----------------------------------------------------------------------
+    def _rig_new(self, engine: Engine) -> None:
+        new, self._new = self._new, []
+        world = engine.world
+        for entity in new:
+            hand = world.try_component(entity, Hand)
+            t = world.try_component(entity, Transform)
+            if hand is None or t is None or not world.has_component(entity, Physical):
+                continue
+            name = _name(world, entity)
+            control = engine.spawn(
+                Name(f"{name} tracker"), Transform(t.position.copy(), t.orientation.copy()),
+                Physical(kind=BodyKind.KINEMATIC, mass=1.0, shapes=[], category=0, mask=0,
+                         gravity=False, can_sleep=False),
+                *([Visual(shapes=[Shape("sphere", (MARKER_SIZE / 2,))], color=MARKER_COLOR,
+                          shadower=False)] if hand.marker else []))
+            drive = engine.spawn(Name(f"{name} drive"), Joint(
+                kind=JointKind.SIX_DOF, body_a=entity, body_b=control,
+                motor_max_force=hand.max_force, id=f"{name} drive"))
+            tick = engine.config.dt / max(engine.controller.substeps, 1)
+            tau = hand.time_constant or max(2.0 * tick, MIN_TIME_CONSTANT)
+            engine.physics.push(SetDriveLimits(drive, hand.max_force, hand.max_torque, tau,
+                                               hand.max_speed, hand.max_spin))
+            visual = world.try_component(entity, Visual)
+            look = (None, (0.8, 0.8, 0.8, 1.0)) if visual is None else (
+                visual.model, tuple(visual.color))
+            rig = _Rig(entity, name, control, drive, look)  # type: ignore[arg-type]
+            self.hands.rigs[entity] = rig
+            for held in hand.holding:  # a saved state: hold again what was held
+                obj = next((e for e, n in world.get_component(Name) if n.id == held), None)
+                if obj is None:
+                    self.hands.messages.warn(f"hand {name!r}: it held {held!r}, which is not "
+                                             "in the scene; it holds nothing")
+                else:
+                    self._grasp(engine, rig, obj)
+            hand.holding = ()
+
+    @staticmethod
+    def _limit_step(engine: Engine) -> None:
+        """Hands are simulated at 1/120 s or finer: more substeps per frame if needed."""
+        needed = math.ceil(engine.config.dt / MAX_STEP - 1e-9)
+        raised = False
+        for controller in (engine.controller, engine.physics.controller):
+            if controller.substeps < needed:
+                raised = True
+                controller.substeps = needed
+                controller.pacing.substeps = needed
+                controller.pacing.max_substeps = max(controller.pacing.max_substeps, needed)
+        if raised:
+            log.info("hands: physics steps at %.4g s (%d per frame of %.4g s)",
+                     engine.config.dt / needed, needed, engine.config.dt)
+
+    def _forget(self, engine: Engine, entity: int) -> None:
+        rig = self.hands.rigs.pop(entity, None)
+        if rig is None:
+            return
+        self.hands.let_go(engine, rig)
+        engine.despawn(rig.drive)
+        engine.despawn(rig.control)
+
+    def _dropped(self, engine: Engine, entity: int) -> None:
+        """A held object went away: its grips went with it (the backend removed them)."""
+        for rig in self.hands.rigs.values():
+            if entity in rig.grasps:
+                engine.despawn(rig.grasps.pop(entity))
+                engine.events.emit(HandReleased(rig.hand, entity))
+
+    # -- each frame ------------------------------------------------------------------
+    @staticmethod
+    def _tracker_pose(engine: Engine, hand: Hand, inputs: InputState
+                      ) -> tuple[np.ndarray, ...] | None:
+        """The tracker's world pose and velocities (through the hand's frame object), or
+        None while it is not tracked."""
+        tracker = inputs.tracker(hand.tracker)
+        if tracker is None or not tracker.tracked:
+            return None
+        p, q = tracker.position, tracker.orientation
+        v, w = tracker.velocity, tracker.angular_velocity
+        frame = None if hand.frame is None else engine.world.try_component(hand.frame,
+                                                                           Transform)
+        if frame is None:
+            return p, q, v, w
+        rot = quat_to_matrix(frame.orientation)
+        arm = rot @ p
+        return (frame.position + arm, quat_multiply(frame.orientation, q),
+                frame.linear_velocity + np.cross(frame.angular_velocity, arm) + rot @ v,
+                frame.angular_velocity + rot @ w)
+
+    def _drive(self, engine: Engine, rig: _Rig, hand: Hand, state: HandState,
+               t: Transform, pose: tuple[np.ndarray, ...] | None, dt: float) -> None:
+        physics = engine.physics
+        if pose is None:
+            if state.tracked or rig.lost_for == 0.0:  # hold still where the hand is
+                physics.push(SetVelocity(rig.control, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)))
+            state.tracked = False
+            rig.lost_for += dt
+            if rig.lost_for >= RELEASE_AFTER and rig.grasps:
+                self.hands.messages.warn(f"hand {rig.name!r}: its tracker {hand.tracker!r} is "
+                                         f"lost; it lets go", f"frame {engine.frame}: ")
+                self.hands.let_go(engine, rig)
+            self._look(engine, rig, hand, state)
+            return
+        position, orientation, velocity, spin = pose
+        state.tracked, rig.lost_for = True, 0.0
+        d = math.dist(t.position.tolist(), position.tolist())
+        state.deviation = d
+        limit = hand.deviation_distance
+        if d > TELEPORT_DISTANCE:
+            self.hands.let_go(engine, rig)
+            physics.set_pose(rig.hand, position, orientation)
+            physics.set_velocity(rig.hand, velocity, spin)
+        if state.colliding and d > limit:
+            physics.push(SetCollisionEnabled(rig.hand, False))
+            state.colliding = False
+        elif not state.colliding and d < COLLIDE_AGAIN * limit:
+            self._collide_again(engine, rig, state)
+        physics.push(SetPose(rig.control, position, orientation, velocity, spin))
+        self._look(engine, rig, hand, state)
+
+    def _collide_again(self, engine: Engine, rig: _Rig, state: HandState) -> None:
+        """Collide again once the hand overlaps nothing but what it holds (asked of the
+        backend; in threaded mode the answer comes a frame later)."""
+        if rig.overlap is None:
+            hand = rig.hand
+            rig.overlap = engine.physics.request(lambda backend: backend.overlapping(hand))
+        if not rig.overlap.done():
+            return
+        future, rig.overlap = rig.overlap, None
+        if future.exception() is not None:
+            return
+        if not set(future.result()) - set(rig.grasps):
+            engine.physics.push(SetCollisionEnabled(rig.hand, True))
+            state.colliding = True
+
+    @staticmethod
+    def _look(engine: Engine, rig: _Rig, hand: Hand, state: HandState) -> None:
+        """The hand's look: its mode's model (or tint), see-through in the band of 5.4,
+        grey while untracked. Written only when one of those changes (a change rebuilds its
+        draw; a script may recolour the hand in between)."""
+        low, high = SEE_THROUGH
+        through = low * hand.deviation_distance <= state.deviation <= \
+            high * hand.deviation_distance
+        shown = (state.mode, state.tracked, through)
+        if shown == rig.shown:
+            return
+        rig.shown = shown
+        visual = engine.world.try_component(rig.hand, Visual)
+        if visual is None:
+            return
+        model, color = rig.look
+        mode = HandMode(state.mode)
+        own = {HandMode.CONTACT: hand.contact_model, HandMode.GRASP: hand.grasp_model}
+        if own.get(mode):
+            model = own[mode]
+        elif mode in TINTS:
+            color = (*TINTS[mode], color[3])
+        if not state.tracked:
+            color = (*UNTRACKED, color[3])
+        if through:
+            color = (*color[:3], SEE_THROUGH_ALPHA)
+        if (visual.model, tuple(visual.color), visual.overlay) != (model, color, through):
+            visual.model, visual.color, visual.overlay = model, color, through
+
+
+class HandContactSystem(System):
+    """POST_PHYSICS: what each hand touches (its mode) and the force its contacts pushed
+    with; :class:`HandTouched` for what it begins to touch."""
+
+    phase = Phase.POST_PHYSICS
+    reads = (Hand, HandState, Physical, Graspable)
+    writes = (HandState,)
+
+    def __init__(self, hands: Hands) -> None:
+        self.hands = hands
+
+    def run(self, engine: Engine, dt: float) -> None:
+        rigs = self.hands.rigs
+        if not rigs:
+            return
+        touches = _hand_contacts(engine.events.frame(Contacts), rigs)
+        world = engine.world
+        outputs = _outputs(engine)
+        for rig in rigs.values():
+            state = world.try_component(rig.hand, HandState)
+            if state is None:
+                continue
+            impulse, others = touches.get(rig.hand, (0.0, ()))
+            force = impulse / dt if dt > 0 else 0.0
+            touching = tuple(o for o in sorted(set(others)) if _graspable(world, o))
+            if touching != state.touching:
+                for obj in set(touching) - set(state.touching):
+                    engine.events.emit(HandTouched(rig.hand, obj))
+                state.touching = touching
+            state.contact_force = force
+            state.held = tuple(rig.grasps)
+            state.mode = HandMode.GRASP if rig.grasps else HandMode.CONTACT if touching \
+                else HandMode.NEUTRAL
+            if outputs is not None:
+                outputs.set(rig.force_output, force)
+                outputs.set(rig.grasp_output, 1.0 if rig.grasps else 0.0)
+
+
+def _hand_contacts(frames: list[Contacts], rigs: dict[int, _Rig]
+                   ) -> dict[int, tuple[float, list[int]]]:
+    """Each hand in a contact this step: its contacts' summed impulse and what it touched.
+    Hands are a few entity ids among the step's contacts: a range test in numpy narrows
+    the contacts to those near the hands' ids, a set picks the hands' own."""
+    batches = [c.batch for c in frames if len(c.batch)]
+    if not batches:
+        return {}
+    contacts = np.concatenate(batches) if len(batches) > 1 else batches[0]
+    a, b = contacts["a"], contacts["b"]
+    low, high = min(rigs), max(rigs)
+    rows = np.flatnonzero(((a >= low) & (a <= high)) | ((b >= low) & (b <= high)))
+    out: dict[int, tuple[float, list[int]]] = {}
+    impulses = contacts["impulse"][rows].tolist()
+    for x, y, impulse in zip(a[rows].tolist(), b[rows].tolist(), impulses, strict=True):
+        for hand, other in ((x, y), (y, x)):
+            if hand in rigs:
+                total, others = out.get(hand, (0.0, []))
+                others.append(other)
+                out[hand] = (total + impulse, others)
+    return out
+
+
+def _graspable(world: Any, entity: int) -> bool:
+    if entity < 0:
+        return False
+    physical = world.try_component(entity, Physical)
+    if physical is None or physical.kind != BodyKind.DYNAMIC or \
+            world.has_component(entity, Hand):
+        return False
+    grasp = world.try_component(entity, Graspable)
+    return grasp is None or grasp.enabled
+
+
+def _outputs(engine: Engine) -> Any:
+    from systems.input import Outputs
+
+    return engine.try_resource(Outputs)
+
+
+class HandsPlugin:
+    """Virtual hands (``requestPlugin("hands")``; the paper's "interaction")."""
+
+    name = "hands"
+
+    def build(self, engine: Engine) -> None:
+        from systems.input import InputPlugin
+
+        engine.add_plugin(InputPlugin())  # the trackers and gloves hands follow
+        hands = Hands()
+        engine.insert_resource(hands)
+        engine.insert_resource(hands, as_type=HandControl)
+        engine.add_system(HandDriveSystem(hands))
+        engine.add_system(HandContactSystem(hands))
