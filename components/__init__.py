@@ -11,6 +11,7 @@ Orientations are unit quaternions ``(w, x, y, z)``. The vocabularies
 from components.avatar import Avatar, ClipSpec, Hold
 from components.camera import Camera
 from components.controller import Controller
+from components.display import Display
 from components.hand import Graspable, Hand, HandState
 from components.joint import Joint
 from components.light import Light
@@ -28,6 +29,7 @@ __all__ = [
     "Camera",
     "ClipSpec",
     "Controller",
+    "Display",
     "Graspable",
     "Hand",
     "HandState",

@@ -10,17 +10,14 @@ import argparse
 import logging
 import os
 import sys
-import time
-import traceback
 from pathlib import Path
 from typing import Any
 
 from engine.input.config import input_option
 from engine.physics.backend import BackendName
+from engine.runner import execute_run, fail, prepare_run
 
 log = logging.getLogger("colosseum")
-
-USAGE_ERROR = 2
 
 
 def _positive(kind: type) -> Any:
@@ -33,6 +30,93 @@ def _positive(kind: type) -> Any:
     return parse
 
 
+def param_option(text: str) -> tuple[str, str]:
+    """``KEY=VALUE`` of ``--param``."""
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip() or not value.strip():
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    return key.strip(), value.strip()
+
+
+def _run_flag_table() -> dict[str, tuple[tuple[str, ...], dict[str, Any]]]:
+    """``run``'s flags by name (serve and join take those that make sense for them)."""
+    return {
+        "seconds": (("--seconds",), {"type": _positive(float),
+                                     "help": "simulated seconds to run"}),
+        "frames": (("--frames",), {"type": _positive(int), "help": "frames to run"}),
+        "headless": (("--headless",), {"action": "store_true",
+                                       "help": "no window (automatic without a display)"}),
+        "backend": (("--backend",), {"choices": list(BackendName), "default": None,
+                                     "help": "dynamics backend (default: the scene's, else "
+                                             "ode)"}),
+        "mode": (("--mode",), {"choices": ["serial", "threaded"], "default": "serial",
+                               "help": "serial: everything on the main thread; threaded: "
+                                       "physics on its own"}),
+        "fast": (("--fast",), {"action": "store_true",
+                               "help": "run as fast as possible, not in real time"}),
+        "seed": (("--seed",), {"type": int, "default": 0,
+                               "help": "seed for the scene's random functions"}),
+        "dt": (("--dt",), {"type": _positive(float), "default": None,
+                           "help": "physics time step (s)"}),
+        "substeps": (("--substeps",), {"type": _positive(int), "default": 1,
+                                       "help": "physics steps per frame"}),
+        "early": (("--early",), {"choices": ["sleep", "substep"], "default": "sleep",
+                                 "help": "when a step finishes early: sleep, or take smaller "
+                                         "substeps"}),
+        "late": (("--late",), {"choices": ["slowmo", "grow"], "default": "slowmo",
+                               "help": "when steps run late: slow motion, or grow the step "
+                                       "(bounded)"}),
+        "max_dt": (("--max-dt",), {"type": _positive(float), "default": 1.0 / 20.0,
+                                   "help": "upper bound for --late grow (s)"}),
+        "sound": (("--sound",), {"default": "null",
+                                 "help": "audio backend: openal, wave:FILE or null"}),
+        "screenshot": (("--screenshot",), {"type": Path,
+                                           "help": "write the last frame to FILE.png"}),
+        "record_frames": (("--record-frames",), {"type": Path,
+                                                 "help": "write every Nth frame into DIR"}),
+        "record_every": (("--record-every",), {"type": _positive(int), "default": 1,
+                                               "help": "N for --record-frames"}),
+        "interpolate": (("--interpolate",), {"action": "store_true",
+                                             "help": "threaded mode: interpolate poses between "
+                                                     "physics states when drawing"}),
+        "hud": (("--hud",), {"action": "store_true",
+                             "help": "show the HUD line (fps, physics ms, rtf)"}),
+        "size": (("--size",), {"default": "640x480", "help": "window/render size WxH"}),
+        "save_state": (("--save-state",), {"type": Path,
+                                           "help": "write the final state as a scene file"}),
+        "stats": (("--stats",), {"type": Path, "help": "write run statistics as JSON"}),
+        "record": (("--record",), {"type": Path,
+                                   "help": "record input events to FILE (JSON lines)"}),
+        "replay": (("--replay",), {"type": Path,
+                                   "help": "replay input events recorded with --record"}),
+        "input": (("--input",), {"action": "append", "default": [], "type": input_option,
+                                 "metavar": "KIND[:ARG]",
+                                 "help": "open an input device: osc:PORT, serial:PATH[@BAUD], "
+                                         "lsl:STREAM[,...], desktop or openxr (repeatable)"}),
+        "progress": (("--progress",), {"action": "store_true",
+                                       "help": "print a status line every second, also into "
+                                               "a log or pipe (on a terminal: a progress bar "
+                                               "when the run has --frames or --seconds)"}),
+    }
+
+
+RUN_FLAGS = tuple(_run_flag_table())
+#: What makes sense on a server (it draws nothing) and on a node (it steps no physics).
+SERVE_FLAGS = tuple(f for f in RUN_FLAGS if f not in (
+    "headless", "screenshot", "record_frames", "record_every", "interpolate", "hud", "size"))
+JOIN_FLAGS = ("seconds", "frames", "headless", "sound", "screenshot", "record_frames",
+              "record_every", "hud", "size", "save_state", "stats", "record", "input",
+              "progress")
+
+
+def add_run_flags(parser: argparse.ArgumentParser, names: tuple[str, ...]) -> None:
+    table = _run_flag_table()
+    limit = parser.add_mutually_exclusive_group()
+    for name in names:
+        flags, options = table[name]
+        (limit if name in ("seconds", "frames") else parser).add_argument(*flags, **options)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="colosseum", description=__doc__.splitlines()[0])
     parser.add_argument("--log-level", default="info",
@@ -42,47 +126,72 @@ def build_parser() -> argparse.ArgumentParser:
 
     run = sub.add_parser("run", help="run a content folder (default: the bundled demo)")
     run.add_argument("path", nargs="?", help="content folder or .scene file")
-    limit = run.add_mutually_exclusive_group()
-    limit.add_argument("--seconds", type=_positive(float), help="simulated seconds to run")
-    limit.add_argument("--frames", type=_positive(int), help="frames to run")
-    run.add_argument("--headless", action="store_true",
-                     help="no window (automatic without a display)")
-    run.add_argument("--backend", choices=list(BackendName), default=None,
-                     help="dynamics backend (default: the scene's, else ode)")
-    run.add_argument("--mode", choices=["serial", "threaded"], default="serial",
-                     help="serial: everything on the main thread; threaded: physics on its own")
-    run.add_argument("--fast", action="store_true",
-                     help="run as fast as possible, not in real time")
-    run.add_argument("--seed", type=int, default=0, help="seed for the scene's random functions")
-    run.add_argument("--dt", type=_positive(float), default=None, help="physics time step (s)")
-    run.add_argument("--substeps", type=_positive(int), default=1, help="physics steps per frame")
-    run.add_argument("--early", choices=["sleep", "substep"], default="sleep",
-                     help="when a step finishes early: sleep, or take smaller substeps")
-    run.add_argument("--late", choices=["slowmo", "grow"], default="slowmo",
-                     help="when steps run late: slow motion, or grow the step (bounded)")
-    run.add_argument("--max-dt", type=_positive(float), default=1.0 / 20.0,
-                     help="upper bound for --late grow (s)")
-    run.add_argument("--sound", default="null", help="audio backend: openal, wave:FILE or null")
-    run.add_argument("--screenshot", type=Path, help="write the last frame to FILE.png")
-    run.add_argument("--record-frames", type=Path, help="write every Nth frame into DIR")
-    run.add_argument("--record-every", type=_positive(int), default=1, help="N for --record-frames")
-    run.add_argument("--interpolate", action="store_true",
-                     help="threaded mode: interpolate poses between physics states when drawing")
-    run.add_argument("--hud", action="store_true", help="show the HUD line (fps, physics ms, rtf)")
-    run.add_argument("--size", default="640x480", help="window/render size WxH")
-    run.add_argument("--save-state", type=Path, help="write the final state as a scene file")
-    run.add_argument("--stats", type=Path, help="write run statistics as JSON")
-    run.add_argument("--record", type=Path, help="record input events to FILE (JSON lines)")
-    run.add_argument("--replay", type=Path, help="replay input events recorded with --record")
-    run.add_argument("--input", action="append", default=[], type=input_option,
-                     metavar="KIND[:ARG]", help="open an input device: osc:PORT, "
-                     "serial:PATH[@BAUD], lsl:STREAM[,...], desktop or openxr (repeatable)")
-    run.add_argument("--progress", action="store_true",
-                     help="print a status line every second, also into a log or pipe (on a "
-                          "terminal: a progress bar when the run has --frames or --seconds)")
+    add_run_flags(run, RUN_FLAGS)
     run.add_argument("--watch", action="store_true",
                      help="start again from the files when the scene or a model, image or "
                           "sound it uses changes on disk")
+    run.add_argument("--param", action="append", default=[], type=param_option,
+                     metavar="KEY=VALUE", help="set a scene variable before the scene is "
+                     "built (repeatable; what colosseum sweep varies)")
+
+    serve = sub.add_parser("serve", help="run the authoritative simulation headless and "
+                           "publish it to nodes that join (colosseum join)")
+    serve.add_argument("path", nargs="?", help="content folder or .scene file")
+    serve.add_argument("--bind", default="tcp://127.0.0.1:5555", metavar="tcp://HOST:PORT",
+                       help="where nodes join (PORT: state, PORT+1: control); loopback unless "
+                            "told otherwise (default: tcp://127.0.0.1:5555)")
+    serve.add_argument("--key", type=Path, metavar="DIR",
+                       help="CURVE encryption and authentication with the keys in DIR "
+                            "(colosseum keygen)")
+    serve.add_argument("--timeout", type=_positive(float), default=2.0,
+                       help="seconds of silence before a node is let go (default: 2)")
+    add_run_flags(serve, SERVE_FLAGS)
+
+    join = sub.add_parser("join", help="follow a server: draw, play sounds, send this "
+                          "node's input (no local physics)")
+    join.add_argument("address", metavar="tcp://HOST:PORT", help="the server's --bind")
+    join.add_argument("path", nargs="?", help="the content folder (default: the server's "
+                      "folder, when it is at the same place here)")
+    join.add_argument("--user", default=None, help="this node's user name: its input drives "
+                      "the trackers, buttons and wheels named USER/... on the server "
+                      "(default: the login name and process id)")
+    join.add_argument("--display", metavar="NAME", help="draw the scene's Display block NAME "
+                      "(a wall of a cluster): off-axis from its head tracker, frame-locked")
+    join.add_argument("--swap-barrier", action="store_true",
+                      help="with --display: wait until every display holds the frame")
+    join.add_argument("--key", type=Path, metavar="DIR",
+                      help="the server's public key and this user's key (colosseum keygen)")
+    join.add_argument("--timeout", type=_positive(float), default=2.0,
+                      help="seconds without frames before the server counts as gone")
+    add_run_flags(join, JOIN_FLAGS)
+
+    sweep = sub.add_parser("sweep", help="run a content folder many times over parameters "
+                           "and seeds on Dask; one results table and a plot")
+    sweep.add_argument("path", help="content folder or .scene file")
+    sweep.add_argument("--param", action="append", default=[], metavar="KEY=v1,v2,...",
+                       help="a scene variable and the values it takes (repeatable: every "
+                            "combination runs)")
+    sweep.add_argument("--seeds", default="0", metavar="A..B",
+                       help="seeds of each combination: A..B, N or N,M (default: 0)")
+    sweep_limit = sweep.add_mutually_exclusive_group()
+    sweep_limit.add_argument("--frames", type=_positive(int), help="frames each run takes")
+    sweep_limit.add_argument("--seconds", type=_positive(float),
+                             help="simulated seconds each run takes")
+    sweep.add_argument("--out", type=Path, required=True, metavar="DIR",
+                       help="where results.csv and results.png go")
+    sweep.add_argument("--scheduler", metavar="ADDRESS",
+                       help="a running Dask scheduler (tcp://HOST:8786); default: a "
+                            "LocalCluster on this machine")
+    sweep.add_argument("--workers", type=_positive(int), default=2,
+                       help="worker processes of the LocalCluster (default: 2)")
+    sweep.add_argument("--backend", choices=list(BackendName), default=None,
+                       help="dynamics backend (default: the scene's)")
+    sweep.add_argument("--dt", type=_positive(float), default=None,
+                       help="physics time step (s)")
+
+    keygen = sub.add_parser("keygen", help="make CURVE keys for serve --key and join --key")
+    keygen.add_argument("folder", type=Path)
+    keygen.add_argument("--user", action="append", default=[], help="a user (repeatable)")
 
     check = sub.add_parser("check", help="validate a content folder or scene file",
                            epilog="exit codes: 0 no errors (warnings allowed), 1 errors, "
@@ -120,7 +229,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="benchmarks, printed as tables")
     bench.add_argument("what", nargs="?", default="scheduler",
                        help="scheduler, physics, scene, scripting, sound, render, input, "
-                            "contacts, avatars, import, hands")
+                            "contacts, avatars, import, hands, net, sweep")
     bench.add_argument("--backend", default=None, help="physics benchmark backend (ode, pymunk)")
     bench.add_argument("--quick", action="store_true", help="fewer sizes and steps")
     bench.add_argument("--json", nargs="?", const="-", metavar="FILE",
@@ -146,86 +255,21 @@ def main(argv: list[str] | None = None) -> int:
         return 0
 
 
-def _fail(message: str, code: int = USAGE_ERROR) -> int:
-    print(f"colosseum: error: {message}", file=sys.stderr)
-    return code
-
-
 def cmd_run(args: argparse.Namespace) -> int:
-    from engine.app import EngineConfig
-    from engine.content import ContentError, load_systems, resolve
-    from engine.input import InputRecorder, InputReplayer, ReplayError
     from engine.physics import BackendUnavailable
-    from engine.scene_loading import SceneLoadError, load_content_scene
-    from engine.stats import collect, sections, status_line, write_json
-    from engine.system import SystemFailure
     from systems import create_engine
 
-    try:
-        content = resolve(args.path)
-    except ContentError as exc:
-        return _fail(str(exc))
-    if args.replay is not None and not args.replay.is_file():
-        return _fail(f"{args.replay}: no such recording")
-    for out in (args.stats, args.save_state, args.screenshot, args.record):
-        if out is not None and not out.parent.exists():
-            return _fail(f"{out}: folder {out.parent} does not exist")
-    headless = args.headless or not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
-    try:
-        scene = load_content_scene(content, seed=args.seed)
-    except SceneLoadError as exc:
-        print(exc, file=sys.stderr)
-        return 1
-    content = scene.content  # a saved state runs in the content folder it names
-    config = EngineConfig(
-        content_dir=content.folder, mode=args.mode, seed=args.seed, fast=args.fast,
-        substeps=args.substeps, early=args.early, late=args.late, max_dt=args.max_dt,
-        headless=headless, sound=args.sound,
-        options={"screenshot": args.screenshot, "record_frames": args.record_frames,
-                 "record_every": args.record_every, "interpolate": args.interpolate,
-                 "hud": args.hud, "size": args.size, "input": args.input},
-    )
-    scene.configure(config, backend=args.backend, dt=args.dt)
+    prepared = prepare_run(args)
+    if isinstance(prepared, int):
+        return prepared
+    scene, config = prepared
     if args.watch:
-        return _run_watching(args, content, config, scene)
+        return _run_watching(args, scene.content, config, scene)
     try:
         engine = create_engine(config)
     except BackendUnavailable as exc:
-        return _fail(str(exc), 1)
-    try:
-        if args.replay is not None:
-            engine.add_system(InputReplayer(args.replay))
-        if args.record is not None:
-            engine.add_system(InputRecorder(args.record))
-        load_systems(engine, content.folder)
-        scene.instantiate(engine)
-        progress = args.progress or sys.stderr.isatty()
-        _run_limited(engine, args, progress, status_line)
-        if args.save_state is not None:
-            from engine.scene_loading import save_state
-
-            save_state(engine, args.save_state)
-        stats = collect(engine)  # before close(), which empties the world
-    except (ContentError, ReplayError) as exc:
-        engine.close()
-        return _fail(str(exc), 1)
-    except SystemFailure as exc:
-        engine.close()
-        trace = "".join(traceback.format_exception(exc.original))
-        print(f"colosseum: error: system {exc.system_name!r} raised; the run stopped.\n{trace}",
-              file=sys.stderr)
-        return 1
-    except BaseException:
-        engine.close()
-        raise
-    engine.close()
-    stats.update(sections(engine))  # what shutting down did (the --screenshot frame)
-    if args.stats is not None:
-        write_json(args.stats, stats)
-    log.info("ran %d frames, %.2f simulated s in %.2f wall s (real-time factor %.2f)",
-             stats["frames"], stats["sim_seconds"], stats["wall_seconds"],
-             stats["real_time_factor"])
-    return 0
+        return fail(str(exc), 1)
+    return execute_run(engine, args, scene)
 
 
 def _run_watching(args: argparse.Namespace, content: Any, config: Any, scene: Any) -> int:
@@ -247,7 +291,7 @@ def _run_watching(args: argparse.Namespace, content: Any, config: Any, scene: An
             engine.run(frames=frames, seconds=seconds, until=watcher.poll)
         except (ContentError, SystemFailure) as exc:
             engine.close()
-            return _fail(str(exc), 1)
+            return fail(str(exc), 1)
         engine.close()
         if frames is not None:
             frames -= engine.frame
@@ -258,57 +302,13 @@ def _run_watching(args: argparse.Namespace, content: Any, config: Any, scene: An
             return 0
         names = ", ".join(sorted(p.name for p in watcher.changed()))
         try:
-            scene = load_content_scene(content, seed=args.seed)
+            scene = load_content_scene(content, seed=args.seed, params=dict(args.param))
         except SceneLoadError as exc:
             print(f"{exc}\ncolosseum: {names} changed but has errors; running the last "
                   f"good scene", file=sys.stderr)
             continue
         print(f"colosseum: {names} changed; starting again", file=sys.stderr)
         scene.configure(config, backend=args.backend, dt=args.dt)
-
-
-def _short_status(engine: Any) -> str:
-    """What fits beside a progress bar: simulated time and real-time factor."""
-    return f"t={engine.time:.2f} s  rtf {engine.real_time_factor:.2f}"
-
-
-def _run_limited(engine: Any, args: argparse.Namespace, progress: bool, status_line: Any) -> None:
-    """Run to the requested limit. On a terminal, a run with a limit shows a progress bar;
-    otherwise ``progress`` prints the status line every second
-    (``--progress``: also into a log or a pipe)."""
-    from engine.progress import on_terminal
-    from engine.progress import progress as progress_bar
-
-    limited = args.frames is not None or args.seconds is not None
-    if on_terminal() and limited:
-        total = args.frames if args.frames is not None else args.seconds
-        start_frame, start_time = engine.frame, engine.time
-        last = [0.0]
-        with progress_bar("running", total) as report:
-            def tick(eng: Any) -> bool:
-                now = time.monotonic()
-                if now - last[0] >= 0.1:
-                    last[0] = now
-                    done = eng.frame - start_frame if args.frames is not None \
-                        else eng.time - start_time
-                    report(done, _short_status(eng))
-                return False
-
-            engine.run(frames=args.frames, seconds=args.seconds, until=tick)
-            report(total, _short_status(engine))
-        return
-    last = [time.monotonic()]
-
-    def line(eng: Any) -> bool:
-        now = time.monotonic()
-        if progress and now - last[0] >= 1.0:
-            last[0] = now
-            print("\r" + status_line(eng), end="", file=sys.stderr, flush=True)
-        return False
-
-    engine.run(frames=args.frames, seconds=args.seconds, until=line)
-    if progress:
-        print(file=sys.stderr)
 
 
 def cmd_check(args: argparse.Namespace) -> int:
@@ -345,7 +345,7 @@ def cmd_keys(args: argparse.Namespace) -> int:
         return 0
     block = keys.find_block(args.block)
     if block is None:
-        return _fail(f"no block {args.block!r}{keys.suggest(args.block)} "
+        return fail(f"no block {args.block!r}{keys.suggest(args.block)} "
                      f"(blocks: {', '.join(keys.blocks())})")
     print(keys.block_text(block))
     return 0
@@ -357,7 +357,7 @@ def cmd_new(args: argparse.Namespace) -> int:
     try:
         folder = scaffold(Path(args.name))
     except ScaffoldError as exc:
-        return _fail(str(exc))
+        return fail(str(exc))
     print(f"created {folder}; run it with: colosseum run {folder}")
     return 0
 
@@ -366,16 +366,44 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from tools.bench import BENCHMARKS, run_benchmark
 
     if args.what not in BENCHMARKS:
-        return _fail(f"unknown benchmark {args.what!r}; choose from {', '.join(BENCHMARKS)}")
+        return fail(f"unknown benchmark {args.what!r}; choose from {', '.join(BENCHMARKS)}")
     for out in (None if args.json in (None, "-") else Path(args.json), args.plot):
         if out is not None and not out.parent.exists():
-            return _fail(f"{out}: folder {out.parent} does not exist")
+            return fail(f"{out}: folder {out.parent} does not exist")
     return run_benchmark(args.what, backend=args.backend, quick=args.quick,
                          json_out=args.json, plot_out=args.plot)
 
 
+def cmd_serve(args: argparse.Namespace) -> int:
+    from engine.cli_net import serve
+
+    return serve(args)
+
+
+def cmd_join(args: argparse.Namespace) -> int:
+    from engine.cli_net import join
+
+    return join(args)
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from engine.sweep import sweep
+
+    return sweep(args)
+
+
+def cmd_keygen(args: argparse.Namespace) -> int:
+    from engine.cli_net import keygen
+
+    return keygen(args)
+
+
 COMMANDS = {
     "run": cmd_run,
+    "serve": cmd_serve,
+    "join": cmd_join,
+    "sweep": cmd_sweep,
+    "keygen": cmd_keygen,
     "check": cmd_check,
     "fmt": cmd_fmt,
     "import": cmd_import,

@@ -45,17 +45,19 @@ class LoadedScene:
         instantiate(engine, self.spec)
 
 
-def load_content_scene(content: Content, seed: int = 0) -> LoadedScene:
+def load_content_scene(content: Content, seed: int = 0,
+                       params: dict[str, str] | None = None) -> LoadedScene:
     """The content's scene, built; its ``systems/*.py`` are imported first, so asset
     loaders they register read the scene's files. A saved state runs in the content
-    folder it names (``Content``)."""
+    folder it names (``Content``). ``params`` set scene variables (``--param``)."""
     from engine.content import ContentError
     from engine.scene import SceneError
     from engine.scene.diagnostics import Reporter
+    from engine.scene.params import ParamError
 
     try:
-        content, spec = _build(content, np.random.default_rng(seed))
-    except ContentError as exc:
+        content, spec = _build(content, np.random.default_rng(seed), params)
+    except (ContentError, ParamError) as exc:
         raise SceneLoadError(str(exc)) from exc
     except SceneError as exc:
         raise SceneLoadError(exc.render()) from exc
@@ -133,14 +135,17 @@ def _stamp(path: Path) -> tuple[int, int] | None:
     return info.st_mtime_ns, info.st_size
 
 
-def _build(content: Content, rng: np.random.Generator) -> tuple[Content, SceneSpec]:
+def _build(content: Content, rng: np.random.Generator,
+           params: dict[str, str] | None = None) -> tuple[Content, SceneSpec]:
     """Parse, find the content folder, import its systems, check and build. Raises
-    SceneError (the scene's mistakes) or ContentError (its systems')."""
+    SceneError (the scene's mistakes), ContentError (its systems') or ParamError."""
     from engine.content import import_systems
-    from engine.scene import build_specs, parse_file, validated
+    from engine.scene import build_specs, parse_file, parse_text, validated
+    from engine.scene.params import with_params
     from engine.scene.snapshot import content_folder
 
-    db = parse_file(content.scene, rng)
+    db = parse_text(with_params(content.scene, params), str(content.scene), rng) if params \
+        else parse_file(content.scene, rng)
     content = Content(content_folder(db), content.scene)
     import_systems(content.folder)
     spec = build_specs(validated(db, content.folder), content.folder)

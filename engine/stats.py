@@ -127,6 +127,55 @@ STATS_SCHEMA: dict[str, Any] = {
             "underruns": _key("integer", "", "times a stream ran dry"),
             "contact_sounds": _key("integer", "", "sounds started by contacts"),
         }),
+        "measures": {"type": "object", "description": "the run's final values: Measure "
+                     "blocks and measure(name, value) in scripts, by name", "x-unit":
+                     "as measured", "properties": {}, "additionalProperties": {
+                         "type": "number"}},
+        "net": {"type": "object", "description": "network (colosseum serve and join)",
+                "x-unit": "", "additionalProperties": False, "properties": {
+                    "nodes": {"type": "array", "items": {"type": "string"}, "x-unit": "",
+                              "description": "server: users joined at the end"},
+                    "replicated": _key("integer", "", "server: objects sent to nodes"),
+                    "frames_sent": _key("integer", "", "server: frames published"),
+                    "bytes_sent": _key("integer", "B", "server: bytes published (each "
+                                       "node receives them all)"),
+                    "publish_ms_mean": _key("number", "ms", "server: mean time its frame "
+                                            "spent gathering a frame for the sender"),
+                    "publish_ms_p99": _key("number", "ms", "server: 99th percentile of it"),
+                    "send_ms_mean": _key("number", "ms", "server: mean time its sender "
+                                         "thread took to encode and send a frame"),
+                    "send_ms_p99": _key("number", "ms", "server: 99th percentile of it"),
+                    "frames_merged": _key("integer", "", "server: frames that took the "
+                                          "place of one the sender had not sent yet"),
+                    "inputs": _key("integer", "", "server: input messages from nodes"),
+                    "refused": _key("integer", "", "server: nodes refused at hello"),
+                    "oversized": _key("integer", "", "server: messages over the size "
+                                      "limit, dropped"),
+                    "malformed": _key("integer", "", "messages that were not the "
+                                      "protocol's, dropped"),
+                    "barrier_timeouts": _key("integer", "", "server: swap barriers let go "
+                                             "before every display was ready"),
+                    "frames_received": _key("integer", "", "node: frames received"),
+                    "bytes_received": _key("integer", "B", "node: bytes received"),
+                    "dropped": _key("integer", "", "node: frames that never arrived"),
+                    "gaps": _key("integer", "", "node: frames it could not decode for a "
+                                 "missed one before them (until a keyframe)"),
+                    "stale": _key("integer", "", "node (display): frames newer than the "
+                                  "one drawn, when the barrier chose an older one"),
+                    "resyncs": _key("integer", "", "node: full states taken again (a "
+                                    "restarted server)"),
+                    "barrier_misses": _key("integer", "", "node: swap barriers that ran "
+                                           "out"),
+                    "shown_frame": _key("integer", "", "node: the newest server frame "
+                                        "shown"),
+                    "shown_time": _key("number", "s", "node: the server time shown last"),
+                    "shown_frames": {"type": "array", "items": {"type": "integer"},
+                                     "x-unit": "", "description": "node (display): the "
+                                     "server frames drawn, newest last (at most 3600)"},
+                    "latency_ms_p50": _key("number", "ms", "node: median of a frame's age "
+                                           "when taken (wall clocks of both machines)"),
+                    "latency_ms_p99": _key("number", "ms", "node: 99th percentile of it"),
+                }},
     },
     "required": ["mode", "backend", "frames", "steps", "sim_seconds", "wall_seconds",
                  "real_time_factor", "physics_ms_mean", "physics_ms_p99", "frame_ms_mean",
@@ -142,7 +191,8 @@ def stats_markdown() -> str:
         out = []
         for name, spec in props.items():
             if spec.get("type") == "object":
-                out.append(f"| `{prefix}{name}` | object | | {spec['description']} |")
+                out.append(f"| `{prefix}{name}` | object | {spec.get('x-unit', '')} | "
+                           f"{spec['description']} |")
                 out += rows(spec["properties"], f"{prefix}{name}.")
             else:
                 kind = spec.get("type", "string")

@@ -27,6 +27,7 @@ PLUGINS: dict[str, str] = {
     "avatars": "systems.avatars:AvatarsPlugin",
     "triggers": "systems.triggers:TriggersPlugin",
     "hands": "systems.hands:HandsPlugin",
+    "measures": "systems.measures:MeasuresPlugin",
 }
 ALIASES: dict[str, str] = {"osg": "render", "osgsim": "render", "openalpp": "sound",
                            "openal": "sound", "ode": "physics", "dynamics": "physics",
@@ -65,7 +66,7 @@ def wants_render(config: EngineConfig) -> bool:
 def default_plugins(config: EngineConfig) -> list[Plugin]:
     plugins = [RegistryPlugin(), *(load_plugin(name) for name in
                                    ("input", "physics", "scripting", "controllers", "sound",
-                                    "avatars", "triggers", "hands"))]
+                                    "avatars", "triggers", "hands", "measures"))]
     if wants_render(config):
         plugins.append(load_plugin("render"))
     return plugins

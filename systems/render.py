@@ -18,10 +18,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from components import Avatar, Camera, Light, Transform, Visual
+from components import Avatar, Camera, Display, Light, Name, Transform, Visual
 from engine.animation import Palettes
 from engine.assets import AssetError, Assets
 from engine.events import KeyEvent
+from engine.input import InputState
 from engine.input.desktop import WindowDevice
 from engine.realtime import CostLog
 from engine.render.camera import CameraView, camera_from_component
@@ -116,7 +117,7 @@ class RenderSystem(System):
     """Keeps a :class:`Renderer` in step with the world and draws a frame per engine frame."""
 
     phase = Phase.RENDER
-    reads = (Visual, Transform, Camera, Light, Avatar)
+    reads = (Visual, Transform, Camera, Light, Avatar, Display, Name)
     writes = ()
 
     def __init__(self, options: RenderOptions | None = None) -> None:
@@ -136,6 +137,7 @@ class RenderSystem(System):
         self.render_costs = CostLog()
         self._last = FrameStats()  # what the last frame drawn cost (kept after shutdown)
         self._errors: list[str] = []
+        self._told_displays: set[str] = set()
         self._drawn = False  # whether the last frame was drawn (headless runs skip frames)
         self._palette_version = -1
 
@@ -326,6 +328,11 @@ class RenderSystem(System):
     def _camera(self, engine: Engine) -> CameraView:
         world = engine.world
         poses = world.poses
+        wall = engine.config.options.get("display")
+        if wall:
+            view = self._display_view(engine, wall)
+            if view is not None:
+                return view
         for entity, (camera,) in world.get_components(Camera):
             if not camera.active:
                 continue
@@ -338,6 +345,32 @@ class RenderSystem(System):
                 target = (poses.position[t_row], poses.orientation[t_row])
             return camera_from_component(camera, pos, quat, target)
         return CameraView()
+
+    def _display_view(self, engine: Engine, name: str) -> CameraView | None:
+        """The off-axis view of the scene's Display ``name`` from the viewer's eye."""
+        world = engine.world
+        for entity, display in world.get_component(Display):
+            named = world.try_component(entity, Name)
+            if named is None or named.id != name:
+                continue
+            eye = np.asarray(display.eye, dtype=np.float64)
+            row = None if display.head is None else world.poses.row_of.get(display.head)
+            tracked = None if display.tracker is None or engine.try_resource(
+                InputState) is None else engine.resource(InputState).tracker(display.tracker)
+            if row is not None:
+                eye = world.poses.position[row].copy()
+            elif tracked is not None and tracked.tracked:
+                eye = np.asarray(tracked.position, dtype=np.float64)
+            corners = tuple(np.asarray(c, dtype=np.float64) for c in (
+                display.lower_left, display.lower_right, display.upper_left))
+            return CameraView(eye, np.array([1.0, 0, 0, 0]), near=display.near,
+                              far=display.far, screen=corners)  # type: ignore[arg-type]
+        if name not in self._told_displays:
+            self._told_displays.add(name)
+            names = sorted(n.id for e, (_, n) in world.get_components(Display, Name))
+            log.error("no Display %r in the scene (displays: %s); drawing its camera", name,
+                      ", ".join(names) or "none")
+        return None
 
     def shutdown(self, engine: Engine) -> None:
         renderer = self.renderer

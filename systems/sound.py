@@ -227,11 +227,14 @@ class SoundSystem(System):
                 if physical is not None and physical.material.contact_sound:
                     file = physical.material.contact_sound
                     break
-            if file is None:
-                continue
-            self.contact_sounds += 1
-            self.manager.play(self.resolve(file), gain=hit.gain, position=hit.position,
-                              priority=CONTACT_PRIORITY)
+            if file is not None:
+                self.play_contact(file, hit.gain, hit.position)
+
+    def play_contact(self, file: str, gain: float, position: np.ndarray) -> None:
+        """A contact's sound at its point (a network node plays the server's this way)."""
+        self.contact_sounds += 1
+        self.manager.play(self.resolve(file), gain=gain, position=position,
+                          priority=CONTACT_PRIORITY)
 
 
 _NO_CONTACTS = np.zeros(0, dtype=CONTACT_DTYPE)

@@ -32,6 +32,8 @@ BENCHMARKS: dict[str, str] = {
     "avatars": "tools.bench_avatars:run_bench",
     "hands": "tools.bench_hands:run_bench",
     "import": "tools.bench_import:run_bench",
+    "net": "tools.bench_net:run_bench",
+    "sweep": "tools.bench_sweep:run_bench",
 }
 
 
@@ -93,6 +95,19 @@ def _input_figures(rows: list[dict[str, Any]]) -> list[Figure]:
                    "python-osc's own server on the same stream")]
 
 
+def _net_figures(rows: list[dict[str, Any]]) -> list[Figure]:
+    out = []
+    for r in rows:
+        n = r["nodes"]
+        out += [Figure(f"{n} node(s): latency p99", r["latency p99 ms"], r["bare zmq p99 ms"],
+                       "ms", "a bare pyzmq PUB/SUB of the same bytes to as many processes"),
+                Figure(f"{n} node(s): bytes/s per node", r["bytes/s per node"],
+                       r["float32 bytes/s"], "B/s", "the bodies as plain float32 arrays"),
+                Figure(f"{n} node(s): server frame", r["server ms/frame"], r["alone ms/frame"],
+                       "ms/frame", "the same server with no node")]
+    return out
+
+
 #: benchmark -> how its rows become figures (ours beside the reference).
 FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "scheduler": _by_row(lambda r: f"{r['mode']}, {r['systems']} systems", "ms/frame",
@@ -114,6 +129,9 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
                                     r["reference_ms"], "ms/frame", r["reference"])
                              for r in rows if r["ms_per_frame"] > 0],
     "import": _import_figures,
+    "net": _net_figures,
+    "sweep": _by_row(lambda r: f"{r['runs']} runs on {r['workers']} Dask workers",
+                     "runs/min", "loop runs/min", "runs/min", "the same runs in a plain loop"),
 }
 
 

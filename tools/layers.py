@@ -44,7 +44,8 @@ LAYERS = (
     Layer(2, "engine services", ("engine.render", "engine.audio", "engine.scripting",
                                  "engine.input", "engine.net", "engine.interchange.export")),
     Layer(3, "systems", ("systems",)),
-    Layer(4, "CLI and tools", ("engine.cli", "engine.scene_loading", "engine.scaffold",
+    Layer(4, "CLI and tools", ("engine.cli", "engine.cli_net", "engine.runner",
+                               "engine.sweep", "engine.scene_loading", "engine.scaffold",
                                "tools")),
 )
 

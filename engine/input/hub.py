@@ -17,10 +17,10 @@ from __future__ import annotations
 
 import logging
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -45,6 +45,8 @@ from engine.input.wheel import WheelRate
 from engine.scene.inputs import InputSpec, TrackerSpec
 
 log = logging.getLogger("colosseum.input")
+
+S = TypeVar("S")
 
 #: Event types that are never "lost": a keyboard or a mouse is silent when unused.
 #: Events that come when something changes, not as a stream: their silence says nothing.
@@ -112,6 +114,8 @@ class InputHub:
         self._replay_clock = 0.0
         self._injected: list[AnyInput] = []
         self.delivered: Counter[str] = Counter()
+        #: Called with each frame's raw input as collected (a network node forwards it).
+        self.listeners: list[Callable[[FrameInput], None]] = []
 
     # -- configuration ----------------------------------------------------------
     def replay(self, recording: Recording) -> None:
@@ -169,6 +173,8 @@ class InputHub:
         batch = self.collect(frame)
         if self._writer is not None:
             self._writer.write(frame, batch)
+        for listener in self.listeners:
+            listener(batch)
         return self.apply(batch)
 
     def collect(self, frame: int) -> FrameInput:
@@ -241,14 +247,14 @@ class InputHub:
             pipeline = self._pipelines.get(event.device)
             if pipeline is None:
                 pipeline = self._pipelines[event.device] = TrackerPipeline(
-                    self._tracker_specs.get(event.device))
+                    _scoped(self._tracker_specs, event.device))
                 state.trackers.setdefault(event.device, TrackerState())
             pose = self._posed[event.device] = pipeline(event)
             return pose
         if isinstance(event, WheelCount):
             wheel = state.wheels.get(event.device)
             if wheel is None:
-                spec = self._wheel_specs.get(event.device)
+                spec = _scoped(self._wheel_specs, event.device)
                 rate = WheelRate.of(spec) if spec is not None else WheelRate()
                 wheel = state.wheels[event.device] = WheelState(rate)
             problem = wheel.rate.add(event.count, event.timestamp)
@@ -258,7 +264,8 @@ class InputHub:
             return event
         if isinstance(event, Button):
             key = (event.device, event.name)
-            if key in self._inverted:
+            if key in self._inverted or (event.device.rpartition("/")[2], event.name) \
+                    in self._inverted:
                 event = Button(event.device, event.name, not event.pressed, event.timestamp)
             state.buttons[key] = event.pressed
             return event
@@ -308,6 +315,16 @@ class InputHub:
         return {"devices": [asdict(d.status()) for d in self.devices],
                 "delivered": dict(self.delivered), "lost": sorted(self.state.lost),
                 "replaying": self._replay is not None}
+
+
+def _scoped(specs: dict[str, S], source: str) -> S | None:
+    """The spec of ``source``; for a user's source ``alice/hand_r`` (a network node's,
+    see engine.net) with none of its own, the spec of ``hand_r``: every user's devices are
+    calibrated as the scene calibrates that device."""
+    found = specs.get(source)
+    if found is None and "/" in source:
+        found = specs.get(source.rpartition("/")[2])
+    return found
 
 
 def describe(device: InputDevice) -> str:

@@ -69,6 +69,10 @@ def parse_binding(text: str) -> Binding:
     """Check an input name once (ValueError says what is wrong and what is allowed)."""
     kind, _, rest = text.partition(":")
     parts = tuple(rest.split("/")) if rest else ()
+    if kind in ("tracker", "wheel", "axis", "button") and len(parts) > 1 and all(parts):
+        # a network user's source (engine.net): tracker:alice/hand_r, axis:alice/pad/x
+        keep = 1 if kind in ("tracker", "wheel") else 2
+        parts = ("/".join(parts[:len(parts) - keep + 1]), *parts[len(parts) - keep + 1:])
     ok = {"tracker": (1,), "wheel": (1,), "axis": (2,), "button": (1, 2), "key": (1, 2)}
     if kind not in ok or len(parts) not in ok[kind] or not all(parts):
         raise ValueError(f"unknown input {text!r}: use {_KINDS}")

@@ -26,6 +26,9 @@ class CameraView:
     near: float = 0.05
     far: float = 500.0
     eye_separation: float = 0.0
+    #: A fixed screen (lower left, lower right, upper left corners, world frame) drawn
+    #: off-axis from ``position`` (a wall of a cluster); None: an ordinary camera.
+    screen: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     @staticmethod
     def looking_at(eye: tuple[float, float, float], target: tuple[float, float, float],
@@ -41,6 +44,9 @@ class CameraView:
 
     def eyes(self, width: int, height: int) -> list[Eye]:
         """One eye filling the viewport, or two side by side when stereo."""
+        if self.screen is not None:
+            view, proj = math3d.off_axis(self.position, *self.screen, self.near, self.far)
+            return [Eye(view, proj, self.position, (0, 0, width, height))]
         if self.eye_separation <= 0.0:
             return [Eye(self.view(), self.projection(width / max(height, 1)), self.position,
                         (0, 0, width, height))]

@@ -64,6 +64,50 @@ def orthographic(left: float, right: float, bottom: float, top: float, near: flo
     )
 
 
+def frustum(left: float, right: float, bottom: float, top: float, near: float, far: float
+            ) -> np.ndarray:
+    """OpenGL perspective projection of an asymmetric frustum (glFrustum's bounds)."""
+    return np.array(
+        [
+            [2 * near / (right - left), 0.0, (right + left) / (right - left), 0.0],
+            [0.0, 2 * near / (top - bottom), (top + bottom) / (top - bottom), 0.0],
+            [0.0, 0.0, (far + near) / (near - far), 2.0 * far * near / (near - far)],
+            [0.0, 0.0, -1.0, 0.0],
+        ]
+    )
+
+
+def off_axis(eye: np.ndarray, lower_left: np.ndarray, lower_right: np.ndarray,
+             upper_left: np.ndarray, near: float, far: float) -> tuple[np.ndarray, np.ndarray]:
+    """View and projection of a fixed screen seen from ``eye`` (Kooima's generalised
+    perspective projection): the screen's corners land on the viewport's corners wherever
+    the eye is, so walls side by side join up for a tracked viewer.
+
+    >>> view, proj = off_axis(np.array([0.3, -2.0, 0.2]), np.array([-1.0, 0, -1]),
+    ...                       np.array([1.0, 0, -1]), np.array([-1.0, 0, 1]), 0.1, 100)
+    >>> [round(c, 6) for c in project(np.array([1.0, 0, 1]), view, proj, 2, 2)[:2]]
+    [2.0, 0.0]
+    """
+    eye = np.asarray(eye, dtype=np.float64)
+    ll, lr, ul = (np.asarray(c, dtype=np.float64) for c in (lower_left, lower_right,
+                                                              upper_left))
+    right = (lr - ll) / np.linalg.norm(lr - ll)
+    up = (ul - ll) / np.linalg.norm(ul - ll)
+    normal = np.cross(right, up)
+    normal /= np.linalg.norm(normal)  # toward the viewer
+    to_ll, to_lr, to_ul = ll - eye, lr - eye, ul - eye
+    distance = -float(to_ll @ normal)
+    if distance <= 1e-9:
+        raise ValueError("the eye is behind the screen (or on its plane)")
+    scale = near / distance
+    proj = frustum(float(right @ to_ll) * scale, float(right @ to_lr) * scale,
+                   float(up @ to_ll) * scale, float(up @ to_ul) * scale, near, far)
+    view = np.eye(4)
+    view[0, :3], view[1, :3], view[2, :3] = right, up, normal
+    view[:3, 3] = -view[:3, :3] @ eye
+    return view, proj
+
+
 def camera_view(position: np.ndarray, orientation: np.ndarray) -> np.ndarray:
     """View matrix of an engine camera (forward local +Y, up local +Z) at a world pose."""
     world = compose(position, orientation)

@@ -31,6 +31,7 @@ from components import (
     Camera,
     ClipSpec,
     Controller,
+    Display,
     Graspable,
     Hand,
     HandState,
@@ -59,6 +60,7 @@ from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from components.script import SavedScript, ScriptHandler, ScriptTimer
 from engine.assets import AssetError, Assets, nodes_name
 from engine.assets.geometry import convex_hull
+from engine.measures import MeasureSpec
 from engine.physics.backend import MaterialPair, SleepState, WorldSettings
 from engine.physics.commands import SetSleepState
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
@@ -149,6 +151,7 @@ class SceneSpec:
     #: The scene's random generator when a saved state was written (see random_state).
     random_state: dict[str, object] | None = None
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
+    display_heads: dict[str, str] = field(default_factory=dict)  # display ID -> object ID
     #: Hand object ID -> the object its tracker is calibrated relative to.
     hand_frames: dict[str, str] = field(default_factory=dict)
     #: Object ID -> sleep-rule state a saved state carries (see :class:`SleepState`).
@@ -161,6 +164,8 @@ class SceneSpec:
     assets: Assets | None = None
     #: The ``Input`` and ``Output`` blocks (devices, calibration, published values).
     input: InputSpec = field(default_factory=InputSpec)
+    #: The ``Measure`` blocks: values the run reports at its end.
+    measures: list[MeasureSpec] = field(default_factory=list)
 
 
 @dataclass(slots=True)
@@ -933,6 +938,17 @@ class _Builder:
                          eye_separation=float(r("EyeSeparation")))
             spec.entities.append(EntitySpec(cid, [Name(cid), Transform(r("Position")), cam],
                                             b.loc))
+        for b in root.blocks("Measure"):
+            r = _Reader(b, "Measure")
+            spec.measures.append(MeasureSpec(r("ID"), r("Object"), r("Value")))
+        for b in root.blocks("Display"):
+            r = _Reader(b, "Display")
+            display = Display(_floats(r("LowerLeft")), _floats(r("LowerRight")),
+                              _floats(r("UpperLeft")), None, r("Tracker"), _floats(r("Eye")),
+                              float(r("Near")), float(r("Far")))
+            if r.has("Head"):
+                spec.display_heads[r("ID")] = r("Head")
+            spec.entities.append(EntitySpec(r("ID"), [Name(r("ID")), display], b.loc))
         for i, b in enumerate(root.blocks("Light")):
             r = _Reader(b, "Light")
             lid = r("ID") or f"light{i}"
@@ -1092,6 +1108,9 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     for cam_id, target in spec.camera_follow.items():
         cam = engine.world.component_for_entity(ids[cam_id], Camera)
         cam.follow = ids[target]
+    for display_id, head in spec.display_heads.items():
+        if head in ids:
+            engine.world.component_for_entity(ids[display_id], Display).head = ids[head]
     for hand_id, frame in spec.hand_frames.items():
         if hand_id in ids and frame in ids:
             engine.world.component_for_entity(ids[hand_id], Hand).frame = ids[frame]

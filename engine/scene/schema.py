@@ -23,6 +23,7 @@ from typing import Any
 
 from components.joint import SCENE_JOINT_TYPES
 from components.shape import ShapeKind
+from engine.measures import QUANTITIES
 from engine.physics.backend import BackendName
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
 
@@ -99,6 +100,11 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                      "a viewpoint (the first active one is drawn and heard from)", repeat=True,
                      struct="Camera"),
         "Light": _f(STRUCT_T, None, "a light source", repeat=True, struct="Light"),
+        "Measure": _f(STRUCT_T, None, "a value the run reports at its end (--stats "
+                      "measures, colosseum sweep's table)", repeat=True, struct="Measure"),
+        "Display": _f(STRUCT_T, None, "a screen of a wall or CAVE, drawn off-axis from the "
+                      "viewer's head (colosseum join --display ID)", repeat=True,
+                      struct="Display"),
         "Script": _f(ASSET_T, doc="a Lua script run for the whole scene", repeat=True),
         "Controller": _f(STRUCT_T, None,
                          "an input bound to a motor, force or kinematic target", repeat=True,
@@ -298,6 +304,27 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Follow": _f(REF_T, None, "object to follow at Offset", ref="Object"),
         "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, its place in the followed object's frame"),
         "EyeSeparation": _f(FLOAT_T, 0.0, "m; > 0 renders stereo"),
+    },
+    "Measure": {
+        "ID": _id("measure", required=True),
+        "Object": _f(REF_T, None, "the object measured", ref="Object", required=True),
+        "Value": _f(ENUM_T, "z", "x, y, z (m), vx, vy, vz (m/s) or speed (m/s) at the end "
+                    "of the run", allowed=QUANTITIES),
+    },
+    "Display": {
+        "ID": _id("display", required=True),
+        "LowerLeft": _f(VEC3_T, (-1.0, 0.0, 0.0), "m, world frame: the screen's lower left "
+                        "corner"),
+        "LowerRight": _f(VEC3_T, (1.0, 0.0, 0.0), "m, world frame: its lower right corner"),
+        "UpperLeft": _f(VEC3_T, (-1.0, 0.0, 1.5), "m, world frame: its upper left corner"),
+        "Head": _f(REF_T, None, "object whose position is the viewer's eye (one a head "
+                   "tracker moves on the server: Tracker { ID \"USER/head\" Object ... })",
+                   ref="Object"),
+        "Tracker": _f(STRING_T, None, "a tracker of this node's own input whose position is "
+                      "the eye (when there is no Head)"),
+        "Eye": _f(VEC3_T, (0.0, -2.0, 0.75), "m, world frame: the eye while no head is tracked"),
+        "Near": _f(FLOAT_T, 0.05, "m, nearest distance drawn"),
+        "Far": _f(FLOAT_T, 500.0, "m, farthest distance drawn"),
     },
     "Light": {
         "ID": _id("light"),

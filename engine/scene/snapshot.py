@@ -36,6 +36,7 @@ from components import HandState, Joint, Name, Transform
 from components.avatar import SavedAvatar
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
 from engine.physics.backend import SleepState, SupportsSleepState
+from engine.physics.driver import PhysicsUnavailable
 from engine.rotation import exact_degrees, quat_to_euler
 from engine.scene.db import (
     FLOAT,
@@ -434,13 +435,16 @@ def _taken(ids: SceneIds) -> set[str]:
     return {es.id for es in ids.spec.entities} | {js.id for js in ids.spec.joints}
 
 
-def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> str:
+def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
+                names: dict[int, str] | None = None) -> str:
     """Scene text of the running simulation; needs a scene loaded with ``instantiate``.
 
     Model, sound, script and shader file names are relative to the content folder (as
     its ``main.scene`` names them). With ``out_path`` (where the text will be saved) the
     file also says where that folder is, relative to it (``Content``), so it runs from
-    anywhere as long as the two keep their places.
+    anywhere as long as the two keep their places. ``names``, when given, receives the
+    object ID each written entity got (a network server tells its nodes which is which).
+    Without local physics (a network node) the solver's and sleep states are left out.
     """
     ids: SceneIds = engine.resource(SceneIds)
     spec = ids.spec
@@ -454,11 +458,14 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None) -> st
             Path(os.path.relpath(dst, here)).as_posix()), _HERE))
     world = engine.world
     # the solver's random state and each body's auto-sleep state, where the backend has them
-    seed, sleep = engine.physics.request(lambda backend: (
-        getattr(backend, "solver_seed", None),
-        backend.sleep_states() if isinstance(backend, SupportsSleepState) else None)
-    ).result(5.0)
-    names: dict[int, str] = {}  # entity -> the object ID written for it
+    try:
+        seed, sleep = engine.physics.request(lambda backend: (
+            getattr(backend, "solver_seed", None),
+            backend.sleep_states() if isinstance(backend, SupportsSleepState) else None)
+        ).result(5.0)
+    except PhysicsUnavailable:
+        seed, sleep = None, None
+    names = {} if names is None else names  # entity -> the object ID written for it
     hands: dict[int, Block] = {}  # hand entity -> its written Object block
     objects = [e for e in root.entries if e.key == "Object"]
     for index, entry in enumerate(objects):

@@ -46,6 +46,7 @@ Scene and engine::
                                      osg, osgsim -> render; openalpp -> sound; the paper's
                                      spelling ``requrestPlugin`` works too)
     time() -> simulated seconds     log(...), warn(...), print(...)
+    measure(name, value)            a final value of the run (--stats measures, sweeps)
     after(sec, fn) / every(sec, fn) -> timer; cancel(timer)
     on(name, fn(data, name)); emit(name, data)   custom events (also seen by Python);
                                     data is plain data: objects in it arrive as entity ids
@@ -236,6 +237,7 @@ end
 function C.requestPlugin(name) return P.request_plugin(name) end
 C.requrestPlugin = C.requestPlugin
 function C.time() return P.time() end
+function C.measure(name, value) P.measure(name, value) end
 
 local I = {}
 function I.tracker(name) return P.tracker(name) end
@@ -285,7 +287,8 @@ class ScriptAPI:
             "hand_held": self.hand_held, "hand_grasp": self.hand_grasp,
             "hand_release": self.hand_release, "is_hand": self.is_hand,
             "set_camera": self.set_camera, "request_plugin": self.request_plugin,
-            "time": self.time, "tracker": self.tracker, "wheel": self.wheel,
+            "time": self.time, "measure": self.measure, "tracker": self.tracker,
+            "wheel": self.wheel,
             "button": self.button, "axis": self.axis, "key": self.key,
             "avatar": self.avatar,
             "avatar_methods": runtime.lua.table_from(AVATAR_METHODS),
@@ -398,6 +401,19 @@ class ScriptAPI:
 
     def time(self) -> float:
         return float(self.engine.time)
+
+    def measure(self, name: Any, value: Any) -> None:
+        """A final value of the run (the last one given wins): --stats measures, sweeps."""
+        from engine.measures import Measures
+
+        measures = self.engine.try_resource(Measures)
+        if measures is None:
+            measures = Measures()
+            self.engine.insert_resource(measures)
+        try:
+            measures.set(name, value)
+        except (TypeError, ValueError) as exc:
+            raise ScriptAPIError(f"measure: {exc}") from None
 
     # -- structure --------------------------------------------------------------
     def spawn(self, text: str) -> Any:
