@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import wave
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +13,7 @@ from components import Transform
 from components.hand import HandMode
 from engine.scene import SceneError, check, spec_from_text, write_state
 from systems.input import Outputs
+from systems.sound import SoundSystem
 
 TABLE = ('Object { ID "table" Position [0 0 0.725] Dynamic 0\n'
          '  PhysicalAttributes { Geometry { Primitive "box" Size [1.2 1.2 0.05] } } }\n'
@@ -124,3 +126,25 @@ def test_a_hand_publishes_its_contact_force_for_a_haptic_glove(tmp_path: Path):
         assert outputs.values["hand:hand_r/grasp"] == (1.0,)
         held = rig.engine.world.component_for_entity(rig.ids["cup"], Transform)
         assert held is not None
+
+
+def test_a_hand_knocking_a_cup_rings_its_contact_sound(tmp_path: Path):
+    """Hand contacts are contacts like any other: a swing into a cup of a material with a
+    ContactSound plays it (once or twice: the knock, maybe a rebound), resting does not."""
+    with wave.open(str(tmp_path / "knock.wav"), "wb") as w:
+        w.setnchannels(1)
+        w.setsampwidth(2)
+        w.setframerate(22050)
+        tone = (np.sin(np.arange(2205) * 2 * np.pi * 900 / 22050) * 2e4).astype("<i2")
+        w.writeframes(tone.tobytes())
+    scene = ('Material { ID "ceramic" ContactSound "knock.wav" }\n'
+             + TABLE.replace('Mass 0.3', 'Mass 0.3 Material "ceramic"')
+             + HAND.replace("[0 0 0.9]", "[-0.3 0 0.8]"))
+    swing = waypoints((0.0, (-0.3, 0, 0.8)), (0.5, (-0.3, 0, 0.8)), (0.8, (0.0, 0, 0.8)))
+    with Rig(scene, tmp_path, paths={"hand_r": swing}) as rig:
+        rig.run(0.45)
+        sounds = rig.engine.resource(SoundSystem)
+        assert sounds.contact_sounds == 0  # the cup at rest on the table is silent
+        rig.run(1.0)
+        assert 1 <= sounds.contact_sounds <= 3
+        assert rig.position("cup")[0] > 0.02  # knocked along
