@@ -283,36 +283,39 @@ class SetKinematicTarget(Command):
             raise CommandError("SetKinematicTarget: dt must be positive")
 
 
+class _Switch(Command):
+    """A command turning one thing of a body on or off: its one flag field, named by
+    ``flag``, is taken as a bool."""
+
+    __slots__ = ()
+    flag: ClassVar[str]
+
+    def __post_init__(self) -> None:
+        self._check_key()
+        self._set(self.flag, bool(getattr(self, self.flag)))
+
+
 @dataclass(frozen=True, slots=True)
-class SetCollisionEnabled(Command):
+class SetCollisionEnabled(_Switch):
     """Let a body collide with the world or pass through everything (still simulated)."""
 
+    flag: ClassVar[str] = "enabled"
     key: int
     enabled: bool
 
-    def __post_init__(self) -> None:
-        self._check_key()
-        self._set("enabled", bool(self.enabled))
-
 
 @dataclass(frozen=True, slots=True)
-class SetGravityEnabled(Command):
+class SetGravityEnabled(_Switch):
+    flag: ClassVar[str] = "enabled"
     key: int
     enabled: bool
 
-    def __post_init__(self) -> None:
-        self._check_key()
-        self._set("enabled", bool(self.enabled))
-
 
 @dataclass(frozen=True, slots=True)
-class SetSleeping(Command):
+class SetSleeping(_Switch):
+    flag: ClassVar[str] = "sleeping"
     key: int
     sleeping: bool
-
-    def __post_init__(self) -> None:
-        self._check_key()
-        self._set("sleeping", bool(self.sleeping))
 
 
 @dataclass(frozen=True, slots=True)
