@@ -22,6 +22,7 @@ from components.shape import Shape
 from components.sound import Sound
 from components.transform import Transform
 from components.trigger import Trigger
+from components.user import UserOwned
 from components.visual import Visual
 
 __all__ = [
@@ -44,5 +45,6 @@ __all__ = [
     "Sound",
     "Transform",
     "Trigger",
+    "UserOwned",
     "Visual",
 ]

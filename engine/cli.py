@@ -145,6 +145,10 @@ def build_parser() -> argparse.ArgumentParser:
                             "(colosseum keygen)")
     serve.add_argument("--timeout", type=_positive(float), default=2.0,
                        help="seconds of silence before a node is let go (default: 2)")
+    serve.add_argument("--leave-after", type=_positive(float), default=10.0,
+                       help="seconds after a user's node leaves that what stands for them "
+                            "(User \"NAME\" objects and avatars) leaves the world, unless "
+                            "they come back (default: 10)")
     add_run_flags(serve, SERVE_FLAGS)
 
     join = sub.add_parser("join", help="follow a server: draw, play sounds, send this "

@@ -73,7 +73,7 @@ def serving_engine(args: argparse.Namespace) -> Any:
     except BackendUnavailable as exc:
         server.close()
         return fail(str(exc), 1)
-    engine.add_plugin(ServerPlugin(server))
+    engine.add_plugin(ServerPlugin(server, args.leave_after))
     return engine, server, scene
 
 

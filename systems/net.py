@@ -9,7 +9,9 @@
   ``alice/hand_r`` follows alice's device, and the server's ``--record`` holds every
   user's input. A node that leaves (or goes silent) has every button it held released
   and every source it used lost, so its hands let go; scripts get the custom events
-  ``userJoined`` and ``userLeft`` with the user's name.
+  ``userJoined`` and ``userLeft`` with the user's name; what stands for a user (an
+  object or avatar with ``User "NAME"``) leaves the world ``--leave-after`` seconds after
+  their node does, unless they come back.
 * :class:`PublishSystem` (RENDER, the frame's last): every replicated entity (a named
   object with a Transform; cameras are each node's own) has a stable net id; the frame's
   poses go out encoded (:mod:`engine.net.codec`) with its events: objects scripts spawned
@@ -35,7 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from components import Camera, Name, Physical, Sound, Transform
+from components import Camera, Name, Physical, Sound, Transform, UserOwned
 from engine.audio import ContactSoundFilter
 from engine.events import Contacts, CustomEvent, Despawned, Spawned
 from engine.input import InputHub
@@ -131,8 +133,11 @@ class ServeInputSystem(System):
     before = ("InputSystem",)
     reads = (ANY_COMPONENT,)  # a node's full state is the whole scene
 
-    def __init__(self, server: NetServer) -> None:
+    def __init__(self, server: NetServer, leave_after: float = 10.0) -> None:
         self.server = server
+        self.leave_after = leave_after
+        #: users whose node left -> the simulated time their objects leave the world
+        self.leaving: dict[str, float] = {}
         self.hub: InputHub | None = None
         self.messages = MessageLog(log)
 
@@ -143,10 +148,24 @@ class ServeInputSystem(System):
             for record in records[:1000]:
                 self._inject(peer, record)
         for peer in server.joined:
+            self.leaving.pop(peer.user, None)
             engine.events.emit(CustomEvent("userJoined", peer.user))
         for peer in server.left:
             self._release(peer)
+            self.leaving[peer.user] = engine.time + self.leave_after
             engine.events.emit(CustomEvent("userLeft", peer.user))
+        for user in [u for u, t in self.leaving.items() if engine.time >= t]:
+            del self.leaving[user]
+            self._take_out(engine, user)
+
+    def _take_out(self, engine: Engine, user: str) -> None:
+        """What stands for a user who left and did not come back leaves the world."""
+        gone = [e for e, owned in engine.world.get_component(UserOwned) if owned.user == user]
+        for entity in gone:
+            engine.despawn(entity)
+        if gone:
+            log.info("user %r left %g s ago and did not come back: %d object(s) standing "
+                     "for them leave the world", user, self.leave_after, len(gone))
 
     def _inject(self, peer: Peer, record: Any) -> None:
         try:
@@ -348,11 +367,12 @@ class ServerPlugin:
 
     name = "net-server"
 
-    def __init__(self, server: NetServer) -> None:
+    def __init__(self, server: NetServer, leave_after: float = 10.0) -> None:
         self.server = server
+        self.leave_after = leave_after
 
     def build(self, engine: Engine) -> None:
-        engine.add_system(ServeInputSystem(self.server))
+        engine.add_system(ServeInputSystem(self.server, self.leave_after))
         engine.add_system(PublishSystem(self.server))
 
 

@@ -46,6 +46,7 @@ from components import (
     Sound,
     Transform,
     Trigger,
+    UserOwned,
     Visual,
 )
 from components.avatar import (
@@ -456,6 +457,8 @@ class _Builder:
                                phys_blk is not None or bare)
         if not r("Graspable"):
             comps.append(Graspable(False))
+        if r.has("User"):
+            comps.append(UserOwned(r("User")))
         if r.has("Controller"):
             comps.append(_controller(_Reader(r.value("Controller").data, "Controller")))
         return EntitySpec(oid, comps, blk.loc)
@@ -721,6 +724,8 @@ class _Builder:
                         shadowed=bool(r("Shadowed")))
         comps: list[Any] = [Name(aid), Transform(_floats(r("Position")), self.orientation(r)),
                             visual, avatar]
+        if r.has("User"):
+            comps.append(UserOwned(r("User")))
         if r.has("Script"):
             comps.append(Script(file=r("Script"), saved=self.script_states.pop(aid, None)))
         return EntitySpec(aid, comps, blk.loc)

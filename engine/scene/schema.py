@@ -153,6 +153,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                    "tracker's pose with bounded force, grasping on a glove's button",
                    struct="Hand"),
         "Graspable": _f(BOOL_T, 1, "0: hands cannot hold it (dynamic bodies can by default)"),
+        "User": _f(STRING_T, None, "the user (colosseum join --user NAME) it stands for — an "
+                   "avatar, a wheelchair, hands: a server takes it out of the world "
+                   "--leave-after s after that user's node leaves, unless the user comes "
+                   "back"),
         "Controller": _f(STRUCT_T, doc="input bound to this object", struct="Controller"),
         "UserData": _f(ANY_T, None, "free-form data for custom systems", repeat=True),
         # The sleep rule's state (engine.physics.sleep; written by --save-state so a
@@ -401,6 +405,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     },
     "Avatar": {
         "ID": _id("avatar"),
+        "User": _f(STRING_T, None, "the user (colosseum join --user NAME) it stands for — an "
+                   "avatar, a wheelchair, hands: a server takes it out of the world "
+                   "--leave-after s after that user's node leaves, unless the user comes "
+                   "back"),
         "Model": _f(ASSET_T, None, ".glb or .gltf with a skin (Blender, Maya, Mixamo exports)",
                     required=True),
         "Position": _f(VEC3_T, (0.0, 0.0, 0.0), "m, where its feet stand"),

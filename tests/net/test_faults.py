@@ -16,6 +16,7 @@ from pythonosc.udp_client import SimpleUDPClient
 from engine.events import CustomEvent
 from engine.input import InputState
 from engine.net import protocol
+from engine.scene import SceneIds
 from systems.scripting import ScriptingSystem
 from tests.net.net_helpers import (
     free_port,
@@ -31,9 +32,12 @@ pytestmark = pytest.mark.slow
 
 
 def test_a_killed_node_lets_go_of_what_it_held(tmp_path: Path) -> None:
+    """... and what stands for its user (``User "alice"``) leaves the world after
+    --leave-after seconds; the other user's stays."""
     port, osc = free_port(), free_port()
     left: list[str] = []
-    with local_server(port, "--timeout", 1.0) as server, processes(tmp_path) as procs:
+    with local_server(port, "--timeout", 1.0, "--leave-after", 0.5) as server, \
+            processes(tmp_path) as procs:
         server.engine.events.subscribe(
             CustomEvent, lambda e: left.append(e.data) if e.name == "userLeft" else None)
         node = procs.start("alice", *join_args(port, "alice", "--seconds", 30, "--input",
@@ -55,6 +59,12 @@ def test_a_killed_node_lets_go_of_what_it_held(tmp_path: Path) -> None:
                           "alice's pinch being released")
         assert "alice/hand_r" in state.lost and not state.tracker("alice/hand_r").tracked
         assert left == ["alice"] and not server.server.peers
+        left_at = server.engine.time
+        ids = server.engine.resource(SceneIds).entities
+        server.step_until(lambda e: not e.world.entity_exists(ids["paddle_alice"]), 5,
+                          "alice's paddle leaving")
+        assert server.engine.time - left_at == pytest.approx(0.5, abs=0.05)
+        assert server.engine.world.entity_exists(ids["paddle_bob"])
 
 
 def test_a_late_joiner_gets_the_full_state_then_follows(tmp_path: Path) -> None:
