@@ -1,6 +1,7 @@
 """Builds the compiled parts: the private ODE binding against the system libode
 (engine/physics/ode3d/_ode.pyx, which includes the .pxi files beside it, one per concept,
-cimports their libode.pxd declarations), the sleep rule's per-body pass (engine/physics/_sleep.pyx), the
+cimports their libode.pxd declarations and includes stepper.h, the step policy it shares
+with tools/bench_ode.c), the sleep rule's per-body pass (engine/physics/_sleep.pyx), the
 pass that turns pymunk.batch buffers into engine rows (engine/physics/pymunk2d/_rows.pyx)
 and the scene scanner (engine/scene/_scan.pyx)."""
 
@@ -39,6 +40,7 @@ def extensions() -> list[Extension]:
         libraries=["ode"],
         library_dirs=[a[2:] for a in pkg_config("--libs") if a.startswith("-L")],
         define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION")],
+        depends=["engine/physics/ode3d/stepper.h"],
     )
     sleep = Extension("engine.physics._sleep", ["engine/physics/_sleep.pyx"],
                       extra_compile_args=["-O3"])

@@ -72,6 +72,16 @@ cdef void near_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
         return
     n = dCollide(o1, o2, c.max_contacts, &c.buf[0].geom, sizeof(dContact))
     for i in range(n):
+        c.buf[i].surface.mode = p.mode
+        c.buf[i].surface.mu = p.mu
+        c.buf[i].surface.bounce = p.bounce
+        c.buf[i].surface.bounce_vel = p.bounce_vel
+        c.buf[i].surface.soft_erp = p.soft_erp
+        c.buf[i].surface.soft_cfm = p.soft_cfm
+    if n and cs_collect(&c.stepper, &c.cfg, c.buf, n, b1, b2, c.dt) < 0:
+        c.oom = 1
+        return
+    for i in range(n):
         if c.nrec >= c.caprec:
             k = c.caprec * 2 if c.caprec > 0 else 1024
             grown = <ContactRec*>realloc(c.recs, k * sizeof(ContactRec))
@@ -80,20 +90,6 @@ cdef void near_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
                 return
             c.recs = grown
             c.caprec = k
-        fb = feedback_slot(c, c.nrec)
-        if fb == NULL:
-            c.oom = 1
-            return
-        c.buf[i].surface.mode = p.mode
-        c.buf[i].surface.mu = p.mu
-        c.buf[i].surface.bounce = p.bounce
-        c.buf[i].surface.bounce_vel = p.bounce_vel
-        c.buf[i].surface.soft_erp = p.soft_erp
-        c.buf[i].surface.soft_cfm = p.soft_cfm
-        j = dJointCreateContact(c.world, c.group, &c.buf[i])
-        dJointAttach(j, b1, b2)
-        memset(fb, 0, sizeof(dJointFeedback))
-        dJointSetFeedback(j, fb)
         rec = &c.recs[c.nrec]
         rec.a = g1.key
         rec.b = g2.key
@@ -125,16 +121,19 @@ cdef void ray_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
         r.normal[k] = cg.normal[k]
 
 
+cdef dJointFeedback* contact_feedback(void* ctx, int i) noexcept nogil:
+    """Contact i's feedback record (stepper.h attaches it to the contact's joint)."""
+    return feedback_slot(<Ctx*>ctx, i)
+
+
 cdef void record_impulses(Ctx* c, double dt) noexcept nogil:
-    """Each contact's impulse, |f|·dt from its joint's feedback (the larger side)."""
+    """Each contact's impulse, |f|·dt of its whole force (stepper.h adds what it
+    preloaded to what the solver found)."""
     cdef int i
-    cdef dJointFeedback* fb
-    cdef double f1, f2
+    if c.oom or c.stepper.oom:
+        return
     for i in range(c.nrec):
-        fb = &c.chunks[i // FB_CHUNK][i % FB_CHUNK]
-        f1 = norm3(fb.f1)
-        f2 = norm3(fb.f2)
-        c.recs[i].impulse = (f1 if f1 > f2 else f2) * dt
+        c.recs[i].impulse = norm3(&c.stepper.forces[3 * i]) * dt
 
 
 def contacts(World w) -> np.ndarray:

@@ -47,6 +47,9 @@ cdef struct Ctx:         # what the near callback needs, passed through ODE's vo
     dJointFeedback** chunks
     int nchunks
     int oom
+    double dt            # the step in progress
+    CsState stepper      # stepper.h: the warm start's contacts, the islands
+    CsSettings cfg
 
 
 @cython.no_gc_clear  # __dealloc__ walks the geoms and joints to free their C memory
@@ -74,6 +77,7 @@ cdef class World:
         dHashSpaceSetLevels(self.space, -1, 6)
         dSpaceSetCleanup(self.space, 0)
         memset(&self.ctx, 0, sizeof(Ctx))
+        cs_init(&self.ctx.stepper)
         self.ctx.world = self.world
         self.ctx.group = dJointGroupCreate(0)
         self.ctx.max_contacts = 4
@@ -121,6 +125,7 @@ cdef class World:
         for i in range(self.ctx.nchunks):
             free(self.ctx.chunks[i])
         free(self.ctx.chunks)
+        cs_free(&self.ctx.stepper)
         free(self.ctx.recs)
         free(self.ctx.buf)
         free(self.ctx.pairs)
@@ -161,14 +166,24 @@ cdef class World:
 
     # -- settings -------------------------------------------------------------------
     def configure(self, gravity, double erp, double cfm, int iterations,
-                  int max_contacts) -> None:
+                  int max_contacts, double warm_start, double softness,
+                  int exact_rows) -> None:
+        """World settings; ``warm_start``, ``softness`` and ``exact_rows`` are stepper.h's
+        (the resting contacts' preload, the contacts' CFM share, the exact islands)."""
         self.check()
         if max_contacts < 1:
             raise ValueError(f"max_contacts must be at least 1, got {max_contacts}")
+        if not 0.0 <= warm_start < 1.0:
+            raise ValueError(f"warm start must be in [0, 1), got {warm_start}")
+        if not softness >= 0.0:
+            raise ValueError(f"contact softness must be >= 0, got {softness}")
         dWorldSetGravity(self.world, gravity[0], gravity[1], gravity[2])
         dWorldSetERP(self.world, erp)
         dWorldSetCFM(self.world, cfm)
         dWorldSetQuickStepNumIterations(self.world, iterations)
+        self.ctx.cfg.beta = warm_start
+        self.ctx.cfg.softness = softness
+        self.ctx.cfg.exact_rows = max(exact_rows, 0)
         free(self.ctx.buf)
         self.ctx.buf = <dContact*>calloc(max_contacts, sizeof(dContact))
         self.ctx.max_contacts = max_contacts
@@ -204,8 +219,9 @@ cdef class World:
 
     # -- the step -------------------------------------------------------------------
     def step(self, double dt) -> list:
-        """Aim the drives, collide and QuickStep with the GIL released, then record the
-        contact impulses and check every moving body; returns the keys of bodies reset."""
+        """Aim the drives, collide and step (stepper.h: exact islands, warm-started
+        contacts) with the GIL released, then record the contact impulses and check every
+        moving body; returns the keys of bodies reset."""
         cdef int nf
         self.check()
         if not dt > 0.0:
@@ -215,15 +231,20 @@ cdef class World:
         self.ctx.nrec = 0
         self.ctx.oom = 0
         self.last_dt = dt
+        self.ctx.dt = dt
         if self.joints:
             drive_joints(self, dt)
         dRandSetSeed(self.seed)
         with nogil:
-            dSpaceCollide(self.space, &self.ctx, near_callback)
-            dWorldQuickStep(self.world, dt)
+            if cs_begin(&self.ctx.stepper, self.n) == 0:
+                dSpaceCollide(self.space, &self.ctx, near_callback)
+            if cs_solve(&self.ctx.stepper, &self.ctx.cfg, self.world, self.ctx.group,
+                        &self.slots[0].body, sizeof(Slot), self.n, dt, contact_feedback,
+                        &self.ctx) < 0:
+                self.ctx.oom = 1
             record_impulses(&self.ctx, dt)
             nf = check_bodies(self)
         self.seed = dRandGetSeed()
-        if self.ctx.oom:
+        if self.ctx.oom or self.ctx.stepper.oom:
             raise MemoryError("out of memory while recording contacts")
         return [(self.slots[self.faults[k]].key) for k in range(nf)]
