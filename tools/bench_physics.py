@@ -10,12 +10,13 @@ The reference is ``tools/bench_ode.c``, compiled here with ``cc -O2`` against th
 same libode (pkg-config) and the engine's own step (``engine/physics/ode3d/stepper.h``,
 which both include, run with the same settings) into a temporary folder and run in the
 same session, both plain ("C") and summing the contact impulses after the step as our
-backend does to report them ("C+fb"). With sleeping on, the C side runs ODE's own auto-disable with the
-sleep rule's limits (by time, SleepTime; SleepLinear and SleepAngular on each step's
-velocity), ours the rule itself (:mod:`engine.physics.sleep`). QuickStep leaves
-these columns of 1 kg, 1 m boxes wobbling at a few cm/s, so neither side puts a box to
-sleep within the run: the "on" rows measure what sleeping costs, the rule's per-step
-work (ODE's C rule costs next to nothing; ours is about twenty numpy calls).
+backend does to report them ("C+fb"). With sleeping on, the C side runs ODE's own
+auto-disable with the sleep rule's limits (by time, SleepTime; SleepLinear and
+SleepAngular on each step's velocity), ours the rule itself (:mod:`engine.physics.sleep`),
+which also waits for a body to be steady and for its whole island: the two put different
+boxes to sleep at different times, so the "on" rows compare whole runs, the rule's cost
+per step is timed on its own below.
+
 For each N and with sleeping off and on it reports ms per step of: plain C; our
 raw ``OdeBackend.step``; our step plus the ECS sync (every body's state written in C
 into a snapshot table and copied into the pose table as the physics system
