@@ -30,6 +30,7 @@ BENCHMARKS: dict[str, str] = {
     "input": "tools.bench_input:run_bench",
     "contacts": "tools.bench:bench_contacts",
     "avatars": "tools.bench_avatars:run_bench",
+    "accuracy": "tools.bench_accuracy:run_bench",
 }
 
 
@@ -77,6 +78,25 @@ def _physics_figures(rows: list[dict[str, Any]]) -> list[Figure]:
                    "bare pymunk stepping")(rows)
 
 
+def _accuracy_figures(rows: list[dict[str, Any]]) -> list[Figure]:
+    """At the default step: our error beside MuJoCo's on the same case, or beside the
+    goal where MuJoCo is not installed (or has no such case)."""
+    from tools.bench_accuracy import DEFAULT_STEP, cases
+
+    goals = {c.name: c.goal for c in cases()}
+    out = []
+    for r in rows:
+        if r["dt"] != DEFAULT_STEP:
+            continue
+        label, unit = f"{r['case']} ({r['backend']})", r["error is"]
+        if "mujoco error" in r:
+            out.append(Figure(label, abs(r["error"]), abs(r["mujoco error"]), unit,
+                              "MuJoCo's error on the same case at the same step"))
+        elif goals.get(r["case"]) is not None:
+            out.append(Figure(label, abs(r["error"]), goals[r["case"]], unit, "the goal"))
+    return out
+
+
 def _input_figures(rows: list[dict[str, Any]]) -> list[Figure]:
     ours = next(r for r in rows if r["path"].startswith("osc -> InputState"))
     ref = next(r for r in rows if "reference" in r["path"])
@@ -102,6 +122,7 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "avatars": lambda rows: [Figure(f"{r['avatars']} avatars, {r['case']}", r["ms_per_frame"],
                                     r["reference_ms"], "ms/frame", r["reference"])
                              for r in rows if r["ms_per_frame"] > 0],
+    "accuracy": _accuracy_figures,
 }
 
 
@@ -158,7 +179,9 @@ def plot(data: dict[str, Any], path: Path) -> Path:
     import matplotlib.pyplot as plt
 
     figures = data["figures"]
-    fig, ax = plt.subplots(figsize=(max(6.0, 1.6 * len(figures) + 2), 4.5))
+    many = len(figures) > 12  # a long row of pairs: narrower bars, steeper labels
+    fig, ax = plt.subplots(figsize=(min(max(6.0, 1.6 * len(figures) + 2), 24.0),
+                                    6.5 if many else 4.5))
     xs = range(len(figures))
     ours = [f["ours"] for f in figures]
     refs = [f["reference"] for f in figures]
@@ -166,13 +189,20 @@ def plot(data: dict[str, Any], path: Path) -> Path:
     ax.bar([x + 0.2 for x in xs], refs, 0.4,
            label=f"reference: {figures[0]['reference_is']}" if figures else "reference")
     for x, f in zip(xs, figures, strict=True):
-        ax.annotate(f"x{f['ratio']:.2f}", (x, max(f["ours"], f["reference"])),
-                    ha="center", va="bottom")
-    ax.set_xticks(list(xs), [f["label"] for f in figures], rotation=15, ha="right")
-    ax.set_ylabel(figures[0]["unit"] if figures else "")
+        ax.annotate(f"x{f['ratio']:.2g}" if many else f"x{f['ratio']:.2f}",
+                    (x, max(f["ours"], f["reference"])), ha="center", va="bottom",
+                    fontsize=6 if many else None)
+    ax.set_xticks(list(xs), [f["label"] for f in figures], rotation=60 if many else 15,
+                  ha="right", fontsize=7 if many else None)
+    ax.set_ylabel(", ".join(dict.fromkeys(f["unit"] for f in figures)))
+    values = [v for v in ours + refs if v > 0]
+    if values and max(values) > 100 * min(values):  # figures a hundredfold apart
+        ax.set_yscale("symlog", linthresh=min(values))
     ax.set_title(f"colosseum bench {data['benchmark']} ({data['machine']['platform']})",
                  fontsize=9)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, title=None if len({f["reference_is"] for f in figures}) < 2 else
+              "references: " + "; ".join(sorted({f["reference_is"] for f in figures})),
+              title_fontsize=7)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=100)
