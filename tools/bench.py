@@ -81,19 +81,16 @@ def _physics_figures(rows: list[dict[str, Any]]) -> list[Figure]:
 def _accuracy_figures(rows: list[dict[str, Any]]) -> list[Figure]:
     """At the default step: our error beside MuJoCo's on the same case, or beside the
     goal where MuJoCo is not installed (or has no such case)."""
-    from tools.bench_accuracy import DEFAULT_STEP, cases
-
-    goals = {c.name: c.goal for c in cases()}
     out = []
     for r in rows:
-        if r["dt"] != DEFAULT_STEP:
+        if not r["default step"]:
             continue
         label, unit = f"{r['case']} ({r['backend']})", r["error is"]
         if "mujoco error" in r:
             out.append(Figure(label, abs(r["error"]), abs(r["mujoco error"]), unit,
                               "MuJoCo's error on the same case at the same step"))
-        elif goals.get(r["case"]) is not None:
-            out.append(Figure(label, abs(r["error"]), goals[r["case"]], unit, "the goal"))
+        elif "goal" in r:
+            out.append(Figure(label, abs(r["error"]), r["goal"], unit, "the goal"))
     return out
 
 

@@ -652,10 +652,12 @@ def run_bench(quick: bool = False, backend: str | None = None,
                     continue
                 got = case.ours(name, dt)
                 row: dict[str, Any] = {
-                    "case": case.name, "dt": dt, "backend": name, "theory": case.theory,
-                    "unit": case.unit, "measured": got.value,
-                    "error": case.error_of(got.value),
+                    "case": case.name, "dt": dt, "default step": dt == DEFAULT_STEP,
+                    "backend": name, "theory": case.theory, "unit": case.unit,
+                    "measured": got.value, "error": case.error_of(got.value),
                     "error is": "%" if case.error == "relative" else case.unit}
+                if case.goal is not None:
+                    row["goal"] = case.goal
                 for k, v in (got.extra or {}).items():
                     row[k] = v
                 if theirs is not None:

@@ -181,12 +181,17 @@ class PymunkBackend:
             self._rest(dt, applied)
         if self._sleep_on:
             self._apply_sleep(dt)
+        else:
+            self._woken.clear()  # the wakes were for the resting rule alone
 
     def _preload_weights(self) -> np.ndarray:
         """Give the rows the resting rule chose their weight's share (an upward force
         for this step); the share each row got."""
         self._space_reader()
         applied = np.zeros(len(self._records))
+        if self._woken and len(self._preload):  # moved, pushed or woken by hand: not at rest
+            self._resting.forget(self._rule.rows(np.fromiter(self._woken, np.int64)))
+            self._preload = self._preload[self._resting.ramp[self._preload] > 0]
         if not len(self._preload):
             return applied
         gx, gz = self._space.gravity

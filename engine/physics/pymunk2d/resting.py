@@ -67,6 +67,14 @@ class RestingSupport:
         self.force, self.friction, self.grip = np.zeros((n, 2)), np.zeros(n), np.zeros(n)
         self.points, self.tilted = np.zeros(n, np.int64), np.zeros(n, np.uint8)
 
+    def forget(self, rows: np.ndarray) -> None:
+        """These rows start afresh (moved or pushed by hand: no longer at rest)."""
+        rows = rows[rows >= 0]
+        self.steps[rows] = 0
+        self.ramp[rows] = 0.0
+        self.kept[rows] = False
+        self.slid[rows] = False
+
     def update(self, dt: float, down: np.ndarray, weight: np.ndarray, mu: np.ndarray,
                awake: np.ndarray) -> None:
         """The standing after a step, from ``force``, ``friction`` and ``grip`` (filled by
@@ -99,5 +107,7 @@ class RestingSupport:
         slip = np.where(self.kept, 4 * REST_SLIP, REST_SLIP)
         chosen = (((self.steps >= 2) | self.kept) & (speed < slip) & ~unrest
                   & ((self.points >= 2) | (self.tilted == 0)))
-        self.ramp = np.clip(self.ramp + np.where(chosen, RAMP, -2 * RAMP), 0.0, 1.0)
+        # off at once where no contact is left (chipmunk keeps no impulse to jolt there)
+        self.ramp = np.where(self.points > 0, np.clip(
+            self.ramp + np.where(chosen, RAMP, -2 * RAMP), 0.0, 1.0), 0.0)
         return self.ramp > 0
