@@ -80,10 +80,11 @@ def _physics_figures(rows: list[dict[str, Any]]) -> list[Figure]:
 
 def _accuracy_figures(rows: list[dict[str, Any]]) -> list[Figure]:
     """At the default step: our error beside MuJoCo's on the same case, or beside the
-    goal where MuJoCo is not installed (or has no such case)."""
+    goal where MuJoCo is not installed (or has no such case). An error of exactly 0 (a
+    motor holding its speed to the bit) has no ratio: the table shows it."""
     out = []
     for r in rows:
-        if not r["default step"]:
+        if not r["default step"] or r["error"] == 0 or r.get("mujoco error", 1) == 0:
             continue
         label, unit = f"{r['case']} ({r['backend']})", r["error is"]
         if "mujoco error" in r:
