@@ -138,6 +138,12 @@ def print_table(rows: list[dict[str, Any]]) -> None:
         print("  ".join(v.rjust(w) for v, w in zip(r, widths, strict=True)))
 
 
+def print_row(row: dict[str, Any]) -> None:
+    """One row as it is measured (``key=value`` pairs), before the table at the end."""
+    print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                    for k, v in row.items()), flush=True)
+
+
 def _fmt(value: Any) -> str:
     if isinstance(value, float):
         return f"{value:.4g}"

@@ -47,6 +47,7 @@ from scipy.special import ellipk
 from components import Joint, MaterialProps, Physical, Shape
 from engine.physics import create_backend
 from engine.physics.backend import DynamicsBackend, WorldSettings
+from tools.bench import print_row, print_table
 
 #: Time steps every case runs at (s): coarse, the default, fine.
 STEPS = (0.02, 0.01, 0.001)
@@ -241,6 +242,20 @@ BALL_RADIUS, DROP = 0.1, 1.0
 BOUNCE_GOAL = 0.8
 
 
+def _first_apex(steps: int, advance: Callable[[], tuple[float, float]]) -> float:
+    """The highest a dropped ball's bottom gets after it first moves up; ``advance`` takes a
+    step and says (height of its bottom, vertical speed)."""
+    apex, rising = -math.inf, False
+    for _ in range(steps):
+        z, vz = advance()
+        rising = rising or vz > 0.0
+        if rising:
+            if vz < 0.0:
+                break
+            apex = max(apex, z)
+    return apex
+
+
 def _bounce_ours(e: float, drop: float = DROP,
                  mass: float = 1.0) -> Callable[[str, float], Outcome]:
     """The first rebound's apex over the drop height (bottom of the ball to the floor)."""
@@ -249,15 +264,13 @@ def _bounce_ours(e: float, drop: float = DROP,
             _floor(backend, bounce=e)
             _add(backend, 1, _ball(BALL_RADIUS, mass, bounce=e), (0.0, 0.0, drop + BALL_RADIUS))
             probe = Probe(backend)
-            apex, rising = -math.inf, False
-            for _ in range(_steps(2 * math.sqrt(2 * drop / G) + 0.2, dt)):
+
+            def advance() -> tuple[float, float]:
                 backend.step(dt)
                 p = probe()
-                rising = rising or p.velocity(1)[2] > 0.0
-                if rising:
-                    if p.velocity(1)[2] < 0.0:
-                        break
-                    apex = max(apex, p.position(1)[2] - BALL_RADIUS)
+                return p.position(1)[2] - BALL_RADIUS, p.velocity(1)[2]
+
+            apex = _first_apex(_steps(2 * math.sqrt(2 * drop / G) + 0.2, dt), advance)
         return Outcome(apex / drop)
     return run
 
@@ -281,15 +294,12 @@ def _bounce_mujoco(e: float) -> Callable[[float], Outcome]:
               <geom type="sphere" size="{BALL_RADIUS}" mass="1"
                     solref="{_restitution_solref(e, dt)}"/></body>
           </worldbody>""")
-        apex, rising = -math.inf, False
-        for _ in range(_steps(2 * math.sqrt(2 * DROP / G) + 0.2, dt)):
+
+        def advance() -> tuple[float, float]:
             mj.mj_step(model, data)
-            vz = data.qvel[2]
-            rising = rising or vz > 0.0
-            if rising:
-                if vz < 0.0:
-                    break
-                apex = max(apex, data.qpos[2] - BALL_RADIUS)
+            return data.qpos[2] - BALL_RADIUS, data.qvel[2]
+
+        apex = _first_apex(_steps(2 * math.sqrt(2 * DROP / G) + 0.2, dt), advance)
         return Outcome(apex / DROP)
     return run
 
@@ -665,8 +675,7 @@ def run_bench(quick: bool = False, backend: str | None = None,
                     row["mujoco error"] = case.error_of(theirs.value)
                     for k, v in (theirs.extra or {}).items():
                         row[f"mujoco {k}"] = v
-                print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
-                                for k, v in row.items()), flush=True)
+                print_row(row)
                 rows.append(row)
     return rows
 
@@ -677,8 +686,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--backend", choices=("ode", "pymunk"))
     parser.add_argument("--only", help="cases whose name contains this")
     args = parser.parse_args(argv)
-    from tools.bench import print_table
-
     print_table(run_bench(args.quick, args.backend, args.only))
     return 0
 

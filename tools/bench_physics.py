@@ -50,6 +50,7 @@ import numpy as np
 
 from engine.physics.backend import WorldSettings
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME, SleepRule
+from tools.bench import print_row
 from tools.bench_readback import EcsReadback, pose_table, time_readback
 
 DT = 1.0 / 60.0
@@ -190,8 +191,7 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
                        "ratio+sync vs C+fb": sync_ms / fb_ms,
                        "realtime 60Hz": "yes" if sync_ms < 1e3 * DT else "no",
                        "mean z C": c_z, "mean z ours": ours_z}
-                print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
-                                for k, v in row.items()), flush=True)
+                print_row(row)
                 rows.append(row)
     print("\nreadback of every body into the ECS pose table, µs per call (median); "
           "the sleep rule's cost per step beside the plain-C step")
@@ -206,8 +206,7 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
         islands_us = time_sleep_rule(n, 100 if quick else 500, islands=True)
         row.update({"sleep rule us": rule_us, "rule/C step": rule_us * 1e-3 / c_ms,
                     "+islands us": islands_us, "+islands/C step": islands_us * 1e-3 / c_ms})
-        print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
-                        for k, v in row.items()), flush=True)
+        print_row(row)
         rows.append(row)
     return rows
 
