@@ -1,8 +1,9 @@
 """Builds the compiled parts: the private ODE binding against the system libode
 (engine/physics/ode3d/_ode.pyx, which includes the .pxi files beside it, one per concept,
-and cimports their libode.pxd declarations), the pass that turns pymunk.batch buffers into
-engine rows (engine/physics/pymunk2d/_rows.pyx) and the scene scanner
-(engine/scene/_scan.pyx)."""
+cimports their libode.pxd declarations and includes stepper.h, the step policy it shares
+with tools/bench_ode.c), the sleep rule's per-body pass (engine/physics/_sleep.pyx), the
+pass that turns pymunk.batch buffers into engine rows (engine/physics/pymunk2d/_rows.pyx)
+and the scene scanner (engine/scene/_scan.pyx)."""
 
 import shlex
 import subprocess
@@ -39,14 +40,17 @@ def extensions() -> list[Extension]:
         libraries=["ode"],
         library_dirs=[a[2:] for a in pkg_config("--libs") if a.startswith("-L")],
         define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION")],
+        depends=["engine/physics/ode3d/stepper.h"],
     )
+    sleep = Extension("engine.physics._sleep", ["engine/physics/_sleep.pyx"],
+                      extra_compile_args=["-O3"])
     scan = Extension("engine.scene._scan", ["engine/scene/_scan.pyx"],
                      extra_compile_args=["-O3"])
     rows = Extension("engine.physics.pymunk2d._rows", ["engine/physics/pymunk2d/_rows.pyx"],
                      include_dirs=[numpy.get_include()], extra_compile_args=["-O3"],
                      define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION"),
                                     ("_GNU_SOURCE", None)])  # sincos
-    return cythonize([ext, rows, scan], language_level=3,
+    return cythonize([ext, sleep, rows, scan], language_level=3,
                      compiler_directives={"boundscheck": False, "wraparound": False})
 
 

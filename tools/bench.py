@@ -34,6 +34,7 @@ BENCHMARKS: dict[str, str] = {
     "import": "tools.bench_import:run_bench",
     "net": "tools.bench_net:run_bench",
     "sweep": "tools.bench_sweep:run_bench",
+    "accuracy": "tools.bench_accuracy:run_bench",
 }
 
 
@@ -87,6 +88,23 @@ def _import_figures(rows: list[dict[str, Any]]) -> list[Figure]:
                    "json.loads of the glTF's JSON") for r in rows if "goal s" in r]
 
 
+def _accuracy_figures(rows: list[dict[str, Any]]) -> list[Figure]:
+    """At the default step: our error beside MuJoCo's on the same case, or beside the
+    goal where MuJoCo is not installed (or has no such case). An error of exactly 0 (a
+    motor holding its speed to the bit) has no ratio: the table shows it."""
+    out = []
+    for r in rows:
+        if not r["default step"] or r["error"] == 0 or r.get("mujoco error", 1) == 0:
+            continue
+        label, unit = f"{r['case']} ({r['backend']})", r["error is"]
+        if "mujoco error" in r:
+            out.append(Figure(label, abs(r["error"]), abs(r["mujoco error"]), unit,
+                              "MuJoCo's error on the same case at the same step"))
+        elif "goal" in r:
+            out.append(Figure(label, abs(r["error"]), r["goal"], unit, "the goal"))
+    return out
+
+
 def _input_figures(rows: list[dict[str, Any]]) -> list[Figure]:
     ours = next(r for r in rows if r["path"].startswith("osc -> InputState"))
     ref = next(r for r in rows if "reference" in r["path"])
@@ -132,6 +150,7 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "net": _net_figures,
     "sweep": _by_row(lambda r: f"{r['runs']} runs on {r['workers']} Dask workers",
                      "runs/min", "loop runs/min", "runs/min", "the same runs in a plain loop"),
+    "accuracy": _accuracy_figures,
 }
 
 
@@ -147,6 +166,12 @@ def print_table(rows: list[dict[str, Any]]) -> None:
     print("  ".join("-" * w for w in widths))
     for r in cells:
         print("  ".join(v.rjust(w) for v, w in zip(r, widths, strict=True)))
+
+
+def print_row(row: dict[str, Any]) -> None:
+    """One row as it is measured (``key=value`` pairs), before the table at the end."""
+    print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                    for k, v in row.items()), flush=True)
 
 
 def _fmt(value: Any) -> str:
@@ -188,7 +213,9 @@ def plot(data: dict[str, Any], path: Path) -> Path:
     import matplotlib.pyplot as plt
 
     figures = data["figures"]
-    fig, ax = plt.subplots(figsize=(max(6.0, 1.6 * len(figures) + 2), 4.5))
+    many = len(figures) > 12  # a long row of pairs: narrower bars, steeper labels
+    fig, ax = plt.subplots(figsize=(min(max(6.0, 1.6 * len(figures) + 2), 24.0),
+                                    6.5 if many else 4.5))
     xs = range(len(figures))
     ours = [f["ours"] for f in figures]
     refs = [f["reference"] for f in figures]
@@ -196,13 +223,20 @@ def plot(data: dict[str, Any], path: Path) -> Path:
     ax.bar([x + 0.2 for x in xs], refs, 0.4,
            label=f"reference: {figures[0]['reference_is']}" if figures else "reference")
     for x, f in zip(xs, figures, strict=True):
-        ax.annotate(f"x{f['ratio']:.2f}", (x, max(f["ours"], f["reference"])),
-                    ha="center", va="bottom")
-    ax.set_xticks(list(xs), [f["label"] for f in figures], rotation=15, ha="right")
-    ax.set_ylabel(figures[0]["unit"] if figures else "")
+        ax.annotate(f"x{f['ratio']:.2g}" if many else f"x{f['ratio']:.2f}",
+                    (x, max(f["ours"], f["reference"])), ha="center", va="bottom",
+                    fontsize=6 if many else None)
+    ax.set_xticks(list(xs), [f["label"] for f in figures], rotation=60 if many else 15,
+                  ha="right", fontsize=7 if many else None)
+    ax.set_ylabel(", ".join(dict.fromkeys(f["unit"] for f in figures)))
+    values = [v for v in ours + refs if v > 0]
+    if values and max(values) > 100 * min(values):  # figures a hundredfold apart
+        ax.set_yscale("symlog", linthresh=min(values))
     ax.set_title(f"colosseum bench {data['benchmark']} ({data['machine']['platform']})",
                  fontsize=9)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, title=None if len({f["reference_is"] for f in figures}) < 2 else
+              "references: " + "; ".join(sorted({f["reference_is"] for f in figures})),
+              title_fontsize=7)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=100)

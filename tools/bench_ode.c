@@ -2,10 +2,12 @@
  *
  * A ground plane and N boxes (1 m, 1 kg) in columns 10 high, columns 1.2 m
  * apart on a square grid, layers 1.1 m apart, the lowest centred at 0.55 m;
- * dt 1/60 s, QuickStep 20 iterations, at most 4 contacts per pair, Coulomb
- * friction mu 0.5 (dContactApprox1). World settings (ERP, CFM, contact surface
- * layer, hash-space levels) match what engine/physics/ode3d sets, so both sides
- * solve the same problem.
+ * dt 1/60 s, at most 4 contacts per pair, Coulomb friction mu 0.5
+ * (dContactApprox1). World settings (ERP, CFM, iterations, contact surface layer,
+ * hash-space levels) match what engine/physics/ode3d sets, and the step is the
+ * engine's own (engine/physics/ode3d/stepper.h: exact joint islands, resting
+ * islands' weight carried over, contact softness from the step and masses, with the
+ * settings passed in), so both sides solve the same problem.
  *
  * Sleeping is ODE's own auto-disable set up as close to the engine's sleep rule
  * (engine/physics/sleep.py) as it goes: by time, not steps (AutoDisableSteps 0,
@@ -17,10 +19,16 @@
  * impulse |f|·dt of each contact is computed after the step, which is the
  * extra work the engine does to report contact impulses.
  *
+ * The engine's step reads every contact's force back (its impulse is reported), so
+ * feedback is always attached here; FEEDBACK=1 also sums the impulses |f|·dt after
+ * the step, the rest of the work the engine does to report them.
+ *
  * Usage: bench_ode N STEPS SLEEP(0|1) FEEDBACK(0|1) SLEEP_TIME SLEEP_LINEAR SLEEP_ANGULAR
+ *                  ITERATIONS ERP CFM WARM_START SOFTNESS EXACT_ROWS
  * Prints: ms_per_step=<mean ms> mean_z=<mean box height at the end> contacts=<last step>
  *         impulse=<sum of the last step's contact impulses, 0 without feedback>
- * Built and run by tools/bench_physics.py (cc -O2 $(pkg-config --cflags --libs ode)).
+ * Built and run by tools/bench_physics.py
+ * (cc -O2 -I engine/physics/ode3d $(pkg-config --cflags --libs ode)).
  */
 #include <math.h>
 #include <stdio.h>
@@ -29,12 +37,14 @@
 
 #include <ode/ode.h>
 
+#include "stepper.h"
+
 #define MAX_CONTACTS 4
 
-static dWorldID world;
-static dJointGroupID contacts;
-static int ncontacts;
-static dJointFeedback *feedback; /* NULL: no feedback */
+static CsState stepper;
+static CsSettings settings;
+static double dt = 1.0 / 60.0;
+static dJointFeedback *feedback;
 static int feedback_cap;
 
 static void near_callback(void *data, dGeomID o1, dGeomID o2) {
@@ -52,12 +62,27 @@ static void near_callback(void *data, dGeomID o1, dGeomID o2) {
     for (int i = 0; i < n; i++) {
         c[i].surface.mode = dContactApprox1;
         c[i].surface.mu = 0.5;
-        dJointID j = dJointCreateContact(world, contacts, &c[i]);
-        dJointAttach(j, b1, b2);
-        if (feedback != NULL && ncontacts + i < feedback_cap)
-            dJointSetFeedback(j, &feedback[ncontacts + i]);
     }
-    ncontacts += n;
+    cs_collect(&stepper, &settings, c, n, b1, b2, dt);
+}
+
+/* Room for `n` feedback records, made before any joint points at one (the engine keeps
+ * them in fixed chunks instead). Returns 0, or -1 out of memory. */
+static int reserve_feedback(int n) {
+    if (n <= feedback_cap) return 0;
+    int cap = feedback_cap ? 2 * feedback_cap : 1024;
+    while (cap < n) cap *= 2;
+    dJointFeedback *grown = realloc(feedback, (size_t)cap * sizeof(dJointFeedback));
+    if (grown == NULL) return -1;
+    feedback = grown;
+    feedback_cap = cap;
+    return 0;
+}
+
+/* Contact i's feedback record. */
+static dJointFeedback *contact_feedback(void *ctx, int i) {
+    (void)ctx;
+    return i < feedback_cap ? &feedback[i] : NULL;
 }
 
 /* CPU time of this thread: on a shared machine it counts our work, not our waiting. */
@@ -68,31 +93,33 @@ static double now_ms(void) {
 }
 
 int main(int argc, char **argv) {
-    if (argc != 8) {
+    if (argc != 14) {
         fprintf(stderr, "usage: %s N STEPS SLEEP FEEDBACK SLEEP_TIME SLEEP_LINEAR "
-                "SLEEP_ANGULAR\n", argv[0]);
+                "SLEEP_ANGULAR ITERATIONS ERP CFM WARM_START SOFTNESS EXACT_ROWS\n", argv[0]);
         return 2;
     }
     int n = atoi(argv[1]), steps = atoi(argv[2]), sleep = atoi(argv[3]);
+    int sum_impulses = atoi(argv[4]);
     double sleep_time = atof(argv[5]), sleep_linear = atof(argv[6]);
     double sleep_angular = atof(argv[7]);
-    if (atoi(argv[4])) {
-        feedback_cap = 8 * n + 64; /* at most 4 contacts per pair, ~2 pairs per box */
-        feedback = calloc((size_t)feedback_cap, sizeof(dJointFeedback));
-    }
-    const double dt = 1.0 / 60.0;
+    int iterations = atoi(argv[8]);
+    double erp = atof(argv[9]), cfm = atof(argv[10]);
+    settings.beta = atof(argv[11]);
+    settings.softness = atof(argv[12]);
+    settings.exact_rows = atoi(argv[13]);
+    cs_init(&stepper);
 
     dInitODE2(0);
     dAllocateODEDataForThread(dAllocateMaskAll);
     dRandSetSeed(0);
-    world = dWorldCreate();
+    dWorldID world = dWorldCreate();
     dSpaceID space = dHashSpaceCreate(NULL);
     dHashSpaceSetLevels(space, -1, 6);
-    contacts = dJointGroupCreate(0);
+    dJointGroupID contacts = dJointGroupCreate(0);
     dWorldSetGravity(world, 0, 0, -9.81);
-    dWorldSetERP(world, 0.2);
-    dWorldSetCFM(world, 1e-5);
-    dWorldSetQuickStepNumIterations(world, 20);
+    dWorldSetERP(world, erp);
+    dWorldSetCFM(world, cfm);
+    dWorldSetQuickStepNumIterations(world, iterations);
     dWorldSetContactSurfaceLayer(world, 0.001);
     dWorldSetAutoDisableFlag(world, sleep);
     dWorldSetAutoDisableLinearThreshold(world, sleep_linear);
@@ -114,24 +141,31 @@ int main(int argc, char **argv) {
         dBodySetPosition(b, 1.2 * (col % side), 1.2 * (col / side), 0.55 + 1.1 * level);
         dGeomID g = dCreateBox(space, 1.0, 1.0, 1.0);
         dGeomSetBody(g, b);
+        dBodySetData(b, (void *)(intptr_t)i); /* its index, as stepper.h reads it */
         bodies[i] = b;
     }
 
     double impulse = 0;
     double t0 = now_ms();
+    int ncontacts = 0;
     for (int s = 0; s < steps; s++) {
-        ncontacts = 0;
+        dJointGroupEmpty(contacts);
+        cs_begin(&stepper, n);
         dSpaceCollide(space, NULL, near_callback);
-        dWorldQuickStep(world, dt);
-        if (feedback != NULL) {
-            int m = ncontacts < feedback_cap ? ncontacts : feedback_cap;
+        if (reserve_feedback(stepper.ncontacts) < 0) {
+            fprintf(stderr, "out of memory\n");
+            return 1;
+        }
+        cs_solve(&stepper, &settings, world, contacts, bodies, sizeof(dBodyID), n, dt,
+                 contact_feedback, NULL);
+        ncontacts = stepper.ncontacts;
+        if (sum_impulses) {
             impulse = 0;
-            for (int i = 0; i < m; i++) {
-                const dReal *f = feedback[i].f1;
+            for (int i = 0; i < ncontacts; i++) {
+                const double *f = &stepper.forces[3 * i];
                 impulse += sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]) * dt;
             }
         }
-        dJointGroupEmpty(contacts);
     }
     double ms = (now_ms() - t0) / steps;
 
@@ -140,6 +174,7 @@ int main(int argc, char **argv) {
     printf("ms_per_step=%.6f mean_z=%.6f contacts=%d impulse=%.6f\n", ms, n ? z / n : 0.0,
            ncontacts, impulse);
 
+    cs_free(&stepper);
     free(feedback);
     free(bodies);
     dJointGroupDestroy(contacts);

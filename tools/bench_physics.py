@@ -2,18 +2,21 @@
 
 Scene (issue 4): a ground plane and N boxes of 1 m and 1 kg in columns 10 high,
 1.2 m apart horizontally and 1.1 m vertically, the lowest centred at 0.55 m;
-Δt 1/60 s, QuickStep 20 iterations, at most 4 contacts per pair, μ 0.5.
+Δt 1/60 s, the default world (``WorldSettings()``: QuickStep iterations, ERP, CFM, the
+warm start of resting islands, contact softness, exact joint islands), at most 4
+contacts per pair, μ 0.5.
 
 The reference is ``tools/bench_ode.c``, compiled here with ``cc -O2`` against the
-same libode (pkg-config) into a temporary folder and run in the same session,
-both plain ("C") and with the contact feedback our backend always does to report
-contact impulses ("C+fb": a dJointFeedback per contact joint, impulses summed
-after the step). With sleeping on, the C side runs ODE's own auto-disable with the
-sleep rule's limits (by time, SleepTime; SleepLinear and SleepAngular on each step's
-velocity), ours the rule itself (:mod:`engine.physics.sleep`). QuickStep leaves
-these columns of 1 kg, 1 m boxes wobbling at a few cm/s, so neither side puts a box to
-sleep within the run: the "on" rows measure what sleeping costs, the rule's per-step
-work (ODE's C rule costs next to nothing; ours is about twenty numpy calls).
+same libode (pkg-config) and the engine's own step (``engine/physics/ode3d/stepper.h``,
+which both include, run with the same settings) into a temporary folder and run in the
+same session, both plain ("C") and summing the contact impulses after the step as our
+backend does to report them ("C+fb"). With sleeping on, the C side runs ODE's own
+auto-disable with the sleep rule's limits (by time, SleepTime; SleepLinear and
+SleepAngular on each step's velocity), ours the rule itself (:mod:`engine.physics.sleep`),
+which also waits for a body to be steady and for its whole island: the two put different
+boxes to sleep at different times, so the "on" rows compare whole runs, the rule's cost
+per step is timed on its own below.
+
 For each N and with sleeping off and on it reports ms per step of: plain C; our
 raw ``OdeBackend.step``; our step plus the ECS sync (every body's state written in C
 into a snapshot table and copied into the pose table as the physics system
@@ -45,11 +48,15 @@ from typing import Any
 
 import numpy as np
 
+from engine.physics.backend import WorldSettings
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME, SleepRule
+from tools.bench import print_row
 from tools.bench_readback import EcsReadback, pose_table, time_readback
 
 DT = 1.0 / 60.0
 SOURCE = Path(__file__).with_name("bench_ode.c")
+#: The engine's step over libode, which the reference includes (stepper.h).
+STEPPER = Path(__file__).resolve().parents[1] / "engine" / "physics" / "ode3d"
 
 
 def box_positions(n: int) -> np.ndarray:
@@ -66,7 +73,7 @@ def compile_reference(folder: Path) -> Path:
                            capture_output=True, text=True).stdout
     exe = folder / "bench_ode"
     cc = os.environ.get("CC", "cc")
-    cmd = [cc, "-O2", "-o", str(exe), str(SOURCE), *shlex.split(flags), "-lm"]
+    cmd = [cc, "-O2", f"-I{STEPPER}", "-o", str(exe), str(SOURCE), *shlex.split(flags), "-lm"]
     done = subprocess.run(cmd, capture_output=True, text=True)
     if done.returncode:
         raise RuntimeError(f"cannot compile {SOURCE}: {' '.join(cmd)}\n{done.stderr}")
@@ -75,21 +82,24 @@ def compile_reference(folder: Path) -> Path:
 
 def run_reference(exe: Path, n: int, steps: int, sleep: bool,
                   feedback: bool = False) -> tuple[float, float]:
-    """(ms per step, mean box height at the end) of the plain C program."""
+    """(ms per step, mean box height at the end) of the plain C program, with the default
+    world's settings."""
+    w = WorldSettings()
     out = subprocess.run([str(exe), str(n), str(steps), str(int(sleep)), str(int(feedback)),
-                          repr(SLEEP_TIME), repr(SLEEP_LINEAR), repr(SLEEP_ANGULAR)],
+                          repr(SLEEP_TIME), repr(SLEEP_LINEAR), repr(SLEEP_ANGULAR),
+                          str(w.iterations), repr(w.erp), repr(w.cfm), repr(w.warm_start),
+                          repr(w.contact_softness), str(w.exact_rows)],
                          check=True, capture_output=True, text=True).stdout
     fields = dict(item.split("=") for item in out.split())
     return float(fields["ms_per_step"]), float(fields["mean_z"])
 
 
 def build_ours(n: int, sleep: bool) -> Any:
-    """The same scene through OdeBackend, with the settings bench_ode.c uses."""
+    """The same scene through OdeBackend, with the settings bench_ode.c is given."""
     from components import MaterialProps, Physical, Shape
-    from engine.physics.backend import WorldSettings
     from engine.physics.ode3d import OdeBackend
 
-    backend = OdeBackend(WorldSettings(iterations=20, max_contacts=4, auto_sleep=sleep))
+    backend = OdeBackend(WorldSettings(max_contacts=4, auto_sleep=sleep))
     material = MaterialProps(friction=0.5)
     backend.add_static_plane((0.0, 0.0, 1.0), 0.0, material)
     body = Physical(mass=1.0, shapes=[Shape("box", (1.0, 1.0, 1.0))], material=material)
@@ -181,8 +191,7 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
                        "ratio+sync vs C+fb": sync_ms / fb_ms,
                        "realtime 60Hz": "yes" if sync_ms < 1e3 * DT else "no",
                        "mean z C": c_z, "mean z ours": ours_z}
-                print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
-                                for k, v in row.items()), flush=True)
+                print_row(row)
                 rows.append(row)
     print("\nreadback of every body into the ECS pose table, µs per call (median); "
           "the sleep rule's cost per step beside the plain-C step")
@@ -197,8 +206,7 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
         islands_us = time_sleep_rule(n, 100 if quick else 500, islands=True)
         row.update({"sleep rule us": rule_us, "rule/C step": rule_us * 1e-3 / c_ms,
                     "+islands us": islands_us, "+islands/C step": islands_us * 1e-3 / c_ms})
-        print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
-                        for k, v in row.items()), flush=True)
+        print_row(row)
         rows.append(row)
     return rows
 

@@ -40,6 +40,7 @@ from engine.physics.pymunk2d import PymunkBackend  # noqa: E402
 from engine.physics.pymunk2d.backend import COLLISION_SLOP  # noqa: E402
 from engine.physics.pymunk2d.shapes import PLANE_DEPTH, PLANE_HALF_LENGTH  # noqa: E402
 from engine.physics.sleep import SLEEP_TIME  # noqa: E402
+from tools.bench import print_row  # noqa: E402
 from tools.bench_readback import EcsReadback, pose_table, time_readback  # noqa: E402
 
 DT = 1.0 / 60.0
@@ -179,8 +180,7 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
             backend.step(DT)
         row = time_readback(backend)
         backend.close()
-        print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
-                        for k, v in row.items()), flush=True)
+        print_row(row)
         rows.append(row)
     return rows
 

@@ -141,6 +141,15 @@ class WorldSettings:
     cfm: float = 1e-5
     iterations: int = 20
     max_contacts: int = 4
+    #: Share of a resting contact's normal force carried over to the next step (the
+    #: solver's warm start; 0: off). See engine/physics/ode3d/stepper.h.
+    warm_start: float = 0.9
+    #: Contact softness: its constraint force mixing as a share of its own stiffness,
+    #: the same for every mass and step (a bouncing contact is always rigid).
+    contact_softness: float = 1e-3
+    #: Islands held by joints alone with up to this many constraint rows are solved
+    #: exactly (ODE's dWorldStep); 0: every island by the iterative solver.
+    exact_rows: int = 60
     auto_sleep: bool = True
     #: The sleep rule's limits (see :mod:`engine.physics.sleep`): seconds quiet, m/s, rad/s.
     sleep_time: float = SLEEP_TIME

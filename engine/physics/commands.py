@@ -34,7 +34,7 @@ import numpy as np
 
 from components import Joint, MaterialProps, Physical, Shape
 from components.joint import JointKind
-from engine.physics.backend import SleepState
+from engine.physics.backend import MaterialPair, SleepState, WorldSettings
 
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
@@ -375,6 +375,23 @@ class SetDriveLimits(Command):
 
 
 @dataclass(frozen=True, slots=True)
+class ConfigureWorld(Command):
+    """The world's settings from the next step on (a plugin needing more solver
+    iterations, a script turning gravity); the backend checks them as at the start. It
+    names the world, not a body: ``key`` is -1."""
+
+    settings: WorldSettings
+    key: int = -1
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.settings, WorldSettings):
+            raise CommandError(f"ConfigureWorld: settings must be WorldSettings, got "
+                               f"{type(self.settings).__name__}")
+        if self.key != -1:
+            raise CommandError("ConfigureWorld: names the world (key -1), not an entity")
+
+
+@dataclass(frozen=True, slots=True)
 class Step:
     """Not a request but a record: the backend stepped by ``dt`` (a command log's clock)."""
 
@@ -385,11 +402,12 @@ class Step:
 COMMANDS: dict[str, type] = {cls.__name__: cls for cls in (
     AddBody, RemoveBody, AddJoint, RemoveJoint, SetMotor, ApplyForce, ApplyTorque,
     ApplyImpulse, SetPose, SetVelocity, SetKinematicTarget, SetCollisionEnabled,
-    SetGravityEnabled, SetSleeping, SetSleepState, SetJointTarget, SetDriveLimits, Step)}
+    SetGravityEnabled, SetSleeping, SetSleepState, SetJointTarget, SetDriveLimits,
+    ConfigureWorld, Step)}
 
 #: Plain-data types a command may hold, by name (tagged in the serialised form).
 _DATA: dict[str, type] = {cls.__name__: cls for cls in (
-    Physical, Shape, MaterialProps, Joint, SleepState)}
+    Physical, Shape, MaterialProps, Joint, SleepState, WorldSettings, MaterialPair)}
 
 
 # -- plain dicts ---------------------------------------------------------------------

@@ -79,6 +79,7 @@ _APPLY: dict[type, Callable[[DynamicsBackend, Any], Any]] = {
     cmd.SetDriveLimits: lambda b, c: b.set_drive_limits(c.key, c.max_force, c.max_torque,
                                                          c.time_constant, c.max_speed,
                                                          c.max_spin),
+    cmd.ConfigureWorld: lambda b, c: b.configure(c.settings),
 }
 
 
@@ -302,6 +303,8 @@ class PhysicsDriver(PhysicsPort):
 
     def describe(self, key: int, joint: bool = False) -> str:
         """How messages name a body or joint: its scene ID when it has one."""
+        if key < 0:
+            return "the world"
         name = self.names.get(key)
         what = "joint" if joint else "object"
         return f"{what} {name!r}" if name else f"{what} (entity {key})"

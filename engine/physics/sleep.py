@@ -52,11 +52,13 @@ The per-body state is the smoothed velocity (where it is averaging), the quiet t
 ``SleepTimer``, ``SleepReference``), so a loaded state falls asleep on the very step
 the uninterrupted run would.
 
-Cost: about twenty numpy calls a step over (6, N) columns, whatever happens; right
-after a step, with cold caches, that is some 70 µs for 500 bodies (``colosseum bench
-physics`` measures it). Islands cost more (contacts to rows, scipy's connected
-components) and are looked for only on steps where some body is ready, and reused
-while the contacts are the same.
+Cost: the per-body part of a step (smoothing, the two tests, the quiet time and the
+reference) is one compiled pass over the bodies (``engine/physics/_sleep.pyx``, the
+same arithmetic in the same order as the numpy formulation it replaced, to the bit):
+a few microseconds for 500 bodies right after a step, where twenty numpy calls over
+(6, N) columns took some 90 with the caches cold (``colosseum bench physics`` measures
+it). Islands cost more (contacts to rows, scipy's connected components) and are looked
+for only on steps where some body is ready, and reused while the contacts are the same.
 """
 
 from __future__ import annotations
@@ -66,6 +68,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+
+from engine.physics import _sleep
 
 #: Seconds a body must stay quiet before it (and its island) falls asleep.
 SLEEP_TIME = 0.5
@@ -95,6 +99,13 @@ class SleepState:
     timer: float = 0.0
     #: The smoothed velocity its quiet stretch began with; None when none is under way.
     reference: np.ndarray | None = None
+    #: Its standing with the resting preload (ODE: engine/physics/ode3d/stepper.h), which
+    #: carries a resting body's weight from step to step: steps it has been held up at
+    #: rest (0 to 2), whether it slid while preloaded, and the force its contacts hold it
+    #: with (averaged; (3,), N; None: none).
+    rest_steps: int = 0
+    rest_slid: bool = False
+    rest_force: np.ndarray | None = None
 
 
 class KeyIndex:
@@ -137,11 +148,11 @@ class SleepRule:
         self.smoothed, self.velocity = self._stack[0], self._stack[2]
         # 1.0 where the next step averages, 0.0 where it snaps (floats: they scale)
         self.smoothing = np.zeros(0)
-        self._keep = np.zeros(0)
         self.timer = np.zeros(0)
         self.reference = np.zeros((6, 0))
         self.started = np.zeros(0, bool)  # a quiet stretch is under way (reference set)
         self._islands_of: tuple[np.ndarray, np.ndarray] | None = None
+        self._pass = self._bind()
 
     def configure(self, time: float, linear: float, angular: float) -> None:
         """Set the limits (s, m/s, rad/s)."""
@@ -151,14 +162,15 @@ class SleepRule:
                 raise ValueError(f"{what} must be a positive number, got {value}")
         self.time = float(time)
         self._bounds = _bounds(linear, angular)
+        self._pass = self._bind()
 
     def layout(self, keys: np.ndarray, movable: np.ndarray, eligible: np.ndarray) -> None:
         """New rows (bodies came or went): the state follows its keys."""
         old = self._index.rows(keys)
         had = np.flatnonzero(old >= 0)
         n = len(keys)
-        # the smoothed velocity, its drift from the reference and the velocity, stacked:
-        # one pass of numpy tests all three
+        # the smoothed velocity, its drift from the reference and the velocity, stacked
+        # as the compiled pass (_sleep.advance) takes them
         stack = np.zeros((3, 6, n))
         moved = {"smoothed": stack[0]}
         for name, shape in (("smoothing", (n,)), ("timer", (n,)), ("reference", (6, n)),
@@ -169,12 +181,19 @@ class SleepRule:
             setattr(self, name, now)
         self._stack = stack
         self.velocity = stack[2]
-        self._keep = np.zeros(n)
         self.keys, self._index = keys, KeyIndex(keys)
         self.movable = np.asarray(movable, bool)
-        self.eligible = np.asarray(eligible, bool)
+        self.eligible = np.ascontiguousarray(eligible, bool)
         self.awake = np.zeros(n, bool)
         self._islands_of = None  # the last edges and their island labels
+        self._pass = self._bind()
+
+    def _bind(self) -> _sleep.Pass:
+        """The compiled pass over the current arrays (they are written in place from then
+        on, so the pass is made again only when they are replaced)."""
+        return _sleep.Pass(self._stack, self.smoothing, self.timer, self.reference,
+                           self.started.view(np.uint8), self.awake.view(np.uint8),
+                           self.eligible.view(np.uint8), self._bounds)
 
     def rows(self, keys: np.ndarray) -> np.ndarray:
         return self._index.rows(keys)
@@ -186,14 +205,6 @@ class SleepRule:
         self.timer[rows] = 0.0
         self.started[rows] = False
 
-    @staticmethod
-    def _under(x: np.ndarray, bounds: np.ndarray) -> np.ndarray:
-        """For each stacked (6, N) velocity table in ``x`` (..., 6, N), per column,
-        whether both halves (linear, angular) are under their squared ``bounds``."""
-        halves = x.reshape(*x.shape[:-2], 2, 3, x.shape[-1])
-        under = np.einsum("...kij,...kij->...kj", halves, halves) < bounds
-        return under[..., 0, :] & under[..., 1, :]
-
     def update(self, dt: float, woken: np.ndarray | None,
                edges: Callable[[], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         """Advance the state by a step of ``dt``; the rows to put to sleep now, and every
@@ -203,36 +214,11 @@ class SleepRule:
         ``edges``: called only when some body is ready, (M, 2) row pairs of the step's
         contacts and joints (-1: not a body of ours).
         """
-        # Each numpy call costs microseconds right after a step (cold caches), so the
-        # step is as few calls as it can be.
         n = len(self.timer)
-        s, d, v = self._stack  # the smoothed velocity, its drift, the velocity
-        np.subtract(v, s, out=d)
-        # where the last step said so the average snaps to the velocity: exactly, as
-        # (v - s) * 0 is 0
-        d *= np.multiply(self.smoothing, math.exp(-dt / SMOOTHING), out=self._keep)
-        np.subtract(v, d, out=s)  # s + (v - s)(1 - e^(-dt/τ))
-        np.subtract(s, self.reference, out=d)
-        calm, steady, rest = self._under(self._stack, self._bounds)
-        calm &= self.awake
-        # smooth on only while calm and not at rest: after an impact or a throw there is
-        # nothing to smooth, and at rest the average would only replay how it got there
-        np.greater(calm, rest, out=self.smoothing)  # as 1.0 or 0.0
-        slow = calm & self.eligible
-        if woken is not None:
-            slow &= ~woken
-        steady &= slow
-        steady &= self.started
-        self.timer += dt
-        self.timer *= steady
-        restart = slow ^ steady  # slow and not steady: a quiet stretch starts (again)
-        if restart.any():
-            d *= restart
-            self.reference += d
-        self.started = slow
-        ready = self.timer >= self.time
-        if not ready.any():
+        if not self._pass.advance(dt, math.exp(-dt / SMOOTHING), self.time,
+                                  None if woken is None else woken.view(np.uint8)):
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        ready = self.timer >= self.time
         labels = self._islands(edges)
         blocked = self.movable & self.awake & ~ready  # awake and not ready: keeps it awake
         held = np.zeros(n, bool)
@@ -304,6 +290,8 @@ class SleepRule:
 
 
 def _bounds(linear: float, angular: float) -> np.ndarray:
-    """Squared (linear, angular) bounds, (3, 2, 1): slow, steady, at rest."""
-    limits = np.array([[linear * linear], [angular * angular]])
-    return np.stack([limits * share**2 for share in (1.0, STEADY_SHARE, STEADY_SHARE**2)])
+    """Squared (linear, angular) bounds, flat: slow, steady, at rest."""
+    return np.array([limit * limit * share**2
+                     for share in (1.0, STEADY_SHARE, STEADY_SHARE**2)
+                     for limit in (linear, angular)])
+

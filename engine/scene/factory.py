@@ -443,7 +443,8 @@ class _Builder:
             if phys("Trigger"):
                 comps.append(Trigger(mask=int(phys("Mask"))))
             self.physical_ids.add(oid)
-            if any(map(r.has, ("Asleep", "SleepVelocity", "SleepTimer", "SleepReference"))):
+            if any(map(r.has, ("Asleep", "SleepVelocity", "SleepTimer", "SleepReference",
+                               "RestSteps", "RestSlid", "RestForce"))):
                 self.sleep[oid] = self.sleep_spec(r)
         self.poses[oid] = (position, quat)
         if r.has("Sound"):
@@ -829,8 +830,14 @@ class _Builder:
             v[3:] = np.radians(v[3:])  # written in deg/s, like AngularVelocity
             return v
 
+        steps = int(r("RestSteps"))
+        if not 0 <= steps <= 2:
+            self.report.error(r.value("RestSteps").loc, "RestSteps must be 0, 1 or 2")
+        force = r("RestForce")
         return SleepState(bool(r("Asleep")), velocity("SleepVelocity"),
-                          max(float(r("SleepTimer")), 0.0), velocity("SleepReference"))
+                          max(float(r("SleepTimer")), 0.0), velocity("SleepReference"),
+                          min(max(steps, 0), 2), bool(r("RestSlid")),
+                          None if force is None else np.array(_floats(force)))
 
     # -- joints ------------------------------------------------------------
     def joint(self, blk: Block, index: int, spawned: set[str]) -> JointSpec | None:
@@ -906,9 +913,23 @@ class _Builder:
         for key in ("SleepTime", "SleepLinear", "SleepAngular"):
             if not (w(key) > 0 and math.isfinite(w(key))):
                 self.report.error(w.value(key).loc, f"{key} must be a positive number")
+        defaults = WorldSettings()
+        warm, soft, rows = (float(w("WarmStart")), float(w("ContactSoftness")),
+                            int(w("ExactRows")))
+        if not 0.0 <= warm <= 0.99:
+            self.report.error(w.value("WarmStart").loc, "WarmStart must be from 0 to 0.99")
+            warm = defaults.warm_start
+        if not (soft >= 0.0 and math.isfinite(soft)):
+            self.report.error(w.value("ContactSoftness").loc,
+                              "ContactSoftness must be a number >= 0")
+            soft = defaults.contact_softness
+        if rows < 0:
+            self.report.error(w.value("ExactRows").loc, "ExactRows must be >= 0 (0: none)")
+            rows = defaults.exact_rows
         spec.world = WorldSettings(gravity=_floats(w("Gravity")), erp=float(w("ERP")),
                                    cfm=float(w("CFM")), iterations=int(w("Iterations")),
                                    max_contacts=int(w("MaxContacts")),
+                                   warm_start=warm, contact_softness=soft, exact_rows=rows,
                                    auto_sleep=bool(w("AutoSleep")),
                                    sleep_time=_positive(w("SleepTime"), SLEEP_TIME),
                                    sleep_linear=_positive(w("SleepLinear"), SLEEP_LINEAR),

@@ -24,8 +24,11 @@ from typing import Any
 from components.joint import SCENE_JOINT_TYPES
 from components.shape import ShapeKind
 from engine.measures import QUANTITIES
-from engine.physics.backend import BackendName
+from engine.physics.backend import BackendName, WorldSettings
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
+
+#: The solver settings' defaults, defined once (engine.physics.backend.WorldSettings).
+_WORLD = WorldSettings()
 
 # Field types.
 INT_T = "int"
@@ -168,6 +171,12 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                          "falls asleep, with what it touches, at the World's SleepTime"),
         "SleepReference": _f(VECTOR_T, None, "the smoothed velocity its quiet stretch began "
                              "with [vx vy vz wx wy wz] (m/s, deg/s)", lengths=(6,)),
+        # Its standing with the resting warm start (ODE; World WarmStart).
+        "RestSteps": _f(INT_T, 0, "steps (0 to 2) the body has been held up at rest by its "
+                        "contacts; at 2 its weight is carried over"),
+        "RestSlid": _f(BOOL_T, 0, "1: it slid while its weight was carried over, and has been "
+                       "pushed sideways since"),
+        "RestForce": _f(VEC3_T, None, "N, the force its contacts hold it with, averaged"),
     },
     "Visual": {
         "Geometry": _f(STRUCT_T, None,
@@ -528,7 +537,22 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "TimeStep": _f(FLOAT_T, 0.01, "s, fixed dynamics step"),
         "Dynamics": _f(ENUM_T, "ode", "dynamics backend: ode (3D) or pymunk (2D, X-Z plane)",
                        allowed=BACKENDS),
-        "Iterations": _f(INT_T, 20, "solver iterations per step"),
+        "Iterations": _f(INT_T, _WORLD.iterations,
+                         "solver iterations per step (ODE QuickStep, pymunk): more converge "
+                         "stacks and long chains further, at a cost that grows with them"),
+        "WarmStart": _f(FLOAT_T, _WORLD.warm_start,
+                        "share of a resting body's weight carried from step to step (0 to "
+                        "0.99; 0: off): stacks stand still with few iterations (ODE; see "
+                        "docs/PHYSICS.md)"),
+        "ContactSoftness": _f(FLOAT_T, _WORLD.contact_softness,
+                              "contacts' give, as a share of their own stiffness: the same "
+                              "for every mass and step; a bouncing contact is always rigid "
+                              "(ODE; a material's Softness overrides)"),
+        "ExactRows": _f(INT_T, _WORLD.exact_rows,
+                        "islands held by joints alone with up to this many constraint rows "
+                        "are solved exactly (ODE dWorldStep): accurate pendulums and "
+                        "mechanisms, at a cost that grows with the cube of the rows; 0: all "
+                        "by the iterative solver"),
         "ERP": _f(FLOAT_T, 0.2, "error reduction per step"),
         "CFM": _f(FLOAT_T, 1e-5, "constraint force mixing"),
         "MaxContacts": _f(INT_T, 4, "per pair of geometries"),

@@ -96,11 +96,19 @@ def _rebase_assets(block: Block, schema: str, src: Path, dst: Path) -> None:
 
 
 def _sleep_keys(block: Block, state: SleepState | None) -> None:
-    """Write a body's sleep-rule state (``None``: fresh, or a backend that keeps none)."""
-    for key in ("Asleep", "SleepVelocity", "SleepTimer", "SleepReference"):
+    """Write a body's sleep-rule state and resting standing (``None``: fresh, or a backend
+    that keeps none)."""
+    for key in ("Asleep", "SleepVelocity", "SleepTimer", "SleepReference", "RestSteps",
+                "RestSlid", "RestForce"):
         _drop(block, key)
     if state is None:
         return
+    if state.rest_steps:
+        _set(block, "RestSteps", Value(INT, int(state.rest_steps), _HERE))
+    if state.rest_slid:
+        _set(block, "RestSlid", Value(INT, 1, _HERE))
+    if state.rest_force is not None:
+        _set(block, "RestForce", _vec(state.rest_force.tolist()))
     if state.asleep:
         _set(block, "Asleep", Value(INT, 1, _HERE))
     for key, v in (("SleepVelocity", state.smoothed), ("SleepReference", state.reference)):

@@ -13,7 +13,7 @@ from components import Joint, Name, Physical, Shape, Transform
 from engine import EngineConfig, Phase, system
 from engine.physics import commands as cmd
 from engine.physics import create_backend
-from engine.physics.backend import SleepState
+from engine.physics.backend import MaterialPair, SleepState, WorldSettings
 from engine.physics.driver import WAIT_STEPS, DetachedPhysics, apply
 from systems import create_engine
 from systems.dynamics import DynamicsPlugin
@@ -60,7 +60,10 @@ def every_command() -> list[cmd.Command | cmd.Step]:
             cmd.SetCollisionEnabled(4, False), cmd.SetGravityEnabled(4, False),
             cmd.SetSleeping(4, True), cmd.SetSleepState(4, sleep),
             cmd.SetJointTarget(9, (0, 0, 1), (1, 0, 0, 0), 300.0, None),
-            cmd.SetDriveLimits(9, 300, 30), cmd.Step(1 / 120)]
+            cmd.SetDriveLimits(9, 300, 30),
+            cmd.ConfigureWorld(WorldSettings(iterations=40, material_pairs=[
+                MaterialPair("wood", "ice", friction=0.05)])),
+            cmd.Step(1 / 120)]
 
 
 def test_every_command_type_round_trips_through_json():

@@ -241,3 +241,21 @@ def test_a_lost_tracker_holds_the_hand_still_and_lets_go_after_a_second(tmp_path
         rig.run(1.2)
         assert np.allclose(rig.position("hand_r"), held_at, atol=1e-3)  # held still
         assert rig.state("hand_r").held == ()  # and let go after a second
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_hand_pressing_a_cup_into_the_table_rests_on_it_still(tmp_path: Path, backend):
+    """The tracker 13 mm inside the cup: the drive presses with its full 300 N through a
+    0.3 kg cup into the table. The hand rests on the cup within a millimetre or so, and
+    still (the solver runs the iterations hands need)."""
+    path = waypoints((0.0, (0, 0, 0.9)), (0.4, (0, 0, 0.852)))
+    with Rig(TABLE + CUP + hand("hand_r", 0, 0.9), tmp_path, backend,
+             paths={"hand_r": path}) as rig:
+        assert rig.engine.config.world.iterations >= 40
+        rig.run(0.6)
+        sunk = []
+        rig.every_frame(lambda e, dt: sunk.append(
+            rig.position("cup")[2] + 0.05 - (rig.position("hand_r")[2] - 0.015)))
+        rig.run(0.3)
+        assert rig.state("hand_r").mode == HandMode.CONTACT
+        assert max(sunk) < 1.5e-3 and np.std(sunk) < 2e-4

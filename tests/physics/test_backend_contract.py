@@ -461,6 +461,19 @@ def test_wheel_on_motorized_hinge_rolls_at_omega_r(kit, backend: DynamicsBackend
     assert np.mean(speeds) == pytest.approx(omega * r, rel=0.05)
 
 
+def test_a_cup_stands_still_on_a_table(kit, backend: DynamicsBackend) -> None:
+    """A cylinder standing on a box (a cup on a table) comes to rest where it was put: its
+    contacts must span its whole rim, not one side of it (it would rock and wander)."""
+    kit.add(backend, 1, Physical(kind="static", shapes=[Shape("box", (1.2, 1.2, 0.05))]),
+            (0.0, 0.0, 0.725))
+    kit.add(backend, 2, Physical(mass=0.3, shapes=[Shape("cylinder", (0.08, 0.1))]),
+            (0.0, 0.0, 0.8))
+    kit.run(backend, 0.5, 1 / 120)
+    settled = kit.row(backend, 2)["position"].copy()
+    kit.run(backend, 4.5, 1 / 120)
+    assert kit.row(backend, 2)["position"] == pytest.approx(settled, abs=1e-4)
+
+
 def test_fixed_joint_holds_relative_pose(kit, backend: DynamicsBackend) -> None:
     kit.add(backend, 1, kit.box((0.4, 0.4, 0.4)), (0.0, 0.0, 3.0))
     kit.add(backend, 2, kit.sphere(radius=0.1), (0.5, 0.0, 3.0))

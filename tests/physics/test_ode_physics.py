@@ -149,14 +149,17 @@ def test_stack_of_ten_comes_to_rest_and_every_box_sleeps() -> None:
     ground(b)
     for i in range(10):
         b.add_body(i, cube(1.0, mass=1000.0), np.array([0, 0, 0.5 + 1.001 * i]), I4)
-    dt, erp, cfm = 1 / 100, 0.2, 1e-5  # the default world's
+    dt, world = 1 / 100, WorldSettings()  # the default world
     for _ in range(400):
         b.step(dt)
     assert b.sleeping_count() == 10
     # each contact layer sinks in by the surface layer (1 mm) and where the soft contact
-    # holds its share of the load: at rest ERP·depth = CFM·λ, λ = f·dt on 4 contacts
+    # holds its share of the load: at rest ERP·depth = CFM·λ·dt on 4 contacts, with the
+    # contact's CFM softness·dt·(1/m1 + 1/m2) and λ the solver's share, (1 - warm start)
+    # of the load once the stack rests
     load = 1000.0 * G * (10 - np.arange(10))  # weight on the contact under box k
-    depth = 0.001 + cfm * load / 4 * dt / erp
+    cfm = world.contact_softness * dt * np.where(np.arange(10) == 0, 1, 2) / 1000.0
+    depth = 0.001 + cfm * (1 - world.warm_start) * load / 4 * dt / world.erp
     expected = 0.5 + np.arange(10) - np.cumsum(depth)
     np.testing.assert_allclose(np.sort(b.read_state().position[:, 2])[1:], expected,
                                atol=1e-3)

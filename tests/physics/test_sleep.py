@@ -14,7 +14,7 @@ import pytest
 
 from components import Joint
 from engine.physics.backend import DynamicsBackend
-from engine.physics.sleep import SLEEP_TIME, SleepRule, SleepState
+from engine.physics.sleep import SLEEP_LINEAR, SLEEP_TIME, SMOOTHING, SleepRule, SleepState
 
 STEPS = (0.0005, 0.001, 0.01, 0.02)
 AMPLITUDES = (0.5, 2.0, 5.0, 30.0)  # degrees
@@ -192,3 +192,63 @@ def test_islands_follow_the_contacts_of_each_step() -> None:
         assert not len(rows)
     rows, _ = rule.update(0.01, None, lambda: np.zeros((0, 2), np.int64))
     assert rows.tolist() == [0]
+
+
+def _numpy_advance(rule: SleepRule, dt: float, woken: np.ndarray | None) -> bool:
+    """The rule's per-body step as it was written in numpy before it was compiled
+    (engine/physics/_sleep.pyx): the oracle the compiled pass must match to the bit."""
+    s, d, v = rule._stack
+    np.subtract(v, s, out=d)
+    d *= rule.smoothing * math.exp(-dt / SMOOTHING)
+    np.subtract(v, d, out=s)
+    np.subtract(s, rule.reference, out=d)
+    bounds = rule._bounds.reshape(3, 2, 1)
+    halves = rule._stack.reshape(3, 2, 3, -1)
+    under = np.einsum("...kij,...kij->...kj", halves, halves) < bounds
+    calm, steady, rest = under[:, 0] & under[:, 1]
+    calm &= rule.awake
+    rule.smoothing[:] = calm > rest
+    slow = calm & rule.eligible
+    if woken is not None:
+        slow &= ~woken
+    steady &= slow & rule.started
+    rule.timer += dt
+    rule.timer *= steady
+    d *= slow ^ steady
+    rule.reference += d
+    rule.started[:] = slow
+    return bool((rule.timer >= rule.time).any())
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_compiled_step_is_the_numpy_formulation_to_the_bit(seed: int) -> None:
+    """Bodies at every speed around the limits (slow, steady, at rest, woken, asleep,
+    ineligible), stepped through both: every state array equal, step after step (the
+    drift row of the stack is scratch, not state)."""
+    rng = np.random.default_rng(seed)
+    n, dt = 300, 0.01
+    rules = [_rule(n), _rule(n)]
+    eligible = rng.random(n) < 0.9
+    for rule in rules:
+        rule.eligible[:] = eligible
+        rule.configure(0.05, SLEEP_LINEAR, math.radians(2.0))  # short: timers run out
+    scale = SLEEP_LINEAR * np.array([10.0, 1.0, 0.1, 0.01, 0.001])[rng.integers(0, 5, n)]
+    base = rng.normal(0.0, 1.0, (6, n)) * scale
+    for step in range(40):
+        velocity = base + rng.normal(0.0, 0.02, (6, n)) * scale * (step % 3 == 0)
+        awake = rng.random(n) < 0.95
+        woken = rng.random(n) < 0.05 if step % 4 == 0 else None
+        ready = []
+        for rule, advance in ((rules[0], None), (rules[1], _numpy_advance)):
+            rule.velocity[:] = velocity
+            rule.awake[:] = awake
+            if advance is None:
+                ready.append(rule._pass.advance(dt, math.exp(-dt / SMOOTHING), rule.time,
+                                                None if woken is None else woken.view(np.uint8)))
+            else:
+                ready.append(advance(rule, dt, woken))
+        assert ready[0] == ready[1]
+        for name in ("smoothed", "velocity", "smoothing", "timer", "reference", "started"):
+            np.testing.assert_array_equal(getattr(rules[0], name), getattr(rules[1], name),
+                                          err_msg=f"{name} at step {step}")
+    assert rules[0].started.any() and (rules[0].timer > 0).any()  # the tests had work

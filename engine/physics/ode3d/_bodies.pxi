@@ -49,6 +49,7 @@ def create_body(World w, int64_t key, int kind, double[::1] pos, double[::1] qua
         dBodySetData(b, <void*><intptr_t>w.n)   # slot index, for wake()
     s.body = b
     w.slot_of[key] = w.n
+    cs_reset(&w.ctx.stepper, w.n)
     w.geoms.append([])
     w.pending_mass.append(bytearray(sizeof(dMass)))
     dMassSetZero(<dMass*><char*>w.pending_mass[w.n])
@@ -77,6 +78,8 @@ def remove_body(World w, key) -> list:
     w.pending_mass.pop()
     del w.slot_of[key]
     w.n -= 1
+    cs_move(&w.ctx.stepper, last, i)   # the last slot's resting standing follows it
+    cs_reset(&w.ctx.stepper, last)
     return gone
 
 
@@ -390,3 +393,32 @@ def sleeping(World w) -> np.ndarray:
         if w.slots[i].body != NULL:
             out[i] = not dBodyIsEnabled(w.slots[i].body)
     return out.view(bool)
+
+
+def rest_standing(World w) -> tuple:
+    """Per slot, the resting preload's standing (stepper.h): steps held up at rest (0 to
+    2), whether it slid while preloaded, and the averaged force its contacts hold it
+    with (n, 3), N."""
+    cdef cnp.ndarray[cnp.int8_t, ndim=1] steps = np.zeros(w.n, np.int8)
+    cdef cnp.ndarray[cnp.uint8_t, ndim=1] slid = np.zeros(w.n, np.uint8)
+    cdef cnp.ndarray[cnp.float64_t, ndim=2] held = np.zeros((w.n, 3))
+    cdef int i, k
+    for i in range(min(w.n, w.ctx.stepper.capbodies)):
+        steps[i] = w.ctx.stepper.bodies[i].resting
+        slid[i] = w.ctx.stepper.bodies[i].slid
+        for k in range(3):
+            held[i, k] = w.ctx.stepper.bodies[i].held[k]
+    return steps, slid.view(bool), held
+
+
+def set_rest_standing(World w, key, int steps, bint slid, double[::1] held) -> None:
+    """Put a body's resting standing back (a saved state's)."""
+    cdef int i = w.slot(key), k
+    if not 0 <= steps <= 2:
+        raise ValueError(f"body {key}: rest steps must be 0, 1 or 2, got {steps}")
+    if w.ctx.stepper.capbodies <= i and cs_begin(&w.ctx.stepper, w.n) < 0:
+        raise MemoryError()
+    w.ctx.stepper.bodies[i].resting = steps
+    w.ctx.stepper.bodies[i].slid = slid
+    for k in range(3):
+        w.ctx.stepper.bodies[i].held[k] = held[k]

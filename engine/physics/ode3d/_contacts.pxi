@@ -27,6 +27,63 @@ cdef inline dJointFeedback* feedback_slot(Ctx* c, int i) noexcept nogil:
     return &c.chunks[chunk][i % FB_CHUNK]
 
 
+cdef inline bint culls_itself(dGeomID g) noexcept nogil:
+    """Spheres touch at one point; ODE's box and plane colliders pick spread points
+    themselves when asked for fewer than they find."""
+    cdef int k = dGeomGetClass(g)
+    return k == dSphereClass or k == dBoxClass or k == dPlaneClass
+
+
+cdef inline double apart2(dContact* a, dContact* b) noexcept nogil:
+    cdef double d0 = a.geom.pos[0] - b.geom.pos[0]
+    cdef double d1 = a.geom.pos[1] - b.geom.pos[1]
+    cdef double d2 = a.geom.pos[2] - b.geom.pos[2]
+    return d0 * d0 + d1 * d1 + d2 * d2
+
+
+cdef inline void swap_contacts(dContact* buf, double* near, int i, int j) noexcept nogil:
+    cdef dContact t
+    cdef double d
+    if i == j:
+        return
+    memcpy(&t, &buf[i], sizeof(dContact))
+    memcpy(&buf[i], &buf[j], sizeof(dContact))
+    memcpy(&buf[j], &t, sizeof(dContact))
+    d = near[i]
+    near[i] = near[j]
+    near[j] = d
+
+
+cdef int spread_contacts(dContact* buf, int n, int keep) noexcept nogil:
+    """Keep ``keep`` of ``n`` contacts spread over the contact patch — the deepest, then
+    each time the one farthest from those kept — and not the first few a collider found,
+    which may all lie on one side (a cylinder standing on a box then rocks forever)."""
+    cdef double near[CANDIDATES]
+    cdef int i, k, best
+    cdef double d
+    if n <= keep:
+        return n
+    near[0] = 0.0
+    best = 0
+    for i in range(1, n):
+        if buf[i].geom.depth > buf[best].geom.depth:
+            best = i
+    swap_contacts(buf, near, 0, best)
+    for i in range(1, n):
+        near[i] = apart2(&buf[i], &buf[0])
+    for k in range(1, keep):
+        best = k
+        for i in range(k + 1, n):
+            if near[i] > near[best]:
+                best = i
+        swap_contacts(buf, near, k, best)
+        for i in range(k + 1, n):
+            d = apart2(&buf[i], &buf[k])
+            if d < near[i]:
+                near[i] = d
+    return keep
+
+
 cdef void near_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
     cdef Ctx* c = <Ctx*>data
     cdef GeomInfo* g1
@@ -70,7 +127,21 @@ cdef void near_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
     p = &c.pairs[g1.material * c.nmat + g2.material]
     if p.collide == 0:
         return
-    n = dCollide(o1, o2, c.max_contacts, &c.buf[0].geom, sizeof(dContact))
+    if c.max_contacts >= CANDIDATES or (culls_itself(o1) and culls_itself(o2)):
+        n = dCollide(o1, o2, c.max_contacts, &c.buf[0].geom, sizeof(dContact))
+    else:
+        n = spread_contacts(c.buf, dCollide(o1, o2, CANDIDATES, &c.buf[0].geom,
+                                            sizeof(dContact)), c.max_contacts)
+    for i in range(n):
+        c.buf[i].surface.mode = p.mode
+        c.buf[i].surface.mu = p.mu
+        c.buf[i].surface.bounce = p.bounce
+        c.buf[i].surface.bounce_vel = p.bounce_vel
+        c.buf[i].surface.soft_erp = p.soft_erp
+        c.buf[i].surface.soft_cfm = p.soft_cfm
+    if n and cs_collect(&c.stepper, &c.cfg, c.buf, n, b1, b2, c.dt) < 0:
+        c.oom = 1
+        return
     for i in range(n):
         if c.nrec >= c.caprec:
             k = c.caprec * 2 if c.caprec > 0 else 1024
@@ -80,20 +151,6 @@ cdef void near_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
                 return
             c.recs = grown
             c.caprec = k
-        fb = feedback_slot(c, c.nrec)
-        if fb == NULL:
-            c.oom = 1
-            return
-        c.buf[i].surface.mode = p.mode
-        c.buf[i].surface.mu = p.mu
-        c.buf[i].surface.bounce = p.bounce
-        c.buf[i].surface.bounce_vel = p.bounce_vel
-        c.buf[i].surface.soft_erp = p.soft_erp
-        c.buf[i].surface.soft_cfm = p.soft_cfm
-        j = dJointCreateContact(c.world, c.group, &c.buf[i])
-        dJointAttach(j, b1, b2)
-        memset(fb, 0, sizeof(dJointFeedback))
-        dJointSetFeedback(j, fb)
         rec = &c.recs[c.nrec]
         rec.a = g1.key
         rec.b = g2.key
@@ -175,16 +232,19 @@ def overlapping(World w, key) -> list:
     return sorted(found)
 
 
+cdef dJointFeedback* contact_feedback(void* ctx, int i) noexcept nogil:
+    """Contact i's feedback record (stepper.h attaches it to the contact's joint)."""
+    return feedback_slot(<Ctx*>ctx, i)
+
+
 cdef void record_impulses(Ctx* c, double dt) noexcept nogil:
-    """Each contact's impulse, |f|·dt from its joint's feedback (the larger side)."""
+    """Each contact's impulse, |f|·dt of its whole force (stepper.h adds what it
+    preloaded to what the solver found)."""
     cdef int i
-    cdef dJointFeedback* fb
-    cdef double f1, f2
+    if c.oom or c.stepper.oom:
+        return
     for i in range(c.nrec):
-        fb = &c.chunks[i // FB_CHUNK][i % FB_CHUNK]
-        f1 = norm3(fb.f1)
-        f2 = norm3(fb.f2)
-        c.recs[i].impulse = (f1 if f1 > f2 else f2) * dt
+        c.recs[i].impulse = norm3(&c.stepper.forces[3 * i]) * dt
 
 
 def contacts(World w) -> np.ndarray:

@@ -1,6 +1,11 @@
 # The World: one ODE world with its hash space, contact group and body slots; its
 # settings and the step. The records every concept shares are declared here.
 
+#: Contacts asked of a collider that does not spread its own (cylinders, capsules,
+#: meshes, convex hulls), before ``spread_contacts`` keeps ``max_contacts`` of them.
+cdef enum:
+    CANDIDATES = 16
+
 cdef struct GeomInfo:
     int64_t key          # body key, -1 for keyless static geometry
     int material
@@ -49,6 +54,9 @@ cdef struct Ctx:         # what the near callback needs, passed through ODE's vo
     dJointFeedback** chunks
     int nchunks
     int oom
+    double dt            # the step in progress
+    CsState stepper      # stepper.h: the warm start's contacts, the islands
+    CsSettings cfg
 
 
 @cython.no_gc_clear  # __dealloc__ walks the geoms and joints to free their C memory
@@ -76,10 +84,11 @@ cdef class World:
         dHashSpaceSetLevels(self.space, -1, 6)
         dSpaceSetCleanup(self.space, 0)
         memset(&self.ctx, 0, sizeof(Ctx))
+        cs_init(&self.ctx.stepper)
         self.ctx.world = self.world
         self.ctx.group = dJointGroupCreate(0)
         self.ctx.max_contacts = 4
-        self.ctx.buf = <dContact*>calloc(4, sizeof(dContact))
+        self.ctx.buf = <dContact*>calloc(CANDIDATES, sizeof(dContact))
         self.ctx.nmat = 1
         self.ctx.pairs = <Pair*>calloc(1, sizeof(Pair))
         self.ctx.pairs[0].collide = 1
@@ -123,6 +132,7 @@ cdef class World:
         for i in range(self.ctx.nchunks):
             free(self.ctx.chunks[i])
         free(self.ctx.chunks)
+        cs_free(&self.ctx.stepper)
         free(self.ctx.recs)
         free(self.ctx.buf)
         free(self.ctx.pairs)
@@ -163,16 +173,26 @@ cdef class World:
 
     # -- settings -------------------------------------------------------------------
     def configure(self, gravity, double erp, double cfm, int iterations,
-                  int max_contacts) -> None:
+                  int max_contacts, double warm_start, double softness,
+                  int exact_rows) -> None:
+        """World settings; ``warm_start``, ``softness`` and ``exact_rows`` are stepper.h's
+        (the resting contacts' preload, the contacts' CFM share, the exact islands)."""
         self.check()
         if max_contacts < 1:
             raise ValueError(f"max_contacts must be at least 1, got {max_contacts}")
+        if not 0.0 <= warm_start < 1.0:
+            raise ValueError(f"warm start must be in [0, 1), got {warm_start}")
+        if not softness >= 0.0:
+            raise ValueError(f"contact softness must be >= 0, got {softness}")
         dWorldSetGravity(self.world, gravity[0], gravity[1], gravity[2])
         dWorldSetERP(self.world, erp)
         dWorldSetCFM(self.world, cfm)
         dWorldSetQuickStepNumIterations(self.world, iterations)
+        self.ctx.cfg.beta = warm_start
+        self.ctx.cfg.softness = softness
+        self.ctx.cfg.exact_rows = max(exact_rows, 0)
         free(self.ctx.buf)
-        self.ctx.buf = <dContact*>calloc(max_contacts, sizeof(dContact))
+        self.ctx.buf = <dContact*>calloc(max(max_contacts, CANDIDATES), sizeof(dContact))
         self.ctx.max_contacts = max_contacts
 
     def set_pairs(self, cnp.ndarray[cnp.float64_t, ndim=3] table) -> None:
@@ -206,8 +226,9 @@ cdef class World:
 
     # -- the step -------------------------------------------------------------------
     def step(self, double dt) -> list:
-        """Aim the drives, collide and QuickStep with the GIL released, then record the
-        contact impulses and check every moving body; returns the keys of bodies reset."""
+        """Aim the drives, collide and step (stepper.h: exact islands, warm-started
+        contacts) with the GIL released, then record the contact impulses and check every
+        moving body; returns the keys of bodies reset."""
         cdef int nf
         self.check()
         if not dt > 0.0:
@@ -217,17 +238,22 @@ cdef class World:
         self.ctx.nrec = 0
         self.ctx.oom = 0
         self.last_dt = dt
+        self.ctx.dt = dt
         if self.joints:
             drive_joints(self, dt)
         dRandSetSeed(self.seed)
         with nogil:
             kinematic_lead(self, dt)
-            dSpaceCollide(self.space, &self.ctx, near_callback)
-            dWorldQuickStep(self.world, dt)
+            if cs_begin(&self.ctx.stepper, self.n) == 0:
+                dSpaceCollide(self.space, &self.ctx, near_callback)
+            if cs_solve(&self.ctx.stepper, &self.ctx.cfg, self.world, self.ctx.group,
+                        &self.slots[0].body, sizeof(Slot), self.n, dt, contact_feedback,
+                        &self.ctx) < 0:
+                self.ctx.oom = 1
             kinematic_arrive(self, dt)
             record_impulses(&self.ctx, dt)
             nf = check_bodies(self)
         self.seed = dRandGetSeed()
-        if self.ctx.oom:
+        if self.ctx.oom or self.ctx.stepper.oom:
             raise MemoryError("out of memory while recording contacts")
         return [(self.slots[self.faults[k]].key) for k in range(nf)]

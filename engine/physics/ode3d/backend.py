@@ -7,6 +7,7 @@ See ``shapes``, ``materials`` and ``joints`` for how each concept maps onto ODE.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 
 import numpy as np
@@ -63,7 +64,8 @@ class OdeBackend:
                              settings.sleep_angular)
         self._settings = settings
         self._world.configure(vec(settings.gravity, 3, "gravity"), settings.erp, settings.cfm,
-                              settings.iterations, settings.max_contacts)
+                              settings.iterations, settings.max_contacts, settings.warm_start,
+                              settings.contact_softness, settings.exact_rows)
         if not settings.auto_sleep:  # everyone awake, nothing counted
             _ode.wake_all(self._world)
             self._rule.forget(slice(None))
@@ -245,8 +247,18 @@ class OdeBackend:
         return self._rule.rows(pairs.ravel()).reshape(-1, 2)
 
     def sleep_states(self) -> dict[int, SleepState]:
-        """Every body asleep or in a quiet stretch (see :mod:`engine.physics.sleep`)."""
-        return self._sleep_rule().states(_ode.sleeping(self._world))
+        """Every body asleep, in a quiet stretch or resting on its contacts (see
+        :mod:`engine.physics.sleep` and stepper.h's resting preload)."""
+        states = self._sleep_rule().states(_ode.sleeping(self._world))
+        steps, slid, held = _ode.rest_standing(self._world)
+        keys = self.keys()
+        for i in np.flatnonzero(steps | slid | held.any(axis=1)).tolist():
+            key = int(keys[i])
+            state = states.get(key, SleepState(False))
+            states[key] = dataclasses.replace(state, rest_steps=int(steps[i]),
+                                              rest_slid=bool(slid[i]),
+                                              rest_force=held[i].copy())
+        return states
 
     def set_sleep_state(self, key: int, state: SleepState) -> None:
         """Put a body's sleep back as :meth:`sleep_states` reported it (a saved state)."""
@@ -254,6 +266,10 @@ class OdeBackend:
             raise KeyError(f"no body with key {key}")
         rule = self._sleep_rule()
         rule.restore(int(rule.rows(np.array([key]))[0]), state)
+        force = np.zeros(3) if state.rest_force is None else vec(state.rest_force, 3,
+                                                                 "rest force")
+        _ode.set_rest_standing(self._world, int(key), int(state.rest_steps),
+                               bool(state.rest_slid), force)
         _ode.restore_sleeping(self._world, int(key), bool(state.asleep))
 
     # -- joints ------------------------------------------------------------

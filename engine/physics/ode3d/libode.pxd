@@ -181,6 +181,11 @@ cdef extern from "ode/ode.h" nogil:
     void dGeomRaySetLength(dGeomID, dReal)
     void dGeomRaySetClosestHit(dGeomID, int)
     int dCollide(dGeomID, dGeomID, int flags, dContactGeom* contact, int skip)
+    int dGeomGetClass(dGeomID)
+    enum:
+        dSphereClass
+        dBoxClass
+        dPlaneClass
 
     dJointID dJointCreateContact(dWorldID, dJointGroupID, const dContact*)
     dJointID dJointCreateHinge(dWorldID, dJointGroupID)
@@ -226,3 +231,30 @@ cdef extern from "ode/ode.h" nogil:
     void dJointSetLMotorNumAxes(dJointID, int)
     void dJointSetLMotorAxis(dJointID, int anum, int rel, dReal, dReal, dReal)
     void dJointSetLMotorParam(dJointID, int, dReal)
+
+
+cdef extern from "stepper.h" nogil:
+    ctypedef struct CsSettings:
+        double beta
+        double softness
+        int exact_rows
+
+    ctypedef struct CsBody:
+        double held[3]
+        int resting
+        int slid
+
+    ctypedef struct CsState:
+        int oom
+        double* forces
+        CsBody* bodies
+        int capbodies
+
+    void cs_init(CsState*)
+    void cs_free(CsState*)
+    void cs_reset(CsState*, int)
+    void cs_move(CsState*, int, int)
+    int cs_begin(CsState*, int)
+    int cs_collect(CsState*, const CsSettings*, const dContact*, int, dBodyID, dBodyID, double)
+    int cs_solve(CsState*, const CsSettings*, dWorldID, dJointGroupID, const void*, size_t, int,
+                 double, dJointFeedback* (*)(void*, int) noexcept, void*)

@@ -13,7 +13,7 @@ A :class:`Rows` is planned for a fixed list of bodies, identified by their pymun
 """
 
 cimport numpy as cnp
-from libc.math cimport isfinite, sqrt
+from libc.math cimport fabs, isfinite, sqrt
 from libc.stdint cimport int64_t, uint64_t
 from libc.stdlib cimport free, malloc
 from libc.string cimport memcpy
@@ -305,6 +305,60 @@ cdef class Rows:
         finally:
             free(rows)
             free(side)
+
+    def support(self, const int64_t[:, ::1] ints, const double[:, ::1] floats,
+                const double[::1] mu, double dt, double down_x, double down_z,
+                double[:, ::1] force, double[::1] friction, double[::1] grip,
+                int64_t[::1] points, unsigned char[::1] tilted) -> None:
+        """What each row's contacts did this step, for the resting warm start (see the
+        backend's RestingSupport): their net force on it (x, z; N) into ``force``, the
+        friction they made and the most they could (``mu`` per row; a pair's is the
+        geometric mean) summed into ``friction`` and ``grip``, its contact points, and
+        whether one of its contact normals is off the vertical (``down``). Every output is
+        overwritten."""
+        cdef Py_ssize_t m = ints.shape[0], i, r, k
+        cdef Py_ssize_t ends[2]
+        cdef double sign[2]
+        cdef double jx, jz, nx, nz, along, slide, pair_mu
+        cdef const double *f
+        cdef int n_points
+        cdef bint off
+        with nogil:
+            for r in range(self.n):
+                force[r, 0] = 0.0
+                force[r, 1] = 0.0
+                friction[r] = 0.0
+                grip[r] = 0.0
+                points[r] = 0
+                tilted[r] = 0
+            for i in range(m):
+                n_points = <int>ints[i, 2]
+                if n_points <= 0:
+                    continue
+                ends[0] = self.row(<uint64_t>ints[i, 0])
+                ends[1] = self.row(<uint64_t>ints[i, 1])
+                f = &floats[i, 0]
+                # pymunk's total impulse is what its body a received (b the opposite)
+                jx, jz, nx, nz = f[0] / dt, f[1] / dt, f[2], f[3]
+                along = jx * nx + jz * nz
+                slide = sqrt(max(jx * jx + jz * jz - along * along, 0.0))
+                off = fabs(nx * down_x + nz * down_z) < 1.0 - 1e-9
+                pair_mu = 1.0
+                sign[0] = 1.0
+                sign[1] = -1.0
+                for k in range(2):
+                    r = ends[k]
+                    pair_mu = pair_mu * (sqrt(mu[r]) if r < self.n else 1.0)
+                for k in range(2):
+                    r = ends[k]
+                    if r >= self.n:
+                        continue
+                    force[r, 0] += sign[k] * jx
+                    force[r, 1] += sign[k] * jz
+                    friction[r] += slide
+                    grip[r] += pair_mu * fabs(along)
+                    points[r] += n_points
+                    tilted[r] |= off
 
     cdef void _sort_into(self, const Contact *rows, const Py_ssize_t *side, Py_ssize_t used,
                          Contact *out) noexcept nogil:

@@ -42,6 +42,7 @@ from engine.physics.backend import (
 from engine.physics.pymunk2d.batch import SpaceReader
 from engine.physics.pymunk2d.joints import JointRecord, build_joint
 from engine.physics.pymunk2d.planar import split_orientation
+from engine.physics.pymunk2d.resting import RestingSupport
 from engine.physics.pymunk2d.shapes import BuiltShape, build_shape
 from engine.physics.sleep import SleepRule, SleepState
 
@@ -110,6 +111,8 @@ class PymunkBackend:
         self._y = np.zeros(0)
         self._reader: SpaceReader | None = None
         self._sleep_on = True
+        self._resting = RestingSupport(0, WorldSettings().warm_start)
+        self._preload = np.zeros(0, np.intp)  # rows that get their weight's share next step
         self._rule = SleepRule()
         self._woken: set[int] = set()  # keys woken explicitly since the rule last looked
         self._joint_pairs: np.ndarray | None = None  # (M, 2) body keys of the joints
@@ -138,6 +141,9 @@ class PymunkBackend:
             self._warn("world", "gravity", "gravity's Y component dropped (not in the X–Z plane)")
         space.gravity = (float(gx), float(gz))
         space.iterations = max(1, int(settings.iterations))
+        if not 0.0 <= settings.warm_start < 1.0:
+            raise ValueError(f"warm start must be in [0, 1), got {settings.warm_start}")
+        self._resting.beta = float(settings.warm_start)
         # ODE's ERP is the share of penetration fixed per step at 60 Hz; pymunk's bias is
         # the share left after one second.
         erp = min(max(settings.erp, 0.0), 0.99)
@@ -178,11 +184,14 @@ class PymunkBackend:
         return ctype
 
     def step(self, dt: float) -> None:
-        """Step the space; then let the sleep rule put quiet islands to sleep."""
+        """Step the space (resting bodies given their weight's share first, see
+        :mod:`resting`); then let the sleep rule put quiet islands to sleep."""
         for rec in self._sliders.values():
             rec.drive_slider(dt)
         if self._aims:
             self._lead_aims(dt)
+        applied = self._preload_weights()
+        # after the preload: it is an outside force to a joint's momentum balance
         strained = self._strain_before(dt) if self._strained else None
         self._space.step(dt)
         if strained:
@@ -190,8 +199,73 @@ class PymunkBackend:
         if self._aims:
             self._arrive(dt)
         self._contacts = None
+        if self._resting.beta > 0.0:
+            self._rest(dt, applied)
         if self._sleep_on:
             self._apply_sleep(dt)
+        else:
+            self._woken.clear()  # the wakes were for the resting rule alone
+
+    def _preload_weights(self) -> np.ndarray:
+        """Give the rows the resting rule chose their weight's share (an upward force
+        for this step); the share each row got."""
+        self._space_reader()
+        applied = np.zeros(len(self._records))
+        if self._woken and len(self._preload):  # moved, pushed or woken by hand: not at rest
+            self._resting.forget(self._rule.rows(np.fromiter(self._woken, np.int64)))
+            self._preload = self._preload[self._resting.ramp[self._preload] > 0]
+        if not len(self._preload):
+            return applied
+        gx, gz = self._space.gravity
+        share = self._resting.beta * self._resting.ramp
+        for row in self._preload.tolist():
+            body = self._records[row].body
+            if body.is_sleeping:
+                continue
+            m = share[row] * body.mass
+            body.force = (body.force[0] - m * gx, body.force[1] - m * gz)
+            applied[row] = share[row]
+        return applied
+
+    def _rest(self, dt: float, applied: np.ndarray) -> None:
+        """The resting rule after a step: what the contacts did, each row's standing, and
+        the rows to preload before the next step."""
+        reader = self._space_reader()
+        resting = self._resting
+        if len(resting.steps) != len(self._records):
+            resting.follow(np.full(len(self._records), -1))
+        gx, gz = self._space.gravity
+        g = math.hypot(gx, gz)
+        if g == 0.0:
+            self._preload = np.zeros(0, np.intp)
+            return
+        down = np.array([gx / g, gz / g])
+        resting.applied = applied
+        mu, weight, unrest = self._rest_bodies(g)
+        reader.support(resting, mu, dt, down)
+        raw, awake = reader.read()
+        speed = np.hypot(raw[reader.gather, 3], raw[reader.gather, 4])
+        resting.update(dt, down, weight, mu, awake)
+        self._preload = np.flatnonzero(resting.eligible(speed, unrest))
+
+    def _rest_bodies(self, g: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per row: friction coefficient, weight (0: not dynamic or gravity off) and
+        whether the rule leaves it alone (jointed, or touching a kinematic body), cached
+        until bodies, joints or contacts' partners change."""
+        recs = self._records
+        mu = np.fromiter((r.physical.material.friction for r in recs), float, len(recs))
+        weight = np.fromiter(
+            (r.body.mass * g if r.body.body_type == pymunk.Body.DYNAMIC and r.physical.gravity
+             else 0.0 for r in recs), float, len(recs))
+        unrest = np.fromiter((bool(r.joints) for r in recs), bool, len(recs))
+        kinematic = [i for i, r in enumerate(recs) if r.body.body_type == pymunk.Body.KINEMATIC]
+        if kinematic:
+            c = self.contacts()
+            rows_a, rows_b = self._rule.rows(c["a"]), self._rule.rows(c["b"])
+            hit = np.isin(rows_a, kinematic) | np.isin(rows_b, kinematic)
+            unrest[rows_a[hit & (rows_a >= 0)]] = True
+            unrest[rows_b[hit & (rows_b >= 0)]] = True
+        return mu, weight, unrest
 
     def _strain_before(self, dt: float) -> list[tuple[int, pymunk.Body, float, pymunk.Vec2d]]:
         """For each measured joint, its moving body and the velocity the step would give
@@ -667,6 +741,12 @@ class PymunkBackend:
         """
         recs = sorted(self._bodies.values(), key=lambda r: r.key)
         n = len(recs)
+        old_rows = np.fromiter((self._row.get(r.key, -1) for r in recs), np.int64, n)
+        if len(self._resting.steps) == len(self._records):
+            self._resting.follow(old_rows)
+        else:
+            self._resting.follow(np.full(n, -1))
+        self._preload = np.zeros(0, np.intp)
         self._records = recs
         self._keys = np.fromiter((r.key for r in recs), np.int64, n)
         self._keys.setflags(write=False)  # every state read hands out this same array
@@ -755,8 +835,14 @@ class PymunkBackend:
                                      -float(state.angular_velocity[i, 1]))
 
     def contacts(self) -> np.ndarray:
+        """The last step's contacts; a preloaded body's impulses are the whole ones (the
+        solver found 1 - warm start of them)."""
         if self._contacts is None:
-            self._contacts = self._space_reader().contacts()
+            c = self._space_reader().contacts()
+            applied = self._resting.applied
+            if applied.any() and len(c):
+                c["impulse"] /= 1.0 - applied[np.maximum(self._rule.rows(c["a"]), 0)]
+            self._contacts = c
         return self._contacts
 
     # -- queries -----------------------------------------------------------

@@ -21,6 +21,7 @@ import pymunk.batch
 
 from engine.physics.backend import CONTACT_DTYPE
 from engine.physics.pymunk2d import _rows
+from engine.physics.pymunk2d.resting import RestingSupport
 
 _BODY = (pymunk.batch.BodyFields.BODY_ID | pymunk.batch.BodyFields.POSITION
          | pymunk.batch.BodyFields.ANGLE | pymunk.batch.BodyFields.VELOCITY
@@ -92,13 +93,24 @@ class SpaceReader:
         """A read's centre-of-mass velocities as the sleep rule keeps them, (6, n)."""
         self._rows.motion(raw, self.gather, velocity)
 
-    def contacts(self) -> np.ndarray:
-        """One CONTACT_DTYPE row per touching shape pair, sorted by keys then place (see
-        :meth:`_rows.Rows.contacts`)."""
+    def _read_arbiters(self) -> tuple[np.ndarray, np.ndarray]:
         buffer = self._arbiters
         buffer.clear()
         pymunk.batch.get_space_arbiters(self._space, _ARBITER, buffer)
         ints = np.frombuffer(buffer.int_buf(), np.int64).reshape(-1, _rows.ARBITER_INTS)
         floats = np.frombuffer(buffer.float_buf(), np.float64).reshape(-1,
                                                                         _rows.ARBITER_FLOATS)
-        return self._rows.contacts(ints, floats)
+        return ints, floats
+
+    def contacts(self) -> np.ndarray:
+        """One CONTACT_DTYPE row per touching shape pair, sorted by keys then place (see
+        :meth:`_rows.Rows.contacts`)."""
+        return self._rows.contacts(*self._read_arbiters())
+
+    def support(self, resting: RestingSupport, mu: np.ndarray, dt: float,
+                down: np.ndarray) -> None:
+        """What every row's contacts did this step, into ``resting`` (see
+        :meth:`_rows.Rows.support`)."""
+        self._rows.support(*self._read_arbiters(), mu, dt, float(down[0]), float(down[1]),
+                           resting.force, resting.friction, resting.grip, resting.points,
+                           resting.tilted)

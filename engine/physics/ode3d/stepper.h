@@ -1,0 +1,477 @@
+/* How Colosseum steps a libode world: plain C, shared by the binding (_ode.pyx) and the
+ * plain-C reference of `colosseum bench physics` (tools/bench_ode.c), so both solve the
+ * same problem with the same settings.
+ *
+ * A step: the caller collides, handing every pair's contacts to cs_collect (which does
+ * not make joints yet); cs_solve then finds the islands, makes the contact joints with
+ * their final surfaces, and steps; afterwards cs_forces holds every contact's force.
+ * Three things on top of ODE's own step, each chosen by measurement (tools/bench_accuracy.py,
+ * docs/PHYSICS.md):
+ *
+ * 1. Islands solved exactly. Islands held together by joints alone (a pendulum, a chain,
+ *    a top on its pivot, a motorised arm) are stepped with dWorldStep, ODE's exact LCP
+ *    solver, when they have at most `exact_rows` constraint rows: QuickStep's 20
+ *    iterations leave a 1 m pendulum at 30 degrees 1.4 % slow at 100 Hz, dWorldStep 0.03 %.
+ *    Islands with contacts always go to QuickStep: ODE's Dantzig solver fails on the
+ *    degenerate, friction-bounded problems a pile of boxes makes (a 4-box stack falls
+ *    through the floor). When both kinds are present the step runs twice, each pass with
+ *    the other kind's bodies disabled (islands share no joint, so a pass never touches
+ *    the other's bodies, and every body is integrated once).
+ *
+ * 2. Resting islands carry their weight over. QuickStep starts every step from zero
+ *    force, and 20 iterations in random order do not carry the weight of a stack down to
+ *    the floor: ten stacked crates rock, sink 2 cm and drift 2 to 10 cm in 20 s at
+ *    100 Hz, and topple at 50 Hz. In an island at rest on its contacts, each body gets
+ *    `beta` of its weight as an upward force before the solve. For a body at rest the
+ *    contacts' whole force (normal and friction) is its weight, so the solver finds
+ *    exactly (1 - beta) of every contact force, friction bounds included, and the motion
+ *    is the same whenever it converges; it just has 10 times less to find. An island is
+ *    at rest when it has no joints, touches no kinematic body, no contact of it slides
+ *    faster than REST_SLIP, and every body has been held up by its contacts for the last
+ *    two steps (at least REST_SUPPORT of its weight) using little of its friction
+ *    (REST_GRIP of what the solver could give, (1 - beta) of that to enter): a body
+ *    pushed, tilted onto a slope, starting to slide or being lifted leaves it the next
+ *    step, after one step at most with (1 - beta) of its friction. Contact forces
+ *    reported are the whole forces (what the solver found over (1 - beta)).
+ *
+ * 3. Contact softness from the step and the masses. ODE's constraint force mixing is an
+ *    absolute number: 1e-5 is rigid for a 1 kg ball and a sponge for a 125 kg crate, and
+ *    the speed it takes off a bounce (CFM x force) grows as the step shrinks (Bounce 0.8
+ *    returns 0.611 of the drop at 1 kHz instead of 0.64). A contact's CFM is made
+ *    `softness` x dt x (1/m1 + 1/m2): the same share of the contact's own stiffness for
+ *    every mass and step; a contact that bounces this step is rigid (CFM 0), so
+ *    restitution does not depend on the step. An author's Softness overrides both, and
+ *    such a contact is not preloaded (the preload would stiffen the spring it tuned).
+ */
+#ifndef COLOSSEUM_STEPPER_H
+#define COLOSSEUM_STEPPER_H
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <ode/ode.h>
+
+/* Contacts sliding faster than this (m/s) are not at rest. */
+#define REST_SLIP 0.05
+/* A body is held up when its contacts push it up with at least this share of its
+ * weight (of the solver's share of it, when preloaded). */
+#define REST_SUPPORT 0.5
+/* Sideways force a resting body's contacts may hold it with (what pushes it or pulls it
+ * along), as a share of what their friction can give: to stay at rest (preloaded); times
+ * (1 - beta) to come to rest (the preload leaves it that). */
+#define REST_GRIP 0.5
+/* Contact normals at least this close to the vertical (cosine) are level. */
+#define REST_LEVEL (1.0 - 1e-9)
+/* A body whose contacts' friction reached this share of what they can give is sliding
+ * (or about to): not at rest. */
+#define REST_SLIDING 0.95
+/* Seconds over which a body's contact force is averaged before the sideways part is
+ * judged: a stack's solver noise pushes its crates back and forth, a lean does not. */
+#define REST_SMOOTHING 0.2
+
+typedef struct {
+    double beta;      /* share of a resting body's weight preloaded; 0: off */
+    double softness;  /* contact CFM as a share of the step times the inverse masses */
+    int exact_rows;   /* joint-only islands up to this many rows: dWorldStep; 0: never */
+} CsSettings;
+
+typedef struct {   /* one contact this step, kept until its joint is made */
+    dContact contact;
+    dBodyID b1, b2;
+    int authored;  /* its softness is the author's */
+} CsContact;
+
+typedef struct {   /* a body's standing with the resting preload */
+    double solved[3]; /* the net force the solver found its contacts to make this step */
+    double mu;        /* the smallest friction coefficient of its contacts this step */
+    double friction;  /* the friction its contacts made this step (N, summed) */
+    double grip;      /* the most they could have made (mu times their normal force) */
+    double held[3];   /* its contacts' net force, averaged over REST_SMOOTHING seconds */
+    int preloaded;    /* it got its weight's share this step */
+    int slid;         /* it slid while preloaded, and has been pushed sideways since */
+    int resting;      /* steps in a row it has been at rest (capped at 2) */
+    int slipping;     /* a contact of it slides this step */
+    int contacts;     /* contacts it has this step */
+    int tilted;       /* one of them has a normal off the vertical */
+} CsBody;
+
+typedef struct {
+    CsContact *contacts;
+    int ncontacts, capcontacts;
+    double *forces;   /* after cs_solve: each contact's whole force on body 1 */
+    CsBody *bodies;
+    int *parent, *kind, *rows;  /* per body: union-find parent; island kind and rows */
+    int capbodies;
+    int oom;
+} CsState;
+
+enum { CS_FREE = 0, CS_JOINTS = 1, CS_CONTACTS = 2, CS_UNREST = 4 };
+/* An island of these is at rest: contacts, nothing else. */
+#define CS_RESTING CS_CONTACTS
+
+static inline void cs_init(CsState *s) { memset(s, 0, sizeof(CsState)); }
+
+static inline void cs_free(CsState *s) {
+    free(s->contacts);
+    free(s->forces);
+    free(s->bodies);
+    free(s->parent);
+    free(s->kind);
+    free(s->rows);
+    cs_init(s);
+}
+
+/* Body `i` is new: it starts with no standing. */
+static inline void cs_reset(CsState *s, int i) {
+    if (i >= 0 && i < s->capbodies) memset(&s->bodies[i], 0, sizeof(CsBody));
+}
+
+/* The caller moved body `from` to index `to` (one was removed): its standing follows. */
+static inline void cs_move(CsState *s, int from, int to) {
+    if (from >= 0 && from < s->capbodies && to >= 0 && to < s->capbodies)
+        s->bodies[to] = s->bodies[from];
+}
+
+static inline int cs_body_index(dBodyID b) { return b ? (int)(intptr_t)dBodyGetData(b) : -1; }
+
+/* The i-th of the body handles `stride` bytes apart from `bodies`. */
+static inline dBodyID cs_body_at(const void *bodies, size_t stride, int i) {
+    return *(const dBodyID *)((const char *)bodies + (size_t)i * stride);
+}
+
+static inline double cs_inverse_mass(dBodyID b) {
+    dMass m;
+    if (b == NULL || dBodyIsKinematic(b)) return 0.0;
+    dBodyGetMass(b, &m);
+    return m.mass > 0.0 ? 1.0 / m.mass : 0.0;
+}
+
+/* Velocity of body 1 relative to body 2 at the contact: its normal part (negative:
+ * closing) is returned, its tangential part's square stored in `slip2`. */
+static inline double cs_relative_speed(dBodyID b1, dBodyID b2, const dContactGeom *g,
+                                       double *slip2) {
+    dVector3 v1, v2 = {0, 0, 0, 0};
+    double v[3], along;
+    int k;
+    dBodyGetPointVel(b1, g->pos[0], g->pos[1], g->pos[2], v1);
+    if (b2) dBodyGetPointVel(b2, g->pos[0], g->pos[1], g->pos[2], v2);
+    for (k = 0; k < 3; k++) v[k] = v1[k] - v2[k];
+    along = v[0] * g->normal[0] + v[1] * g->normal[1] + v[2] * g->normal[2];
+    *slip2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2] - along * along;
+    return along;
+}
+
+/* Keep the `n` contacts bodies b1 (moving) and b2 (NULL: the world) made this step,
+ * their surfaces set by the caller from the pair's materials; their softness is set
+ * here. Their joints are made by cs_solve, in this order. Returns 0, or -1 out of memory. */
+static inline int cs_collect(CsState *s, const CsSettings *cfg, const dContact *contacts,
+                             int n, dBodyID b1, dBodyID b2, double dt) {
+    double soft = cfg->softness * dt * (cs_inverse_mass(b1) + cs_inverse_mass(b2));
+    int i;
+    if (s->ncontacts + n > s->capcontacts) {
+        int cap = s->capcontacts ? 2 * s->capcontacts : 1024;
+        CsContact *grown;
+        double *forces;
+        while (cap < s->ncontacts + n) cap *= 2;
+        grown = (CsContact *)realloc(s->contacts, (size_t)cap * sizeof(CsContact));
+        if (grown) s->contacts = grown;
+        forces = grown ? (double *)realloc(s->forces, (size_t)cap * 3 * sizeof(double)) : NULL;
+        if (!forces) {
+            s->oom = 1;
+            return -1;
+        }
+        s->forces = forces;
+        s->capcontacts = cap;
+    }
+    for (i = 0; i < n; i++) {
+        CsContact *k = &s->contacts[s->ncontacts++];
+        dSurfaceParameters *f = &k->contact.surface;
+        double slip2, closing;
+        k->contact = contacts[i];
+        k->b1 = b1;
+        k->b2 = b2;
+        k->authored = (f->mode & dContactSoftCFM) != 0;
+        closing = -cs_relative_speed(b1, b2, &k->contact.geom, &slip2);
+        if (slip2 > REST_SLIP * REST_SLIP) {
+            int i1 = cs_body_index(b1), i2 = cs_body_index(b2);
+            if (i1 >= 0 && i1 < s->capbodies) s->bodies[i1].slipping = 1;
+            if (i2 >= 0 && i2 < s->capbodies) s->bodies[i2].slipping = 1;
+        }
+        if (k->authored) continue;
+        f->mode |= dContactSoftCFM;
+        f->soft_cfm = (f->mode & dContactBounce) && f->bounce > 0.0 && closing > f->bounce_vel
+                          ? 0.0 : soft;
+    }
+    return 0;
+}
+
+/* Start a step for `n` bodies: contacts forgotten, room for every body's standing.
+ * Returns 0, or -1 out of memory. */
+static inline int cs_begin(CsState *s, int n) {
+    int i;
+    s->ncontacts = 0;
+    if (n > s->capbodies) {
+        int cap = n > 2 * s->capbodies ? n : 2 * s->capbodies;
+        CsBody *b = (CsBody *)realloc(s->bodies, (size_t)cap * sizeof(CsBody));
+        int *p = b ? (int *)realloc(s->parent, (size_t)cap * sizeof(int)) : NULL;
+        int *kd = p ? (int *)realloc(s->kind, (size_t)cap * sizeof(int)) : NULL;
+        int *rw = kd ? (int *)realloc(s->rows, (size_t)cap * sizeof(int)) : NULL;
+        if (b) {
+            memset(b + s->capbodies, 0, (size_t)(cap - s->capbodies) * sizeof(CsBody));
+            s->bodies = b;
+        }
+        if (p) s->parent = p;
+        if (kd) s->kind = kd;
+        if (!rw) {
+            s->oom = 1;
+            return -1;
+        }
+        s->rows = rw;
+        s->capbodies = cap;
+    }
+    for (i = 0; i < n; i++) s->bodies[i].slipping = 0;
+    return 0;
+}
+
+static inline int cs_root(int *parent, int i) {
+    while (parent[i] != i) {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    return i;
+}
+
+static inline void cs_union(CsState *s, int a, int b) {
+    a = cs_root(s->parent, a);
+    b = cs_root(s->parent, b);
+    if (a == b) return;
+    s->parent[b] = a;
+    s->kind[a] |= s->kind[b];
+    s->rows[a] += s->rows[b];
+}
+
+/* Rows a joint of this type may add (ODE's getInfo1 at most, with a motor or limit). */
+static inline int cs_joint_rows(dJointID j) {
+    switch (dJointGetType(j)) {
+    case dJointTypeBall:
+    case dJointTypeAMotor:
+    case dJointTypeLMotor: return 3;
+    default: return 6;
+    }
+}
+
+/* Whether an island is solved exactly: held by joints alone, and small enough. */
+static inline int cs_exact(const CsState *s, int exact_rows, int root) {
+    return (s->kind[root] & (CS_JOINTS | CS_CONTACTS)) == CS_JOINTS &&
+           s->rows[root] <= exact_rows;
+}
+
+/* Disable (off) or re-enable (on) the enabled bodies of the exact islands or of the
+ * others; `mark` remembers which were enabled, so re-enabling wakes nobody asleep. */
+static inline void cs_switch(CsState *s, int exact_rows, const void *bodies, size_t stride,
+                             int n, int exact, int off, unsigned char *mark) {
+    int i;
+    for (i = 0; i < n; i++) {
+        dBodyID b = cs_body_at(bodies, stride, i);
+        if (b == NULL || cs_exact(s, exact_rows, cs_root(s->parent, i)) != exact) continue;
+        if (off) {
+            mark[i] = (unsigned char)dBodyIsEnabled(b);
+            if (mark[i]) dBodyDisable(b);
+        } else if (mark[i]) {
+            dBodyEnable(b);
+        }
+    }
+}
+
+/* Step the world over the collected contacts: islands found, resting islands
+ * preloaded, contact joints made in `group` (contact i's feedback is `feedback(ctx, i)`),
+ * then joint-only islands small enough stepped by dWorldStep and the rest by QuickStep,
+ * and every contact's whole force put in s->forces. `bodies` points at the first of `n`
+ * body handles `stride` bytes apart (NULL: a static body); each body's data is its index
+ * among them. Returns 0, or -1 out of memory (the step was still taken). */
+static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
+                           dJointGroupID group, const void *bodies, size_t stride, int n,
+                           double dt, dJointFeedback *(*feedback)(void *, int), void *ctx) {
+    dVector3 gravity;
+    double g, down[3];
+    int i, k, exact = 0, quick = 0, status = 0;
+    dWorldGetGravity(world, gravity);
+    g = sqrt(gravity[0] * gravity[0] + gravity[1] * gravity[1] + gravity[2] * gravity[2]);
+    for (k = 0; k < 3; k++) down[k] = g > 0.0 ? gravity[k] / g : 0.0;
+    for (i = 0; i < n; i++) {
+        dBodyID b = cs_body_at(bodies, stride, i);
+        s->parent[i] = i;
+        s->rows[i] = 0;
+        /* a kinematic body may push what it touches: its island is not at rest */
+        s->kind[i] = b != NULL && dBodyIsKinematic(b) ? CS_UNREST : CS_FREE;
+    }
+    for (i = 0; i < n; i++) s->bodies[i].contacts = s->bodies[i].tilted = 0;
+    for (i = 0; i < s->ncontacts; i++) {
+        const CsContact *c = &s->contacts[i];
+        const double *nrm = c->contact.geom.normal;
+        int a = cs_body_index(c->b1), b = cs_body_index(c->b2);
+        int tilted = fabs(nrm[0] * down[0] + nrm[1] * down[1] + nrm[2] * down[2]) < REST_LEVEL;
+        s->bodies[a].contacts++;
+        s->bodies[a].tilted |= tilted;
+        if (b >= 0) {
+            s->bodies[b].contacts++;
+            s->bodies[b].tilted |= tilted;
+        }
+        if (c->authored) s->kind[cs_root(s->parent, a)] |= CS_UNREST;
+        if (b >= 0) cs_union(s, a, b);
+        s->kind[cs_root(s->parent, a)] |= CS_CONTACTS;
+    }
+    for (i = 0; i < n; i++) {  /* the joints (contact joints are not made yet) */
+        dBodyID b = cs_body_at(bodies, stride, i);
+        int nj;
+        if (b == NULL) continue;
+        nj = dBodyGetNumJoints(b);
+        for (k = 0; k < nj; k++) {
+            dJointID j = dBodyGetJoint(b, k);
+            dBodyID o0 = dJointGetBody(j, 0), o1 = dJointGetBody(j, 1);
+            int r;
+            if (!dJointIsEnabled(j) || (o0 != b && !(o0 == NULL && o1 == b)))
+                continue;  /* each joint once, from its first body */
+            if (o0 != NULL && o1 != NULL) cs_union(s, i, cs_body_index(o1));
+            r = cs_root(s->parent, i);
+            s->kind[r] |= CS_JOINTS;
+            s->rows[r] += cs_joint_rows(j);
+        }
+    }
+    /* resting islands: each body's weight, (beta of it) preloaded */
+    for (i = 0; i < n; i++) {
+        dBodyID b = cs_body_at(bodies, stride, i);
+        CsBody *st = &s->bodies[i];
+        int r;
+        memset(st->solved, 0, sizeof st->solved);
+        st->mu = dInfinity;
+        st->friction = st->grip = 0.0;
+        st->preloaded = 0;
+        if (b == NULL) continue;
+        r = cs_root(s->parent, i);
+        if (dBodyIsEnabled(b)) {
+            if (cs_exact(s, cfg->exact_rows, r))
+                exact = 1;
+            else
+                quick = 1;
+        }
+        /* the upward push only where it leaves nothing free to move: a body resting on a
+         * face (three contacts or more: friction holds it whole), or touching only level
+         * ground (it may roll, but not downhill) */
+        if (cfg->beta > 0.0 && s->kind[r] == CS_RESTING && dBodyGetGravityMode(b) &&
+            dBodyIsEnabled(b) && st->resting >= 2 && !st->slipping &&
+            (st->contacts >= 3 || !st->tilted)) {
+            dMass m;
+            dBodyGetMass(b, &m);
+            dBodyAddForce(b, -cfg->beta * m.mass * gravity[0], -cfg->beta * m.mass * gravity[1],
+                          -cfg->beta * m.mass * gravity[2]);
+            st->preloaded = 1;
+        }
+    }
+    for (i = 0; i < s->ncontacts; i++) {  /* the contact joints */
+        CsContact *c = &s->contacts[i];
+        dJointFeedback *fb = feedback(ctx, i);
+        dJointID j;
+        j = dJointCreateContact(world, group, &c->contact);
+        dJointAttach(j, c->b1, c->b2);
+        if (fb == NULL) {
+            status = -1;
+            continue;
+        }
+        memset(fb, 0, sizeof(dJointFeedback));
+        dJointSetFeedback(j, fb);
+    }
+    if (!exact) {
+        dWorldQuickStep(world, dt);
+    } else if (!quick) {
+        dWorldStep(world, dt);
+    } else {
+        unsigned char *mark = (unsigned char *)calloc((size_t)n, 1);
+        if (mark == NULL) {
+            dWorldQuickStep(world, dt);
+            status = -1;
+        } else {
+            int rows = cfg->exact_rows;
+            cs_switch(s, rows, bodies, stride, n, 0, 1, mark);  /* the others off: exact pass */
+            dWorldStep(world, dt);
+            cs_switch(s, rows, bodies, stride, n, 0, 0, mark);
+            cs_switch(s, rows, bodies, stride, n, 1, 1, mark);  /* exact ones off: QuickStep */
+            dWorldQuickStep(world, dt);
+            cs_switch(s, rows, bodies, stride, n, 1, 0, mark);
+            free(mark);
+        }
+    }
+    /* forces: what the solver found, over (1 - beta) in a resting island */
+    for (i = 0; i < s->ncontacts; i++) {
+        const CsContact *c = &s->contacts[i];
+        const dJointFeedback *fb = feedback(ctx, i);
+        const double *nrm = c->contact.geom.normal;
+        double *f = &s->forces[3 * i], mu = c->contact.surface.mu, along, slide2, friction, grip;
+        int a = cs_body_index(c->b1), b = cs_body_index(c->b2);
+        double scale = cfg->beta > 0.0 && s->bodies[a].preloaded ? 1.0 / (1.0 - cfg->beta) : 1.0;
+        if (fb == NULL) {
+            memset(f, 0, 3 * sizeof(double));
+            continue;
+        }
+        for (k = 0; k < 3; k++) {
+            f[k] = scale * fb->f1[k];
+            s->bodies[a].solved[k] += fb->f1[k];
+            if (b >= 0) s->bodies[b].solved[k] -= fb->f1[k];
+        }
+        along = fb->f1[0] * nrm[0] + fb->f1[1] * nrm[1] + fb->f1[2] * nrm[2];
+        slide2 = fb->f1[0] * fb->f1[0] + fb->f1[1] * fb->f1[1] + fb->f1[2] * fb->f1[2] -
+                 along * along;
+        friction = slide2 > 0.0 ? sqrt(slide2) : 0.0;
+        grip = mu < dInfinity && along > 0.0 ? mu * along : (mu < dInfinity ? 0.0 : dInfinity);
+        if (mu < s->bodies[a].mu) s->bodies[a].mu = mu;
+        s->bodies[a].friction += friction;
+        s->bodies[a].grip += grip;
+        if (b >= 0) {
+            if (mu < s->bodies[b].mu) s->bodies[b].mu = mu;
+            s->bodies[b].friction += friction;
+            s->bodies[b].grip += grip;
+        }
+    }
+    /* each body's standing for the next step */
+    for (i = 0; i < n; i++) {
+        dBodyID b = cs_body_at(bodies, stride, i);
+        CsBody *st = &s->bodies[i];
+        double up, side[3], weight, share, grip, keep = exp(-dt / REST_SMOOTHING);
+        dMass m;
+        if (b == NULL || dBodyIsKinematic(b)) continue;
+        if (!dBodyIsEnabled(b)) {  /* asleep: it starts afresh when woken */
+            st->resting = 0;
+            continue;
+        }
+        dBodyGetMass(b, &m);
+        weight = m.mass * g;
+        share = st->preloaded ? 1.0 - cfg->beta : 1.0;  /* of its weight the solver holds */
+        up = -(st->solved[0] * down[0] + st->solved[1] * down[1] + st->solved[2] * down[2]);
+        for (k = 0; k < 3; k++)  /* the whole force, as the solver found (1 - beta) of it */
+            st->held[k] = keep * st->held[k] + (1.0 - keep) * st->solved[k] / share;
+        {
+            double held_up = -(st->held[0] * down[0] + st->held[1] * down[1] +
+                               st->held[2] * down[2]);
+            for (k = 0; k < 3; k++) side[k] = st->held[k] + held_up * down[k];
+            /* one that slid while preloaded comes back only when the preload cannot make
+             * it slide again: held sideways by less than (1 - beta) of the grip */
+            grip = REST_GRIP * (st->slid ? 1.0 - cfg->beta : 1.0) * st->mu * held_up;
+        }
+        if (st->preloaded && st->friction >= REST_SLIDING * st->grip) st->slid = 1;
+        if (side[0] * side[0] + side[1] * side[1] + side[2] * side[2] > grip * grip) {
+            st->resting = 0;
+        } else {
+            st->slid = 0;
+            if (weight > 0.0 && up >= REST_SUPPORT * share * weight &&
+                st->friction < REST_SLIDING * st->grip)
+                st->resting = st->resting < 2 ? st->resting + 1 : 2;
+            else
+                st->resting = 0;
+        }
+    }
+    return status;
+}
+
+#endif
