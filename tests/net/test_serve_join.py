@@ -79,7 +79,10 @@ def test_two_nodes_follow_the_server_and_lift_the_crate_together(tmp_path: Path)
         # a velocity is two positions' difference over a frame: their rounding over dt
         assert faller["Velocity"][2] == pytest.approx(vz, abs=2 * POSITION_STEP / DT), (user, t)
         node = stats(tmp_path / f"{user}.json")["net"]
-        assert node["dropped"] == 0 and node["malformed"] == 0 and node["gaps"] == 0, node
+        assert node["malformed"] == 0 and node["gaps"] == 0, node
+        # a busy server's sender replaces a frame it has not sent yet by the next (their
+        # events joined): a few frame numbers may be skipped, never most
+        assert node["dropped"] <= node["frames_received"] // 10, node
         assert node["latency_ms_p50"] < 50.0, node
     bob = (tmp_path / "bob.scene").read_text()
     # alice's tracker moved alice's paddle on the server, and bob's node shows it there
