@@ -1,9 +1,13 @@
 """Builds the compiled parts: the private ODE binding against the system libode
 (engine/physics/ode3d/_ode.pyx, which includes the .pxi files beside it, one per concept,
 cimports their libode.pxd declarations and includes stepper.h, the step policy it shares
-with tools/bench_ode.c), the sleep rule's per-body pass (engine/physics/_sleep.pyx), the
-pass that turns pymunk.batch buffers into engine rows (engine/physics/pymunk2d/_rows.pyx)
-and the scene scanner (engine/scene/_scan.pyx)."""
+with tools/bench_ode.c, and through it engine/physics/sleep.h), the sleep rule's per-body
+pass (engine/physics/_sleep.pyx, over sleep.h), the pass that turns pymunk.batch buffers
+into engine rows (engine/physics/pymunk2d/_rows.pyx), the scene scanner
+(engine/scene/_scan.pyx) and the network pose codec's per-frame passes
+(engine/net/_codec.pyx: built without fused multiply-add, so every machine's arithmetic
+is the same to the bit, as a server's copy of the poses and its nodes' must be), and the
+skeletons' hierarchy and palettes (engine/animation/_compose.pyx)."""
 
 import shlex
 import subprocess
@@ -35,22 +39,27 @@ def extensions() -> list[Extension]:
     ext = Extension(
         "engine.physics.ode3d._ode",
         [str(source)],
-        include_dirs=[numpy.get_include()],
+        include_dirs=[numpy.get_include(), "engine/physics"],  # sleep.h (csleep.pxd)
         extra_compile_args=[*cflags, "-O3", "-DdDOUBLE"],
         libraries=["ode"],
         library_dirs=[a[2:] for a in pkg_config("--libs") if a.startswith("-L")],
         define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION")],
-        depends=["engine/physics/ode3d/stepper.h"],
+        depends=["engine/physics/ode3d/stepper.h", "engine/physics/sleep.h"],
     )
     sleep = Extension("engine.physics._sleep", ["engine/physics/_sleep.pyx"],
-                      extra_compile_args=["-O3"])
+                      extra_compile_args=["-O3"], depends=["engine/physics/sleep.h"])
     scan = Extension("engine.scene._scan", ["engine/scene/_scan.pyx"],
                      extra_compile_args=["-O3"])
     rows = Extension("engine.physics.pymunk2d._rows", ["engine/physics/pymunk2d/_rows.pyx"],
-                     include_dirs=[numpy.get_include()], extra_compile_args=["-O3"],
+                     include_dirs=[numpy.get_include()],
+                     extra_compile_args=["-O3", "-ffp-contract=off"],  # no fused a*b+c
                      define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION"),
                                     ("_GNU_SOURCE", None)])  # sincos
-    return cythonize([ext, sleep, rows, scan], language_level=3,
+    codec = Extension("engine.net._codec", ["engine/net/_codec.pyx"],
+                      extra_compile_args=["-O3", "-ffp-contract=off"])
+    compose = Extension("engine.animation._compose", ["engine/animation/_compose.pyx"],
+                        extra_compile_args=["-O3"])
+    return cythonize([ext, sleep, rows, scan, codec, compose], language_level=3,
                      compiler_directives={"boundscheck": False, "wraparound": False})
 
 
