@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from enum import StrEnum
 
@@ -30,6 +31,26 @@ SCENE_JOINT_TYPES: dict[str, JointKind] = {
 
 #: Kinds whose limits and motor act along a line (metres, m/s, N) rather than an angle.
 LINEAR_KINDS = frozenset({JointKind.SLIDER, JointKind.LINEAR_MOTOR})
+#: Kinds with no axis of their own (a zero ``axis`` is no mistake for them).
+AXISLESS_KINDS = frozenset({JointKind.BALL, JointKind.FIXED, JointKind.SIX_DOF})
+
+
+@dataclass(frozen=True, slots=True)
+class Spring:
+    """A spring-damper pulling a hinge's or slider's free axis toward ``target`` (rad or
+    m, counted as the joint's angle or position: from where the joint was made):
+    ``-stiffness (x - target) - damping v`` (N·m/rad and N·m·s/rad, or N/m and N·s/m),
+    at most ``max_force`` (N·m or N). Stiffness 0 is a damper alone (a drive toward a
+    velocity of 0)."""
+
+    stiffness: float = 0.0
+    damping: float = 0.0
+    target: float = 0.0
+    max_force: float = math.inf
+
+
+#: Kinds a Spring can act on (one free axis).
+SPRING_KINDS = frozenset({JointKind.HINGE, JointKind.MOTORIZED_HINGE, JointKind.SLIDER})
 
 
 @dataclass(slots=True)
@@ -47,6 +68,7 @@ class Joint:
     ``body_b`` (None for the world) when the joint was first made, with ``anchor``
     and ``axis`` as they were then; a backend makes the joint as if the bodies
     were there, which re-creates a saved joint exactly. None: where they are now.
+    ``spring`` (a hinge's or slider's) pulls the free axis toward a target.
     """
 
     kind: str = JointKind.HINGE
@@ -62,3 +84,4 @@ class Joint:
     id: str = ""
     broken: bool = False
     reference: tuple[tuple[float, ...], tuple[float, ...] | None] | None = None
+    spring: Spring | None = None

@@ -36,6 +36,12 @@ class Physical:
     ``kind`` is a :class:`BodyKind`. ``mass`` wins over the material density when
     both are given. ``category``/``mask`` filter collisions as bit sets: two bodies
     collide when each one's category meets the other's mask.
+
+    ``center_of_mass`` (m, body frame) and ``inertia`` (principal moments about the
+    centre of mass, kg·m², along the axes ``inertia_rotation`` turns the body frame's
+    onto) are a modelling tool's numbers for a body whose mass is not spread like its
+    shapes (a weighted door, a hollow can); None: from the shapes (with a given centre
+    alone, the shapes' inertia about their own centroid, moved there).
     """
 
     kind: str = BodyKind.DYNAMIC
@@ -48,3 +54,6 @@ class Physical:
     category: int = 1
     mask: int = 0xFFFFFFFF
     gravity: bool = True
+    center_of_mass: tuple[float, float, float] | None = None
+    inertia: tuple[float, float, float] | None = None
+    inertia_rotation: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)

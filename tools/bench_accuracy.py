@@ -47,6 +47,7 @@ from scipy.special import ellipk
 from components import Joint, MaterialProps, Physical, Shape
 from engine.physics import create_backend
 from engine.physics.backend import DynamicsBackend, WorldSettings
+from engine.rotation import quat_from_rotation_vector, quat_to_matrix
 from tools.bench import print_row, print_table
 
 #: Time steps every case runs at (s): coarse, the default, fine.
@@ -119,7 +120,7 @@ def _floor(backend: DynamicsBackend, **material: Any) -> None:
 
 def _quat_y(phi: float) -> np.ndarray:
     """Rotation by ``phi`` about +Y (takes X toward −Z)."""
-    return np.array([math.cos(phi / 2), 0.0, math.sin(phi / 2), 0.0])
+    return np.array(quat_from_rotation_vector((0.0, phi, 0.0)))
 
 
 def _steps(seconds: float, dt: float) -> int:
@@ -521,7 +522,7 @@ def _top_mujoco(dt: float) -> Outcome:
         <geom type="cylinder" size="{TOP_RADIUS} {TOP_THICKNESS / 2}" mass="{TOP_MASS}"
               pos="0 0 {TOP_ARM}"/></body></worldbody>""")
     data.qpos[0:4] = q
-    r = _rotation(q)
+    r = quat_to_matrix(q)
     data.qvel[0:3] = r.T @ omega  # a ball joint's velocity is in the body frame
     n = _steps(TOP_TIME, dt)
     quats = np.empty((n, 4))
@@ -529,13 +530,6 @@ def _top_mujoco(dt: float) -> Outcome:
         mj.mj_step(model, data)
         quats[i] = data.qpos[0:4]
     return Outcome(_precession(dt * np.arange(1, n + 1), _axis_z(quats)))
-
-
-def _rotation(q: np.ndarray) -> np.ndarray:
-    w, x, y, z = q
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
 MOTOR_SPEED, MOTOR_TORQUE, BAR_MASS = 2.0, 60.0, 10.0

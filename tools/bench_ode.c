@@ -9,11 +9,12 @@
  * islands' weight carried over, contact softness from the step and masses, with the
  * settings passed in), so both sides solve the same problem.
  *
- * Sleeping is ODE's own auto-disable set up as close to the engine's sleep rule
- * (engine/physics/sleep.py) as it goes: by time, not steps (AutoDisableSteps 0,
- * AutoDisableTime = SleepTime), on each step's velocity (AverageSamplesCount 1)
- * under the same linear and angular limits, passed in by tools/bench_physics.py.
- * What ODE lacks (the steady test, islands) is the engine's extra work.
+ * Sleeping is the engine's own rule (engine/physics/sleep.py), run as the engine's step
+ * runs it: stepper.h's cs_sleep after each step, the per-body pass of sleep.h over the
+ * rule's arrays and the islands of the step, with the limits tools/bench_physics.py
+ * passes in (SleepTime, SleepLinear, SleepAngular, the steady share and the smoothing
+ * time). ODE's own auto-disable stays off, as in the engine, so both sides put the same
+ * boxes to sleep on the same steps and do the same work.
  *
  * With FEEDBACK=1 every contact joint also gets a dJointFeedback and the
  * impulse |f|·dt of each contact is computed after the step, which is the
@@ -24,15 +25,17 @@
  * the step, the rest of the work the engine does to report them.
  *
  * Usage: bench_ode N STEPS SLEEP(0|1) FEEDBACK(0|1) SLEEP_TIME SLEEP_LINEAR SLEEP_ANGULAR
- *                  ITERATIONS ERP CFM WARM_START SOFTNESS EXACT_ROWS
+ *                  STEADY_SHARE SMOOTHING ITERATIONS ERP CFM WARM_START SOFTNESS EXACT_ROWS
  * Prints: ms_per_step=<mean ms> mean_z=<mean box height at the end> contacts=<last step>
  *         impulse=<sum of the last step's contact impulses, 0 without feedback>
+ *         asleep=<bodies asleep at the end>
  * Built and run by tools/bench_physics.py
  * (cc -O2 -I engine/physics/ode3d $(pkg-config --cflags --libs ode)).
  */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 #include <ode/ode.h>
@@ -92,22 +95,55 @@ static double now_ms(void) {
     return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
 }
 
+/* The sleep rule's arrays for `n` dynamic bodies, all awake, all allowed to sleep, with
+ * the squared bounds sleep.py's _bounds makes (slow, steady, at rest). 0, or -1 out of
+ * memory. */
+static int make_rule(SrRule *r, int n, double linear, double angular, double steady,
+                     double *bounds) {
+    double share[3] = {1.0, steady, steady * steady};
+    uint8_t *flags = calloc((size_t)(4 * n + 1), 1);
+    for (int k = 0; k < 3; k++) {
+        bounds[2 * k] = linear * linear * (share[k] * share[k]);
+        bounds[2 * k + 1] = angular * angular * (share[k] * share[k]);
+    }
+    r->stack = calloc((size_t)(18 * n + 1), sizeof(double));
+    r->smoothing = calloc((size_t)(n + 1), sizeof(double));
+    r->timer = calloc((size_t)(n + 1), sizeof(double));
+    r->reference = calloc((size_t)(6 * n + 1), sizeof(double));
+    if (!flags || !r->stack || !r->smoothing || !r->timer || !r->reference) return -1;
+    r->started = flags;
+    r->awake = flags + n;
+    memset(flags + 2 * n, 1, (size_t)(2 * n)); /* eligible, movable */
+    r->eligible = flags + 2 * n;
+    r->movable = flags + 3 * n;
+    r->bounds = bounds;
+    r->n = n;
+    return 0;
+}
+
 int main(int argc, char **argv) {
-    if (argc != 14) {
+    if (argc != 16) {
         fprintf(stderr, "usage: %s N STEPS SLEEP FEEDBACK SLEEP_TIME SLEEP_LINEAR "
-                "SLEEP_ANGULAR ITERATIONS ERP CFM WARM_START SOFTNESS EXACT_ROWS\n", argv[0]);
+                "SLEEP_ANGULAR STEADY_SHARE SMOOTHING ITERATIONS ERP CFM WARM_START SOFTNESS "
+                "EXACT_ROWS\n", argv[0]);
         return 2;
     }
     int n = atoi(argv[1]), steps = atoi(argv[2]), sleep = atoi(argv[3]);
     int sum_impulses = atoi(argv[4]);
     double sleep_time = atof(argv[5]), sleep_linear = atof(argv[6]);
-    double sleep_angular = atof(argv[7]);
-    int iterations = atoi(argv[8]);
-    double erp = atof(argv[9]), cfm = atof(argv[10]);
-    settings.beta = atof(argv[11]);
-    settings.softness = atof(argv[12]);
-    settings.exact_rows = atoi(argv[13]);
+    double sleep_angular = atof(argv[7]), steady = atof(argv[8]), smoothing = atof(argv[9]);
+    int iterations = atoi(argv[10]);
+    double erp = atof(argv[11]), cfm = atof(argv[12]);
+    settings.beta = atof(argv[13]);
+    settings.softness = atof(argv[14]);
+    settings.exact_rows = atoi(argv[15]);
+    SrRule rule;
+    double bounds[6];
     cs_init(&stepper);
+    if (make_rule(&rule, n, sleep_linear, sleep_angular, steady, bounds) < 0) {
+        fprintf(stderr, "out of memory\n");
+        return 1;
+    }
 
     dInitODE2(0);
     dAllocateODEDataForThread(dAllocateMaskAll);
@@ -121,12 +157,7 @@ int main(int argc, char **argv) {
     dWorldSetCFM(world, cfm);
     dWorldSetQuickStepNumIterations(world, iterations);
     dWorldSetContactSurfaceLayer(world, 0.001);
-    dWorldSetAutoDisableFlag(world, sleep);
-    dWorldSetAutoDisableLinearThreshold(world, sleep_linear);
-    dWorldSetAutoDisableAngularThreshold(world, sleep_angular);
-    dWorldSetAutoDisableSteps(world, 0);
-    dWorldSetAutoDisableTime(world, sleep_time);
-    dWorldSetAutoDisableAverageSamplesCount(world, 1);
+    dWorldSetAutoDisableFlag(world, 0); /* bodies sleep by the engine's rule */
     dCreatePlane(space, 0, 0, 1, 0);
 
     int columns = (n + 9) / 10;
@@ -158,6 +189,11 @@ int main(int argc, char **argv) {
         }
         cs_solve(&stepper, &settings, world, contacts, bodies, sizeof(dBodyID), n, dt,
                  contact_feedback, NULL);
+        if (sleep && cs_sleep(&stepper, &rule, bodies, sizeof(dBodyID), n, dt,
+                              exp(-dt / smoothing), sleep_time, NULL) < 0) {
+            fprintf(stderr, "out of memory\n");
+            return 1;
+        }
         ncontacts = stepper.ncontacts;
         if (sum_impulses) {
             impulse = 0;
@@ -170,11 +206,20 @@ int main(int argc, char **argv) {
     double ms = (now_ms() - t0) / steps;
 
     double z = 0;
-    for (int i = 0; i < n; i++) z += dBodyGetPosition(bodies[i])[2];
-    printf("ms_per_step=%.6f mean_z=%.6f contacts=%d impulse=%.6f\n", ms, n ? z / n : 0.0,
-           ncontacts, impulse);
+    int asleep = 0;
+    for (int i = 0; i < n; i++) {
+        z += dBodyGetPosition(bodies[i])[2];
+        asleep += !dBodyIsEnabled(bodies[i]);
+    }
+    printf("ms_per_step=%.6f mean_z=%.6f contacts=%d impulse=%.6f asleep=%d\n", ms,
+           n ? z / n : 0.0, ncontacts, impulse, asleep);
 
     cs_free(&stepper);
+    free((void *)rule.started);
+    free(rule.stack);
+    free(rule.smoothing);
+    free(rule.timer);
+    free(rule.reference);
     free(feedback);
     free(bodies);
     dJointGroupDestroy(contacts);

@@ -10,12 +10,13 @@ The reference is ``tools/bench_ode.c``, compiled here with ``cc -O2`` against th
 same libode (pkg-config) and the engine's own step (``engine/physics/ode3d/stepper.h``,
 which both include, run with the same settings) into a temporary folder and run in the
 same session, both plain ("C") and summing the contact impulses after the step as our
-backend does to report them ("C+fb"). With sleeping on, the C side runs ODE's own
-auto-disable with the sleep rule's limits (by time, SleepTime; SleepLinear and
-SleepAngular on each step's velocity), ours the rule itself (:mod:`engine.physics.sleep`),
-which also waits for a body to be steady and for its whole island: the two put different
-boxes to sleep at different times, so the "on" rows compare whole runs, the rule's cost
-per step is timed on its own below.
+backend does to report them ("C+fb"). With sleeping on, both sides run the engine's
+sleep rule (:mod:`engine.physics.sleep`) the same way: its per-body pass and island
+decision (``engine/physics/sleep.h``) after each step, on the islands the step found
+(stepper.h's ``cs_sleep``; ODE's own auto-disable off), so they put the same boxes to
+sleep on the same steps ("asleep" counts them at the end) and the "on" rows compare the
+same work. The rule's numpy-side cost (:class:`SleepRule.update`, which the pymunk
+backend runs) is timed on its own below.
 
 For each N and with sleeping off and on it reports ms per step of: plain C; our
 raw ``OdeBackend.step``; our step plus the ECS sync (every body's state written in C
@@ -49,7 +50,14 @@ from typing import Any
 import numpy as np
 
 from engine.physics.backend import WorldSettings
-from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME, SleepRule
+from engine.physics.sleep import (
+    SLEEP_ANGULAR,
+    SLEEP_LINEAR,
+    SLEEP_TIME,
+    SMOOTHING,
+    STEADY_SHARE,
+    SleepRule,
+)
 from tools.bench import print_row
 from tools.bench_readback import EcsReadback, pose_table, time_readback
 
@@ -81,17 +89,18 @@ def compile_reference(folder: Path) -> Path:
 
 
 def run_reference(exe: Path, n: int, steps: int, sleep: bool,
-                  feedback: bool = False) -> tuple[float, float]:
-    """(ms per step, mean box height at the end) of the plain C program, with the default
-    world's settings."""
+                  feedback: bool = False) -> tuple[float, float, int]:
+    """(ms per step, mean box height at the end, bodies asleep at the end) of the plain C
+    program, with the default world's settings."""
     w = WorldSettings()
     out = subprocess.run([str(exe), str(n), str(steps), str(int(sleep)), str(int(feedback)),
                           repr(SLEEP_TIME), repr(SLEEP_LINEAR), repr(SLEEP_ANGULAR),
+                          repr(STEADY_SHARE), repr(SMOOTHING),
                           str(w.iterations), repr(w.erp), repr(w.cfm), repr(w.warm_start),
                           repr(w.contact_softness), str(w.exact_rows)],
                          check=True, capture_output=True, text=True).stdout
     fields = dict(item.split("=") for item in out.split())
-    return float(fields["ms_per_step"]), float(fields["mean_z"])
+    return float(fields["ms_per_step"]), float(fields["mean_z"]), int(fields["asleep"])
 
 
 def build_ours(n: int, sleep: bool) -> Any:
@@ -109,8 +118,9 @@ def build_ours(n: int, sleep: bool) -> Any:
     return backend
 
 
-def time_ours(n: int, steps: int, sleep: bool, sync: bool) -> tuple[float, float]:
-    """(ms per step, mean box height at the end); ``sync`` adds the ECS readback."""
+def time_ours(n: int, steps: int, sleep: bool, sync: bool) -> tuple[float, float, int]:
+    """(ms per step, mean box height at the end, bodies asleep at the end); ``sync`` adds
+    the ECS readback."""
     backend = build_ours(n, sleep)
     readback = EcsReadback(backend, pose_table(backend.keys()))
     step = backend.step
@@ -124,8 +134,9 @@ def time_ours(n: int, steps: int, sleep: bool, sync: bool) -> tuple[float, float
             step(DT)
     ms = (time.thread_time() - t0) / steps * 1e3
     mean_z = float(backend.read_state().position[:, 2].mean()) if n else 0.0
+    asleep = backend.sleeping_count()
     backend.close()
-    return ms, mean_z
+    return ms, mean_z, asleep
 
 
 def time_sleep_rule(n: int, calls: int = 2000, islands: bool = False) -> float:
@@ -178,11 +189,12 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
             for sleep in (False, True):
                 c_ms = fb_ms = raw_ms = sync_ms = math.inf
                 c_z = ours_z = 0.0
+                c_asleep = ours_asleep = 0
                 for _ in range(repeats):
-                    ms, c_z = run_reference(exe, n, steps, sleep)
+                    ms, c_z, c_asleep = run_reference(exe, n, steps, sleep)
                     c_ms = min(c_ms, ms)
                     fb_ms = min(fb_ms, run_reference(exe, n, steps, sleep, feedback=True)[0])
-                    ms, ours_z = time_ours(n, steps, sleep, sync=False)
+                    ms, ours_z, ours_asleep = time_ours(n, steps, sleep, sync=False)
                     raw_ms = min(raw_ms, ms)
                     sync_ms = min(sync_ms, time_ours(n, steps, sleep, sync=True)[0])
                 row: dict[str, Any] = {"N": n, "sleeping": "on" if sleep else "off", "C ms": c_ms,
@@ -190,7 +202,8 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
                        "ratio": raw_ms / c_ms, "ratio+sync": sync_ms / c_ms,
                        "ratio+sync vs C+fb": sync_ms / fb_ms,
                        "realtime 60Hz": "yes" if sync_ms < 1e3 * DT else "no",
-                       "mean z C": c_z, "mean z ours": ours_z}
+                       "mean z C": c_z, "mean z ours": ours_z, "asleep C": c_asleep,
+                       "asleep ours": ours_asleep}
                 print_row(row)
                 rows.append(row)
     print("\nreadback of every body into the ECS pose table, µs per call (median); "

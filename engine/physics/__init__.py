@@ -42,7 +42,7 @@ def create_backend(name: str) -> DynamicsBackend:
     try:
         module = importlib.import_module(module_name)
     except ImportError as exc:
-        hint = " (run `tools/dev setup` to build it)" if name == "ode" else ""
+        hint = " (run `tools/dev setup` to build it)" if name == BackendName.ODE else ""
         raise BackendUnavailable(
             f"dynamics backend {name!r} is not available: {exc}{hint}") from exc
     return getattr(module, class_name)()

@@ -5,17 +5,14 @@ One pass over the bodies does what twenty numpy calls over (6, N) columns did: r
 after a physics step the caches are cold and each numpy call costs microseconds, so the
 pass takes a few microseconds for 500 bodies where the calls took some 90. The
 arithmetic is the rule's, in the same order, so the results are the same to the bit
-(tests/physics/test_sleep.py checks it against the numpy formulation). The rule's
-definition, its constants and its islands stay in sleep.py.
+(tests/physics/test_sleep.py checks it against the numpy formulation); it is written
+once, in ``sleep.h``, which the ODE binding's step and the plain-C reference of ``bench
+physics`` run too. The rule's definition, its constants and its islands stay in sleep.py.
 """
 
 from libc.stdint cimport uint8_t
 
-
-cdef inline bint under(const double* x, double lin, double ang) noexcept nogil:
-    """Whether a 6-vector's linear and angular halves are each under a squared bound."""
-    return (x[0] * x[0] + x[1] * x[1] + x[2] * x[2] < lin and
-            x[3] * x[3] + x[4] * x[4] + x[5] * x[5] < ang)
+from engine.physics.csleep cimport SrRule, sr_advance
 
 
 cdef class Pass:
@@ -51,55 +48,20 @@ cdef class Pass:
         reference. ``bounds``: squared (linear, angular) limits for slow, steady and at
         rest. ``woken``: explicitly woken since the last step (None: none). Whether some
         body has been quiet for ``time``."""
-        cdef Py_ssize_t i, j, n = self.n
-        cdef double s[6]
-        cdef double d[6]
-        cdef double v[6]
-        cdef double k
-        cdef bint calm, steady, rest, slow, ready = False, has_woken = woken is not None
-        cdef double* smooth_rows
-        cdef double* drift_rows
-        cdef double* velocity_rows
-        cdef double* reference_rows
-        cdef double* smoothing
-        cdef double* timer
-        cdef const double* bounds = &self.bounds[0]
-        cdef uint8_t* started
-        cdef const uint8_t* awake
-        cdef const uint8_t* eligible
-        if has_woken and woken.shape[0] != n:
-            raise ValueError(f"woken must have {n} rows, got {woken.shape[0]}")
-        if n == 0:
+        cdef SrRule rule
+        cdef bint ready
+        cdef const uint8_t* marks = NULL
+        if woken is not None and woken.shape[0] != self.n:
+            raise ValueError(f"woken must have {self.n} rows, got {woken.shape[0]}")
+        if self.n == 0:
             return False
-        # rows of (6, n) tables reached by pointer: the pass is a few loads per body
-        smooth_rows, drift_rows = &self.stack[0, 0, 0], &self.stack[1, 0, 0]
-        velocity_rows, reference_rows = &self.stack[2, 0, 0], &self.reference[0, 0]
-        smoothing, timer = &self.smoothing[0], &self.timer[0]
-        started, awake, eligible = &self.started[0], &self.awake[0], &self.eligible[0]
+        if woken is not None:
+            marks = &woken[0]
+        rule.stack, rule.smoothing = &self.stack[0, 0, 0], &self.smoothing[0]
+        rule.timer, rule.reference = &self.timer[0], &self.reference[0, 0]
+        rule.started, rule.awake = &self.started[0], &self.awake[0]
+        rule.eligible, rule.movable, rule.bounds = &self.eligible[0], NULL, &self.bounds[0]
+        rule.n = self.n
         with nogil:
-            for i in range(n):
-                k = smoothing[i] * keep
-                for j in range(6):
-                    v[j] = velocity_rows[j * n + i]
-                    # where the last step said so the average snaps to the velocity:
-                    # exactly, as (v - s) * 0 is 0
-                    d[j] = (v[j] - smooth_rows[j * n + i]) * k
-                    s[j] = v[j] - d[j]  # s + (v - s)(1 - e^(-dt/τ))
-                    smooth_rows[j * n + i] = s[j]
-                    d[j] = s[j] - reference_rows[j * n + i]
-                    drift_rows[j * n + i] = d[j]
-                calm = awake[i] and under(s, bounds[0], bounds[1])
-                steady = under(d, bounds[2], bounds[3])
-                rest = under(v, bounds[4], bounds[5])
-                # smooth on only while calm and not at rest
-                smoothing[i] = 1.0 if calm and not rest else 0.0
-                slow = calm and eligible[i] and not (has_woken and woken[i])
-                steady = steady and slow and started[i]
-                timer[i] = (timer[i] + dt) * (1.0 if steady else 0.0)
-                if slow and not steady:  # a quiet stretch starts (again) from here
-                    for j in range(6):
-                        reference_rows[j * n + i] = reference_rows[j * n + i] + d[j]
-                started[i] = slow
-                if timer[i] >= time:
-                    ready = True
+            ready = sr_advance(&rule, dt, keep, time, marks)
         return ready

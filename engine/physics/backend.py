@@ -12,6 +12,7 @@ thread in threaded mode). Nothing here is thread-safe; the engine's
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Protocol, runtime_checkable
@@ -20,6 +21,60 @@ import numpy as np
 
 from components import Joint, Physical
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME, SleepState
+
+#: Half the side of the cube every body stays in (m), by default (``World { Extent }``).
+#: ODE's hash space turns bounding boxes into integer cells and aborts the process on one
+#: past integer range (about 4.5e15 m); a thousand kilometres is far beyond any scene
+#: and keeps positions exact to a nanometre.
+WORLD_EXTENT = 1e6
+#: Speed (m/s) and spin (rad/s) past which a body counts as runaway: one step further
+#: and its numbers overflow.
+MAX_SPEED = 1e5
+#: The heaviest body (kg) and densest material (kg/m³) any body may have: far above
+#: anything real, and far below where the solver's products of masses overflow (ODE's
+#: step fails on a 1e160 kg sphere resting on the ground; pymunk's overflow warns).
+MAX_MASS = 1e12
+MAX_DENSITY = 1e6
+
+
+@dataclass(frozen=True, slots=True)
+class Limits:
+    """What every backend can take, shared through the protocol: values are checked
+    against these once, where a command is made and pushed
+    (:func:`engine.physics.commands.check_limits`), and a body that passes them while
+    stepping (leaves the world, runs away) is stopped by its backend and reported."""
+
+    extent: float = WORLD_EXTENT
+    max_speed: float = MAX_SPEED
+
+    def __post_init__(self) -> None:
+        for name in ("extent", "max_speed"):
+            value = getattr(self, name)
+            if not (value > 0 and math.isfinite(value)):
+                raise ValueError(f"{name} must be a positive number, got {value!r}")
+
+
+class BackendFailure(RuntimeError):
+    """The backend's library failed inside a step and cannot step again (ODE's internal
+    errors, see docs/ODE.md); the message says what it reported. The driver stops
+    physics with one message and the rest of the run goes on."""
+
+
+def metres(extent: float) -> str:
+    """An extent as messages write it: ``±1e6 m`` (not ``±1e+06``)."""
+    text = f"{extent:g}".replace("e+0", "e").replace("e+", "e")
+    return f"±{text} m"
+
+
+def fault_message(cause: str, extent: float = WORLD_EXTENT) -> str:
+    """What a backend reports (``take_faults``) for a body it stopped after a step:
+    ``cause`` is "nonfinite", "runaway" or "left" (the world of ``extent``)."""
+    if cause == "left":
+        return (f"it left the world ({metres(extent)}); stopped at its last pose inside, "
+                "at rest, and disabled")
+    what = "its state turned non-finite" if cause == "nonfinite" else \
+        f"it became a runaway (faster than {MAX_SPEED:g} m/s or rad/s)"
+    return f"{what}; put back at its last good pose, at rest, and disabled"
 
 
 class BackendName(StrEnum):
@@ -158,6 +213,12 @@ class WorldSettings:
     material_pairs: list[MaterialPair] = field(default_factory=list)
     #: The solver's random state to start from (a saved state restores it); None: fresh.
     solver_seed: int | None = None
+    #: Half the side of the cube bodies stay in (m; see :data:`WORLD_EXTENT`).
+    extent: float = WORLD_EXTENT
+
+    @property
+    def limits(self) -> Limits:
+        return Limits(extent=self.extent)
 
 
 @runtime_checkable
@@ -255,8 +316,19 @@ class DynamicsBackend(Protocol):
 
 
 @runtime_checkable
+class SupportsExactState(Protocol):
+    """Backends whose state read (:meth:`DynamicsBackend.read_state`) is a conversion that
+    rounds (a centre of mass off the origin, orientations normalised on the way back in),
+    and that can give instead the rows which, put back, restore their numbers to the bit:
+    what a saved state writes, so its continuation is the uninterrupted run's."""
+
+    def exact_state(self) -> BodyState: ...
+
+
+@runtime_checkable
 class SupportsFaults(Protocol):
-    """Backends that detect non-finite or exploding bodies, reset them, and report them."""
+    """Backends that detect bodies gone non-finite, running away or leaving the world
+    (:class:`Limits`), stop them, and report them."""
 
     def take_faults(self) -> list[tuple[int, str]]: ...
 

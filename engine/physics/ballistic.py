@@ -14,31 +14,28 @@ import logging
 import numpy as np
 
 from components import Joint, Physical
-from engine.physics.backend import ARRIVE_SLACK, CONTACT_DTYPE, BodyState, RayHit, WorldSettings
-from engine.rotation import rotation_vector_between
+from components.physical import BodyKind
+from engine.physics.backend import (
+    ARRIVE_SLACK,
+    CONTACT_DTYPE,
+    BackendName,
+    BodyState,
+    RayHit,
+    WorldSettings,
+)
+from engine.rotation import quat_multiply, quat_normalize, rotation_vector_between
 
 log = logging.getLogger("colosseum.physics.ballistic")
 
 
 def _integrate_orientation(q: np.ndarray, w: np.ndarray, dt: float) -> np.ndarray:
     """q' = q + dt/2 * (0, w) ⊗ q, renormalised; vectorised over rows."""
-    wx, wy, wz = w[:, 0], w[:, 1], w[:, 2]
-    qw, qx, qy, qz = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    dq = 0.5 * dt * np.stack(
-        [
-            -wx * qx - wy * qy - wz * qz,
-            wx * qw + wy * qz - wz * qy,
-            wy * qw + wz * qx - wx * qz,
-            wz * qw + wx * qy - wy * qx,
-        ],
-        axis=1,
-    )
-    out = q + dq
-    return out / np.linalg.norm(out, axis=1, keepdims=True)
+    spin = np.concatenate([np.zeros((len(w), 1)), w], axis=1)
+    return quat_normalize(q + 0.5 * dt * quat_multiply(spin, q))
 
 
 class BallisticBackend:
-    name = "ballistic"
+    name = BackendName.BALLISTIC
 
     def __init__(self) -> None:
         self.settings = WorldSettings()
@@ -71,7 +68,7 @@ class BallisticBackend:
                  angular_velocity: np.ndarray | None = None) -> None:
         if key in self._index:
             raise ValueError(f"body {key} already exists")
-        dynamic = body.kind == "dynamic"
+        dynamic = body.kind == BodyKind.DYNAMIC
         mass = body.mass if body.mass else 1.0
         self._index[key] = len(self._keys)
         self._keys.append(key)
@@ -88,7 +85,7 @@ class BallisticBackend:
         self._gravity_on = np.append(self._gravity_on, 1.0 if dynamic and body.gravity else 0.0)
         self._dynamic = np.append(self._dynamic, dynamic)
         self._keys_array = None
-        if body.kind == "static":
+        if body.kind == BodyKind.STATIC:
             self._vel[-1] = 0.0
             self._ang[-1] = 0.0
 

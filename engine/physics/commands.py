@@ -4,9 +4,12 @@ The main thread never calls a backend; it makes a command and queues it (see
 :class:`engine.physics.driver.PhysicsDriver`), which applies it between two steps
 with its one dispatch. A command is a frozen dataclass of plain values, so it
 
-* is **checked when it is made**: a bad value (NaN, a zero axis, a joint on one body)
-  raises :class:`CommandError` at the caller's line — a Lua call, a Python system — not
-  later on the physics thread;
+* is **checked when it is made**: a bad value (NaN, a zero axis, a joint on one body, a
+  size or mass not positive) raises :class:`CommandError` at the caller's line — a Lua
+  call, a Python system — not later on the physics thread; what depends on the world it
+  goes to (a position outside its extent, a speed past its limit:
+  :class:`~engine.physics.backend.Limits`) is checked by :func:`check_limits` when it is
+  pushed, in the same call;
 * **serialises** to a plain dict and back (:func:`to_dict`, :func:`from_dict`), so the
   command stream of a run can be logged, replayed into a fresh backend and sent to
   another process.
@@ -20,6 +23,10 @@ True
 Traceback (most recent call last):
 ...
 engine.physics.commands.CommandError: ApplyForce: force must be 3 finite numbers, got (nan, ...)
+>>> check_limits(SetPose(3, (1e30, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)), Limits())
+Traceback (most recent call last):
+...
+engine.physics.commands.CommandError: SetPose: x = 1e+30 is outside the world (±1e6 m)
 """
 
 from __future__ import annotations
@@ -33,23 +40,44 @@ from typing import Any, ClassVar
 import numpy as np
 
 from components import Joint, MaterialProps, Physical, Shape
-from components.joint import JointKind
-from engine.physics.backend import MaterialPair, SleepState, WorldSettings
+from components.joint import AXISLESS_KINDS, SPRING_KINDS, JointKind, Spring
+from engine.physics.backend import (
+    MAX_DENSITY,
+    MAX_MASS,
+    Limits,
+    MaterialPair,
+    SleepState,
+    WorldSettings,
+    metres,
+)
+from engine.rotation import UNIT_ROUNDING
 
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
 _FLOAT = np.dtype(np.float64)
+_IDENTITY = (1.0, 0.0, 0.0, 0.0)
 
 
 class CommandError(ValueError):
     """A command was made with a value no backend can take; the message says which."""
 
 
+def _number(value: Any) -> float:
+    """A number, never a boolean (``float(True)`` is 1.0: a mistake, not a value)."""
+    if isinstance(value, bool | np.bool_):
+        raise TypeError("a boolean is not a number")
+    return float(value)
+
+
 def _vector(command: str, what: str, value: Any, n: int) -> tuple[float, ...]:
     try:
-        # an array of floats is already floats (the per-frame case: kept cheap)
-        out = tuple(value.tolist()) if type(value) is np.ndarray and value.dtype == _FLOAT \
-            else tuple(map(float, value))
+        # floats are floats already (the per-frame and scene-loading cases: kept cheap)
+        if type(value) is tuple and all(type(x) is float for x in value):
+            out = value
+        elif type(value) is np.ndarray and value.dtype == _FLOAT:
+            out = tuple(value.tolist())
+        else:
+            out = tuple(map(_number, value))
     except (TypeError, ValueError):
         raise CommandError(f"{command}: {what} must be {n} numbers, got {value!r}") from None
     # a sum is finite exactly when every term is (short of overflowing: 1e308 * 2, far
@@ -64,12 +92,15 @@ def _quaternion(command: str, value: Any) -> Quat:
     norm = math.hypot(w, x, y, z)
     if norm == 0.0:
         raise CommandError(f"{command}: orientation must be a non-zero quaternion w, x, y, z")
-    return (w, x, y, z) if norm == 1.0 else (w / norm, x / norm, y / norm, z / norm)
+    return (w, x, y, z) if abs(norm - 1.0) <= UNIT_ROUNDING else (w / norm, x / norm,
+                                                                  y / norm, z / norm)
 
 
 def _scalar(command: str, what: str, value: Any, low: float = -math.inf) -> float:
+    if type(value) is float and value >= low and math.isfinite(value):  # the common case
+        return value
     try:
-        out = float(value)
+        out = _number(value)
     except (TypeError, ValueError):
         raise CommandError(f"{command}: {what} must be a number, got {value!r}") from None
     if not math.isfinite(out) or out < low:
@@ -91,6 +122,10 @@ class Command:
     key: int
     #: Whether the command names a joint (True) or a body (False) by ``key``.
     on_joint: ClassVar[bool] = False
+    #: Fields holding world points, checked against the world's extent when pushed.
+    points: ClassVar[tuple[str, ...]] = ()
+    #: Fields holding velocities (m/s or rad/s), checked against the speed limit.
+    speeds: ClassVar[tuple[str, ...]] = ()
 
     def _set(self, name: str, value: Any) -> None:
         object.__setattr__(self, name, value)
@@ -109,16 +144,22 @@ class AddBody(Command):
     orientation: Quat = (1.0, 0.0, 0.0, 0.0)
     linear_velocity: Vec3 = (0.0, 0.0, 0.0)
     angular_velocity: Vec3 = (0.0, 0.0, 0.0)
+    points: ClassVar[tuple[str, ...]] = ("position",)
+    speeds: ClassVar[tuple[str, ...]] = ("linear_velocity", "angular_velocity")
 
     def __post_init__(self) -> None:
         self._check_key()
         name = "AddBody"
         if not isinstance(self.body, Physical):
             raise CommandError(f"{name}: body must be a Physical, got {type(self.body).__name__}")
-        if self.body.mass is not None and not (self.body.mass > 0 and math.isfinite(
-                self.body.mass)):
-            raise CommandError(f"{name}: mass must be a positive number of kg, "
-                               f"got {self.body.mass!r}")
+        if self.body.mass is not None and not (
+                0 < _scalar(name, "mass", self.body.mass) <= MAX_MASS):
+            raise CommandError(f"{name}: mass must be a positive number of kg up to "
+                               f"{MAX_MASS:g}, got {self.body.mass!r}")
+        _check_material(name, self.body.material)
+        for shape in self.body.shapes:
+            _check_shape(name, shape)
+        _check_mass_frame(name, self.body)
         self._set("position", _vector(name, "position", self.position, 3))
         self._set("orientation", _quaternion(name, self.orientation))
         self._set("linear_velocity", _vector(name, "linear velocity", self.linear_velocity, 3))
@@ -154,15 +195,108 @@ class AddJoint(Command):
             raise CommandError(f"{name}: unknown kind {j.kind!r} "
                                f"(one of {', '.join(JointKind)})")
         if j.body_b is not None and j.body_a == j.body_b:
-            raise CommandError(f"{name}: a joint needs two different bodies, "
-                               f"got body {j.body_a} twice")
+            raise CommandError(f"{name}: a joint needs two different bodies, got one body "
+                               "twice")
         _vector(name, "anchor", j.anchor, 3)
+        for what in ("low", "high"):
+            if getattr(j, what) is not None:
+                _scalar(name, what, getattr(j, what))
+        _scalar(name, "motor velocity", j.motor_velocity)
+        _scalar(name, "motor max force", j.motor_max_force, 0.0)
+        if j.spring is not None:
+            _check_spring(name, j)
         for what, axis in (("axis", j.axis), ("axis2", j.axis2)):
-            if not any(_vector(name, what, axis, 3)) and j.kind not in _AXISLESS:
+            if not any(_vector(name, what, axis, 3)) and j.kind not in AXISLESS_KINDS:
                 raise CommandError(f"{name}: {what} must not be zero")
+        if j.kind in TWO_AXES and parallel(j.axis, j.axis2):
+            raise CommandError(f"{name}: axis and axis2 must not be parallel: a {j.kind} "
+                               "joint turns about two different axes")
+        if j.kind == JointKind.HINGE2 and j.body_b is None:
+            raise CommandError(f"{name}: {HINGE2_BODIES}")
+        for pose in j.reference or ():
+            if pose is not None:
+                _vector(name, "reference pose", pose, 7)
 
 
-_AXISLESS = frozenset({JointKind.BALL, JointKind.FIXED, JointKind.SIX_DOF})
+#: Kinds that turn about two axes, which ODE needs independent (it aborts the process on
+#: parallel hinge2 axes; a universal's fail its step).
+TWO_AXES = frozenset({JointKind.UNIVERSAL, JointKind.HINGE2})
+#: Why a hinge2 needs two bodies (ODE aborts the process on one alone).
+HINGE2_BODIES = ("a hinge2 joint joins two bodies, the wheel (a) to its chassis (b); it "
+                 "cannot join one to the world or to a static object")
+
+
+def parallel(a: Any, b: Any) -> bool:
+    """Whether two non-zero axes point along one line (within a millionth of a radian)."""
+    u, v = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return bool(np.linalg.norm(np.cross(u, v)) <= 1e-6 * np.linalg.norm(u) * np.linalg.norm(v))
+
+
+def _check_material(command: str, material: MaterialProps) -> None:
+    """A body's material: friction, bounce and softness finite and not negative (ODE's
+    contact solver takes them as they are), density positive up to MAX_DENSITY (ODE's
+    mass setters abort on one not positive)."""
+    if not isinstance(material, MaterialProps):
+        raise CommandError(f"{command}: material must be MaterialProps, got "
+                           f"{type(material).__name__}")
+    for what in ("friction", "bounce", "bounce_velocity", "softness"):
+        _scalar(command, f"material {what}", getattr(material, what), 0.0)
+    if not (0 < _scalar(command, "material density", material.density) <= MAX_DENSITY):
+        raise CommandError(f"{command}: material density must be a positive number of "
+                           f"kg/m³ up to {MAX_DENSITY:g}, got {material.density!r}")
+
+
+def _check_spring(command: str, joint: Joint) -> None:
+    """A spring on a joint with one free axis, its stiffness and damping finite, not
+    negative and not both 0 (ODE's soft row divides by them), its force bound positive."""
+    sp = joint.spring
+    if not isinstance(sp, Spring):
+        raise CommandError(f"{command}: spring must be a Spring, got {type(sp).__name__}")
+    if joint.kind not in SPRING_KINDS:
+        raise CommandError(f"{command}: a {joint.kind} joint takes no spring (only "
+                           f"{', '.join(sorted(SPRING_KINDS))})")
+    stiffness = _scalar(command, "spring stiffness", sp.stiffness, 0.0)
+    damping = _scalar(command, "spring damping", sp.damping, 0.0)
+    if stiffness == 0.0 and damping == 0.0:
+        raise CommandError(f"{command}: a spring needs a stiffness or a damping above 0")
+    _scalar(command, "spring target", sp.target)
+    if not (isinstance(sp.max_force, int | float) and sp.max_force > 0):
+        raise CommandError(f"{command}: spring max force must be above 0, got "
+                           f"{sp.max_force!r}")
+
+
+def _check_mass_frame(command: str, body: Physical) -> None:
+    """A given centre of mass finite, principal moments positive (ODE aborts the process on
+    an inertia that is not positive definite), their axes' turn a quaternion."""
+    if body.center_of_mass is not None:
+        _vector(command, "centre of mass", body.center_of_mass, 3)
+    if body.inertia is not None:
+        moments = _vector(command, "inertia", body.inertia, 3)
+        if not min(moments) > 0:
+            raise CommandError(f"{command}: inertia must be 3 positive moments (kg m^2), got "
+                               f"{body.inertia!r}")
+    if body.inertia_rotation != _IDENTITY:
+        _quaternion(command, body.inertia_rotation)
+
+
+def _check_shape(command: str, shape: Shape) -> None:
+    """A shape's sizes finite, none negative and not all zero (ODE aborts the process on a
+    negative one); a plane's normal and offset finite."""
+    if not isinstance(shape, Shape):
+        raise CommandError(f"{command}: shapes must be Shape, got {type(shape).__name__}")
+    if shape.kind == "plane":
+        _vector(command, "plane", shape.size, 4)
+        return
+    if shape.kind in ("mesh", "hull"):
+        v = shape.vertices
+        if v is None or not np.isfinite(v).all():
+            raise CommandError(f"{command}: a {shape.kind} shape needs finite vertices")
+    else:
+        size = _vector(command, f"{shape.kind} size", shape.size, len(shape.size))
+        if not size or min(size) < 0 or max(size) == 0:
+            raise CommandError(f"{command}: {shape.kind} size must be positive, "
+                               f"got {shape.size!r}")
+    _vector(command, "shape offset", shape.offset, 3)
 
 
 @dataclass(frozen=True, slots=True)
@@ -196,6 +330,7 @@ class ApplyForce(Command):
     key: int
     force: Vec3
     point: Vec3 | None = None
+    points: ClassVar[tuple[str, ...]] = ("point",)
 
     def __post_init__(self) -> None:
         self._check_key()
@@ -221,6 +356,7 @@ class ApplyImpulse(Command):
     key: int
     impulse: Vec3
     point: Vec3 | None = None
+    points: ClassVar[tuple[str, ...]] = ("point",)
 
     def __post_init__(self) -> None:
         self._check_key()
@@ -240,6 +376,8 @@ class SetPose(Command):
     orientation: Quat
     linear: Vec3 | None = None
     angular: Vec3 | None = None
+    points: ClassVar[tuple[str, ...]] = ("position",)
+    speeds: ClassVar[tuple[str, ...]] = ("linear", "angular")
 
     def __post_init__(self) -> None:
         self._check_key()
@@ -257,11 +395,52 @@ class SetVelocity(Command):
     key: int
     linear: Vec3
     angular: Vec3
+    speeds: ClassVar[tuple[str, ...]] = ("linear", "angular")
 
     def __post_init__(self) -> None:
         self._check_key()
         self._set("linear", _vector("SetVelocity", "linear velocity", self.linear, 3))
         self._set("angular", _vector("SetVelocity", "angular velocity", self.angular, 3))
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class SetPoses(Command):
+    """Teleport several bodies in one command, each moving on at its velocities: row ``i``
+    of ``table`` (BodyState's layout: x y z, qw qx qy qz, vx vy vz, wx wy wz) is body
+    ``keys[i]``'s. Checked in one pass over the rows (every hand's control body, each
+    frame, costs one command, not one per body); ``key`` is the first body's, for
+    messages about the whole command."""
+
+    keys: np.ndarray
+    table: np.ndarray
+
+    def __post_init__(self) -> None:
+        try:
+            keys = np.array(self.keys, dtype=np.int64, ndmin=1)
+            table = np.array(self.table, dtype=np.float64, ndmin=2)
+        except (TypeError, ValueError):
+            raise CommandError("SetPoses: keys must be entity ids and table rows of 13 "
+                               "numbers") from None
+        if keys.ndim != 1 or table.shape != (len(keys), 13):
+            raise CommandError(f"SetPoses: {len(keys)} keys need a table of shape "
+                               f"({len(keys)}, 13), got {table.shape}")
+        bad = ~np.isfinite(table).all(axis=1)
+        if bad.any():
+            raise CommandError(f"SetPoses: body {keys[bad][0]}'s row is not 13 finite "
+                               f"numbers: {table[bad][0].tolist()}")
+        norm = np.sqrt(np.einsum("ij,ij->i", table[:, 3:7], table[:, 3:7]))
+        if (norm == 0.0).any():
+            raise CommandError(f"SetPoses: body {keys[norm == 0.0][0]}'s orientation must "
+                               "be a non-zero quaternion w, x, y, z")
+        off = np.abs(norm - 1.0) > UNIT_ROUNDING  # unit to rounding: kept bit-exact
+        if off.any():
+            table[off, 3:7] /= norm[off, None]
+        self._set("keys", keys)
+        self._set("table", table)
+
+    @property
+    def key(self) -> int:  # type: ignore[override]
+        return int(self.keys[0]) if len(self.keys) else -1
 
 
 @dataclass(frozen=True, slots=True)
@@ -273,6 +452,7 @@ class SetKinematicTarget(Command):
     position: Vec3
     orientation: Quat
     dt: float
+    points: ClassVar[tuple[str, ...]] = ("position",)
 
     def __post_init__(self) -> None:
         self._check_key()
@@ -339,6 +519,7 @@ class SetJointTarget(Command):
     max_force: float | None = None
     max_torque: float | None = None
     on_joint: ClassVar[bool] = True
+    points: ClassVar[tuple[str, ...]] = ("position",)
 
     def __post_init__(self) -> None:
         self._check_key()
@@ -398,10 +579,97 @@ class Step:
     dt: float
 
 
+# -- the world's limits ---------------------------------------------------------------
+_AXES = "xyz"
+_SPEED_WORDS = {"linear_velocity": "linear velocity", "angular_velocity": "angular velocity",
+                "linear": "linear velocity", "angular": "angular velocity"}
+
+
+def _inside(command: str, what: str, point: tuple[float, ...], extent: float) -> None:
+    for axis, value in zip(_AXES, point, strict=False):
+        if abs(value) > extent:
+            name = axis if what == "position" else f"{what} {axis}"
+            raise CommandError(f"{command}: {name} = {value:g} is outside the world "
+                               f"({metres(extent)})")
+
+
+def check_limits(command: Command, limits: Limits) -> None:
+    """Refuse a command whose points leave the world or whose velocities pass the speed
+    limit (``limits``: the world it goes to). Raises :class:`CommandError`, with the
+    same ``Command: what`` form as the checks made when a command is made."""
+    name = type(command).__name__
+    extent = limits.extent
+    for field_name in command.points:
+        point = getattr(command, field_name)
+        if point is not None:
+            _inside(name, field_name, point, extent)
+    for field_name in command.speeds:
+        velocity = getattr(command, field_name)
+        speed = 0.0 if velocity is None else math.hypot(*velocity)
+        if speed > limits.max_speed:
+            unit = "rad/s" if "angular" in field_name else "m/s"
+            raise CommandError(f"{name}: {_SPEED_WORDS[field_name]} {speed:g} {unit} is over "
+                               f"the limit of {limits.max_speed:g} {unit}")
+    if isinstance(command, SetPoses):
+        _rows_inside(command, limits)
+    if isinstance(command, SetMotor) and abs(command.velocity) > limits.max_speed:
+        raise CommandError(f"{name}: velocity {command.velocity:g} is over the limit of "
+                           f"{limits.max_speed:g} (rad/s or m/s)")
+    if isinstance(command, AddBody):
+        _body_inside(name, command.body, extent)
+    elif isinstance(command, AddJoint):
+        _inside(name, "anchor", command.joint.anchor, extent)
+        if abs(command.joint.motor_velocity) > limits.max_speed:
+            raise CommandError(f"{name}: motor velocity {command.joint.motor_velocity:g} is "
+                               f"over the limit of {limits.max_speed:g} (rad/s or m/s)")
+        for pose in command.joint.reference or ():
+            if pose is not None:
+                _inside(name, "reference pose", pose[:3], extent)
+
+
+def _rows_inside(command: SetPoses, limits: Limits) -> None:
+    """:func:`check_limits` for every row of a :class:`SetPoses` at once: positions in
+    the world, speeds under the limit (the first row that is not is told, by its body)."""
+    table = command.table
+    out = (np.abs(table[:, 0:3]) > limits.extent).any(axis=1)
+    if out.any():
+        row = int(np.flatnonzero(out)[0])
+        _inside(f"SetPoses: body {command.keys[row]}", "position",
+                tuple(table[row, 0:3].tolist()), limits.extent)
+    for what, columns, unit in (("linear", slice(7, 10), "m/s"),
+                                ("angular", slice(10, 13), "rad/s")):
+        speed = np.sqrt(np.einsum("ij,ij->i", table[:, columns], table[:, columns]))
+        fast = speed > limits.max_speed
+        if fast.any():
+            row = int(np.flatnonzero(fast)[0])
+            raise CommandError(f"SetPoses: body {command.keys[row]}: {_SPEED_WORDS[what]} "
+                               f"{speed[row]:g} {unit} is over the limit of "
+                               f"{limits.max_speed:g} {unit}")
+
+
+def _body_inside(name: str, body: Physical, extent: float) -> None:
+    """A body's shapes no larger than the world (ODE's bounding boxes must stay in range)."""
+    for shape in body.shapes:
+        if shape.kind == "plane":
+            if abs(shape.size[3]) > extent:
+                raise CommandError(f"{name}: the plane lies {shape.size[3]:g} m from the "
+                                   f"origin, outside the world ({metres(extent)})")
+            continue
+        _inside(name, "shape offset", shape.offset, extent)
+        if shape.vertices is not None and len(shape.vertices):
+            reach = float(np.abs(shape.vertices).max())
+            if reach > extent:
+                raise CommandError(f"{name}: a {shape.kind} vertex lies {reach:g} m out, "
+                                   f"larger than the world ({metres(extent)})")
+        elif shape.size and max(shape.size) > extent:
+            raise CommandError(f"{name}: {shape.kind} size {max(shape.size):g} m is larger "
+                               f"than the world ({metres(extent)})")
+
+
 #: Every command type by name: the serialised form's ``"command"`` field.
 COMMANDS: dict[str, type] = {cls.__name__: cls for cls in (
     AddBody, RemoveBody, AddJoint, RemoveJoint, SetMotor, ApplyForce, ApplyTorque,
-    ApplyImpulse, SetPose, SetVelocity, SetKinematicTarget, SetCollisionEnabled,
+    ApplyImpulse, SetPose, SetPoses, SetVelocity, SetKinematicTarget, SetCollisionEnabled,
     SetGravityEnabled, SetSleeping, SetSleepState, SetJointTarget, SetDriveLimits,
     ConfigureWorld, Step)}
 

@@ -36,9 +36,18 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from engine.memory import paused_gc
 from engine.messages import MessageLog
 from engine.physics import commands as cmd
-from engine.physics.backend import CONTACT_DTYPE, BodyState, DynamicsBackend, SupportsFaults
+from engine.physics.backend import (
+    CONTACT_DTYPE,
+    BackendFailure,
+    BodyState,
+    DynamicsBackend,
+    Limits,
+    SupportsFaults,
+)
+from engine.physics.naming import named
 from engine.realtime import Pacing, RealTimeController, advance
 
 log = logging.getLogger("colosseum.physics")
@@ -47,6 +56,9 @@ R = TypeVar("R")
 
 #: Steps a command waits for its body or joint to appear in the backend before it is dropped.
 WAIT_STEPS = 3
+#: Queued commands from which they are applied with the cyclic GC paused: a scene's bodies
+#: made at once (10,000 of them met a full collection as often as not).
+GC_BURST = 1000
 
 
 def _vec(values: tuple[float, ...] | None) -> np.ndarray | None:
@@ -66,6 +78,7 @@ _APPLY: dict[type, Callable[[DynamicsBackend, Any], Any]] = {
     cmd.ApplyTorque: lambda b, c: b.add_torque(c.key, np.array(c.torque)),
     cmd.ApplyImpulse: lambda b, c: b.add_impulse(c.key, np.array(c.impulse), _vec(c.point)),
     cmd.SetPose: lambda b, c: _set_pose(b, c),
+    cmd.SetPoses: lambda b, c: b.write_state(BodyState(c.keys, c.table)),
     cmd.SetVelocity: lambda b, c: b.set_velocity(c.key, np.array(c.linear),
                                                  np.array(c.angular)),
     cmd.SetKinematicTarget: lambda b, c: b.set_kinematic_target(
@@ -139,6 +152,9 @@ class Snapshot:
     step: int
     time: float
     bodies: BodyState
+    #: Commands applied before this state (of those pushed: :attr:`PhysicsDriver.pushed`),
+    #: so the main thread knows which of its teleports a snapshot already holds.
+    applied: int = 0
 
 
 EMPTY_SNAPSHOT = Snapshot(0, 0.0, BodyState.empty().freeze())
@@ -170,6 +186,8 @@ class PhysicsPort:
     #: Entities teleported through :meth:`set_pose` this frame (the physics system treats
     #: their Transform writes as done, not as writes to detect).
     teleported: set[int]
+    #: The world's extent and speed limit every pushed command is checked against.
+    limits: Limits = Limits()
 
     @property
     def backend_name(self) -> str:
@@ -178,6 +196,16 @@ class PhysicsPort:
         return getattr(backend, "name", "none") if backend is not None else "none"
 
     def push(self, command: cmd.Command) -> None:
+        """Check ``command`` against this world's :attr:`limits` and queue it; a value the
+        world cannot take raises :class:`~engine.physics.commands.CommandError` here, at
+        the caller, with the checks made when the command was made."""
+        if not isinstance(command, cmd.Command):
+            raise TypeError(f"physics.push takes a command from engine.physics.commands, "
+                            f"got {type(command).__name__}")
+        cmd.check_limits(command, self.limits)
+        self._enqueue(command)
+
+    def _enqueue(self, command: cmd.Command) -> None:
         raise NotImplementedError
 
     def set_pose(self, entity: int, position: Any, orientation: Any) -> None:
@@ -222,17 +250,15 @@ class DetachedPhysics(PhysicsPort):
     #: Commands kept at most; older ones are dropped (and counted) when nobody drains them.
     LIMIT = 100_000
 
-    def __init__(self) -> None:
+    def __init__(self, limits: Limits | None = None) -> None:
         self.controller = RealTimeController(Pacing())
+        self.limits = limits or Limits()
         self.names: dict[int, str] = {}
         self.teleported: set[int] = set()
         self.outbox: deque[cmd.Command] = deque(maxlen=self.LIMIT)
         self.dropped = 0
 
-    def push(self, command: cmd.Command) -> None:
-        if not isinstance(command, cmd.Command):
-            raise TypeError(f"physics.push takes a command from engine.physics.commands, "
-                            f"got {type(command).__name__}")
+    def _enqueue(self, command: cmd.Command) -> None:
         if len(self.outbox) == self.LIMIT:
             self.dropped += 1
         self.outbox.append(command)
@@ -250,10 +276,11 @@ class PhysicsDriver(PhysicsPort):
     def __init__(self, backend: DynamicsBackend, mode: str = "serial",
                  pacing: Pacing | None = None,
                  clock: Callable[[], float] = time.perf_counter,
-                 names: Mapping[int, str] | None = None) -> None:
+                 names: Mapping[int, str] | None = None, limits: Limits | None = None) -> None:
         if mode not in ("serial", "threaded"):
             raise ValueError(f"mode must be 'serial' or 'threaded', not {mode!r}")
         self.backend = backend
+        self.limits = limits or Limits()
         self._reports_faults = isinstance(backend, SupportsFaults)
         self.mode = mode
         self.clock = clock
@@ -268,6 +295,9 @@ class PhysicsDriver(PhysicsPort):
         self.log: cmd.CommandLog | None = None
         self.messages = MessageLog(log)
         self.contacts_total = 0
+        #: Commands and queries queued and applied (by the owner thread) so far.
+        self.pushed = 0
+        self.applied = 0
         self._commands: deque[tuple[cmd.Command | Callable[[DynamicsBackend], Any],
                                     Future | None]] = deque()
         self._waiting: list[tuple[cmd.Command, int]] = []
@@ -279,14 +309,15 @@ class PhysicsDriver(PhysicsPort):
         self._thread: threading.Thread | None = None
         self.stop_at = None
         self.error: BaseException | None = None
+        #: Why the backend cannot step any more (its library failed inside a step); the
+        #: world is then frozen at its last state while the clock and the run go on.
+        self.failed: str | None = None
         self.closed = False
 
     # -- commands (any thread) ---------------------------------------------
-    def push(self, command: cmd.Command) -> None:
-        """Queue a command; it is applied between two steps, in the order pushed."""
-        if not isinstance(command, cmd.Command):
-            raise TypeError(f"physics.push takes a command from engine.physics.commands, "
-                            f"got {type(command).__name__}")
+    def _enqueue(self, command: cmd.Command) -> None:
+        """Queue a checked command; it is applied between two steps, in the order pushed."""
+        self.pushed += 1
         self._commands.append((command, None))
 
     def request(self, query: Callable[[DynamicsBackend], R]) -> Future:
@@ -294,10 +325,13 @@ class PhysicsDriver(PhysicsPort):
         mode runs it now. Queries are not commands: they are not logged and must not change
         the world."""
         future: Future = Future()
-        if self.mode == "serial" or self._thread is None:
+        if self.failed is not None:
+            future.set_exception(PhysicsUnavailable(f"physics stopped: {self.failed}"))
+        elif self.mode == "serial" or self._thread is None:
             self._apply_pending()
             self._query(query, future)
         else:
+            self.pushed += 1
             self._commands.append((query, future))
         return future
 
@@ -328,8 +362,9 @@ class PhysicsDriver(PhysicsPort):
                     f"(not created yet, or removed)", f"frame {self.frame}: ")
             return
         except Exception as exc:  # a bad command must not take the physics down
-            self.messages.error(f"{type(command).__name__} on "
-                                f"{self.describe(command.key, command.on_joint)} failed: {exc}",
+            target = self.describe(command.key, command.on_joint)
+            why = named(str(exc), self.names).removeprefix(f"{target}: ")
+            self.messages.error(f"{type(command).__name__} on {target} failed: {why}",
                                 f"frame {self.frame}: ")
             return
         if self.log is not None:
@@ -337,8 +372,16 @@ class PhysicsDriver(PhysicsPort):
 
     def _apply_pending(self) -> None:
         commands = self._commands
+        if len(commands) >= GC_BURST:  # a scene's bodies at once: long-lived, GC paused
+            with paused_gc():
+                self._apply(commands)
+        else:
+            self._apply(commands)
+
+    def _apply(self, commands: deque) -> None:
         while commands:
             item, future = commands.popleft()
+            self.applied += 1
             if future is None:
                 self._run(item)  # type: ignore[arg-type]
             else:
@@ -355,6 +398,8 @@ class PhysicsDriver(PhysicsPort):
 
         Returns the wall seconds spent stepping.
         """
+        if self.failed is not None:
+            return self._frozen(dt)
         self._apply_pending()
         if self._waiting:
             self._retry_waiting()
@@ -364,7 +409,11 @@ class PhysicsDriver(PhysicsPort):
         spent = 0.0
         for _ in range(substeps):
             t0 = self.clock()
-            backend.step(h)
+            try:
+                backend.step(h)
+            except BackendFailure as exc:
+                self._stop_physics(exc)
+                return spent
             cost = self.clock() - t0
             if record is not None:
                 record(cmd.Step(h))
@@ -382,8 +431,35 @@ class PhysicsDriver(PhysicsPort):
                     self._faults.extend(faults)
         table = self._tables.take(backend.body_count())
         keys = backend.read_state_into(table)
-        self.snapshot = Snapshot(self.steps, self.time, BodyState(keys, table).freeze())
+        self.snapshot = Snapshot(self.steps, self.time, BodyState(keys, table).freeze(),
+                                 self.applied)
         return spent
+
+    def _stop_physics(self, exc: BackendFailure) -> None:
+        """The backend failed inside a step: say so once and freeze the world there."""
+        self.failed = str(exc)
+        self.messages.error(
+            f"physics stopped at t = {self.time:.6g} s: the {self.backend_name} library "
+            f"failed inside a step ({exc}). The world stays as it was; scripts, drawing and "
+            "sound go on. The engine's checks should have kept this from the library: "
+            "please report it with the scene", f"frame {self.frame}: ")
+
+    def _frozen(self, dt: float) -> float:
+        """A step of a stopped physics: the clock moves on, the world does not; commands
+        are dropped (counted in one message) and queries fail."""
+        dropped = 0
+        while self._commands:
+            item, future = self._commands.popleft()
+            self.applied += 1
+            if future is None:
+                dropped += 1
+            else:
+                future.set_exception(PhysicsUnavailable(f"physics stopped: {self.failed}"))
+        self._waiting.clear()
+        if dropped:
+            self.messages.warn("commands to the stopped physics are dropped")
+        self.time = advance(self.time, dt)
+        return 0.0
 
     # -- threaded mode ------------------------------------------------------
     def start(self) -> None:

@@ -26,6 +26,22 @@ from collections.abc import Iterable, Mapping
 _KEY = re.compile(r"\b(body|joint) (-?\d+)\b")
 
 
+def named(text: str, names: Mapping[int, str]) -> str:
+    """``text`` with ``body N`` / ``joint N`` as ``object 'ID'`` / ``joint 'ID'`` for the
+    keys ``names`` (entity -> scene ID) knows.
+
+    >>> named("body 7: velocity beyond 1e5", {7: "crate"})
+    "object 'crate': velocity beyond 1e5"
+    """
+    def scene_id(match: re.Match[str]) -> str:
+        name = names.get(int(match[2]))
+        if name is None:
+            return match[0]
+        return f"{'joint' if match[1] == 'joint' else 'object'} {name!r}"
+
+    return _KEY.sub(scene_id, text)
+
+
 class SceneNames(logging.Filter):
     """Rewrites backend records' ``body N`` and ``joint N`` to the scene IDs in ``names``
     (entity -> ID, the physics plugin's live table); keys it has no name for stay."""
@@ -35,17 +51,11 @@ class SceneNames(logging.Filter):
         self.names = names
         self._loggers: list[logging.Logger] = []
 
-    def _named(self, match: re.Match[str]) -> str:
-        name = self.names.get(int(match[2]))
-        if name is None:
-            return match[0]
-        return f"{'joint' if match[1] == 'joint' else 'object'} {name!r}"
-
     def filter(self, record: logging.LogRecord) -> bool:
         text = record.getMessage()
-        named = _KEY.sub(self._named, text)
-        if named != text:
-            record.msg, record.args = named, ()
+        renamed = named(text, self.names)
+        if renamed != text:
+            record.msg, record.args = renamed, ()
         return True
 
     def install(self, loggers: Iterable[logging.Logger]) -> None:

@@ -53,12 +53,16 @@ The per-body state is the smoothed velocity (where it is averaging), the quiet t
 the uninterrupted run would.
 
 Cost: the per-body part of a step (smoothing, the two tests, the quiet time and the
-reference) is one compiled pass over the bodies (``engine/physics/_sleep.pyx``, the
+reference) is one compiled pass over the bodies (``engine/physics/sleep.h``, the
 same arithmetic in the same order as the numpy formulation it replaced, to the bit):
 a few microseconds for 500 bodies right after a step, where twenty numpy calls over
 (6, N) columns took some 90 with the caches cold (``colosseum bench physics`` measures
-it). Islands cost more (contacts to rows, scipy's connected components) and are looked
-for only on steps where some body is ready, and reused while the contacts are the same.
+it). :meth:`SleepRule.update` runs it through ``_sleep.pyx`` and finds the islands with
+scipy (contacts to rows, connected components: far dearer, so only on steps where some
+body is ready, and reused while the contacts are the same); that is the pymunk backend's
+path. The ODE backend runs the whole update inside its step instead, in C on the same
+arrays (:meth:`SleepRule.arrays`), with the islands the step itself found
+(``ode3d/stepper.h``'s ``cs_sleep``), and so does the plain-C reference of the benchmark.
 """
 
 from __future__ import annotations
@@ -101,11 +105,13 @@ class SleepState:
     reference: np.ndarray | None = None
     #: Its standing with the resting preload (ODE: engine/physics/ode3d/stepper.h), which
     #: carries a resting body's weight from step to step: steps it has been held up at
-    #: rest (0 to 2), whether it slid while preloaded, and the force its contacts hold it
-    #: with (averaged; (3,), N; None: none).
+    #: rest (0 to 2), whether it slid while preloaded, the force its contacts hold it
+    #: with (averaged; (3,), N; None: none), and whether it was preloaded at the last step
+    #: (a preloaded body stays so up to a faster drift than it may enter at).
     rest_steps: int = 0
     rest_slid: bool = False
     rest_force: np.ndarray | None = None
+    rest_preloaded: bool = False
 
 
 class KeyIndex:
@@ -152,6 +158,7 @@ class SleepRule:
         self.reference = np.zeros((6, 0))
         self.started = np.zeros(0, bool)  # a quiet stretch is under way (reference set)
         self._islands_of: tuple[np.ndarray, np.ndarray] | None = None
+        self.generation = 0  # counts the times the arrays were replaced (bound anew)
         self._pass = self._bind()
 
     def configure(self, time: float, linear: float, angular: float) -> None:
@@ -182,7 +189,7 @@ class SleepRule:
         self._stack = stack
         self.velocity = stack[2]
         self.keys, self._index = keys, KeyIndex(keys)
-        self.movable = np.asarray(movable, bool)
+        self.movable = np.ascontiguousarray(movable, bool)
         self.eligible = np.ascontiguousarray(eligible, bool)
         self.awake = np.zeros(n, bool)
         self._islands_of = None  # the last edges and their island labels
@@ -191,9 +198,17 @@ class SleepRule:
     def _bind(self) -> _sleep.Pass:
         """The compiled pass over the current arrays (they are written in place from then
         on, so the pass is made again only when they are replaced)."""
-        return _sleep.Pass(self._stack, self.smoothing, self.timer, self.reference,
-                           self.started.view(np.uint8), self.awake.view(np.uint8),
-                           self.eligible.view(np.uint8), self._bounds)
+        self.generation += 1
+        return _sleep.Pass(*self.arrays()[:7], self._bounds)
+
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        """The arrays a compiled pass works on in place, as ``sleep.h``'s SrRule holds
+        them: the (3, 6, N) stack (smoothed, drift, velocity), smoothing, timer, reference,
+        started, awake, eligible, movable (bytes), the squared bounds. A backend stepping
+        the rule in C binds them again whenever :attr:`generation` changes."""
+        return (self._stack, self.smoothing, self.timer, self.reference,
+                self.started.view(np.uint8), self.awake.view(np.uint8),
+                self.eligible.view(np.uint8), self.movable.view(np.uint8), self._bounds)
 
     def rows(self, keys: np.ndarray) -> np.ndarray:
         return self._index.rows(keys)

@@ -538,6 +538,25 @@ def test_six_dof_follows_target_with_bounded_force(kit, backend: DynamicsBackend
     assert abs(kit.row(backend, 2)["position"][2] - 1.0) < 0.1
 
 
+def test_a_fixed_joint_holds_a_light_body_pulled_off_a_heavy_one(kit, backend) -> None:
+    """A 0.45 kg palm fixed on a 50 kg crate's top, 0.2 m off its middle, pulled up with
+    250 N: too little to lift the crate (490 N) or tip it over its far edge (250 N x 0.5 m
+    < 490 N x 0.3 m), so it stays on the floor, and the joint keeps the palm where it was
+    on it. (ODE carries the joint's offset as a lever on its first body: on the
+    palm, 5000 times easier to turn than the crate, QuickStep let it stretch 0.2 m.)"""
+    kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
+    kit.add(backend, 1, kit.box((0.6, 0.4, 0.5), mass=50.0), (0.0, 0.0, 0.25))
+    kit.add(backend, 2, kit.box((0.09, 0.18, 0.03), mass=0.45), (0.2, 0.0, 0.515))
+    backend.add_joint(10, Joint(kind="fixed", body_a=2, body_b=1, anchor=(0.2, 0.0, 0.515)))
+    kit.run(backend, 0.2, 1 / 120)
+    start = kit.row(backend, 2)["position"] - kit.row(backend, 1)["position"]
+    kit.run(backend, 1.0, 1 / 120,
+            lambda i: backend.add_force(2, np.array([0.0, 0.0, 250.0])))
+    crate, palm = kit.row(backend, 1), kit.row(backend, 2)
+    assert crate["position"][2] == pytest.approx(0.25, abs=2e-3)
+    np.testing.assert_allclose(palm["position"] - crate["position"], start, atol=2e-3)
+
+
 def test_offset_shapes_spin_about_their_centre_of_mass(kit, make_backend) -> None:
     backend = make_backend(gravity=(0.0, 0.0, 0.0))
     dumbbell = Physical(mass=1.0, shapes=[Shape("sphere", (0.1,)),

@@ -1,5 +1,6 @@
 """The physics benchmark compares like with like: its C reference and our backend
-simulate the same scene to the last bit (so the ratio measures overhead only)."""
+simulate the same scene to the last bit, and with sleeping on put the same boxes to sleep
+(both run the engine's sleep rule), so the ratio measures overhead only."""
 
 from __future__ import annotations
 
@@ -19,10 +20,12 @@ pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C co
 
 def test_reference_and_backend_simulate_the_same_boxes(tmp_path: Path) -> None:
     exe = bench.compile_reference(tmp_path)
-    for sleep in (False, True):
-        _, c_z = bench.run_reference(exe, 30, 90, sleep, feedback=True)
-        _, ours_z = bench.time_ours(30, 90, sleep, sync=True)
+    for n, steps, sleep in ((30, 90, False), (30, 90, True), (3, 300, True)):
+        _, c_z, c_asleep = bench.run_reference(exe, n, steps, sleep, feedback=True)
+        _, ours_z, ours_asleep = bench.time_ours(n, steps, sleep, sync=True)
         assert ours_z == pytest.approx(c_z, abs=1e-6)
+        assert ours_asleep == c_asleep
+    assert c_asleep == 3  # the short stack fell asleep, on both sides
 
 
 def test_run_bench_reports_every_case(capsys: pytest.CaptureFixture[str]) -> None:

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pymunk
 import pytest
 
 from components import Physical, Shape
-from engine.physics.backend import WorldSettings
+from engine.physics.backend import BodyState, WorldSettings
 from engine.physics.pymunk2d import PymunkBackend
+from engine.rotation import quat_multiply
 
 # a failing pymunk callback is only printed by cffi: make it fail the test
 pytestmark = pytest.mark.filterwarnings("error::pytest.PytestUnraisableExceptionWarning")
@@ -177,3 +180,71 @@ def test_read_state_into_fills_rows_in_keys_order(kit) -> None:
     state = backend.read_state()
     np.testing.assert_array_equal(table, state.table)
     np.testing.assert_array_equal(backend.keys(), state.keys)
+
+
+def _bodies_for_poses(kit, backend: PymunkBackend) -> None:
+    """A tilted box off its centre of mass, a ball, a hand's shapeless kinematic control
+    body and a static box: every case a pose is turned into the plane for."""
+    tilt = np.array([math.cos(0.3), math.sin(0.3), 0.0, 0.0])  # 34° about X: a rest tilt
+    offset = Physical(mass=2.0, shapes=[Shape("box", (0.4, 0.2, 0.1), (0.3, 0.0, 0.2))])
+    kit.add(backend, 4, offset, (0.0, 0.5, 1.0), tilt)
+    kit.add(backend, 7, kit.sphere(), (1.0, 0.0, 1.0))
+    kit.add(backend, 9, Physical(kind="kinematic", mass=1.0, shapes=[], category=0, mask=0,
+                                 gravity=False), (2.0, 0.0, 1.0))
+    kit.add(backend, 12, kit.box(kind="static", mass=None), (3.0, 0.0, 0.5))
+
+
+def _raw(backend: PymunkBackend) -> list[tuple[float, ...]]:
+    return [(*rec.body.position, rec.body.angle, *rec.body.velocity, rec.body.angular_velocity,
+             rec.y) for _, rec in sorted(backend._bodies.items())]
+
+
+def test_write_state_sets_what_set_pose_and_set_velocity_set_to_the_bit(kit) -> None:
+    """Many bodies in one write (the hands' control bodies each frame) and one by one:
+    the same pymunk positions, angles and centre-of-mass velocities, bit for bit, and the
+    same steps after; nothing a row asks for out of the plane goes unsaid."""
+    rng = np.random.default_rng(5)
+    one, batch = PymunkBackend(), PymunkBackend()
+    for backend in (one, batch):
+        _bodies_for_poses(kit, backend)
+        backend.step(1 / 120)
+    keys = np.array([4, 7, 9, 12])
+    tilt = np.array([math.cos(0.3), math.sin(0.3), 0.0, 0.0])
+    for _ in range(3):
+        turns = rng.uniform(-3.0, 3.0, 4)
+        orientation = np.array([quat_multiply(kit.quat_y(a), tilt if k == 4 else kit.IDENTITY)
+                                for a, k in zip(turns, keys, strict=True)])
+        position = rng.uniform(-2.0, 2.0, (4, 3))
+        linear = rng.uniform(-1.0, 1.0, (4, 3)) * (1.0, 0.0, 1.0)
+        angular = rng.uniform(-4.0, 4.0, (4, 3)) * (0.0, 1.0, 0.0)
+        for i, key in enumerate(keys.tolist()):
+            one.set_pose(key, position[i], orientation[i])
+            one.set_velocity(key, linear[i], angular[i])
+        batch.write_state(BodyState.from_arrays(keys, position, orientation, linear, angular))
+        assert _raw(batch) == _raw(one)
+        assert np.array_equal(batch.read_state().table, one.read_state().table)
+        for backend in (one, batch):
+            backend.step(1 / 120)
+        assert _raw(batch) == _raw(one)
+
+
+def test_write_state_warns_as_one_by_one_and_applies_nothing_of_a_bad_row(kit,
+                                                                           caplog) -> None:
+    backend = PymunkBackend()
+    _bodies_for_poses(kit, backend)
+    before = _raw(backend)
+    rows = BodyState.from_arrays(np.array([7, 9]), np.array([[0.5, 0, 1], [np.nan, 0, 1]]),
+                                 np.tile(kit.IDENTITY, (2, 1)), np.zeros((2, 3)),
+                                 np.zeros((2, 3)))
+    with pytest.raises(ValueError, match=r"body 9: pose \[nan, .*is not finite"):
+        backend.write_state(rows)
+    assert _raw(backend) == before  # not even the good row before it
+    with pytest.raises(KeyError, match=r"no bodies with keys \[33\]"):
+        backend.write_state(BodyState.from_arrays(np.array([33]), np.zeros((1, 3)),
+                                                  kit.IDENTITY[None], np.zeros((1, 3)),
+                                                  np.zeros((1, 3))))
+    tilted = np.array([[math.cos(0.2), 0.0, 0.0, math.sin(0.2)]])  # about Z: out of plane
+    backend.write_state(BodyState.from_arrays(np.array([7]), np.zeros((1, 3)), tilted,
+                                              np.array([[0.0, 1.0, 0.0]]), np.zeros((1, 3))))
+    assert "body 7: new orientation tilts differently out of the X–Z plane" in caplog.text
+    assert "body 7: velocity out of the X–Z plane; only its in-plane part" in caplog.text

@@ -128,6 +128,26 @@ def test_a_body_that_may_not_sleep_keeps_what_it_carries_awake(kit, make_backend
     assert not backend.is_sleeping(1) and not backend.is_sleeping(2)
 
 
+def test_a_joint_ties_an_island_as_a_contact_does(kit, make_backend) -> None:
+    """Two crates resting apart on the floor, one that may not sleep: joined by a ball
+    joint, the other stays awake with it (ODE finds its islands in the step, pymunk with
+    the rule's own; both from the joints as well as the contacts); apart, or joined to
+    one that may sleep, it sleeps."""
+    asleep = []
+    for joined, restless in ((True, True), (False, True), (True, False)):
+        backend = make_backend(auto_sleep=True)
+        kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
+        first = kit.box((0.5, 0.5, 0.5))
+        first.can_sleep = not restless
+        kit.add(backend, 1, first, (0.0, 0.0, 0.25))
+        kit.add(backend, 2, kit.box((0.5, 0.5, 0.5)), (1.0, 0.0, 0.25))
+        if joined:
+            backend.add_joint(10, kit.hinge(1, (0.5, 0.0, 0.25), 2, kind="ball"))
+        kit.run(backend, 3.0, 0.01)
+        asleep.append((backend.is_sleeping(1), backend.is_sleeping(2)))
+    assert asleep == [(False, False), (False, True), (True, True)]
+
+
 def test_a_push_restarts_the_quiet_stretch(kit, make_backend) -> None:
     """Every explicit wake starts the stretch over, so a body nudged every few steps,
     however gently, never sleeps."""

@@ -64,6 +64,7 @@ def remove_body(World w, key) -> list:
     gone = [jk for jk, rec in w.joints.items() if key in (<_JointRec>rec).bodies]
     for jk in gone:
         remove_joint(w, jk)
+    wake_touching(w, i)
     free_geoms(w, i)
     if w.slots[i].body != NULL:
         dBodyDestroy(w.slots[i].body)
@@ -119,22 +120,33 @@ def slots_for(World w, keys) -> np.ndarray:
 
 
 # -- poses and velocities ---------------------------------------------------------------
-cdef void set_slot_pose(World w, int i, const double* pos, const double* quat) noexcept:
+cdef void set_quaternion_exactly(dBodyID b, const double* q) noexcept:
+    """Give ``b`` the unit quaternion ``q`` to the bit (one ODE made: a body put back where
+    it was), which dBodySetQuaternion's normalisation alone may move by an ulp."""
+    cdef double c[4]
+    quat_preimage(q, c)
+    dBodySetQuaternion(b, c)
+
+
+cdef void set_slot_pose(World w, int i, const double* pos, const double* quat,
+                        bint wake_others=True) noexcept:
     cdef Slot* s = &w.slots[i]
     cdef double q[4]
     cdef double wc[3]
     memcpy(q, quat, 4 * sizeof(double))
     qnormalize(q)
     s.target_left = 0.0  # put somewhere else: no longer on its way to a target
+    if wake_others:
+        wake_touching(w, i)  # what it held up where it was
     if s.body == NULL:
         memcpy(s.pose, pos, 3 * sizeof(double))
         memcpy(&s.pose[3], q, 4 * sizeof(double))
         for entry in w.geoms[i]:
             place_static_geom(s, entry)
         return
-    qrotate(q, s.com, wc)
-    dBodySetPosition(s.body, pos[0] + wc[0], pos[1] + wc[1], pos[2] + wc[2])
     dBodySetQuaternion(s.body, q)
+    qrotate(dBodyGetQuaternion(s.body), s.com, wc)  # the turn it has (ODE normalises too)
+    dBodySetPosition(s.body, pos[0] + wc[0], pos[1] + wc[1], pos[2] + wc[2])
     wake(w, s.body)
 
 
@@ -146,9 +158,9 @@ cdef void set_slot_velocity(World w, int i, const double* lin, const double* ang
     if s.body == NULL:
         return
     qrotate(dBodyGetQuaternion(s.body), s.com, wc)
-    dBodySetLinearVel(s.body, lin[0] + ang[1] * wc[2] - ang[2] * wc[1],
-                      lin[1] + ang[2] * wc[0] - ang[0] * wc[2],
-                      lin[2] + ang[0] * wc[1] - ang[1] * wc[0])
+    dBodySetLinearVel(s.body, lin[0] + (ang[1] * wc[2] - ang[2] * wc[1]),
+                      lin[1] + (ang[2] * wc[0] - ang[0] * wc[2]),
+                      lin[2] + (ang[0] * wc[1] - ang[1] * wc[0]))
     dBodySetAngularVel(s.body, ang[0], ang[1], ang[2])
     wake(w, s.body)
 
@@ -306,11 +318,9 @@ def add_impulse(World w, key, double ix, double iy, double iz, point=None) -> No
 
 
 # -- switches ---------------------------------------------------------------------------
-cdef void disable(dBodyID b) noexcept nogil:
-    """Asleep, at rest: a sleeping body reports zero velocity."""
-    dBodyDisable(b)
-    dBodySetLinearVel(b, 0.0, 0.0, 0.0)
-    dBodySetAngularVel(b, 0.0, 0.0, 0.0)
+cdef inline void disable(dBodyID b) noexcept nogil:
+    """Asleep, at rest: a sleeping body reports zero velocity (stepper.h)."""
+    cs_disable(b)
 
 
 def set_sleeping(World w, key, bint sleeping) -> None:
@@ -320,6 +330,7 @@ def set_sleeping(World w, key, bint sleeping) -> None:
         return
     if sleeping:
         disable(b)
+        w.unsure = True
     else:
         wake(w, b)
 
@@ -332,6 +343,7 @@ def restore_sleeping(World w, key, bint sleeping) -> None:
     cdef dBodyID b = w.slots[slot].body
     for i in range(w.n):
         w.slots[i].woken = 0
+    w.unsure = True
     if b == NULL or w.slots[slot].kind != KIND_DYNAMIC:
         return
     if sleeping:
@@ -375,6 +387,8 @@ def set_collision(World w, key, bint enabled) -> None:
     dSpaceCollide and ray casts); the body itself moves on."""
     cdef int i = w.slot(key)
     cdef dGeomID g
+    if not enabled:
+        wake_touching(w, i)  # what rests on it falls through
     for entry in w.geoms[i]:
         g = <dGeomID><size_t>entry[0]
         if enabled:
@@ -397,21 +411,24 @@ def sleeping(World w) -> np.ndarray:
 
 def rest_standing(World w) -> tuple:
     """Per slot, the resting preload's standing (stepper.h): steps held up at rest (0 to
-    2), whether it slid while preloaded, and the averaged force its contacts hold it
-    with (n, 3), N."""
+    2), whether it slid while preloaded, the averaged force its contacts hold it with
+    (n, 3), N, and whether it was preloaded at the last step."""
     cdef cnp.ndarray[cnp.int8_t, ndim=1] steps = np.zeros(w.n, np.int8)
     cdef cnp.ndarray[cnp.uint8_t, ndim=1] slid = np.zeros(w.n, np.uint8)
+    cdef cnp.ndarray[cnp.uint8_t, ndim=1] preloaded = np.zeros(w.n, np.uint8)
     cdef cnp.ndarray[cnp.float64_t, ndim=2] held = np.zeros((w.n, 3))
     cdef int i, k
     for i in range(min(w.n, w.ctx.stepper.capbodies)):
         steps[i] = w.ctx.stepper.bodies[i].resting
         slid[i] = w.ctx.stepper.bodies[i].slid
+        preloaded[i] = w.ctx.stepper.bodies[i].preloaded
         for k in range(3):
             held[i, k] = w.ctx.stepper.bodies[i].held[k]
-    return steps, slid.view(bool), held
+    return steps, slid.view(bool), held, preloaded.view(bool)
 
 
-def set_rest_standing(World w, key, int steps, bint slid, double[::1] held) -> None:
+def set_rest_standing(World w, key, int steps, bint slid, double[::1] held,
+                      bint preloaded) -> None:
     """Put a body's resting standing back (a saved state's)."""
     cdef int i = w.slot(key), k
     if not 0 <= steps <= 2:
@@ -420,5 +437,6 @@ def set_rest_standing(World w, key, int steps, bint slid, double[::1] held) -> N
         raise MemoryError()
     w.ctx.stepper.bodies[i].resting = steps
     w.ctx.stepper.bodies[i].slid = slid
+    w.ctx.stepper.bodies[i].preloaded = preloaded
     for k in range(3):
         w.ctx.stepper.bodies[i].held[k] = held[k]

@@ -129,8 +129,11 @@ cdef void place_static_geom(Slot* s, list entry) noexcept:
     dGeomSetQuaternion(g, wq)
 
 
-def finish_body(World w, key, double mass) -> None:
-    """Give the body its mass (``mass`` > 0 rescales the shapes' total) at its COM."""
+def finish_body(World w, key, double mass, com=None, inertia=None) -> None:
+    """Give the body its mass (``mass`` > 0 rescales the shapes' total) at its COM: the
+    shapes' centroid, or ``com`` (entity frame) with the shapes' inertia about their
+    centroid; ``inertia`` (9 numbers, row-major: the tensor about the COM in the entity
+    frame) replaces theirs."""
     cdef int i = w.slot(key)
     cdef Slot* s = &w.slots[i]
     cdef dMass* m = <dMass*><char*>w.pending_mass[i]
@@ -153,8 +156,15 @@ def finish_body(World w, key, double mass) -> None:
     c[1] = m.c[1]
     c[2] = m.c[2]
     dMassTranslate(m, -c[0], -c[1], -c[2])
+    if com is not None:
+        for k in range(3):
+            c[k] = com[k]
+    if inertia is not None:
+        dMassSetParameters(m, m.mass, 0.0, 0.0, 0.0, inertia[0], inertia[4], inertia[8],
+                           inertia[1], inertia[2], inertia[5])
     if not dMassCheck(m):
-        raise ValueError("the body's shapes give an invalid mass distribution")
+        raise ValueError("the body's shapes give an invalid mass distribution"
+                         if inertia is None else "its inertia is not positive definite")
     dBodySetMass(s.body, m)
     if s.kind == KIND_KINEMATIC:
         dBodySetKinematic(s.body)  # setting a mass makes a body dynamic again
@@ -176,9 +186,9 @@ def finish_body(World w, key, double mass) -> None:
     # the body was given its entity origin's velocity: move it to the COM too
     v = dBodyGetLinearVel(s.body)
     av = dBodyGetAngularVel(s.body)
-    dBodySetLinearVel(s.body, v[0] + av[1] * wc[2] - av[2] * wc[1],
-                      v[1] + av[2] * wc[0] - av[0] * wc[2],
-                      v[2] + av[0] * wc[1] - av[1] * wc[0])
+    dBodySetLinearVel(s.body, v[0] + (av[1] * wc[2] - av[2] * wc[1]),
+                      v[1] + (av[2] * wc[0] - av[0] * wc[2]),
+                      v[2] + (av[0] * wc[1] - av[1] * wc[0]))
     store_good(w, i)
 
 

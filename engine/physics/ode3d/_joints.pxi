@@ -4,8 +4,10 @@
 cdef class _Drive:
     """A six-DOF drive: linear + angular velocity motors aiming a body at a target pose.
 
-    Each step the motors ask for ``v = error / τ``: the error closes with time constant τ
-    (at least the step; 0 means the step), the correction capped at ``max_speed`` and
+    Each step the motors ask for the velocity that leaves ``e^(-dt/τ)`` of the error after
+    the step, ``v = error (1 - e^(-dt/τ)) / dt``: the error closes as e^(-t/τ) at any step
+    (``error / τ`` closed it faster, by 15 % at 1/120 s and τ = 30 ms; pymunk's bias is
+    the same law; 0 means all of it in one step), the correction capped at ``max_speed`` and
     ``max_spin``. The motors' force and torque are bounded, so a blocked body pushes but
     never fights. With a second body the target rides on it (the relative pose at
     creation is kept) and the motors hold velocities relative to it, so its own motion is
@@ -25,12 +27,31 @@ cdef class _Drive:
     cdef double com[3]       # the body's centre of mass in its entity frame
 
 
+cdef class _Spring:
+    """A spring-damper on a hinge's or slider's free axis: an angular or linear motor of
+    one axis beside the joint (which keeps its own limits and motor) whose row each step
+    is the spring ``f = -k (x + a h v - target) - d v``, ``v`` the rate after the step:
+    ODE's soft row ``J v = c - cfm f`` with ``cfm = 1 / (a h k + d)`` and
+    ``c = -k (x - target) cfm``. ``a`` is 0 while the spring's period is resolved
+    (``k h^2 / m <= 1``, m the row's mass): its pull is the one before the step, and ODE
+    moving the bodies with the new velocity makes the step symplectic, so an undamped
+    spring keeps its energy; a stiffer one takes ``a`` 1, the limit-stop spring of ODE's
+    manual (implicit: stable at any stiffness, it loses a little energy a period)."""
+    cdef dJointID motor
+    cdef double stiffness   # N m / rad or N / m
+    cdef double damping     # N m s / rad or N s / m
+    cdef double target      # rad or m, as joint_state counts
+    cdef double max_force
+    cdef double axis[3]     # the free axis in ODE's body 1
+
+
 cdef class _JointRec:
     cdef dJointID joint
     cdef int kind
     cdef double sign        # -1 where ODE's body order is the reverse of (body_a, body_b)
     cdef public object bodies   # (key_a, key_b or None)
     cdef _Drive drive
+    cdef _Spring spring
     cdef dJointFeedback feedback  # written by each step once asked for (joint_force)
     cdef bint watched
 
@@ -53,13 +74,25 @@ cdef void relative_pose(dBodyID base, dBodyID body, double* out) noexcept nogil:
     qmul(conj, dBodyGetQuaternion(body), &out[3])
 
 
+cdef double min_inertia(dBodyID body) noexcept:
+    """The smallest diagonal moment of inertia of ``body`` (kg m²; a kinematic body's is
+    infinite): how easily it turns about its easiest axis."""
+    cdef dMass m
+    if dBodyIsKinematic(body):
+        return 1e300
+    dBodyGetMass(body, &m)
+    return min(m.I[0], m.I[5], m.I[10])
+
+
 def create_joint(World w, key, int kind, key_a, key_b, anchor, axis, axis2, low, high,
-                 double velocity, double max_force, ref_a=None, ref_b=None) -> None:
+                 double velocity, double max_force, ref_a=None, ref_b=None,
+                 spring=None) -> None:
     """Create a joint between two bodies (``key_b`` None or static: the world).
 
     ``ref_a``/``ref_b`` (entity poses x y z w x y z, or None: where the body is) are
     the poses the bodies had when the joint was first made: the joint is made as if
-    they were there, so a saved state re-creates it exactly.
+    they were there, so a saved state re-creates it exactly. ``spring`` (stiffness,
+    damping, target, max force; a hinge or slider) pulls its free axis to the target.
     """
     cdef dBodyID ba = NULL
     cdef dBodyID bb = NULL
@@ -68,10 +101,19 @@ def create_joint(World w, key, int kind, key_a, key_b, anchor, axis, axis2, low,
     cdef dReal a2[3]
     cdef _JointRec rec
     cdef _Drive d
+    cdef _Spring sp = None
     cdef double sign = 1.0
     w.check()
     if key in w.joints:
         raise ValueError(f"joint {key} already exists")
+    if spring is not None and kind not in (JOINT_HINGE, JOINT_SLIDER):
+        raise ValueError(f"joint {key}: only a hinge or a slider takes a spring")
+    # ODE aborts the process on these (see _errors.pxi): refused at the door as well
+    if key_b is not None and key_b == key_a:
+        raise ValueError(f"joint {key}: a joint needs two different bodies")
+    if (kind not in (JOINT_BALL, JOINT_FIXED, JOINT_SIX_DOF) and not any(axis)) or (
+            kind in (JOINT_UNIVERSAL, JOINT_HINGE2) and not any(axis2)):
+        raise ValueError(f"joint {key}: a zero axis")
     cdef int ia = w.slot(key_a)
     cdef int ib = -1 if key_b is None else w.slot(key_b)
     cdef int ia0 = ia
@@ -85,6 +127,14 @@ def create_joint(World w, key, int kind, key_a, key_b, anchor, axis, axis2, low,
         ia = ib
     if ba == NULL:
         raise ValueError("a joint needs at least one non-static body")
+    if kind == JOINT_HINGE2 and bb == NULL:
+        raise ValueError(f"joint {key}: a hinge2 joint needs two bodies, neither static")
+    if kind in (JOINT_UNIVERSAL, JOINT_HINGE2):  # ODE aborts on parallel hinge2 axes
+        u, v = [float(x) for x in axis], [float(x) for x in axis2]
+        cross = ((u[1] * v[2] - u[2] * v[1]) ** 2 + (u[2] * v[0] - u[0] * v[2]) ** 2
+                 + (u[0] * v[1] - u[1] * v[0]) ** 2)
+        if cross <= 1e-12 * sum(x * x for x in u) * sum(x * x for x in v):
+            raise ValueError(f"joint {key}: axis and axis2 must not be parallel")
     # ODE fixes the joint's body-frame anchors, axes and reference rotation from where
     # the bodies are now: make them where they were when the joint was first made.
     cdef double saved[14]
@@ -133,7 +183,14 @@ def create_joint(World w, key, int kind, key_a, key_b, anchor, axis, axis2, low,
             dJointSetHinge2Axes(j, a1, a2)
         elif kind == JOINT_FIXED:
             j = dJointCreateFixed(w.world, NULL)
-            dJointAttach(j, ba, bb)
+            # ODE holds the offset between the bodies as a lever on its first body's
+            # turning; on a body that turns easily (a light hand gripping a 50 kg crate:
+            # 5000 times less inertia) QuickStep cannot converge and the joint stretches
+            # by many cm. The body harder to turn goes first (joint_force reads either).
+            if bb != NULL and min_inertia(bb) > min_inertia(ba):
+                dJointAttach(j, bb, ba)
+            else:
+                dJointAttach(j, ba, bb)
             dJointSetFixed(j)
         elif kind == JOINT_AMOTOR:
             j = dJointCreateAMotor(w.world, NULL)
@@ -173,19 +230,35 @@ def create_joint(World w, key, int kind, key_a, key_b, anchor, axis, axis2, low,
             j = d.lmotor
         else:
             raise ValueError(f"unknown joint kind {kind}")
+        if spring is not None:
+            sp = _Spring()
+            sp.stiffness, sp.damping, sp.target, sp.max_force = spring
+            inverse_rotate(dBodyGetQuaternion(ba), a1, sp.axis)
+            if kind == JOINT_HINGE:  # the hinge's axis, fixed in ODE's body 1 as the hinge's
+                sp.motor = dJointCreateAMotor(w.world, NULL)
+                dJointAttach(sp.motor, ba, bb)
+                dJointSetAMotorMode(sp.motor, dAMotorUser)
+                dJointSetAMotorNumAxes(sp.motor, 1)
+                dJointSetAMotorAxis(sp.motor, 0, 1, a1[0], a1[1], a1[2])
+            else:
+                sp.motor = dJointCreateLMotor(w.world, NULL)
+                dJointAttach(sp.motor, ba, bb)
+                dJointSetLMotorNumAxes(sp.motor, 1)
+                dJointSetLMotorAxis(sp.motor, 0, 1, a1[0], a1[1], a1[2])
     finally:
         if moved_a:
             dBodySetPosition(w.slots[ia0].body, saved[0], saved[1], saved[2])
-            dBodySetQuaternion(w.slots[ia0].body, &saved[3])
+            set_quaternion_exactly(w.slots[ia0].body, &saved[3])
         if moved_b:
             dBodySetPosition(w.slots[ib0].body, saved[7], saved[8], saved[9])
-            dBodySetQuaternion(w.slots[ib0].body, &saved[10])
+            set_quaternion_exactly(w.slots[ib0].body, &saved[10])
     rec = _JointRec()
     rec.joint = j
     rec.kind = kind
     rec.sign = sign
     rec.bodies = (key_a, key_b)
     rec.drive = d if kind == JOINT_SIX_DOF else None
+    rec.spring = sp
     w.joints[key] = rec
     if sign < 0.0:
         low, high = (None if high is None else -high), (None if low is None else -low)
@@ -367,7 +440,8 @@ cdef inline void capped(double* v, double cap) noexcept nogil:
 
 
 cdef void drive_joints(World w, double dt):
-    """Aim every six-DOF drive: v = error / τ (capped), force bounded. The motors hold the
+    """Aim every six-DOF drive: v = error (1 - e^(-dt/τ)) / dt (capped), force bounded. The
+    motors hold the
     body's velocity relative to ``other`` when there is one, so the target body's own
     motion is fed forward by the constraint itself."""
     cdef _Drive d
@@ -375,14 +449,16 @@ cdef void drive_joints(World w, double dt):
     cdef const dReal* p
     cdef double rv[3]
     cdef double lin[3]
-    cdef double tau
+    cdef double rate  # the share of the error corrected per second
     cdef int k
     for obj in w.joints.values():
         rec = <_JointRec>obj
+        if rec.spring is not None:
+            aim_spring(rec, dt)
         if rec.drive is None:
             continue
         d = rec.drive
-        tau = max(d.tau, dt)
+        rate = (1.0 - exp(-dt / d.tau)) / dt if d.tau > 0.0 else 1.0 / dt
         if d.other != NULL:
             qmul(dBodyGetQuaternion(d.other), &d.rel[3], &d.target[3])
             qrotate(dBodyGetQuaternion(d.other), d.rel, d.target)
@@ -391,11 +467,11 @@ cdef void drive_joints(World w, double dt):
                 d.target[k] += p[k]
         p = dBodyGetPosition(d.body)
         for k in range(3):
-            lin[k] = (d.target[k] - p[k]) / tau
+            lin[k] = (d.target[k] - p[k]) * rate
         capped(lin, d.max_speed)
         rotvec_between(dBodyGetQuaternion(d.body), &d.target[3], rv)
         for k in range(3):
-            rv[k] /= tau
+            rv[k] *= rate
         capped(rv, d.max_spin)
         dJointSetLMotorParam(d.lmotor, dParamVel, clamp_speed(lin[0]))
         dJointSetLMotorParam(d.lmotor, dParamVel2, clamp_speed(lin[1]))
@@ -408,7 +484,66 @@ cdef void drive_joints(World w, double dt):
             dJointSetAMotorParam(d.amotor, dParamFMax + 0x100 * k, d.max_torque)
 
 
+cdef double inverse_moment(dBodyID b, const double* n) noexcept:
+    """n^T M^-1 n for a body and a world direction: its inverse mass along a line (``n``
+    None) or inverse inertia about an axis; 0 for a static or kinematic body."""
+    cdef dMass m
+    cdef double local[3]
+    cdef double a, bb, c, d, e, f, det
+    if b == NULL or dBodyIsKinematic(b):
+        return 0.0
+    dBodyGetMass(b, &m)
+    if n == NULL:
+        return 1.0 / m.mass
+    inverse_rotate(dBodyGetQuaternion(b), n, local)
+    a, bb, c = m.I[0], m.I[1], m.I[2]   # the symmetric tensor [[a b c] [b d e] [c e f]]
+    d, e, f = m.I[5], m.I[6], m.I[10]
+    det = a * (d * f - e * e) - bb * (bb * f - e * c) + c * (bb * e - d * c)
+    if not det > 0.0:
+        return 0.0
+    return (local[0] * local[0] * (d * f - e * e) + local[1] * local[1] * (a * f - c * c)
+            + local[2] * local[2] * (a * d - bb * bb)
+            + 2.0 * local[0] * local[1] * (c * e - bb * f)
+            + 2.0 * local[0] * local[2] * (bb * e - c * d)
+            + 2.0 * local[1] * local[2] * (bb * c - a * e)) / det
+
+
+cdef void aim_spring(_JointRec rec, double dt) noexcept:
+    """Set the spring's row for this step from where the joint is now (see _Spring)."""
+    cdef _Spring sp = rec.spring
+    cdef dBodyID b1 = dJointGetBody(rec.joint, 0)
+    cdef dBodyID b2 = dJointGetBody(rec.joint, 1)
+    cdef double n[3]
+    cdef double x, inv, soft
+    cdef int hinge = rec.kind == JOINT_HINGE
+    qrotate(dBodyGetQuaternion(b1), sp.axis, n)
+    if hinge:
+        x = dJointGetHingeAngle(rec.joint)
+        inv = inverse_moment(b1, n) + inverse_moment(b2, n)
+    else:
+        x = dJointGetSliderPosition(rec.joint)
+        inv = inverse_moment(b1, NULL) + inverse_moment(b2, NULL)
+    if not isfinite(x):
+        return  # a body gone wrong: the step's check stops it
+    soft = sp.damping
+    if sp.stiffness * dt * dt * inv > 1.0:
+        soft += dt * sp.stiffness   # too stiff to follow explicitly: implicit
+    # undamped: a row that all but only pulls (damping of 1e-6 h k; the velocity it aims
+    # at is large, but the force, (c - v) / cfm, is the spring's)
+    soft = max(soft, 1e-6 * dt * sp.stiffness)
+    if hinge:
+        dJointSetAMotorParam(sp.motor, dParamCFM, 1.0 / soft)
+        dJointSetAMotorParam(sp.motor, dParamVel, -sp.stiffness * (x - sp.target) / soft)
+        dJointSetAMotorParam(sp.motor, dParamFMax, sp.max_force)
+    else:
+        dJointSetLMotorParam(sp.motor, dParamCFM, 1.0 / soft)
+        dJointSetLMotorParam(sp.motor, dParamVel, -sp.stiffness * (x - sp.target) / soft)
+        dJointSetLMotorParam(sp.motor, dParamFMax, sp.max_force)
+
+
 cdef void free_joint(_JointRec rec) noexcept:
+    if rec.spring is not None:
+        dJointDestroy(rec.spring.motor)
     if rec.drive is not None:
         dJointDestroy(rec.drive.lmotor)
         dJointDestroy(rec.drive.amotor)
@@ -425,14 +560,3 @@ def remove_joint(World w, key) -> None:
 
 def has_joint(World w, key) -> bool:
     return key in w.joints
-
-
-def joint_bodies(World w) -> np.ndarray:
-    """(M, 2) body keys of every joint (-1: the world), for the sleep rule's islands."""
-    out = np.full((len(w.joints), 2), -1, np.int64)
-    for row, rec in enumerate(w.joints.values()):
-        a, b = (<_JointRec>rec).bodies
-        out[row, 0] = a
-        if b is not None:
-            out[row, 1] = b
-    return out

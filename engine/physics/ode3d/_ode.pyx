@@ -6,13 +6,16 @@ Only what runs per step or per body is here, in C: the near callback that filter
 pairs and makes contact joints, the step itself (collision and QuickStep with the
 GIL released), contact impulses from joint feedback, the non-finite and runaway
 check, the six-DOF drives, batch state reads and writes. Policy lives in Python:
-auto-sleep is :mod:`engine.physics.sleep`, fed by :func:`read_motion` and applied
-by :func:`sleep_slots`, with ODE's own auto-disable off.
+auto-sleep is :mod:`engine.physics.sleep`, whose per-step pass (``sleep.h``, over the
+rule's own arrays, bound by ``World.bind_sleep``) the step runs in C with the GIL
+released, with ODE's own auto-disable off.
 
 One extension built from one file per concept, included here in dependency order
 (one module, so the per-step paths inline across concepts and there is one copy of
 ODE's process-wide state):
 
+* ``_errors.pxi``: ODE's error, debug and message handlers, and the guard that turns
+  an internal error inside the step into a Python exception instead of ``abort()``;
 * ``_world.pxi``: the World (ODE world, space, contact group, body slots),
   settings, the step;
 * ``_bodies.pxi``: bodies, their pose, velocity, loads, sleep, gravity and
@@ -30,7 +33,7 @@ calls them as ``_ode.create_body(world, ...)``.
 """
 
 cimport cython
-from libc.math cimport atan2, fabs, isfinite, sqrt
+from libc.math cimport INFINITY, atan2, exp, fabs, isfinite, nextafter, sqrt
 from libc.stdint cimport int64_t, intptr_t, uint8_t, uint32_t
 from libc.stdlib cimport calloc, free, malloc, realloc
 from libc.string cimport memcmp, memcpy, memset
@@ -84,19 +87,28 @@ cdef enum:
     KIND_STATIC = 1
     KIND_KINEMATIC = 2
 
-#: Speed (m/s) and spin (rad/s) beyond which a body counts as exploded.
-cdef double MAX_SPEED = 1e5
+from engine.physics.backend import MAX_SPEED as _MAX_SPEED
+from engine.physics.backend import WORLD_EXTENT as _WORLD_EXTENT
+
+#: Speed (m/s) and spin (rad/s) beyond which a body counts as exploded (the protocol's).
+cdef double MAX_SPEED = _MAX_SPEED
 MAX_BODY_SPEED = MAX_SPEED
 
+#: Why the post-step check stopped a body (``World.step`` returns (key, reason) pairs).
+cdef enum:
+    FAULT_NONFINITE_C = 0
+    FAULT_RUNAWAY_C = 1
+    FAULT_LEFT_WORLD_C = 2
+FAULT_NONFINITE = FAULT_NONFINITE_C
+FAULT_RUNAWAY = FAULT_RUNAWAY_C
+FAULT_LEFT_WORLD = FAULT_LEFT_WORLD_C
 
-cdef void quiet(int errnum, const char* msg, va_list ap) noexcept nogil:
-    """ODE's informational messages (e.g. LCP warnings) are not errors; keep stdout clean."""
-    pass
 
+include "_errors.pxi"
 
 dInitODE2(0)
 dAllocateODEDataForThread(dAllocateMaskAll)
-dSetMessageHandler(quiet)
+install_handlers()
 
 
 include "_quat.pxi"

@@ -29,8 +29,21 @@ cdef inline void qrotate(const double* q, const double* v, double* out) noexcept
     out[2] = v[2] + q[0] * tz + q[1] * ty - q[2] * tx
 
 
+cdef inline void inverse_rotate(const double* q, const double* v, double* out) noexcept nogil:
+    """out = q* v q: a world vector in the frame ``q`` turns onto the world."""
+    cdef double c[4]
+    c[0] = q[0]
+    c[1] = -q[1]
+    c[2] = -q[2]
+    c[3] = -q[3]
+    qrotate(c, v, out)
+
+
 cdef inline void qnormalize(double* q) noexcept nogil:
+    """q made unit; one unit to rounding already is kept to the bit (a saved state's)."""
     cdef double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    if fabs(n - 1.0) <= 1e-12:
+        return
     if n > 0.0 and isfinite(n):
         q[0] /= n
         q[1] /= n
@@ -68,3 +81,34 @@ cdef inline void rotvec_between(const double* qcur, const double* qtarget, doubl
     out[0] = d[1] / s * angle
     out[1] = d[2] / s * angle
     out[2] = d[3] / s * angle
+
+
+cdef bint _quat_lands(const double* q_in, const double* q) noexcept nogil:
+    """Whether putting ``q_in`` back (our normalisation, then ODE's own in
+    dBodySetQuaternion) gives ``q`` to the bit."""
+    cdef double c[4]
+    memcpy(c, q_in, 4 * sizeof(double))
+    qnormalize(c)
+    dNormalize4(c)
+    return c[0] == q[0] and c[1] == q[1] and c[2] == q[2] and c[3] == q[3]
+
+
+cdef void quat_preimage(const double* q, double* out) noexcept nogil:
+    """A quaternion that putting back turns into the unit ``q`` to the bit (``q`` where none
+    is found). ODE's normalisation is not idempotent, so ``q`` itself may come back an ulp
+    off; ``q`` scaled a little (as the integrated quaternion it normalised was) lands."""
+    cdef double scale
+    cdef int k, sign
+    memcpy(out, q, 4 * sizeof(double))
+    if _quat_lands(out, q):
+        return
+    for k in range(1, 2049):
+        for sign in range(2):
+            scale = 1.0 + (k if sign == 0 else -k) * 2.220446049250313e-16
+            out[0] = q[0] * scale
+            out[1] = q[1] * scale
+            out[2] = q[2] * scale
+            out[3] = q[3] * scale
+            if _quat_lands(out, q):
+                return
+    memcpy(out, q, 4 * sizeof(double))

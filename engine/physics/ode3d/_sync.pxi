@@ -1,6 +1,6 @@
-# Batches: every slot's state into a table row (BodyState's layout) and back, what the
-# sleep rule reads each step and the sleep it orders, and the post-step check that puts
-# non-finite or runaway bodies back where they were sane.
+# Batches: every slot's state into a table row (BodyState's layout) and back, and the
+# post-step check that puts bodies gone non-finite, running away or leaving the world back
+# where they were sane.
 
 cdef inline void read_slot(World w, int i, double* out) noexcept nogil:
     """Entity-frame state: position, quaternion, linear (at origin) and angular velocity."""
@@ -52,54 +52,75 @@ def read_state_into(World w, double[:, ::1] out) -> None:
             read_slot(w, i, &out[i, 0])
 
 
-def read_motion(World w, double[:, ::1] velocity, uint8_t[::1] awake,
-                uint8_t[::1] woken) -> None:
-    """What the sleep rule reads after a step, per slot: centre-of-mass linear and angular
-    velocity (world frame) as the columns of ``velocity`` (6, n), whether the body is
-    awake, and whether it was woken explicitly since the last call (the marks are then
-    cleared)."""
-    cdef int i, k
-    cdef Slot* s
+cdef double _preimage(double target, double a) noexcept nogil:
+    """An x near target - a with x + a == target in floating point (target - a where none
+    is near): the origin value that set_slot_pose/velocity turn into the body's own."""
+    cdef double start = target - a
+    cdef double up = start, down = start
+    cdef int k
+    for k in range(8):
+        if up + a == target:
+            return up
+        if down + a == target:
+            return down
+        up = nextafter(up, INFINITY)
+        down = nextafter(down, -INFINITY)
+    return start
+
+
+def read_state_exact(World w) -> tuple:
+    """(keys, table) as read_state, each row chosen so that putting it back (set_pose,
+    then set_velocity: what loading a saved state does) gives ODE its numbers to the bit:
+    the orientation that both normalisations turn into the body's own, and the origin
+    and origin velocity that adding the centre-of-mass offset turns into the centre's.
+    read_state's rows differ from these by rounding, which a saved state's continuation
+    would carry (and a chaotic contact amplify)."""
+    cdef cnp.ndarray[cnp.float64_t, ndim=2] table = np.empty((w.n, 13))
+    cdef double[:, ::1] out = table
+    cdef double qin[4]
+    cdef double wc[3]
+    cdef double t[3]
+    cdef const dReal* p
+    cdef const dReal* q
     cdef const dReal* v
     cdef const dReal* av
-    if velocity.shape[0] != 6 or velocity.shape[1] != w.n or awake.shape[0] != w.n \
-            or woken.shape[0] != w.n:
-        raise ValueError(f"read_motion needs (6, {w.n}) and ({w.n},) arrays")
-    with nogil:
-        for i in range(w.n):
-            s = &w.slots[i]
-            woken[i] = s.woken
-            s.woken = 0
-            if s.body == NULL:
-                for k in range(6):
-                    velocity[k, i] = 0.0
-                awake[i] = 0
-                continue
-            v = dBodyGetLinearVel(s.body)
-            av = dBodyGetAngularVel(s.body)
-            for k in range(3):
-                velocity[k, i] = v[k]
-                velocity[3 + k, i] = av[k]
-            awake[i] = dBodyIsEnabled(s.body)
-
-
-def sleep_slots(World w, cnp.int64_t[::1] slots) -> None:
-    """Put the bodies at ``slots`` to sleep, at rest (what the sleep rule decided)."""
-    cdef Py_ssize_t i
-    for i in range(slots.shape[0]):
-        if not 0 <= slots[i] < w.n or w.slots[slots[i]].body == NULL:
-            raise IndexError(f"sleep_slots: no moving body in slot {slots[i]}")
-    with nogil:
-        for i in range(slots.shape[0]):
-            disable(w.slots[slots[i]].body)
+    cdef Slot* s
+    cdef int i, k
+    for i in range(w.n):
+        read_slot(w, i, &out[i, 0])
+        s = &w.slots[i]
+        if s.body == NULL:
+            continue
+        p = dBodyGetPosition(s.body)
+        q = dBodyGetQuaternion(s.body)
+        v = dBodyGetLinearVel(s.body)
+        av = dBodyGetAngularVel(s.body)
+        quat_preimage(q, qin)
+        memcpy(&out[i, 3], qin, 4 * sizeof(double))
+        # the origin and its velocity: putting a body back adds R c and w x R c, R the
+        # turn it then has (q, when q_in lands on it)
+        qrotate(q, s.com, wc)
+        for k in range(3):
+            out[i, k] = _preimage(p[k], wc[k])
+        t[0] = av[1] * wc[2] - av[2] * wc[1]
+        t[1] = av[2] * wc[0] - av[0] * wc[2]
+        t[2] = av[0] * wc[1] - av[1] * wc[0]
+        for k in range(3):
+            out[i, 7 + k] = _preimage(v[k], t[k])
+    return keys(w), table
 
 
 def write_state(World w, cnp.int64_t[::1] slots, double[:, ::1] pos, double[:, ::1] quat,
                 double[:, ::1] lin, double[:, ::1] ang) -> None:
     """Set pose and velocity of the bodies at ``slots`` (row i -> slots[i])."""
     cdef Py_ssize_t i
+    cdef bint asleep = False  # no sleeper to wake (the usual case): no neighbour search
+    for i in range(w.n):
+        if w.slots[i].body != NULL and not dBodyIsEnabled(w.slots[i].body):
+            asleep = True
+            break
     for i in range(slots.shape[0]):
-        set_slot_pose(w, <int>slots[i], &pos[i, 0], &quat[i, 0])
+        set_slot_pose(w, <int>slots[i], &pos[i, 0], &quat[i, 0], asleep)
         set_slot_velocity(w, <int>slots[i], &lin[i, 0], &ang[i, 0])
 
 
@@ -113,15 +134,17 @@ cdef void reset_slot(Slot* s) noexcept nogil:
 
 
 cdef int check_bodies(World w) noexcept nogil:
-    """Reset and disable bodies gone non-finite or past MAX_SPEED (their slots go in
-    ``w.faults``); remember every other moving body's pose as its last good one."""
+    """Reset and disable bodies gone non-finite, past MAX_SPEED or out of the world
+    (``w.faults`` gets slot * 4 + FAULT_*); remember every other moving body's pose as its
+    last good one, so one leaving the world stops at its last pose inside."""
     cdef int i, k, nf = 0
     cdef Slot* s
     cdef const dReal* p
     cdef const dReal* q
     cdef const dReal* v
     cdef const dReal* av
-    cdef int ok
+    cdef int why
+    cdef double extent = w.extent
     for i in range(w.n):
         s = &w.slots[i]
         if s.body == NULL or not dBodyIsEnabled(s.body):
@@ -130,20 +153,23 @@ cdef int check_bodies(World w) noexcept nogil:
         q = dBodyGetQuaternion(s.body)
         v = dBodyGetLinearVel(s.body)
         av = dBodyGetAngularVel(s.body)
-        ok = 1
+        why = -1
         for k in range(3):
             if not (isfinite(p[k]) and isfinite(v[k]) and isfinite(av[k])):
-                ok = 0
+                why = FAULT_NONFINITE_C
         for k in range(4):
             if not isfinite(q[k]):
-                ok = 0
-        if ok and (norm3(v) > MAX_SPEED or norm3(av) > MAX_SPEED):
-            ok = 0   # finite but runaway: the next step would overflow
-        if ok:
+                why = FAULT_NONFINITE_C
+        if why < 0 and (norm3(v) > MAX_SPEED or norm3(av) > MAX_SPEED):
+            why = FAULT_RUNAWAY_C   # finite but runaway: the next step would overflow
+        if why < 0 and (fabs(p[0]) > extent or fabs(p[1]) > extent or fabs(p[2]) > extent):
+            why = FAULT_LEFT_WORLD_C
+        if why < 0:
             memcpy(&s.good[0], p, 3 * sizeof(double))
             memcpy(&s.good[3], q, 4 * sizeof(double))
         else:
             reset_slot(s)
-            w.faults[nf] = i
+            w.unsure = True
+            w.faults[nf] = i * 4 + why
             nf += 1
     return nf

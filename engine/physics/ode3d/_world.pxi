@@ -33,7 +33,7 @@ cdef struct Slot:
     dBodyID body         # NULL for static bodies
     int64_t key
     int kind
-    uint8_t woken        # explicitly woken since the sleep rule last looked (read_motion)
+    uint8_t woken        # explicitly woken since the sleep rule last looked (World.step)
     double pose[7]       # static bodies: entity pose (x y z w x y z)
     double com[3]        # centre of mass in the entity frame (ODE bodies sit at the COM)
     double good[7]       # last sane pose of the ODE body (position, quaternion)
@@ -59,6 +59,24 @@ cdef struct Ctx:         # what the near callback needs, passed through ODE's vo
     CsSettings cfg
 
 
+cdef struct StepJob:     # one step's collide-and-solve, run under the guard (_errors.pxi)
+    Ctx* ctx
+    dSpaceID space
+    Slot* slots
+    int n
+    double dt
+
+
+cdef int collide_and_solve(void* arg) noexcept nogil:
+    """Collide and step (stepper.h); -1 out of memory."""
+    cdef StepJob* job = <StepJob*>arg
+    if cs_begin(&job.ctx.stepper, job.n) == 0:
+        dSpaceCollide(job.space, job.ctx, near_callback)
+    return cs_solve(&job.ctx.stepper, &job.ctx.cfg, job.ctx.world, job.ctx.group,
+                    &job.slots[0].body, sizeof(Slot), job.n, job.dt, contact_feedback,
+                    job.ctx)
+
+
 @cython.no_gc_clear  # __dealloc__ walks the geoms and joints to free their C memory
 cdef class World:
     """One ODE world with its hash space, contact group and body slots."""
@@ -69,14 +87,22 @@ cdef class World:
     cdef Slot* slots
     cdef int n
     cdef int cap
-    cdef int* faults           # slots reset by the last step
+    cdef int* faults           # slots stopped by the last step, times 4, plus FAULT_* why
     cdef unsigned long seed
     cdef double last_dt
+    cdef double extent         # bodies stay within +-extent on every axis (m)
+    cdef str broken            # ODE failed inside a step: why; the world is abandoned
     cdef dict slot_of          # key -> slot index
     cdef list geoms            # slot -> list of (geom address, keep-alive object or None)
     cdef dict joints           # key -> _JointRec
     cdef list pending_mass     # slot -> dMass accumulated by add_geom (as a bytes buffer)
     cdef list static_geoms     # keyless static geometry, kept until close
+    cdef SrRule rule           # the sleep rule's arrays (bind_sleep), stepped in the step
+    cdef tuple rule_arrays     # ... kept alive here
+    cdef uint8_t* woken        # per slot: woken explicitly since the last step (the rule's)
+    cdef double sleep_time, sleep_smoothing
+    cdef bint unsure           # a body was put to sleep since this step's collision other
+                               # than by the rule: a sleeper may touch an awake body
 
     def __cinit__(self) -> None:
         self.world = dWorldCreate()
@@ -100,11 +126,17 @@ cdef class World:
         self.cap = 0
         self.seed = 0
         self.last_dt = 1.0 / 60.0
+        self.extent = _WORLD_EXTENT
+        self.broken = None
         self.slot_of = {}
         self.geoms = []
         self.joints = {}
         self.pending_mass = []
         self.static_geoms = []
+        memset(&self.rule, 0, sizeof(SrRule))
+        self.rule_arrays = None
+        self.woken = NULL
+        self.unsure = False
         dWorldSetContactSurfaceLayer(self.world, 0.001)
         dWorldSetAutoDisableFlag(self.world, 0)   # bodies sleep by engine.physics.sleep
 
@@ -114,6 +146,9 @@ cdef class World:
     cdef void _destroy(self) noexcept:
         cdef int i
         if self.world == NULL:
+            return
+        if self.broken is not None:  # ODE was left mid-call: calling it again may abort
+            self.world = NULL
             return
         for rec in self.joints.values():
             free_joint(<_JointRec>rec)
@@ -138,12 +173,17 @@ cdef class World:
         free(self.ctx.pairs)
         free(self.slots)
         free(self.faults)
+        free(self.woken)
+        self.woken = NULL
+        self.rule_arrays = None
         self.n = 0
 
     def close(self) -> None:
         self._destroy()
 
     cdef void check(self) except *:
+        if self.broken is not None:
+            raise OdeFailure(self.broken)
         if self.world == NULL:
             raise RuntimeError("the ODE world is closed")
 
@@ -174,9 +214,10 @@ cdef class World:
     # -- settings -------------------------------------------------------------------
     def configure(self, gravity, double erp, double cfm, int iterations,
                   int max_contacts, double warm_start, double softness,
-                  int exact_rows) -> None:
+                  int exact_rows, double extent=_WORLD_EXTENT) -> None:
         """World settings; ``warm_start``, ``softness`` and ``exact_rows`` are stepper.h's
-        (the resting contacts' preload, the contacts' CFM share, the exact islands)."""
+        (the resting contacts' preload, the contacts' CFM share, the exact islands);
+        ``extent`` bounds every body's position on each axis."""
         self.check()
         if max_contacts < 1:
             raise ValueError(f"max_contacts must be at least 1, got {max_contacts}")
@@ -184,6 +225,9 @@ cdef class World:
             raise ValueError(f"warm start must be in [0, 1), got {warm_start}")
         if not softness >= 0.0:
             raise ValueError(f"contact softness must be >= 0, got {softness}")
+        if not (extent > 0.0 and isfinite(extent)):
+            raise ValueError(f"the world's extent must be a positive number, got {extent}")
+        self.extent = extent
         dWorldSetGravity(self.world, gravity[0], gravity[1], gravity[2])
         dWorldSetERP(self.world, erp)
         dWorldSetCFM(self.world, cfm)
@@ -224,15 +268,59 @@ cdef class World:
     def solver_seed(self, unsigned long value) -> None:
         self.seed = value
 
+    def bind_sleep(self, double[:, :, ::1] stack, double[::1] smoothing, double[::1] timer,
+                   double[:, ::1] reference, uint8_t[::1] started, uint8_t[::1] awake,
+                   const uint8_t[::1] eligible, const uint8_t[::1] movable,
+                   const double[::1] bounds, double time, double smoothing_time) -> None:
+        """The sleep rule's arrays (:class:`engine.physics.sleep.SleepRule`'s own, laid out
+        over the current slots), which ``step(dt, sleep=True)`` advances in place; bound
+        again whenever the rule lays its rows out anew or is configured."""
+        cdef int n = self.n
+        cdef uint8_t* marks
+        if (stack.shape[0] != 3 or stack.shape[1] != 6 or stack.shape[2] != n
+                or reference.shape[0] != 6 or reference.shape[1] != n
+                or smoothing.shape[0] != n or timer.shape[0] != n or started.shape[0] != n
+                or awake.shape[0] != n or eligible.shape[0] != n or movable.shape[0] != n
+                or bounds.shape[0] != 6):
+            raise ValueError(f"bind_sleep: the sleep rule's arrays must have {n} rows")
+        if not (time > 0.0 and smoothing_time > 0.0):
+            raise ValueError(f"bind_sleep: times must be positive, got {time}, "
+                             f"{smoothing_time}")
+        marks = <uint8_t*>realloc(self.woken, max(n, 1))
+        if marks == NULL:
+            raise MemoryError()
+        self.woken = marks
+        self.rule_arrays = (stack, smoothing, timer, reference, started, awake, eligible,
+                            movable, bounds)
+        self.rule.n = n
+        if n:
+            self.rule.stack, self.rule.smoothing = &stack[0, 0, 0], &smoothing[0]
+            self.rule.timer, self.rule.reference = &timer[0], &reference[0, 0]
+            self.rule.started, self.rule.awake = &started[0], &awake[0]
+            self.rule.eligible, self.rule.movable = &eligible[0], &movable[0]
+        self.rule.bounds = &bounds[0]
+        self.sleep_time, self.sleep_smoothing = time, smoothing_time
+
     # -- the step -------------------------------------------------------------------
-    def step(self, double dt) -> list:
+    def step(self, double dt, bint sleep=False) -> list:
         """Aim the drives, collide and step (stepper.h: exact islands, warm-started
-        contacts) with the GIL released, then record the contact impulses and check every
-        moving body; returns the keys of bodies reset."""
-        cdef int nf
+        contacts) with the GIL released and ODE's failures guarded, then record the contact
+        impulses and check every moving body; with ``sleep``, the sleep rule bound by
+        :meth:`bind_sleep` then puts quiet islands to sleep (stepper.h's cs_sleep, over
+        the islands of this step). Returns (key, FAULT_*) of the bodies stopped. Raises
+        OdeFailure when ODE fails inside (the world is then abandoned)."""
+        cdef int nf = 0, failed, solved = 0, i, slept = 0
+        cdef double keep = 0.0
+        cdef bint unbound
+        cdef StepJob job
         self.check()
         if not dt > 0.0:
             raise ValueError(f"dt must be positive, got {dt}")
+        unbound = sleep and (self.rule_arrays is None or self.rule.n != self.n)
+        if unbound:  # (raised after the step, so a failure inside ODE is told first)
+            sleep = False
+        if sleep:
+            keep = exp(-dt / self.sleep_smoothing)
         dAllocateODEDataForThread(dAllocateMaskAll)
         dJointGroupEmpty(self.ctx.group)
         self.ctx.nrec = 0
@@ -242,18 +330,38 @@ cdef class World:
         if self.joints:
             drive_joints(self, dt)
         dRandSetSeed(self.seed)
+        self.unsure = False  # the collision wakes every sleeper an awake body touches
         with nogil:
             kinematic_lead(self, dt)
-            if cs_begin(&self.ctx.stepper, self.n) == 0:
-                dSpaceCollide(self.space, &self.ctx, near_callback)
-            if cs_solve(&self.ctx.stepper, &self.ctx.cfg, self.world, self.ctx.group,
-                        &self.slots[0].body, sizeof(Slot), self.n, dt, contact_feedback,
-                        &self.ctx) < 0:
-                self.ctx.oom = 1
-            kinematic_arrive(self, dt)
-            record_impulses(&self.ctx, dt)
-            nf = check_bodies(self)
+            job.ctx = &self.ctx
+            job.space = self.space
+            job.slots = self.slots
+            job.n = self.n
+            job.dt = dt
+            failed = guarded(collide_and_solve, &job, &solved)
+            if not failed:
+                if solved < 0:
+                    self.ctx.oom = 1
+                kinematic_arrive(self, dt)
+                record_impulses(&self.ctx, dt)
+                nf = check_bodies(self)
+                if sleep and self.n and not self.ctx.stepper.oom:
+                    for i in range(self.n):
+                        self.woken[i] = self.slots[i].woken
+                        self.slots[i].woken = 0
+                    slept = cs_sleep(&self.ctx.stepper, &self.rule, &self.slots[0].body,
+                                     sizeof(Slot), self.n, dt, keep, self.sleep_time,
+                                     self.woken)
+        if failed:
+            self.broken = (f"ODE error {ode_failure_code()}: "
+                           f"{ode_failure().decode('utf-8', 'replace')}")
+            raise OdeFailure(self.broken)
         self.seed = dRandGetSeed()
         if self.ctx.oom or self.ctx.stepper.oom:
             raise MemoryError("out of memory while recording contacts")
-        return [(self.slots[self.faults[k]].key) for k in range(nf)]
+        if slept < 0:
+            raise MemoryError("out of memory while putting bodies to sleep")
+        if unbound:
+            raise RuntimeError("step(sleep=True): the sleep rule is not bound to the "
+                               "current bodies (bind_sleep)")
+        return [(self.slots[self.faults[k] >> 2].key, self.faults[k] & 3) for k in range(nf)]

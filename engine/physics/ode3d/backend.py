@@ -13,17 +13,22 @@ import logging
 import numpy as np
 
 from components import Joint, MaterialProps, Physical
+from components.physical import BodyKind
+from engine.messages import MessageLog
 from engine.physics.backend import (
     CONTACT_DTYPE,
+    BackendFailure,
+    BackendName,
     BodyState,
     RayHit,
     WorldSettings,
+    fault_message,
 )
 from engine.physics.ode3d import _ode, joints, shapes
 from engine.physics.ode3d.materials import MaterialTable
 from engine.physics.ode3d.values import check_speed, vec
-from engine.physics.sleep import SleepRule, SleepState
-from engine.rotation import rotation_vector_between
+from engine.physics.sleep import SMOOTHING, SleepRule, SleepState
+from engine.rotation import quat_to_matrix, rotation_vector_between
 
 log = logging.getLogger("colosseum.physics.ode")
 
@@ -31,15 +36,17 @@ if CONTACT_DTYPE.itemsize != _ode.CONTACT_RECORD_SIZE:  # pragma: no cover - bui
     raise ImportError("engine.physics.ode3d._ode was built against a different CONTACT_DTYPE; "
                       "rebuild it with `python setup.py build_ext --inplace`")
 
-_BODY_KINDS = {"dynamic": _ode.BODY_DYNAMIC, "static": _ode.BODY_STATIC,
-               "kinematic": _ode.BODY_KINEMATIC}
+_BODY_KINDS = {BodyKind.DYNAMIC: _ode.BODY_DYNAMIC, BodyKind.STATIC: _ode.BODY_STATIC,
+               BodyKind.KINEMATIC: _ode.BODY_KINEMATIC}
 _ALL_BITS = 0xFFFFFFFF
+_CAUSES = {_ode.FAULT_NONFINITE: "nonfinite", _ode.FAULT_RUNAWAY: "runaway",
+           _ode.FAULT_LEFT_WORLD: "left"}
 
 
 class OdeBackend:
     """DynamicsBackend over ODE (3D, double precision). One owner thread at a time."""
 
-    name = "ode"
+    name = BackendName.ODE
 
     def __init__(self, settings: WorldSettings | None = None) -> None:
         self._world = _ode.World()
@@ -49,9 +56,9 @@ class OdeBackend:
         self._keys: np.ndarray | None = None  # cached slot order, dropped on add/remove
         self._inert_joints: set[int] = set()
         self._restless: set[int] = set()  # bodies that may not sleep
-        self._joint_pairs: np.ndarray | None = None  # (M, 2) body keys of the joints
         self._rule = SleepRule()
-        self._woken = np.zeros(0, np.uint8)
+        self._bound = -1  # the rule's arrays' generation the world's step is bound to
+        self._notes = MessageLog(log)  # ODE's informational messages, told once each
         self._material(MaterialProps())
         self.configure(settings or WorldSettings())
 
@@ -65,7 +72,7 @@ class OdeBackend:
         self._settings = settings
         self._world.configure(vec(settings.gravity, 3, "gravity"), settings.erp, settings.cfm,
                               settings.iterations, settings.max_contacts, settings.warm_start,
-                              settings.contact_softness, settings.exact_rows)
+                              settings.contact_softness, settings.exact_rows, settings.extent)
         if not settings.auto_sleep:  # everyone awake, nothing counted
             _ode.wake_all(self._world)
             self._rule.forget(slice(None))
@@ -79,25 +86,29 @@ class OdeBackend:
         return self._world.solver_seed
 
     def step(self, dt: float) -> None:
-        """Collide and solve in C with the GIL released; record contacts and faults; then
-        let the sleep rule put quiet islands to sleep."""
-        bad = self._world.step(dt)
+        """Collide and solve in C with the GIL released; record contacts and the bodies
+        stopped (non-finite, runaway, out of the world; the engine reports them); then let
+        the sleep rule put quiet islands to sleep (in the same C call: stepper.h's
+        cs_sleep over the rule's arrays, on the islands the step found). Raises
+        :class:`BackendFailure` when ODE failed inside the step (the world is abandoned:
+        see docs/ODE.md)."""
+        sleep = self._settings.auto_sleep
+        if sleep:
+            self._sleep_rule()  # laid out and bound for the current slots
+        try:
+            bad = self._world.step(dt, sleep)
+        except _ode.OdeFailure as exc:
+            raise BackendFailure(str(exc)) from None
         if bad:
-            self._faults.extend(
-                (key, "non-finite or runaway state; reset to its last good pose and disabled")
-                for key in bad)
-            for key in bad:
-                log.warning("body %d went non-finite or ran away; reset and disabled", key)
-        if self._settings.auto_sleep:
-            rule = self._sleep_rule()
-            _ode.read_motion(self._world, rule.velocity, rule.awake.view(np.uint8),
-                             self._woken)
-            rows, _ = rule.update(dt, self._woken.view(bool), self._touching)
-            if len(rows):
-                _ode.sleep_slots(self._world, rows)
+            extent = self._settings.extent
+            self._faults.extend((key, fault_message(_CAUSES[why], extent)) for key, why in bad)
+        count, note = _ode.take_notes()
+        if count:  # one line per kind of message (the log compares them numbers aside)
+            self._notes.warn(f"ODE: {note.strip()}")
 
     def close(self) -> None:
         self._world.close()
+        self._notes.flush()
 
     # -- materials ---------------------------------------------------------
     def _material(self, m: MaterialProps) -> int:
@@ -138,7 +149,7 @@ class OdeBackend:
                     vec(g.shape.rotation, 4, "shape rotation"), float(body.material.density),
                     material, body.category & _ALL_BITS, body.mask & _ALL_BITS, **g.extra)
             mass = float(body.mass) if body.mass else -1.0
-            _ode.finish_body(self._world, int(key), mass)
+            _ode.finish_body(self._world, int(key), mass, *_mass_frame(body))
         except ValueError as exc:
             _ode.remove_body(self._world, int(key))
             raise ValueError(f"body {key}: {exc}") from None
@@ -157,7 +168,7 @@ class OdeBackend:
         """Remove a body; joints on it are removed with it."""
         _ode.remove_body(self._world, int(key))
         self._restless.discard(int(key))
-        self._keys = self._joint_pairs = None
+        self._keys = None
 
     def body_count(self) -> int:
         return _ode.body_count(self._world)
@@ -227,7 +238,7 @@ class OdeBackend:
         return _ode.sleeping_count(self._world)
 
     def _sleep_rule(self) -> SleepRule:
-        """The rule, laid out for the current slots."""
+        """The rule, laid out for the current slots and bound to the world's step."""
         keys = self.keys()
         rule = self._rule
         if rule.keys is not keys:
@@ -235,29 +246,24 @@ class OdeBackend:
             restless = np.isin(keys, np.fromiter(self._restless, np.int64, len(self._restless)))
             rule.layout(keys, kinds != _ode.BODY_STATIC,
                         (kinds == _ode.BODY_DYNAMIC) & ~restless)
-            self._woken = np.zeros(len(keys), np.uint8)
+        if self._bound != rule.generation:
+            self._world.bind_sleep(*rule.arrays(), rule.time, SMOOTHING)
+            self._bound = rule.generation
         return rule
-
-    def _touching(self) -> np.ndarray:
-        """Row pairs the step's contacts and the joints tie together (the rule's islands)."""
-        c = self.contacts()
-        if self._joint_pairs is None:
-            self._joint_pairs = _ode.joint_bodies(self._world)
-        pairs = np.concatenate([np.column_stack([c["a"], c["b"]]), self._joint_pairs])
-        return self._rule.rows(pairs.ravel()).reshape(-1, 2)
 
     def sleep_states(self) -> dict[int, SleepState]:
         """Every body asleep, in a quiet stretch or resting on its contacts (see
         :mod:`engine.physics.sleep` and stepper.h's resting preload)."""
         states = self._sleep_rule().states(_ode.sleeping(self._world))
-        steps, slid, held = _ode.rest_standing(self._world)
+        steps, slid, held, preloaded = _ode.rest_standing(self._world)
         keys = self.keys()
-        for i in np.flatnonzero(steps | slid | held.any(axis=1)).tolist():
+        for i in np.flatnonzero(steps | slid | preloaded | held.any(axis=1)).tolist():
             key = int(keys[i])
             state = states.get(key, SleepState(False))
             states[key] = dataclasses.replace(state, rest_steps=int(steps[i]),
                                               rest_slid=bool(slid[i]),
-                                              rest_force=held[i].copy())
+                                              rest_force=held[i].copy(),
+                                              rest_preloaded=bool(preloaded[i]))
         return states
 
     def set_sleep_state(self, key: int, state: SleepState) -> None:
@@ -269,7 +275,7 @@ class OdeBackend:
         force = np.zeros(3) if state.rest_force is None else vec(state.rest_force, 3,
                                                                  "rest force")
         _ode.set_rest_standing(self._world, int(key), int(state.rest_steps),
-                               bool(state.rest_slid), force)
+                               bool(state.rest_slid), force, bool(state.rest_preloaded))
         _ode.restore_sleeping(self._world, int(key), bool(state.asleep))
 
     # -- joints ------------------------------------------------------------
@@ -283,14 +289,12 @@ class OdeBackend:
             self._inert_joints.add(int(key))
             return
         joints.create(self._world, int(key), joint)
-        self._joint_pairs = None
 
     def remove_joint(self, key: int) -> None:
         if int(key) in self._inert_joints:
             self._inert_joints.discard(int(key))
             return
         _ode.remove_joint(self._world, int(key))
-        self._joint_pairs = None
 
     def has_joint(self, key: int) -> bool:
         return _ode.has_joint(self._world, int(key)) or int(key) in self._inert_joints
@@ -327,6 +331,12 @@ class OdeBackend:
     def read_state(self) -> BodyState:
         """Every body's pose and velocity (static ones included) in fresh arrays."""
         keys, table = _ode.read_state(self._world)
+        return BodyState(keys, table)
+
+    def exact_state(self) -> BodyState:
+        """The rows that, put back as a saved state loads them, give ODE its numbers to the
+        bit (read_state's differ by rounding where the centre of mass is off the origin)."""
+        keys, table = _ode.read_state_exact(self._world)
         return BodyState(keys, table)
 
     def read_state_into(self, out: np.ndarray) -> np.ndarray:
@@ -402,3 +412,15 @@ class OdeBackend:
             return None
         key, pos, normal, dist = hit
         return RayHit(int(key), pos, normal, float(dist))
+
+
+def _mass_frame(body: Physical) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """A body's given centre of mass and its inertia tensor about it in the body frame,
+    row-major (R diag(I) R^T, R the principal axes' turn); None where the shapes say."""
+    com = None if body.center_of_mass is None else vec(body.center_of_mass, 3,
+                                                       "centre of mass")
+    if body.inertia is None:
+        return com, None
+    turn = quat_to_matrix(vec(body.inertia_rotation, 4, "inertia rotation"))
+    tensor = turn @ np.diag(vec(body.inertia, 3, "inertia")) @ turn.T
+    return com, np.ascontiguousarray((tensor + tensor.T) / 2).reshape(9)

@@ -13,7 +13,9 @@ or explodes, and the constraint is implicit (stable at any gain, unlike an expli
 force). A joint with a ``reference`` (its bodies' poses when it was first made) is
 made as if its bodies stood there, then they are put back: ODE keeps anchors, axes and
 the reference rotation in the bodies' frames, fixed when the joint is made, so this
-re-creates a saved joint bit for bit.
+re-creates a saved joint bit for bit. A hinge's or slider's ``spring`` is an angular or
+linear motor beside it whose row is the implicit spring-damper (``_Spring`` in
+``_joints.pxi``), so the joint keeps its limits and motor.
 """
 
 from __future__ import annotations
@@ -21,16 +23,15 @@ from __future__ import annotations
 import numpy as np
 
 from components import Joint
+from components.joint import AXISLESS_KINDS, JointKind
 from engine.physics.ode3d import _ode
 from engine.physics.ode3d.values import vec
 
-JOINT_KINDS = {"hinge": _ode.JOINT_HINGE, "motorized_hinge": _ode.JOINT_HINGE,
-               "ball": _ode.JOINT_BALL, "slider": _ode.JOINT_SLIDER,
-               "universal": _ode.JOINT_UNIVERSAL, "hinge2": _ode.JOINT_HINGE2,
-               "fixed": _ode.JOINT_FIXED, "angular_motor": _ode.JOINT_AMOTOR,
-               "linear_motor": _ode.JOINT_LMOTOR, "six_dof": _ode.JOINT_SIX_DOF}
-#: Kinds with no axis of their own.
-AXISLESS = (_ode.JOINT_BALL, _ode.JOINT_FIXED, _ode.JOINT_SIX_DOF)
+JOINT_KINDS = {JointKind.HINGE: _ode.JOINT_HINGE, JointKind.MOTORIZED_HINGE: _ode.JOINT_HINGE,
+               JointKind.BALL: _ode.JOINT_BALL, JointKind.SLIDER: _ode.JOINT_SLIDER,
+               JointKind.UNIVERSAL: _ode.JOINT_UNIVERSAL, JointKind.HINGE2: _ode.JOINT_HINGE2,
+               JointKind.FIXED: _ode.JOINT_FIXED, JointKind.ANGULAR_MOTOR: _ode.JOINT_AMOTOR,
+               JointKind.LINEAR_MOTOR: _ode.JOINT_LMOTOR, JointKind.SIX_DOF: _ode.JOINT_SIX_DOF}
 
 
 def create(world: _ode.World, key: int, joint: Joint) -> None:
@@ -42,7 +43,7 @@ def create(world: _ode.World, key: int, joint: Joint) -> None:
                          f"(expected one of {', '.join(JOINT_KINDS)})")
     axis = vec(joint.axis, 3, "joint axis")
     axis2 = vec(joint.axis2, 3, "joint axis2")
-    if kind not in AXISLESS and not np.linalg.norm(axis) > 0:
+    if joint.kind not in AXISLESS_KINDS and not np.linalg.norm(axis) > 0:
         raise ValueError(f"joint {name}: axis is zero")
     ref_a = ref_b = None
     if joint.reference is not None:
@@ -55,6 +56,14 @@ def create(world: _ode.World, key: int, joint: Joint) -> None:
                           None if joint.body_b is None else int(joint.body_b),
                           vec(joint.anchor, 3, "joint anchor"), axis, axis2, joint.low,
                           joint.high, float(joint.motor_velocity),
-                          float(joint.motor_max_force), ref_a, ref_b)
+                          float(joint.motor_max_force), ref_a, ref_b, _spring(joint))
     except KeyError as exc:
         raise KeyError(f"joint {name}: {exc.args[0]}") from None
+
+
+def _spring(joint: Joint) -> tuple[float, float, float, float] | None:
+    """The joint's spring as the binding takes it (a motorized hinge is ODE's hinge)."""
+    sp = joint.spring
+    if sp is None:
+        return None
+    return (float(sp.stiffness), float(sp.damping), float(sp.target), float(sp.max_force))

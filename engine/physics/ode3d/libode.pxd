@@ -1,6 +1,8 @@
 """Declarations of the libode 0.16 API (double precision) that the binding uses."""
 
-from libc.stdint cimport uint32_t
+from libc.stdint cimport uint8_t, uint32_t
+
+from engine.physics.csleep cimport SrRule
 
 
 cdef extern from "stdarg.h":
@@ -69,7 +71,7 @@ cdef extern from "ode/ode.h" nogil:
         dAMotorUser
         dParamLoStop, dParamHiStop, dParamVel, dParamFMax
         dParamLoStop2, dParamHiStop2, dParamVel2, dParamFMax2
-        dParamVel3, dParamFMax3
+        dParamVel3, dParamFMax3, dParamCFM
 
     int dInitODE2(unsigned int flags)
     int dAllocateODEDataForThread(unsigned int mask)
@@ -137,6 +139,8 @@ cdef extern from "ode/ode.h" nogil:
     void dMassSetCylinder(dMass*, dReal density, int direction, dReal radius, dReal length)
     void dMassSetTrimesh(dMass*, dReal density, dGeomID)
     void dMassAdjust(dMass*, dReal)
+    void dMassSetParameters(dMass*, dReal themass, dReal cgx, dReal cgy, dReal cgz,
+                            dReal I11, dReal I22, dReal I33, dReal I12, dReal I13, dReal I23)
     void dMassTranslate(dMass*, dReal, dReal, dReal)
     void dMassRotate(dMass*, const dMatrix3)
     void dMassAdd(dMass*, const dMass*)
@@ -242,6 +246,7 @@ cdef extern from "stepper.h" nogil:
     ctypedef struct CsBody:
         double held[3]
         int resting
+        int preloaded
         int slid
 
     ctypedef struct CsState:
@@ -258,3 +263,6 @@ cdef extern from "stepper.h" nogil:
     int cs_collect(CsState*, const CsSettings*, const dContact*, int, dBodyID, dBodyID, double)
     int cs_solve(CsState*, const CsSettings*, dWorldID, dJointGroupID, const void*, size_t, int,
                  double, dJointFeedback* (*)(void*, int) noexcept, void*)
+    void cs_disable(dBodyID)
+    int cs_sleep(CsState*, SrRule*, const void*, size_t, int, double, double, double,
+                 const uint8_t*)

@@ -26,13 +26,18 @@
  *    contacts' whole force (normal and friction) is its weight, so the solver finds
  *    exactly (1 - beta) of every contact force, friction bounds included, and the motion
  *    is the same whenever it converges; it just has 10 times less to find. An island is
- *    at rest when it has no joints, touches no kinematic body, no contact of it slides
- *    faster than REST_SLIP, and every body has been held up by its contacts for the last
- *    two steps (at least REST_SUPPORT of its weight) using little of its friction
- *    (REST_GRIP of what the solver could give, (1 - beta) of that to enter): a body
- *    pushed, tilted onto a slope, starting to slide or being lifted leaves it the next
- *    step, after one step at most with (1 - beta) of its friction. Contact forces
- *    reported are the whole forces (what the solver found over (1 - beta)).
+ *    at rest when it has no joints, touches no kinematic body, and no body of it is
+ *    weightless or has a force or torque applied this step (a script's, a controller's):
+ *    then each preloaded weight reaches the ground through contacts (a crate on a
+ *    platform a force holds up would otherwise lift the platform). In it, a body is
+ *    preloaded when it moves and slides slower than REST_SLIP and has been held up by its
+ *    contacts for the last two steps (at least REST_SUPPORT of its weight) using little
+ *    of its friction (REST_GRIP of what the solver could give, (1 - beta) of that to
+ *    enter). An
+ *    island pushed or lifted by hand is not preloaded that step; a body tilted onto a
+ *    slope or starting to slide leaves it the next step, after one step at most with
+ *    (1 - beta) of its friction. Contact forces reported are the whole forces: what the
+ *    solver found, plus each preload carried down through the contacts under it.
  *
  * 3. Contact softness from the step and the masses. ODE's constraint force mixing is an
  *    absolute number: 1e-5 is rigid for a 1 kg ball and a sponge for a 125 kg crate, and
@@ -42,6 +47,9 @@
  *    every mass and step; a contact that bounces this step is rigid (CFM 0), so
  *    restitution does not depend on the step. An author's Softness overrides both, and
  *    such a contact is not preloaded (the preload would stiffen the spring it tuned).
+ *
+ * After the step, cs_sleep runs the engine's sleep rule (../sleep.h, engine/physics/sleep.py)
+ * on the islands cs_solve found, so the binding and the reference sleep alike.
  */
 #ifndef COLOSSEUM_STEPPER_H
 #define COLOSSEUM_STEPPER_H
@@ -52,6 +60,8 @@
 #include <string.h>
 
 #include <ode/ode.h>
+
+#include "../sleep.h"
 
 /* Contacts sliding faster than this (m/s) are not at rest. */
 #define REST_SLIP 0.05
@@ -132,6 +142,13 @@ static inline void cs_reset(CsState *s, int i) {
 static inline void cs_move(CsState *s, int from, int to) {
     if (from >= 0 && from < s->capbodies && to >= 0 && to < s->capbodies)
         s->bodies[to] = s->bodies[from];
+}
+
+/* The square of a body's centre-of-mass speed across `down` (a unit vector, or zero). */
+static inline double cs_across2(dBodyID b, const double *down) {
+    const dReal *v = dBodyGetLinearVel(b);
+    double along = v[0] * down[0] + v[1] * down[1] + v[2] * down[2];
+    return v[0] * v[0] + v[1] * v[1] + v[2] * v[2] - along * along;
 }
 
 static inline int cs_body_index(dBodyID b) { return b ? (int)(intptr_t)dBodyGetData(b) : -1; }
@@ -291,6 +308,94 @@ static inline void cs_switch(CsState *s, int exact_rows, const void *bodies, siz
  * and every contact's whole force put in s->forces. `bodies` points at the first of `n`
  * body handles `stride` bytes apart (NULL: a static body); each body's data is its index
  * among them. Returns 0, or -1 out of memory (the step was still taken). */
+typedef struct { double height; int index; } CsHeight;
+
+static int cs_higher_first(const void *x, const void *y) {
+    double a = ((const CsHeight *)x)->height, b = ((const CsHeight *)y)->height;
+    return a > b ? -1 : a < b ? 1 : ((const CsHeight *)x)->index - ((const CsHeight *)y)->index;
+}
+
+/* Put the forces the preload stood in for back into the contacts that carry them, so a
+ * contact reports its whole force: each preloaded body's beta m g (upward) goes into the
+ * contacts holding it up, in proportion to what the solver found each to carry, and on
+ * through the bodies under them, highest first, down to the ground. (Scaling a contact
+ * by 1 / (1 - beta) for its preloaded body is right only when everything it carries is
+ * preloaded too: a crate set on a resting stack reported ten times its weight on every
+ * contact below it, an impact a contact sound heard.) Returns -1 when out of memory
+ * (the forces are then the solver's alone). */
+static inline int cs_add_preloads(CsState *s, const CsSettings *cfg, const dReal *gravity,
+                                  const double *down, const void *bodies, size_t stride,
+                                  int n) {
+    int i, e, nc = s->ncontacts, any = 0, status = 0;
+    CsHeight *order;
+    int *head, *next, *which;
+    double *load;
+    for (i = 0; i < n && !any; i++) any = s->bodies[i].preloaded;
+    if (!any || cfg->beta <= 0.0) return 0;
+    order = (CsHeight *)malloc((size_t)n * sizeof(CsHeight));
+    head = (int *)malloc((size_t)n * sizeof(int));
+    next = (int *)malloc((size_t)(2 * nc + 1) * sizeof(int));
+    which = (int *)malloc((size_t)(2 * nc + 1) * sizeof(int));
+    load = (double *)calloc((size_t)(3 * n), sizeof(double));
+    if (!order || !head || !next || !which || !load) {
+        status = -1;
+        goto done;
+    }
+    for (i = 0; i < n; i++) {
+        dBodyID b = cs_body_at(bodies, stride, i);
+        head[i] = -1;
+        order[i].index = i;
+        order[i].height = 0.0;
+        if (b == NULL) continue;
+        {
+            const dReal *pos = dBodyGetPosition(b);
+            order[i].height = -(pos[0] * down[0] + pos[1] * down[1] + pos[2] * down[2]);
+        }
+        if (s->bodies[i].preloaded) {
+            dMass m;
+            int k;
+            dBodyGetMass(b, &m);
+            for (k = 0; k < 3; k++) load[3 * i + k] = -cfg->beta * m.mass * gravity[k];
+        }
+    }
+    for (e = 0, i = 0; i < nc; i++) {  /* each body's contacts, as linked lists */
+        int a = cs_body_index(s->contacts[i].b1), b = cs_body_index(s->contacts[i].b2);
+        which[e] = i; next[e] = head[a]; head[a] = e++;
+        if (b >= 0) { which[e] = i; next[e] = head[b]; head[b] = e++; }
+    }
+    qsort(order, (size_t)n, sizeof(CsHeight), cs_higher_first);
+    for (i = 0; i < n; i++) {
+        int u = order[i].index, k;
+        double *l = &load[3 * u], total = 0.0;
+        if (l[0] == 0.0 && l[1] == 0.0 && l[2] == 0.0) continue;
+        for (e = head[u]; e >= 0; e = next[e]) {  /* what holds it up, and how much */
+            int c = which[e];
+            double sign = cs_body_index(s->contacts[c].b1) == u ? 1.0 : -1.0, *f = &s->forces[3 * c];
+            double up = -sign * (f[0] * down[0] + f[1] * down[1] + f[2] * down[2]);
+            if (up > 0.0) total += up;
+        }
+        if (total <= 0.0) continue;  /* nothing holds it up: nothing to put back */
+        for (e = head[u]; e >= 0; e = next[e]) {
+            int c = which[e], a = cs_body_index(s->contacts[c].b1);
+            int v = a == u ? cs_body_index(s->contacts[c].b2) : a;
+            double sign = a == u ? 1.0 : -1.0, *f = &s->forces[3 * c], share;
+            double up = -sign * (f[0] * down[0] + f[1] * down[1] + f[2] * down[2]);
+            if (up <= 0.0) continue;
+            share = up / total;
+            for (k = 0; k < 3; k++) f[k] += sign * share * l[k];
+            if (v >= 0)  /* the body under it carries that too */
+                for (k = 0; k < 3; k++) load[3 * v + k] += share * l[k];
+        }
+    }
+done:
+    free(order);
+    free(head);
+    free(next);
+    free(which);
+    free(load);
+    return status;
+}
+
 static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
                            dJointGroupID group, const void *bodies, size_t stride, int n,
                            double dt, dJointFeedback *(*feedback)(void *, int), void *ctx) {
@@ -340,10 +445,32 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
             s->rows[r] += cs_joint_rows(j);
         }
     }
+    /* a preloaded body's weight must reach the ground through contacts: an island with a
+     * body that something other than its contacts holds or moves (a script's force or
+     * torque, no gravity; joints and kinematic bodies above) is not preloaded at all.
+     * Such a body would take the preload of what rests on it instead: a crate on a
+     * platform a force held up lifted the platform (both rose at 5 m/s^2). (A body not at
+     * rest but on the ground passes the weight of what rests on it on as the solver finds
+     * it.) */
+    if (cfg->beta > 0.0) {
+        for (i = 0; i < n; i++) {
+            dBodyID b = cs_body_at(bodies, stride, i);
+            const dReal *f, *t;
+            if (b == NULL || !dBodyIsEnabled(b) || dBodyIsKinematic(b)) continue;
+            f = dBodyGetForce(b);
+            t = dBodyGetTorque(b);
+            if (!dBodyGetGravityMode(b) || f[0] != 0.0 ||
+                f[1] != 0.0 || f[2] != 0.0 || t[0] != 0.0 || t[1] != 0.0 || t[2] != 0.0)
+                s->kind[cs_root(s->parent, i)] |= CS_UNREST;
+        }
+    }
     /* resting islands: each body's weight, (beta of it) preloaded */
     for (i = 0; i < n; i++) {
         dBodyID b = cs_body_at(bodies, stride, i);
         CsBody *st = &s->bodies[i];
+        /* how fast it may move across gravity and be preloaded: four times that to stay
+         * so (a stack's solver jitter is not a slide) */
+        double moving = (st->preloaded ? 4.0 : 1.0) * REST_SLIP;
         int r;
         memset(st->solved, 0, sizeof st->solved);
         st->mu = dInfinity;
@@ -359,10 +486,12 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
         }
         /* the upward push only where it leaves nothing free to move: a body resting on a
          * face (three contacts or more: friction holds it whole), or touching only level
-         * ground (it may roll, but not downhill) */
-        if (cfg->beta > 0.0 && s->kind[r] == CS_RESTING && dBodyGetGravityMode(b) &&
-            dBodyIsEnabled(b) && st->resting >= 2 && !st->slipping &&
-            (st->contacts >= 3 || !st->tilted)) {
+         * ground (it may roll, but not downhill); one not carried along itself (a crate
+         * riding a sliding box, its contacts still, took its weight off the floor's
+         * friction: the pair slid six times too far) */
+        if (cfg->beta > 0.0 && s->kind[r] == CS_RESTING && dBodyIsEnabled(b) &&
+            st->resting >= 2 && !st->slipping && (st->contacts >= 3 || !st->tilted) &&
+            cs_across2(b, down) < moving * moving) {
             dMass m;
             dBodyGetMass(b, &m);
             dBodyAddForce(b, -cfg->beta * m.mass * gravity[0], -cfg->beta * m.mass * gravity[1],
@@ -403,20 +532,19 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
             free(mark);
         }
     }
-    /* forces: what the solver found, over (1 - beta) in a resting island */
+    /* forces: what the solver found (the preloads put back after this loop) */
     for (i = 0; i < s->ncontacts; i++) {
         const CsContact *c = &s->contacts[i];
         const dJointFeedback *fb = feedback(ctx, i);
         const double *nrm = c->contact.geom.normal;
         double *f = &s->forces[3 * i], mu = c->contact.surface.mu, along, slide2, friction, grip;
         int a = cs_body_index(c->b1), b = cs_body_index(c->b2);
-        double scale = cfg->beta > 0.0 && s->bodies[a].preloaded ? 1.0 / (1.0 - cfg->beta) : 1.0;
         if (fb == NULL) {
             memset(f, 0, 3 * sizeof(double));
             continue;
         }
         for (k = 0; k < 3; k++) {
-            f[k] = scale * fb->f1[k];
+            f[k] = fb->f1[k];
             s->bodies[a].solved[k] += fb->f1[k];
             if (b >= 0) s->bodies[b].solved[k] -= fb->f1[k];
         }
@@ -434,6 +562,7 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
             s->bodies[b].grip += grip;
         }
     }
+    if (cs_add_preloads(s, cfg, gravity, down, bodies, stride, n) < 0) status = -1;
     /* each body's standing for the next step */
     for (i = 0; i < n; i++) {
         dBodyID b = cs_body_at(bodies, stride, i);
@@ -472,6 +601,63 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
         }
     }
     return status;
+}
+
+/* A body asleep, at rest: a sleeping body reports zero velocity. */
+static inline void cs_disable(dBodyID b) {
+    dBodyDisable(b);
+    dBodySetLinearVel(b, 0.0, 0.0, 0.0);
+    dBodySetAngularVel(b, 0.0, 0.0, 0.0);
+}
+
+/* The sleep rule's step (sleep.h) after cs_solve: every body's centre-of-mass velocity and
+ * whether it is awake into the rule, the rule advanced by `dt` (`keep`: e^(-dt/SMOOTHING);
+ * `woken`: bodies woken explicitly since the last step, or NULL), and when some body has
+ * been quiet for `time`, the islands cs_solve found for this step (its contacts and the
+ * joints, through moving bodies: the ties SleepRule's islands are made of) decide which
+ * bodies fall asleep, and they are put to sleep. `bodies` as for cs_solve, the rule laid
+ * out over the same `n` rows. Returns how many fell asleep, or -1 out of memory (none
+ * did). */
+static inline int cs_sleep(CsState *s, SrRule *r, const void *bodies, size_t stride, int n,
+                           double dt, double keep, double time, const uint8_t *woken) {
+    double *velocity = r->stack + 12 * (ptrdiff_t)n;
+    int i, k, *label;
+    uint8_t *held;
+    ptrdiff_t *rows, slept;
+    if (n <= 0 || r->n != n) return 0;
+    for (i = 0; i < n; i++) {
+        dBodyID b = cs_body_at(bodies, stride, i);
+        const dReal *v, *w;
+        if (b == NULL) {
+            for (k = 0; k < 6; k++) velocity[k * n + i] = 0.0;
+            r->awake[i] = 0;
+            continue;
+        }
+        v = dBodyGetLinearVel(b);
+        w = dBodyGetAngularVel(b);
+        for (k = 0; k < 3; k++) {
+            velocity[k * n + i] = v[k];
+            velocity[(3 + k) * n + i] = w[k];
+        }
+        r->awake[i] = (uint8_t)dBodyIsEnabled(b);
+    }
+    if (!sr_advance(r, dt, keep, time, woken)) return 0;
+    label = (int *)malloc((size_t)n * sizeof(int));
+    held = (uint8_t *)malloc((size_t)n);
+    rows = (ptrdiff_t *)malloc((size_t)n * sizeof(ptrdiff_t));
+    if (!label || !held || !rows || s->capbodies < n) {
+        free(label);
+        free(held);
+        free(rows);
+        return -1;
+    }
+    for (i = 0; i < n; i++) label[i] = cs_root(s->parent, i);
+    slept = sr_settle(r, time, label, held, rows);
+    for (i = 0; i < slept; i++) cs_disable(cs_body_at(bodies, stride, (int)rows[i]));
+    free(label);
+    free(held);
+    free(rows);
+    return (int)slept;
 }
 
 #endif

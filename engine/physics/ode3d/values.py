@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from engine.physics.ode3d import _ode
+from engine.physics.backend import MAX_SPEED
 
 
 def vec(value: object, n: int, what: str) -> np.ndarray:
@@ -20,7 +20,8 @@ def vec(value: object, n: int, what: str) -> np.ndarray:
 
 
 def check_speed(key: int, linear: np.ndarray, angular: np.ndarray) -> None:
-    """Refuse velocities beyond ``_ode.MAX_BODY_SPEED`` (the next step would overflow)."""
+    """Refuse velocities beyond the protocol's ``MAX_SPEED`` (the next step would
+    overflow): what a kinematic target asks for, known only against the body's pose."""
     # hypot scales instead of overflowing; an infinite component gives inf, refused
-    if max(math.hypot(*linear.tolist()), math.hypot(*angular.tolist())) > _ode.MAX_BODY_SPEED:
-        raise ValueError(f"body {key}: velocity beyond {_ode.MAX_BODY_SPEED:g} m/s or rad/s")
+    if max(math.hypot(*linear.tolist()), math.hypot(*angular.tolist())) > MAX_SPEED:
+        raise ValueError(f"body {key}: velocity beyond {MAX_SPEED:g} m/s or rad/s")

@@ -31,20 +31,28 @@ import numpy as np
 import pymunk
 
 from components import Joint, MaterialProps, Physical, Shape
+from components.joint import JointKind
+from components.physical import BodyKind
 from engine.physics.backend import (
     ARRIVE_SLACK,
     CONTACT_DTYPE,
+    MAX_SPEED,
+    WORLD_EXTENT,
+    BackendName,
     BodyState,
     MaterialPair,
     RayHit,
     WorldSettings,
+    fault_message,
 )
-from engine.physics.pymunk2d.batch import SpaceReader
+from engine.physics.pymunk2d import _rows
+from engine.physics.pymunk2d.batch import Buffers, SpaceReader
 from engine.physics.pymunk2d.joints import JointRecord, build_joint
 from engine.physics.pymunk2d.planar import split_orientation
-from engine.physics.pymunk2d.resting import RestingSupport
+from engine.physics.pymunk2d.resting import RestingSupport, carried_down
 from engine.physics.pymunk2d.shapes import BuiltShape, build_shape
 from engine.physics.sleep import SleepRule, SleepState
+from engine.rotation import quat_to_matrix
 
 log = logging.getLogger("colosseum.physics.pymunk")
 
@@ -57,9 +65,9 @@ NEVER = 1e300
 NOTHING = pymunk.ShapeFilter(categories=0, mask=0)
 
 _KINDS = {
-    "dynamic": pymunk.Body.DYNAMIC,
-    "static": pymunk.Body.STATIC,
-    "kinematic": pymunk.Body.KINEMATIC,
+    BodyKind.DYNAMIC: pymunk.Body.DYNAMIC,
+    BodyKind.STATIC: pymunk.Body.STATIC,
+    BodyKind.KINEMATIC: pymunk.Body.KINEMATIC,
 }
 
 
@@ -72,6 +80,8 @@ class _BodyRecord:
     y: float
     rest: np.ndarray
     joints: set[int] = field(default_factory=set)
+    #: (x, z, θ) where it was made: its last good pose until a read has seen it
+    made_at: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 @dataclass(slots=True)
@@ -87,9 +97,11 @@ class _Aim:
 class PymunkBackend:
     """A 2D side-view world: pymunk space in X–Z, Y kept per body as authored."""
 
-    name = "pymunk"
+    name = BackendName.PYMUNK
 
     def __init__(self) -> None:
+        self._step_dt = 0.0  # the last step's, for contact impulses (carried_down)
+        self._preload_force = np.zeros(0)  # each row's preload in the last step (N, upward)
         self._space = pymunk.Space()
         self._space.collision_slop = COLLISION_SLOP
         # joints asked for their force -> that force on body_a after the last step
@@ -104,24 +116,36 @@ class PymunkBackend:
         self._pairs: dict[tuple[int, int], MaterialPair] = {}
         self._warned: set[tuple[str, str]] = set()
         self._contacts: np.ndarray | None = np.zeros(0, CONTACT_DTYPE)
+        self._contacts_rows = np.zeros((0, 2), np.int64)  # their rows (a, b)
         self._dirty = True
         self._keys = np.zeros(0, np.int64)
         self._records: list[_BodyRecord] = []  # by row
         self._row: dict[int, int] = {}
         self._y = np.zeros(0)
+        # per row, as the reader was planned: fixed tilt, centre of mass, static or not
+        self._rests = np.zeros((0, 4))
+        self._cogs = np.zeros((0, 2))
+        self._masses = np.zeros(0)  # kg, dynamic rows (0 for the others)
+        self._static = np.zeros(0, bool)
         self._reader: SpaceReader | None = None
+        self._buffers = Buffers()  # every reader's: pymunk never frees a batch buffer
         self._sleep_on = True
         self._resting = RestingSupport(0, WorldSettings().warm_start)
         self._preload = np.zeros(0, np.intp)  # rows that get their weight's share next step
         self._rule = SleepRule()
         self._woken: set[int] = set()  # keys woken explicitly since the rule last looked
         self._joint_pairs: np.ndarray | None = None  # (M, 2) body keys of the joints
-        self._sliders: dict[int, JointRecord] = {}
+        #: per row, for the resting rule: friction, dynamic, mass under gravity, jointed,
+        #: and the kinematic rows with shapes (None: to be gathered again)
+        self._rest_rows: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                               list[int]] | None = None
+        self._driven: dict[int, JointRecord] = {}  # sliders and springs: forces each step
         self._aims: dict[int, _Aim] = {}  # kinematic bodies on their way to a target
         #: The last read that was all finite: keys, and each row's (x, z, θ, vx, vz, ω).
         self._last_good = (np.zeros(0, np.int64), np.zeros((0, 6)))
         self._read_rows = np.zeros((0, 6))  # the next read's rows, swapped in when good
         self._faults: list[tuple[int, str]] = []
+        self._extent = WORLD_EXTENT
         self.configure(WorldSettings())
 
     # -- reporting ---------------------------------------------------------
@@ -136,6 +160,7 @@ class PymunkBackend:
     def configure(self, settings: WorldSettings) -> None:
         """Gravity, solver iterations, error correction, sleeping and material pairs."""
         space = self._space
+        self._extent = float(settings.extent)
         gx, _, gz = settings.gravity
         if settings.gravity[1] != 0.0:
             self._warn("world", "gravity", "gravity's Y component dropped (not in the X–Z plane)")
@@ -186,14 +211,16 @@ class PymunkBackend:
     def step(self, dt: float) -> None:
         """Step the space (resting bodies given their weight's share first, see
         :mod:`resting`); then let the sleep rule put quiet islands to sleep."""
-        for rec in self._sliders.values():
-            rec.drive_slider(dt)
+        for rec in self._driven.values():
+            rec.before_step(dt)
         if self._aims:
             self._lead_aims(dt)
+        self._step_dt = dt
         applied = self._preload_weights()
         # after the preload: it is an outside force to a joint's momentum balance
         strained = self._strain_before(dt) if self._strained else None
         self._space.step(dt)
+        self._reader.new_step()
         if strained:
             self._strain_after(strained, dt)
         if self._aims:
@@ -208,9 +235,14 @@ class PymunkBackend:
 
     def _preload_weights(self) -> np.ndarray:
         """Give the rows the resting rule chose their weight's share (an upward force
-        for this step); the share each row got."""
-        self._space_reader()
+        for this step, on top of the forces they have); the share each row got.
+
+        Every body's force is read and written in one batch each (a C pass in between,
+        :meth:`SpaceReader.preload`); where some body sleeps, which a batch write would
+        wake, the preloaded ones are set one by one instead."""
+        reader = self._space_reader()
         applied = np.zeros(len(self._records))
+        self._preload_force = np.zeros(len(self._records))  # N, upward
         if self._woken and len(self._preload):  # moved, pushed or woken by hand: not at rest
             self._resting.forget(self._rule.rows(np.fromiter(self._woken, np.int64)))
             self._preload = self._preload[self._resting.ramp[self._preload] > 0]
@@ -218,13 +250,12 @@ class PymunkBackend:
             return applied
         gx, gz = self._space.gravity
         share = self._resting.beta * self._resting.ramp
-        for row in self._preload.tolist():
-            body = self._records[row].body
-            if body.is_sleeping:
-                continue
-            m = share[row] * body.mass
-            body.force = (body.force[0] - m * gx, body.force[1] - m * gz)
-            applied[row] = share[row]
+        forces = reader.preload(self._preload, share, self._masses, (gx, gz), math.hypot(gx, gz),
+                                applied, self._preload_force)
+        if forces is not None:
+            records, gather = self._records, reader.gather
+            for row in np.flatnonzero(applied).tolist():
+                _SET_FORCE(records[row].body, forces[gather[row]].tolist())
         return applied
 
     def _rest(self, dt: float, applied: np.ndarray) -> None:
@@ -241,31 +272,40 @@ class PymunkBackend:
             return
         down = np.array([gx / g, gz / g])
         resting.applied = applied
-        mu, weight, unrest = self._rest_bodies(g)
-        reader.support(resting, mu, dt, down)
         raw, awake = reader.read()
-        speed = np.hypot(raw[reader.gather, 3], raw[reader.gather, 4])
-        resting.update(dt, down, weight, mu, awake)
-        self._preload = np.flatnonzero(resting.eligible(speed, unrest))
+        mu, weight, unrest, dynamic = self._rest_bodies(g)
+        reader.support(resting, mu, dt, down)
+        chosen = resting.update(dt, down, weight, mu, awake, unrest, raw, reader.gather)
+        self._preload = np.flatnonzero(resting.eligible(chosen, dynamic & awake, unrest,
+                                                        weight, reader.islands))
 
-    def _rest_bodies(self, g: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Per row: friction coefficient, weight (0: not dynamic or gravity off) and
-        whether the rule leaves it alone (jointed, or touching a kinematic body), cached
-        until bodies, joints or contacts' partners change."""
-        recs = self._records
-        mu = np.fromiter((r.physical.material.friction for r in recs), float, len(recs))
-        weight = np.fromiter(
-            (r.body.mass * g if r.body.body_type == pymunk.Body.DYNAMIC and r.physical.gravity
-             else 0.0 for r in recs), float, len(recs))
-        unrest = np.fromiter((bool(r.joints) for r in recs), bool, len(recs))
-        kinematic = [i for i, r in enumerate(recs) if r.body.body_type == pymunk.Body.KINEMATIC]
+    def _rest_bodies(self, g: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Per row: friction coefficient, weight (0: not dynamic or gravity off), whether
+        the rule leaves it alone (jointed, or touching a kinematic body) and whether it is
+        dynamic."""
+        if self._rest_rows is None:  # what stays as it is while no body or joint comes or goes
+            recs = self._records
+            n = len(recs)
+            dynamic = np.fromiter((r.body.body_type == pymunk.Body.DYNAMIC for r in recs), bool,
+                                  n)
+            self._rest_rows = (
+                np.fromiter((r.physical.material.friction for r in recs), float, n), dynamic,
+                np.fromiter((r.body.mass if d and r.physical.gravity else 0.0
+                             for r, d in zip(recs, dynamic.tolist(), strict=True)), float, n),
+                np.fromiter((bool(r.joints) for r in recs), bool, n),
+                # (a kinematic body without shapes, a hand's control body, touches nothing)
+                [i for i, r in enumerate(recs)
+                 if r.body.body_type == pymunk.Body.KINEMATIC and r.physical.shapes])
+        mu, dynamic, mass, jointed, kinematic = self._rest_rows
+        weight = mass * g
+        unrest = jointed.copy()
         if kinematic:
-            c = self.contacts()
-            rows_a, rows_b = self._rule.rows(c["a"]), self._rule.rows(c["b"])
+            pairs = self._contact_pairs()
+            rows_a, rows_b = pairs[:, 0], pairs[:, 1]
             hit = np.isin(rows_a, kinematic) | np.isin(rows_b, kinematic)
             unrest[rows_a[hit & (rows_a >= 0)]] = True
             unrest[rows_b[hit & (rows_b >= 0)]] = True
-        return mu, weight, unrest
+        return mu, weight, unrest, dynamic
 
     def _strain_before(self, dt: float) -> list[tuple[int, pymunk.Body, float, pymunk.Vec2d]]:
         """For each measured joint, its moving body and the velocity the step would give
@@ -341,13 +381,13 @@ class PymunkBackend:
             self._warn(obj, "tilt", "orientation tilts out of the X–Z plane; the tilt is "
                        "baked into its 2D silhouette")
         pbody = pymunk.Body(body_type=_KINDS[body.kind])
-        static = body.kind != "dynamic"
+        static = body.kind != BodyKind.DYNAMIC
         built = [b for spec in body.shapes
-                 if (b := build_shape(pbody, spec, rest, body.kind == "static",
+                 if (b := build_shape(pbody, spec, rest, body.kind == BodyKind.STATIC,
                                       lambda t, m: self._warn(obj, t, m))) is not None]
-        if body.kind == "dynamic":
+        if body.kind == BodyKind.DYNAMIC:
             pbody.mass, pbody.moment, pbody.center_of_gravity = self._mass_properties(
-                obj, body, built)
+                obj, body, built, rest)
         pbody.angle = theta  # before the position: pymunk turns a body about its centre
         pbody.position = (float(position[0]), float(position[2]))
         mat = body.material
@@ -368,16 +408,31 @@ class PymunkBackend:
             pbody.velocity_func = _velocity_func(body.gravity, body.linear_damping,
                                                  body.angular_damping)
         self._space.add(pbody, *shapes)
-        rec = _BodyRecord(key, pbody, shapes, body, float(position[1]), rest)
+        rec = _BodyRecord(key, pbody, shapes, body, float(position[1]), rest,
+                          made_at=(pbody.position.x, pbody.position.y, pbody.angle))
         self._bodies[key] = rec
         self._dirty = True
         if linear_velocity is not None or angular_velocity is not None:
             self.set_velocity(key, np.zeros(3) if linear_velocity is None else linear_velocity,
                               np.zeros(3) if angular_velocity is None else angular_velocity)
 
-    def _mass_properties(self, obj: str, body: Physical,
-                         built: list[BuiltShape]) -> tuple[float, float, tuple[float, float]]:
-        """Mass, moment about the centre of mass, and that centre in the body frame."""
+    def _mass_properties(self, obj: str, body: Physical, built: list[BuiltShape],
+                         rest: np.ndarray) -> tuple[float, float, tuple[float, float]]:
+        """Mass, moment about the centre of mass, and that centre in the body frame (a
+        given centre and principal moments, seen in the plane, win over the shapes')."""
+        mass, moment, centre = self._shape_mass(obj, body, built)
+        turn = quat_to_matrix(rest)
+        if body.center_of_mass is not None:
+            c = turn @ np.asarray(body.center_of_mass, np.float64)
+            centre = (float(c[0]), float(c[2]))
+        if body.inertia is not None:
+            axes = turn @ quat_to_matrix(np.asarray(body.inertia_rotation, np.float64))
+            moment = float((axes @ np.diag(np.asarray(body.inertia, np.float64)) @ axes.T)[1, 1])
+        return mass, moment, centre
+
+    def _shape_mass(self, obj: str, body: Physical,
+                    built: list[BuiltShape]) -> tuple[float, float, tuple[float, float]]:
+        """Mass, moment about the centre of mass, and that centre, from the shapes."""
         volume = sum(b.volume for b in built)
         if body.mass is not None and body.mass > 0.0:
             shares = ([b.volume / volume for b in built] if volume > 0.0
@@ -407,10 +462,13 @@ class PymunkBackend:
     def remove_body(self, key: int) -> None:
         rec = self._record(key)
         if self._contacts is None:  # the last step's, while the reader still knows the body
-            self._contacts = self._space_reader().contacts()
+            self.contacts()
         for jkey in list(rec.joints):
             log.info("joint %s removed with body %s", jkey, key)
             self.remove_joint(jkey)
+        # what it touches wakes (chipmunk wakes a sleeper only through a step's contact: one
+        # put to sleep by hand on an awake body, taken away before a step, hung in the air)
+        rec.body.each_arbiter(_wake_others, rec.body)
         self._space.remove(rec.body, *rec.shapes)
         del self._bodies[rec.key]
         self._aims.pop(rec.key, None)
@@ -424,7 +482,7 @@ class PymunkBackend:
 
     def _set_orientation(self, rec: _BodyRecord, orientation: np.ndarray) -> float:
         theta, rest, _ = split_orientation(orientation)
-        if not np.allclose(rest, rec.rest, atol=1e-6):
+        if max(abs(a - b) for a, b in zip(rest.tolist(), rec.rest.tolist(), strict=True)) > 1e-6:
             self._warn(f"body {rec.key}", "retilt", "new orientation tilts differently out of "
                        "the X–Z plane; only its turn about Y is applied")
         return theta
@@ -556,13 +614,12 @@ class PymunkBackend:
 
     def _touching(self) -> np.ndarray:
         """Row pairs the step's contacts and the joints tie together (the rule's islands)."""
-        c = self.contacts()
         if self._joint_pairs is None:
             self._joint_pairs = np.array(
                 [(rec.spec.body_a, -1 if rec.spec.body_b is None else rec.spec.body_b)
                  for rec in self._joints.values()], np.int64).reshape(-1, 2)
-        pairs = np.concatenate([np.column_stack([c["a"], c["b"]]), self._joint_pairs])
-        return self._rule.rows(pairs.ravel()).reshape(-1, 2)
+        joints = self._rule.rows(self._joint_pairs.ravel()).reshape(-1, 2)
+        return np.concatenate([self._contact_pairs(), joints])
 
     def sleep_states(self) -> dict[int, SleepState]:
         """Every body asleep or in a quiet stretch (see :mod:`engine.physics.sleep`)."""
@@ -646,9 +703,9 @@ class PymunkBackend:
                 body.angle, body.position = angle, position
         self._space.add(*rec.constraints)
         self._joints[key] = rec
-        self._joint_pairs = None
-        if joint.kind == "slider":
-            self._sliders[key] = rec
+        self._joint_pairs = self._rest_rows = None
+        if joint.kind == JointKind.SLIDER or joint.spring is not None:
+            self._driven[key] = rec
         a.joints.add(key)
         if b is not None:
             b.joints.add(key)
@@ -658,9 +715,9 @@ class PymunkBackend:
             rec = self._joints.pop(int(key))
         except KeyError:
             raise KeyError(f"no joint with key {key}") from None
-        self._sliders.pop(int(key), None)
+        self._driven.pop(int(key), None)
         self._space.remove(*rec.constraints)
-        self._joint_pairs = None
+        self._joint_pairs = self._rest_rows = None
         self._wake_joint(rec)
         for body_key in (rec.spec.body_a, rec.spec.body_b):
             if body_key is not None and body_key in self._bodies:
@@ -727,7 +784,7 @@ class PymunkBackend:
 
     def _six_dof(self, key: int, what: str) -> JointRecord:
         rec = self._joint(key)
-        if rec.spec.kind != "six_dof":
+        if rec.spec.kind != JointKind.SIX_DOF:
             raise ValueError(f"joint {rec.spec.id or key}: {what} needs a six_dof joint, "
                              f"not {rec.spec.kind!r}")
         return rec
@@ -747,17 +804,22 @@ class PymunkBackend:
         else:
             self._resting.follow(np.full(n, -1))
         self._preload = np.zeros(0, np.intp)
+        self._rest_rows = None
         self._records = recs
         self._keys = np.fromiter((r.key for r in recs), np.int64, n)
         self._keys.setflags(write=False)  # every state read hands out this same array
         self._row = {r.key: i for i, r in enumerate(recs)}
         self._y = np.fromiter((r.y for r in recs), np.float64, n)
         kind = np.array([r.body.body_type for r in recs], np.int64).reshape(n)
-        static = kind == pymunk.Body.STATIC
-        self._reader = SpaceReader(
-            self._space, [r.body for r in recs], self._keys, self._y,
-            np.array([r.rest for r in recs], np.float64).reshape(-1, 4),
-            np.array([tuple(r.body.center_of_gravity) for r in recs]).reshape(-1, 2), static)
+        static = self._static = kind == pymunk.Body.STATIC
+        self._rests = np.array([r.rest for r in recs], np.float64).reshape(-1, 4)
+        self._cogs = np.array([tuple(r.body.center_of_gravity) for r in recs],
+                              np.float64).reshape(-1, 2)
+        self._masses = np.fromiter((r.body.mass if k == pymunk.Body.DYNAMIC else 0.0
+                                    for r, k in zip(recs, kind.tolist(), strict=True)),
+                                   np.float64, n)
+        self._reader = SpaceReader(self._space, [r.body for r in recs], self._keys, self._y,
+                                   self._rests, self._cogs, static, self._buffers)
         self._rule.layout(self._keys, ~static, (kind == pymunk.Body.DYNAMIC) & np.fromiter(
             (r.physical.can_sleep for r in recs), bool, n))
         self._dirty = False
@@ -784,7 +846,7 @@ class PymunkBackend:
         keep = self._read_rows
         if len(keep) != n:
             keep = self._read_rows = np.empty((n, 6))
-        if not reader.table(raw, out, keep):
+        if not reader.table(raw, out, keep) or self._escaped(keep):
             self._reset_broken(keep)
             raw, _ = reader.read()
             reader.table(raw, out, keep)
@@ -793,23 +855,41 @@ class PymunkBackend:
         self._last_good = (self._keys, last)
         return self._keys
 
+    def _escaped(self, planar: np.ndarray) -> bool:
+        """Whether a body of a finite read left the world or ran away (``planar``: a row
+        per body, (x, z, θ, vx, vz, ω))."""
+        return bool(len(planar)) and (float(np.abs(planar[:, :2]).max()) > self._extent
+                                      or float(np.abs(planar[:, 3:]).max()) > MAX_SPEED)
+
     def _reset_broken(self, planar: np.ndarray) -> None:
-        """Put bodies whose state turned non-finite back at their last good pose, at rest.
+        """Put bodies gone non-finite, runaway or out of the world back at their last good
+        pose (one that left stops at its last pose inside), at rest; the engine reports
+        them (:meth:`take_faults`).
 
         ``planar`` is a read, a row per body: (x, z, θ, vx, vz, ω).
         """
         last_keys, last = self._last_good
-        for i in np.flatnonzero(~np.isfinite(planar).all(axis=1)).tolist():
-            key = int(self._keys[i])
-            body = self._bodies[key].body
-            seen = np.flatnonzero(last_keys == key)
-            x, z, angle = last[seen[0], :3] if seen.size else (0.0, 0.0, 0.0)
-            body.angle = float(angle)  # before the position: pymunk turns about the centre
-            body.position = (float(x), float(z))
-            _stop(body)
-            message = "state turned non-finite; reset to its last good pose, at rest"
-            log.warning("body %s: %s", key, message)
-            self._faults.append((key, message))
+        with np.errstate(invalid="ignore"):
+            causes = {"nonfinite": ~np.isfinite(planar).all(axis=1),
+                      "runaway": (np.abs(planar[:, 3:]) > MAX_SPEED).any(axis=1),
+                      "left": (np.abs(planar[:, :2]) > self._extent).any(axis=1)}
+        told: set[int] = set()
+        for cause, rows in causes.items():
+            for i in np.flatnonzero(rows).tolist():
+                if i in told:
+                    continue
+                told.add(i)
+                key = int(self._keys[i])
+                rec = self._bodies[key]
+                body = rec.body
+                seen = np.flatnonzero(last_keys == key)
+                x, z, angle = last[seen[0], :3] if seen.size else rec.made_at
+                body.angle = float(angle)  # before the position: pymunk turns about the centre
+                body.position = (float(x), float(z))
+                _stop(body)
+                if self._sleep_on and body.body_type == pymunk.Body.DYNAMIC:
+                    body.sleep()  # disabled, as under ODE, until something wakes it
+                self._faults.append((key, fault_message(cause, self._extent)))
 
     def take_faults(self) -> list[tuple[int, str]]:
         """Bodies reset since the last call, with why (the engine reports them)."""
@@ -823,27 +903,72 @@ class PymunkBackend:
         return self._keys
 
     def write_state(self, state: BodyState) -> None:
-        missing = [int(k) for k in state.keys if int(k) not in self._bodies]
+        """Poses and velocities of the bodies ``state.keys`` names, each as set_pose and
+        set_velocity set it (once-per-body warnings included), the rows turned into the
+        plane in one pass (:func:`_rows.planar_poses`): the hands' control bodies, every
+        frame, pay only pymunk's own setters."""
+        keys = np.asarray(state.keys).tolist()
+        self._space_reader()  # rows planned for the bodies there are now
+        where = self._row
+        missing = [k for k in keys if k not in where]
         if missing:
             raise KeyError(f"write_state: no bodies with keys {missing[:10]}")
-        for i, key in enumerate(state.keys):
-            rec = self._bodies[int(key)]
-            self.set_pose(rec.key, state.position[i], state.orientation[i])
-            if rec.body.body_type != pymunk.Body.STATIC:
-                _set_origin_velocity(rec.body, float(state.linear_velocity[i, 0]),
-                                     float(state.linear_velocity[i, 2]),
-                                     -float(state.angular_velocity[i, 1]))
+        rows = [where[k] for k in keys]
+        planar = np.empty((len(rows), 7))
+        flags = np.empty(len(rows), np.uint8)
+        flagged = _rows.planar_poses(np.ascontiguousarray(state.table, np.float64),
+                                     self._rests[rows], self._cogs[rows], planar, flags)
+        if flagged < 0:
+            bad = -flagged - 1
+            raise ValueError(f"body {keys[bad]}: pose {state.table[bad].tolist()} is not "
+                             "finite, or its orientation not a rotation quaternion")
+        if flagged:
+            self._tell_off_plane(keys, flags)
+        records, static, y_rows, space = self._records, self._static, self._y, self._space
+        for row, key, (x, z, theta, vx, vz, spin, y) in zip(rows, keys, planar.tolist(),
+                                                            strict=True):
+            rec = records[row]
+            body = rec.body
+            _SET_ANGLE(body, theta)
+            _SET_POSITION(body, (x, z))
+            rec.y = y_rows[row] = y
+            if static[row]:
+                space.reindex_shapes_for_body(body)
+            else:
+                _SET_SPIN(body, spin)
+                _SET_VELOCITY(body, (vx, vz))
+            self._aims.pop(key, None)
+        self._woken.update(keys)
+
+    def _tell_off_plane(self, keys: list[int], flags: np.ndarray) -> None:
+        """The warnings set_pose and set_velocity give, for the rows :func:`planar_poses`
+        flagged."""
+        for i in np.flatnonzero(flags).tolist():
+            if flags[i] & _rows.RETILT:
+                self._warn(f"body {keys[i]}", "retilt", "new orientation tilts differently "
+                           "out of the X–Z plane; only its turn about Y is applied")
+            if flags[i] & _rows.OFF_PLANE and not self._static[self._row[keys[i]]]:
+                self._warn(f"body {keys[i]}", "planar-velocity", "velocity out of the X–Z "
+                           "plane; only its in-plane part is applied")
 
     def contacts(self) -> np.ndarray:
-        """The last step's contacts; a preloaded body's impulses are the whole ones (the
-        solver found 1 - warm start of them)."""
+        """The last step's contacts, with the whole impulses: what the solver found plus
+        the preloads it stood in for, carried down to the ground (:func:`carried_down`)."""
         if self._contacts is None:
-            c = self._space_reader().contacts()
-            applied = self._resting.applied
-            if applied.any() and len(c):
-                c["impulse"] /= 1.0 - applied[np.maximum(self._rule.rows(c["a"]), 0)]
-            self._contacts = c
+            c, pairs = self._space_reader().contacts()
+            gx, gz = self._space.gravity
+            g = math.hypot(gx, gz)
+            if self._preload_force.any() and len(c) and g > 0.0:
+                up = np.array([-gx / g, 0.0, -gz / g])
+                c["impulse"] = carried_down(pairs[:, 0], pairs[:, 1], c["impulse"],
+                                            c["normal"] @ up, self._preload_force * self._step_dt)
+            self._contacts, self._contacts_rows = c, pairs
         return self._contacts
+
+    def _contact_pairs(self) -> np.ndarray:
+        """Row pairs of the step's contacts (-1: static geometry), as rows were then."""
+        self.contacts()
+        return self._contacts_rows
 
     # -- queries -----------------------------------------------------------
     def overlapping(self, key: int) -> list[int]:
@@ -938,6 +1063,15 @@ def _contact_impulse(body: pymunk.Body) -> pymunk.Vec2d:
     return total
 
 
+#: pymunk.Body's own property setters, called straight (its __setattr__ hook, there for
+#: type checkers, would double the cost of the four a moved body takes per frame).
+_SET_ANGLE = pymunk.Body.angle.fset
+_SET_POSITION = pymunk.Body.position.fset
+_SET_SPIN = pymunk.Body.angular_velocity.fset
+_SET_VELOCITY = pymunk.Body.velocity.fset
+_SET_FORCE = pymunk.Body.force.fset
+
+
 def _velocity_func(gravity: bool, linear_damping: float, angular_damping: float):
     """Per-body gravity switch and ODE-style damping (velocity × (1 − damping) per step)."""
     keep_v = 1.0 - min(max(linear_damping, 0.0), 1.0)
@@ -964,3 +1098,11 @@ def _set_origin_velocity(body: pymunk.Body, vx: float, vz: float, w: float) -> N
     r = body.rotation_vector.cpvrotate(body.center_of_gravity)
     body.angular_velocity = w
     body.velocity = (vx - w * r.y, vz + w * r.x)
+
+
+def _wake_others(arbiter: pymunk.Arbiter, body: pymunk.Body) -> None:
+    """Wake the dynamic body on the other side of one of ``body``'s contacts."""
+    for other in arbiter.bodies:
+        if other is not body and other.body_type == pymunk.Body.DYNAMIC:
+            other.activate()
+

@@ -23,6 +23,8 @@ from engine.physics.backend import CONTACT_DTYPE
 from engine.physics.pymunk2d import _rows
 from engine.physics.pymunk2d.resting import RestingSupport
 
+_ID = pymunk.batch.BodyFields.BODY_ID
+_FORCE = pymunk.batch.BodyFields.FORCE
 _BODY = (pymunk.batch.BodyFields.BODY_ID | pymunk.batch.BodyFields.POSITION
          | pymunk.batch.BodyFields.ANGLE | pymunk.batch.BodyFields.VELOCITY
          | pymunk.batch.BodyFields.ANGULAR_VELOCITY)
@@ -30,6 +32,24 @@ _ARB = pymunk.batch.ArbiterFields
 _ARBITER = (_ARB.BODY_A_ID | _ARB.BODY_B_ID | _ARB.CONTACT_COUNT | _ARB.TOTAL_IMPULSE
             | _ARB.NORMAL | _ARB.POINT_A_1 | _ARB.POINT_B_1 | _ARB.DISTANCE_1
             | _ARB.POINT_A_2 | _ARB.POINT_B_2 | _ARB.DISTANCE_2)
+
+
+class Buffers:
+    """The batch buffers a space is read and written through, made once per backend and
+    handed to every reader planned for it: pymunk never frees a ``pymunk.batch.Buffer``'s
+    C arrays, so one made per plan leaked them each time bodies came or went (a script
+    spawning and deleting every frame grew the process by ~700 bytes per object).
+
+    ``forces`` reads ids and forces (and ids alone), so a body read stays valid through
+    them; ``writes`` only ever writes: its floats are a numpy array of ours
+    (``Buffer.set_float_buf``), which a read into it would reallocate under numpy."""
+
+    def __init__(self) -> None:
+        self.bodies = pymunk.batch.Buffer()
+        self.arbiters = pymunk.batch.Buffer()
+        self.forces = pymunk.batch.Buffer()
+        self.writes = pymunk.batch.Buffer()
+        self.written: np.ndarray | None = None  # the array ``writes`` holds now
 
 
 class SpaceReader:
@@ -43,10 +63,15 @@ class SpaceReader:
     """
 
     def __init__(self, space: pymunk.Space, bodies: list[pymunk.Body], keys: np.ndarray,
-                 y: np.ndarray, rest: np.ndarray, cog: np.ndarray, static: np.ndarray) -> None:
+                 y: np.ndarray, rest: np.ndarray, cog: np.ndarray, static: np.ndarray,
+                 buffers: Buffers) -> None:
         self._space = space
-        self._buffer = pymunk.batch.Buffer()
-        self._arbiters = pymunk.batch.Buffer()
+        self._buffers = buffers
+        self._buffer, self._arbiters = buffers.bodies, buffers.arbiters
+        #: the step's arbiters as read (ints, floats) and the body order then; dropped by
+        #: :meth:`new_step`, and read again if a body has fallen asleep or woken since
+        self._arbiter_read: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._sleepers = 0
         ids = np.fromiter((b.id for b in bodies), np.int64, len(bodies))
         self._rows = _rows.Rows(ids, keys, static, y, rest, cog, CONTACT_DTYPE)
         # the static bodies pymunk lists between the awake and the sleeping ones: ours
@@ -70,7 +95,12 @@ class SpaceReader:
                                "awake and the sleeping ones; the backend cannot tell who sleeps")
         self.gather = gather
         self._awake = gather < first
+        self._sleepers = len(ids) - first - len(self._static_ids)
         self._order = ids.copy()
+
+    def _check_order(self, ids: np.ndarray) -> None:
+        if not np.array_equal(ids, self._order):
+            self._plan_order(ids)
 
     def read(self) -> tuple[np.ndarray, np.ndarray]:
         """Every body's (x, z, θ, vx, vz, ω) as pymunk has them (velocity of the centre of
@@ -79,10 +109,41 @@ class SpaceReader:
         buffer = self._buffer
         buffer.clear()
         pymunk.batch.get_space_bodies(self._space, _BODY, buffer)
-        ids = np.frombuffer(buffer.int_buf(), np.int64)
-        if not np.array_equal(ids, self._order):
-            self._plan_order(ids)
+        self._check_order(np.frombuffer(buffer.int_buf(), np.int64))
         return np.frombuffer(buffer.float_buf(), np.float64).reshape(-1, 6), self._awake
+
+    def forces(self) -> tuple[np.ndarray, np.ndarray, bool]:
+        """Every body's force (x, z) as it stands now, in pymunk's order (row ``i`` at
+        ``gather[i]``; valid until the next call); which rows are awake, and whether any
+        body sleeps."""
+        buffer = self._buffers.forces
+        buffer.clear()
+        pymunk.batch.get_space_bodies(self._space, _ID | _FORCE, buffer)
+        self._check_order(np.frombuffer(buffer.int_buf(), np.int64))
+        return (np.frombuffer(buffer.float_buf(), np.float64).reshape(-1, 2), self._awake,
+                self._sleepers > 0)
+
+    def force_rows(self) -> np.ndarray:
+        """An array (pymunk's list: a row per body, x and z) for :meth:`set_forces`."""
+        out = self._buffers.written
+        if out is None or len(out) != len(self._order):
+            out = np.zeros((len(self._order), 2))
+        return out
+
+    def set_forces(self, forces: np.ndarray) -> None:
+        """Every body's force from ``forces`` (from :meth:`force_rows`), in one batch.
+        Setting a force wakes a body: only for a space where none sleeps."""
+        if self._sleepers:
+            raise RuntimeError("set_forces would wake the sleeping bodies")
+        buffers = self._buffers
+        if buffers.written is not forces:
+            buffers.writes.set_float_buf(forces.reshape(-1))
+            buffers.written = forces
+        pymunk.batch.set_space_bodies(self._space, _FORCE, buffers.writes)
+
+    def new_step(self) -> None:
+        """The space was stepped: its arbiters are new."""
+        self._arbiter_read = None
 
     def table(self, raw: np.ndarray, out: np.ndarray, keep: np.ndarray) -> bool:
         """A read as state rows (BodyState's layout) in ``out[:n]``, and in row order as
@@ -94,16 +155,28 @@ class SpaceReader:
         self._rows.motion(raw, self.gather, velocity)
 
     def _read_arbiters(self) -> tuple[np.ndarray, np.ndarray]:
+        """The space's arbiters, read once per step: chipmunk changes them between steps
+        only as bodies fall asleep (their arbiters leave its cache) or wake, which the
+        order pymunk lists the bodies in tells (a read of the ids alone)."""
+        ids = self._buffers.forces
+        ids.clear()
+        pymunk.batch.get_space_bodies(self._space, _ID, ids)
+        self._check_order(np.frombuffer(ids.int_buf(), np.int64))
+        read = self._arbiter_read
+        if read is not None and read[2] is self._order:
+            return read[0], read[1]
         buffer = self._arbiters
         buffer.clear()
         pymunk.batch.get_space_arbiters(self._space, _ARBITER, buffer)
         ints = np.frombuffer(buffer.int_buf(), np.int64).reshape(-1, _rows.ARBITER_INTS)
         floats = np.frombuffer(buffer.float_buf(), np.float64).reshape(-1,
                                                                         _rows.ARBITER_FLOATS)
+        self._arbiter_read = (ints, floats, self._order)
         return ints, floats
 
-    def contacts(self) -> np.ndarray:
-        """One CONTACT_DTYPE row per touching shape pair, sorted by keys then place (see
+    def contacts(self) -> tuple[np.ndarray, np.ndarray]:
+        """One CONTACT_DTYPE row per touching shape pair, sorted by keys then place, and
+        each one's rows (a, b; -1: the keyless world), (m, 2) (see
         :meth:`_rows.Rows.contacts`)."""
         return self._rows.contacts(*self._read_arbiters())
 
@@ -114,3 +187,28 @@ class SpaceReader:
         self._rows.support(*self._read_arbiters(), mu, dt, float(down[0]), float(down[1]),
                            resting.force, resting.friction, resting.grip, resting.points,
                            resting.tilted)
+
+    def islands(self, moving: np.ndarray) -> np.ndarray:
+        """Each row's island label: rows tied by the step's contacts between ``moving``
+        rows share one (see :meth:`_rows.Rows.islands`)."""
+        labels = np.empty(len(self.gather), np.intp)
+        self._rows.islands(self._read_arbiters()[0], moving.view(np.uint8), labels)
+        return labels
+
+    def preload(self, rows: np.ndarray, share: np.ndarray, mass: np.ndarray,
+                gravity: tuple[float, float], g: float, applied: np.ndarray,
+                lifted: np.ndarray) -> np.ndarray | None:
+        """Give the awake ones of ``rows`` ``share`` of their weight (``mass`` per row)
+        upward on top of what forces they have, in one batch write where no body sleeps;
+        the share each got into ``applied``, the force (N) into ``lifted``. Returns None
+        when done, or the new forces (pymunk's list) for the caller to set one by one
+        where bodies sleep (a batch write would wake them)."""
+        forces, awake, asleep = self.forces()
+        out = self.force_rows()
+        if not _rows.preload(forces, self.gather, rows, share, mass, awake.view(np.uint8),
+                             gravity[0], gravity[1], g, out, applied, lifted):
+            return None
+        if asleep:
+            return out
+        self.set_forces(out)
+        return None

@@ -13,6 +13,9 @@ dropped); hinge2 → pivot about the wheel axle (steering and suspension dropped
 motor drives the wheel; its limits and joint state belong to the steering, so they
 are dropped and 0); a hinge axis off ±Y → treated as ±Y.
 
+A hinge's or slider's spring is a force (torque) applied before each step from the
+joint's position and rate (:meth:`JointRecord.drive_spring`).
+
 Joint angles follow ODE: a hinge's angle is body_a's rotation relative to body_b about
 the joint axis, zero when the joint is made; a slider's position is
 ``(p_a − p_b)·axis`` minus its value when made. Jointed bodies do not collide.
@@ -28,6 +31,7 @@ import numpy as np
 import pymunk
 
 from components import Joint
+from components.joint import JointKind
 
 #: Groove half-length for a slider without limits (m).
 FREE_GROOVE = 1.0e3
@@ -36,7 +40,13 @@ SIX_DOF_ERROR_BIAS = (1.0 - 0.5) ** 60
 
 Warn = Callable[[str, str], None]
 
-ANGULAR = ("hinge", "motorized_hinge", "ball", "universal", "hinge2", "fixed", "six_dof")
+#: Kinds made as a pivot about Y (their out-of-plane freedom dropped); fixed and six_dof
+#: pin the bodies, a slider slides; the motors of their own ODE has are not made here.
+PIVOTS = frozenset({JointKind.HINGE, JointKind.MOTORIZED_HINGE, JointKind.BALL,
+                    JointKind.UNIVERSAL, JointKind.HINGE2})
+#: Kinds whose axis is turned onto ±Y (the one axis the plane has).
+ON_AXIS = frozenset({JointKind.HINGE, JointKind.MOTORIZED_HINGE, JointKind.HINGE2})
+SUPPORTED = PIVOTS | {JointKind.SLIDER, JointKind.FIXED, JointKind.SIX_DOF}
 
 
 @dataclass(slots=True)
@@ -56,9 +66,9 @@ class JointRecord:
 
     def state(self) -> tuple[float, float]:
         """Position (angle or distance) and rate of the first axis, ODE's sign."""
-        if self.spec.kind == "hinge2":
+        if self.spec.kind == JointKind.HINGE2:
             return 0.0, 0.0  # the first axis is the steering, held straight in the plane
-        if self.spec.kind == "slider":
+        if self.spec.kind == JointKind.SLIDER:
             ax, az = self.axis
             dp = self.a.position - self.b.position
             dv = self.a.velocity - self.b.velocity
@@ -68,7 +78,7 @@ class JointRecord:
                                                            - self.a.angular_velocity)
 
     def set_motor(self, velocity: float, max_force: float, space: pymunk.Space) -> None:
-        if self.spec.kind == "slider":
+        if self.spec.kind == JointKind.SLIDER:
             self.slider_velocity, self.slider_max_force = velocity, max_force
             return
         if self.motor is None:
@@ -111,21 +121,66 @@ class JointRecord:
         if max_spin is not None:
             gear.max_bias = max_spin
 
+    def before_step(self, dt: float) -> None:
+        """What acts on the bodies as forces this step: a slider's motor, a spring."""
+        if self.spec.kind == JointKind.SLIDER:
+            self.drive_slider(dt)
+        if self.spec.spring is not None:
+            self.drive_spring(dt)
+
+    def _inverse(self) -> float:
+        """The bodies' inverse mass (a slider) or moment (a hinge) along the free axis."""
+        linear = self.spec.kind == JointKind.SLIDER
+        return sum(1.0 / (body.mass if linear else body.moment) for body in (self.a, self.b)
+                   if body.body_type == pymunk.Body.DYNAMIC)
+
+    def _push(self, force: float) -> None:
+        """``force`` along the free axis (N, or N·m about it), ODE's sense: on body_a
+        toward a larger position or angle, on body_b the other way."""
+        if self.spec.kind == JointKind.SLIDER:
+            ax, az = self.axis
+            for body, f in ((self.a, force), (self.b, -force)):
+                if body.body_type == pymunk.Body.DYNAMIC:
+                    body.apply_force_at_local_point((f * ax, f * az), body.center_of_gravity)
+            return
+        # the angle is sign (θb − θa): a positive force turns a back, b on
+        for body, t in ((self.a, -self.sign * force), (self.b, self.sign * force)):
+            if body.body_type == pymunk.Body.DYNAMIC:
+                body.torque += t
+
     def drive_slider(self, dt: float) -> None:
         """The slider motor: the force that reaches the target rate this step, bounded."""
         if self.slider_max_force <= 0.0:
             return
-        inv = (1.0 / self.a.mass if self.a.body_type == pymunk.Body.DYNAMIC else 0.0) + (
-            1.0 / self.b.mass if self.b.body_type == pymunk.Body.DYNAMIC else 0.0)
+        inv = self._inverse()
         if inv == 0.0:
             return
         _, rate = self.state()
         force = (self.slider_velocity - rate) / (inv * dt)
-        force = max(-self.slider_max_force, min(self.slider_max_force, force))
-        ax, az = self.axis
-        for body, f in ((self.a, force), (self.b, -force)):
-            if body.body_type == pymunk.Body.DYNAMIC:
-                body.apply_force_at_local_point((f * ax, f * az), body.center_of_gravity)
+        self._push(max(-self.slider_max_force, min(self.slider_max_force, force)))
+
+    def drive_spring(self, dt: float) -> None:
+        """The spring's pull ``-k (x − target)`` and its damping as the impulse that takes
+        ``1 − e^(−d h / m)`` of the rate away this step (chipmunk's damped springs' rule,
+        stable at any damping; ``d v`` when that is small), at most its max force. The
+        pull is the one at ``x + h v``, where the step puts the joint before it turns
+        forces into velocity (chipmunk moves bodies first): symplectic, so an undamped
+        spring keeps its energy (at ``x`` it would gain ``ω² h²`` of it a step). A spring
+        too stiff for the step (``k h² / m > 1``, m the bodies' mass, or moment about their
+        own centres, along the axis) pulls as at the end of the step, implicitly, as under
+        ODE: stable at any stiffness."""
+        sp = self.spec.spring
+        inv = self._inverse()
+        if sp is None or inv == 0.0:
+            return
+        x, rate = self.state()
+        pull = -sp.stiffness * (x + dt * rate - sp.target)
+        if sp.stiffness * dt * dt * inv > 1.0:
+            soft = dt * sp.stiffness + sp.damping
+            force = (pull - soft * rate) / (1.0 + soft * dt * inv)
+        else:
+            force = pull - rate * -math.expm1(-sp.damping * dt * inv) / (inv * dt)
+        self._push(max(-sp.max_force, min(sp.max_force, force)))
 
 
 def _axis_sign(spec: Joint, axis: tuple[float, float, float], warn: Warn) -> float:
@@ -155,25 +210,24 @@ def build_joint(spec: Joint, a: pymunk.Body, b: pymunk.Body, warn: Warn) -> Join
     rec = JointRecord(spec, a, b)
     anchor = (float(spec.anchor[0]), float(spec.anchor[2]))
     rec.zero = b.angle - a.angle
-    if kind in ("hinge", "motorized_hinge", "ball", "universal", "hinge2"):
-        if kind == "ball":
+    if kind in PIVOTS:
+        if kind == JointKind.BALL:
             warn("ball", "ball joint: out-of-plane rotation dropped; pivot about Y")
-        elif kind == "universal":
+        elif kind == JointKind.UNIVERSAL:
             warn("universal", "universal joint: second axis dropped; pivot about Y")
-        elif kind == "hinge2":
+        elif kind == JointKind.HINGE2:
             warn("hinge2", "hinge2: steering and suspension dropped; pivot about the axle")
-        axis = spec.axis2 if kind == "hinge2" else spec.axis
-        rec.sign = _axis_sign(spec, axis, warn) if kind in ("hinge", "motorized_hinge",
-                                                            "hinge2") else 1.0
+        axis = spec.axis2 if kind == JointKind.HINGE2 else spec.axis
+        rec.sign = _axis_sign(spec, axis, warn) if kind in ON_AXIS else 1.0
         rec.constraints.append(pymunk.PivotJoint(a, b, anchor))
-        if kind != "hinge2":  # a hinge2's limits are its steering's, which the plane drops
+        if kind != JointKind.HINGE2:  # a hinge2's limits are its steering's (dropped)
             _limits(rec, spec)
-        if kind == "motorized_hinge" or spec.motor_max_force > 0.0:
+        if kind == JointKind.MOTORIZED_HINGE or spec.motor_max_force > 0.0:
             motor = pymunk.SimpleMotor(a, b, -rec.sign * spec.motor_velocity)
             motor.max_force = max(0.0, spec.motor_max_force)
             rec.motor = motor
             rec.constraints.append(motor)
-    elif kind == "slider":
+    elif kind == JointKind.SLIDER:
         v = np.array([spec.axis[0], spec.axis[2]], dtype=np.float64)
         n = float(np.linalg.norm(v))
         if n < 1e-9:
@@ -194,18 +248,19 @@ def build_joint(spec: Joint, a: pymunk.Body, b: pymunk.Body, warn: Warn) -> Join
         rec.constraints.append(pymunk.GearJoint(a, b, b.angle - a.angle, 1.0))
         rec.slider_velocity = spec.motor_velocity
         rec.slider_max_force = spec.motor_max_force
-    elif kind in ("fixed", "six_dof"):
+    elif kind in (JointKind.FIXED, JointKind.SIX_DOF):
         pivot = pymunk.PivotJoint(a, b, (0.0, 0.0), b.world_to_local(a.position))
         gear = pymunk.GearJoint(a, b, b.angle - a.angle, 1.0)
-        if kind == "six_dof":
+        if kind == JointKind.SIX_DOF:
             limit = spec.motor_max_force if spec.motor_max_force > 0.0 else math.inf
             for c in (pivot, gear):
                 c.max_force = limit
                 c.error_bias = SIX_DOF_ERROR_BIAS
         rec.constraints += [pivot, gear]
     else:
-        raise ValueError(f"joint {spec.id or '?'}: unknown kind {kind!r}; expected one of "
-                         f"{', '.join((*ANGULAR, 'slider'))}")
+        what = "has no 2D form" if kind in JointKind.__members__.values() else "unknown kind"
+        raise ValueError(f"joint {spec.id or '?'}: {what} {kind!r}; pymunk makes "
+                         f"{', '.join(k for k in JointKind if k in SUPPORTED)}")
     for c in rec.constraints:
         c.collide_bodies = False
     return rec

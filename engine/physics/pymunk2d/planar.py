@@ -18,8 +18,6 @@ import math
 
 import numpy as np
 
-from engine.rotation import quat_conjugate, quat_multiply
-
 #: Quaternions closer than this to ``q_y(φ)`` count as purely in-plane.
 PLANAR_TOLERANCE = 1e-9
 
@@ -28,24 +26,24 @@ def split_orientation(q: np.ndarray) -> tuple[float, np.ndarray, bool]:
     """Split ``q`` into the pymunk angle θ and the out-of-plane rest ``q_rest``.
 
     Returns ``(theta, q_rest, planar)``; ``planar`` is False when ``q`` has a tilt
-    that the plane cannot represent (it is then kept in ``q_rest``).
+    that the plane cannot represent (it is then kept in ``q_rest``). Plain floats: it
+    runs for every pose set (each tracked hand's control body, every frame), where numpy's
+    per-call cost was most of a hand's.
     """
-    q = np.asarray(q, dtype=np.float64).reshape(4)
-    norm = float(np.linalg.norm(q))
+    w, x, y, z = (float(c) for c in np.asarray(q, dtype=np.float64).reshape(4))
+    norm = math.sqrt(w * w + x * x + y * y + z * z)
     if not math.isfinite(norm) or norm == 0.0:
-        raise ValueError(f"orientation {q.tolist()} is not a rotation quaternion")
-    q = q / norm
-    w, y = float(q[0]), float(q[2])
+        raise ValueError(f"orientation {[w, x, y, z]} is not a rotation quaternion")
+    w, x, y, z = w / norm, x / norm, y / norm, z / norm
     twist_norm = math.hypot(w, y)
     if twist_norm < 1e-12:  # a half turn about a horizontal axis: no Y twist to speak of
-        twist = np.array([1.0, 0.0, 0.0, 0.0])
+        tw, ty = 1.0, 0.0
     else:
-        twist = np.array([w / twist_norm, 0.0, y / twist_norm, 0.0])
-    rest = quat_multiply(quat_conjugate(twist), q)
+        tw, ty = w / twist_norm, y / twist_norm
+    # rest = conj(twist) q, twist = (tw, 0, ty, 0)
+    rest = (tw * w + ty * y, tw * x - ty * z, tw * y - ty * w, tw * z + ty * x)
     if rest[0] < 0.0:
-        rest = -rest
-    phi = 2.0 * math.atan2(twist[2], twist[0])
-    planar = bool(abs(rest[0] - 1.0) < PLANAR_TOLERANCE)
-    if planar:
-        rest = np.array([1.0, 0.0, 0.0, 0.0])
-    return -phi, rest, planar
+        rest = (-rest[0], -rest[1], -rest[2], -rest[3])
+    phi = 2.0 * math.atan2(ty, tw)
+    planar = abs(rest[0] - 1.0) < PLANAR_TOLERANCE
+    return -phi, np.array((1.0, 0.0, 0.0, 0.0) if planar else rest), planar
