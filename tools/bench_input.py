@@ -7,7 +7,8 @@ stamped with its send times, from a separate process (as a tracking bridge would
 * ``osc -> InputState`` — the engine at 90 frames per second (paced, serial mode): send
   to the moment the event is delivered on the bus, with InputState updated, so every
   later system of that frame sees it. Its floor is the wait for the next frame's INPUT
-  phase (0 to 11.1 ms); target p99 <= 11.1 ms, one frame at 90 Hz;
+  phase (0 to 11.1 ms at 90 Hz, so its p99 is about a frame whatever the engine does):
+  no target of its own, its CPU per event is compared with the reference's;
 * ``osc -> bound Transform`` — send to the frame in which the tracker-bound object's
   Transform holds that sample (read in POST_PHYSICS);
 * ``osc -> physics step`` — send to the start of the physics step that moves a kinematic
@@ -254,10 +255,9 @@ def run_bench(quick: bool = False) -> list[dict[str, Any]]:
     reference = _reference_run(seconds)
     frame_ms = 1e3 / FRAME_HZ
     ours = rows[1]
-    ours["target p99 ms"] = round(frame_ms, 1)
-    ours["ok"] = "yes" if ours["p99 ms"] <= frame_ms and ours["lost"] == 0 else "NO"
     ours["cpu ratio"] = ours["cpu us/event"] / reference["cpu us/event"]
-    physics = rows[3]  # the goal: packet to the physics step that uses it, one frame
-    physics["target p99 ms"] = round(frame_ms, 1)
-    physics["ok"] = "yes" if physics["p99 ms"] <= frame_ms else "NO"
+    physics = rows[3]  # the goal: packet to the physics step that uses it, one frame,
+    physics["target p99 ms"] = round(frame_ms, 1)  # and no event lost on the way
+    physics["ok"] = "yes" if physics["p99 ms"] <= frame_ms and all(
+        row["lost"] == 0 for row in rows) else "NO"
     return [*rows, reference]

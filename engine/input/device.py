@@ -31,8 +31,15 @@ Clock = Callable[[], float]
 MONOTONIC: Clock = time.monotonic
 #: Seconds between two reports of a device's bad messages.
 REPORT_EVERY = 3.0
+#: Seconds an open device may stay silent before it is told (once): a sender pointed at
+#: the wrong port or address, a serial line at the wrong baud rate.
+SILENT_AFTER = 10.0
 #: How far from 1 a quaternion's length may be and still be normalised (else it is bad).
 QUAT_TOLERANCE = 0.01
+#: Largest position or velocity component a device may send, in its own units: the
+#: world's edge (1e6 m) in millimetres. Finite but larger values (an OSC double of 1e308)
+#: overflowed the one-euro filter to inf and then NaN, for good.
+MAX_COORDINATE = 1e9
 
 
 class DeviceError(Exception):
@@ -95,10 +102,11 @@ class BadMessages:
                 text = repr(message)
                 self._example = f"{reason}: {text[:120]}{'...' if len(text) > 120 else ''}"
 
-    def report(self, now: float) -> str | None:
-        """Log (and return) the summary when there is news and the last one is old enough."""
+    def report(self, now: float, final: bool = False) -> str | None:
+        """Log (and return) the summary when there is news and the last one is old enough
+        (or this is the ``final`` one, when the device closes)."""
         with self._lock:
-            if not self._pending or now - self._last_report < self.every:
+            if not self._pending or (now - self._last_report < self.every and not final):
                 return None
             count, example = self._pending, self._example
             self._pending = 0
@@ -118,6 +126,8 @@ class QueuedDevice:
     """
 
     kind = "device"
+    #: False for devices whose silence says nothing (a keyboard nobody types on).
+    watched = True
 
     def __init__(self, name: str) -> None:
         self.name = name
@@ -128,6 +138,9 @@ class QueuedDevice:
         self._threads: list[threading.Thread] = []
         self._state = "closed"
         self._detail = ""
+        #: Whether a silence since opening is still to be told; from the first poll's time.
+        self._silence_watch = False
+        self._silent_since: float | None = None
 
     def describe_name(self) -> str:
         return f"input device {self.name!r} ({self.kind})"
@@ -152,6 +165,7 @@ class QueuedDevice:
     def open(self) -> None:
         self._open()
         self._state = "open"
+        self._silence_watch, self._silent_since = True, None
         self._threads = [threading.Thread(target=self._loop, args=(receive,), daemon=True,
                                           name=f"input-{self.name}")
                          for receive in self._receivers()]
@@ -162,7 +176,23 @@ class QueuedDevice:
         queue = self._queue
         out = [queue.popleft() for _ in range(len(queue))]
         self.bad.report(now)
+        if self._silence_watch:
+            self._check_silence(now)
         return out
+
+    def _check_silence(self, now: float) -> None:
+        if self.received or self.bad.total or not self.watched:
+            self._silence_watch = False
+        elif self._silent_since is None:
+            self._silent_since = now
+        elif now - self._silent_since >= SILENT_AFTER:
+            self._silence_watch = False
+            log.warning("%s: nothing received in %g s since it opened%s", self.describe_name(),
+                        SILENT_AFTER, self.silence_hint())
+
+    def silence_hint(self) -> str:
+        """What to check when nothing arrives (``; ...``), per transport."""
+        return ""
 
     def close(self) -> None:
         self._stop.set()
@@ -170,6 +200,7 @@ class QueuedDevice:
             thread.join(timeout=2.0)
         self._threads = []
         self._close()
+        self.bad.report(0.0, final=True)  # what came since the last report is told too
         if self._state == "open":
             self._state = "closed"
 
@@ -214,8 +245,13 @@ def numbers(args: Sequence[object], count: int, what: str) -> list[float]:
 def make_pose(device: str, values: Sequence[float], timestamp: float,
               velocity: Sequence[float] | None = None) -> TrackerPose:
     """A TrackerPose from ``x y z qw qx qy qz`` (finite floats); the quaternion is
-    normalised when within QUAT_TOLERANCE of unit length, else BadMessage."""
+    normalised when within QUAT_TOLERANCE of unit length, else BadMessage, as is a
+    position or velocity component beyond ±MAX_COORDINATE."""
     x, y, z, qw, qx, qy, qz = values
+    for what, vector in (("position", (x, y, z)), ("velocity", velocity or ())):
+        if any(abs(v) > MAX_COORDINATE for v in vector):
+            raise BadMessage(f"tracker {device!r}: {what} {tuple(vector)} is beyond "
+                             f"±{MAX_COORDINATE:g}")
     norm = math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
     if abs(norm - 1.0) > QUAT_TOLERANCE:
         raise BadMessage(f"tracker {device!r}: quaternion length {norm:.4g} is not 1")

@@ -16,6 +16,7 @@ reproduces a live run bit for bit.
 from __future__ import annotations
 
 import logging
+import math
 from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, replace
@@ -51,6 +52,9 @@ S = TypeVar("S")
 #: Event types that are never "lost": a keyboard or a mouse is silent when unused.
 #: Events that come when something changes, not as a stream: their silence says nothing.
 _UNWATCHED = (KeyEvent, Pointer, Button, Axis)
+#: Distinct trackers, wheels, buttons and axes the devices may name in one run: a sender
+#: inventing names (a counter in its addresses) would grow every table without end.
+MAX_SOURCES = 1024
 
 
 class TrackerPipeline:
@@ -107,11 +111,16 @@ class InputHub:
         self._last_heard: dict[str, tuple[float, float]] = {}  # source -> (time, timeout)
         self._lost: set[str] = set()
         self._complaints: dict[str, BadMessages] = {}
+        #: the input names devices have sent so far (at most MAX_SOURCES of them)
+        self._names: set[str | tuple[str, str]] = set()
         self._replay: Recording | None = None
         self._writer: RecordWriter | None = None
         self._started = False
         self._closed = False
         self._replay_clock = 0.0
+        #: The recording's last frame, its clock and the mean frame interval (None: empty).
+        self._replay_end: tuple[int, float, float] | None = None
+        self._replay_ended = False
         self._injected: list[AnyInput] = []
         self.delivered: Counter[str] = Counter()
         #: Called with each frame's raw input as collected (a network node forwards it).
@@ -123,6 +132,12 @@ class InputHub:
         if self._started:
             raise RuntimeError("replay must be chosen before the first frame")
         self._replay = recording
+        frames = recording.frames
+        if frames:
+            first, last = min(frames), max(frames)
+            span = frames[last].clock - frames[first].clock
+            self._replay_end = (last, frames[last].clock,
+                                span / (last - first) if last > first else 0.0)
         log.info("replaying %d input events over %d frames from %s", recording.event_count,
                  len(recording.frames), recording.path)
 
@@ -184,6 +199,8 @@ class InputHub:
             if recorded is not None:
                 self._replay_clock = recorded.clock
                 return recorded
+            if self._replay_end is not None and frame > self._replay_end[0]:
+                return self._after_replay(frame, self._replay_end)
             return FrameInput(self._replay_clock)
         now = self.clock()
         events: list[AnyInput] = []
@@ -194,7 +211,7 @@ class InputHub:
             events.append(event)
         for device in self.devices:
             for event in device.poll(now):
-                if not self._wanted(event, device.name):
+                if not self._wanted(event, device.name) or not self._admit(event, device.name):
                     continue
                 if device.name in self._watched and not isinstance(event, _UNWATCHED):
                     self._heard(event.device, event.timestamp, device.name, events)
@@ -205,11 +222,42 @@ class InputHub:
                 events.append(DeviceLost(source, now))
         return FrameInput(now, events)
 
+    def _after_replay(self, frame: int, end: tuple[int, float, float]) -> FrameInput:
+        """A frame past the recording's end: its devices fell silent. The clock goes on
+        at the recording's mean frame interval (so wheels come to rest as a silent
+        encoder's do) and, at the first such frame, every source still tracked is lost."""
+        last, last_clock, interval = end
+        clock = last_clock + (frame - last) * interval
+        if self._replay_ended:
+            return FrameInput(clock)
+        self._replay_ended = True
+        log.info("the recorded input ended at frame %d: no input from here on", last)
+        state = self.state
+        sources = sorted((state.trackers.keys() | state.wheels.keys()) - state.lost)
+        return FrameInput(clock, [DeviceLost(source, clock) for source in sources])
+
     def _wanted(self, event: AnyInput, transport: str) -> bool:
         """Drop poses of a tracker bound to another device (``Tracker { Device }``)."""
         if isinstance(event, TrackerPose):
             spec = self._tracker_specs.get(event.device)
             return spec is None or not spec.device or spec.device == transport
+        return True
+
+    def _admit(self, event: AnyInput, transport: str) -> bool:
+        """False for an input name past the first MAX_SOURCES (told as a bad message)."""
+        if isinstance(event, (TrackerPose, WheelCount)):
+            name: str | tuple[str, str] = event.device
+        elif isinstance(event, (Button, Axis)):
+            name = (event.device, event.name)
+        else:
+            return True
+        if name in self._names:
+            return True
+        if len(self._names) >= MAX_SOURCES:
+            self._complain(transport, f"a new input name beyond the first {MAX_SOURCES} "
+                                      "this run has heard; ignored", event)
+            return False
+        self._names.add(name)
         return True
 
     def _heard(self, source: str, timestamp: float, transport: str,
@@ -226,6 +274,8 @@ class InputHub:
         self._posed.clear()
         for event in batch.events:
             processed = self._apply(event)
+            if processed is None:
+                continue
             out.append(processed)
             self.delivered[TAGS[type(processed)]] += 1
         for name, pose in self._posed.items():  # the table holds each tracker's newest pose
@@ -239,9 +289,11 @@ class InputHub:
             wheel.angular_velocity = wheel.rate.angular_velocity(batch.clock)
         for complaints in self._complaints.values():
             complaints.report(batch.clock)
+        _tell_changes(out)
         return out
 
-    def _apply(self, event: AnyInput) -> AnyInput:
+    def _apply(self, event: AnyInput) -> AnyInput | None:
+        """The processed event, after updating the state table; None when it is dropped."""
         state = self.state
         if isinstance(event, TrackerPose):
             pipeline = self._pipelines.get(event.device)
@@ -249,7 +301,18 @@ class InputHub:
                 pipeline = self._pipelines[event.device] = TrackerPipeline(
                     _scoped(self._tracker_specs, event.device))
                 state.trackers.setdefault(event.device, TrackerState())
-            pose = self._posed[event.device] = pipeline(event)
+            pose = pipeline(event)
+            if not all(map(math.isfinite, (*pose.position, *pose.orientation,
+                                           *(pose.velocity or ())))):
+                # the scene's Scale, Offset or Predict took a sane sample past float range:
+                # drop it, and start the filters afresh rather than keep an inf in them
+                self._complain(event.device, "calibrated, filtered or predicted pose is not "
+                                             "finite (check the Tracker's Scale, Offset and "
+                                             "Predict)", event)
+                self._pipelines[event.device] = TrackerPipeline(
+                    _scoped(self._tracker_specs, event.device))
+                return None
+            self._posed[event.device] = pose
             return pose
         if isinstance(event, WheelCount):
             wheel = state.wheels.get(event.device)
@@ -284,11 +347,8 @@ class InputHub:
         tracked = isinstance(event, DeviceFound)
         if tracked:
             state.lost.discard(event.device)
-            log.info("input source %r found", event.device)
         else:
             state.lost.add(event.device)
-            log.warning("input source %r lost: nothing received for its timeout; it is "
-                        "untracked until it sends again", event.device)
         tracker = state.trackers.get(event.device)
         if tracker is not None:
             tracker.tracked = tracked
@@ -308,6 +368,8 @@ class InputHub:
         if self._started and self._replay is None:
             for device in self.devices:
                 device.close()
+        for complaints in self._complaints.values():
+            complaints.report(0.0, final=True)
         return self._writer.close() if self._writer is not None else None
 
     def stats(self) -> dict[str, Any]:
@@ -315,6 +377,26 @@ class InputHub:
         return {"devices": [asdict(d.status()) for d in self.devices],
                 "delivered": dict(self.delivered), "lost": sorted(self.state.lost),
                 "replaying": self._replay is not None}
+
+
+def _tell_changes(events: list[AnyInput]) -> None:
+    """One line for the sources found in a frame and one for those lost (a sender with a
+    counter in its addresses finds a thousand in one frame)."""
+    found = [e.device for e in events if isinstance(e, DeviceFound)]
+    lost = [e.device for e in events if isinstance(e, DeviceLost)]
+    if found:
+        log.info("input source%s %s found", "s" * (len(found) > 1), _listed(found))
+    if lost:
+        log.warning("input source%s %s lost: nothing received for %s timeout; untracked "
+                    "until %s again", "s" * (len(lost) > 1), _listed(lost),
+                    "their" if len(lost) > 1 else "its",
+                    "they send" if len(lost) > 1 else "it sends")
+
+
+def _listed(names: list[str], shown: int = 5) -> str:
+    """``'a', 'b' and 3 more``."""
+    text = ", ".join(repr(n) for n in names[:shown])
+    return text + (f" and {len(names) - shown} more" if len(names) > shown else "")
 
 
 def _scoped(specs: dict[str, S], source: str) -> S | None:

@@ -20,7 +20,9 @@ first LSL device or output of a process decides it for the whole process.
 from __future__ import annotations
 
 import logging
+import math
 import threading
+import time
 from collections.abc import Callable
 from types import ModuleType
 from typing import Any
@@ -44,8 +46,16 @@ INSTALL_HINT = ("install pylsl with its bundled liblsl (pip install pylsl), or t
                 "library of your system and set PYLSL_LIB to its path")
 #: Seconds one background resolve of a stream waits before trying again.
 RESOLVE_WAIT = 0.5
+#: Seconds without finding a stream before saying so (once; the search goes on).
+NOT_FOUND_AFTER = 5.0
 #: Seconds a pull waits for a sample before checking whether the device is closing.
 PULL_WAIT = 0.05
+#: How far (s) a sample's time may lie ahead of the engine's clock (clock correction is
+#: good to milliseconds), and behind it (an inlet buffers 360 s by default); an outlet
+#: may stamp anything, NaN included, and the stamp is what wheel rates, filters and
+#: the watchdog measure by.
+MAX_AHEAD = 1.0
+MAX_AGE = 360.0
 POSE_TYPES = ("mocap", "pose")
 WHEEL_TYPES = ("wheel", "counter")
 
@@ -59,10 +69,12 @@ def load_pylsl(scope: str = "site") -> ModuleType:
     The first call sets the process's discovery scope (``machine``: this computer only).
     """
     try:
-        import pylsl
+        import pylsl  # finds and loads liblsl as it is imported (RuntimeError without)
 
         pylsl.library_version()
-    except (ImportError, RuntimeError, OSError, AttributeError) as exc:
+    except ImportError as exc:
+        raise DeviceError(f"lsl: pylsl is not installed; {INSTALL_HINT}") from exc
+    except (RuntimeError, OSError, AttributeError) as exc:
         raise DeviceError(f"lsl: liblsl cannot be loaded ({exc}); {INSTALL_HINT}") from exc
     with _config_lock:
         if not _configured_scope:
@@ -103,7 +115,10 @@ class LslDevice(QueuedDevice):
         if not self.streams:
             raise DeviceError(f"{self.describe_name()}: no Streams named (give stream names, "
                               "or \"type:TYPE\")")
-        self._lsl = load_pylsl(self.scope)
+        try:
+            self._lsl = load_pylsl(self.scope)
+        except DeviceError as exc:
+            raise DeviceError(f"{self.describe_name()}: {exc}") from exc
         self._offset = self.clock() - self._lsl.local_clock()
 
     def _receivers(self) -> list[Callable[[], None]]:
@@ -124,6 +139,8 @@ class _StreamReader:
         self.kind = ""
         self.labels: list[str] = []
         self.pressed: list[bool] = []
+        self.searching_since: float | None = None
+        self.told_missing = False
 
     def step(self) -> None:
         if self.inlet is None:
@@ -134,14 +151,34 @@ class _StreamReader:
             return
         device = self.device
         try:
-            self._deliver(list(sample), stamp + self.correction + device._offset)
+            self._deliver(list(sample), self._time(stamp))
         except BadMessage as exc:
             device.bad.note(str(exc), (self.source, *sample))
 
+    def _time(self, stamp: float) -> float:
+        """A sample's LSL time on the engine's clock; BadMessage if it cannot be one."""
+        device = self.device
+        timestamp = stamp + self.correction + device._offset
+        now = device.clock()
+        if not (now - MAX_AGE <= timestamp <= now + MAX_AHEAD):  # NaN fails too
+            raise BadMessage(f"stream {self.source!r}: sample time {stamp!r} is "
+                             f"{'not finite' if not math.isfinite(timestamp) else 'not now'} "
+                             f"(from {MAX_AGE:g} s ago to {MAX_AHEAD:g} s ahead)")
+        return timestamp
+
     def _resolve(self) -> None:
         lsl = self.device._lsl
+        if self.searching_since is None:
+            self.searching_since = time.monotonic()
         found = lsl.resolve_byprop(self.prop, self.value, minimum=1, timeout=RESOLVE_WAIT)
         if not found:
+            if not self.told_missing and \
+                    time.monotonic() - self.searching_since >= NOT_FOUND_AFTER:
+                self.told_missing = True
+                log.warning("%s: no LSL stream with %s %r found in %g s; still looking (is "
+                            "its outlet running, and within the device's Scope %r?)",
+                            self.device.describe_name(), self.prop, self.value,
+                            NOT_FOUND_AFTER, self.device.scope)
             return
         inlet = lsl.StreamInlet(found[0], recover=True)
         info = inlet.info(timeout=2.0)

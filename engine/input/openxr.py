@@ -1,7 +1,7 @@
 """OpenXR (pyopenxr, the ``openxr`` extra): a headset's pose and its controllers.
 
-The headset becomes the tracker ``hmd`` (bind it to the camera with ``Tracker { ID "hmd"
-Object "camera0" }``), the controllers' grip poses ``hand_l``/``hand_r``, their select
+The headset becomes the tracker ``hmd`` (bind it to a camera with ``Tracker { ID "hmd"
+Camera "eye" }``), the controllers' grip poses ``hand_l``/``hand_r``, their select
 buttons ``Button(hand_l, "select")``. Poses are read through a headless session
 (``XR_MND_headless``: no frames are submitted to the headset; drawing into it is not
 this device's job) and converted from OpenXR's frame (y up, looking along -z) to the
@@ -25,6 +25,29 @@ HANDS = (("hand_l", "/user/hand/left"), ("hand_r", "/user/hand/right"))
 PROFILE = "/interaction_profiles/khr/simple_controller"
 NO_RUNTIME = ("no OpenXR runtime found: install one (Monado, SteamVR, or your headset's) "
               "and make it the active runtime (XR_RUNTIME_JSON names its manifest)")
+#: XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT (the
+#: OpenXR specification's values): a located space is a pose only with both.
+POSE_VALID = 0x1 | 0x2
+
+
+def located_pose(name: str, location: Any, now: float) -> TrackerPose | None:
+    """A located space (an ``XrSpaceLocation``: flags and a pose in OpenXR's frame) as
+    tracker ``name``'s pose in the engine's frame; None while the runtime does not track
+    it (the watchdog reports the tracker lost if it stays so)."""
+    if location.location_flags & POSE_VALID != POSE_VALID:
+        return None
+    p, q = location.pose.position, location.pose.orientation
+    position, orientation = openxr_to_engine((p.x, p.y, p.z), (q.w, q.x, q.y, q.z))
+    return TrackerPose(name, position, orientation, None, now)
+
+
+def select_change(name: str, state: Any, was_pressed: bool, now: float) -> Button | None:
+    """A controller's select action (an ``XrActionStateBoolean``) as a Button event when
+    it changed from ``was_pressed``; None while unchanged or inactive (no controller bound
+    to it: nothing is known, so nothing is released either)."""
+    if not state.is_active or bool(state.current_state) == was_pressed:
+        return None
+    return Button(name, "select", bool(state.current_state), now)
 
 
 def load_openxr() -> Any:
@@ -121,9 +144,10 @@ class OpenXRDevice(QueuedDevice):
             self._locate(xr, name, h["grips"][i], frame.predicted_display_time, now)
             state = xr.get_action_state_boolean(session, xr.ActionStateGetInfo(
                 action=h["select"], subaction_path=h["paths"][i]))
-            if state.is_active and bool(state.current_state) != h["pressed"][i]:
-                h["pressed"][i] = bool(state.current_state)
-                self.push(Button(name, "select", h["pressed"][i], now))
+            button = select_change(name, state, h["pressed"][i], now)
+            if button is not None:
+                h["pressed"][i] = button.pressed
+                self.push(button)
         xr.end_frame(session, xr.FrameEndInfo(
             display_time=frame.predicted_display_time,
             environment_blend_mode=xr.EnvironmentBlendMode.OPAQUE, layers=[]))
@@ -149,14 +173,9 @@ class OpenXRDevice(QueuedDevice):
                 self._running = False
 
     def _locate(self, xr: Any, name: str, space: Any, when: Any, now: float) -> None:
-        location = xr.locate_space(space, self._handles["stage"], when)
-        valid = (xr.SpaceLocationFlags.POSITION_VALID_BIT
-                 | xr.SpaceLocationFlags.ORIENTATION_VALID_BIT)
-        if location.location_flags & valid != valid:
-            return  # untracked this frame; the watchdog reports it lost if it stays so
-        p, q = location.pose.position, location.pose.orientation
-        position, orientation = openxr_to_engine((p.x, p.y, p.z), (q.w, q.x, q.y, q.z))
-        self.push(TrackerPose(name, position, orientation, None, now))
+        pose = located_pose(name, xr.locate_space(space, self._handles["stage"], when), now)
+        if pose is not None:
+            self.push(pose)
 
     def _close(self) -> None:
         xr, h = self._xr, self._handles

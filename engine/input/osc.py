@@ -15,17 +15,20 @@ applied. See docs/input-format.md.
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import logging
+import math
 import os
 import socket
 import struct
 
 from pythonosc.osc_message import OscMessage
-from pythonosc.osc_packet import OscPacket, ParseError
+from pythonosc.osc_packet import OscPacket
 
 from engine.input.device import (
     MONOTONIC,
+    REPORT_EVERY,
     BadMessage,
     Clock,
     DeviceError,
@@ -37,11 +40,22 @@ from engine.input.device import (
 )
 from engine.input.events import AnyInput, Axis, Button, WheelCount
 
+log = logging.getLogger("colosseum.input")
+
 PREFIX = "/colosseum/"
-#: What python-osc raises for bytes that are no OSC packet (it does not wrap them all).
-_GARBAGE = (ParseError, ValueError, IndexError, TypeError, OverflowError, struct.error)
 #: Seconds a receive waits before checking whether the device is closing.
 RECEIVE_TIMEOUT = 0.05
+#: Receive buffer asked of the system (bytes; Linux grants up to net.core.rmem_max, and
+#: doubles it). The default 208 kB holds about 256 datagrams: 0.2 s of 240 Hz x 5
+#: streams, less than one slow frame holding the interpreter.
+RECEIVE_BUFFER = 4 << 20
+#: Bundles nested deeper than this are refused unread: python-osc unpacks them
+#: recursively (600 levels, one 12 kB datagram, raised RecursionError on the device's
+#: thread, or not, as the process's recursion limit happened to be set).
+MAX_BUNDLE_DEPTH = 16
+#: Linux's socket option that stamps each datagram with the socket's count of datagrams
+#: dropped so far (a full buffer); the socket module does not name it.
+SO_RXQ_OVFL = 40
 
 
 class _QuietOsc(logging.Filter):
@@ -95,6 +109,10 @@ class OscDevice(QueuedDevice):
         self.address = address
         self.clock = clock
         self._socket: socket.socket | None = None
+        #: Datagrams the system dropped before they were read, and how many were told.
+        self.dropped = 0
+        self._dropped_told = 0
+        self._dropped_at = -math.inf
         super().__init__(name)
 
     def describe_name(self) -> str:
@@ -113,22 +131,61 @@ class OscDevice(QueuedDevice):
                     f"or --input osc:PORT") from exc
             raise DeviceError(f"{self.describe_name()}: cannot listen: {exc}") from exc
         sock.settimeout(RECEIVE_TIMEOUT)
+        with contextlib.suppress(OSError):  # best effort: a smaller buffer still works
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RECEIVE_BUFFER)
+        with contextlib.suppress(OSError):  # Linux only: elsewhere drops go uncounted
+            sock.setsockopt(socket.SOL_SOCKET, SO_RXQ_OVFL, 1)
         logging.getLogger().addFilter(_QUIET)  # once: a filter is kept only once
         self.port = sock.getsockname()[1]  # the port the system chose for Port 0
         self.bad.device = self.describe_name()
         self._socket = sock
 
+    def silence_hint(self) -> str:
+        if self.address.startswith("127."):
+            return (f" (it listens on {self.address} only: a sender on another machine needs "
+                    f"Address \"0.0.0.0\", or --input osc:0.0.0.0:{self.port})")
+        return f" (is the sender sending to UDP port {self.port} of this machine?)"
+
     def _receive(self) -> None:
         assert self._socket is not None
         try:
-            data = self._socket.recv(65536)
+            data, ancillary, _, _ = self._socket.recvmsg(65536, socket.CMSG_SPACE(4))
         except TimeoutError:
             return
-        now = self.clock()
+        for level, kind, payload in ancillary:
+            if level == socket.SOL_SOCKET and kind == SO_RXQ_OVFL and len(payload) >= 4:
+                self.dropped = struct.unpack("=I", payload[:4])[0]
+        self.take(data, self.clock())
+
+    def poll(self, now: float) -> list[AnyInput]:
+        self._tell_dropped(now)
+        return super().poll(now)
+
+    def _tell_dropped(self, now: float, final: bool = False) -> None:
+        """Datagrams lost in the system, told as bad messages are: every few seconds."""
+        dropped = self.dropped
+        if dropped == self._dropped_told or (now - self._dropped_at < REPORT_EVERY
+                                             and not final):
+            return
+        log.warning("%s: %d datagram%s dropped by the system before they were read (the "
+                    "receive buffer was full: the engine fell behind the sender)",
+                    self.describe_name(), dropped - self._dropped_told,
+                    "s" * (dropped - self._dropped_told != 1))
+        self._dropped_told, self._dropped_at = dropped, now
+        self._detail = f"{dropped} datagrams dropped by the system"
+
+    def take(self, data: bytes, now: float) -> None:
+        """One datagram: its messages pushed as events, anything wrong counted as bad."""
+        if _bundles_deeper_than(data, MAX_BUNDLE_DEPTH):
+            self.bad.note(f"OSC bundles nested deeper than {MAX_BUNDLE_DEPTH} levels",
+                          data[:40])
+            return
         try:
             packet = OscPacket(data)
-        except _GARBAGE as exc:
-            self.bad.note(f"not an OSC packet ({exc})", data[:40])
+        except Exception as exc:  # hostile bytes in a third-party parser:
+            # python-osc raises ParseError, struct.error, IndexError...; none may end the
+            # device's thread
+            self.bad.note(f"not an OSC packet ({type(exc).__name__}: {exc})", data[:40])
             return
         if not packet.messages:
             self.bad.note("an OSC bundle without a message python-osc can read", data[:40])
@@ -143,3 +200,24 @@ class OscDevice(QueuedDevice):
         if self._socket is not None:
             self._socket.close()
             self._socket = None
+        self._tell_dropped(0.0, final=True)
+
+
+def _bundles_deeper_than(data: bytes, limit: int) -> bool:
+    """Whether the datagram's bundles nest deeper than ``limit``: one pass over the
+    element sizes, without parsing anything."""
+    pending = [(0, len(data), 1)]  # (start, end, depth) of each bundle still to read
+    while pending:
+        start, end, depth = pending.pop()
+        if not data.startswith(b"#bundle\x00", start):
+            continue
+        if depth > limit:
+            return True
+        at = start + 16  # "#bundle\0" and the time tag
+        while at + 4 <= end:
+            size = int.from_bytes(data[at:at + 4], "big", signed=True)
+            if size <= 0 or at + 4 + size > end:
+                break
+            pending.append((at + 4, at + 4 + size, depth + 1))
+            at += 4 + size
+    return False

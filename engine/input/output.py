@@ -117,5 +117,8 @@ def make_publisher(kind: str, address: str, port: int, name: str,
         except OSError as exc:
             raise DeviceError(f"output to {address}:{port} (osc): {exc}") from exc
     if kind == "lsl":
-        return LslOutput(name, scope)
+        try:
+            return LslOutput(name, scope)
+        except DeviceError as exc:
+            raise DeviceError(f"output {name!r} (lsl): {exc}") from exc
     raise DeviceError(f"unknown output kind {kind!r} (osc or lsl)")

@@ -182,6 +182,32 @@ class RecordWriter:
         return summary
 
 
+#: Header keys holding the run's flags that change what it simulates (``--param``,
+#: ``--dt``, ``--substeps``, ``--backend``): a replay runs with them again.
+RUN_KEYS = ("params", "dt", "substeps", "backend")
+
+
+def read_header(path: Path) -> dict[str, Any]:
+    """A recording's header line alone (what a run needs before its scene is built);
+    ReplayError says what is wrong with it."""
+    path = Path(path)
+    try:
+        with path.open(encoding="utf-8") as lines:
+            first = next((line for line in lines if line.strip()), "")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ReplayError(f"{path}: cannot read the recording: {exc}") from exc
+    if not first:
+        raise ReplayError(f"{path}: empty; a recording starts with its header line")
+    try:
+        header = json.loads(first)
+        if not isinstance(header, dict):
+            raise ValueError("a line must be a JSON object")
+        _check_header(header)
+    except ValueError as exc:
+        raise ReplayError(f"{path}:1: not a recorded input line ({exc})") from exc
+    return header
+
+
 def read_recording(path: Path) -> Recording:
     """Parse a recording; ReplayError names the line of the first problem."""
     path = Path(path)
@@ -210,7 +236,7 @@ def read_recording(path: Path) -> Recording:
                 clocks[frame] = float(record["clock"])
             else:
                 events.setdefault(frame, []).append(event_from_record(record))
-        except (ValueError, KeyError, TypeError) as exc:
+        except (ValueError, KeyError, TypeError, OverflowError) as exc:  # inf: OverflowError
             raise ReplayError(f"{path}:{number}: not a recorded input line ({exc})") from exc
     if header is None:
         raise ReplayError(f"{path}: empty; a recording starts with its header line")

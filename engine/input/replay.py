@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 from engine.input.hub import InputHub
 from engine.input.record import ReplayError, read_recording, scene_fingerprint
-from engine.system import Phase, System
+from engine.system import Phase, PluginName, System
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -27,7 +27,7 @@ def input_hub(engine: Engine) -> InputHub:
     hub = engine.try_resource(InputHub)
     if hub is None:
         try:
-            engine.request_plugin("input")
+            engine.request_plugin(PluginName.INPUT)
         except KeyError as exc:
             raise ReplayError("recording and replaying input needs the input plugin, which "
                               "this engine does not have") from exc
@@ -56,7 +56,8 @@ class InputRecorder(System):
 
     def setup(self, engine: Engine) -> None:
         input_hub(engine).record(self.path, {**scene_identity(engine),
-                                             "seed": engine.config.seed})
+                                             "seed": engine.config.seed,
+                                             **engine.config.options.get("run_flags", {})})
 
     def run(self, engine: Engine, dt: float) -> None:
         """Nothing per frame: the hub writes each frame as it collects it."""

@@ -4,7 +4,8 @@ The line protocol is a template (``Device { Kind "serial" Line "{name} {count}" 
 ``{field}`` placeholders between literal text, whitespace matching any run of spaces
 or tabs. A line must hold the fields of one event: ``{count}`` (a wheel), ``{button}
 {pressed}``, ``{axis} {value}``, or ``{x} {y} {z} {qw} {qx} {qy} {qz}`` (a tracker);
-``{name}`` names the source (default: the device's ID).
+``{name}`` names the source (default: the device's ID). A port that goes away (a USB
+adapter unplugged) is reported and reopened every second until it is back.
 
 >>> fmt = LineFormat("{name} {count}")
 >>> fmt.event("left 1024", "wheels", 3.0)
@@ -15,6 +16,7 @@ WheelCount(device='left', count=1024, timestamp=3.0)
 
 from __future__ import annotations
 
+import logging
 import math
 import re
 
@@ -27,10 +29,14 @@ from engine.input.device import (
     make_pose,
 )
 from engine.input.events import AnyInput, Axis, Button, WheelCount
-from engine.scene.inputs import line_fields
+from engine.scene.inputs import LINE_EVENTS, line_fields
+
+log = logging.getLogger("colosseum.input")
 
 #: Longest line kept waiting for its newline (bytes); longer is garbage on the line.
 MAX_LINE = 1024
+#: Seconds between attempts to reopen a port that went away (a USB adapter unplugged).
+REOPEN_EVERY = 1.0
 _PATTERNS = {"name": r"\S+", "button": r"\S+", "axis": r"\S+", "count": r"[-+]?\d+",
              "pressed": r"[01]"}
 _NUMBER = r"\S+"  # checked by float(), so "nan" and "1e999" are named in the report
@@ -43,6 +49,9 @@ class LineFormat:
     def __init__(self, template: str) -> None:
         self.template = template
         self.fields = line_fields(template)  # ValueError names what is wrong
+        #: The one event the fields make whole (others may be there, unused: a {value}
+        #: beside a tracker's seven is read and ignored).
+        self.kind = next(k for k, need in LINE_EVENTS.items() if set(need) <= set(self.fields))
         pattern = ""
         for i, part in enumerate(re.split(r"\{(\w+)\}", template)):
             if i % 2:  # a field's name
@@ -59,11 +68,11 @@ class LineFormat:
             raise BadMessage(f"line does not match {self.template!r}")
         values = found.groupdict()
         source = values.get("name") or device
-        if "count" in values:
+        if self.kind == "wheel":
             return WheelCount(source, int(values["count"]), timestamp)
-        if "pressed" in values:
+        if self.kind == "button":
             return Button(source, values["button"], values["pressed"] == "1", timestamp)
-        if "value" in values:
+        if self.kind == "axis":
             return Axis(source, values["axis"], _finite(values["value"]), timestamp)
         return make_pose(source, [_finite(values[k]) for k in _POSE], timestamp)
 
@@ -97,6 +106,9 @@ class SerialDevice(QueuedDevice):
     def describe_name(self) -> str:
         return f"input device {self.name!r} (serial, {self.path})"
 
+    def silence_hint(self) -> str:
+        return f" (is the device on, and sending at Baud {self.baud}?)"
+
     def _open(self) -> None:
         import serial
 
@@ -110,18 +122,43 @@ class SerialDevice(QueuedDevice):
                               f"{reason}") from exc
 
     def _receive(self) -> None:
+        import serial
+
         port = self._port
-        assert port is not None
-        data = port.read(max(1, port.in_waiting))
-        if not data:
+        if port is None:  # unplugged: try again, as a USB adapter comes back
+            self._reopen()
             return
-        now = self.clock()
+        try:
+            data = port.read(max(1, port.in_waiting))
+        except (serial.SerialException, OSError) as exc:
+            port.close()
+            self._port = None
+            self._detail = f"port lost ({exc}); reopening it every {REOPEN_EVERY:g} s"
+            log.error("%s: %s", self.describe_name(), self._detail)
+            return
+        if data:
+            self.take(data, self.clock())
+
+    def _reopen(self) -> None:
+        if self._stop.wait(REOPEN_EVERY):
+            return
+        try:
+            self._open()
+        except DeviceError:
+            return
+        self._buffer, self._overlong, self._detail = b"", False, ""
+        log.info("%s: port reopened", self.describe_name())
+
+    def take(self, data: bytes, now: float) -> None:
+        """Bytes read from the port: each whole line pushed as an event (or counted as
+        bad), the rest kept for the next read."""
         *lines, self._buffer = (self._buffer + data).split(b"\n")
         if self._overlong and lines:  # the rest of a line already reported as too long
             self._overlong = False
             lines.pop(0)
-        if len(self._buffer) > MAX_LINE:
-            self.bad.note(f"no newline in {MAX_LINE} bytes", self._buffer[:40])
+        if len(self._buffer) > MAX_LINE:  # one bad line however many reads it spans
+            if not self._overlong:
+                self.bad.note(f"no newline in {MAX_LINE} bytes", self._buffer[:40])
             self._buffer, self._overlong = b"", True
         for raw in lines:
             if not raw.strip():

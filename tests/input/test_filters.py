@@ -95,3 +95,21 @@ def test_prediction_extrapolates_constant_velocity_exactly(tmp_path: Path, lead_
         same = abs(float(np.dot(pose.orientation, future_q)))
         assert same == pytest.approx(1.0, abs=1e-12)
         np.testing.assert_allclose(pose.velocity, velocity, atol=1e-9)
+
+
+def test_a_pose_past_float_range_is_dropped_and_the_filter_starts_afresh(caplog):
+    """A raw 1e308 is refused by the devices (beyond ±1e9); a sane sample that the scene's
+    Scale takes past float range is dropped with a message, and the one-euro filter,
+    which an inf once turned to NaN for the rest of the run, starts again from the next."""
+    hub = InputHub(InputSpec(trackers=(TrackerSpec("hand_r", filter="oneeuro", scale=1e301),)),
+                   [])
+    identity = (1.0, 0.0, 0.0, 0.0)
+    xs = [0.0, 1e8, -1e8, 0.5, 0.5]
+    for i, x in enumerate(xs):
+        hub.apply(FrameInput(10.0 + i, [TrackerPose("hand_r", (x, 0.0, 0.0), identity, None,
+                                                    10.0 + i)]))
+    assert hub.delivered["tracker"] == 3  # 1e8 and -1e8 (1e309 calibrated) dropped
+    tracker = hub.state.tracker("hand_r")
+    assert np.isfinite(tracker.position).all() and np.isfinite(tracker.velocity).all()
+    assert tracker.position[0] == pytest.approx(0.5e301)  # the filter was reset at 0.5
+    assert "pose is not finite (check the Tracker's Scale" in caplog.text

@@ -5,15 +5,19 @@ from __future__ import annotations
 
 import logging
 import socket
+import struct
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 from input_helpers import input_engine, run_until
+from pythonosc.osc_message import OscMessage
+from pythonosc.osc_message_builder import OscMessageBuilder
 from pythonosc.udp_client import SimpleUDPClient
 
 from components import Transform
+from engine import EngineConfig
 from engine.input import (
     Button,
     DeviceError,
@@ -23,7 +27,9 @@ from engine.input import (
     InputState,
     TrackerPose,
     WheelCount,
+    osc,
 )
+from engine.input import device as device_module
 from engine.input.osc import OscDevice
 
 
@@ -56,7 +62,8 @@ def f32(*values: float) -> list[float]:
 def test_a_received_pose_is_in_the_state_table_at_the_next_frame(tmp_path: Path):
     with input_engine(osc_scene(), tmp_path) as engine:
         client = SimpleUDPClient("127.0.0.1", port_of(engine))
-        state = engine.resource(InputState)
+        state = engine.input  # the issue's engine.input.tracker(...): the state table
+        assert state is engine.resource(InputState)
         poses: list[TrackerPose] = []
         engine.events.subscribe(TrackerPose, poses.append)
         engine.step()
@@ -67,10 +74,20 @@ def test_a_received_pose_is_in_the_state_table_at_the_next_frame(tmp_path: Path)
             time.sleep(0.001)
         assert state.tracker("hand_r") is None
         engine.step()  # the first frame after the packet arrived delivers it
-        tracker = state.tracker("hand_r")
+        tracker = engine.input.tracker("hand_r")
         assert tracker.position.tolist() == f32(0.1, 0.2, 1.5)
         assert tracker.orientation.tolist() == [1.0, 0.0, 0.0, 0.0]
         assert [p.device for p in poses] == ["hand_r"] and poses[0].timestamp > 0
+
+
+def test_an_engine_without_the_input_plugin_says_where_engine_input_comes_from():
+    from engine import Engine
+
+    with Engine(EngineConfig(backend="ballistic", fast=True)) as engine:
+        engine.run(frames=1)
+        with pytest.raises(LookupError, match=r"engine.input: no input state; the input "
+                                              r"plugin provides it"):
+            _ = engine.input
 
 
 def test_buttons_axes_and_wheel_counts_arrive_typed(tmp_path: Path):
@@ -107,6 +124,15 @@ def test_a_bound_object_follows_its_calibrated_tracker(tmp_path: Path):
         np.testing.assert_allclose(marker.position, [1.0, 0.0, 1.5], rtol=1e-7)
 
 
+def huge_double_pose() -> OscMessage:
+    """A pose whose x is 1e308, as an OSC double: finite, and past anything a tracker sees."""
+    builder = OscMessageBuilder("/colosseum/tracker/hand_r")
+    builder.add_arg(1e308, OscMessageBuilder.ARG_TYPE_DOUBLE)
+    for value in (0.0, 0.0, 1.0, 0.0, 0.0, 0.0):
+        builder.add_arg(value)
+    return builder.build()
+
+
 def test_malformed_and_non_finite_packets_are_counted_not_applied(tmp_path: Path, caplog):
     with input_engine(osc_scene(), tmp_path) as engine:
         port = port_of(engine)
@@ -121,6 +147,7 @@ def test_malformed_and_non_finite_packets_are_counted_not_applied(tmp_path: Path
                lambda: client.send_message("/colosseum/tracker/hand_r", [0.0, 0.0, 0.0, 2.0,
                                                                          0.0, 0.0, 0.0]),
                lambda: client.send_message("/colosseum/tracker/hand_r", [1.0, 2.0]),
+               lambda: client.send(huge_double_pose()),
                lambda: client.send_message("/colosseum/wheel/left", [float("inf")]),
                lambda: client.send_message("/colosseum/wheel/left", [1.5]),
                lambda: client.send_message("/colosseum/button/glove/index", [7]),
@@ -191,3 +218,120 @@ def test_a_silent_source_is_lost_and_found_again(tmp_path: Path):
         client.send_message("/colosseum/tracker/hand_r", pose)
         run_until(engine, lambda: len(found) == 2)
         assert state.tracker("hand_r").tracked and not state.lost
+
+
+def nested_bundle(depth: int) -> bytes:
+    """A wheel count wrapped in ``depth`` bundles: 20 bytes a level, valid OSC throughout."""
+    inner = b"/colosseum/wheel/left\x00\x00\x00,i\x00\x00" + struct.pack(">i", 1)
+    for _ in range(depth):
+        inner = b"#bundle\x00" + struct.pack(">Qi", 1, len(inner)) + inner
+    return inner
+
+
+def test_a_deeply_nested_bundle_is_one_bad_message_and_the_device_keeps_listening(
+        tmp_path: Path):
+    """python-osc unpacks bundles recursively: 600 levels (12 kB, one datagram) raised
+    RecursionError on the device's thread, which ended it for the rest of the run."""
+    with input_engine(osc_scene(), tmp_path) as engine:
+        port = port_of(engine)
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as raw:
+            raw.sendto(nested_bundle(600), ("127.0.0.1", port))
+            raw.sendto(nested_bundle(3), ("127.0.0.1", port))  # a shallow one is read
+        state = engine.resource(InputState)
+        run_until(engine, lambda: state.wheel("left") is not None)
+        status = osc_device(engine).status()
+        assert (status.state, status.bad, status.received) == ("open", 1, 1)
+
+
+def test_bad_messages_since_the_last_report_are_told_when_the_device_closes(caplog):
+    device = OscDevice("mocap", 0)
+    device.open()
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as raw, \
+            caplog.at_level(logging.WARNING, logger="colosseum.input"):
+        for count, packet in enumerate((b"first garbage", b"second garbage",
+                                        b"third garbage"), 1):
+            raw.sendto(packet, ("127.0.0.1", device.port))
+            deadline = time.monotonic() + 5.0
+            while device.status().bad < count and time.monotonic() < deadline:
+                time.sleep(0.001)
+            device.poll(time.monotonic())  # reports the first; the others are too soon
+        device.close()
+    reports = [r.getMessage() for r in caplog.records if "bad message" in r.getMessage()]
+    assert len(reports) == 2
+    assert "1 bad message ignored" in reports[0] and "first garbage" in reports[0]
+    assert "2 bad messages ignored" in reports[1] and "second garbage" in reports[1]
+
+
+def test_datagrams_the_system_dropped_are_counted_and_told(monkeypatch, caplog):
+    """A receive buffer too small for a burst (the system's default holds 256 datagrams)
+    lost packets without a word; the count of drops Linux keeps is told like bad messages."""
+    monkeypatch.setattr(osc, "RECEIVE_BUFFER", 2048)  # a few datagrams
+    device = OscDevice("mocap", 0)
+    device.open()
+    sent, late = 2000, 0
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as raw, \
+            caplog.at_level(logging.WARNING, logger="colosseum.input"):
+        packet = OscMessageBuilder("/colosseum/wheel/left")
+        packet.add_arg(1)
+        data = packet.build().dgram
+        for _ in range(sent):
+            raw.sendto(data, ("127.0.0.1", device.port))
+        deadline = time.monotonic() + 5.0
+        while device.received + device.dropped < sent + late and time.monotonic() < deadline:
+            raw.sendto(data, ("127.0.0.1", device.port))  # a datagram read brings the count
+            late += 1
+            time.sleep(0.05)
+        events = device.poll(time.monotonic())
+        device.close()
+    assert device.dropped > 0 and len(events) + device.dropped == sent + late
+    told = [r.getMessage() for r in caplog.records if "dropped by the system" in r.getMessage()]
+    assert told and f"{device.dropped} datagrams dropped" in told[0]
+    assert f"UDP 127.0.0.1:{device.port}" in told[0]
+    assert device.status().detail == f"{device.dropped} datagrams dropped by the system"
+
+
+def test_a_device_that_never_hears_anything_says_so_once(monkeypatch, caplog):
+    """A phone app sending to this machine's LAN address while the device listens on
+    127.0.0.1 (the default) delivered nothing, and nothing said why."""
+    monkeypatch.setattr(device_module, "SILENT_AFTER", 0.1)
+    quiet, heard = OscDevice("mocap", 0), OscDevice("gloves", 0)
+    quiet.open()
+    heard.open()
+    try:
+        SimpleUDPClient("127.0.0.1", heard.port).send_message("/colosseum/wheel/left", 1)
+        deadline = time.monotonic() + 5.0
+        while heard.received == 0 and time.monotonic() < deadline:
+            time.sleep(0.001)
+        with caplog.at_level(logging.WARNING, logger="colosseum.input"):
+            for now in (100.0, 100.05, 100.2, 100.3, 200.0):
+                quiet.poll(now)
+                heard.poll(now)
+    finally:
+        quiet.close()
+        heard.close()
+    assert [r.getMessage() for r in caplog.records] == [
+        f"input device 'mocap' (osc, UDP 127.0.0.1:{quiet.port}): nothing received in 0.1 s "
+        f"since it opened (it listens on 127.0.0.1 only: a sender on another machine needs "
+        f'Address "0.0.0.0", or --input osc:0.0.0.0:{quiet.port})']
+
+
+def test_a_sender_inventing_names_is_held_to_a_bounded_table(tmp_path: Path, caplog):
+    """A counter in the addresses would add a table entry per packet for ever: names past
+    the first MAX_SOURCES are bad messages, the ones already heard keep working."""
+    from engine.input.hub import MAX_SOURCES
+
+    with input_engine(osc_scene(), tmp_path) as engine:
+        client = SimpleUDPClient("127.0.0.1", port_of(engine))
+        state = engine.resource(InputState)
+        device = osc_device(engine)
+        sent = MAX_SOURCES + 100
+        for i in range(sent):
+            client.send_message(f"/colosseum/button/glove/b{i}", 1)
+            if i % 200 == 199:  # let the device's thread keep up with the burst
+                run_until(engine, lambda n=i: device.status().received > n - 50)
+        run_until(engine, lambda: device.status().received >= sent)
+        engine.step()
+        assert len(state.buttons) == MAX_SOURCES
+        client.send_message("/colosseum/button/glove/b0", 0)
+        run_until(engine, lambda: not state.button("glove", "b0"))
+    assert f"a new input name beyond the first {MAX_SOURCES}" in caplog.text

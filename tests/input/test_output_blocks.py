@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import socket
 import time
 from pathlib import Path
 
 import pytest
-from input_helpers import input_engine
-from pythonosc.osc_packet import OscPacket
+from input_helpers import input_engine, osc_receiver, received
 
 from components import Transform
 from engine.events import CustomEvent
@@ -18,21 +16,8 @@ from systems.input import Outputs
 
 @pytest.fixture
 def receiver():
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.bind(("127.0.0.1", 0))
-    sock.settimeout(0.01)
-    yield sock
-    sock.close()
-
-
-def drain(sock: socket.socket) -> list[tuple[str, list]]:
-    out = []
-    while True:
-        try:
-            data = sock.recv(65536)
-        except TimeoutError:
-            return out
-        out += [(m.message.address, list(m.message.params)) for m in OscPacket(data).messages]
+    with osc_receiver() as sock:
+        yield sock
 
 
 def test_values_and_markers_go_out_every_frame(tmp_path: Path, receiver):
@@ -49,7 +34,7 @@ Output {{ Kind "osc" Port {port} Value "position:ball" Value "velocity:ball"
         frames = 30
         engine.run(frames=frames)
         time.sleep(0.05)
-        got = drain(receiver)
+        got = received(receiver)
         ball = next(t for _, t in engine.world.get_component(Transform))
         final_z, final_vz = float(ball.position[2]), float(ball.linear_velocity[2])
     positions = [args for address, args in got if address == "/colosseum/out/position/ball"]

@@ -18,15 +18,20 @@ from components import Physical, Transform
 from engine import Phase, system
 from engine.cli import main
 from engine.input import (
+    DeviceLost,
     InputHub,
     InputRecorder,
     InputReplayer,
     InputState,
     ReplayError,
+    TrackerPose,
+    WheelCount,
     read_recording,
 )
 from engine.input.osc import OscDevice
+from engine.input.record import FrameInput, RecordWriter
 from engine.physics.commands import ApplyImpulse
+from engine.scene.inputs import InputSpec, WheelSpec
 from systems import load_plugin
 
 SCENE = """
@@ -63,7 +68,8 @@ def steer_ball(engine, dt):
 def run(tmp_path: Path, port: int, frames: int, live: bool = False, **extra):
     """Final ball position and the hand's pose per frame; ``live`` sends OSC meanwhile."""
     with input_engine(SCENE.format(port=port), tmp_path,
-                      extra_plugins=(load_plugin("physics"),)) as engine:
+                      extra_plugins=(load_plugin("physics"),),
+                      backend=extra.get("backend", "ballistic")) as engine:
         engine.add_system(steer_ball)
         for s in extra.get("systems", ()):
             engine.add_system(s)
@@ -98,10 +104,12 @@ def send_motion(port: int) -> None:
         time.sleep(1 / 240)
 
 
-def test_a_replay_in_serial_mode_is_bit_identical_to_the_live_run(tmp_path: Path):
+@pytest.mark.parametrize("backend", ["ode", "pymunk"])
+def test_a_replay_in_serial_mode_is_bit_identical_to_the_live_run(tmp_path: Path, backend):
     port = free_port()
     path = tmp_path / "session.jsonl"
-    live_end, live_hands = run(tmp_path, port, 150, live=True, systems=[InputRecorder(path)])
+    live_end, live_hands = run(tmp_path, port, 150, live=True, systems=[InputRecorder(path)],
+                               backend=backend)
     recording = read_recording(path)
     kinds = {type(e).__name__ for f in recording.frames.values() for e in f.events}
     assert {"TrackerPose", "WheelCount", "Button", "DeviceFound"} <= kinds
@@ -111,10 +119,11 @@ def test_a_replay_in_serial_mode_is_bit_identical_to_the_live_run(tmp_path: Path
     # the port is taken during the replay: the replay must not open the live device
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as blocker:
         blocker.bind(("127.0.0.1", port))
-        replay_end, replay_hands = run(tmp_path, port, 150, systems=[InputReplayer(path)])
+        replay_end, replay_hands = run(tmp_path, port, 150, systems=[InputReplayer(path)],
+                                       backend=backend)
     assert replay_hands == live_hands
     assert replay_end.tobytes() == live_end.tobytes()
-    quiet_end, _ = run(tmp_path, free_port(), 150)
+    quiet_end, _ = run(tmp_path, free_port(), 150, backend=backend)
     assert quiet_end.tobytes() != live_end.tobytes()  # the input mattered
 
 
@@ -181,3 +190,38 @@ def test_a_file_without_the_header_is_refused(tmp_path: Path):
     path.write_text('{"frame": 1, "type": "key", "key": "a", "pressed": true}\n')
     with pytest.raises(ReplayError, match=r"old.jsonl:1: .*header"):
         read_recording(path)
+
+
+def test_an_infinite_frame_number_is_a_replay_error_naming_the_line(tmp_path):
+    """Found by the fuzzer: ``"frame": 1e999`` (infinity) raised OverflowError."""
+    path = tmp_path / "run.input"
+    path.write_text('{"format": "colosseum-input", "version": 1}\n{"frame": 1e999, "clock": 1}\n')
+    with pytest.raises(ReplayError, match=r"run.input:2: not a recorded input line"):
+        read_recording(path)
+
+
+def test_past_the_end_of_a_replay_wheels_come_to_rest_and_sources_are_lost(tmp_path, caplog):
+    """The recording's devices fall silent where it ends: the clock went on standing
+    still there, so a wheel turned at its last rate for ever and a hand stayed tracked."""
+    path = tmp_path / "short.jsonl"
+    writer = RecordWriter(path, {"scene": "", "seed": 0, "devices": []})
+    for frame in range(30):  # 2 turns a second at 60 frames a second
+        t = 100.0 + frame / 60
+        writer.write(frame, FrameInput(t, [
+            WheelCount("left", round(2 * 1024 * (t - 100.0)), t),
+            TrackerPose("hand_r", (0.0, 0.0, 1.0), (1.0, 0.0, 0.0, 0.0), None, t)]))
+    writer.close()
+    hub = InputHub(InputSpec(wheels=(WheelSpec("left", counts_per_turn=1024),)), [])
+    hub.replay(read_recording(path))
+    lost: list[DeviceLost] = []
+    with caplog.at_level(logging.INFO, logger="colosseum.input"):
+        for frame in range(30):
+            hub.step(frame)
+        assert hub.state.wheel("left").angular_velocity == pytest.approx(4 * math.pi, rel=0.01)
+        for frame in range(30, 60):
+            lost += [e for e in hub.step(frame) if isinstance(e, DeviceLost)]
+    assert hub.state.now == pytest.approx(100.0 + 59 / 60)
+    assert hub.state.wheel("left").angular_velocity == 0.0
+    assert sorted(e.device for e in lost) == ["hand_r", "left"]
+    assert not hub.state.tracker("hand_r").tracked
+    assert "the recorded input ended at frame 29" in caplog.text

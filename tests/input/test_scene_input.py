@@ -55,6 +55,9 @@ Output { Kind "osc" Port 9200 Value "wheel:left" Value "position:hand" Markers 0
     ('Input { Device { Kind "osc" Port 70000 } }', "Port must be 0..65535"),
     ('Input { Trackr { ID "h" } }', "unknown key 'Trackr' in Input (did you mean 'Tracker'?"),
     ('Input { Tracker { ID "h" Object "nobody" } }', "unknown Object 'nobody'"),
+    ('Input { Tracker { ID "h" Camera "eye" } }', "unknown Camera 'eye'"),
+    ('Input { Tracker { ID "h" Object "o" Camera "c" } }\nObject { ID "o" }\nCamera { ID "c" }',
+     "moves one Object or one Camera, not both"),
 ])
 def test_mistakes_are_reported_at_their_line(tmp_path: Path, text: str, message: str):
     with pytest.raises(SceneError) as caught:

@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 from input_helpers import input_engine, run_until
 
-from engine.input import DeviceError, InputHub, InputState
+from engine.input import DeviceError, InputHub, InputState, serial_line
+from engine.input.device import BadMessage
 from engine.input.serial_line import LineFormat, SerialDevice
 
 
@@ -79,6 +80,16 @@ def test_bad_serial_lines_are_counted_and_skipped(tmp_path: Path, pty_pair):
         assert device.status().bad == 5
 
 
+@pytest.mark.parametrize("chunk", [1, 700, 1025, 6000])
+def test_a_line_too_long_is_one_bad_line_however_the_reads_split_it(chunk: int) -> None:
+    device = SerialDevice("encoders", "/dev/unused")
+    data = b"x" * 5000 + b"\nleft 7\n"
+    for start in range(0, len(data), chunk):
+        device.take(data[start:start + chunk], 1.0)
+    assert device.bad.total == 1
+    assert [e.count for e in device.poll(1.0)] == [7]
+
+
 def test_a_port_in_use_names_the_port_and_the_device(pty_pair):
     _, path = pty_pair
     first = SerialDevice("wheels", path)
@@ -103,3 +114,58 @@ def test_line_templates_read_every_event_kind():
     for bad in ("{count} {count}", "{count} {button} {pressed}", "{speed}", "{name}"):
         with pytest.raises(ValueError):
             LineFormat(bad)
+
+
+def test_a_template_with_a_spare_field_reads_its_one_event():
+    """Found by the fuzzer: a tracker's seven fields and a lone {value} (no {axis}) made
+    a KeyError on every line; the template makes a tracker, the spare field is ignored."""
+    fmt = LineFormat("T {name} {x}{y}{z} {qw} {qx} {qy} {qz}{value}")
+    assert fmt.kind == "tracker"
+    with pytest.raises(BadMessage):
+        fmt.event("T t 578 2 8 8 0.", "dev", 1.0)
+
+
+def test_an_unplugged_port_is_reported_and_reopened_when_it_comes_back(tmp_path: Path,
+                                                                        caplog, monkeypatch):
+    """A USB adapter's port goes away and comes back (udev gives it the same link): the
+    device said so and stopped reading for the rest of the run."""
+    monkeypatch.setattr(serial_line, "REOPEN_EVERY", 0.1)
+    link = tmp_path / "ttyWheels"
+    master, slave = os.openpty()
+    link.symlink_to(os.ttyname(slave))
+    device = SerialDevice("wheels", str(link))
+    device.open()
+    try:
+        os.write(master, b"left 5\n")
+        events = wait_for_events(device)
+        assert [e.count for e in events] == [5]
+        os.close(master)  # unplugged
+        os.close(slave)
+        deadline = time.monotonic() + 5.0
+        while "port lost" not in caplog.text and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert "'wheels' (serial, " in caplog.text and "reopening it every" in caplog.text
+        master, slave = os.openpty()  # plugged in again
+        link.unlink()
+        link.symlink_to(os.ttyname(slave))
+        events = []
+        deadline = time.monotonic() + 5.0
+        while not events and time.monotonic() < deadline:  # an encoder keeps sending
+            os.write(master, b"left 7\n")  # (what came before the reopen is flushed)
+            events = wait_for_events(device, 0.1)
+        assert events and {e.count for e in events} == {7}
+        assert device.status().state == "open" and device.status().detail == ""
+    finally:
+        device.close()
+        os.close(master)
+        os.close(slave)
+
+
+def wait_for_events(device: SerialDevice, patience: float = 5.0) -> list:
+    deadline = time.monotonic() + patience
+    while time.monotonic() < deadline:
+        events = device.poll(time.monotonic())
+        if events:
+            return events
+        time.sleep(0.01)
+    return []

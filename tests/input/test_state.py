@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
@@ -10,6 +11,7 @@ import pytest
 from engine.input import (
     Axis,
     Button,
+    DeviceFound,
     DeviceLost,
     InputHub,
     Key,
@@ -56,3 +58,21 @@ def test_every_input_name_reads_its_value():
 def test_malformed_input_names_are_refused_with_the_forms_allowed(name: str):
     with pytest.raises(ValueError, match="use tracker:NAME, wheel:NAME"):
         parse_binding(name)
+
+
+def test_sources_found_or_lost_together_are_told_in_one_line(caplog):
+    """A sender with a counter in its addresses made a thousand sources in one frame, and
+    a line each when they were found and again when they were lost."""
+    hub = InputHub(InputSpec(), [])
+    with caplog.at_level(logging.INFO, logger="colosseum.input"):
+        hub.apply(FrameInput(1.0, [DeviceFound(f"t{i}", 1.0) for i in range(1000)]))
+        hub.apply(FrameInput(2.0, [DeviceLost(f"t{i}", 2.0) for i in range(1000)]))
+        hub.apply(FrameInput(3.0, [DeviceLost("hand_r", 3.0)]))
+    lines = [r.getMessage() for r in caplog.records]
+    assert lines == [
+        "input sources 't0', 't1', 't2', 't3', 't4' and 995 more found",
+        "input sources 't0', 't1', 't2', 't3', 't4' and 995 more lost: nothing received for "
+        "their timeout; untracked until they send again",
+        "input source 'hand_r' lost: nothing received for its timeout; untracked until it "
+        "sends again"]
+    assert len(hub.state.lost) == 1001
