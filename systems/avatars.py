@@ -41,7 +41,7 @@ from engine.physics import commands as cmd
 from engine.render.math3d import compose
 from engine.rotation import euler_to_quat, matrix_to_quat, quat_multiply, quat_to_matrix
 from engine.services import AVATAR_METHODS, AvatarControl, AvatarStates
-from engine.system import Phase, System
+from engine.system import Phase, PluginName, System
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -530,7 +530,12 @@ class AvatarSystem(System):
                 rot = bone[:3, :3] / np.linalg.norm(bone[:3, :3], axis=0)
                 at = bone[:3, 3] + rot @ held.offset
                 quat = quat_multiply(matrix_to_quat(rot), held.rotation)
-                self._move(engine, held, at, quat, dt)
+                try:
+                    self._move(engine, held, at, quat, dt)
+                except cmd.CommandError as exc:  # a bone posed out of the world (a scale
+                    figure.held.remove(held)  # of 0, a far path): let go, and say so
+                    self._messages.error(f"avatar {self._name(entity)!r} lets go of "
+                                         f"{self._name(held.entity)!r}: {exc}")
 
     def _move(self, engine: Engine, held: _Held, at: np.ndarray, quat: np.ndarray,
               dt: float) -> None:
@@ -586,7 +591,13 @@ class AvatarSystem(System):
         assert engine is not None
         if target < 0 or not engine.world.entity_exists(target):
             raise ValueError(f"there is no such object to hold ({target})")
+        if target in (entity, figure.capsule):  # it would chase its own hand away
+            raise ValueError(f"avatar {self._name(entity)!r} cannot hold itself")
         node = self._bone(figure, bone)
+        # finite, and a rotation: what reaches physics each frame
+        offset, rotation = _finite(offset, 3, "offset"), _finite(rotation, 4, "rotation")
+        if not any(rotation):
+            raise ValueError("rotation must be a non-zero quaternion w, x, y, z")
         body = engine.world.try_component(target, Physical)
         kind = "visual" if body is None else (
             "kinematic" if body.kind == BodyKind.KINEMATIC else "dynamic")
@@ -604,7 +615,11 @@ class AvatarSystem(System):
         bend to reach it. Until :meth:`release_bone`."""
         figure = self._figure(entity)
         node = self._bone(figure, bone)
-        pose = cmd.SetPose(entity, position, orientation)  # checked: finite, a rotation
+        parents = figure.model.parents
+        if parents[node] < 0 or parents[parents[node]] < 0:  # (it was ignored, silently)
+            raise ValueError(f"bone {bone!r} has no parent and grandparent to bend (a hand "
+                             "driven by a tracker hangs below a forearm and an upper arm)")
+        pose = self._checked(cmd.SetPose(entity, position, orientation))  # finite, a rotation
         figure.drives[node] = _Drive(node, np.asarray(pose.position),
                                      np.asarray(pose.orientation))
 
@@ -631,10 +646,17 @@ class AvatarSystem(System):
     def set_path(self, entity: int, points: list[Any], loop: bool = True) -> None:
         """Walk through ``points`` (world, m) in turn; an empty list stops walking."""
         figure = self._figure(entity)
-        figure.path = [np.asarray(cmd.SetPose(entity, p, (1, 0, 0, 0)).position)
+        figure.path = [np.asarray(self._checked(cmd.SetPose(entity, p, (1, 0, 0, 0))).position)
                        for p in points]
         figure.path_loop = bool(loop)
         figure.waypoint = 0
+
+    def _checked(self, pose: cmd.SetPose) -> cmd.SetPose:
+        """A pose a script gave, inside the world (CommandError, a ValueError, if not: a
+        path walked out of it would end in a capsule target physics refuses)."""
+        assert self._engine is not None
+        cmd.check_limits(pose, self._engine.physics.limits)
+        return pose
 
     def _bone(self, figure: _Figure, bone: str) -> int:
         node = figure.model.node(str(bone))
@@ -651,11 +673,14 @@ class AvatarSystem(System):
         if method not in AVATAR_METHODS:
             raise ValueError(f"unknown avatar method {method!r}")
         first = args[0] if args else None
-        opts = args[1] if len(args) > 1 and isinstance(args[1], dict) else {}
-        unknown = set(opts) - {"fade", "speed", "loop", "offset", "orientation"}
+        opts = args[1] if len(args) > 1 and method in ("play", "queue", "blend") else {}
+        if not isinstance(opts, dict):
+            raise ValueError(f"options are a table {{fade=s, speed=x, loop=bool}}, got {opts!r}")
+        unknown = set(opts) - {"fade", "speed", "loop"}
         if unknown:
-            raise ValueError(f"unknown option {sorted(unknown)[0]!r} (fade, speed, loop; offset, "
-                             "orientation for hold)")
+            raise ValueError(f"unknown option {sorted(unknown)[0]!r} (fade, speed, loop)")
+        if not isinstance(opts.get("loop", True), bool):
+            raise ValueError(f"loop must be true or false, got {opts['loop']!r}")
         timing = {k: opts[k] for k in ("fade", "speed", "loop") if k in opts}
         if method in ("play", "queue"):
             if not isinstance(first, str | dict):
@@ -668,7 +693,13 @@ class AvatarSystem(System):
                 raise ValueError("expected a table of weights, {Walk=0.7, Run=0.3}")
             mixer.blend(entity, first, **timing)
         elif method == "stopAnimation":
-            mixer.stop(entity, (first or {}).get("fade") if isinstance(first, dict) else None)
+            if first is not None and not isinstance(first, dict):
+                raise ValueError(f"options are a table {{fade=s}}, got {first!r}")
+            fade = (first or {}).get("fade")
+            if fade is not None and (isinstance(fade, bool) or not isinstance(fade, int | float)
+                                     or not 0.0 <= fade < 1e6):
+                raise ValueError(f"fade must be a number >= 0, got {fade!r}")
+            mixer.stop(entity, fade)
         elif method == "animation":
             playing = mixer.playing(entity)
             if not playing:
@@ -682,11 +713,10 @@ class AvatarSystem(System):
                 raise ValueError("expected a list of points {{x, y, z}, ...}")
             self.set_path(entity, first, bool(args[1]) if len(args) > 1 else True)
         elif method == "hold":
-            self.hold(entity, int(first) if isinstance(first, int) else -1, str(args[1]) if
-                      len(args) > 1 else "", *self._hold_options(args[2] if len(args) > 2
-                                                                 else {}))
+            self.hold(entity, _object_id(first), str(args[1]) if len(args) > 1 else "",
+                      *self._hold_options(args[2] if len(args) > 2 else {}))
         elif method == "release":
-            self.release(entity, int(first) if isinstance(first, int) else -1)
+            self.release(entity, _object_id(first))
         elif method == "driveBone":
             if len(args) < 3:
                 raise ValueError("expected (bone, {x, y, z}, {w, x, y, z})")
@@ -702,20 +732,42 @@ class AvatarSystem(System):
     def _hold_options(opts: Any) -> tuple[Any, Any]:
         if not isinstance(opts, dict):
             raise ValueError("options are a table {offset=, orientation=}")
+        unknown = set(opts) - {"offset", "orientation"}
+        if unknown:
+            raise ValueError(f"unknown option {sorted(unknown)[0]!r} (offset, orientation)")
         offset = opts.get("offset", (0.0, 0.0, 0.0))
-        rotation = euler_to_quat(opts.get("orientation", (0.0, 0.0, 0.0)))
-        return offset, rotation
+        turn = opts.get("orientation", (0.0, 0.0, 0.0))
+        if not isinstance(turn, list | tuple) or len(turn) != 3 or not all(
+                isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
+                for x in turn):
+            raise ValueError(f"orientation is 3 finite numbers (degrees), got {turn!r}")
+        return offset, euler_to_quat(turn)
 
 
 class AvatarsPlugin:
     """Animates the scene's avatars (``requestPlugin("avatars")``)."""
 
-    name = "avatars"
+    name = PluginName.AVATARS
 
     def build(self, engine: Engine) -> None:
         engine.add_system(AvatarSystem())
 
 
+def _finite(values: Any, n: int, what: str) -> tuple[float, ...]:
+    """``n`` finite numbers (a script's or a saved state's), or ValueError naming ``what``."""
+    if not isinstance(values, list | tuple | np.ndarray) or len(values) != n or not all(
+            isinstance(x, int | float | np.floating) and not isinstance(x, bool)
+            and math.isfinite(x) for x in values):
+        raise ValueError(f"{what} must be {n} finite numbers, got {values!r}")
+    return tuple(float(x) for x in values)
+
+
 def _floats(values: Any) -> Any:
     """A vector as a tuple of plain floats (what a saved state holds)."""
     return tuple(float(x) for x in values)
+
+
+def _object_id(value: Any) -> int:
+    """An object's entity id as a script passed it (a handle arrives as its id); -1 for
+    anything else (true is not entity 1)."""
+    return int(value) if isinstance(value, int) and not isinstance(value, bool) else -1

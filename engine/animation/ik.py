@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from engine.rotation import axis_angle_matrices, from_to
+
 _EPS = 1e-9
 
 
@@ -66,30 +68,6 @@ def make_chains(items: list[tuple[int, np.ndarray, int, int, int]]) -> Chains:
     return Chains(np.array(a, np.int64), np.array(b, np.int64), np.array(c, np.int64),
                   cat(subs["a"][0]), cat(subs["a"][1]), cat(subs["b"][0]), cat(subs["b"][1]),
                   cat(subs["c"][0]), cat(subs["c"][1]))
-
-
-def axis_angle_matrices(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """Rotation matrices ``(n, 3, 3)`` about unit ``axis`` by ``angle`` (Rodrigues)."""
-    x, y, z = axis[:, 0], axis[:, 1], axis[:, 2]
-    c, s = np.cos(angle), np.sin(angle)
-    k = 1.0 - c
-    return np.stack([
-        np.stack([c + x * x * k, x * y * k - z * s, x * z * k + y * s], -1),
-        np.stack([y * x * k + z * s, c + y * y * k, y * z * k - x * s], -1),
-        np.stack([z * x * k - y * s, z * y * k + x * s, c + z * z * k], -1)], axis=1)
-
-
-def from_to(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """The smallest rotations ``(n, 3, 3)`` turning directions ``u`` into ``v``."""
-    un = u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), _EPS)
-    vn = v / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), _EPS)
-    cross = np.cross(un, vn)
-    s = np.linalg.norm(cross, axis=1)
-    angle = np.arctan2(s, np.einsum("ij,ij->i", un, vn))
-    fallback = np.cross(un, np.where(np.abs(un[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
-    axis = np.where((s > _EPS)[:, None], cross, fallback)
-    axis /= np.maximum(np.linalg.norm(axis, axis=1, keepdims=True), _EPS)
-    return axis_angle_matrices(axis, angle)
 
 
 def turn(world: np.ndarray, rows: np.ndarray, chain: np.ndarray, rotation: np.ndarray,

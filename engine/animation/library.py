@@ -183,7 +183,26 @@ class Library:
         self.track_last_time = self.key_time[last] if len(last) else np.zeros(0)
         self.track_lo = self.track_start
         self.track_hi = np.maximum(self.track_start, last - 1)
+        self._slerp_constants(last)
         self._packed_version = self.version
+
+    def _slerp_constants(self, last: np.ndarray) -> None:
+        """What slerp from each key to the next of its track needs besides the weight, as
+        :func:`engine.animation.mixer.fast_slerp` works it out (so results are the same to
+        the bit): the angle, one over its sine (0 where the two keys nearly coincide: a
+        linear mix is taken there) and the sign that takes the short way. The last key of
+        a track pairs with itself."""
+        count = len(self.key_value)
+        following = np.minimum(np.arange(count) + 1, max(count - 1, 0))
+        following[last] = last
+        q0, q1 = self.key_value, self.key_value[following]
+        dot = np.einsum("ij,ij->i", q0, q1)
+        self.key_sign = np.where(dot < 0.0, -1.0, 1.0)
+        self.key_theta = np.arccos(np.minimum(dot * self.key_sign, 1.0))
+        sin_theta = np.sin(self.key_theta)
+        self.key_near = sin_theta < 1e-6
+        self.key_inv_sin = np.divide(1.0, sin_theta, out=np.zeros_like(sin_theta),
+                                     where=~self.key_near)
 
 
 def _root_motion(model: SkinnedModel, clip: object) -> tuple[int, np.ndarray, np.ndarray]:

@@ -22,9 +22,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from components.avatar import SavedGroup, SavedLayer, SavedRequest
+from engine.animation import _compose
 from engine.animation.library import CUBIC, ROTATION, STEP, Library, Rig
 from engine.animation.sampling import hermite
-from engine.rotation import quat_normalize, quat_to_matrix
+from engine.rotation import quat_normalize
 
 
 class AnimationError(ValueError):
@@ -260,12 +261,13 @@ class Mixer:
         # in the model's order, whatever the caller's (a Lua table has none that repeats):
         # layers are slerped in turn, which depends on their order
         for name, w in sorted(weights.items(), key=lambda item: animator.clip_id(str(item[0]))):
-            if not isinstance(w, int | float) or not 0.0 <= float(w) < 1e6:
+            if not isinstance(w, int | float) or isinstance(w, bool) or not 0.0 <= w < 1e6:
                 raise AnimationError(f"weight of {name!r} must be a number >= 0, got {w!r}")
             out[str(name)] = float(w)
         for what, value in (("fade", fade), ("speed", speed)):
-            if value is not None and not (isinstance(value, int | float)
-                                          and 0.0 <= float(value) < 1e6):
+            if value is not None and not (isinstance(value, int | float)  # a boolean is no
+                                          and not isinstance(value, bool)  # number here
+                                          and 0.0 <= value < 1e6):
                 raise AnimationError(f"{what} must be a number >= 0, got {value!r}")
         return out
 
@@ -512,6 +514,17 @@ class _Plan:
                 [np.searchsorted(animated[x], r) for x, r in zip(a, row, strict=True)],
                 np.int64).reshape(-1)
 
+        # queries grouped by how they are interpolated (lerp, slerp, cubic): each group a
+        # slice, so its rows are views, not copies
+        path, interp = lib.track_path[q_track], lib.track_interp[q_track]
+        plain = interp != CUBIC
+        groups = (plain & (path != ROTATION), plain & (path == ROTATION), ~plain)
+        by_kind = np.concatenate([np.flatnonzero(g) for g in groups])
+        q_track, q_layer, q_row = q_track[by_kind], q_layer[by_kind], q_row[by_kind]
+        path, interp = path[by_kind], interp[by_kind]
+        bounds = np.cumsum([0] + [int(g.sum()) for g in groups])
+        self.q_lin, self.q_rot, self.q_cubic = (
+            slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True))
         self.q_layer = q_layer
         self.q_first = lib.track_first_time[q_track]
         self.q_last = lib.track_last_time[q_track]
@@ -519,14 +532,9 @@ class _Plan:
         self.q_lo = lib.track_lo[q_track]
         self.q_hi = lib.track_hi[q_track]
         self.q_end = lib.track_start[q_track] + lib.track_count[q_track] - 1
-        path, interp = lib.track_path[q_track], lib.track_interp[q_track]
         self.q_dst = slot(q_layer, q_row)
         self.q_step = np.flatnonzero(interp == STEP)
-        self.q_cubic = np.flatnonzero(interp == CUBIC)
         self.q_cubic_rot = path[self.q_cubic] == ROTATION
-        plain = interp != CUBIC
-        self.q_rot = np.flatnonzero(plain & (path == ROTATION))
-        self.q_lin = np.flatnonzero(plain & (path != ROTATION))
         # root motion taken off, per layer whose clip travels
         moving = np.array([i for i, c in enumerate(clips) if np.any(c.travel_local)], np.int64)
         self.rm_layer = moving
@@ -546,8 +554,8 @@ class _Plan:
             dst = np.repeat(avatar_start[layer_avatar[layers]], m) + offsets
             src = self.layer_start[which] + offsets
             rot = np.concatenate([animated[layer_avatar[x]] % 3 == ROTATION for x in layers])
-            self.rounds.append((dst[~rot], src[~rot], which[~rot], dst[rot], src[rot],
-                                which[rot], layers))
+            self.rounds.append((dst, src, dst[~rot], src[~rot], which[~rot], dst[rot],
+                                src[rot], which[rot], layers))
 
     def _avatars(self, animators: list[Animator]) -> None:
         """Each avatar's nodes as a block (``animator.row``), their rest pose, the depth
@@ -569,19 +577,13 @@ class _Plan:
             row += rig.nodes
         self.rows = row
         self.avatar_rest = np.concatenate(rest) if rest else np.zeros((0, 4))
-        parent = np.concatenate(parents) if parents else np.zeros(0, np.int64)
+        self.parent = (np.concatenate(parents) if parents else np.zeros(0)).astype(np.int64)
         level = np.concatenate(depth) if depth else np.zeros(0, np.int64)
-        self.order = np.argsort(level, kind="stable")  # sorted position -> block row
-        self.unorder = np.argsort(self.order)  # block row -> sorted position
-        bounds = np.searchsorted(level[self.order], np.arange(int(level.max()) + 2)) if len(
-            level) else np.zeros(1, np.int64)
-        self.roots = slice(0, int(bounds[1]) if len(bounds) > 1 else 0)
-        self.levels = [(slice(int(bounds[d]), int(bounds[d + 1])),
-                        self.unorder[parent[self.order[bounds[d]:bounds[d + 1]]]])
-                       for d in range(1, len(bounds) - 1)]
-        self.palette_rows = np.concatenate(palette_rows) if palette_rows else np.zeros(
-            0, np.int64)
-        self.inverse_bind = np.concatenate(ibms) if ibms else np.zeros((0, 4, 4))
+        self.order = np.argsort(level, kind="stable").astype(np.int64)  # parents first
+        self.palette_rows = (np.concatenate(palette_rows) if palette_rows else np.zeros(
+            0)).astype(np.int64)
+        self.inverse_bind = np.ascontiguousarray(
+            np.concatenate(ibms) if ibms else np.zeros((0, 4, 4)), np.float64)
 
     def evaluate(self, mixer: Mixer) -> np.ndarray:
         lib = mixer.library
@@ -604,10 +606,15 @@ class _Plan:
             lin = self.q_lin
             out[lin] = v0[lin] + alpha[lin, None] * (v1[lin] - v0[lin])
             rot = self.q_rot
-            if len(rot):
-                out[rot] = fast_slerp(v0[rot], v1[rot], alpha[rot])
+            if rot.stop > rot.start:  # slerp between keys: angles worked out when packed
+                k, a = i[rot], alpha[rot]
+                theta, inv, near = lib.key_theta[k], lib.key_inv_sin[k], lib.key_near[k]
+                w0 = np.where(near, 1.0 - a, np.sin((1.0 - a) * theta) * inv)
+                w1 = np.where(near, a, np.sin(a * theta) * inv) * lib.key_sign[k]
+                # unit keys (as the reader leaves them) slerp to unit quaternions
+                out[rot] = w0[:, None] * v0[rot] + w1[:, None] * v1[rot]
             c = self.q_cubic
-            if len(c):
+            if c.stop > c.start:
                 s = span[c, None]
                 value = hermite(v0[c], lib.key_out[i[c]] * s, v1[c], lib.key_in[i1[c]] * s,
                                 alpha[c])
@@ -623,14 +630,14 @@ class _Plan:
             w = t.weight[rows]
             running = np.maximum(0.0, 1.0 - np.bincount(self.layer_avatar, w,
                                                         len(mixer.animators)))
-            for ts_dst, ts_src, ts_which, r_dst, r_src, r_which, layers in self.rounds:
+            for dst, src, ts_dst, ts_src, ts_which, r_dst, r_src, r_which, layers in \
+                    self.rounds:
                 owners = self.layer_avatar[layers]
                 running[owners] += w[layers]
                 f_layer = np.divide(w[layers], running[owners], out=np.zeros(len(layers)),
                                     where=running[owners] > 0)
                 if np.all(f_layer == 1.0):  # the usual first round: nothing to mix with
-                    sparse[ts_dst] = pose[ts_src]
-                    sparse[r_dst] = pose[r_src]
+                    sparse[dst] = pose[src]
                     continue
                 factor = np.zeros(len(rows))
                 factor[layers] = f_layer
@@ -641,20 +648,17 @@ class _Plan:
         return self._hierarchy(full)
 
     def _hierarchy(self, pose: np.ndarray) -> np.ndarray:
-        """Model-frame matrices of every node, composed down the depths (one slice each)."""
-        ordered = pose.reshape(-1, 3, 4)[self.order]
+        """Model-frame matrices of every node, composed down the tree (parents first)."""
         world = np.empty((self.rows, 4, 4))
-        world[:, :3, :3] = quat_to_matrix(ordered[:, ROTATION]) * ordered[:, 2, None, :3]
-        world[:, :3, 3] = ordered[:, 0, :3]
-        world[:, 3, :3] = 0.0
-        world[:, 3, 3] = 1.0
-        for rows, parents in self.levels:
-            world[rows] = world[parents] @ world[rows]
-        return world[self.unorder]
+        _compose.compose(np.ascontiguousarray(pose.reshape(-1, 12)), self.parent, self.order,
+                         world)
+        return world
 
     def palettes(self, world: np.ndarray) -> np.ndarray:
         """Every avatar's joint matrices ``(J, 4, 4)``, in ``palette_offsets`` order."""
-        return world[self.palette_rows] @ self.inverse_bind
+        out = np.empty((len(self.palette_rows), 4, 4))
+        _compose.palettes(world, self.palette_rows, self.inverse_bind, out)
+        return out
 
 
 def fast_slerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray) -> np.ndarray:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from engine.assets.skinned import Channel, SkinnedModel
-from engine.rotation import quat_normalize, quat_to_matrix, slerp
+from engine.rotation import compose, quat_normalize, slerp
 
 
 def sample_channel(channel: Channel, t: float) -> np.ndarray:
@@ -49,15 +49,6 @@ def hermite(p0: np.ndarray, m0: np.ndarray, p1: np.ndarray, m1: np.ndarray, s: n
             + (s3 - s2) * m1)
 
 
-def trs_matrices(t: np.ndarray, r: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Local matrices ``(..., 4, 4)`` = translate · rotate · scale."""
-    out = np.zeros(t.shape[:-1] + (4, 4))
-    out[..., :3, :3] = quat_to_matrix(r) * s[..., None, :]
-    out[..., :3, 3] = t
-    out[..., 3, 3] = 1.0
-    return out
-
-
 def global_matrices(parents: np.ndarray, local: np.ndarray) -> np.ndarray:
     """Each node's transform in the model frame from local ones (parents come first)."""
     out = np.empty_like(local)
@@ -68,7 +59,7 @@ def global_matrices(parents: np.ndarray, local: np.ndarray) -> np.ndarray:
 
 def rest_globals(model: SkinnedModel) -> np.ndarray:
     """The model's nodes in their rest pose, model frame ``(nodes, 4, 4)``."""
-    return global_matrices(model.parents, trs_matrices(
+    return global_matrices(model.parents, compose(
         model.rest_translation, model.rest_rotation, model.rest_scale))
 
 

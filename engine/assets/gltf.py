@@ -32,6 +32,7 @@ import numpy as np
 from engine.assets.loaders import rgba_pixels
 from engine.assets.registry import register_loader
 from engine.assets.types import WHITE, MeshPart, ModelAsset, vertex_normals
+from engine.rotation import compose
 
 #: glTF is +Y up, the engine +Z up: (x, y, z) -> (x, -z, y), a quarter turn about X.
 Y_UP_TO_Z_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
@@ -115,22 +116,12 @@ def node_matrix(node: dict[str, Any]) -> np.ndarray:
     s = _numbers(node.get("scale", _UNIT), 3, "scale")
     if not any(q):
         raise ValueError("its rotation quaternion is all zeros")
-    return trs_matrices(np.array([t]), np.array([q]), np.array([s]))[0]
+    return compose(np.array(t), _wxyz(np.array(q)), np.array(s))
 
 
-def trs_matrices(t: np.ndarray, q: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """``(N, 4, 4)`` matrices from translations ``(N, 3)``, glTF quaternions ``[x y z w]``
-    ``(N, 4)`` (normalised here; all-zero ones give a scale-only matrix) and scales."""
-    norm = np.linalg.norm(q, axis=1)
-    x, y, z, w = (q / np.where(norm > 0, norm, 1.0)[:, None]).T
-    r = np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
-                  2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-                  2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-                 axis=1).reshape(-1, 3, 3)
-    m = np.repeat(np.eye(4)[None], len(t), axis=0)
-    m[:, :3, :3] = r * s[:, None, :]
-    m[:, :3, 3] = t
-    return m
+def _wxyz(q: np.ndarray) -> np.ndarray:
+    """glTF's quaternions ``[x y z w]`` in the engine's order ``(w, x, y, z)``."""
+    return np.asarray(q)[..., [3, 0, 1, 2]]
 
 
 def _numbers(values: Any, count: int, what: str) -> list[float]:
@@ -227,6 +218,14 @@ class GltfDocument:
     def accessor(self, index: int) -> np.ndarray:
         """Accessor ``index`` as an array (count, width), sparse values applied;
         normalized integers scaled to 0..1 (or -1..1)."""
+        try:
+            return self._accessor(index)
+        except (TypeError, AttributeError, KeyError, IndexError, OverflowError) as exc:
+            # a field of the wrong JSON type (a list for a number, a number for an object)
+            raise ValueError(f"accessor {index} is malformed ({type(exc).__name__}: "
+                             f"{exc})") from None
+
+    def _accessor(self, index: int) -> np.ndarray:
         accessors = _list(self.json, "accessors")
         if not isinstance(index, int) or not 0 <= index < len(accessors):
             raise ValueError(f"accessor {index} does not exist")
@@ -328,7 +327,7 @@ class GltfDocument:
             good = np.isfinite(t).all(1) & np.isfinite(q).all(1) & np.isfinite(s).all(1) & (
                 np.abs(q).sum(1) > 0)
             with np.errstate(invalid="ignore", over="ignore"):  # the bad rows are redone
-                local[np.array(plain)] = trs_matrices(t, q, s)
+                local[np.array(plain)] = compose(t, _wxyz(q), s)
             slow = [i for i, ok in zip(plain, good, strict=True) if not ok]
         else:
             slow = list(range(n))
@@ -346,7 +345,8 @@ class GltfDocument:
         world = np.repeat(np.eye(4)[None], n, axis=0)
         done = np.zeros(n, bool)
         roots = [i for i in range(n) if self.parents[i] < 0]
-        stack = [(r, np.eye(4), None) for r in reversed(roots)]
+        stack: list[tuple[int, np.ndarray | None, str | None]] = [
+            (r, None, None) for r in reversed(roots)]  # a root's world is its own matrix
         while stack:
             i, parent, broken = stack.pop()
             done[i] = True
@@ -355,7 +355,7 @@ class GltfDocument:
                     broken = f"node '{self.name(i)}': {unusable[i]}"
                     self.bad_nodes[i] = unusable[i]
                 else:
-                    world[i] = parent @ local[i]
+                    world[i] = local[i] if parent is None else parent @ local[i]
             elif broken is not None:
                 self.bad_nodes.setdefault(i, f"its ancestor is unusable ({broken})")
             stack.extend((c, world[i], broken) for c in reversed(self.children[i]))
@@ -365,8 +365,16 @@ class GltfDocument:
 
     def name(self, index: int) -> str:
         """A node's name as the file gives it (``node<index>`` when it has none)."""
-        name = self.nodes[index].get("name")
-        return name if isinstance(name, str) and name else f"node{index}"
+        return self._names[index]
+
+    @cached_property
+    def _names(self) -> list[str]:
+        """Every node's name, worked out once (an import asks each node's many times)."""
+        out = []
+        for i, node in enumerate(self.nodes):
+            name = node.get("name")
+            out.append(name if isinstance(name, str) and name else f"node{i}")
+        return out
 
     def mesh_name(self, index: int) -> str:
         """A mesh's name as the file gives it (``mesh<index>`` when it has none)."""
@@ -375,7 +383,7 @@ class GltfDocument:
 
     @cached_property
     def _by_name(self) -> dict[str, list[int]]:
-        return _by_name([self.name(i) for i in range(len(self.nodes))])
+        return _by_name(self._names)
 
     @cached_property
     def _mesh_by_name(self) -> dict[str, list[int]]:
@@ -384,7 +392,12 @@ class GltfDocument:
     def node_ref(self, index: int) -> str:
         """How a scene names node ``index``: its name, or ``#index`` when another node
         has the same name."""
-        return _ref(self._by_name, self.name(index), index)
+        return self._node_refs[index]
+
+    @cached_property
+    def _node_refs(self) -> list[str]:
+        by_name = self._by_name
+        return [_ref(by_name, name, i) for i, name in enumerate(self._names)]
 
     def mesh_ref(self, index: int) -> str:
         """How a scene names mesh ``index`` (as :meth:`node_ref` names a node)."""
@@ -423,27 +436,21 @@ class GltfDocument:
             if not isinstance(mesh, int) or not 0 <= mesh < len(self.meshes):
                 raise ValueError(f"mesh {mesh} does not exist (the file has "
                                  f"{len(self.meshes)})")
-            spec = self.meshes[mesh]
+            spec = _object(self.meshes[mesh], f"mesh {mesh}")
             parts = []
-            for k, prim in enumerate(spec.get("primitives", ())):
-                part = self._primitive(prim, f"mesh {spec.get('name') or mesh} primitive {k}")
+            for k, prim in enumerate(_list(spec, "primitives")):
+                what = f"mesh {spec.get('name') or mesh} primitive {k}"
+                part = self._primitive(_object(prim, what), what)
                 if part is not None:
                     parts.append(part)
             found = self._parts[mesh] = tuple(parts)
         return found
 
-    def mesh_triangles(self, mesh: int) -> tuple[np.ndarray, np.ndarray]:
-        """Mesh ``mesh`` as one triangle soup ``(vertices, faces)`` in its own space."""
-        parts = self.mesh_parts(mesh)
-        if not parts:
-            raise ValueError(f"mesh {mesh} holds no triangles")
-        return ModelAsset(self.path, parts).triangles()
-
     def _primitive(self, prim: dict[str, Any], what: str) -> MeshPart | None:
         mode = prim.get("mode", _TRIANGLES)
         if mode not in (_TRIANGLES, _STRIP, _FAN):
             return None  # points and lines have no surface to draw or collide with
-        attributes = prim.get("attributes", {})
+        attributes = _object(prim.get("attributes", {}), f"{what}'s attributes")
         if "POSITION" not in attributes:
             raise ValueError(f"{what} has no POSITION")
         if "extensions" in prim and "KHR_draco_mesh_compression" in prim["extensions"]:
@@ -467,7 +474,8 @@ class GltfDocument:
         uv = colors = None
         if "TEXCOORD_0" in attributes:
             uv = self.accessor(attributes["TEXCOORD_0"]).astype(np.float64)
-            uv = uv if uv.shape == (len(vertices), 2) else None
+            # glTF's v runs down the image, a MeshPart's up (as trimesh gives whole files)
+            uv = uv * (1.0, -1.0) + (0.0, 1.0) if uv.shape == (len(vertices), 2) else None
         if "COLOR_0" in attributes:
             raw = self.accessor(attributes["COLOR_0"]).astype(np.float64)
             if len(raw) == len(vertices) and raw.shape[1] in (3, 4):
@@ -479,7 +487,10 @@ class GltfDocument:
         materials = _list(self.json, "materials")
         if not isinstance(index, int) or not 0 <= index < len(materials):
             return WHITE, None
-        pbr = materials[index].get("pbrMetallicRoughness", {})
+        material = materials[index]
+        pbr = material.get("pbrMetallicRoughness") if isinstance(material, dict) else None
+        if not isinstance(pbr, dict):  # no colour said, or said in no way that reads
+            return WHITE, None
         factor = pbr.get("baseColorFactor", WHITE)
         try:
             color = tuple(_numbers(factor, 4, "baseColorFactor"))
@@ -529,9 +540,14 @@ class GltfDocument:
         for i in indices:
             if i in self.bad_nodes:
                 raise ValueError(f"node '{self.name(i)}' cannot be used: {self.bad_nodes[i]}")
-        base = np.linalg.inv(self._rigid[indices[0]])
-        placed = [(self.nodes[i]["mesh"], base @ self.world[i]) for i in indices
-                  if self.nodes[i].get("mesh") is not None]
+        if len(indices) == 1:  # a node alone, as an imported scene draws each: its scale
+            i = indices[0]
+            placed = [(self.nodes[i]["mesh"], self._own[i])] if self.nodes[i].get(
+                "mesh") is not None else []
+        else:
+            base = np.linalg.inv(self._rigid[indices[0]])
+            placed = [(self.nodes[i]["mesh"], base @ self.world[i]) for i in indices
+                      if self.nodes[i].get("mesh") is not None]
         # nodes drawing the same meshes the same way share one model (and the renderer
         # one copy of it): a file of 10,000 boxes holds one box
         key = tuple((mesh, np.round(m, 9).tobytes()) for mesh, m in placed)
@@ -554,6 +570,19 @@ class GltfDocument:
         out[:, :3, :3] = r
         out[:, :3, 3] = t
         return out
+
+    @cached_property
+    def _own(self) -> np.ndarray:
+        """Every node's world matrix in its own rigid frame (its scale and shear):
+        ``(N, 4, 4)``, for all nodes at once (an inverse each was most of drawing a file
+        of 10,000 bodies)."""
+        rigid = self._rigid
+        inverse = np.zeros_like(rigid)
+        turn = np.transpose(rigid[:, :3, :3], (0, 2, 1))
+        inverse[:, :3, :3] = turn
+        inverse[:, :3, 3] = -np.einsum("nij,nj->ni", turn, rigid[:, :3, 3])
+        inverse[:, 3, 3] = 1.0
+        return inverse @ np.asarray(self.world, np.float64)
 
 
     def mesh_model(self, ref: str) -> ModelAsset:
@@ -622,6 +651,13 @@ def _list(document: dict[str, Any], key: str) -> list[Any]:
     if not isinstance(found, list):
         raise ValueError(f"its '{key}' is not a list")
     return found
+
+
+def _object(value: Any, what: str) -> dict[str, Any]:
+    """``value`` if it is a JSON object; ValueError naming ``what`` if not."""
+    if not isinstance(value, dict):
+        raise ValueError(f"{what} is not a JSON object")
+    return value
 
 
 def _json(data: bytes) -> dict[str, Any]:

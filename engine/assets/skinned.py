@@ -26,6 +26,7 @@ import numpy as np
 
 from engine.assets.registry import register_loader
 from engine.assets.types import WHITE, vertex_normals
+from engine.confine import Confinement
 
 #: glTF (Y up, front +Z) to the engine's avatar frame (Z up, front +Y): a proper rotation.
 AVATAR_AXES = np.array([[-1.0, 0, 0, 0], [0, 0, 1.0, 0], [0, 1.0, 0, 0], [0, 0, 0, 1.0]])
@@ -42,12 +43,19 @@ _WIDTHS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "
 _NORMALISE = {np.int8: 127.0, np.uint8: 255.0, np.int16: 32767.0, np.uint16: 65535.0}
 #: How far a vertex's weights may sum from 1 before it is told (quantised weights round).
 WEIGHT_TOLERANCE = 2e-3
+#: Required extensions whose data this reader cannot decode: without them the meshes would
+#: be read as zeros (their accessors have no buffer view), so the file is refused.
+UNREADABLE_EXTENSIONS = {"KHR_draco_mesh_compression": "Draco-compressed meshes",
+                         "EXT_meshopt_compression": "meshopt-compressed buffers"}
+#: Required extensions read as glTF 2.0 data (integer accessors, normalised or not).
+READ_EXTENSIONS = frozenset({"KHR_mesh_quantization"})
 
 
 @dataclass(frozen=True, slots=True)
 class SkinnedPart:
     """One primitive in its bind pose (glTF frame). ``joints`` ``(N, 4)`` index
-    :attr:`SkinnedModel.palette_nodes`; ``weights`` ``(N, 4)`` sum to 1."""
+    :attr:`SkinnedModel.palette_nodes`; ``weights`` ``(N, 4)`` sum to 1; ``uv`` as
+    :class:`~engine.assets.types.MeshPart`'s (v up from the image's bottom row)."""
 
     vertices: np.ndarray
     normals: np.ndarray
@@ -141,6 +149,16 @@ class _Reader:
         self._buffers: dict[int, bytes] = {}
 
     # -- raw data ----------------------------------------------------------------
+    def _beside(self, uri: str, what: str) -> Path:
+        """The file a URI of the model names: in the model's folder or below it (as
+        trimesh reads the files a model names), never outside: content stays in its
+        folder (:mod:`engine.confine`)."""
+        file = self.path.parent / _unquote(uri)
+        if not Confinement.of(self.path.parent).allows(file):
+            raise ValueError(f"{what} names a file outside the model's folder; files a "
+                             "model names must lie beside it or below it")
+        return file
+
     def buffer(self, index: int) -> bytes:
         found = self._buffers.get(index)
         if found is not None:
@@ -160,7 +178,7 @@ class _Reader:
             except (ValueError, IndexError) as exc:
                 raise ValueError(f"buffer {index}'s data URI is not base64 ({exc})") from None
         else:
-            file = self.path.parent / _unquote(uri)
+            file = self._beside(uri, f"buffer {index}")
             if not file.is_file():
                 raise ValueError(f"buffer {index} is the file {uri!r}, which is not there "
                                  f"(looked for {file})")
@@ -246,7 +264,7 @@ class _Reader:
             elif img.uri and img.uri.startswith("data:"):
                 raw = base64.b64decode(img.uri.split(",", 1)[1])
             elif img.uri:
-                file = self.path.parent / _unquote(img.uri)
+                file = self._beside(img.uri, f"image {index}")
                 if not file.is_file():
                     raise ValueError(f"the file is not there (looked for {file})")
                 raw = file.read_bytes()
@@ -260,8 +278,21 @@ class _Reader:
             return None
 
     # -- structure -----------------------------------------------------------------
+    def required_extensions(self) -> None:
+        """Refuse a file whose meshes need a decoder this reader lacks; tell the other
+        required extensions it does not read (the model is drawn without them)."""
+        for name in self.gltf.extensionsRequired or []:
+            what = UNREADABLE_EXTENSIONS.get(str(name))
+            if what is not None:
+                raise ValueError(f"the file requires {name} ({what}), which is not read here; "
+                                 "export it without that compression")
+            if name not in READ_EXTENSIONS:
+                self.warnings.append(f"the file requires the extension {name}, which is not "
+                                     "read here; the model is drawn without it")
+
     def model(self) -> SkinnedModel:
         gltf = self.gltf
+        self.required_extensions()
         order, parents = self.scene_nodes()
         new = {old: i for i, old in enumerate(order)}
         t, r, s = (np.zeros((len(order), 3)), np.tile([1.0, 0, 0, 0], (len(order), 1)),
@@ -373,7 +404,7 @@ class _Reader:
             return None
         if attrs.get("POSITION") is None:
             raise ValueError(f"primitive {name!r} has no POSITION")
-        vertices = self.accessor(attrs["POSITION"], f"{name} POSITION")
+        vertices = self.accessor(attrs["POSITION"], f"{name} POSITION").astype(np.float64)
         if not np.isfinite(vertices).all():
             raise ValueError(f"primitive {name!r} has positions that are not finite")
         n = len(vertices)
@@ -384,8 +415,16 @@ class _Reader:
             raise ValueError(f"primitive {name!r} has indices beyond its {n} vertices")
         normals = (self.accessor(attrs["NORMAL"], f"{name} NORMAL")
                    if attrs.get("NORMAL") is not None else vertex_normals(vertices, faces))
-        uv = (self.accessor(attrs["TEXCOORD_0"], f"{name} TEXCOORD_0")
-              if attrs.get("TEXCOORD_0") is not None else None)
+        uv = None
+        if attrs.get("TEXCOORD_0") is not None:
+            uv = self.accessor(attrs["TEXCOORD_0"], f"{name} TEXCOORD_0")
+            if uv.shape == (n, 2):
+                uv = uv * (1.0, -1.0) + (0.0, 1.0)  # glTF's v runs down the image; ours up
+            else:
+                self.warnings.append(f"primitive {name!r}'s TEXCOORD_0 is not two numbers "
+                                     f"for each of its {n} vertices; it is drawn in its base "
+                                     "colour")
+                uv = None
         colors = None
         if attrs.get("COLOR_0") is not None:
             colors = self.accessor(attrs["COLOR_0"], f"{name} COLOR_0").astype(np.float64)
@@ -399,6 +438,8 @@ class _Reader:
             joints, weights = self.influences(attrs, name, n)
             joints = joints + base
         color, texture = self.material(prim.material)
+        if uv is None:  # nothing says where on the image each vertex is
+            texture = None
         return SkinnedPart(vertices, normals, faces, joints.astype(np.int32),
                            weights.astype(np.float32), uv, colors, color, texture, name)
 
@@ -515,6 +556,13 @@ class _Reader:
             raise ValueError(f"node {node} {path} has values that are not finite")
         if path == "rotation":
             values = values[:, [3, 0, 1, 2]]  # glTF writes x, y, z, w
+            if kind != "CUBICSPLINE":  # unit, as slerp takes them (files round them)
+                length = np.linalg.norm(values, axis=1, keepdims=True)
+                if (length < 1e-6).any():
+                    raise ValueError(f"node {node} rotation key "
+                                     f"{int(np.argmax(length[:, 0] < 1e-6)) + 1} is the zero "
+                                     "quaternion, which is no rotation")
+                values = values / length
         if kind == "CUBICSPLINE":
             values = values.reshape(len(times), 3, width)
         return Channel(new[node], path, kind, times, values)

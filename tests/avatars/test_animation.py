@@ -8,17 +8,28 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from avatar_helpers import GROUND, MODELS, avatar_engine, avatars, content, entity
+from avatar_helpers import GROUND, MODELS, SAMPLES, avatar_engine, avatars, content, entity
 
 from engine.animation import AnimationEnded, AnimationError, Mixer
 from engine.animation.mixer import fast_slerp
-from engine.animation.sampling import clip_pose, joint_matrices, trs_matrices
+from engine.animation.sampling import clip_pose, joint_matrices
 from engine.animation.skinning import skin
 from engine.assets import Assets
-from engine.rotation import slerp
+from engine.rotation import compose, slerp
 from tools.gltf_samples import two_bone
 
 DT = 1 / 64  # exact in binary: phases add up without rounding
+
+
+def played(model, clip: str, t: float) -> np.ndarray:
+    """The batched mixer's joint matrices of ``model`` playing ``clip`` once, ``t`` s in."""
+    mixer = Mixer()
+    mixer.add(1, mixer.library.rig_for(model))
+    mixer.play(1, clip, loop=False)
+    for _ in range(round(t / DT)):
+        mixer.advance(DT)
+    world, _ = mixer.evaluate()
+    return world[mixer.animators[1].row + model.palette_nodes] @ model.inverse_bind
 
 
 @pytest.fixture(scope="module")
@@ -65,7 +76,7 @@ def bend_angle(kind: str, t: float) -> float:
 def test_reference_and_batched_palettes_match_the_bar_worked_by_hand(bars, kind: str, t: float):
     model = bars[kind]
     expected = by_hand(bend_angle(kind, t))
-    reference = joint_matrices(model, trs_matrices(*clip_pose(model, "Bend", t)))
+    reference = joint_matrices(model, compose(*clip_pose(model, "Bend", t)))
     np.testing.assert_allclose(reference, expected, atol=1e-6)
     mixer = Mixer()
     mixer.add(1, mixer.library.rig_for(model))
@@ -98,6 +109,41 @@ def test_the_cpu_reference_skins_the_bar_as_worked_by_hand(bars):
     np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-6)
 
 
+@pytest.fixture(scope="module")
+def strip_model() -> object:
+    return Assets(SAMPLES).skinned("strip.gltf")
+
+
+@pytest.mark.parametrize("t,angle", [(0.25, 15.0), (0.75, 52.5), (1.5, 75.0), (2.25, 17.5),
+                                     (2.875, -10.0)])
+def test_the_strip_under_turned_joints_is_skinned_as_worked_by_hand(strip_model, t: float,
+                                                                    angle: float):
+    """tools.gltf_samples.strip: the tip joint sits at c = (1, 1.5, 0) under a base turned
+    90 degrees about Z (inverse bind matrices with a rotation), and turns about Z through
+    0, 30, 75, 75, -40, 0 degrees at 0, 0.5, 1, 2, 2.5, 3 s; the angles above are those keys
+    interpolated by hand (slerp about one axis: linear in the angle). A vertex at height y
+    has weight w = (y - 0.5) / 2 on the tip and lands at (1 - w) v + w (Rz (v - c) + c);
+    the tip's skinning matrix is T(c) Rz T(-c), the base's the identity."""
+    model = strip_model
+    assert model.warnings == () and model.clip_names == ("Sway",)
+    part = model.parts[0]
+    w = (part.vertices[:, 1:2] - 0.5) / 2.0
+    np.testing.assert_array_equal(part.joints[:, :2], np.tile([0, 1], (10, 1)))  # strided
+    np.testing.assert_allclose(part.weights[:, :2], np.hstack([1 - w, w]), atol=1e-7)
+    a = math.radians(angle)
+    rz = np.array([[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1]])
+    c = np.array([1.0, 1.5, 0.0])
+    tip = np.eye(4)
+    tip[:3, :3], tip[:3, 3] = rz, c - rz @ c
+    expected = (1 - w) * part.vertices + w * ((part.vertices - c) @ rz.T + c)
+    reference = joint_matrices(model, compose(*clip_pose(model, "Sway", t)))
+    batched = played(model, "Sway", t)
+    for palette in (reference, batched):
+        np.testing.assert_allclose(palette, np.stack([np.eye(4), tip]), atol=1e-6)
+        got, _ = skin(part.vertices, part.normals, part.joints, part.weights, palette)
+        np.testing.assert_allclose(got, expected, atol=1e-6)
+
+
 @pytest.mark.parametrize("weight", [0.0, 0.5, 1.0])
 def test_blending_slerps_rotations_and_lerps_translations_by_weight(bars, weight: float):
     """Bend (the tip turns 90 degrees in 1 s) blended with Lift (the tip at rest, the root
@@ -127,13 +173,61 @@ def test_the_fast_slerp_is_the_engines_slerp():
     np.testing.assert_allclose(fast_slerp(q0, q1, t), slerp(q0, q1, t), atol=1e-12)
 
 
+@pytest.mark.parametrize("t", [0.0, 0.5, 1.25, 2.5, 3.75, 4.5, 6.0])
+def test_batched_key_slerp_takes_the_short_way_and_holds_repeated_keys(bars, t: float):
+    """Keys the evaluator's precomputed slerp must treat as the reference does: a key
+    repeated (no angle: a hold), the same rotation with its sign flipped (the short way is
+    no turn at all), and two turns more than 90 degrees apart in 4D."""
+    from dataclasses import replace
+
+    from engine.assets.skinned import AnimationClip, Channel
+
+    model = bars["LINEAR"]
+    rng = np.random.default_rng(7)
+    q, r = rng.normal(size=(2, 4))
+    q, r = q / np.linalg.norm(q), r / np.linalg.norm(r)
+    r *= np.sign(q @ r)  # so that -q to r, and -r to q, are the long way round in 4D
+    keys = np.array([q, q, -q, r, -r, q])
+    tip = model.node("tip")
+    clip = AnimationClip("Keys", 5.0, (Channel(tip, "rotation", "LINEAR",
+                                               np.arange(6.0), keys),))
+    model = replace(model, clips=(clip,))
+    expected = joint_matrices(model, compose(*clip_pose(model, "Keys", t)))
+    got = played(model, "Keys", t)
+    np.testing.assert_allclose(got, expected, atol=1e-9)
+
+
+@pytest.mark.parametrize("t,x", [(0.5, 0.8125), (1.0, 1.25), (2.0, 1.0)])
+def test_cubic_spline_tangents_are_the_out_of_one_key_and_the_in_of_the_next(bars, t: float,
+                                                                             x: float):
+    """glTF's Hermite spline over a 2 s interval, worked by hand: keys x = 0 (out-tangent 2)
+    and x = 1 (in-tangent -1) above the tip's rest height; the other two tangents (7, 9)
+    must not count. At s = t / 2,
+    x = 2 (s^3 - 2 s^2 + s) 2 + (3 s^2 - 2 s^3) 1 + 2 (s^3 - s^2) (-1)."""
+    from dataclasses import replace
+
+    from engine.assets.skinned import AnimationClip, Channel
+
+    model = bars["LINEAR"]
+    # along Y (up: sideways travel would be taken for root motion and taken off)
+    values = np.array([[[0, 7.0, 0], [0, 1.0, 0], [0, 2.0, 0]],   # in, value, out
+                       [[0, -1.0, 0], [0, 2.0, 0], [0, 9.0, 0]]])
+    clip = AnimationClip("Slide", 2.0, (Channel(model.node("tip"), "translation",
+                                                "CUBICSPLINE", np.array([0.0, 2.0]), values),))
+    model = replace(model, clips=(clip,))
+    reference = joint_matrices(model, compose(*clip_pose(model, "Slide", t)))
+    batched = played(model, "Slide", t)
+    for palette in (reference, batched):  # the tip rose x above its rest place
+        np.testing.assert_allclose(palette[1, :3, 3], (0.0, x, 0.0), atol=1e-9)
+
+
 def test_the_batched_evaluation_of_many_avatars_is_the_reference_for_each():
-    fox = Assets(MODELS).skinned("Fox.glb")
+    hound = Assets(MODELS).skinned("hound.glb")
     walker = Assets(MODELS).skinned("walker.glb")
     mixer = Mixer()
     plan = []
     for key in range(12):
-        model = (fox, walker)[key % 2]
+        model = (hound, walker)[key % 2]
         mixer.add(key, mixer.library.rig_for(model))
         clip = model.clip_names[key % len(model.clip_names)]
         mixer.play(key, clip, speed=0.5 + 0.1 * key)
@@ -144,7 +238,7 @@ def test_the_batched_evaluation_of_many_avatars_is_the_reference_for_each():
     for key, (model, clip, speed) in enumerate(plan):
         duration = model.clip(clip).duration
         t = (37 * DT * speed / duration % 1.0) * duration
-        expected = joint_matrices(model, trs_matrices(*clip_pose(model, clip, t)))
+        expected = joint_matrices(model, compose(*clip_pose(model, clip, t)))
         if clip in ("Walk", "Run", "CarryWalk") and model is walker:  # root motion taken off
             continue
         row = mixer.animators[key].row
@@ -273,6 +367,30 @@ def test_lua_hears_onanimationend_in_the_frame_the_clip_ends(tmp_path: Path):
     assert [(f, e.clip, e.avatar == w) for f, e in events] == [(95, "Wave", True)]
     assert ends == [f"Wave@{95 * DT:.6f}"]
     assert heard == ["w:Wave"]
+
+
+def test_a_queue_in_the_scene_file_plays_in_turn_with_its_fade(tmp_path: Path):
+    """``Queue`` and ``Fade`` as written in the scene: Wave (1.5 s, played once) ends in
+    frame 95 and Idle crossfades in over 0.25 s (16 frames); Idle (2 s, played once by its
+    Clip block) ends 128 frames later and Walk crossfades in the same way."""
+    folder = content(tmp_path, "\n".join([
+        GROUND, 'Avatar { ID "w" Model "models/walker.glb" Animation "Wave" Loop 0 '
+                'Queue ["Idle" "Walk"] Fade 0.25 Clip { Name "Idle" Loop 0 } }']))
+    with avatar_engine(folder, dt=DT) as engine:
+        w = entity(engine, "w")
+        mixer = avatars(engine).mixer
+        ends, weights = [], {}
+        engine.events.subscribe(AnimationEnded, lambda e: ends.append((engine.frame, e.clip)))
+        for frame in range(95 + 128 + 17):
+            engine.run(frames=1)
+            weights[frame] = {name: v for name, _, v in mixer.playing(w)}
+    assert ends == [(95, "Wave"), (95 + 128, "Idle")]
+    for first, (before, after) in ((95, ("Wave", "Idle")), (95 + 128, ("Idle", "Walk"))):
+        assert weights[first - 1] == {before: 1.0}
+        assert weights[first] == {before: 1.0, after: 0.0}
+        for k in range(1, 16):
+            assert weights[first + k] == pytest.approx({before: 1 - k / 16, after: k / 16})
+        assert weights[first + 16] == {after: 1.0}
 
 
 @pytest.mark.parametrize(("given", "rate"), [("", 0.5), ("Speed 2", 2.0)])

@@ -67,7 +67,7 @@ SCENE = "\n".join([
     'Hold { Object "crate" Bone "hand.R" Offset [-0.17 -0.12 0] } '
     'Hold { Object "lamp" Bone "head" Offset [0 0.3 0] Orientation [0 0 30] } '
     'Script "scripts/walker.lua" }',
-    'Avatar { ID "fox" Model "models/Fox.glb" Scale 0.01 Position [-3 0 0] '
+    'Avatar { ID "hound" Model "models/hound.glb" Scale 0.01 Position [-3 0 0] '
     'Animation "Walk" Clip { Name "Walk" GroundSpeed 1.2 } '
     'Path [-3 0 0  -4 2 0  -2 2 0] GroundFollow 1 Capsule [0.35 0.5] }',
     'Script "scripts/scene.lua"',
@@ -81,7 +81,7 @@ def by_name(engine: Engine) -> dict[str, int]:
     return {n.id: e for e, n in engine.world.get_component(Name)}
 
 
-def observe(engine: Engine, figures: tuple[str, ...] = ("walker", "fox"),
+def observe(engine: Engine, figures: tuple[str, ...] = ("walker", "hound"),
             things: tuple[str, ...] = ("crate", "lamp")) -> dict[str, Any]:
     """What the avatars look like now: joint matrices, roots, capsules, carried objects,
     and each clip's time and weight."""
@@ -130,7 +130,7 @@ def assert_same(want: dict[str, Any], got: dict[str, Any], when: str) -> None:
 def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return content(tmp_path_factory.mktemp("sim"), SCENE,
                    {"walker.lua": WALKER_SCRIPT, "scene.lua": SCENE_SCRIPT},
-                   models=(MODELS / "walker.glb", MODELS / "Fox.glb"))
+                   models=(MODELS / "walker.glb", MODELS / "hound.glb"))
 
 
 @pytest.fixture(scope="module")
@@ -187,7 +187,7 @@ def test_the_saved_state_says_what_it_resumes_and_is_checked_and_canonical(
     assert [h.get("Object") for h in walker.blocks("Hold")] == ["crate", "lamp"]
     assert walker.blocks("Hold")[0].get("Last") is not None  # the crate moves on with the hand
     assert [d.get("Bone") for d in walker.blocks("Drive")] == ["hand.L"]
-    assert state["fox"].get("CapsulePosition") is not None
+    assert state["hound"].get("CapsulePosition") is not None
 
 
 def test_a_broken_avatar_state_is_told_at_its_line(folder: Path, tmp_path: Path,

@@ -88,6 +88,23 @@ def test_a_carried_crate_follows_the_hand_and_falls_when_let_go(tmp_path: Path):
         assert position(engine, "crate")[2] == pytest.approx(0.15, abs=0.02)  # on the ground
 
 
+def test_a_hand_posed_out_of_reach_of_physics_lets_go_with_a_message_and_the_run_goes_on(
+        tmp_path: Path, caplog: pytest.LogCaptureFixture):
+    """A giant (Scale 1e6) swings its hand at over 100 km/s: the crate it holds cannot be
+    moved there. It used to stop the run with a traceback; now the avatar lets go."""
+    folder = content(tmp_path, "\n".join([
+        GROUND,
+        'Object { ID "crate" Position [2 0 1] Size [0.3 0.3 0.3] '
+        'PhysicalAttributes { Mass 2 Geometry { Primitive "box" } } }',
+        WALKER.format(extra='Scale 1000000 Animation "Walk" Hold { Object "crate" '
+                            'Bone "hand.R" }')]))
+    with avatar_engine(folder, dt=1 / 60) as engine:
+        engine.run(frames=30)
+        assert not avatars(engine).figures[entity(engine, "w")].held
+        assert engine.frame == 30
+    assert any("avatar 'w' lets go of 'crate'" in r.getMessage() for r in caplog.records)
+
+
 def test_a_driven_bone_reaches_the_tracked_pose_with_its_arm_bent(tmp_path: Path):
     folder = content(tmp_path, "\n".join([GROUND, WALKER.format(extra='Animation "Idle"')]))
     with avatar_engine(folder, dt=1 / 60) as engine:
@@ -158,6 +175,17 @@ def test_lua_drives_an_avatar_with_play_queue_blend_and_reads_it_back(tmp_path: 
                                             "bone 'hand.X'; did you mean 'hand.R'?"),
     ('find("ground"):play("Walk")', "w.lua:2: play: object 'ground' is not an avatar"),
     ('self:play("Walk", {fade = 1, sped = 2})', "w.lua:2: play: unknown option 'sped'"),
+    ('self:play("Walk", "fast")', "w.lua:2: play: options are a table {fade=s, speed=x, "
+                                  "loop=bool}, got 'fast'"),
+    ('self:play("Walk", {loop = "yes"})', "w.lua:2: play: loop must be true or false"),
+    ('self:stopAnimation({fade = -1})', "w.lua:2: stopAnimation: fade must be a number >= 0"),
+    ('self:hold(self, "hand.R")', "w.lua:2: hold: avatar 'w' cannot hold itself"),
+    ('self:driveBone("spine", {0, 0, 1}, {1, 0, 0, 0})',
+     "w.lua:2: driveBone: bone 'spine' has no parent and grandparent to bend"),
+    ('self:hold(find("ground"), "hand.R", {offset = {0/0, 0, 0}})',
+     "w.lua:2: hold: offset must be 3 finite numbers"),
+    ('self:hold(find("ground"), "hand.R", {orientation = "x"})',
+     "w.lua:2: hold: orientation is 3 finite numbers (degrees), got 'x'"),
 ])
 def test_bad_avatar_calls_fail_at_the_script_line_naming_what_exists(tmp_path: Path, call: str,
                                                                      message: str):

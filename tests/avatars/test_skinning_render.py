@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from avatar_helpers import MODELS, ROOT
+from avatar_helpers import AT_HAND, MODELS, ROOT, SAMPLES
 
 from components import Shape, Visual
 from engine.animation import Mixer
@@ -79,9 +79,11 @@ def posed(model: SkinnedModel, clip: str, t: float) -> np.ndarray:
 def draw_pair(gl_ctx: object, cpu_models: tuple[dict[str, ModelAsset], Path], file: str,
               scale: float,
               clip: str, t: float, state: str | None = None,
-              library: ShaderLibrary | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """The same posed model, skinned on the GPU and on the CPU, as two frames."""
-    assets = Assets(MODELS)
+              library: ShaderLibrary | None = None, folder: Path = MODELS
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """The same posed model (``file`` in ``folder``), skinned on the GPU and on the CPU,
+    as two frames."""
+    assets = Assets(folder)
     model = assets.skinned(file)
     palette = posed(model, clip, t)
     gpu = renderer(gl_ctx, assets, library)
@@ -97,7 +99,7 @@ def draw_pair(gl_ctx: object, cpu_models: tuple[dict[str, ModelAsset], Path], fi
         n = n @ place[:3, :3].T / scale  # normals turn with the vertices
         parts.append(MeshPart(v, part.faces, n, part.uv, part.colors, part.color, part.texture))
     made, folder = cpu_models
-    name = f"{file}-{clip}"
+    name = f"{Path(file).stem}-{clip}"
     made[name] = ModelAsset(folder / f"{name}.cpuskin", tuple(parts))
     (folder / f"{name}.cpuskin").write_text("posed by the CPU reference")
     cpu = renderer(gl_ctx, Assets(MODELS), library)
@@ -119,12 +121,25 @@ def assert_alike(gpu: np.ndarray, cpu: np.ndarray) -> None:
     assert floor_only.mean() > 0.01  # something besides floor is drawn
 
 
-@pytest.mark.parametrize("file,scale,clip,t", [("walker.glb", 1.0, "Run", 0.3),
-                                               ("walker.glb", 1.0, "Wave", 0.6),
-                                               ("Fox.glb", 0.01, "Run", 0.4)])
-def test_gpu_skinning_draws_what_the_cpu_reference_computes(gl_ctx, cpu_models, file: str,
-                                                            scale: float, clip: str, t: float):
-    gpu, cpu = draw_pair(gl_ctx, cpu_models, file, scale, clip, t)
+@pytest.mark.parametrize("folder,file,scale,clip,t", [
+    (MODELS, "walker.glb", 1.0, "Run", 0.3), (MODELS, "walker.glb", 1.0, "Wave", 0.6),
+    (MODELS, "hound.glb", 0.012, "Run", 0.2), (SAMPLES, "strip.gltf", 0.6, "Sway", 1.2)])
+def test_gpu_skinning_draws_what_the_cpu_reference_computes(gl_ctx, cpu_models, folder: Path,
+                                                            file: str, scale: float, clip: str,
+                                                            t: float):
+    gpu, cpu = draw_pair(gl_ctx, cpu_models, file, scale, clip, t, folder=folder)
+    assert_alike(gpu, cpu)
+
+
+@pytest.mark.parametrize("path", AT_HAND)
+def test_skinned_files_at_hand_draw_on_the_gpu_as_the_cpu_reference_skins_them(
+        gl_ctx, cpu_models, path: Path):
+    """Each file of a folder of others' samples (when one is at hand: avatar_helpers), made
+    about 1.5 m tall, in its first clip."""
+    model = Assets(path.parent).skinned(path.name)
+    height = float(np.ptp(np.concatenate([p.vertices for p in model.parts]), axis=0).max())
+    gpu, cpu = draw_pair(gl_ctx, cpu_models, path.name, 1.5 / height, model.clip_names[0],
+                         0.4, folder=path.parent)
     assert_alike(gpu, cpu)
 
 
@@ -172,3 +187,33 @@ def test_user_shaders_draw_skinned_figures_as_they_draw_posed_meshes(gl_ctx, cpu
         blue = (np.abs(gpu[:, :, 0]) < 10) & (np.abs(gpu[:, :, 1] - 64) < 10) & (
             gpu[:, :, 2] > 245)
         assert blue.sum() > 100
+
+
+def test_a_skinned_texture_is_drawn_the_way_up_the_file_means(gl_ctx):
+    """glTF's texture coordinate v runs down from the image's top row. The hound's fur
+    (tools/gltf_samples.py) has its tan coat in the top band, legs darkening into paws in
+    the second, dark ears in the bottom one: seen from its right, lit from there, in its
+    bind pose, its flank is tan (blue well under red) and its paws darker; read upside down
+    the flank was dark brown and the paws tan."""
+    assets = Assets(MODELS)
+    model = assets.skinned("hound.glb")
+    r = renderer(gl_ctx, assets)
+    r.camera = CameraView.looking_at((3.0, 0.0, 0.8), (0.0, 0.0, 0.6))
+    r.lights = [LightInfo("directional", direction=(-1.0, 0.0, -0.3))]
+    scale = 0.015
+    r.add(1, Visual(model="hound.glb", scale=(scale,) * 3), skin=model)
+    r.set_palettes(np.tile(np.eye(4)[:3], (len(model.palette_nodes), 1, 1)), {1: 0})
+    r.render()
+    image = r.read_pixels().astype(float)
+    eye = r.camera.eyes(W, H)[0]
+    r.release()
+
+    def colour(gltf_point: tuple[float, float, float]) -> np.ndarray:
+        """The mean colour of the 3x3 pixels where a point of the model (glTF axes) is."""
+        x, y, _ = project(scale * (AVATAR_AXES[:3, :3] @ gltf_point), eye.view, eye.proj, W, H)
+        return image[int(y) - 1:int(y) + 2, int(x) - 1:int(x) + 2].reshape(-1, 3).mean(axis=0)
+
+    flank = colour((-11.5, 54.0, 0.0))  # the right flank (glTF -X) faces the camera
+    assert flank[2] < 0.55 * flank[0], flank
+    paw = colour((-8.0, 3.0, 28.0))  # the right fore toe
+    assert paw.max() < 0.6 * flank.max(), (paw, flank)
