@@ -6,13 +6,18 @@ for rendering and simulation).
   it is an Object there, drawn with the node's geometry (and its children's, down to the
   next body), its ``<shape>``s (box, sphere, capsule, cylinder, tapered ones, plane,
   ``<instance_geometry>`` of a ``<mesh>`` or ``<convex_mesh>``) placed by their own
-  ``<translate>``/``<rotate>``; ``<dynamic>false`` makes it static. The instance's
+  ``<translate>``/``<rotate>``; ``<dynamic>false`` makes it static. As Blender's 2006
+  exporter writes it, a body may be named instead of given a sid, an instance may name
+  no body when its model holds one, and a box may have ``<half_extends>``. The instance's
   ``<velocity>``, ``<angular_velocity>`` (degrees per second), ``<dynamic>`` and
   ``<mass>`` win over the body's.
 * ``<physics_material>``: dynamic friction and restitution (static friction told).
+* ``<mass_frame>`` and ``<inertia>``: the body's centre of mass and principal moments.
 * ``<rigid_constraint>``: the frames of ``<ref_attachment>`` and ``<attachment>`` in
-  their bodies, ``<limits>`` (``<swing_cone_and_twist>`` degrees, ``<linear>``) per axis:
-  min = max locks it, an infinite or inverted range frees it; ``<spring>`` is told.
+  their bodies (one left out, as Bullet's converter does, is the world where the other
+  starts), ``<limits>`` (``<swing_cone_and_twist>`` degrees, ``<linear>``) per axis:
+  min = max locks it, an infinite or inverted range frees it; ``<spring>`` (angular on a
+  hinge, linear on a slider) is the joint's Spring.
 * ``<physics_scene>``'s gravity and time step become the scene's World.
 * A node's ``<extra><technique profile="colosseum">`` holds scene keys as text, like
   glTF extras (:mod:`engine.interchange.extras`).
@@ -25,6 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from xml.etree.ElementTree import Element
 
 import numpy as np
@@ -32,7 +38,14 @@ import numpy as np
 from engine.assets.dae import ColladaDocument
 from engine.assets.gltf import Frame, decompose
 from engine.interchange.extras import TEXT_PROPERTY, Extras, attach, read_extras
-from engine.interchange.joints import FREE, LOCKED, Dof, Frames, working_joint
+from engine.interchange.joints import (
+    FREE,
+    LOCKED,
+    Dof,
+    Frames,
+    WorkingJoint,
+    working_joint,
+)
 from engine.interchange.model import (
     ImportedScene,
     JointDecl,
@@ -45,9 +58,12 @@ from engine.interchange.model import (
     unique_ids,
     vector,
 )
+from engine.rotation import axis_angle_matrices, from_to
 
 #: Past this a limit is no limit (exporters write FLT_MAX for a free axis).
 _UNBOUNDED = 1e30
+#: The Z axis, the one a plane's normal and a cylinder's length point along, as one row.
+_UP = np.array([[0.0, 0.0, 1.0]])
 
 
 @dataclass(slots=True)
@@ -122,7 +138,8 @@ class _Importer:
                 r = self.floats(child, count=4, what="rotate", node=node)
                 if r is not None and any(r[:3]):
                     step = np.eye(4)
-                    step[:3, :3] = _axis_angle(np.array(r[:3]), math.radians(r[3]))
+                    axis = np.array(r[:3]) / math.hypot(*r[:3])
+                    step[:3, :3] = axis_angle_matrices(axis[None], np.radians(r[3:4]))[0]
                     m = m @ step
         return m
 
@@ -192,10 +209,17 @@ class _Importer:
                 key = id(instance)
                 for ibody in self.findall(instance, "instance_rigid_body"):
                     self._body(key, model, ibody)
+                seen: dict[str, int] = {}
                 for iconstraint in self.findall(instance, "instance_rigid_constraint"):
                     sid = iconstraint.get("constraint", "")
-                    found = next((c for c in self.findall(model, "rigid_constraint")
-                                  if c.get("sid") == sid), None)
+                    same = [c for c in self.findall(model, "rigid_constraint")
+                            if c.get("sid") == sid]
+                    nth = seen[sid] = seen.get(sid, -1) + 1
+                    if len(same) > 1:  # Bullet's converter names every one alike
+                        self.problems.once(f"sid-{sid}", None, f"{len(same)} rigid_constraints "
+                                           f"share sid {sid!r}; their instances are taken "
+                                           f"in order")
+                    found = same[min(nth, len(same) - 1)] if same else None
                     if found is None:
                         self.problems.error(None, f"instance_rigid_constraint names {sid!r}, "
                                                   f"which its physics model does not declare; "
@@ -216,8 +240,13 @@ class _Importer:
 
     def _body(self, key: int, model: Element, instance: Element) -> None:
         sid, target = instance.get("body", ""), instance.get("target", "")
-        element = next((b for b in self.findall(model, "rigid_body") if b.get("sid") == sid),
-                       None)
+        bodies = self.findall(model, "rigid_body")
+        element = next((b for b in bodies if b.get("sid") == sid), None)
+        if element is None and sid:  # Blender's 2006 exporter names bodies, gives no sid
+            element = next((b for b in bodies if b.get("name") == sid), None)
+        if element is None and not sid and len(bodies) == 1:
+            element = bodies[0]  # ... and names no body when its model holds one
+            sid = element.get("sid") or element.get("name") or ""
         node = self.doc.node_index(target)
         if element is None:
             self.problems.error(None, f"instance_rigid_body names body {sid!r}, which its "
@@ -254,6 +283,7 @@ class _Importer:
                 made = self._new_object(i, None)
             obj = made or above
             attach(extras, obj, self.doc.name(i), self.scene, self.problems)
+            self._missing_geometry(i)
             if obj is None:
                 continue
             self.owner[i] = obj
@@ -264,6 +294,22 @@ class _Importer:
                     obj.visual = ("", (first,) if first == ref else (first, ref))
                 else:
                     obj.visual = ("", (*obj.visual[1], ref))
+
+    def _missing_geometry(self, i: int) -> None:
+        """Tell each ``<instance_geometry>`` of node ``i`` naming a geometry the file does
+        not have (pycollada leaves it out, so the node is drawn without it)."""
+        xml = getattr(self.doc.nodes[i], "xmlnode", None)
+        for el in self.findall(xml, "instance_geometry"):
+            url = (el.get("url") or "").lstrip("#")
+            if url not in self._geometry_ids:
+                self.problems.error(self.doc.name(i), f"its <instance_geometry> names "
+                                                      f"geometry {url!r}, which the file "
+                                                      f"does not have; it is not drawn")
+
+    @cached_property
+    def _geometry_ids(self) -> set[str]:
+        return {g.get("id") or "" for g in self.findall(self.doc.xml,
+                                                        "library_geometries/geometry")}
 
     def _extras(self, i: int) -> Extras:
         xml = getattr(self.doc.nodes[i], "xmlnode", None)
@@ -300,12 +346,8 @@ class _Importer:
             else:
                 self.problems.warn(name, f"its mass {mass} is not positive; the mass comes "
                                          f"from its shapes")
-        for key in ("mass_frame", "inertia"):
-            found = self.find(over, key) or self.find(tc, key)
-            if found is not None and dynamic and not self._trivial(key, found, name):
-                self.problems.warn(name, f"its {key.replace('_', ' ')} is not represented: a "
-                                         f"body's centre of mass and inertia come from its "
-                                         f"shapes here")
+        if dynamic:
+            self._mass_frame(obj, i, over, tc, name)
         for key, attr, scale in (("velocity", "velocity", self.doc.meter),
                                  ("angular_velocity", "angular_velocity", math.pi / 180)):
             v = self.floats(over, key, 3, node=name)
@@ -328,11 +370,33 @@ class _Importer:
                 obj.kind = None
         return obj
 
-    def _trivial(self, key: str, el: Element, name: str) -> bool:
-        if key == "inertia":
-            return False
-        m = self.transform(el, name)
-        return bool(np.allclose(m, np.eye(4)))
+    def _mass_frame(self, obj: ObjectDecl, i: int, over: Element | None,
+                    tc: Element | None, name: str) -> None:
+        """``<mass_frame>`` (the centre of mass and the principal axes, in the body's frame)
+        and ``<inertia>`` (the principal moments along them, kg in the file's unit
+        squared), the instance's winning over the body's; Bullet's converter writes
+        ``<inertia>`` for every body, its mass frame left out: one of its shapes."""
+        frame = self.find(over, "mass_frame")
+        frame = frame if frame is not None else self.find(tc, "mass_frame")
+        moments = self.floats(over, "inertia", 3, node=name) or self.floats(
+            tc, "inertia", 3, node=name)
+        turn = np.eye(3)
+        if frame is not None:
+            rel = decompose(np.linalg.inv(self.frames[id(obj)]) @ self.doc.to_z_up(
+                self.doc.world[i] @ self.transform(frame, name)))
+            if np.any(np.abs(rel.translation) > 1e-12):
+                obj.center_of_mass = vector(rel.translation)
+            turn = rel.rotation
+        if moments is None or not any(moments[:3]):
+            return
+        if min(moments[:3]) <= 0:
+            self.problems.error(name, f"its <inertia> {[tidy(x) for x in moments[:3]]} is not "
+                                      f"3 positive moments; left out (the shapes' inertia is "
+                                      f"used)")
+            return
+        obj.inertia = vector(np.abs(self.doc.axes) @ np.array(moments[:3]) *
+                             self.doc.meter ** 2)
+        obj.inertia_rotation = quaternion(turn)
 
     def _material_of(self, el: Element | None, name: str) -> str | None:
         instance = self.find(el, "instance_physics_material")
@@ -371,7 +435,8 @@ class _Importer:
         offset, rotation = vector(rel.translation), rel.rotation
         try:
             if kind == "box":
-                half = self.floats(el, "half_extents", 3, node=name)
+                half = self.floats(el, "half_extents" if self.find(el, "half_extents")
+                                   is not None else "half_extends", 3, node=name)
                 if half is None:
                     return
                 size = np.abs(self.doc.axes @ np.array(half[:3])) * 2 * m
@@ -414,7 +479,7 @@ class _Importer:
                                      f"of the largest radius, here")
         base = "capsule" if "capsule" in kind else "cylinder"
         m = self.doc.meter
-        along_y = _turn(np.array([0.0, 0.0, 1.0]), self.doc.axes @ np.array([0.0, 1.0, 0.0]))
+        along_y = from_to(_UP, (self.doc.axes @ np.array([0.0, 1.0, 0.0]))[None])[0]
         return ShapeDecl(base, (2 * max(radii) * m, height[0] * m), vector(rel.translation),
                          quaternion(rel.rotation @ along_y))
 
@@ -460,7 +525,7 @@ class _Importer:
             obj.shapes.append(ShapeDecl("plane"))  # the body's own XY plane, as here
             return
         plane = ObjectDecl(f"{obj.id}.plane", name, vector(point[:3]),
-                           quaternion(_turn(np.array([0.0, 0.0, 1.0]), normal)), "static",
+                           quaternion(from_to(_UP, normal[None])[0]), "static",
                            shapes=[ShapeDecl("plane")], material=obj.material)
         self.scene.objects.append(plane)
 
@@ -474,11 +539,17 @@ class _Importer:
             problems.warn(name, "a disabled rigid_constraint; left out")
             return None
         sides = []
-        for key in ("ref_attachment", "attachment"):
-            el = self.find(constraint, key)
-            if el is None:
-                problems.error(name, f"a rigid_constraint without <{key}>; left out")
-                return None
+        found = {key: self.find(constraint, key) for key in ("ref_attachment", "attachment")}
+        if not any(el is not None for el in found.values()):
+            problems.error(name, "a rigid_constraint with neither <ref_attachment> nor "
+                                 "<attachment>; left out")
+            return None
+        for key, el in found.items():
+            if el is None:  # Bullet's converter writes a body held to the world so
+                problems.warn(name, f"a rigid_constraint without <{key}>: that side is the "
+                                    f"world, where the other side starts")
+                sides.append(None)
+                continue
             sid = (el.get("rigid_body") or "").lstrip("#")
             node = self.by_sid.get((instance, sid)) if sid else None
             if sid and node is None:
@@ -490,7 +561,9 @@ class _Importer:
             frame = decompose(self.doc.to_z_up(world @ self.transform(el, name)))
             moving = owner.id if owner is not None and owner.kind == "dynamic" else None
             sides.append((moving, frame))
-        (ref_body, ref_frame), (att_body, att_frame) = sides
+        given = next(side for side in sides if side is not None)
+        (ref_body, ref_frame), (att_body, att_frame) = (
+            side if side is not None else (None, given[1]) for side in sides)
         if ref_body is None and att_body is None:
             problems.warn(name, "its rigid_constraint connects nothing that moves; left out")
             return None
@@ -498,16 +571,41 @@ class _Importer:
                 tc, "interpenetrate") is not None:
             problems.once("interpenetrate", name, "jointed bodies never collide here "
                                                        "(interpenetrate false is not represented)")
-        for kind in ("angular", "linear"):
-            stiffness = self.floats(self.find(tc, f"spring/{kind}"), "stiffness")
-            if stiffness and stiffness[0] > 0:
-                problems.warn(name, f"its {kind} spring (stiffness {tidy(stiffness[0])}) is "
-                                         f"not represented: the limits are hard")
         frames = Frames(ref_frame.rotation @ self.doc.axes, ref_frame.translation,
                         att_frame.rotation @ self.doc.axes, att_frame.translation)
         made = working_joint(name, self._dofs(tc, name), frames, ref_body, att_body,
                              problems)
-        return None if made is None else made.decl(name)
+        if made is None:
+            return None
+        self._springs(tc, made, name, problems)
+        return made.decl(name)
+
+    def _springs(self, tc: Element | None, joint: WorkingJoint, name: str,
+                 problems: Problems) -> None:
+        """``<spring>``: its ``<angular>`` part (stiffness per degree, target in degrees, as
+        Collada counts angles) on a hinge's free axis, its ``<linear>`` part (per file
+        unit) on a slider's; a part the joint has no free axis for is told."""
+        for kind in ("angular", "linear"):
+            el = self.find(tc, f"spring/{kind}")
+            if el is None:
+                continue
+            stiffness, damping, target = ((self.floats(el, key, 1, node=name) or [0.0])[0]
+                                          for key in ("stiffness", "damping", "target_value"))
+            if min(stiffness, damping) < 0:
+                problems.error(name, f"its {kind} spring has a negative stiffness or damping; "
+                                     f"left out")
+                continue
+            if stiffness == 0 and damping == 0:
+                continue  # a spring that pulls with nothing: none
+            angular = kind == "angular"
+            if joint.type not in (("Hinge", "MotorizedHinge") if angular else ("Slider",)):
+                problems.warn(name, f"its {kind} spring (stiffness {tidy(stiffness)}) is not "
+                                    f"represented: springs here act on a hinge's or slider's "
+                                    f"free axis, and this joint is a {joint.type}")
+                continue
+            per = math.degrees(1.0) if angular else 1.0 / self.doc.meter
+            joint.pull(stiffness * per, damping * per,
+                       math.radians(target) if angular else target * self.doc.meter, None)
 
     def _dofs(self, tc: Element | None, name: str) -> list[Dof]:
         dofs: list[Dof] = []
@@ -535,22 +633,3 @@ def _bool(el: Element | None, default: bool) -> bool:
     if el is None or el.text is None:
         return default
     return el.text.strip().lower() in ("true", "1")
-
-
-def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
-    a = axis / np.linalg.norm(axis)
-    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k)
-
-
-def _turn(frm: np.ndarray, to: np.ndarray) -> np.ndarray:
-    """The shortest rotation taking direction ``frm`` to ``to``."""
-    frm, to = frm / np.linalg.norm(frm), to / np.linalg.norm(to)
-    axis = np.cross(frm, to)
-    s, c = float(np.linalg.norm(axis)), float(frm @ to)
-    if s < 1e-12:
-        if c > 0:
-            return np.eye(3)
-        other = np.array([1.0, 0.0, 0.0]) if abs(frm[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-        return _axis_angle(np.cross(frm, other), math.pi)
-    return _axis_angle(axis, math.atan2(s, c))

@@ -6,18 +6,20 @@ shapes are its colliders (on the node, or on child nodes when offset), its mater
 physics material, its ``Category``/``Mask`` a collision filter (one system per bit), a
 trigger a ``trigger``; each joint is a pair of attachment frames (``jointSpaceA`` under
 its second body, ``jointSpaceB`` under its first, as Blender writes them) with the limits
-and velocity drive its type means. Importing the file again gives the same bodies,
-shapes, masses, materials and joints (:mod:`engine.interchange.gltf_physics` reads it).
+and velocity drive its type means, a spring a position drive; a body's given centre of
+mass and inertia its motion's. Importing the file again gives the same bodies, shapes,
+masses, materials and joints (:mod:`engine.interchange.gltf_physics` reads it).
 
 What glTF cannot say is told, not dropped: material pairs (KHR has per-material combine
 modes only), ``hinge2`` (exported as a universal joint) and ``six_dof`` tracking joints
-(left out). Velocities are written in world axes, as Blender's exporter writes them.
+(left out). Velocities are written in node space, as the extension says.
 """
 
 from __future__ import annotations
 
 import base64
 import json
+import math
 import struct
 from collections.abc import Sequence
 from pathlib import Path
@@ -267,12 +269,19 @@ class _Exporter:
             # the mass the engine gives it: the file's, or its shapes' volume x density
             motion["mass"] = float(body.mass if body.mass is not None else
                                    body.material.density * sum(map(volume, body.shapes)))
+            # KHR velocities are in node space: the world's turned into the body's frame
+            turn = quat_to_matrix(np.asarray(t.orientation, np.float64)).T
             if np.any(t.linear_velocity):
-                motion["linearVelocity"] = to_gltf(t.linear_velocity)
+                motion["linearVelocity"] = to_gltf(turn @ t.linear_velocity)
             if np.any(t.angular_velocity):
-                motion["angularVelocity"] = to_gltf(t.angular_velocity)
+                motion["angularVelocity"] = to_gltf(turn @ t.angular_velocity)
             if not body.gravity:
                 motion["gravityFactor"] = 0.0
+            if body.center_of_mass is not None:
+                motion["centerOfMass"] = to_gltf(body.center_of_mass)
+            if body.inertia is not None:  # glTF's X Y Z moments are the engine's X Z Y
+                motion["inertiaDiagonal"] = [float(x) for x in np.abs(_TO_GLTF) @ body.inertia]
+                motion["inertiaOrientation"] = gltf_rotation(body.inertia_rotation)
             self.w.khr(node, motion=motion)
         own = len(body.shapes) == 1 and _at_origin(body.shapes[0])
         for k, shape in enumerate(body.shapes):
@@ -355,12 +364,26 @@ class _Exporter:
         frame[:3, 3] = joint.anchor
         limits = _LIMITS[kind](joint)
         description: dict[str, Any] = {"limits": limits}
+        drives: list[dict[str, Any]] = []
+        linear = kind == JointKind.SLIDER
         if joint.motor_max_force > 0 and kind in _DRIVEN:
-            linear = kind in (JointKind.SLIDER,)
-            description["drives"] = [{
+            drives.append({
                 "type": "linear" if linear else "angular", "mode": "force", "axis": 0,
                 "velocityTarget": float(joint.motor_velocity),
-                "maxForce": float(joint.motor_max_force), "damping": MOTOR_DAMPING}]
+                "maxForce": float(joint.motor_max_force), "damping": MOTOR_DAMPING})
+        spring = joint.spring
+        if spring is not None:  # a position drive: k (target - x) - d v, at most max force
+            drives.append({
+                "type": "linear" if linear else "angular", "mode": "force", "axis": 0,
+                "stiffness": float(spring.stiffness), "damping": float(spring.damping),
+                "positionTarget": float(spring.target),
+                **({"maxForce": float(spring.max_force)} if math.isfinite(spring.max_force)
+                   else {})})
+            if len(drives) > 1:
+                self.problems.warn(jid, "its motor and its spring are two drives on one axis "
+                                        "(colosseum reads both back; other tools may take one)")
+        if drives:
+            description["drives"] = drives
         index = self.w.top(KHR, "physicsJoints", description)
         reference = joint.reference
         space_b = self._space("jointSpaceB", first, frame,

@@ -13,14 +13,17 @@ referenced from the model file (``Nodes``), never copied into the scene.
 
 Axes: glTF is +Y up; positions, orientations and sizes are turned +Z up so an object
 upright in the file is upright here (box ``[x y z]`` becomes ``[x z y]``, capsule and
-cylinder axes glTF Y become local Z). Velocities are read in world axes, as Blender's
-exporter writes them.
+cylinder axes glTF Y become local Z). KHR velocities are in node space, as the extension
+says (its reference importer, Babylon's, turns them by the node's rotation); OMI's in
+world axes, as Godot writes them.
 
-What the engine cannot represent (a centre of mass or inertia of the file's choosing,
-a gravity factor other than 0 or 1, static friction apart from dynamic, a position
-drive, soft limits, joint combinations no joint type here has) is approximated and
-told, node by node; broken parts (a collider of zero size, a joint naming a node that
-does not exist, NaN in a matrix) are told and skipped, and the rest is imported.
+A motion's centre of mass and inertia become the body's; a drive's stiffness and
+damping its joint's Spring (a velocity drive its motor). What the engine cannot
+represent (a gravity factor other than 0 or 1, static friction apart from dynamic,
+soft limits, a position drive on a joint with more than one free axis, joint
+combinations no joint type here has) is approximated and told, node by node; broken
+parts (a collider of zero size, a joint naming a node that does not exist, NaN in a
+matrix) are told and skipped, and the rest is imported.
 """
 
 from __future__ import annotations
@@ -51,6 +54,7 @@ from engine.interchange.joints import (
 )
 from engine.interchange.model import (
     GEOMETRIC_MEAN,
+    UNTURNED,
     VOLUME_DENSITY,
     CameraDecl,
     ImportedScene,
@@ -62,8 +66,10 @@ from engine.interchange.model import (
     quaternion,
     tidy,
     unique_ids,
+    unit_quaternion,
     vector,
 )
+from engine.rotation import matrices_to_quats, quat_to_matrix
 
 KHR = "KHR_physics_rigid_bodies"
 KHR_SHAPES = "KHR_implicit_shapes"
@@ -77,6 +83,9 @@ PHYSICS_EXTENSIONS = (KHR, KHR_SHAPES, KHR_OLD_SHAPES, OMI_BODY, OMI_SHAPE, OMI_
 LOOKS_PREFIXES = ("KHR_materials_", "KHR_texture_", "EXT_texture_",
                   "KHR_mesh_quantization")
 
+#: Extensions that add nothing an import reads (Godot's says the file has one root node).
+_NOTHING_TO_READ = ("GODOT_single_root",)
+
 #: Shape parameter defaults, per extension (they differ).
 _DEFAULTS = {
     "KHR": {"box": {"size": [1.0, 1.0, 1.0]}, "sphere": {"radius": 0.5},
@@ -89,8 +98,15 @@ _DEFAULTS = {
 #: A motionless body's stand-in shape: the file gives it no collider, so it collides with
 #: nothing (category and mask 0) and only carries mass.
 _PHANTOM_DIAMETER = 0.1
+#: OMI_physics_body's mass when a motion gives none (KHR leaves it to the shapes' volume).
+_OMI_MASS = 1.0
 #: A finite plane (sizeX/sizeZ) is a box this thick, its top face on the plane.
 _PLANE_THICKNESS = 0.01
+#: What a motion may say of its mass's place and spread (in this order).
+_MASS_FRAME_KEYS = ("centerOfMass", "inertiaDiagonal", "inertiaOrientation")
+#: A node's own place in its object's frame, shared (read only) by every object.
+_ORIGIN = np.zeros(3)
+_ORIGIN.flags.writeable = False
 
 
 @dataclass(slots=True)
@@ -140,6 +156,7 @@ class _Importer:
         #: Objects that are bodies only through their extras: shaped like their mesh.
         self.typed_bodies: set[int] = set()
         self._frames: tuple[np.ndarray, ...] | None = None
+        self._quats = np.zeros((0, 4))  # every node's world orientation, with _frames
         self.materials: dict[tuple[str, int], str] = {}
         self.systems: dict[str, int] = {}
 
@@ -173,7 +190,7 @@ class _Importer:
         self.scene.read = read
         looks = [e for e in used if e.startswith(LOOKS_PREFIXES)]
         unknown = [e for e in used if e not in PHYSICS_EXTENSIONS and e not in looks
-                   and e != "KHR_lights_punctual"]
+                   and e not in ("KHR_lights_punctual", *_NOTHING_TO_READ)]
         if looks:
             self.problems.warn(None, f"drawn with base colours and textures only; what "
                                      f"{', '.join(looks)} add to the look is left out")
@@ -449,6 +466,7 @@ class _Importer:
         """Node ``i``'s world frame, Z up (all nodes' taken apart at once, when first asked)."""
         if self._frames is None:
             self._frames = decompose_many(to_z_up(self.doc.world))
+            self._quats = matrices_to_quats(self._frames[1])
         t, r, s, sheared = self._frames
         return Frame(t[i], r[i], s[i], bool(sheared[i]))
 
@@ -458,8 +476,8 @@ class _Importer:
         if f.sheared:
             self.problems.warn(name, "its parents' non-uniform scale shears it; its shapes "
                                      "and mesh are the nearest unsheared ones")
-        obj = ObjectDecl(name, name, vector(f.translation), quaternion(f.rotation), kind,
-                         trigger=trigger)
+        obj = ObjectDecl(name, name, vector(f.translation), unit_quaternion(self._quats[i]),
+                         kind, trigger=trigger)
         self.scene.objects.append(obj)
         self.object_node[id(obj)] = i
         self.frames[id(obj)] = f.unscaled()
@@ -472,12 +490,12 @@ class _Importer:
             found = self._filter(role.family, role.trigger_filter, obj.node)
             obj.category, obj.mask = 0, (0xFFFFFFFF if found is None else found[1])
         if role.motion is not None and kind != "static":
-            self._motion(i, obj, role.motion)
+            self._motion(i, obj, role.motion, role.family)
         return obj
 
-    def _motion(self, i: int, obj: ObjectDecl, motion: dict[str, Any]) -> None:
+    def _motion(self, i: int, obj: ObjectDecl, motion: dict[str, Any], family: str) -> None:
         name = obj.node
-        mass = _number(motion.get("mass"))
+        mass = _number(motion.get("mass", _OMI_MASS if family == "OMI" else None))
         if "mass" in motion and mass is None:
             self.problems.error(name, "its mass is not a finite number; the mass comes from "
                                       "the shapes' volume")
@@ -491,15 +509,9 @@ class _Importer:
                                           f"from the shapes' volume")
             mass = None
         obj.mass = mass
-        if mass is None:  # the extensions: "calculated by the engine", from the volume
+        if mass is None:  # KHR: "calculated by the simulation engine", from the volume
             obj.density = VOLUME_DENSITY
-        for key, what in (("centerOfMass", "centre of mass"),
-                          ("inertiaDiagonal", "inertia"), ("inertiaOrientation", "inertia")):
-            value = motion.get(key)
-            if value is not None and not _trivial(key, value):
-                self.problems.once(f"{key}-{name}", name,
-                                   f"its {what} ({key} {value}) is not represented: a body's "
-                                   f"{what} comes from its shapes here")
+        self._mass_frame(i, obj, motion)
         gravity = _number(motion.get("gravityFactor", 1.0))
         if gravity is None or gravity not in (0.0, 1.0):
             self.problems.warn(name, f"gravityFactor {motion.get('gravityFactor')} is not "
@@ -507,6 +519,9 @@ class _Importer:
                                      f"{'full' if gravity is None or gravity > 0.5 else 'no'} "
                                      f"gravity")
         obj.gravity = gravity is not None and gravity > 0.5
+        # KHR gives velocities in node space (the node's rotation, not its scale); OMI
+        # says nothing, and Godot writes its bodies' velocities in world axes
+        turn = self._frame(i).rotation if family == "KHR" else UNTURNED
         for key, attr in (("linearVelocity", "velocity"), ("angularVelocity",
                                                             "angular_velocity")):
             if key in motion:
@@ -515,7 +530,42 @@ class _Importer:
                     self.problems.error(name, f"its {key} is not 3 finite numbers; it starts "
                                               f"at rest")
                 else:
-                    setattr(obj, attr, vector(Y_UP_TO_Z_UP @ np.array(v)))
+                    setattr(obj, attr, vector(turn @ (Y_UP_TO_Z_UP @ np.array(v))))
+
+    def _mass_frame(self, i: int, obj: ObjectDecl, motion: dict[str, Any]) -> None:
+        """The motion's centre of mass (node space: its scale applies) and principal
+        inertia with their axes, turned Z up: glTF's Y moment is the engine's Z one."""
+        if not _MASS_FRAME_KEYS & motion.keys():
+            return  # most bodies: mass from the file or their shapes, no more
+        name = obj.node
+        given = {key: motion.get(key) for key in _MASS_FRAME_KEYS}
+        found = {key: _vector(value, 4 if key == "inertiaOrientation" else 3)
+                 for key, value in given.items() if value is not None}
+        for key, value in found.items():
+            if value is None:
+                n = 4 if key == "inertiaOrientation" else 3
+                self.problems.error(name, f"its {key} {given[key]} is not {n} finite numbers; "
+                                          f"left out (the shapes' is used)")
+        com, diagonal, turn = (found.get(k) for k in given)
+        if com is not None and any(com):
+            obj.center_of_mass = vector(self._frame(i).scale * (Y_UP_TO_Z_UP @ np.array(com)))
+        if diagonal is not None and any(diagonal):
+            if min(diagonal) <= 0:
+                self.problems.error(name, f"its inertiaDiagonal {given['inertiaDiagonal']} is "
+                                          f"not 3 positive moments; left out (the shapes' "
+                                          f"inertia is used)")
+                return
+            obj.inertia = vector(np.abs(Y_UP_TO_Z_UP) @ np.array(diagonal))
+            norm = math.hypot(*turn) if turn is not None else 0.0
+            if turn is not None and norm == 0:
+                self.problems.error(name, "its inertiaOrientation is a zero quaternion; its "
+                                          "inertia's axes are the node's")
+            elif turn is not None:
+                x, y, z, w = (c / norm for c in turn)
+                obj.inertia_rotation = unit_quaternion((w, *(Y_UP_TO_Z_UP @ [x, y, z])))
+        elif turn is not None and not _trivial("inertiaOrientation", given["inertiaOrientation"]):
+            self.problems.once(f"inertia-axes-{name}", name, "its inertiaOrientation without an "
+                               "inertiaDiagonal turns nothing (the shapes' inertia is used)")
 
     def _phantom(self, obj: ObjectDecl) -> None:
         self.problems.warn(obj.node, "a body without colliders: it gets a small sphere that "
@@ -548,7 +598,7 @@ class _Importer:
     def _relative(self, obj: ObjectDecl, i: int) -> Frame:
         """Node ``i``'s frame in its object's (the object's own node: its scale alone)."""
         if self.object_node[id(obj)] == i:
-            return Frame(np.zeros(3), np.eye(3), self._frame(i).scale, False)
+            return Frame(_ORIGIN, UNTURNED, self._frame(i).scale, False)
         base = np.linalg.inv(self.frames[id(obj)])
         return decompose(base @ to_z_up(self.doc.world[i]))
 
@@ -601,8 +651,11 @@ class _Importer:
         given = spec.get(kind, {})
         if isinstance(given, dict):
             params.update({k: v for k, v in given.items() if k in params})
+            if kind in ("capsule", "cylinder") and "radius" in given and not (
+                    {"radiusTop", "radiusBottom"} & set(given)):
+                params.update(_one_radius(shape.family, kind, given))
         scale = np.abs(rel.scale)
-        if np.all(scale == 0):
+        if not scale.any():
             return None  # a zero-scaled node disables its shape (the extension says)
         zero = _zero_size(kind, params)
         if zero is not None:
@@ -683,8 +736,13 @@ class _Importer:
                                      if self.doc.nodes[k].get("mesh") is not None)]
             meshes = [self.doc.nodes[k]["mesh"] for k in holders
                       if self.doc.nodes[k].get("mesh") is not None]
+            # placed in the collider node's space, its scale too (Blender 4 writes the
+            # mesh on a bare node beside it and scales the collider node); the node's own
+            # mesh has its scale already
             decl = ShapeDecl(kind, (), offset, rotation, "",
-                             tuple(self.doc.node_ref(k) for k in holders))
+                             tuple(self.doc.node_ref(k) for k in holders),
+                             scale=(1.0, 1.0, 1.0) if shape.node == i else
+                             vector(np.abs(rel.scale)))
         else:
             meshes = [shape.mesh]
             if self.doc.nodes[i].get("mesh") == shape.mesh:  # the node's own: as it is drawn
@@ -794,7 +852,7 @@ class _Importer:
         fc = decompose(to_z_up(self.doc.world[connected]))
         frames = Frames(fj.rotation @ Y_UP_TO_Z_UP, fj.translation,
                         fc.rotation @ Y_UP_TO_Z_UP, fc.translation)
-        made = working_joint(name, _dofs(desc, name, self.problems), frames,
+        made = working_joint(name, _dofs(desc, name, self.problems, family), frames,
                              body_a.id if body_a else None, body_b.id if body_b else None,
                              self.problems)
         if made is None:
@@ -806,7 +864,11 @@ class _Importer:
 
     def _drive(self, name: str, desc: dict[str, Any], joint: WorkingJoint,
                driven: ObjectDecl) -> None:
-        """The file's drive on the joint's free axis as its velocity motor."""
+        """The file's drives on the joint's free axis: a position drive (stiffness) or one
+        that only damps is the joint's Spring; a velocity drive its motor, of at most
+        maxForce (unlimited: what damping x target velocity asks from rest). In
+        acceleration mode stiffness and damping are per unit of the driven body's mass or
+        moment about the axis."""
         for drive in desc.get("drives", []) or []:
             if not isinstance(drive, dict):
                 continue
@@ -814,7 +876,8 @@ class _Importer:
             if not isinstance(axis, int) or not 0 <= axis <= 2:
                 self.problems.error(name, f"a drive's axis {axis!r} is not 0, 1 or 2; left out")
                 continue
-            dof = (3 if drive.get("type") == "angular" else 0) + axis
+            angular = drive.get("type") == "angular"
+            dof = (3 if angular else 0) + axis
             if dof != joint.free:
                 self.problems.warn(name, f"a drive on the joint's {DOF_NAMES[dof]} axis, "
                                          f"which is not its free axis, is left out")
@@ -822,32 +885,137 @@ class _Importer:
             stiffness = _number(drive.get("stiffness", 0.0)) or 0.0
             velocity = _number(drive.get("velocityTarget", 0.0)) or 0.0
             damping = _number(drive.get("damping", 0.0)) or 0.0
+            target = _number(drive.get("positionTarget", 0.0)) or 0.0
             force = _number(drive.get("maxForce"))
-            if stiffness > 0:
-                self.problems.warn(name, f"a position drive (stiffness {tidy(stiffness)} toward "
-                                         f"{drive.get('positionTarget', 0)}) is not represented: "
-                                         f"joints here have velocity motors")
-            if force is None and velocity:
-                mass = driven.mass if driven.mass is not None else 1.0
-                scale = mass if drive.get("mode") == "acceleration" else 1.0
+            if force is not None and force < 0:  # OMI: negative is not force-limited
+                force = None
+            if min(stiffness, damping) < 0:
+                self.problems.error(name, f"a drive's stiffness {tidy(stiffness)} or damping "
+                                          f"{tidy(damping)} is negative; left out")
+                continue
+            scale, what = 1.0, ""
+            if drive.get("mode") == "acceleration":  # force per unit of acceleration
+                scale, what = _effective_inertia(driven, joint, angular)
+            if stiffness > 0 or (damping > 0 and not velocity):
+                self._spring(name, joint, stiffness * scale, damping * scale, target,
+                             velocity, force)
+                continue
+            if not velocity:
+                continue
+            if force is None:
                 force = damping * abs(velocity) * scale
-                self.problems.warn(name, f"a drive without maxForce: a motor of at most "
-                                         f"{tidy(force)} (damping x target velocity"
-                                         f"{' x mass' if scale != 1.0 else ''})")
-            if velocity and force is not None and force > 0:
+                self.problems.warn(name, f"a drive without a force limit: a motor of at most "
+                                         f"{tidy(force)} {'N m' if angular else 'N'} (damping x "
+                                         f"target velocity{what})")
+            if force > 0:
                 joint.motor(velocity, force)
+            else:
+                self.problems.warn(name, "a drive that can apply no force (maxForce or damping "
+                                         "0) is left out")
+
+    def _spring(self, name: str, joint: WorkingJoint, stiffness: float, damping: float,
+                target: float, velocity: float, force: float | None) -> None:
+        """A position drive as the joint's spring: its pull ``k (target - x) + d (v - x')``
+        is the spring's toward ``target + d v / k``, exactly."""
+        if joint.type not in ("Hinge", "MotorizedHinge", "Slider"):
+            self.problems.warn(name, f"a position drive on a {joint.type} joint is not "
+                                     f"represented: springs act on hinges and sliders here")
+            return
+        if joint.spring is not None:
+            self.problems.warn(name, "a second position drive on the same axis is left out")
+            return
+        if force == 0:
+            self.problems.warn(name, "a position drive that can apply no force (maxForce 0) is "
+                                     "left out")
+            return
+        if velocity and stiffness > 0:
+            target += damping * velocity / stiffness
+        joint.pull(stiffness, damping, target, force)
 
 
-def _dofs(desc: dict[str, Any], name: str, problems: Problems) -> list[Dof]:
-    """Each of the six degrees of freedom: free, locked, or limited (low, high)."""
+def _effective_inertia(body: ObjectDecl, joint: WorkingJoint,
+                       angular: bool) -> tuple[float, str]:
+    """What an acceleration-mode drive scales its force by, and how it was found: the
+    driven body's mass, or its moment of inertia about the joint's axis (its primitive
+    shapes as solids of one density; mesh shapes, whose volume the file does not say
+    here, are left out of it)."""
+    solids = [(s, _volume(s)) for s in body.shapes]
+    solids = [(s, v) for s, v in solids if v > 0]
+    total = sum(v for _, v in solids)
+    mass = body.mass if body.mass is not None else (
+        (body.density or VOLUME_DENSITY) * total if total > 0 else 1.0)
+    if not angular:
+        return mass, " x the body's mass"
+    n = np.asarray(joint.axis, np.float64)
+    n = n / np.linalg.norm(n)
+    turn = quat_to_matrix(np.asarray(body.rotation, np.float64))
+
+    def across(offset: Any) -> float:
+        """The squared distance from the joint's axis of a point in the body's frame."""
+        arm = np.asarray(body.position) + turn @ np.asarray(offset) - np.asarray(joint.anchor)
+        arm = arm - (arm @ n) * n
+        return float(arm @ arm)
+
+    what = " x the body's moment of inertia about the axis"
+    if body.inertia is not None:  # the file's: about its centre of mass
+        local = (turn @ quat_to_matrix(np.asarray(body.inertia_rotation, np.float64))).T @ n
+        return (float(local @ (np.asarray(body.inertia) * local))
+                + mass * across(body.center_of_mass or (0.0, 0.0, 0.0)), what)
+    if not solids:
+        return mass, " x the body's mass, as if 1 m from the axis (its shapes are meshes)"
+    moment, centroid = 0.0, np.zeros(3)
+    for s, v in solids:
+        m = mass * v / total
+        local = (turn @ quat_to_matrix(np.asarray(s.rotation, np.float64))).T @ n
+        moment += float(local @ (_principal(s, m) * local)) + m * across(s.offset)
+        centroid += m * np.asarray(s.offset) / mass
+    if body.center_of_mass is not None:  # the shapes' inertia about their centroid, moved
+        moment += mass * (across(body.center_of_mass) - across(centroid))
+    return moment, what
+
+
+def _volume(s: ShapeDecl) -> float:
+    """A primitive's volume (m^3) from its scene size; 0 for meshes and planes."""
+    if s.kind == "box":
+        return float(np.prod(s.size))
+    if s.kind == "sphere":
+        return math.pi * s.size[0] ** 3 / 6
+    if s.kind in ("cylinder", "capsule"):
+        r, length = s.size[0] / 2, s.size[1]
+        return math.pi * r * r * (length + (4 * r / 3 if s.kind == "capsule" else 0.0))
+    return 0.0
+
+
+def _principal(s: ShapeDecl, m: float) -> np.ndarray:
+    """A solid primitive's principal moments of inertia (kg m^2) in its own frame; a
+    capsule as the cylinder of its volume."""
+    if s.kind == "box":
+        x, y, z = (float(v) ** 2 for v in s.size)
+        return m / 12 * np.array([y + z, x + z, x + y])
+    if s.kind == "sphere":
+        return np.full(3, m * s.size[0] ** 2 / 10)
+    r, length = s.size[0] / 2, s.size[1] + (2 * s.size[0] / 3 if s.kind == "capsule" else 0)
+    side = m * (3 * r * r + length * length) / 12
+    return np.array([side, side, m * r * r / 2])
+
+
+def _dofs(desc: dict[str, Any], name: str, problems: Problems, family: str) -> list[Dof]:
+    """Each of the six degrees of freedom: free, locked, or limited (low, high).
+
+    A limit may name linear and angular axes at once (OMI's weld). Over several axes KHR
+    bounds a distance or a cone (held here only when the bound is 0); OMI bounds each
+    axis alone, as if each had a limit of its own."""
     dofs: list[Dof] = [FREE] * 6
     for limit in desc.get("limits", []) or []:
         if not isinstance(limit, dict):
             continue
-        linear = limit.get("linearAxes")
-        axes = [a for a in (linear if linear is not None else limit.get("angularAxes", []))
-                if isinstance(a, int) and 0 <= a <= 2]
-        base = 0 if linear is not None else 3
+        groups = [(base, [a for a in limit[key] if isinstance(a, int) and 0 <= a <= 2])
+                  for base, key in ((0, "linearAxes"), (3, "angularAxes"))
+                  if isinstance(limit.get(key), list)]
+        if not any(axes for _, axes in groups):
+            problems.error(name, "a joint limit names no linear or angular axis 0, 1 or 2; "
+                                 "left out")
+            continue
         low = _number(limit.get("min", -math.inf)) if "min" in limit else -math.inf
         high = _number(limit.get("max", math.inf)) if "max" in limit else math.inf
         if low is None or high is None:
@@ -857,24 +1025,42 @@ def _dofs(desc: dict[str, Any], name: str, problems: Problems) -> list[Dof]:
             problems.once(f"no-range-{name}", name, "a joint limit with neither min nor max "
                                                     "holds nothing (the axes it names are free)")
             continue
-        stiffness = limit.get("stiffness")
-        if stiffness is not None and _number(stiffness) not in (None, math.inf):
-            problems.once(f"soft-{name}", name, f"soft joint limits (stiffness {stiffness}) are "
-                                                f"hard here")
-        if len(axes) == 1:
-            state = "locked" if low == high else "limited"
-            if state == "locked" and low != 0:
-                problems.warn(name, f"a limit that holds the {DOF_NAMES[base + axes[0]]} axis "
-                                    f"at {low}, not 0, holds it where it starts here")
-            dofs[base + axes[0]] = (state, low, high)
-        elif high == 0 or (high <= 0 and low <= 0):
-            for a in axes:
-                dofs[base + a] = LOCKED
-        else:
-            kind = "distance" if base == 0 else "cone"
-            problems.warn(name, f"a {kind} limit over {len(axes)} axes (up to {tidy(high)}) is "
-                                f"not represented: those axes are free")
+        stiffness = _number(limit.get("stiffness"))
+        if stiffness is not None and stiffness != math.inf and not (
+                family == "OMI" and stiffness < 0):  # OMI: negative is infinitely stiff
+            problems.once(f"soft-{name}", name, f"soft joint limits (stiffness "
+                                                f"{tidy(stiffness)}) are hard here")
+        for base, axes in groups:
+            if len(axes) == 1 or family == "OMI":
+                state = "locked" if low == high else "limited"
+                if state == "locked" and low != 0:
+                    problems.warn(name, f"a limit that holds the "
+                                        f"{', '.join(DOF_NAMES[base + a] for a in axes)} "
+                                        f"axis at {low}, not 0, holds it where it starts here")
+                for a in axes:
+                    dofs[base + a] = (state, low, high)
+            elif high == 0 or (high <= 0 and low <= 0):
+                for a in axes:
+                    dofs[base + a] = LOCKED
+            else:
+                kind = "distance" if base == 0 else "cone"
+                problems.warn(name, f"a {kind} limit over {len(axes)} axes (up to "
+                                    f"{tidy(high)}) is not represented: those axes are free")
     return dofs
+
+
+def _one_radius(family: str, kind: str, given: dict[str, Any]) -> dict[str, Any]:
+    """A capsule or cylinder of one ``radius``, as OMI's drafts before September 2024 (and
+    Godot 4.4, which writes them) give it: an OMI capsule's ``height`` then is its full
+    height, caps included (default 2 m), which the present form counts between the caps."""
+    radius = given["radius"]
+    out = {"radiusTop": radius, "radiusBottom": radius}
+    if family == "OMI":
+        height = given.get("height", 2.0)
+        out["height"] = height
+        if kind == "capsule" and _number(height) is not None and _number(radius) is not None:
+            out["height"] = max(height - 2 * radius, 0.0)
+    return out
 
 
 def _zero_size(kind: str, params: dict[str, Any]) -> str | None:

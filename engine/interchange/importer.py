@@ -8,11 +8,12 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from engine.assets import Assets, Where
+from engine.assets import AssetError, Assets, Where
+from engine.assets.service import reason
 from engine.interchange.model import ImportedScene, MaterialDecl, Problems, to_db
+from engine.memory import paused_gc
 from engine.scene.db import STRING, SceneDB
 from engine.scene.diagnostics import WARNING, Diagnostic, Loc, Reporter, SceneError
-from engine.scene.parser import paused_gc
 from engine.scene.validate import validate
 
 #: Model formats the importer reads, by extension.
@@ -35,13 +36,11 @@ def read_model(name: str | Path, assets: Assets, where: Where | None = None,
     path = assets.resolve(name, root)
     document = assets.document(name, where, root)
     problems = Problems(str(Path(name)) if not Path(name).is_absolute() else str(path))
-    if path.suffix.lower() == ".dae":
-        from engine.interchange.collada import import_collada
-
-        return import_collada(document, problems)
+    from engine.interchange.collada import import_collada
     from engine.interchange.gltf_physics import import_gltf
 
-    return import_gltf(document, problems)
+    read = import_collada if path.suffix.lower() == ".dae" else import_gltf
+    return read(document, problems)
 
 
 def import_model(name: str | Path, file_ref: str, assets: Assets | None = None,
@@ -56,9 +55,18 @@ def import_model(name: str | Path, file_ref: str, assets: Assets | None = None,
     cannot be read at all. ``check`` False leaves the schema check of what the importer
     made to the caller (a scene checks its Model blocks' with the rest); the author's
     extras are checked either way."""
-    with paused_gc():  # many small objects that all stay alive
-        return _imported(name, file_ref, assets or Assets(root or Path(name).parent), where,
-                         root, prefix, known, header, loc, check)
+    assets = assets or Assets(root or Path(name).parent)
+    try:
+        with paused_gc():  # many small objects that all stay alive
+            return _imported(name, file_ref, assets, where, root, prefix, known, header, loc,
+                             check)
+    except (AssetError, SceneError):  # told already, at their own places
+        raise
+    except (ValueError, TypeError, AttributeError, KeyError, IndexError, OverflowError) as exc:
+        # a part the importer needs whole (the scene's node list, a body's position) lies
+        # or has the wrong JSON or XML shape: the file cannot be imported
+        raise AssetError("import model", str(name), assets.resolve(name, root),
+                         f"it is malformed ({reason(exc)})", where) from None
 
 
 def _imported(name: str | Path, file_ref: str, assets: Assets, where: Where | None,

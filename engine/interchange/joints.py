@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from engine.interchange.model import JointDecl, Problems, tidy
+from engine.interchange.model import JointDecl, Problems, SpringDecl, tidy
 from engine.rotation import matrix_to_quat
 
 DOF_NAMES = ("linear X", "linear Y", "linear Z", "angular X", "angular Y", "angular Z")
@@ -58,8 +58,12 @@ class WorkingJoint:
     free: int | None
     #: 1, or -1 when the joint's own side is body 1 (limits and motor turned around).
     sign: float = 1.0
+    #: Where the free axis starts in the file's terms (m or rad): see _start_offset.
+    offset: float = 0.0
     motor_velocity: float = 0.0
     motor_max_force: float = 0.0
+    #: (stiffness, damping, target, max force or None): per m or rad, the engine's count.
+    spring: tuple[float, float, float, float | None] | None = None
 
     def motor(self, velocity: float, max_force: float) -> None:
         """A velocity motor on the free axis (the file's sense)."""
@@ -68,13 +72,24 @@ class WorkingJoint:
         self.motor_velocity = self.sign * velocity
         self.motor_max_force = max_force
 
+    def pull(self, stiffness: float, damping: float, target: float,
+             max_force: float | None) -> None:
+        """A spring-damper on the free axis toward ``target`` (the file's count: from where
+        the frames coincide, in the file's sense), counted as the engine counts."""
+        self.spring = (stiffness, damping, self.sign * target - self.offset, max_force)
+
     def decl(self, name: str) -> JointDecl:
-        """The scene joint: angles in degrees."""
+        """The scene joint: angles in degrees (a spring per degree)."""
         deg = math.degrees if self.type in _ANGULAR_TYPES else float
+        spring = None
+        if self.spring is not None:
+            k, d, target, most = self.spring
+            per = math.radians if self.type in _ANGULAR_TYPES else float
+            spring = SpringDecl(tidy(per(k)), tidy(per(d)), tidy(deg(target)), most)
         return JointDecl(name, self.type, self.bodies, self.anchor, self.axis, self.axis2,
                          None if self.low is None else tidy(deg(self.low)),
                          None if self.high is None else tidy(deg(self.high)),
-                         tidy(deg(self.motor_velocity)), self.motor_max_force)
+                         tidy(deg(self.motor_velocity)), self.motor_max_force, spring)
 
 
 def working_joint(name: str, dofs: list[Dof], frames: Frames, joint_body: str | None,
@@ -86,13 +101,13 @@ def working_joint(name: str, dofs: list[Dof], frames: Frames, joint_body: str | 
     if made is None:
         return None
     made.sign = 1.0 if connected_body is not None else -1.0
+    made.offset = _start_offset(frames, made.free)
     if made.low is not None or made.high is not None:
         low, high = made.low, made.high
         if made.sign < 0:
             low, high = (None if high is None else -high), (None if low is None else -low)
-        offset = _start_offset(frames, made.free)
-        made.low = None if low is None else low - offset
-        made.high = None if high is None else high - offset
+        made.low = None if low is None else low - made.offset
+        made.high = None if high is None else high - made.offset
     _check_aligned(name, dofs, frames, problems)
     return made
 

@@ -32,7 +32,7 @@ from engine.scene.db import (
     SceneDB,
     Value,
 )
-from engine.scene.diagnostics import ERROR, WARNING, Diagnostic, Loc
+from engine.scene.diagnostics import ERROR, WARNING, Diagnostic, Loc, printable
 from engine.scene.schema import SCHEMAS
 
 Vec3 = tuple[float, float, float]
@@ -56,10 +56,10 @@ class ModelDiagnostic(Diagnostic):
     """A problem in a model file, told as ``room.glb: warning: node 'Door': ...`` (a model
     has no lines; its nodes have names)."""
 
-    def render(self, source: str | None = None) -> str:
+    def head(self) -> str:
         if self.line > 0:
-            return Diagnostic.render(self, source)
-        return f"{self.path}: {self.severity}: {self.message}"
+            return Diagnostic.head(self)
+        return f"{self.path}: {self.severity}: {printable(self.message)}"
 
 
 class Problems:
@@ -142,6 +142,11 @@ class ObjectDecl:
     velocity: Vec3 = (0.0, 0.0, 0.0)
     angular_velocity: Vec3 = (0.0, 0.0, 0.0)
     gravity: bool = True
+    #: The file's centre of mass (object frame, m) and principal moments (kg m^2) with
+    #: their axes' turn (None: the shapes').
+    center_of_mass: Vec3 | None = None
+    inertia: Vec3 | None = None
+    inertia_rotation: Quat = (1.0, 0.0, 0.0, 0.0)
     shapes: list[ShapeDecl] = field(default_factory=list)
     material: str | None = None
     category: int | None = None
@@ -166,6 +171,18 @@ class JointDecl:
     high: float | None = None
     motor_velocity: float = 0.0
     motor_max_force: float = 0.0
+    spring: SpringDecl | None = None
+
+
+@dataclass(slots=True)
+class SpringDecl:
+    """A joint's spring in the scene's units: stiffness per degree (or per m), damping per
+    deg/s (or m/s), target in degrees (or m), max force None: unbounded."""
+
+    stiffness: float
+    damping: float
+    target: float
+    max_force: float | None = None
 
 
 @dataclass(slots=True)
@@ -203,25 +220,44 @@ def tidy(x: float) -> float | int:
     an integer when it is one: ``0.20000000298023224`` is written ``0.2``."""
     if not math.isfinite(x):
         raise ValueError(f"{x} is not a finite number")
+    x = float(x)
+    if x.is_integer():  # counts, unit sizes: the most common, and the cheapest
+        return int(x) if abs(x) < 1e15 else x
     if abs(x) < 1e-7:  # float32 noise around zero, 0.1 micrometre
         return 0
-    r = round(x, 6 - math.floor(math.log10(abs(x))))
+    r = float(f"{x:.7g}")  # 7 significant digits, correctly rounded (as round() is)
     return int(r) if r.is_integer() and abs(r) < 1e15 else r
 
 
 def vector(v: Iterable[float]) -> tuple[float, ...]:
     """Plain floats at full precision (what is written is tidied then: :func:`tidy`)."""
+    if type(v) is np.ndarray:  # most are: numpy makes the floats itself, five times faster
+        return tuple(v.astype(np.float64, copy=False).tolist())
     return tuple(float(x) for x in v)
 
 
 def quaternion(rotation: np.ndarray) -> Quat:
     """A rotation matrix as ``(w, x, y, z)``, ``w >= 0``, exactly identity when it is one."""
-    w, x, y, z = (float(c) for c in matrix_to_quat(rotation))
+    if rotation is UNTURNED or np.array_equal(rotation, UNTURNED):  # most shapes sit on
+        return _IDENTITY                                             # their node, unturned
+    return unit_quaternion(matrix_to_quat(rotation))
+
+
+def unit_quaternion(q: Iterable[float]) -> Quat:
+    """A quaternion ``(w, x, y, z)`` as plain floats, ``w >= 0``, exactly identity when it
+    is one (float noise aside)."""
+    w, x, y, z = (float(c) for c in q)
     if w < 0:
         w, x, y, z = -w, -x, -y, -z
     if abs(x) <= 1e-9 and abs(y) <= 1e-9 and abs(z) <= 1e-9:
-        return (1.0, 0.0, 0.0, 0.0)
+        return _IDENTITY
     return (w, x, y, z)
+
+
+#: The identity rotation, shared (read only): a frame that is known not to turn.
+UNTURNED = np.eye(3)
+UNTURNED.flags.writeable = False
+_IDENTITY: Quat = (1.0, 0.0, 0.0, 0.0)
 
 
 def unique_ids(names: Sequence[str], taken: Iterable[str] = ()) -> list[str]:
@@ -244,11 +280,14 @@ class _Blocks:
 
     def __init__(self, loc: Loc) -> None:
         self.loc = loc
+        self._tidy: dict[float, float | int] = {}  # a model's numbers repeat (sizes, 0, 1)
 
     def num(self, x: float) -> Value:
         if isinstance(x, int):  # bits and counts, exactly
             return Value(INT, x, self.loc)
-        t = tidy(x)
+        t = self._tidy.get(x)
+        if t is None:
+            t = self._tidy[x] = tidy(x)
         return Value(INT if isinstance(t, int) else FLOAT, t, self.loc)
 
     def vec(self, xs: Iterable[float]) -> Value:
@@ -301,6 +340,8 @@ def to_db(scene: ImportedScene, file_ref: str, prefix: str = "",
         if j.motor_max_force:
             body += [b.entry("MotorVelocity", b.num(j.motor_velocity)),
                      b.entry("MotorMaxForce", b.num(j.motor_max_force))]
+        if j.spring is not None:
+            body.append(b.entry("Spring", b.block(_spring(b, j.spring))))
         entries.append(b.entry("Joint", b.block(body)))
     if scene.world:
         entries.append(b.entry("World", b.block([
@@ -359,6 +400,13 @@ def _object(b: _Blocks, o: ObjectDecl, file_ref: str, prefix: str) -> list[Entry
             phys.append(b.entry("Mask", b.num(o.mask)))
         if not o.gravity:
             phys.append(b.entry("Gravity", b.num(0)))
+        if o.center_of_mass is not None:
+            phys.append(b.entry("CenterOfMass", b.vec(o.center_of_mass)))
+        if o.inertia is not None:
+            phys.append(b.entry("Inertia", b.vec(o.inertia)))
+            euler = quat_to_euler(o.inertia_rotation)
+            if any(abs(a) > 1e-7 for a in euler):
+                phys.append(b.entry("InertiaOrientation", b.vec(euler)))
         phys += [b.entry("Geometry", b.block(_shape(b, s, file_ref))) for s in o.shapes]
         out.append(b.entry("PhysicalAttributes", b.block(_merged(phys,
                                                                  o.extras.get("Physical", [])))))
@@ -372,6 +420,17 @@ def _merged(generated: list[Entry], typed: list[Entry]) -> list[Entry]:
         return generated
     keys = {e.key for e in typed}
     return [e for e in generated if e.key not in keys] + typed
+
+
+def _spring(b: _Blocks, s: SpringDecl) -> list[Entry]:
+    out = [b.entry("Stiffness", b.num(s.stiffness))]
+    if s.damping:
+        out.append(b.entry("Damping", b.num(s.damping)))
+    if s.target:
+        out.append(b.entry("Target", b.num(s.target)))
+    if s.max_force is not None:
+        out.append(b.entry("MaxForce", b.num(s.max_force)))
+    return out
 
 
 def _shape(b: _Blocks, s: ShapeDecl, file_ref: str) -> list[Entry]:
@@ -427,6 +486,8 @@ def material_pairs(scene: ImportedScene) -> list[tuple[str, str, float, float]]:
     out = []
     for i, a in enumerate(pool):
         for c in pool[i:]:
+            if not (a.friction >= 0 and c.friction >= 0):  # negative or NaN: the schema
+                continue                                   # check tells of the Material
             friction = combine(a.friction_combine, c.friction_combine, a.friction, c.friction)
             bounce = combine(a.bounce_combine, c.bounce_combine, a.bounce, c.bounce)
             engine_friction = math.sqrt(a.friction * c.friction)

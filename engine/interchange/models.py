@@ -32,9 +32,11 @@ MODEL = "Model"
 
 
 def expand_models(db: SceneDB, folder: Path, report: Reporter,
-                  known: Mapping[str, Iterable[str]] | None = None) -> list[Diagnostic]:
+                  known: Mapping[str, Iterable[str]] | None = None,
+                  allow: Iterable[Path] = ()) -> list[Diagnostic]:
     """Import every ``Model`` block of ``db`` in place; mistakes in the blocks themselves
-    go to ``report``; returns what the model files leave out (to tell, not to stop)."""
+    go to ``report``; returns what the model files leave out (to tell, not to stop). Model
+    files lie in ``folder`` or one of ``allow`` (engine.confine)."""
     entries = [e for e in db.root if e.key == MODEL and e.value.kind == STRUCTURE]
     if not entries:
         return []
@@ -47,7 +49,7 @@ def expand_models(db: SceneDB, folder: Path, report: Reporter,
         if entry.included is not None:
             continue
         own = Reporter(sources=report.sources)  # told by the scene's check, which sees it
-        validate(SceneDB(Block([entry], entry.loc), db.path), folder, own)
+        validate(SceneDB(Block([entry], entry.loc), db.path), folder, own, allow=allow)
         if own.has_errors:
             continue
         block: Block = entry.value.data

@@ -11,7 +11,9 @@ import pytest
 
 from components import Physical, Transform, Trigger
 from engine.assets.gltf import GltfDocument
+from engine.cli import main
 from engine.interchange.export import export_gltf, volume
+from engine.rotation import quat_to_matrix
 from engine.scene import load_spec
 from engine.scene_loading import export_path
 from tests.interchange.helpers import Run, import_scene
@@ -27,7 +29,7 @@ Object { ID "ground" Dynamic 0
   PhysicalAttributes { Material "ice" Geometry { Primitive "plane" } } }
 Object { ID "crate" Position [0 0 1] Orientation [0 0 30]
   PhysicalAttributes { Mass 3 Material "rubber" Geometry { Primitive "box" Size [0.4 0.6 0.8] } } }
-Object { ID "ball" Position [1 0 1] Velocity [1 0 2] AngularVelocity [0 90 0]
+Object { ID "ball" Position [1 0 1] Orientation [0 0 90] Velocity [1 0 2] AngularVelocity [0 90 0]
   PhysicalAttributes { Density 500 Geometry { Primitive "sphere" Size [0.5] } } }
 Object { ID "pill" Position [2 0 1] Orientation [90 0 0]
   PhysicalAttributes { Mass 1 Category 2 Mask 3 Geometry { Primitive "capsule" Size [0.4 0.6] } } }
@@ -66,6 +68,15 @@ Joint { ID "pivot" Type "Ball" Bodies ["bob"] Anchor [-3 -2 3] }
 Joint { ID "weld" Type "Fixed" Bodies ["b" "a"] Anchor [-5.75 -3 1.15] }
 Joint { ID "gimbal" Type "Universal" Bodies ["cross"] Anchor [-9 -3 3] Axis [1 0 0]
   Axis2 [0 1 0] Low -30 High 30 }
+Object { ID "weight" Position [8 -3 3] Orientation [0 0 20]
+  PhysicalAttributes { Mass 2 CenterOfMass [0.1 0 -0.4] Inertia [0.04 0.03 0.02]
+    InertiaOrientation [10 0 45] Geometry { Primitive "sphere" Size [0.1] } } }
+Joint { ID "swing" Type "Hinge" Bodies ["weight"] Anchor [8 -3 3] Axis [0 1 0]
+  Spring { Stiffness 0.02 Damping 0.001 Target 15 MaxForce 5 } }
+Object { ID "slide" Position [10 -3 3]
+  PhysicalAttributes { Mass 1 Geometry { Primitive "box" Size [0.2 0.2 0.2] } } }
+Joint { ID "spring" Type "Slider" Bodies ["slide"] Anchor [10 -3 3] Axis [1 0 0]
+  Low -0.3 High 0.3 Spring { Stiffness 40 Target 0.1 } }
 """
 
 OCTAHEDRON = """v 0.3 0 0\nv -0.3 0 0\nv 0 0.3 0\nv 0 -0.3 0\nv 0 0 0.3\nv 0 0 -0.3
@@ -89,6 +100,13 @@ def round_trip(scene: Path, name: str = "out.glb") -> tuple[Path, Path]:
 def parts(spec):
     return {es.id: {type(c): c for c in es.components} for es in spec.entities
             if not es.skipped}
+
+
+def tensor(p: Physical) -> np.ndarray:
+    """A body's given inertia tensor in its frame (principal axes may come back in
+    another order; the tensor is the same)."""
+    turn = quat_to_matrix(np.asarray(p.inertia_rotation))
+    return turn @ np.diag(p.inertia) @ turn.T
 
 
 def collides(a: Physical, b: Physical) -> bool:
@@ -119,6 +137,12 @@ def test_import_of_export_keeps_bodies_shapes_masses_materials_and_joints(scene,
                 np.testing.assert_allclose(t.size, s.size, atol=1e-6, err_msg=oid)
                 np.testing.assert_allclose(t.offset, s.offset, atol=1e-6, err_msg=oid)
                 assert abs(np.dot(t.rotation, s.rotation)) == pytest.approx(1, abs=1e-6)
+        assert (q.center_of_mass is None) == (p.center_of_mass is None), oid
+        if p.center_of_mass is not None:
+            np.testing.assert_allclose(q.center_of_mass, p.center_of_mass, atol=1e-6)
+        assert (q.inertia is None) == (p.inertia is None), oid
+        if p.inertia is not None:
+            np.testing.assert_allclose(tensor(q), tensor(p), atol=1e-7, err_msg=oid)
         tp, tq = before[oid][Transform], after[oid][Transform]
         np.testing.assert_allclose(tq.position, tp.position, atol=1e-6, err_msg=oid)
         assert abs(tq.orientation @ tp.orientation) == pytest.approx(1, abs=1e-6), oid
@@ -137,6 +161,12 @@ def test_import_of_export_keeps_bodies_shapes_masses_materials_and_joints(scene,
         assert (k.low, k.high) == pytest.approx((j.low, j.high)), jid
         assert (k.motor_velocity, k.motor_max_force) == pytest.approx(
             (j.motor_velocity, j.motor_max_force)), jid
+        assert (k.spring is None) == (j.spring is None), jid
+        if j.spring is not None:
+            assert (k.spring.stiffness, k.spring.damping, k.spring.target,
+                    k.spring.max_force) == pytest.approx((
+                        j.spring.stiffness, j.spring.damping, j.spring.target,
+                        j.spring.max_force), rel=1e-6), jid
         np.testing.assert_allclose(k.anchor, j.anchor, atol=1e-6, err_msg=jid)
         if j.kind not in ("ball", "fixed"):  # those have no axis
             np.testing.assert_allclose(k.axis, j.axis, atol=1e-6, err_msg=jid)
@@ -165,7 +195,8 @@ def test_an_exported_state_moves_like_the_scene(scene):
         with Run.start(path) as run:
             run.step(1.0)
             ends.append({oid: run.position(oid) for oid in ("crate", "ball", "pill", "gem",
-                                                           "arm", "cart", "bob")})
+                                                           "arm", "cart", "bob", "weight",
+                                                           "slide")})
     for oid in ends[0]:
         np.testing.assert_allclose(ends[1][oid], ends[0][oid], atol=5e-3, err_msg=oid)
 
@@ -175,3 +206,37 @@ def test_what_gltf_cannot_say_is_told(scene):
                                               '"ice" Friction 2 }\n')
     told = export_gltf(load_spec(scene), scene / "out.glb")
     assert any("material pair rubber/ice is not exported" in d.message for d in told)
+
+
+def test_an_exported_saved_state_keeps_every_bodys_pose_and_velocity(scene):
+    """``colosseum run --save-state`` mid-fall, then ``colosseum export`` of the state: the
+    file imports with each body where the state has it, moving as it moved then."""
+    state = scene / "state.scene"
+    assert main(["run", str(scene), "--headless", "--fast", "--seconds", "0.4",
+                 "--save-state", str(state)]) == 0
+    saved = parts(load_spec(state))
+    out = scene / "state.glb"
+    assert export_path(state, out) == 0
+    again = parts(load_spec(import_scene(out, scene / "again.scene")))
+    moving = [oid for oid, c in saved.items() if Physical in c and c[Physical].kind == "dynamic"]
+    assert any(np.linalg.norm(saved[oid][Transform].linear_velocity) > 1 for oid in moving)
+    for oid, c in saved.items():
+        if Physical not in c:
+            continue
+        tp, tq = c[Transform], again[oid][Transform]
+        np.testing.assert_allclose(tq.position, tp.position, rtol=1e-6, atol=1e-6, err_msg=oid)
+        assert abs(tq.orientation @ tp.orientation) == pytest.approx(1, abs=1e-6), oid
+        np.testing.assert_allclose(tq.linear_velocity, tp.linear_velocity, rtol=1e-5,
+                                   atol=1e-6, err_msg=oid)
+        np.testing.assert_allclose(tq.angular_velocity, tp.angular_velocity, rtol=1e-5,
+                                   atol=1e-6, err_msg=oid)
+    # its joints hold where the state's do: limits, springs and motors counted from where
+    # each joint was first made (its frames are written there), the bodies elsewhere now
+    ends = []
+    for path in (state, scene / "again.scene"):
+        with Run.start(path) as run:
+            run.step(1.0)
+            ends.append({oid: run.position(oid) for oid in ("arm", "wheel", "cart", "bob",
+                                                           "weight", "slide")})
+    for oid in ends[0]:
+        np.testing.assert_allclose(ends[1][oid], ends[0][oid], atol=5e-3, err_msg=oid)

@@ -67,7 +67,7 @@ def built(path: Path) -> dict[str, int]:
 
 
 @pytest.mark.parametrize("name", ["shapes.glb", "joints.glb", "materials.glb", "filters.glb",
-                                  "triggers.glb"])
+                                  "triggers.glb", "blender.glb"])
 def test_the_scene_has_the_bodies_shapes_and_joints_the_file_declares(models, name):
     assert built(models / name) == declared(models / name)
 
@@ -216,10 +216,116 @@ def test_omi_physics_bodies_shapes_and_joints(models):
     kinds = {o.id: (o.kind, o.trigger) for o in scene.objects}
     assert kinds == {"Ground": ("static", False), "Ball": ("dynamic", False),
                      "Lifter": ("kinematic", False), "Zone": ("static", True),
-                     "Door": ("dynamic", False), "Frame": ("static", False)}
-    (hinge,) = scene.joints
+                     "Door": ("dynamic", False), "Frame": ("static", False),
+                     "WeldA": ("dynamic", False), "WeldB": ("dynamic", False),
+                     "Turntable": ("dynamic", False)}
+    joints = {j.id: j for j in scene.joints}
+    hinge = joints["DoorHinge"]
     assert (hinge.type, hinge.bodies) == ("Hinge", ("Door",))
     assert (hinge.low, hinge.high) == pytest.approx((-math.degrees(1.5), math.degrees(1.5)))
+    # one limit naming linear and angular axes at once is a weld (it was read as a ball)
+    assert (joints["WeldJoint"].type, joints["WeldJoint"].bodies) == ("Fixed",
+                                                                      ("WeldB", "WeldA"))
+    # OMI's negative maxForce is "not force-limited" (the motor was dropped in silence):
+    # the motor gets what damping x target velocity asks
+    table = joints["TurntableAxle"]
+    assert table.type == "MotorizedHinge" and table.motor_max_force == pytest.approx(
+        10.0 * samples_.OMI_SPIN)
     with Run.start(import_scene(models / "omi.gltf")) as run:
+        weld = run.position("WeldB") - run.position("WeldA")
         run.step(2.0)
         assert run.position("Ball")[2] == pytest.approx(0.25, abs=0.005)
+        # the welded pair landed as one body; the turntable turns at the drive's rate
+        # (glTF +Y is +Z here)
+        np.testing.assert_allclose(run.position("WeldB") - run.position("WeldA"), weld,
+                                   atol=2e-3)
+        np.testing.assert_allclose(run.spin("Turntable"), (0, 0, samples_.OMI_SPIN),
+                                   atol=1e-3)
+
+
+def test_khr_velocities_are_in_node_space_omi_velocities_in_world_axes(tmp_path):
+    """KHR: "initial linear velocity of the rigid body in node space" (its reference
+    importer turns it by the node's rotation); OMI says nothing and Godot writes world
+    velocities. A node turned 90 degrees about glTF Y sends its local X to glTF -Z, which
+    is +Y here (Z up)."""
+    b = samples_.GltfBuilder()
+    turned = samples_._quat_about((0, 1, 0), math.pi / 2)
+    ball = b.node("Ball", (0, 0, 5), rotation=turned)
+    b.khr(ball, motion={"mass": 1, "linearVelocity": [1, 0, 0],
+                        "angularVelocity": [0, 0, 2]},
+          collider={"geometry": b.shape("sphere", radius=0.2)})
+    b.node("Godot", (2, 0, 5), rotation=turned, ext={samples_.OMI_BODY: {
+        "motion": {"type": "dynamic", "linearVelocity": [1, 0, 0]}}})
+    path = b.write(tmp_path / "spin.gltf")
+    scene = import_model(path.name, path.name, Assets(tmp_path)).scene
+    by_id = {o.id: o for o in scene.objects}
+    np.testing.assert_allclose(by_id["Ball"].velocity, (0, 1, 0), atol=1e-9)
+    # local glTF Z turns to glTF +X: the spin is about X here
+    np.testing.assert_allclose(by_id["Ball"].angular_velocity, (2, 0, 0), atol=1e-9)
+    np.testing.assert_allclose(by_id["Godot"].velocity, (1, 0, 0), atol=1e-9)
+    with Run.start(import_scene(path)) as run:
+        np.testing.assert_allclose(run.velocity("Ball"), (0, 1, 0), atol=1e-9)
+
+
+def test_an_omi_body_without_mass_weighs_one_kilogram(tmp_path):
+    """OMI_physics_body's mass defaults to 1 kg; KHR leaves a missing mass to the shapes'
+    volume (at water's density here)."""
+    b = samples_.GltfBuilder()
+    b.doc.setdefault("extensions", {})[samples_.OMI_SHAPE] = {
+        "shapes": [{"type": "box", "box": {"size": [1, 1, 1]}}]}
+    b.use(samples_.OMI_SHAPE)
+    b.node("Crate", (0, 0, 1), ext={samples_.OMI_BODY: {"motion": {"type": "dynamic"},
+                                                        "collider": {"shape": 0}}})
+    khr = b.node("Block", (3, 0, 1))
+    b.khr(khr, motion={}, collider={"geometry": b.shape("box", size=[1, 1, 1])})
+    path = b.write(tmp_path / "masses.gltf")
+    spec = load_spec(import_scene(path))
+    bodies = {es.id: c for es in spec.entities for c in es.components
+              if isinstance(c, Physical)}
+    assert bodies["Crate"].mass == 1.0
+    assert bodies["Block"].mass is None and bodies["Block"].material.density == 1000.0
+
+
+@pytest.mark.parametrize("dt", [0.01, 0.005])
+def test_an_acceleration_drive_without_force_limit_accelerates_as_damping_asks(tmp_path, dt):
+    """An "acceleration" drive scales its force by the driven axis's inertia: from rest it
+    turns the body at damping x target velocity (rad/s^2) whatever the body weighs. The
+    motor gets that torque: the bar's moment of inertia about the hinge (m (x^2 + z^2) /
+    12 + m d^2) times damping x target velocity, and ODE, which weighs the bar itself,
+    spins it up at that rate."""
+    damping, target, mass = 2.0, 1.0, 3.0
+    b = samples_.GltfBuilder()
+    bar = b.node("Bar", (0.5, 0, 1))
+    b.khr(bar, motion={"mass": mass}, collider={"geometry": b.shape("box",
+                                                                    size=[1, 0.2, 0.2])})
+    samples_._joint(b, "Hinge", None, bar, (0, 0, 1), (-0.5, 0, 0),
+                    samples_.LOCK_LINEAR + samples_._locked("angular", (0, 2)),
+                    [{"type": "angular", "mode": "acceleration", "axis": 1,
+                      "velocityTarget": target, "damping": damping}])
+    path = b.write(tmp_path / "bar.gltf")
+    (joint,) = import_model(path.name, path.name, Assets(tmp_path)).scene.joints
+    inertia = mass * (1 + 0.04) / 12 + mass * 0.5 ** 2
+    assert joint.motor_max_force == pytest.approx(damping * target * inertia, rel=1e-6)
+    with Run.start(import_scene(path), dt=dt) as run:
+        run.step(0.2)
+        assert np.linalg.norm(run.spin("Bar")) == pytest.approx(damping * target * 0.2,
+                                                                rel=0.02)
+
+
+@pytest.mark.parametrize("dt", [0.01, 0.005])
+def test_a_file_laid_out_as_blender_writes_it_moves_as_it_declares(models, dt):
+    """Blender 4.4's layout: mesh colliders on bare data nodes, scaled by the collider's
+    node; a kinematic glider, a weightless floater, an infinitely heavy anvil; a wheel
+    driven in acceleration mode with no force limit."""
+    with Run.start(import_scene(models / "blender.glb"), "ode", dt) as run:
+        glider = run.position("Glider")
+        run.step(1.5)
+        # the floor reaches x = 10 (5 m scaled by 2): the far box rests on it
+        assert run.position("FarBox")[2] == pytest.approx(0.25, abs=0.005)
+        np.testing.assert_allclose(run.position("Glider") - glider,
+                                   (0, samples_.GLIDE_SPEED * 1.5, 0), atol=1e-6)
+        for oid in ("Floater", "Anvil"):  # neither falls
+            assert run.position(oid)[2] == pytest.approx(2, abs=1e-6), oid
+        # the wheel turns about glTF Z (-Y here) at the drive's target, the file's sense
+        np.testing.assert_allclose(run.spin("Wheel"), (0, -samples_.WHEEL_TARGET, 0),
+                                   atol=1e-3)
