@@ -62,7 +62,7 @@ def serving_engine(args: argparse.Namespace) -> Any:
         log.warning("serving on %s without --key: anyone who reaches it can join and send "
                     "input; use --key DIR (colosseum keygen) off a trusted network", args.bind)
     server = NetServer(args.bind, content_fingerprint(scene.content.folder), keys,
-                       timeout=args.timeout)
+                       timeout=args.timeout, barrier_wait=args.barrier_wait)
     server.content_dir = str(scene.content.folder)
     try:
         server.bind()
@@ -125,11 +125,28 @@ def join(args: argparse.Namespace) -> int:
 
 def _run_node(args: argparse.Namespace, client: Any, welcome: dict[str, Any],
               folder: Path) -> int:
+    made = node_engine(args, client, welcome, folder)
+    if isinstance(made, int):
+        return made
+    engine, node, scene = made
+    log.info("joined %s as %s at its frame %s", client.address, client.user, welcome["frame"])
+
+    def stamp(eng: Any) -> None:  # the state a node shows is at the server's time
+        eng.time = node.system.shown_time
+
+    return execute_run(engine, args, scene, custom_systems=False, before_save=stamp)
+
+
+def node_engine(args: argparse.Namespace, client: Any, welcome: dict[str, Any],
+                folder: Path) -> Any:
+    """(engine, node plugin, scene) of a node that joined (``welcome``) — the scene not
+    yet in the engine — or the exit code of a state this folder cannot build (told)."""
     from engine.app import Engine, EngineConfig
     from engine.content import Content
     from engine.scene import SceneError
     from engine.scene_loading import LoadedScene
     from systems import RegistryPlugin, load_plugin, wants_render
+    from systems.anomalies import AnomaliesPlugin
     from systems.net import NodePlugin, node_scene
 
     try:
@@ -144,20 +161,18 @@ def _run_node(args: argparse.Namespace, client: Any, welcome: dict[str, Any],
         dt=float(welcome.get("dt") or 1 / 60), world=spec.world, backend="none",
         options={"screenshot": args.screenshot, "record_frames": args.record_frames,
                  "record_every": args.record_every, "hud": args.hud, "size": args.size,
-                 "input": args.input, "display": args.display})
+                 "input": args.input, "display": args.display, "stereo": args.stereo,
+                 "render_scale": args.render_scale})
     node = NodePlugin(client, welcome, display=args.display is not None,
                       barrier=args.swap_barrier)
-    plugins: list[Any] = [RegistryPlugin(), load_plugin("input"), load_plugin("sound")]
+    # anomalies before render (the renderer draws the resource it finds); switched by the
+    # server only (this node's keys go there)
+    plugins: list[Any] = [RegistryPlugin(), load_plugin("input"), load_plugin("sound"),
+                          AnomaliesPlugin(switches=False)]
     if wants_render(config):
         plugins.append(load_plugin("render"))
     engine = Engine(config, plugins=[*plugins, node])
-    scene = LoadedScene(spec, Content(folder, folder / "main.scene"))
-    log.info("joined %s as %s at its frame %s", client.address, client.user, welcome["frame"])
-
-    def stamp(eng: Any) -> None:  # the state a node shows is at the server's time
-        eng.time = node.system.shown_time
-
-    return execute_run(engine, args, scene, custom_systems=False, before_save=stamp)
+    return engine, node, LoadedScene(spec, Content(folder, folder / "main.scene"))
 
 
 def keygen(args: argparse.Namespace) -> int:

@@ -127,7 +127,10 @@ def sweep(args: argparse.Namespace) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     runs = combinations(params, seeds)
-    rows = _distribute(str(content.scene), runs, args)
+    try:
+        rows = _distribute(str(content.scene), runs, args)
+    except SweepError as exc:
+        return fail(str(exc), 1)
     table = out / "results.csv"
     failed = write_table(table, params, rows)
     plot = out / "results.png"
@@ -147,16 +150,29 @@ def _distribute(scene: str, runs: list[tuple[dict[str, str], int]],
 
     # one run per worker thread at a time (none queued on it), so a worker that dies takes
     # down only the run it was running, which is retried once
+    # a dying worker is this table's row, not Dask's tracebacks on the author's terminal
+    # (distributed sets some of its loggers' levels itself: "Couldn't gather ... keys,
+    # rescheduling" came from distributed.client)
+    for name in ["distributed", *logging.root.manager.loggerDict]:
+        if name.startswith("distributed"):
+            logging.getLogger(name).setLevel(logging.CRITICAL)
     with dask.config.set({"distributed.scheduler.allowed-failures": 1,
                           "distributed.scheduler.worker-saturation": 1.0,
                           "distributed.worker.daemon": False,
                           "distributed.logging.distributed": "error"}):
         if args.scheduler:
-            client = Client(args.scheduler, timeout="10s")
+            try:
+                client = Client(args.scheduler, timeout="10s")
+            except (OSError, ValueError, TypeError) as exc:  # unreachable, not an address
+                raise SweepError(f"--scheduler {args.scheduler}: no Dask scheduler answers "
+                                 f"there ({str(exc).splitlines()[0]}); start one (`dask "
+                                 "scheduler`) or leave --scheduler out to sweep on this "
+                                 "machine") from None
             cluster = None
         else:
             cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1,
-                                   processes=True, dashboard_address=None)
+                                   processes=True, dashboard_address=None,
+                                   silence_logs=logging.CRITICAL)
             client = Client(cluster)
         try:
             futures = {client.submit(run_once, scene, params, seed, args.frames, args.seconds,

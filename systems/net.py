@@ -12,21 +12,25 @@
   ``userJoined`` and ``userLeft`` with the user's name; what stands for a user (an
   object or avatar with ``User "NAME"``) leaves the world ``--leave-after`` seconds after
   their node does, unless they come back.
-* :class:`PublishSystem` (RENDER, the frame's last): every replicated entity (a named
-  object with a Transform; cameras are each node's own) has a stable net id; the frame's
-  poses go out encoded (:mod:`engine.net.codec`) with its events: objects scripts spawned
-  (their scene text) and removed, sounds played, stopped and regained, contact sounds,
-  uniforms set, custom events emitted.
+* :class:`PublishSystem` (RENDER, the frame's last): every replicated entity (an object
+  with a Transform and a Name or a Visual; cameras are each node's own) has a stable net
+  id; the frame's poses go out encoded (:mod:`engine.net.codec`), the avatars' joint
+  matrices among them (:mod:`engine.net.bones`), with its events: objects scripts spawned
+  (their scene text) and Python code made (text written from their components,
+  :mod:`engine.scene.objects_text`) and removed, sounds played, stopped and regained,
+  contact sounds, uniforms set, custom events emitted.
 
 :class:`NodePlugin` (``colosseum join``) runs without physics or scripts:
 :class:`FollowSystem` (INPUT) takes the frames that came, applies their events,
 and writes the poses it shows into the pose table — interpolated a little behind the
-newest frame, or, on a display of a wall, exactly the frame all displays draw — and
-forwards the node's raw input each frame.
+newest frame, or, on a display of a wall, exactly the frame all displays draw — and the
+avatars' joint matrices into its :class:`~engine.animation.Palettes`, and forwards the
+node's raw input each frame.
 """
 
 from __future__ import annotations
 
+import difflib
 import logging
 import math
 import time
@@ -37,23 +41,34 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from components import Camera, Name, Physical, Sound, Transform, UserOwned
+from components import Camera, Name, Physical, Sound, Transform, UserOwned, Visual
+from engine.animation import Palettes
+from engine.anomalies import ANOMALIES, Anomalies
 from engine.audio import ContactSoundFilter
-from engine.events import Contacts, CustomEvent, Despawned, Spawned
+from engine.events import AnomalySwitched, Contacts, CustomEvent, Despawned, Spawned
 from engine.input import InputHub
 from engine.input.events import Button, DeviceLost
 from engine.input.record import FrameInput, event_from_record, event_record
 from engine.messages import MessageLog
 from engine.net import protocol
+from engine.net.bones import (
+    BONE_FLAG,
+    MAX_AVATAR_NET,
+    MAX_JOINTS,
+    bone_ids,
+    palette_matrices,
+    palette_poses,
+    split_bone_ids,
+)
 from engine.net.client import NetClient
 from engine.net.codec import CodecError, Gap, PoseDecoder
-from engine.net.follow import Follower
-from engine.net.server import NetServer, Peer
+from engine.net.follow import Follower, Shown
+from engine.net.server import NetError, NetServer, Peer
 from engine.realtime import CostLog
 from engine.scene import SceneIds
-from engine.scene.factory import SpawnRecord
-from engine.services import ShaderControl, SoundControl, UniformValue
-from engine.system import ANY_COMPONENT, Phase, System
+from engine.scene.factory import SceneSpec, SpawnRecord
+from engine.services import ShaderControl, SoundControl, SwapGate, UniformValue
+from engine.system import ANY_COMPONENT, Phase, PluginName, System
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -63,8 +78,13 @@ log = logging.getLogger("colosseum.net")
 #: Frames between keyframes the server sends unasked (a node that missed one waits at
 #: most this long, or asks).
 KEY_EVERY = 120
-#: Custom events a frame forwards at most; their data must be JSON.
+#: Custom events a frame forwards at most (the rest are counted and told); their data
+#: must be JSON.
 MAX_CUSTOM = 64
+#: Input events one message from a node may carry; the rest are dropped (and counted).
+MAX_EVENTS = 1000
+#: A joint whose matrix stretches an axis by more than this is told: nodes draw it rigid.
+MAX_STRETCH = 1e-3
 
 
 # -- server --------------------------------------------------------------------------
@@ -75,21 +95,26 @@ class FrameEvents:
     spawned: list[dict[str, Any]] = field(default_factory=list)
     removed: list[int] = field(default_factory=list)
     sounds: list[list[Any]] = field(default_factory=list)
+    #: ``[state, uniform, value]`` (setUniform)
     uniforms: list[list[Any]] = field(default_factory=list)
+    #: ``["enable", pass, on]`` and ``["uniform", pass, uniform, value]`` (a PostPass)
+    post: list[list[Any]] = field(default_factory=list)
+    #: ``[id, kind, enabled, onset, eye, {key: value}]``: an anomaly as it stands now
+    anomalies: list[list[Any]] = field(default_factory=list)
     custom: list[list[Any]] = field(default_factory=list)
 
     def take(self) -> dict[str, Any]:
-        out = {k: v for k, v in (("spawned", self.spawned), ("removed", self.removed),
-                                 ("sounds", self.sounds), ("uniforms", self.uniforms),
-                                 ("custom", self.custom)) if v}
-        self.spawned, self.removed, self.sounds, self.uniforms, self.custom = [], [], [], [], []
+        names = ("spawned", "removed", "sounds", "uniforms", "post", "anomalies", "custom")
+        out = {name: getattr(self, name) for name in names if getattr(self, name)}
+        for name in out:
+            setattr(self, name, [])
         return out
 
 
 class SoundRelay:
     """The server's SoundControl: the sound plugin's (if loaded) plus telling the nodes."""
 
-    plugin = "sound"
+    plugin = PluginName.SOUND
 
     def __init__(self, inner: SoundControl | None, publish: PublishSystem) -> None:
         self.inner = inner
@@ -111,19 +136,72 @@ class SoundRelay:
 
 
 class ShaderRelay:
-    """The server's ShaderControl: uniforms a script sets go to the nodes (a headless
-    server draws nothing itself)."""
+    """The server's ShaderControl: uniforms and post passes a script sets go to the nodes
+    (a headless server draws nothing itself), each checked against the scene first as a
+    renderer would; the latest of each is kept for the nodes that join later."""
 
-    plugin = "render"
+    plugin = PluginName.RENDER
 
-    def __init__(self, inner: ShaderControl | None, events: FrameEvents) -> None:
+    def __init__(self, inner: ShaderControl | None, events: FrameEvents,
+                 engine: Engine) -> None:
         self.inner = inner
         self.events = events
+        self.engine = engine
+        #: (what, name, uniform) -> its latest record, as :class:`FrameEvents` holds it
+        self.latest: dict[tuple[str, ...], list[Any]] = {}
 
     def set_uniform(self, state_id: str, name: str, value: UniformValue) -> None:
-        self.events.uniforms.append([state_id, name, value])
         if self.inner is not None:
             self.inner.set_uniform(state_id, name, value)
+        else:
+            _known("shader state", state_id, self._spec().shader_states)
+        record = [state_id, name, _plain(value)]
+        self.events.uniforms.append(record)
+        self.latest["uniform", state_id, name] = record
+
+    def enable_post(self, name: str, enabled: bool = True) -> None:
+        anomalies = self.engine.try_resource(Anomalies)
+        if anomalies is not None and (name in anomalies.states or name in ANOMALIES):
+            anomalies.switch(name, enabled, "python")  # as the renderer does: sent as one
+            return
+        if self.inner is not None:
+            self.inner.enable_post(name, enabled)
+        else:
+            _known("PostPass", name, [p.id for p in self._spec().post_passes])
+        record = ["enable", name, bool(enabled)]
+        self.events.post.append(record)
+        self.latest["post", name] = record
+
+    def set_post_uniform(self, name: str, uniform: str, value: UniformValue) -> None:
+        if self.inner is not None:
+            self.inner.set_post_uniform(name, uniform, value)
+        else:
+            _known("PostPass", name, [p.id for p in self._spec().post_passes])
+        record = ["uniform", name, uniform, _plain(value)]
+        self.events.post.append(record)
+        self.latest["post uniform", name, uniform] = record
+
+    def _spec(self) -> Any:
+        ids = self.engine.try_resource(SceneIds)
+        return SceneSpec() if ids is None else ids.spec
+
+    def state(self) -> dict[str, list[list[Any]]]:
+        """What was set so far, for a node's full state."""
+        return {"uniforms": [r for k, r in self.latest.items() if k[0] == "uniform"],
+                "post": [r for k, r in self.latest.items() if k[0] != "uniform"]}
+
+
+def _known(what: str, name: str, names: Any) -> None:
+    """KeyError naming the closest of ``names`` when ``name`` is not one of them."""
+    if name not in names:
+        close = difflib.get_close_matches(name, list(names), 1)
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        raise KeyError(f"unknown {what} {name!r}{hint}")
+
+
+def _plain(value: Any) -> Any:
+    """A uniform's or parameter's value as JSON holds it (vectors as lists)."""
+    return [float(v) for v in value] if isinstance(value, tuple | list) else value
 
 
 class ServeInputSystem(System):
@@ -145,8 +223,13 @@ class ServeInputSystem(System):
         self.hub = engine.try_resource(InputHub)  # the input system's (set up after this)
         server = self.server
         for peer, records in server.poll():
-            for record in records[:1000]:
+            for record in records[:MAX_EVENTS]:
                 self._inject(peer, record)
+            if len(records) > MAX_EVENTS:
+                server.counts["oversized"] += 1
+                self.messages.warn(f"node {peer.user!r} sent {len(records)} input events in "
+                                   f"one message; the first {MAX_EVENTS} were taken, the "
+                                   "rest dropped", key=f"too many events from {peer.user}")
         for peer in server.joined:
             self.leaving.pop(peer.user, None)
             engine.events.emit(CustomEvent("userJoined", peer.user))
@@ -175,8 +258,9 @@ class ServeInputSystem(System):
             event = event_from_record(record)
         except (ValueError, KeyError, TypeError) as exc:
             self.server.counts["malformed"] += 1
-            self.messages.warn(f"node {peer.user!r} sent an input event that is not one "
-                               f"({exc}); dropped")
+            self.messages.warn(f"node {peer.user!r} sends input events that are not ones, "
+                               f"dropped (counted as malformed); the first: {exc}",
+                               key=f"malformed input from {peer.user}")
             return
         scoped = _scope(event, peer.user)
         if isinstance(scoped, Button):
@@ -196,6 +280,11 @@ class ServeInputSystem(System):
             self.hub.inject(DeviceLost(f"{peer.user}/{source}"))
 
 
+def _object_name(engine: Engine, entity: int, fallback: str | None = None) -> str:
+    named = engine.world.try_component(entity, Name)
+    return named.id if named is not None else fallback or f"entity {entity}"
+
+
 def _scope(event: Any, user: str) -> Any:
     """The event with its source named ``user/source``."""
     from dataclasses import replace
@@ -207,10 +296,14 @@ class PublishSystem(System):
     """Every frame's state to the nodes: poses of what moved, and the frame's events."""
 
     phase = Phase.RENDER
-    reads = (Name, Transform, Camera, Physical, Sound)
+    reads = (Name, Transform, Camera, Physical, Sound, Visual, UserOwned)
 
     def __init__(self, server: NetServer) -> None:
         self.server = server
+        #: Gather and send frames while no node is joined too (a server nobody follows
+        #: skips both); ``colosseum bench net`` sets it, so that its no-node baseline does
+        #: the same work as a server with nodes.
+        self.publish_alone = False
         self.events = FrameEvents()
         self.contacts = ContactSoundFilter()
         #: entity -> net id, for every replicated entity; and the ids sorted with their
@@ -222,31 +315,44 @@ class PublishSystem(System):
         self._rows: tuple[int, int, np.ndarray] | None = None
         self._layout = 0
         self._announced: set[int] = set()  # spawned entities whose record went out
+        self._fresh: list[int] = []  # entities replicated since the last frame went out
+        self.shaders: ShaderRelay  # made in setup, with the engine
         self.publish_costs = CostLog()
+        #: Custom events a frame held beyond MAX_CUSTOM, which the nodes were not told.
+        self.custom_dropped = 0
         self.messages = MessageLog(log)
         self._full: tuple[int, dict[str, Any]] | None = None
+        #: (layout key, bone ids, palette rows, each bone's avatar entity) of the avatars
+        #: whose skeletons go out
+        self._bones: tuple[Any, np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def setup(self, engine: Engine) -> None:
         sound = engine.try_resource(SoundControl)  # type: ignore[type-abstract]
         engine.insert_resource(SoundRelay(sound, self), as_type=SoundControl)
         shader = engine.try_resource(ShaderControl)  # type: ignore[type-abstract]
-        engine.insert_resource(ShaderRelay(shader, self.events), as_type=ShaderControl)
+        self.shaders = ShaderRelay(shader, self.events, engine)
+        engine.insert_resource(self.shaders, as_type=ShaderControl)
         for entity in sorted(engine.world.entities()):
             self._track(engine, entity)
-        self._announced.update(self.net_of)
+        self._announced.update(self.net_of)  # in the full state (made in Python or not)
+        self._fresh.clear()
         self.server.full_state = lambda: self.full_state(engine)
         engine.stat_sources["net"] = self.stats
 
     def _track(self, engine: Engine, entity: int) -> None:
+        """Replicate ``entity`` if it is an object: a Transform and a Name or a Visual (an
+        unnamed one made in Python), cameras excepted (each node has its own)."""
         world = engine.world
         if entity in self.net_of or not world.entity_exists(entity):
             return
-        if world.try_component(entity, Name) is None or world.try_component(
-                entity, Transform) is None or world.try_component(entity, Camera) is not None:
+        if world.try_component(entity, Transform) is None or world.try_component(
+                entity, Camera) is not None or (world.try_component(entity, Name) is None
+                                                and world.try_component(entity, Visual) is None):
             return
         self.net_of[entity] = self._next
         self._next += 1
         self._layout += 1
+        self._fresh.append(entity)
 
     def sound(self, what: str, entity: int, *args: float) -> None:
         net = self.net_of.get(entity)
@@ -264,12 +370,17 @@ class PublishSystem(System):
                 self.events.removed.append(net)
                 self._layout += 1
         self._spawn_records(engine)
+        self._python_objects(engine)
         self._contact_sounds(engine)
+        self._anomalies(engine)
         self._custom(engine)
         server = self.server
         events = self.events.take()
-        if server.peers:
+        if server.peers or self.publish_alone:
             ids, poses = self._poses(engine)
+            bones, joints = self._skeletons(engine)
+            if len(bones):
+                ids, poses = np.concatenate([ids, bones]), np.concatenate([poses, joints])
             server.submit(engine.frame, engine.physics.snapshot.time, ids, poses, events,
                           key=engine.frame % KEY_EVERY == 0)
             server.barrier()
@@ -291,6 +402,46 @@ class PublishSystem(System):
                 return self._poses(engine)
             self._rows = (self._layout, poses.version, rows)
         return self._ids, poses.table[self._rows[2], :7]  # a copy: the sender's own
+
+    def _skeletons(self, engine: Engine) -> tuple[np.ndarray, np.ndarray]:
+        """Every replicated avatar's joint matrices as poses, with their bone ids
+        (:mod:`engine.net.bones`): what the avatars plugin published for this frame."""
+        palettes = engine.try_resource(Palettes)
+        if palettes is None or not palettes.offsets:
+            return np.zeros(0, np.uint32), np.zeros((0, 7))
+        key = (self._layout, tuple(palettes.offsets.items()), len(palettes.matrices))
+        if self._bones is None or self._bones[0] != key:
+            self._bones = (key, *self._bone_layout(engine, palettes))
+        _, ids, rows, owners = self._bones
+        poses, stretch = palette_poses(palettes.matrices[rows])
+        for entity in np.unique(owners[stretch > MAX_STRETCH]).tolist():
+            self.messages.warn(f"avatar {_object_name(engine, entity)!r} scales its bones; "
+                               "nodes draw its skeleton without the scale")
+        return ids, poses
+
+    def _bone_layout(self, engine: Engine, palettes: Palettes
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        ends = sorted(palettes.offsets.values()) + [len(palettes.matrices)]
+        joints = {start: stop - start for start, stop in zip(ends, ends[1:], strict=False)}
+        chosen = []
+        for entity, start in palettes.offsets.items():
+            net = self.net_of.get(entity)
+            if net is None:
+                continue
+            if net >= MAX_AVATAR_NET or joints[start] > MAX_JOINTS:
+                self.messages.error(f"avatar {_object_name(engine, entity)!r} has "
+                                    f"{joints[start]} joints (at most {MAX_JOINTS} go to "
+                                    "nodes) or too many objects came before it; nodes draw "
+                                    "it in its rest pose")
+                continue
+            chosen.append((net, start, joints[start], entity))
+        chosen.sort()
+        nets = np.array([c[0] for c in chosen], np.int64)
+        counts = np.array([c[2] for c in chosen], np.int64)
+        rows = np.concatenate([np.arange(c[1], c[1] + c[2]) for c in chosen]) if chosen \
+            else np.zeros(0, np.int64)
+        return bone_ids(nets, counts), rows, np.repeat(
+            np.array([c[3] for c in chosen], np.int64), counts)
 
     def _spawn_records(self, engine: Engine) -> None:
         """Objects a script spawned since the last frame go out as their scene text."""
@@ -315,6 +466,43 @@ class PublishSystem(System):
                 "text": write(record.db, literal=True, flatten=True),
                 "objects": [self.net_of.get(e, -1) for e in record.objects]})
 
+    def _python_objects(self, engine: Engine) -> None:
+        """Objects made this frame by Python code (no scene text of their own) go out as
+        text written from their components."""
+        fresh, self._fresh = self._fresh, []
+        for entity in fresh:
+            if entity in self._announced or entity not in self.net_of:
+                continue
+            self._announced.add(entity)
+            text = self._object_text(engine, entity)
+            if text is not None:
+                self.events.spawned.append({"text": text, "objects": [self.net_of[entity]]})
+
+    def _object_name(self, engine: Engine, entity: int) -> str:
+        """Its Name, else one made from its net id (an object made in Python unnamed)."""
+        return _object_name(engine, entity, f"unnamed~{self.net_of[entity]}")
+
+    def _object_text(self, engine: Engine, entity: int) -> str | None:
+        """Scene text of an object made in Python; None (told, once per object) when its
+        components cannot be written: the nodes do not show it."""
+        from engine.scene.db import STRUCTURE, Block, Entry, Value
+        from engine.scene.objects_text import Unwritable, object_block
+        from engine.scene.writer import write
+
+        world = engine.world
+        name = self._object_name(engine, entity)
+        try:
+            block = object_block(name, world.component_for_entity(entity, Transform),
+                                 world.try_component(entity, Visual),
+                                 world.try_component(entity, Sound),
+                                 world.try_component(entity, UserOwned))
+        except Unwritable as exc:
+            self.messages.error(f"object {name!r}, made in Python, is not shown on the "
+                                f"nodes: its {exc} has no scene text")
+            return None
+        entry = Entry("Object", Value(STRUCTURE, block, block.loc), block.loc)
+        return write(Block([entry]), literal=True)
+
     def _contact_sounds(self, engine: Engine) -> None:
         batches = engine.events.frame(Contacts)
         if not batches:
@@ -330,8 +518,28 @@ class PublishSystem(System):
                                                    [float(x) for x in hit.position]])
                         break
 
+    def _anomalies(self, engine: Engine) -> None:
+        """Each anomaly switched or set this frame, as it stands now (the nodes ramp it)."""
+        switched = {e.anomaly for e in engine.events.frame(AnomalySwitched)}
+        anomalies = engine.try_resource(Anomalies)
+        if not switched or anomalies is None:
+            return
+        for state in anomalies.states.values():
+            if state.id in switched:
+                self.events.anomalies.append([
+                    state.id, state.kind.name, state.enabled, state.onset, state.eye,
+                    {key: _plain(value) for key, value in state.values.items()}])
+
     def _custom(self, engine: Engine) -> None:
-        for event in engine.events.frame(CustomEvent)[:MAX_CUSTOM]:
+        events = engine.events.frame(CustomEvent)
+        over = events[MAX_CUSTOM:]
+        if over:
+            self.custom_dropped += len(over)
+            names = ", ".join(repr(n) for n in dict.fromkeys(e.name for e in over))
+            self.messages.warn(f"{len(events)} custom events in one frame: the nodes are told "
+                               f"the first {MAX_CUSTOM}, not the other {len(over)} ({names}); "
+                               "see --stats net.custom_dropped")
+        for event in events[:MAX_CUSTOM]:
             try:
                 protocol.encode({"d": event.data})
             except (TypeError, ValueError):
@@ -349,15 +557,23 @@ class PublishSystem(System):
             return self._full[1]
         written: dict[int, str] = {}
         text = write_state(engine, None, written)
+        for entity in self.net_of:  # objects made in Python: their text from components
+            if entity not in written:
+                made = self._object_text(engine, entity)
+                if made is not None:
+                    text += made
+                    written[entity] = self._object_name(engine, entity)
         names = {name: self.net_of[e] for e, name in written.items() if e in self.net_of}
         folder = engine.config.content_dir
         state = {"text": text, "names": names, "frame": engine.frame, "time": engine.time,
-                 "dt": engine.config.dt, "content_dir": None if folder is None else str(folder)}
+                 "dt": engine.config.dt, "content_dir": None if folder is None else str(folder),
+                 **self.shaders.state()}
         self._full = (engine.frame, state)
         return state
 
     def stats(self) -> dict[str, Any]:
         return {**self.server.stats(), "replicated": len(self.net_of),
+                "custom_dropped": self.custom_dropped,
                 "publish_ms_mean": self.publish_costs.mean() * 1e3,
                 "publish_ms_p99": self.publish_costs.percentile(99) * 1e3}
 
@@ -365,7 +581,7 @@ class PublishSystem(System):
 class ServerPlugin:
     """Serves the engine's simulation to nodes (``colosseum serve``)."""
 
-    name = "net-server"
+    name = PluginName.NET_SERVER
 
     def __init__(self, server: NetServer, leave_after: float = 10.0) -> None:
         self.server = server
@@ -390,6 +606,9 @@ class FollowSystem(System):
         self.client = client
         self.display = display
         self.barrier = barrier
+        #: How long a display waits at the barrier: the server's own wait, and a frame
+        #: or two for its release to arrive.
+        self.barrier_wait = float(welcome.get("barrier_wait", protocol.BARRIER_WAIT)) + 0.25
         self.decoder = PoseDecoder()
         self.follower = Follower(delay=1.5 * float(welcome.get("dt") or 1 / 60))
         self.entity_of: dict[int, int] = {}
@@ -405,10 +624,19 @@ class FollowSystem(System):
         self._outbox: list[dict[str, Any]] = []
         self._rows: tuple[int, int, np.ndarray, np.ndarray] | None = None
         self._layout = 0
+        #: The frame the swap barrier's last round released (every display released in it
+        #: draws it next), that frame if it was held then, and whether this frame waited
+        #: at the barrier already.
+        self._agreed: int | None = None
+        self._pinned: Shown | None = None
+        self._waited = False
         self.messages = MessageLog(log)
-        self._welcome = welcome
+        #: The full state joined from; its uniforms and post passes are set at the first
+        #: frame (the renderer is running then).
+        self._welcome: dict[str, Any] | None = welcome
 
     def setup(self, engine: Engine) -> None:
+        assert self._welcome is not None
         self._map_names(engine, self._welcome["names"])
         hub = engine.try_resource(InputHub)
         if hub is not None:
@@ -427,20 +655,26 @@ class FollowSystem(System):
     # -- per frame ---------------------------------------------------------------
     def run(self, engine: Engine, dt: float) -> None:
         client = self.client
+        self._waited = False
+        if self._welcome is not None:
+            self._visuals(engine, self._welcome)
+            self._welcome = None
         if self._outbox:
             events, self._outbox = self._outbox[:1000], self._outbox[1000:]
             client.send({"type": "input", "events": events})
         client.beat()
-        for reply in client.replies():
-            if reply.get("rejoin"):
-                self._resync(engine, client.rejoin(1.0))
+        # a server that forgot this node (it restarted) answers each message the node
+        # queued while it was away: one rejoin answers them all
+        if any(reply.get("rejoin") for reply in client.replies()) and \
+                not self._rejoin(engine, 1.0):
+            return
         wall = time.monotonic()
         newest = None
         for kind, header, blob in client.receive():
             if kind == protocol.BARRIER:
                 continue
             if header.get("epoch") != client.epoch:
-                self._resync(engine, client.rejoin(2.0))
+                self._rejoin(engine, 2.0)
                 return
             newest = self._take(engine, header, blob, wall) or newest
         if newest is None and client.silent:
@@ -499,17 +733,40 @@ class FollowSystem(System):
                     self._layout += 1
             for sound in events.get("sounds", ()):
                 self._sound(engine, sound)
-            control = engine.try_resource(ShaderControl)  # type: ignore[type-abstract]
-            for state, name, value in events.get("uniforms", ()):
-                if control is not None:
-                    control.set_uniform(state, name, tuple(value) if isinstance(value, list)
-                                        else value)
+            self._visuals(engine, events)
             for name, data in events.get("custom", ()):
                 engine.events.emit(CustomEvent(name, data))
         except (KeyError, TypeError, ValueError) as exc:
             self.counts["malformed"] += 1
             self.messages.warn(f"a frame's events from the server are not understood "
                                f"({exc!r}); the rest of them are skipped")
+
+    def _visuals(self, engine: Engine, events: dict[str, Any]) -> None:
+        """Uniforms, post passes and anomalies the server's scripts set, drawn here; one
+        this node cannot draw (its renderer refused it) is told and the rest go on."""
+        control = engine.try_resource(ShaderControl)  # type: ignore[type-abstract]
+        anomalies = engine.try_resource(Anomalies)
+        for kind in ("uniforms", "post", "anomalies"):
+            for record in events.get(kind, ()):
+                try:
+                    if kind == "anomalies" and anomalies is not None:
+                        anomaly, what, enabled, onset, eye, values = record
+                        if anomaly not in anomalies.states:
+                            anomalies.declare(anomaly, kind=what)
+                        anomalies.set(anomaly, "server", enabled=bool(enabled), onset=onset,
+                                      eye=eye, values={k: _vector(v) for k, v in
+                                                       values.items()})
+                    elif kind == "uniforms" and control is not None:
+                        state, name, value = record
+                        control.set_uniform(state, name, _vector(value))
+                    elif kind == "post" and control is not None and record[0] == "enable":
+                        control.enable_post(record[1], bool(record[2]))
+                    elif kind == "post" and control is not None:
+                        _, name, uniform, value = record
+                        control.set_post_uniform(name, uniform, _vector(value))
+                except (KeyError, TypeError, ValueError, RuntimeError) as exc:
+                    self.messages.warn(f"the server's {kind} {record!r} cannot be drawn "
+                                       f"here ({exc}); skipped")
 
     def _spawn(self, engine: Engine, text: str, objects: list[int]) -> None:
         from engine.scene import SceneError, spec_from_text
@@ -559,12 +816,21 @@ class FollowSystem(System):
             newest = follower.frames[-1]
             shown = newest
             if self.barrier:
-                agreed = self.client.wait_barrier(newest.frame, 0.25)
-                found = None if agreed is None else follower.frame(agreed)
-                if found is None:
-                    self.counts["barrier misses"] += 1
-                else:
-                    shown = found
+                if self._agreed is None:  # nothing agreed yet (the first frame, or the last
+                    # wait ran out): agree before drawing; a wait that ran out is not waited
+                    # again before the swap
+                    self._agreed = self._barrier_round()
+                    self._waited = self._agreed is None
+                if self._agreed is not None:
+                    found = self._pinned if self._pinned is not None else self._frame_at(
+                        engine, self._agreed, time.monotonic() + self.barrier_wait)
+                    self._agreed, self._pinned = None, None
+                    if not follower.frames:
+                        return  # the server restarted meanwhile: rejoined, nothing to draw yet
+                    if found is None:
+                        self.counts["barrier misses"] += 1
+                    else:
+                        shown = found
             ids, when = shown.ids, shown.time
             rows = np.zeros((len(ids), 13))
             rows[:, :7] = shown.poses
@@ -579,7 +845,48 @@ class FollowSystem(System):
         self.shown_time = when
         self._write(engine, ids, rows)
 
+    def _barrier_round(self) -> int | None:
+        """Wait at the swap barrier holding the frames held; the frame the round released
+        (None, counted, when the wait ran out)."""
+        frames = self.follower.frames
+        agreed = self.client.wait_barrier(frames[0].frame, frames[-1].frame, self.barrier_wait)
+        if agreed is None:
+            self.counts["barrier misses"] += 1
+        return agreed
+
+    def before_swap(self) -> None:
+        """The swap barrier between a frame drawn and its swap (this display's
+        :class:`~engine.services.SwapGate`), once a frame: every display released in a
+        round swaps then, and draws the frame the round released next."""
+        if self._waited or not self.follower.frames:
+            return
+        self._waited = True
+        self._agreed = self._barrier_round()
+        # held on to now: frames arriving before it is drawn must not push it out
+        self._pinned = None if self._agreed is None else self.follower.frame(self._agreed)
+
+    def _frame_at(self, engine: Engine, number: int, end: float) -> Shown | None:
+        """Frame ``number`` of those held, or of those arriving before ``end`` (the
+        barrier agreed on a frame newer than this display's newest)."""
+        follower, client = self.follower, self.client
+        while (found := follower.frame(number)) is None and \
+                number > follower.frames[-1].frame and \
+                client.wait(max(end - time.monotonic(), 0.0)):
+            wall = time.monotonic()
+            for kind, header, blob in client.receive():
+                if kind == protocol.BARRIER:
+                    continue
+                if header.get("epoch") != client.epoch:
+                    self._rejoin(engine, 2.0)
+                    return None
+                self._take(engine, header, blob, wall)
+        return found
+
     def _write(self, engine: Engine, ids: np.ndarray, rows: np.ndarray) -> None:
+        cut = int(np.searchsorted(ids, BONE_FLAG))  # bodies first, then the avatars' bones
+        if cut < len(ids):
+            self._skeletons(engine, ids[cut:], rows[cut:, :7])
+            ids, rows = ids[:cut], rows[:cut]
         table = engine.world.poses
         cached = self._rows
         if cached is None or cached[:2] != (self._layout, table.version) or \
@@ -590,6 +897,28 @@ class FollowSystem(System):
         have = where >= 0
         table.table[where[have]] = rows[have]
 
+    def _skeletons(self, engine: Engine, ids: np.ndarray, poses: np.ndarray) -> None:
+        """The avatars' joint matrices as the server drew them, for the renderer."""
+        palettes = engine.resource(Palettes)
+        owners, _ = split_bone_ids(ids)
+        nets, starts = np.unique(owners, return_index=True)
+        palettes.matrices = palette_matrices(poses)
+        palettes.offsets = {self.entity_of[net]: int(start) for net, start in
+                            zip(nets.tolist(), starts.tolist(), strict=True)
+                            if net in self.entity_of}
+        palettes.version += 1
+
+    def _rejoin(self, engine: Engine, wait: float) -> bool:
+        """Join the server again and rebuild from its state; a refusal or silence is told
+        and tried again next frame (False)."""
+        try:
+            welcome = self.client.rejoin(wait)
+        except NetError as exc:
+            log.warning("%s; trying again", exc)
+            return False
+        self._resync(engine, welcome)
+        return True
+
     def _resync(self, engine: Engine, welcome: dict[str, Any]) -> None:
         """Another server (a restart) or a lost place: build the world from its state."""
         self.counts["resyncs"] += 1
@@ -598,6 +927,7 @@ class FollowSystem(System):
         self.decoder = PoseDecoder()
         self.follower.reset()
         self._frame = -1
+        self._agreed, self._pinned = None, None  # the other server's frame numbers
         spec = node_scene(welcome, engine.config.content_dir or Path("."))
         for entity in list(engine.world.entities()):
             engine.despawn(entity)
@@ -607,6 +937,13 @@ class FollowSystem(System):
 
             instantiate(engine, spec)
             self._map_names(engine, welcome["names"])
+            anomalies = engine.try_resource(Anomalies)
+            for declared in spec.anomalies if anomalies is not None else ():
+                if declared.id not in anomalies.states:
+                    anomalies.declare(declared.id, kind=declared.kind)
+                anomalies.set(declared.id, "server", enabled=declared.enabled,
+                              values=declared.values, onset=declared.onset, eye=declared.eye)
+            self._welcome = welcome  # its uniforms and post passes, at the next frame
 
         engine.defer(rebuild)
 
@@ -620,6 +957,11 @@ class FollowSystem(System):
                 "shown_frames": list(self.shown_frames),
                 "latency_ms_p50": self.latency.percentile(50) * 1e3,
                 "latency_ms_p99": self.latency.percentile(99) * 1e3}
+
+
+def _vector(value: Any) -> Any:
+    """A value from JSON as the engine holds it (vectors as tuples)."""
+    return tuple(float(v) for v in value) if isinstance(value, list) else value
 
 
 def node_scene(welcome: dict[str, Any], folder: Path) -> Any:
@@ -640,10 +982,25 @@ def node_scene(welcome: dict[str, Any], folder: Path) -> Any:
     return build_specs(validated(db, folder), folder)
 
 
+class SwapBarrierSystem(System):
+    """A display's swap barrier on a frame it did not draw (a headless display draws only
+    the frames it saves; a drawn one waited before its swap): waited at the frame's end,
+    so the displays keep in step whether they draw or not."""
+
+    phase = Phase.RENDER
+    after = ("RenderSystem",)
+
+    def __init__(self, follow: FollowSystem) -> None:
+        self.follow = follow
+
+    def run(self, engine: Engine, dt: float) -> None:
+        self.follow.before_swap()
+
+
 class NodePlugin:
     """Follows a server (``colosseum join``): no physics, no scripts of its own."""
 
-    name = "net-node"
+    name = PluginName.NET_NODE
 
     def __init__(self, client: NetClient, welcome: dict[str, Any], display: bool = False,
                  barrier: bool = False) -> None:
@@ -651,4 +1008,8 @@ class NodePlugin:
 
     def build(self, engine: Engine) -> None:
         engine.insert_resource(self.system)
+        engine.insert_resource(Palettes())  # the server's skeletons, drawn here
         engine.add_system(self.system)
+        if self.system.display and self.system.barrier:
+            engine.insert_resource(self.system, as_type=SwapGate)
+            engine.add_system(SwapBarrierSystem(self.system))

@@ -34,6 +34,8 @@ log = logging.getLogger("colosseum.net")
 STATE_QUEUE = 64
 #: Seconds between heartbeats.
 BEAT = 0.25
+#: Connections the server may close in the handshake before a node without keys gives up.
+CUT_OFF = 3
 
 _HANDSHAKE_FAILED = {
     getattr(zmq, "EVENT_HANDSHAKE_FAILED_NO_DETAIL", 0x0800): "the encryption handshake "
@@ -65,6 +67,8 @@ class NetClient:
         self._heard = clock()
         self._beat = 0.0
         self._held: list[list[bytes]] = []
+        #: The swap barrier's rounds this display has waited in.
+        self._round = 0
         self._ctx = zmq.Context()
         self._sub: zmq.Socket | None = None
         self._dealer: zmq.Socket | None = None
@@ -73,19 +77,24 @@ class NetClient:
     def _connect(self) -> None:
         self._close_sockets()
         state_at, control_at = protocol.endpoints(self.address)
-        self._sub = self._socket(zmq.SUB, state_at)
-        self._sub.rcvhwm = STATE_QUEUE
+        self._sub = self._socket(zmq.SUB, state_at, queue=STATE_QUEUE)
         self._sub.setsockopt(zmq.SUBSCRIBE, b"")
-        self._dealer = self._socket(zmq.DEALER, control_at)
-        self._monitor = self._dealer.get_monitor_socket()
+        self._dealer = self._socket(zmq.DEALER, control_at, monitored=True)
 
-    def _socket(self, kind: int, endpoint: str) -> zmq.Socket:
+    def _socket(self, kind: int, endpoint: str, monitored: bool = False,
+                queue: int | None = None) -> zmq.Socket:
+        """A socket connected to ``endpoint``; ``queue``: messages it queues (set before
+        the connect, which takes the options as they are then)."""
         sock = self._ctx.socket(kind)
         sock.linger = 0
+        if queue is not None:
+            sock.rcvhwm = queue
         if self.keys is not None:
             sock.curve_secretkey = self.keys.secret
             sock.curve_publickey = self.keys.public
             sock.curve_serverkey = self.keys.server
+        if monitored:  # before connecting: a refused handshake is told once, at once
+            self._monitor = sock.get_monitor_socket()
         sock.connect(endpoint)
         return sock
 
@@ -120,13 +129,21 @@ class NetClient:
         poller.register(self._dealer, zmq.POLLIN)
         poller.register(self._monitor, zmq.POLLIN)
         end = self.clock() + wait
+        cut_off = 0
         while (left := end - self.clock()) > 0:
             ready = dict(poller.poll(int(left * 1000) + 1))
             if self._monitor in ready:
                 event = recv_monitor_message(self._monitor)
                 problem = _HANDSHAKE_FAILED.get(event["event"])
                 if event["event"] == zmq.EVENT_HANDSHAKE_FAILED_NO_DETAIL and self.keys is None:
-                    problem = None  # a connection closed while it was made: it is retried
+                    # a connection closed while it was made is retried; a server that
+                    # closes every one is CURVE's (libzmq tells the mismatch only now and
+                    # then) or not ZeroMQ at all
+                    cut_off += 1
+                    problem = None if cut_off < CUT_OFF else (
+                        f"the server closed {cut_off} connections in ZeroMQ's handshake: it "
+                        "speaks another security mechanism (it was started with --key: join "
+                        "with --key DIR), or it is not a colosseum server")
                 if problem is not None:
                     raise NetError(f"cannot join {self.address}: {problem}")
             if self._dealer in ready:
@@ -136,6 +153,8 @@ class NetClient:
                     raise NetError(f"{self.address} answered something that is not this "
                                    f"protocol ({exc}); is it a colosseum server?") from None
                 if reply.get("type") == "refused":
+                    if kind == "welcome" and reply.get("rejoin"):
+                        continue  # answers a message sent before this hello
                     raise NetError(f"{self.address} refused this node: {reply.get('reason')}",
                                    reply)
                 if reply.get("type") == kind:
@@ -184,11 +203,14 @@ class NetClient:
         assert self._sub is not None
         return bool(self._held) or bool(self._sub.poll(int(timeout * 1000)))
 
-    def wait_barrier(self, frame: int, wait: float) -> int | None:
-        """Tell the server this display is ready to draw ``frame`` and wait (at most
-        ``wait`` s) for the frame every display holds; None when the wait ran out.
-        State messages arriving meanwhile are kept for the next :meth:`receive`."""
-        self.send({"type": "ready", "frame": frame})
+    def wait_barrier(self, oldest: int, newest: int, wait: float) -> int | None:
+        """Tell the server this display is ready, holding frames ``oldest`` to
+        ``newest``, and wait (at most ``wait`` s) for the frame every display is to
+        draw; None when the wait ran out. A
+        release of a round this display was not in (one it came too late for) is passed
+        over. State messages arriving meanwhile are kept for the next :meth:`receive`."""
+        self._round += 1
+        self.send({"type": "ready", "frame": newest, "oldest": oldest, "round": self._round})
         assert self._sub is not None
         end = self.clock() + wait
         while (left := end - self.clock()) > 0:
@@ -199,10 +221,12 @@ class NetClient:
                 self._held.append(frames)
                 continue
             try:
-                released = protocol.decode_json(frames[1]).get("frame")
+                release = protocol.decode_json(frames[1])
             except MessageError:
                 continue
-            if isinstance(released, int):
+            rounds, released = release.get("rounds"), release.get("frame")
+            if isinstance(rounds, dict) and rounds.get(self.user) == self._round and \
+                    isinstance(released, int):
                 return released
         return None
 

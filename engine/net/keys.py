@@ -6,8 +6,9 @@
     DIR/users/alice.key  DIR/users/alice.key_secret  one pair per user
 
 ``serve --key DIR`` uses the server's secret key and accepts only the users whose public
-key is in ``DIR/users``; ``join --key DIR --user alice`` needs ``server.key`` (public) and
-``users/alice.key_secret``. Hand each user only those two files.
+key is in ``DIR/users``, each only under its own name (the key file's); ``join --key DIR
+--user alice`` needs ``server.key`` (public) and ``users/alice.key_secret``. Hand each user
+only those two files.
 """
 
 from __future__ import annotations
@@ -28,6 +29,9 @@ class ServerKeys:
     public: bytes
     secret: bytes
     users: Path
+    #: Each user's public key (Z85, the User-Id CURVE gives their messages) -> their name
+    #: (the key file's): a node may join only as the user its key is.
+    names: dict[str, str]
 
 
 @dataclass(frozen=True, slots=True)
@@ -70,7 +74,8 @@ def server_keys(folder: Path) -> ServerKeys:
         raise KeyProblem(f"{users}: no user keys; no node could join (make them with "
                         "`colosseum keygen DIR --user NAME`)")
     assert secret is not None
-    return ServerKeys(public, secret, users)
+    names = {_load(key, False)[0].decode(): key.stem for key in sorted(users.glob("*.key"))}
+    return ServerKeys(public, secret, users, names)
 
 
 def client_keys(folder: Path, user: str) -> ClientKeys:

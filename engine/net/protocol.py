@@ -5,7 +5,10 @@ Two sockets per server, both on the address ``--bind`` names:
 * **state** (PUB on PORT, nodes SUB): every physics frame ``[b"S", header, poses]`` —
   ``header`` a JSON object (:func:`state_header`: the server's epoch, frame, simulated
   time, wall time sent, and the frame's events), ``poses`` a blob of
-  :mod:`engine.net.codec`; and ``[b"B", {"frame": F}]``, the swap barrier's release.
+  :mod:`engine.net.codec`; and ``[b"B", {"frame": F, "rounds": {user: round}}]``, the
+  swap barrier's release of the displays that were ready (each at its own round): F is
+  the newest frame every one of them holds or, where a display joined after another's
+  newest, the oldest one the newcomer holds, which the others then wait for.
 * **control** (ROUTER on PORT+1, nodes DEALER): one JSON object per message, ``type``
   one of :data:`REQUESTS` (node to server) or ``welcome``, ``refused``, ``state``
   (server to node).
@@ -31,18 +34,22 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
-#: Version of this protocol; a node of another version is refused at hello.
-VERSION = 1
+#: Version of this protocol; a node of another version is refused at hello (2: change
+#: residuals zigzagged, keyframes stored; see engine/net/codec.py).
+VERSION = 2
 #: Bytes a node may send in one message (a frame's input is far smaller).
 MAX_MESSAGE = 64 * 1024
 #: ZeroMQ's own cap per message on the server's sockets: larger ones cut the peer off.
 HARD_LIMIT = 1024 * 1024
 STATE, BARRIER = b"S", b"B"
+#: Seconds a swap barrier waits for every display before it lets the ready ones go
+#: (``serve --barrier-wait``).
+BARRIER_WAIT = 0.1
 
 #: Requests a node sends, and the fields each must carry.
 REQUESTS: dict[str, tuple[str, ...]] = {
     "bye": (), "hello": ("v", "user", "content"), "input": ("events",), "key": (),
-    "ready": ("frame",), "state": (), "beat": (),
+    "ready": ("frame", "oldest", "round"), "state": (), "beat": (),
 }
 
 

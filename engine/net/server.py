@@ -29,7 +29,7 @@ import zmq
 from engine.net import protocol
 from engine.net.codec import PoseCoder
 from engine.net.keys import ServerKeys
-from engine.net.protocol import MessageError
+from engine.net.protocol import BARRIER_WAIT, MessageError
 from engine.realtime import CostLog
 
 log = logging.getLogger("colosseum.net")
@@ -38,8 +38,9 @@ log = logging.getLogger("colosseum.net")
 MAX_REQUESTS = 2_000
 #: State messages queued per node before ZeroMQ drops that node's newest (about 1 s).
 STATE_QUEUE = 64
-#: Seconds a swap barrier waits for every display before it lets the ready ones go.
-BARRIER_WAIT = 0.1
+#: Seconds a node may take from its hello to its first message (building a large scene
+#: and starting its renderer) before it counts as gone.
+JOIN_GRACE = 30.0
 
 
 class NetError(Exception):
@@ -62,7 +63,11 @@ class Peer:
     #: Buttons it holds down now ((device, name), device unscoped) and sources it used.
     held: set[tuple[str, str]] = field(default_factory=set)
     sources: set[str] = field(default_factory=set)
-    ready: int | None = None
+    #: The oldest and newest frames it holds (a display at the swap barrier) and the
+    #: barrier's round it waits in.
+    ready: tuple[int, int, int] | None = None
+    #: It sent something since its hello (until then JOIN_GRACE holds, not the timeout).
+    settled: bool = False
 
 
 @dataclass(slots=True)
@@ -89,12 +94,14 @@ class NetServer:
     """
 
     def __init__(self, address: str, content: str, keys: ServerKeys | None = None,
-                 timeout: float = 2.0, clock: Callable[[], float] = time.monotonic) -> None:
+                 timeout: float = 2.0, clock: Callable[[], float] = time.monotonic,
+                 barrier_wait: float = BARRIER_WAIT) -> None:
         self.address = address
         self.content = content
         self.keys = keys
         self.timeout = timeout
         self.clock = clock
+        self.barrier_wait = barrier_wait
         #: The content folder served, told to a node whose content differs (so a node on
         #: the same machine finds it).
         self.content_dir: str | None = None
@@ -115,10 +122,12 @@ class NetServer:
         self.frames_sent = 0
         self._barrier_since: float | None = None
         self.coder = PoseCoder()
-        #: Wall seconds the sender thread spent encoding and sending each frame.
+        #: Wall seconds the sender thread spent encoding and sending each frame, and its
+        #: CPU seconds (the wall time less waiting for the GIL or a core).
         self.send_costs = CostLog()
+        self.send_cpu = CostLog()
         self._outgoing: Outgoing | None = None
-        self._releases: list[int] = []
+        self._releases: list[dict[str, Any]] = []
         self._wake = threading.Condition()
         self._stopping = False
         self._sender: threading.Thread | None = None
@@ -138,18 +147,21 @@ class NetServer:
             self._auth = ThreadAuthenticator(ctx, log=logging.getLogger("colosseum.net.auth"))
             self._auth.start()
             self._auth.configure_curve(domain="*", location=str(self.keys.users))
-        self._pub = self._socket(zmq.PUB, state_at)
-        self._pub.sndhwm = STATE_QUEUE
+        self._pub = self._socket(zmq.PUB, state_at, STATE_QUEUE)
         self._router = self._socket(zmq.ROUTER, control_at)
         self._router.setsockopt(zmq.ROUTER_MANDATORY, 0)
         self._sender = threading.Thread(target=self._send_loop, name="colosseum-net-send",
                                         daemon=True)
         self._sender.start()
 
-    def _socket(self, kind: int, endpoint: str) -> zmq.Socket:
+    def _socket(self, kind: int, endpoint: str, queue: int | None = None) -> zmq.Socket:
+        """A socket bound to ``endpoint``; ``queue``: messages it queues per peer (set
+        before the bind: a listener's connections take the options it was bound with)."""
         assert self._ctx is not None
         sock = self._ctx.socket(kind)
         sock.linger = 0
+        if queue is not None:
+            sock.sndhwm = queue
         sock.setsockopt(zmq.MAXMSGSIZE, protocol.HARD_LIMIT)
         if self.keys is not None:
             sock.curve_secretkey = self.keys.secret
@@ -197,10 +209,10 @@ class NetServer:
         router = self._router
         for _ in range(MAX_REQUESTS):
             try:
-                frames = router.recv_multipart(zmq.NOBLOCK, copy=True)
+                frames = router.recv_multipart(zmq.NOBLOCK, copy=False)
             except zmq.Again:
                 break
-            identity, body = frames[0], frames[1:]
+            identity, body = frames[0].bytes, [f.bytes for f in frames[1:]]
             try:
                 request = protocol.decode_request(body)
             except MessageError as exc:
@@ -210,7 +222,7 @@ class NetServer:
             peer = self.peers.get(identity)
             kind = request["type"]
             if kind == "hello":
-                self._hello(identity, request, now)
+                self._hello(identity, request, now, self._key_owner(frames[-1]))
                 continue
             if peer is None:  # a node the server forgot (it restarted, or timed out)
                 self._reply(identity, {"type": "refused", "reason": "not joined: say hello",
@@ -218,6 +230,7 @@ class NetServer:
                 self.counts["unjoined"] += 1
                 continue
             peer.heard = now
+            peer.settled = True
             self.counts[kind] += 1
             if kind == "input":
                 if isinstance(request["events"], list):
@@ -230,12 +243,14 @@ class NetServer:
             elif kind == "key":
                 self.key_wanted = True
             elif kind == "ready":
-                frame = request["frame"]
-                peer.ready = frame if isinstance(frame, int) else None
+                held = (request["oldest"], request["frame"], request["round"])
+                peer.ready = held if all(isinstance(n, int) for n in held) else None
             elif kind == "bye":
                 self._let_go(peer, "left")
-        for peer in [p for p in self.peers.values() if now - p.heard > self.timeout]:
-            self._let_go(peer, f"not heard from for {self.timeout:g} s")
+        for peer in list(self.peers.values()):
+            limit = self.timeout if peer.settled else max(self.timeout, JOIN_GRACE)
+            if now - peer.heard > limit:
+                self._let_go(peer, f"not heard from for {limit:g} s")
         return inputs
 
     def _bad(self, what: str, message: str, over: bool = False) -> None:
@@ -244,10 +259,24 @@ class NetServer:
         if total == 1 or total % 1000 == 0:
             log.warning("dropped %s (%d dropped so far; see --stats net)", message, total)
 
-    def _hello(self, identity: bytes, request: dict[str, Any], now: float) -> None:
+    def _key_owner(self, frame: zmq.Frame) -> str | None:
+        """The user whose CURVE key sent ``frame`` (None without --key)."""
+        if self.keys is None:
+            return None
+        try:
+            user_id = frame.get("User-Id")
+        except zmq.ZMQError:
+            return ""
+        return self.keys.names.get(str(user_id), "")
+
+    def _hello(self, identity: bytes, request: dict[str, Any], now: float,
+               owner: str | None = None) -> None:
         user, display = request.get("user"), request.get("display")
         reason = None
-        if request["v"] != protocol.VERSION:
+        if owner is not None and owner != user:
+            reason = (f"its key is {owner!r}'s, not {user!r}'s: join with --user {owner}"
+                      if owner else "its key is not among the server's users")
+        elif request["v"] != protocol.VERSION:
             reason = f"protocol version {request['v']!r}; this server speaks {protocol.VERSION}"
         elif not isinstance(user, str) or not user or "/" in user or len(user) > 64:
             reason = "user must be a name of 1 to 64 characters without '/'"
@@ -258,8 +287,12 @@ class NetServer:
         elif any(p.user == user and p.identity != identity for p in self.peers.values()):
             reason = f"user {user!r} is already joined from another node; choose another --user"
         if reason is not None:
-            self.counts["refused"] += 1
-            log.warning("refused a node: %s", reason)
+            if request["content"] == "" and reason.startswith("its content"):
+                # a node given no folder asks which one this server runs: not a refusal
+                log.debug("told a node the content folder (%s)", self.content_dir)
+            else:
+                self.counts["refused"] += 1
+                log.warning("refused a node: %s", reason)
             self._reply(identity, {"type": "refused", "reason": reason,
                                    "content_dir": self.content_dir})
             return
@@ -269,9 +302,10 @@ class NetServer:
                 display, str) else None, now)
             self.joined.append(peer)
             log.info("%s joined%s", user, f" (display {peer.display})" if peer.display else "")
-        peer.heard = now
+        peer.heard, peer.settled = now, False
         self.key_wanted = True
-        self._reply(identity, {"type": "welcome", "epoch": self.epoch, **self.full_state()})
+        self._reply(identity, {"type": "welcome", "epoch": self.epoch,
+                               "barrier_wait": self.barrier_wait, **self.full_state()})
 
     def _let_go(self, peer: Peer, why: str) -> None:
         self.peers.pop(peer.identity, None)
@@ -310,51 +344,54 @@ class NetServer:
                     return
                 out, self._outgoing = self._outgoing, None
                 releases, self._releases = self._releases, []
-            for frame in releases:
-                self._send([protocol.BARRIER, protocol.encode({"frame": frame})])
+            for release in releases:
+                self._send([protocol.BARRIER, protocol.encode(release)])
             if out is not None:
-                t0 = time.perf_counter()
+                t0, cpu = time.perf_counter(), time.thread_time()
                 if out.key:
                     self.coder.key_wanted = True
                 poses = self.coder.encode(out.ids, out.poses)
                 header = protocol.state_header(self.epoch, out.frame, out.time, out.sent,
                                                out.events)
-                if self._send([protocol.STATE, header, poses]):
-                    self.frames_sent += 1
-                    self.bytes_sent += len(header) + len(poses) + 1
+                self._send([protocol.STATE, header, poses])
+                self.frames_sent += 1
+                self.bytes_sent += len(header) + len(poses) + 1
                 self.send_costs.add(time.perf_counter() - t0)
+                self.send_cpu.add(time.thread_time() - cpu)
 
-    def _send(self, frames: list[bytes]) -> bool:
-        """Send on the state socket (the sender thread's alone); never blocks."""
+    def _send(self, frames: list[bytes]) -> None:
+        """Send on the state socket (the sender thread's alone). A PUB socket never blocks
+        nor refuses: a node whose queue is full loses the frame, which only it can tell
+        (it counts the frame numbers it missed)."""
         assert self._pub is not None
-        try:
-            self._pub.send_multipart(frames, zmq.NOBLOCK, copy=False)
-        except zmq.Again:
-            self.counts["frames dropped"] += 1
-            return False
-        return True
+        self._pub.send_multipart(frames, copy=False)
 
     def barrier(self) -> int | None:
         """Release the displays waiting at the swap barrier: when each one is ready (or
-        :data:`BARRIER_WAIT` passed since the first), the oldest frame they all hold goes
-        out and is returned."""
+        :attr:`barrier_wait` passed since the first), the newest frame they all hold
+        goes out and is returned — or, when one joined after another's newest frame,
+        the oldest frame the newcomer holds, which the others are about to receive. The
+        release names each released display's round, so a display that was not in it
+        (it came late) keeps waiting for its own."""
         displays = [p for p in self.peers.values() if p.display is not None]
-        ready = [p.ready for p in displays if p.ready is not None]
-        if not ready:
+        held = {p.user: p.ready for p in displays if p.ready is not None}
+        if not held:
             return None
         now = self.clock()
         if self._barrier_since is None:
             self._barrier_since = now
-        if len(ready) < len(displays) and now - self._barrier_since < BARRIER_WAIT:
+        if len(held) < len(displays) and now - self._barrier_since < self.barrier_wait:
             return None
-        if len(ready) < len(displays):
+        if len(held) < len(displays):
             self.counts["barrier timeouts"] += 1
-        frame = min(ready)
+        frame = max(min(newest for _, newest, _ in held.values()),
+                    max(oldest for oldest, _, _ in held.values()))
         for peer in displays:
             peer.ready = None
         self._barrier_since = None
         with self._wake:
-            self._releases.append(frame)
+            self._releases.append({"frame": frame, "rounds": {
+                user: round_ for user, (_, _, round_) in held.items()}})
             self._wake.notify()
         return frame
 
@@ -366,4 +403,5 @@ class NetServer:
                 "barrier_timeouts": self.counts["barrier timeouts"],
                 "send_ms_mean": self.send_costs.mean() * 1e3,
                 "send_ms_p99": self.send_costs.percentile(99) * 1e3,
+                "send_cpu_ms_mean": self.send_cpu.mean() * 1e3,
                 "frames_merged": self.counts["frames merged"]}

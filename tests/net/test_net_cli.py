@@ -3,6 +3,7 @@ reason and what to do, an exit code, never a traceback."""
 
 from __future__ import annotations
 
+import logging
 import shutil
 import socket
 import subprocess
@@ -74,10 +75,13 @@ def test_other_content_is_refused(tmp_path: Path) -> None:
 
 @pytest.mark.slow
 def test_curve_refuses_a_node_without_the_key(tmp_path: Path) -> None:
-    keys, strangers = tmp_path / "keys", tmp_path / "strangers"
-    told(colosseum("keygen", keys, "--user", "alice"), 0)
+    keys, strangers, stolen = tmp_path / "keys", tmp_path / "strangers", tmp_path / "stolen"
+    told(colosseum("keygen", keys, "--user", "alice", "--user", "bob"), 0)
     told(colosseum("keygen", strangers, "--user", "mallory"), 0)
     shutil.copy(keys / "server.key", strangers / "server.key")  # knows the server, not a user
+    (stolen / "users").mkdir(parents=True)  # bob holding alice's key, to drive her hands
+    shutil.copy(keys / "server.key", stolen / "server.key")
+    shutil.copy(keys / "users" / "alice.key_secret", stolen / "users" / "bob.key_secret")
     port = free_port()
     with local_server(port, "--key", keys) as server, processes(tmp_path) as procs:
         plain = procs.start("plain", *join_args(port, "alice", "--frames", 5))
@@ -89,8 +93,54 @@ def test_curve_refuses_a_node_without_the_key(tmp_path: Path) -> None:
         server.step_until(lambda e: stranger.poll() is not None, 20, "mallory giving up")
         assert stranger.returncode == 1 and "refused this node's key" in procs.log(stranger), \
             procs.log(stranger)
+        posing = procs.start("posing", *join_args(port, "bob", "--frames", 5, "--key", stolen))
+        server.step_until(lambda e: posing.poll() is not None, 20, "bob-as-alice giving up")
+        assert posing.returncode == 1 and "its key is 'alice''s, not 'bob''s" in procs.log(
+            posing), procs.log(posing)
         assert not server.server.peers
         alice = procs.start("alice", *join_args(port, "alice", "--frames", 30, "--key", keys))
         server.step_until(lambda e: alice.poll() is not None, 20, "alice finishing")
         assert alice.returncode == 0, procs.log(alice)
         assert server.server.counts["hello"] == 0  # hellos are not counted as requests
+
+
+def test_serve_takes_params_and_headless(tmp_path: Path) -> None:
+    """serve takes run's --param (a scene variable) and --headless (it always is)."""
+    port = free_port()
+    out = tmp_path / "served.scene"
+    told(colosseum(*serve_args(port, "--headless", "--frames", 3, "--param", "crate_mass=60",
+                               "--save-state", out)), 0)
+    assert "crate_mass 60" in out.read_text()
+    told(colosseum(*serve_args(port, "--frames", 3, "--param", "crate_mas=60")), 1,
+         "did you mean 'crate_mass'")
+
+
+def test_serve_binds_loopback_unless_told_and_warns_off_it_without_a_key(
+        tmp_path: Path, caplog: pytest.LogCaptureFixture,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """The default --bind is loopback; another address without --key is warned about
+    before anything is bound. (The address off loopback here is one no interface has, so
+    the bind fails: no socket leaves 127.0.0.1.)"""
+    from engine.cli import build_parser
+    from engine.cli_net import serving_engine
+    from engine.net.protocol import is_loopback
+
+    parser = build_parser()
+    assert is_loopback(parser.parse_args(["serve", str(MULTIUSER)]).bind)
+    caplog.set_level(logging.WARNING, "colosseum.net")
+    port = free_port()
+    made = serving_engine(parser.parse_args([str(a) for a in serve_args(port)]))
+    assert not isinstance(made, int)
+    made[0].close()
+    made[1].close()
+    assert "without --key" not in caplog.text  # loopback: nothing to warn about
+    off = f"tcp://192.0.2.1:{port}"  # TEST-NET-1 (RFC 5737): on no interface here
+    assert serving_engine(parser.parse_args(["serve", str(MULTIUSER), "--bind", off])) == 1
+    assert f"serving on {off} without --key" in caplog.text
+    assert f"cannot bind {off}" in capsys.readouterr().err
+    caplog.clear()
+    keys = tmp_path / "keys"
+    told(colosseum("keygen", keys, "--user", "alice"), 0)
+    assert serving_engine(parser.parse_args(["serve", str(MULTIUSER), "--bind", off,
+                                             "--key", str(keys)])) == 1
+    assert "without --key" not in caplog.text

@@ -41,8 +41,11 @@ def content(tmp_path: Path, crash_seed: int | None = None) -> Path:
     if crash_seed is not None:  # a simulation that takes its process down
         (folder / "systems").mkdir()
         (folder / "systems" / "crash.py").write_text(
-            "import os\n\n\ndef build(engine):\n"
-            f"    if engine.config.seed == {crash_seed}:\n        os._exit(3)\n")
+            "import os\nfrom pathlib import Path\n\n\ndef build(engine):\n"
+            f"    if engine.config.seed == {crash_seed}:\n"
+            "        with (Path(__file__).parents[1] / 'attempts').open('a') as f:\n"
+            "            f.write('x')\n"
+            "        os._exit(3)\n")
     return folder
 
 
@@ -94,5 +97,14 @@ def test_a_dying_worker_is_retried_once_then_reported(tmp_path: Path) -> None:
     rows = table(tmp_path / "out" / "results.csv")
     assert [bool(r["error"]) for r in rows] == [False, False, True, False]
     assert "worker died" in rows[2]["error"]
+    assert (tmp_path / "balls" / "attempts").read_text() == "xx"  # tried once more
     assert all(r["height"] for r in rows if not r["error"])
+    assert "Traceback" not in done.stderr and "rescheduling" not in done.stderr, done.stderr
+
+
+def test_a_scheduler_that_is_not_there_is_told(tmp_path: Path) -> None:
+    done = colosseum("sweep", content(tmp_path), "--frames", 10, "--out", tmp_path / "out",
+                     "--scheduler", "nowhere")
+    assert done.returncode == 1, done.stderr
+    assert "--scheduler nowhere: no Dask scheduler answers there" in done.stderr, done.stderr
     assert "Traceback" not in done.stderr
