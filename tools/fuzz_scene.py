@@ -1,58 +1,35 @@
-"""Fuzz the scene format: generated and mutated scene text, expressions and includes.
+"""The scene target of the fuzzer (``python -m tools.fuzz --kind scene``): generated and
+mutated scene text, expressions and includes.
 
 Every input is written as a content folder and goes through what ``colosseum check``
 and ``colosseum fmt --write`` do: parse with its includes, validate, build specs,
 render the report as text and as JSON, and, when it has no errors, format it, check
 the format is stable and reads back to the same scene. Each input must end in a
-report, never a traceback, within :data:`TIME_LIMIT_S` seconds and
-:data:`MEMORY_LIMIT` bytes of new memory, and every diagnostic must point inside a
-file that was read (``path:line:col``). A failing input is shrunk (chunks removed
-while it still fails the same way) and written out as a reproducer.
+report, never a traceback, within the fuzzer's time and memory limits
+(:mod:`tools.fuzz_core`), and every diagnostic must point inside a file that was read
+(``path:line:col``).
 
-Hypothesis drives the run: each example is a seed from which one input is made
-with a seeded ``random.Random`` (cheap enough for 100,000 inputs in well under an
-hour on two cores), and batches of examples are seeded in turn, so a run is
-reproducible from ``--seed``::
-
-    .venv/bin/python -m tools.fuzz_scene --seconds 3600          # an hour
-    .venv/bin/python -m tools.fuzz_scene --seed 3 --inputs 100000
-
-The test suite runs a short fixed-seed run (tests/scene/test_fuzz.py); the fast
-path's property test (tests/scene/test_fast_path.py) uses :func:`scene_text` and
-:func:`mutate` for its scenes.
+The fast path's property test (tests/scene/test_fast_path.py) uses :func:`scene_text`
+and :func:`mutate` for its scenes.
 """
 
 from __future__ import annotations
 
-import argparse
 import random
-import resource
 import shutil
-import signal
-import sys
-import tempfile
-import time
-import traceback
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
-from types import FrameType
-
-from hypothesis import HealthCheck, Phase, given, settings
-from hypothesis import seed as hypothesis_seed
-from hypothesis import strategies as st
 
 import engine.scene.expr as ex
 import engine.scene.schema as sc
 from engine.scene import Report, SceneError, check, format_scene, parse_file
 from engine.scene.diagnostics import MAX_PER_FILE
+from tools.fuzz_core import Outcome, Target
 
 ROOT = Path(__file__).resolve().parent.parent
-TIME_LIMIT_S = 10.0
-MEMORY_LIMIT = 1 << 30
-#: Hypothesis examples per seeded batch (a run stops between batches when time is up).
-BATCH = 100
+#: Share of inputs that are one of the large :data:`HOSTILE` files.
+HOSTILE_RATE = 0.002
 #: Real files whose text is mutated; assets the fuzz folder holds, so models load.
 SEED_FILES = [ROOT / "content/demo/main.scene", *sorted(
     (ROOT / "tests/scene/data").glob("**/*.scene"))]
@@ -73,7 +50,7 @@ _WORDS = ["sphere", "box", "capsule", "cylinder", "plane", "rubber", "wood", "ba
           "hinge", "Hinge", "ode", "pymunk", "models/cube.obj", "sounds/knock.wav",
           "scripts/door.lua", "shaders/toon.vert", "key:Up/Down", "motor:hinge", "toon",
           "TriangleMesh", "ConvexHull", "", "a b", "x" * 50]
-#: Names an ``Include`` gives: files of the fuzz folder (see :func:`_prepare`), and names
+#: Names an ``Include`` gives: files of the fuzz folder (see :func:`prepare`), and names
 #: no file system likes.
 INCLUDE_NAMES = ["part.scene", "loop_a.scene", "link_a.scene", "folder.scene", "bad.scene",
                  "main.scene", "missing.scene", "a\x00b.scene", "x" * 300 + ".scene",
@@ -218,8 +195,9 @@ def scene_text(rng: random.Random) -> str:
     return text
 
 
-def mutate(rng: random.Random, text: str, edits: int) -> str:
-    """``text`` after ``edits`` random deletions, insertions, replacements and copies."""
+def mutate(rng: random.Random, text: str, edits: int, fragments: list[str] = FRAGMENTS) -> str:
+    """``text`` after ``edits`` random deletions, insertions and replacements (of pieces
+    of ``fragments``), and copies."""
     for _ in range(edits):
         i = rng.randrange(len(text) + 1)
         j = min(len(text), i + rng.randrange(13))
@@ -227,9 +205,9 @@ def mutate(rng: random.Random, text: str, edits: int) -> str:
         if op == 0:
             text = text[:i] + text[j:]
         elif op == 1:
-            text = text[:i] + rng.choice(FRAGMENTS) + text[i:]
+            text = text[:i] + rng.choice(fragments) + text[i:]
         elif op == 2:
-            text = text[:i] + rng.choice(FRAGMENTS) + text[j:]
+            text = text[:i] + rng.choice(fragments) + text[j:]
         else:
             text = text[:j] + text[i:j] + text[j:]
     return text
@@ -268,7 +246,7 @@ class Input:
     part: str = ""
 
 
-def make_input(rng: random.Random, hostile_rate: float = 0.002) -> Input:
+def make_input(rng: random.Random, hostile_rate: float = HOSTILE_RATE) -> Input:
     """A scene (generated, a real file, an expression list or text soup), mutated or not,
     with an included part; now and then one of :data:`HOSTILE`."""
     if rng.random() < hostile_rate:
@@ -300,10 +278,6 @@ def _no_surrogates(text: str) -> str:
 # -- running an input --------------------------------------------------------------
 
 
-class Hang(Exception):
-    """An input ran past :data:`TIME_LIMIT_S`."""
-
-
 class BadReport(AssertionError):
     """A report that points outside the files read, or a format that does not hold."""
 
@@ -323,9 +297,9 @@ def prepare(folder: Path) -> Path:
     return folder
 
 
-def exercise(inp: Input, folder: Path) -> tuple[int, bool]:
-    """Run one input through check and fmt; returns the diagnostics found and whether it
-    parsed (and so was formatted)."""
+def exercise(inp: Input, folder: Path) -> Outcome:
+    """Run one input through check and fmt: "formatted" when it parsed, else "message"
+    (its report)."""
     main = folder / "main.scene"
     main.write_text(inp.main, encoding="utf-8")
     (folder / "part.scene").write_text(inp.part, encoding="utf-8")
@@ -336,14 +310,14 @@ def exercise(inp: Input, folder: Path) -> tuple[int, bool]:
     try:
         before = parse_file(main)
     except SceneError:
-        return len(report), False
+        return "message"
     formatted = format_scene(folder)
     main.write_text(formatted, encoding="utf-8")
     if format_scene(folder) != formatted:
         raise BadReport("fmt is not stable: formatting its output changes it")
     if parse_file(main) != before:
         raise BadReport("fmt changed the scene: its output reads differently")
-    return len(report), True
+    return "formatted"
 
 
 def _check_places(report: Report) -> None:
@@ -362,199 +336,9 @@ def _check_places(report: Report) -> None:
         raise BadReport(f"more than {MAX_PER_FILE} diagnostics shown for one file")
 
 
-@contextmanager
-def time_limit(seconds: float) -> Iterator[None]:
-    """Raise :class:`Hang` in the main thread if the block runs past ``seconds``."""
-
-    def expired(signum: int, frame: FrameType | None) -> None:
-        raise Hang(f"no result within {seconds:g} s")
-
-    previous = signal.signal(signal.SIGALRM, expired)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
+def _files(inp: Input, stem: str) -> dict[str, str]:
+    return {f"{stem}.scene": inp.main, **({f"{stem}.part.scene": inp.part} if inp.part else {})}
 
 
-def _data_in_use() -> int:
-    """Bytes of this process's data segment now (VmData)."""
-    with open("/proc/self/status", encoding="ascii") as status:
-        for line in status:
-            if line.startswith("VmData:"):
-                return int(line.split()[1]) * 1024
-    return 0
-
-
-@contextmanager
-def memory_limit(extra: int) -> Iterator[None]:
-    """Cap new memory (RLIMIT_DATA) at ``extra`` bytes over what is in use now: past it
-    an input gets a MemoryError, which counts as a failure."""
-    soft, hard = resource.getrlimit(resource.RLIMIT_DATA)
-    cap = _data_in_use() + extra
-    if hard != resource.RLIM_INFINITY:
-        cap = min(cap, hard)
-    resource.setrlimit(resource.RLIMIT_DATA, (cap, hard))
-    try:
-        yield
-    finally:
-        resource.setrlimit(resource.RLIMIT_DATA, (soft, hard))
-
-
-def fails_like(folder: Path, kind: type[BaseException]) -> Callable[[Input], bool]:
-    """Whether an input still fails in ``folder`` with an exception of ``kind``."""
-
-    def fails(inp: Input) -> bool:
-        try:
-            with time_limit(TIME_LIMIT_S):
-                exercise(inp, folder)
-        except kind:
-            return True
-        except Exception:
-            return False
-        return False
-
-    return fails
-
-
-def shrink(inp: Input, fails: Callable[[Input], bool], budget_s: float = 120.0) -> Input:
-    """A smaller input that still ``fails``: chunks of each file removed, halving the
-    chunk size down to one character, while it does."""
-    stop = time.monotonic() + budget_s
-    for name in ("main", "part"):
-        text = getattr(inp, name)
-        size = max(len(text) // 2, 1)
-        while time.monotonic() < stop:
-            i = 0
-            while i < len(text) and time.monotonic() < stop:
-                candidate = replace(inp, **{name: text[:i] + text[i + size:]})
-                if fails(candidate):
-                    inp, text = candidate, getattr(candidate, name)
-                else:
-                    i += size
-            if size == 1:
-                break
-            size //= 2
-    return inp
-
-
-# -- the run -------------------------------------------------------------------------
-
-
-@dataclass(slots=True)
-class Result:
-    """What a run did: inputs run, how many parsed (and went through fmt), the
-    diagnostics reported, the slowest input, and the first failure if any."""
-
-    inputs: int = 0
-    formatted: int = 0
-    diagnostics: int = 0
-    slowest_s: float = 0.0
-    seconds: float = 0.0
-    failure: str | None = None
-    reproducer: list[Path] = field(default_factory=list)
-
-
-class _Failed(Exception):
-    """Stops hypothesis at the first failing input (already shrunk and written out)."""
-
-
-def run(seconds: float, seed: int = 0, max_inputs: int | None = None,
-        hostile_rate: float = 0.002, out_dir: Path | None = None,
-        progress: Callable[[Result], None] | None = None) -> Result:
-    """Fuzz for ``seconds`` (or ``max_inputs`` inputs); stops at the first failure."""
-    result = Result()
-    start = time.monotonic()
-    deadline = start + seconds
-    with tempfile.TemporaryDirectory(prefix="fuzz_scene.") as tmp, memory_limit(MEMORY_LIMIT):
-        folder = prepare(Path(tmp))
-        batch = 0
-        while time.monotonic() < deadline and result.failure is None and (
-                max_inputs is None or result.inputs < max_inputs):
-            examples = BATCH if max_inputs is None else min(BATCH, max_inputs - result.inputs)
-            try:
-                _batch(seed, batch, examples, deadline, folder, hostile_rate, result, out_dir)
-            except _Failed:
-                break
-            batch += 1
-            if progress is not None:
-                result.seconds = time.monotonic() - start
-                progress(result)
-    result.seconds = time.monotonic() - start
-    return result
-
-
-def _batch(seed: int, batch: int, examples: int, deadline: float, folder: Path,
-           hostile_rate: float, result: Result, out_dir: Path | None) -> None:
-    @hypothesis_seed(seed * 1_000_003 + batch)
-    @settings(max_examples=examples, database=None, deadline=None, phases=[Phase.generate],
-              suppress_health_check=list(HealthCheck))
-    @given(st.integers(0, 2**63 - 1))
-    def one(example: int) -> None:
-        if time.monotonic() >= deadline:
-            return
-        inp = make_input(random.Random(f"{seed}/{batch}/{example}"), hostile_rate)
-        t0 = time.perf_counter()
-        try:
-            with time_limit(TIME_LIMIT_S):
-                found, parsed = exercise(inp, folder)
-        except Exception as exc:
-            result.failure = "".join(traceback.format_exception(exc))
-            small = shrink(inp, fails_like(folder, type(exc)))
-            result.reproducer = _write_reproducer(small, out_dir or Path.cwd(), example)
-            raise _Failed from exc
-        result.slowest_s = max(result.slowest_s, time.perf_counter() - t0)
-        result.inputs += 1
-        result.formatted += parsed
-        result.diagnostics += found
-
-    one()
-
-
-def _write_reproducer(inp: Input, out_dir: Path, example: int) -> list[Path]:
-    out_dir.mkdir(parents=True, exist_ok=True)
-    main = out_dir / f"fuzz-failure-{example}.scene"
-    main.write_text(inp.main, encoding="utf-8")
-    paths = [main]
-    if inp.part:
-        part = out_dir / f"fuzz-failure-{example}.part.scene"
-        part.write_text(inp.part, encoding="utf-8")
-        paths.append(part)
-    return paths
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seconds", type=float, default=60.0, help="how long to run")
-    parser.add_argument("--inputs", type=int, default=None, help="stop after this many")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the whole run")
-    parser.add_argument("--hostile-rate", type=float, default=0.002,
-                        help="share of inputs that are large hostile files")
-    parser.add_argument("--out", type=Path, default=Path.cwd(),
-                        help="folder for a failing input's reproducer")
-    args = parser.parse_args(argv)
-
-    shown = [0.0]
-
-    def progress(r: Result) -> None:
-        if r.seconds - shown[0] >= 10:
-            shown[0] = r.seconds
-            print(f"{r.inputs} inputs, {r.seconds:.0f} s, slowest {r.slowest_s:.2f} s",
-                  file=sys.stderr, flush=True)
-
-    result = run(args.seconds if args.inputs is None else float("inf"), args.seed,
-                 args.inputs, args.hostile_rate, args.out, progress)
-    print(f"{result.inputs} inputs in {result.seconds:.0f} s (seed {args.seed}): "
-          f"{'FAILED' if result.failure else 'no tracebacks, no hangs'}; slowest input "
-          f"{result.slowest_s:.2f} s; {result.formatted} parsed and were formatted; "
-          f"{result.diagnostics} diagnostics reported")
-    if result.failure:
-        print(result.failure, file=sys.stderr)
-        print("reproducer: " + ", ".join(map(str, result.reproducer)), file=sys.stderr)
-        return 1
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+#: The scene target of :mod:`tools.fuzz`.
+TARGET = Target("scene", make_input, exercise, _files, prepare)

@@ -71,6 +71,29 @@ def test_a_model_drawn_and_collided_by_two_objects_is_read_once(tmp_path: Path,
     assert extents == pytest.approx([0.5, 1.0])  # one read, a hull per scale
 
 
+def test_a_gltf_node_or_mesh_reads_the_texture_coordinates_the_whole_file_does():
+    """glTF's v runs down from the image's top row, a MeshPart's up. Drawn whole (through
+    trimesh) or as a node or a mesh of it (engine/assets/gltf.py, as imported scenes draw
+    their bodies), each vertex of the walker's textured shirt reads the same texel; the
+    node path read v upside down."""
+    from collections import Counter
+
+    def places(parts: tuple) -> tuple[list, list, Counter]:
+        keys = [tuple(np.round(v, 6)) for part in parts for v in part.vertices]
+        return keys, [uv for part in parts for uv in part.uv], Counter(keys)
+
+    assets = Assets(ROOT / "content" / "avatars" / "models")
+    keys, uvs, counts = places(assets.model("walker.glb").parts)
+    whole = dict(zip(keys, uvs, strict=True))
+    for ref in ('walker.glb#["walker"]', 'walker.glb#mesh["walker"]'):
+        keys, uvs, seen = places(assets.model(ref).parts)
+        # a point where two tubes meet (caps, joins) has one texel per tube: left out
+        once = [i for i, k in enumerate(keys) if seen[k] == 1 and counts[k] == 1]
+        assert len(once) > 500
+        np.testing.assert_allclose([whole[keys[i]] for i in once], [uvs[i] for i in once],
+                                   atol=1e-6)
+
+
 def test_an_author_registers_a_format_in_the_content_systems(tmp_path: Path):
     """A loader for a new extension, in the content's own systems/ module, reads the scene's
     model for `check` and for a run that draws it; its failure is told like any other."""

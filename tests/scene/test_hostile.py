@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import errno
 import os
+import tracemalloc
 from pathlib import Path
 
 import pytest
 
+from engine.confine import OUTSIDE
 from engine.scene import Limits, Loc, Report, SceneError, check, parse_file, parse_text
 from engine.scene.diagnostics import LINE_WIDTH, MAX_PER_FILE, Omitted, Reporter
 from engine.scene.paths import FOLDER
@@ -86,10 +88,12 @@ def test_includes_and_assets_through_a_symlink_loop(tmp_path, entry, what):
 
 def test_a_folder_or_a_device_is_not_an_includable_file(tmp_path):
     (tmp_path / "parts").mkdir()
-    report = report_of(tmp_path, 'Include "parts"\nInclude "/dev/zero"\n')
+    os.mkfifo(tmp_path / "pipe")
+    report = report_of(tmp_path, 'Include "parts"\nInclude "pipe"\nInclude "/dev/zero"\n')
     assert [d.message for d in report.errors] == [
         f'cannot include "parts": {FOLDER}',
-        'cannot include "/dev/zero": it is not a regular file']
+        'cannot include "pipe": it is not a regular file',
+        f'cannot include "/dev/zero": {OUTSIDE}']
 
 
 def test_a_refused_oversized_file_is_not_read_again_to_show_a_line(tmp_path):
@@ -111,6 +115,24 @@ def test_a_megabyte_of_nul_bytes_is_one_error(tmp_path):
         1, 1, "unexpected characters '\\x00\\x00\\x00\\x00\\x00\\x00\\x00\\x00\\x00\\x00"
               "\\x00\\x00\\x00\\x00\\x00\\x00\\x00\\x00\\x00\\x00...' (1000000 in a row)")
     assert len(report.render()) < 3 * LINE_WIDTH * 4  # the line is clipped, NULs escaped
+
+
+@pytest.mark.parametrize("text", [
+    "\x00" * 1_000_000, "." * 1_000_000, 'a "' + "b" * 1_000_000 + "\n",
+    "a " + "@" * 1_000_000 + "\n", "a $\n" * 20_000], ids=[
+    "NUL bytes", "dots", "an open string", "a bad run", "errors on every line"])
+def test_a_megabyte_of_hostile_text_is_checked_in_little_memory(tmp_path, text):
+    """Memory, not time (which the fuzz run watches): a backtracking repeat in the lexer
+    kept a frame per character, 190 MB for one 1 MB line."""
+    main = tmp_path / "main.scene"
+    main.write_text(text, encoding="utf-8")
+    tracemalloc.start()
+    try:
+        check(tmp_path).render()
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 32_000_000  # a megabyte of input; one line of NULs took 193 MB
 
 
 def test_a_long_line_is_clipped_around_the_column(tmp_path):

@@ -268,6 +268,38 @@ function onKey(key) if key == "b" then breakJoint("axle") end end
             engine.physics.request(lambda b: b.joint_state(entity)).result()
 
 
+@pytest.mark.parametrize("backend", backends())
+def test_a_spring_from_a_script_swings_at_the_root_of_k_over_i(tmp_path: Path,
+                                                               backend: str) -> None:
+    """createJoint's spring (engine units: N·m/rad, rad) on a hinge through a sphere's
+    centre: released at the joint's zero toward a target of 0.3 rad, it swings to 0.6 rad
+    and back with period 2π√(I/k) (I = 2/5 m r²)."""
+    mass, radius, stiffness, target = 1.0, 0.25, 0.4, 0.3
+    scene = (f'Object {{ ID "wheel" Position [0 0 1] Script "scripts/w.lua"\n'
+             f'  PhysicalAttributes {{ Mass {mass} Gravity 0 Geometry {{ Primitive "sphere" '
+             f'Size [{2 * radius}] }} }} }}\n')  # a sphere's Size is its diameter
+    wheel = f"""
+function onStart()
+  axle = createJoint{{kind = "hinge", a = self, anchor = {{0, 0, 1}}, axis = {{0, 1, 0}},
+                     spring = {{stiffness = {stiffness}, target = {target}}}}}
+end
+"""
+    write_content(tmp_path, scene, {"w.lua": wheel})
+    period = 2 * math.pi * math.sqrt(0.4 * mass * radius**2 / stiffness)
+    with scripted_engine(tmp_path, backend) as engine:
+        engine.run(frames=1)
+        entity = script_named(engine, "scripts/w.lua").env.axle
+        angles, times = [], []
+        start = engine.physics.time
+        while engine.physics.time - start < period:
+            engine.run(frames=1)
+            angles.append(engine.physics.request(lambda b: b.joint_state(entity)).result()[0])
+            times.append(engine.physics.time - start)
+    swing = int(np.argmax(np.abs(angles)))
+    assert abs(angles[swing]) == pytest.approx(2 * target, rel=0.02)
+    assert times[swing] == pytest.approx(period / 2, abs=0.02)
+
+
 def test_delete_and_optional_subsystems(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
     scene = GROUND + 'Script "scripts/d.lua"\n'
     script = """

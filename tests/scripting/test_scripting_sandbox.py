@@ -3,11 +3,12 @@ memory-hungry scripts are stopped while the runtime and other scripts keep going
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import pytest
 
-from engine.scripting.runtime import ScriptLoadError, ScriptRuntime
+from engine.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRuntime
 
 
 def run_once(runtime: ScriptRuntime, body: str, name: str = "scripts/evil.lua"):
@@ -137,7 +138,7 @@ def test_runaway_top_level_refuses_to_load(runtime: ScriptRuntime) -> None:
 
 
 BOMBS = {  # body, what stops it
-    "table growth": ("local t = {} for i = 1, 1e9 do t[i] = ('x'):rep(4e6) .. i end",
+    "table growth": ("local x = ('x'):rep(4e6) local t = {} for i = 1, 1e9 do t[i] = x .. i end",
                      "memory cap"),
     "string doubling": ("local s = 'x' while true do s = s .. s end", "memory cap"),
     "global hoard": ("hoard = {} for i = 1, 1e9 do hoard[i] = {i, i, i} end", "memory cap"),
@@ -170,6 +171,7 @@ BACKTRACKING = {
     "method call": "local s = ('a'):rep(1e5) return s:match('a*a*b')",
     "gsub": "return string.gsub(('a'):rep(5000), 'a*a*a*b', '')",
     "gmatch": "for w in ('a'):rep(5000):gmatch('a-a-a-b') do end",
+    "short subject": "return ('a'):rep(63):find(('a*'):rep(7) .. 'b')",  # a minute unchecked
 }
 
 
@@ -179,6 +181,97 @@ def test_catastrophic_patterns_are_refused(runtime: ScriptRuntime, body: str) ->
     ok, _ = run_once(runtime, body)
     assert not ok
     assert "may backtrack for up to" in runtime.messages[-1]
+
+
+def test_building_strings_is_charged_by_size(runtime: ScriptRuntime) -> None:
+    """string.rep, concat and sort are charged by the work they do, the same in every run:
+    a thread busy beside the script (the physics thread, a numeric library's spinning
+    workers) costs it nothing, and a call too big for the budget never starts."""
+    import threading
+
+    stop = threading.Event()
+
+    def spin() -> None:
+        while not stop.is_set():
+            sum(range(1000))
+
+    busy = threading.Thread(target=spin)
+    busy.start()
+    try:
+        # ~130,000 instructions charged of the test budget's 200,000, on any machine
+        ok, _ = run_once(runtime, "local t = {}\n"
+                                  "for i = 1, 1000 do t[i] = ('ab'):rep(10) end\n"
+                                  "table.sort(t) local s = table.concat(t)")
+    finally:
+        stop.set()
+        busy.join()
+    assert ok, runtime.messages
+    started = time.perf_counter()
+    ok, script = run_once(runtime, "while true do local s = ('a'):rep(1e6) end",
+                          name="scripts/builder.lua")
+    # stopped at the first call (uncharged, 40,000 calls of 3 ms each would run)
+    assert not ok and time.perf_counter() - started < 5
+    assert "scripts/builder.lua:2: script exceeded its instruction budget" in runtime.messages[-1]
+
+
+def test_work_nothing_counts_is_stopped_by_the_clock(content: Path) -> None:
+    """Joining megabyte strings with `..` is one VM instruction each: a loop of them ran for
+    a minute inside the default budget. The real-time net stops it within 2 s."""
+    runtime = ScriptRuntime(scripts_dir=content / "scripts")  # the default budget
+    started = time.perf_counter()
+    ok, script = run_once(runtime, "local big = ('a'):rep(1e6)\n"
+                                   "for i = 1, 1e9 do local x = big .. big .. big .. i end",
+                          name="scripts/joiner.lua")
+    assert not ok and script.stopped
+    assert time.perf_counter() - started < 4
+    assert "scripts/joiner.lua:3: script exceeded its instruction budget (ran over a second" \
+        in runtime.messages[-1]
+
+
+def test_the_clock_judges_only_a_running_callback(content: Path) -> None:
+    """A scene whose scripts define no onUpdate ran two seconds, then the kernel's own loop
+    over them was stopped as if a callback had run that long (every run of such a scene
+    ended there). The net times callbacks, not the gaps between them."""
+    runtime = ScriptRuntime(scripts_dir=content / "scripts")
+    script = runtime.load("scripts/quiet.lua", "count = 0\nfunction onStart() end\n")
+    time.sleep(2.0)  # os.time's whole seconds: two of them have begun since the load
+    for _ in range(3000):  # ticks of the count hook land inside the kernel's loop
+        runtime.update(1 / 60)
+    assert runtime.call(script, "onStart") and not script.stopped, runtime.messages
+    assert not runtime.messages
+
+
+def test_an_overrun_seen_after_the_callback_never_escapes(runtime: ScriptRuntime) -> None:
+    """Work charged at a callback's last statement (a big table.concat) is seen at the next
+    tick of the count hook; a tick landing in the kernel after the callback returned raised
+    the budget error into the engine, and the runtime stayed killed. At every phase of the
+    hook: the script is stopped or not, never an exception, and the runtime goes on."""
+    for pad in range(1000):  # shifts where the hook's next tick lands
+        script = runtime.load(f"scripts/s{pad}.lua", "t = {}\n"
+                              "for i = 1, 100 do t[i] = ('x'):rep(1500) end\n"
+                              f"function onUpdate()\nfor i = 1, {pad} do end\n"
+                              "local a = table.concat(t) local b = table.concat(t)\nend\n")
+        runtime.call(script, "onUpdate")
+        runtime.unload(script)
+    after = runtime.load("scripts/after.lua", "x = 1\nfunction onUpdate() x = 2 end\n")
+    assert runtime.call(after, "onUpdate") and after.env.x == 2
+
+
+@pytest.mark.parametrize("body", [
+    "local src = ('a=1 '):rep(2e6) for i = 1, 1e9 do load(src) end",
+    "local piece = ('a=1 '):rep(2e5)\nfor i = 1, 1e9 do\n  local n = 0\n"
+    "  load(function() n = n + 1 if n < 40 then return piece end end)\nend"],
+    ids=["text", "reader"])
+def test_compiling_is_charged_by_the_size_of_the_source(content: Path, body: str) -> None:
+    """Compiling is C work the count cannot see: 200 compilations of 8 MB of source ran
+    between two looks of the hook, 24 s before the clock stopped them."""
+    runtime = ScriptRuntime(scripts_dir=content / "scripts")  # the default budget
+    started = time.perf_counter()
+    ok, script = run_once(runtime, body, name="scripts/compiler.lua")
+    assert not ok and script.stopped and time.perf_counter() - started < 2
+    assert "instructions per callback" in runtime.messages[-1]
+    ok, small = run_once(runtime, "assert(load('return 1 + 1'))()", name="scripts/small.lua")
+    assert ok  # a small chunk costs little
 
 
 def test_ordinary_patterns_still_work(runtime: ScriptRuntime) -> None:
@@ -194,9 +287,57 @@ plain = ("a+b"):rep(10000):find("a+b", 1, true)
         (200, "key", 2, 1)
 
 
+def test_a_kill_by_a_charge_names_the_script_and_line_whatever_the_hooks_phase(
+        runtime: ScriptRuntime) -> None:
+    """A budget run out by what a C call is charged stops the script from the charging
+    wrapper; a hook tick landing while the kill was being worked out raised the message
+    of the kill before (another script's file and line), or nil in a fresh runtime ("error
+    object is a nil value"). Every phase of the hook's count is tried by padding the
+    script with one more instruction each time."""
+    for pad in range(0, 600):
+        name = f"scripts/pad{pad}.lua"
+        ok, _ = run_once(runtime, f"local x = 0\nfor i = 1, {pad} do x = x + 1 end\n"
+                                  "while true do local s = ('a'):rep(40000) end", name=name)
+        assert not ok
+        assert runtime.messages[-1].startswith(
+            f"{name}:4: script exceeded its instruction budget (200000 instructions per "
+            "callback)"), runtime.messages[-1]
+
+
+def test_small_matches_cost_the_bytes_they_scan_not_the_clock(runtime: ScriptRuntime) -> None:
+    """Matching is charged the bytes it may scan, and CPU time only past a tenth of a
+    millisecond a call: 1,000 matches on a short line fit a 200,000-instruction budget in
+    every run (charged by the clock, reading it alone cost more than the budget)."""
+    for i in range(20):
+        ok, _ = run_once(runtime, """
+local line, n = "key = value", 0
+for i = 1, 500 do
+  if line:find("=") and line:match("^(%w+)") then n = n + 1 end
+end
+for k in line:gmatch("%w+") do n = n + 1 end
+""", name=f"scripts/match{i}.lua")
+        assert ok, runtime.messages[-1]
+
+
 def test_time_in_c_functions_counts_against_the_budget(runtime: ScriptRuntime) -> None:
     """Many individually allowed slow matches in a loop still exhaust the budget."""
     ok, script = run_once(runtime, "local s = ('a'):rep(3000)\n"
                                    "while true do s:find('a+b') end")
     assert not ok and script.stopped
     assert "instruction budget" in runtime.messages[-1]
+
+
+def test_the_engines_own_lua_work_between_callbacks_is_never_charged() -> None:
+    """Only script callbacks are counted and timed. Kernel work the engine asks for
+    between them (the names of a reloaded script, garbage collection) used to run under
+    the last callback's budget and clock: a scene whose scripts had been idle for a second
+    was killed with a LuaError traceback when a script was edited (hot reload)."""
+    runtime = ScriptRuntime(ScriptLimits(instructions=5_000))
+    script = runtime.load("scripts/calm.lua", "n = 0\nfunction onUpdate() n = n + 1 end\n")
+    big = runtime.lua.table_from({f"k{i}": i for i in range(20_000)})  # ~100,000 instructions
+    for _ in range(3):
+        assert sum(1 for _ in runtime.kernel.names(big)) == 20_000
+        runtime.kernel.collect()
+    assert runtime.call(script, "onUpdate") and script.env.n == 1 and not script.stopped
+    ok, runaway = run_once(runtime, "while true do end", name="scripts/runaway.lua")
+    assert not ok and runaway.stopped  # callbacks are still counted
