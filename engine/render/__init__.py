@@ -12,7 +12,7 @@ from engine.render.context import (
 )
 from engine.render.lights import LightInfo, light_from_component
 from engine.render.meshes import ModelError
-from engine.render.postprocess import BUILTIN_PASSES, PostPass, PostProcessing
+from engine.render.postprocess import PostPass, PostProcessing
 from engine.render.renderer import FrameStats, Renderer
 from engine.render.shaders import (
     FragmentShader,
@@ -26,7 +26,6 @@ from engine.render.shaders import (
 
 __all__ = [
     "BACKENDS",
-    "BUILTIN_PASSES",
     "CameraView",
     "FragmentShader",
     "FrameStats",

@@ -170,11 +170,12 @@ void main() {
 
 #: The lit fragment stage is specialised per light set (``LIGHT_KINDS`` and ``SHADOW_LIGHT``
 #: are compile-time constants) so loops unroll: llvmpipe shades far faster without dynamic
-#: indexing. :func:`lit_fragment` fills them in.
+#: indexing; and per textured or not. :func:`lit_fragment` fills them in.
 LIT_FRAGMENT_TEMPLATE = """
 #version 330
 #define N_LIGHTS %(n)d
 #define SHADOW_LIGHT %(shadow)d
+#define TEXTURED %(textured)d
 const int LIGHT_KINDS[N_LIGHTS] = int[N_LIGHTS](%(kinds)s);
 in vec3 v_world;
 in vec3 v_normal;
@@ -199,7 +200,7 @@ float shadow_factor() {
 }
 
 void main() {
-    vec4 albedo = texture(u_texture, v_uv) * v_color;
+    vec4 albedo = TEXTURED == 1 ? texture(u_texture, v_uv) * v_color : v_color;
     vec3 n = normalize(v_normal);
     vec3 to_eye = normalize(u_camera_pos - v_world);
     if (dot(n, to_eye) < 0.0) n = -n;  // two-sided lighting for open meshes and planes
@@ -232,11 +233,14 @@ void main() {
 """
 
 
-def lit_fragment(kinds: tuple[int, ...], shadow_light: int) -> str:
-    """The lit fragment source for lights of ``kinds`` (0 directional, 1 point, 2 spot)."""
+def lit_fragment(kinds: tuple[int, ...], shadow_light: int, textured: bool = True) -> str:
+    """The lit fragment source for lights of ``kinds`` (0 directional, 1 point, 2 spot);
+    without ``textured`` it skips the texture fetch (objects with no Texture: a CPU
+    rasteriser shades them a few per cent faster)."""
     kinds = kinds or (0,)
     return LIT_FRAGMENT_TEMPLATE % {"n": len(kinds), "shadow": shadow_light,
-                                    "kinds": ", ".join(str(k) for k in kinds)}
+                                    "kinds": ", ".join(str(k) for k in kinds),
+                                    "textured": int(textured)}
 
 
 DEPTH_VERTEX = """
@@ -265,6 +269,16 @@ void main() {
     v_uv = p;
     gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
 }
+"""
+
+#: Draws texture ``u_scene`` over the viewport, filtered: a frame drawn at a lower
+#: resolution (Renderer.render_scale) scaled up to the output.
+UPSCALE_FRAGMENT = """
+#version 330
+in vec2 v_uv;
+uniform sampler2D u_scene;
+out vec4 f_color;
+void main() { f_color = texture(u_scene, v_uv); }
 """
 
 HUD_VERTEX = """

@@ -1,4 +1,6 @@
-"""The HUD: one line of text (fps, physics ms, real-time factor) drawn over the frame.
+"""The HUD: one line of text drawn over the frame: the run's figures (fps, physics ms,
+real-time factor) when switched on, and a status line content sets (task progress:
+Lua's ``emit("hud", text)``), shown whenever it is not empty.
 
 Text is rasterised with pillow into a texture only when it changes, so the HUD costs one
 small quad per frame.
@@ -14,8 +16,14 @@ from engine.render import glsl
 
 
 def hud_line(fps: float, physics_ms: float, real_time_factor: float) -> str:
-    """The HUD text the engine shows."""
-    return f"{fps:5.1f} fps | physics {physics_ms:6.2f} ms | real-time x{real_time_factor:4.2f}"
+    """The HUD text the engine shows; the rate is "--" until two frames were drawn (a
+    headless run draws only the frame it saves).
+
+    >>> hud_line(0.0, 0.5, 1.0)
+    '   -- fps | physics   0.50 ms | real-time x1.00'
+    """
+    rate = f"{fps:5.1f}" if fps > 0.0 else "   --"
+    return f"{rate} fps | physics {physics_ms:6.2f} ms | real-time x{real_time_factor:4.2f}"
 
 
 def text_image(text: str, font_size: int = 14) -> np.ndarray:
@@ -34,12 +42,14 @@ def text_image(text: str, font_size: int = 14) -> np.ndarray:
 
 
 class Hud:
-    """Draws :attr:`text` at the top-left of a framebuffer when :attr:`enabled`."""
+    """Draws :attr:`text` (when :attr:`enabled`) and :attr:`status` at the top-left of a
+    framebuffer."""
 
     def __init__(self, ctx: Any) -> None:
         self.ctx = ctx
         self.enabled = False
         self.text = ""
+        self.status = ""
         self._drawn_text: str | None = None
         self._texture: Any = None
         self._program = ctx.program(vertex_shader=glsl.HUD_VERTEX,
@@ -50,15 +60,16 @@ class Hud:
         self.enabled = not self.enabled
 
     def draw(self, fbo: Any, size: tuple[int, int]) -> None:
-        if not self.enabled or not self.text:
+        shown = " | ".join(t for t in (self.text if self.enabled else "", self.status) if t)
+        if not shown:
             return
-        if self._drawn_text != self.text:
-            pixels = text_image(self.text)
+        if self._drawn_text != shown:
+            pixels = text_image(shown)
             if self._texture is not None:
                 self._texture.release()
             h, w = pixels.shape[:2]
             self._texture = self.ctx.texture((w, h), 4, np.ascontiguousarray(pixels).tobytes())
-            self._drawn_text = self.text
+            self._drawn_text = shown
         w, h = self._texture.size
         x0, y1 = -1.0 + 8.0 / size[0] * 2, 1.0 - 8.0 / size[1] * 2
         x1, y0 = x0 + 2.0 * w / size[0], y1 - 2.0 * h / size[1]

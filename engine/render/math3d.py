@@ -15,27 +15,14 @@ import math
 
 import numpy as np
 
-from engine.rotation import matrix_to_quat, quat_to_matrix
+from engine.rotation import compose as compose  # the renderer's model matrices
+from engine.rotation import matrix_to_quat
 
 #: Rotation taking camera-local engine axes (forward +Y, up +Z, right +X) to GL eye axes
 #: (forward -Z, up +Y, right +X).
 ENGINE_TO_GL_EYE = np.array(
     [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
 )
-
-
-def compose(position: np.ndarray, orientation: np.ndarray, scale: np.ndarray | None = None
-            ) -> np.ndarray:
-    """Model matrices ``(..., 4, 4)`` = translate · rotate · scale, batched over leading axes."""
-    position = np.asarray(position, dtype=np.float64)
-    rot = quat_to_matrix(orientation)
-    out = np.zeros(rot.shape[:-2] + (4, 4))
-    if scale is not None:
-        rot = rot * np.asarray(scale, dtype=np.float64)[..., None, :]
-    out[..., :3, :3] = rot
-    out[..., :3, 3] = position
-    out[..., 3, 3] = 1.0
-    return out
 
 
 def perspective(fov_y_deg: float, aspect: float, near: float, far: float) -> np.ndarray:

@@ -11,28 +11,37 @@ from __future__ import annotations
 
 import hashlib
 import logging
+import math
 import time as _time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from engine.anomalies import ActiveAnomaly
 from engine.assets import AssetError, Assets, SkinnedModel
 from engine.assets.skinned import AVATAR_AXES
 from engine.render import glsl, math3d, meshes
+from engine.render.anomalies import adjust_eye, eye_geometry
 from engine.render.camera import CameraView, Eye
-from engine.render.hud import Hud
-from engine.render.lights import (
-    DEFAULT_AMBIENT,
-    DEFAULT_LIGHT,
-    KIND_CODES,
-    LightInfo,
-    shadow_matrix,
+from engine.render.culling import (
+    LOD_PIXELS,
+    SHADOW_LEVEL,
+    frustum_planes,
+    in_frustum,
+    lod_levels,
+    pixels_per_unit,
+    sphere_segments,
+    world_radii,
 )
+from engine.render.hud import Hud
+from engine.render.lights import DEFAULT_AMBIENT, DEFAULT_LIGHT, KIND_CODES, LightInfo
 from engine.render.materials import checker_image
 from engine.render.postprocess import PostChain, PostPass
 from engine.render.shaders import ShaderLibrary, ShaderManager, UniformValue, write_uniform
+from engine.render.shadows import ShadowMap
 from engine.render.skinning import Skinning
 
 log = logging.getLogger("colosseum.render")
@@ -43,6 +52,13 @@ _INSTANCE_FORMAT = "16f 4f 4f/i"
 _INSTANCE_ATTRS = ("i_model", "i_color", "i_flags")
 _PLACEHOLDER = "<placeholder>"
 _WHITE = "<white>"
+_EYE4 = np.eye(4)
+#: Primitives drawn as shared unit meshes scaled per instance.
+_UNIT_KINDS = ("box", "sphere", "cylinder", "capsule")
+#: The instance-buffer slot of the shadow pass (eyes use 0 and 1).
+_SHADOW_SLOT = 2
+#: The smallest share of the output's resolution the view may be drawn at.
+MIN_RENDER_SCALE = 0.25
 
 
 @dataclass(slots=True)
@@ -52,6 +68,8 @@ class _GpuMesh:
     radius: float  # bounding radius about the local origin
     is_plane: bool
     closed: bool  # a closed primitive: back faces can be culled
+    #: Coarser versions of this mesh (levels 1, 2, ...), drawn when it looks small.
+    lods: tuple[str, ...] = ()
 
 
 @dataclass(slots=True)
@@ -69,22 +87,76 @@ class _Part:
 
 @dataclass(slots=True)
 class _Batch:
+    """Parts ``start:stop`` (in draw order) that share a mesh, texture, shader state and
+    overlay flag: one instanced draw per level of detail and view."""
+
     key: tuple[str, str, str | None, bool]
     start: int
     stop: int
-    buffer: Any = None
-    vaos: dict[int, Any] = field(default_factory=dict)
+    levels: tuple[str, ...] = ()  # the mesh of each level of detail, finest first
+    #: (level, slot) -> instance buffer; a slot is an eye (0, 1) or the shadow pass.
+    buffers: dict[tuple[int, int], Any] = field(default_factory=dict)
+    vaos: dict[tuple[int, int, int], Any] = field(default_factory=dict)
+
+    def release(self) -> None:
+        for vao in self.vaos.values():
+            vao.release()
+        for buffer in self.buffers.values():
+            buffer.release()
+        self.vaos.clear()
+        self.buffers.clear()
+
+
+@dataclass(slots=True)
+class _Run:
+    """One draw: ``parts`` (indices, in the order written) of a batch at a level of detail."""
+
+    batch: _Batch
+    level: int
+    parts: np.ndarray
+
+
+@dataclass(slots=True)
+class _Posed:
+    """The parts' world matrices, bounding radii and instance rows, and the object poses
+    they were made from (rows in part order); ``version`` counts the frames any changed."""
+
+    position: np.ndarray
+    orientation: np.ndarray
+    world: np.ndarray
+    radii: np.ndarray
+    inst: np.ndarray
+    version: int = 0
 
 
 @dataclass(slots=True)
 class FrameStats:
-    """What the last frame cost: draw calls by pass, instances, CPU milliseconds."""
+    """What the last frame cost: draw calls by pass, instances drawn and left out, and
+    milliseconds by stage (CPU time, unless :attr:`Renderer.profile` waits for the GPU at
+    the end of each stage, which puts the GPU's time in its stage too)."""
 
     draw_calls: int = 0
     shadow_draw_calls: int = 0
     instances: int = 0
+    #: Parts outside every eye's view frustum, not drawn (summed over eyes).
+    culled: int = 0
+    #: Parts whose shadow came from the cached map of resting casters.
+    shadow_cached: int = 0
+    #: Times the cached shadow map of resting casters was redrawn this frame (0 or 1).
+    shadow_rebakes: int = 0
     batches: int = 0
     frame_ms: float = 0.0
+    #: The render system bringing the renderer up to date with the world (visuals that
+    #: came, went or changed; poses, camera, lights), before drawing.
+    scene_ms: float = 0.0
+    #: World matrices, culling, levels of detail and instance buffer writes.
+    upload_ms: float = 0.0
+    shadow_ms: float = 0.0
+    #: The eyes' draw calls.
+    draw_ms: float = 0.0
+    post_ms: float = 0.0
+    #: Copy to the screen, HUD and buffer swap.
+    present_ms: float = 0.0
 
 
 class Renderer:
@@ -108,7 +180,7 @@ class Renderer:
         self.shaders = ShaderManager(self.ctx, self.root)
         self.post = PostChain(self.ctx, self.root)
         self.hud = Hud(self.ctx)
-        self._lit_programs: dict[tuple[tuple[int, ...], int], Any] = {}
+        self._lit_programs: dict[tuple[tuple[int, ...], int, bool], Any] = {}
         self._depth = self.ctx.program(vertex_shader=glsl.DEPTH_VERTEX,
                                        fragment_shader=glsl.DEPTH_FRAGMENT)
         self._meshes: dict[str, _GpuMesh] = {}
@@ -130,16 +202,32 @@ class Renderer:
         self._part_extra = np.zeros((0, 8), np.float32)
         self._part_radius = np.zeros(0)
         self._part_casts = np.zeros(0, bool)
-        self._shadow_size = int(shadow_size)
-        self._shadow_tex = self.ctx.depth_texture((self._shadow_size,) * 2)
-        self._shadow_tex.compare_func = "<="
-        self._shadow_tex.filter = (self.ctx.LINEAR, self.ctx.LINEAR)
-        self._shadow_tex.repeat_x = self._shadow_tex.repeat_y = False
-        self._shadow_fbo = self.ctx.framebuffer(depth_attachment=self._shadow_tex)
+        self._part_batch = np.zeros(0, np.int64)
+        self._part_coarsest = np.zeros(0, np.int8)  # each part's coarsest level of detail
+        self._posed: _Posed | None = None  # the parts' world matrices as last worked out
+        #: Each eye slot's last draws, with what they were made from (see _eye_runs).
+        self._eye_cache: dict[int, tuple[tuple, int, list[_Run]]] = {}
+        self._shadows = ShadowMap(self.ctx, shadow_size)
+        #: The visual anomalies to draw this frame, ramped (the render system sets them from
+        #: the run's engine.anomalies.Anomalies).
+        self.anomalies: list[ActiveAnomaly] = []
+        #: Leave out what no eye can see (False draws everything: the test's reference).
+        self.culling = True
+        #: Draw small-looking spheres, cylinders and capsules with fewer triangles.
+        self.lod = True
+        #: Wait for the GPU at the end of each stage, so FrameStats' stage times include
+        #: the GPU's work (the benchmark's breakdown; slower, as nothing overlaps).
+        self.profile = False
+        #: Called between a frame drawn and finished on the GPU (``ctx.finish()``) and its
+        #: swap: a swap barrier (None: swap at once, the GPU finishing on its own).
+        self.before_present: Callable[[], None] | None = None
         self._scene_size: tuple[int, int] | None = None
         self._scene_tex: Any = None
         self._scene_depth: Any = None
         self._scene_fbo: Any = None
+        self._render_scale = 1.0
+        self._scaled: tuple[Any, Any] | None = None  # the post chain's output when scaled
+        self._upscale: tuple[Any, Any] | None = None  # program and vertex array
         self._texture_for(_WHITE)
         self._skinning = Skinning(self.ctx)
         self._skinned: dict[int, list[str]] = {}  # object -> the skin groups it is in
@@ -157,6 +245,39 @@ class Renderer:
     def instancing(self, value: bool) -> None:
         self._instancing = bool(value)
         self._dirty = True
+
+    @property
+    def render_scale(self) -> float:
+        """The share of the output's resolution the view is drawn at (1: all of it; less
+        draws fewer pixels, and the frame is scaled up, filtered, to the output; the HUD
+        stays sharp). A software rasteriser's cost is mostly per pixel, so 0.75 draws
+        about 0.56 of the pixels. Off (1) unless asked for: ``--render-scale``."""
+        return self._render_scale
+
+    @render_scale.setter
+    def render_scale(self, value: float) -> None:
+        value = float(value)
+        if not MIN_RENDER_SCALE <= value <= 1.0:
+            raise ValueError(f"render scale must be {MIN_RENDER_SCALE:g} to 1, got {value:g}")
+        self._render_scale = value
+
+    def view_size(self, size: tuple[int, int]) -> tuple[int, int]:
+        """The size the view is drawn at for an output of ``size`` pixels."""
+        if self._render_scale >= 1.0:
+            return size
+        return (max(1, round(size[0] * self._render_scale)),
+                max(1, round(size[1] * self._render_scale)))
+
+    @property
+    def shadow_cache(self) -> bool:
+        """Draw shadow casters that rest into a cached map once (False: every caster every
+        frame, the benchmark's reference); see :mod:`engine.render.shadows`."""
+        return self._shadows.caching
+
+    @shadow_cache.setter
+    def shadow_cache(self, value: bool) -> None:
+        self._shadows.caching = bool(value)
+        self._shadows.reset(len(self._part_obj))
 
     # ------------------------------------------------------------------ objects
     def add(self, key: int, visual: Any, position: Any = (0.0, 0.0, 0.0),
@@ -233,14 +354,14 @@ class Renderer:
         parts = []
         for shape in visual.shapes:
             try:
-                mesh = self._mesh_for_shape(shape)
+                pieces = self._meshes_for_shape(shape, visual.shader_state is None)
             except meshes.ModelError as exc:
                 self._error(f"object {key}: {exc}")
                 continue
-            local = math3d.compose(shape.offset, shape.rotation, scale)
-            parts.append(_Part(row, mesh, texture, visual.shader_state, local, color,
-                               visual.shadower and not self._meshes[mesh].is_plane,
-                               visual.shadowed, visual.overlay))
+            frame = math3d.compose(shape.offset, shape.rotation, scale)
+            parts += [_Part(row, mesh, texture, visual.shader_state, frame @ piece, color,
+                            visual.shadower and not self._meshes[mesh].is_plane,
+                            visual.shadowed, visual.overlay) for mesh, piece in pieces]
         if visual.model:
             local = math3d.compose((0, 0, 0), (1, 0, 0, 0), scale)
             try:
@@ -267,17 +388,57 @@ class Renderer:
             self._texture_for(part.texture)
         return parts
 
-    def _mesh_for_shape(self, shape: Any) -> str:
+    def _meshes_for_shape(self, shape: Any, unit: bool) -> list[tuple[str, np.ndarray]]:
+        """The meshes a shape is drawn with, each with the matrix placing it in the shape's
+        frame. With ``unit`` (the default material, which normalises scaled normals)
+        primitives are unit meshes scaled per instance, so objects of every size are one
+        instanced batch per kind; an author's shader gets meshes of the shape's own size,
+        as it always has."""
         if shape.kind in ("mesh", "hull"):
             if shape.vertices is None or shape.faces is None:
                 raise meshes.ModelError(f"{shape.kind} shape without vertices and faces")
             digest = hashlib.sha1(np.ascontiguousarray(shape.vertices, np.float64).tobytes()
                                   + np.ascontiguousarray(shape.faces, np.int64).tobytes())
             key = f"mesh:{digest.hexdigest()}"
-            return self._mesh_for_shape_key(
-                key, lambda: meshes.mesh_from_arrays(shape.vertices, shape.faces))
-        key = f"{shape.kind}:{tuple(round(float(s), 6) for s in shape.size)}"
-        return self._mesh_for_shape_key(key, lambda: meshes.primitive(shape.kind, shape.size))
+            return [(self._mesh_for_shape_key(
+                key, lambda: meshes.mesh_from_arrays(shape.vertices, shape.faces)), _EYE4)]
+        size = tuple(float(s) for s in shape.size)
+        if unit and shape.kind in _UNIT_KINDS and size and all(0.0 < s < math.inf
+                                                              for s in size):
+            return self._unit_pieces(shape.kind, size)
+        key = f"{shape.kind}:{tuple(round(s, 6) for s in size)}"
+        return [(self._mesh_for_shape_key(key, lambda: meshes.primitive(shape.kind, size)),
+                 _EYE4)]
+
+    def _unit_pieces(self, kind: str, size: tuple[float, ...]) -> list[tuple[str, np.ndarray]]:
+        """A primitive as unit meshes (with coarser levels of detail) and their placing
+        matrices: a capsule is a cylinder between two spheres, so capsules of every
+        proportion share the cylinders' and spheres' batches."""
+        sphere = self._lod_meshes("sphere", lambda level: meshes.sphere(
+            1.0, *sphere_segments(level)))
+        if kind == "box":
+            box = self._lod_meshes("box", lambda level: meshes.box((1.0, 1.0, 1.0)), 1)
+            return [(box, np.diag([*(size if len(size) == 3 else (size[0],) * 3), 1.0]))]
+        radius = size[0]
+        if kind == "sphere":
+            return [(sphere, np.diag([radius, radius, radius, 1.0]))]
+        length = size[1] if len(size) > 1 else 1.0
+        cylinder = self._lod_meshes("cylinder", lambda level: meshes.cylinder(
+            1.0, 1.0, sphere_segments(level)[0]))
+        pieces = [(cylinder, np.diag([radius, radius, length, 1.0]))]
+        if kind == "capsule":
+            pieces += [(sphere, math3d.compose((0.0, 0.0, end), (1.0, 0.0, 0.0, 0.0),
+                                               (radius,) * 3))
+                       for end in (-length / 2, length / 2)]
+        return pieces
+
+    def _lod_meshes(self, name: str, build: Any, levels: int = len(LOD_PIXELS) + 1) -> str:
+        """Mesh ``unit:NAME`` and its coarser levels ``unit:NAME#1``...; returns the first."""
+        keys = [f"unit:{name}"] + [f"unit:{name}#{level}" for level in range(1, levels)]
+        for level, key in enumerate(keys):
+            self._mesh_for_shape_key(key, lambda level=level: build(level))
+        self._meshes[keys[0]].lods = tuple(keys[1:])
+        return keys[0]
 
     def _mesh_for_shape_key(self, key: str, build: Any) -> str:
         if key not in self._meshes:
@@ -339,7 +500,7 @@ class Renderer:
     def _skin_pass(self) -> None:
         """Skin every group for this frame's poses; place each group's object at its
         avatars' centre and size its bounds for shadow fitting."""
-        self._shadow_fbo.use()  # Mesa captures nothing without a complete framebuffer bound
+        self._shadows.fbo.use()  # Mesa captures nothing without a complete framebuffer bound
         for mesh_key, group in self._skinning.groups.items():
             if not group.members:
                 continue
@@ -413,10 +574,7 @@ class Renderer:
     # -------------------------------------------------------------- per frame
     def _rebuild(self) -> None:
         for batch in self._batches:
-            for vao in batch.vaos.values():
-                vao.release()
-            if batch.buffer is not None:
-                batch.buffer.release()
+            batch.release()
         parts = [p for ps in self._objects.values() for p in ps]
         # planes last: they cover the screen, and drawing them after the objects lets the
         # depth test skip shading the floor hidden behind them; overlays after everything
@@ -446,16 +604,23 @@ class Renderer:
             if self._instancing and self._batches and self._batches[-1].key == key:
                 self._batches[-1].stop = i + 1
             else:
-                self._batches.append(_Batch(key, i, i + 1))
-        for batch in self._batches:
-            batch.buffer = self.ctx.buffer(
-                reserve=(batch.stop - batch.start) * INSTANCE_FLOATS * 4, dynamic=True)
+                mesh = self._meshes[p.mesh]
+                self._batches.append(_Batch(key, i, i + 1, (p.mesh, *mesh.lods)))
+        self._part_batch = np.zeros(n, np.int64)
+        self._part_coarsest = np.zeros(n, np.int8)
+        for index, batch in enumerate(self._batches):
+            self._part_batch[batch.start:batch.stop] = index
+            self._part_coarsest[batch.start:batch.stop] = len(batch.levels) - 1
+        self._shadows.reset(n)
+        self._posed = None
+        self._eye_cache.clear()
         self._dirty = False
 
-    def _lit(self, lights: list[LightInfo], shadow_index: int) -> Any:
-        """The default material's program, specialised for this set of lights."""
+    def _lit(self, lights: list[LightInfo], shadow_index: int, textured: bool) -> Any:
+        """The default material's program, specialised for this set of lights and for
+        textured or plain objects."""
         kinds = tuple(KIND_CODES.get(light.kind, 0) for light in lights[:glsl.MAX_LIGHTS])
-        key = (kinds, shadow_index)
+        key = (kinds, shadow_index, textured)
         program = self._lit_programs.get(key)
         if program is None:
             program = self.ctx.program(vertex_shader=glsl.LIT_VERTEX,
@@ -463,7 +628,7 @@ class Renderer:
             self._lit_programs[key] = program
         return program
 
-    def _cull(self, batch: _Batch) -> None:
+    def _face_culling(self, batch: _Batch) -> None:
         """Cull back faces of closed primitives (half the triangles); model files may be open
         meshes and stay two-sided."""
         if self._meshes[batch.key[0]].closed:
@@ -471,64 +636,133 @@ class Renderer:
         else:
             self.ctx.disable(self.ctx.CULL_FACE)
 
-    def _vao(self, batch: _Batch, program: Any) -> Any:
-        vao = batch.vaos.get(program.glo)
+    def _vao(self, batch: _Batch, level: int, slot: int, program: Any) -> Any:
+        """The vertex array drawing ``batch`` at a level of detail from one slot's
+        instance buffer with ``program``."""
+        vao = batch.vaos.get((level, slot, program.glo))
         if vao is None:
-            mesh = self._meshes[batch.key[0]]
+            mesh = self._meshes[batch.levels[level]]
             vao = self.ctx.vertex_array(
                 program,
                 [(mesh.vbo, meshes.VERTEX_FORMAT, *meshes.VERTEX_ATTRIBUTES),
-                 (batch.buffer, _INSTANCE_FORMAT, *_INSTANCE_ATTRS)],
+                 (self._buffer(batch, level, slot), _INSTANCE_FORMAT, *_INSTANCE_ATTRS)],
                 index_buffer=mesh.ibo, index_element_size=4, skip_errors=True)
-            batch.vaos[program.glo] = vao
+            batch.vaos[(level, slot, program.glo)] = vao
         return vao
 
-    def _upload_instances(self) -> np.ndarray:
-        """Write every part's instance data; returns world matrices ``(P, 4, 4)``.
+    def _buffer(self, batch: _Batch, level: int, slot: int) -> Any:
+        """A batch's instance buffer for one level and slot (room for all its parts)."""
+        buffer = batch.buffers.get((level, slot))
+        if buffer is None:
+            buffer = batch.buffers[(level, slot)] = self.ctx.buffer(
+                reserve=(batch.stop - batch.start) * INSTANCE_FLOATS * 4, dynamic=True)
+        return buffer
 
-        Instances of a batch are sorted near to far from the camera so the depth test rejects
-        hidden fragments before they are shaded (a large saving on a CPU rasteriser).
-        """
+    def _world(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every part's world matrix ``(P, 4, 4)``, world bounding radius and instance row
+        ``(P, 24)``, straight from the pose arrays (no per-object Python). Parts whose
+        object has not moved since the last frame keep what they had (most of a scene
+        rests); skinned parts, whose bounds change with the pose, are always redone. The
+        arrays are the renderer's own: read them, do not keep them."""
         rows = self._part_obj
-        world = math3d.compose(self._pos[rows], self._quat[rows]) @ self._part_local
-        inst = np.empty((len(rows), INSTANCE_FLOATS), np.float32)
-        inst[:, :16] = world.transpose(0, 2, 1).reshape(len(rows), 16)
-        inst[:, 16:] = self._part_extra
-        distance = np.linalg.norm(world[:, :3, 3] - self.camera.position, axis=1)
-        for batch in self._batches:
-            chunk = inst[batch.start:batch.stop]
-            if len(chunk) > 1:
-                chunk = chunk[np.argsort(distance[batch.start:batch.stop], kind="stable")]
-            batch.buffer.write(chunk.tobytes())
-        return world
+        pos, quat = self._pos[rows], self._quat[rows]
+        cache = self._posed
+        if cache is None:
+            parts = np.arange(len(rows))
+            world = np.empty((len(rows), 4, 4))
+            inst = np.empty((len(rows), INSTANCE_FLOATS), np.float32)
+            inst[:, 16:] = self._part_extra
+            cache = self._posed = _Posed(pos, quat, world, np.empty(len(rows)), inst)
+        else:
+            moved = np.any(pos != cache.position, axis=1) | np.any(quat != cache.orientation,
+                                                                    axis=1)
+            moved[self._skinned_parts] = True
+            parts = np.flatnonzero(moved)
+            cache.position, cache.orientation = pos, quat
+        if len(parts):
+            world = math3d.compose(pos[parts], quat[parts]) @ self._part_local[parts]
+            cache.world[parts] = world
+            cache.inst[parts, :16] = world.transpose(0, 2, 1).reshape(len(parts), 16)
+            cache.radii[parts] = world_radii(world, self._part_radius[parts])
+            cache.version += 1
+        return cache.world, cache.radii, cache.inst
+
+    def _upload(self, selected: np.ndarray, order_key: np.ndarray, level: np.ndarray,
+                inst: np.ndarray, slot: int) -> list[_Run]:
+        """Write the ``selected`` parts' instance rows into their batches' buffers of
+        ``slot``, in ascending ``order_key`` within each batch and level of detail; returns
+        the draws to make."""
+        chosen = np.flatnonzero(selected)
+        if not len(chosen):
+            return []
+        order = chosen[np.lexsort((order_key[chosen], level[chosen],
+                                   self._part_batch[chosen]))]
+        groups = self._part_batch[order] * 8 + level[order]
+        cuts = np.flatnonzero(np.diff(groups)) + 1
+        rows = inst[order]
+        runs = []
+        for start, stop in zip(np.r_[0, cuts].tolist(), np.r_[cuts, len(order)].tolist(),
+                               strict=True):
+            batch = self._batches[int(self._part_batch[order[start]])]
+            lod = int(level[order[start]])
+            self._buffer(batch, lod, slot).write(rows[start:stop].tobytes())
+            runs.append(_Run(batch, lod, order[start:stop]))
+        return runs
+
+    def _eye_runs(self, eye: Eye, slot: int, world: np.ndarray, radii: np.ndarray,
+                  inst: np.ndarray) -> list[_Run]:
+        """One eye's draws: the parts in its view frustum (all of them with
+        :attr:`culling` off), each at its level of detail, near to far within a batch so
+        the depth test rejects hidden fragments before they are shaded. An eye that sees
+        what it saw last frame (the same view of parts that did not move) draws the same
+        runs from the instance buffers as they are."""
+        assert self._posed is not None
+        key = (self._posed.version, eye.view.tobytes(), eye.proj.tobytes(), eye.viewport,
+               self.culling, self.lod)
+        kept = self._eye_cache.get(slot)
+        if kept is not None and kept[0] == key:
+            self.stats.culled += kept[1]
+            return kept[2]
+        centres = world[:, :3, 3]
+        visible = (in_frustum(frustum_planes(eye.proj @ eye.view), centres, radii)
+                   if self.culling else np.ones(len(centres), bool))
+        distance = np.linalg.norm(centres - eye.position, axis=1)
+        levels = np.minimum(lod_levels(radii, distance, pixels_per_unit(eye.proj,
+                                                                         eye.viewport[3])),
+                            self._part_coarsest) if self.lod else np.zeros(len(radii), np.int8)
+        culled = int(len(visible) - visible.sum())
+        self.stats.culled += culled
+        runs = self._upload(visible, distance, levels, inst, slot)
+        self._eye_cache[slot] = (key, culled, runs)
+        return runs
 
     def _shadow_light(self, lights: list[LightInfo]) -> int:
         return next((i for i, light in enumerate(lights) if light.shadows), -1)
 
-    def _shadow_pass(self, light: LightInfo, world: np.ndarray) -> np.ndarray | None:
+    def _shadow_pass(self, light: LightInfo, world: np.ndarray, radii: np.ndarray,
+                     inst: np.ndarray) -> np.ndarray | None:
         casts = self._part_casts
         if not casts.any():
             return None
-        centres = world[casts, :3, 3]
-        scales = np.linalg.norm(world[casts, :3, :3], axis=1).max(axis=1)
-        radii = self._part_radius[casts] * scales
-        lo = (centres - radii[:, None]).min(axis=0)
-        hi = (centres + radii[:, None]).max(axis=0)
-        centre = 0.5 * (lo + hi)
-        radius = float(np.max(np.linalg.norm(centres - centre, axis=1) + radii))
-        light_vp = shadow_matrix(light, centre, radius)
-        self._shadow_fbo.use()
-        self._shadow_fbo.viewport = (0, 0, self._shadow_size, self._shadow_size)
-        self._shadow_fbo.clear(depth=1.0)
-        self.ctx.enable(self.ctx.DEPTH_TEST)
         self.ctx.polygon_offset = (2.0, 4.0)
-        write_uniform(self._depth, "u_light_vp", _gl(light_vp))
-        for batch in self._batches:
-            if not casts[batch.start:batch.stop].any():
-                continue
-            self._cull(batch)
-            self._vao(batch, self._depth).render(instances=batch.stop - batch.start)
-            self.stats.shadow_draw_calls += 1
+        unsorted = np.zeros(len(casts))
+        level = np.minimum(self._part_coarsest, SHADOW_LEVEL)
+
+        def draw(selected: np.ndarray, light_vp: np.ndarray) -> int:
+            write_uniform(self._depth, "u_light_vp", _gl(light_vp))
+            runs = self._upload(selected, unsorted, level, inst, _SHADOW_SLOT)
+            for run in runs:
+                self._face_culling(run.batch)
+                self._vao(run.batch, run.level, _SHADOW_SLOT, self._depth).render(
+                    instances=len(run.parts))
+            return len(runs)
+
+        deforming = np.zeros(len(casts), bool)
+        deforming[self._skinned_parts] = True
+        light_vp, frame = self._shadows.update(light, world, radii, casts, deforming, draw)
+        self.stats.shadow_draw_calls += frame.draw_calls
+        self.stats.shadow_cached = frame.cached
+        self.stats.shadow_rebakes = int(frame.rebaked)
         self.ctx.polygon_offset = (0.0, 0.0)
         self.ctx.disable(self.ctx.CULL_FACE)
         return light_vp
@@ -630,28 +864,40 @@ class Renderer:
             self._rebuild()
         if self._skinning.groups:
             self._skin_pass()
-        size = tuple(self.target.size)
-        self._ensure_scene_targets(size)  # type: ignore[arg-type]
-        world = self._upload_instances()
+        output: tuple[int, int] = tuple(self.target.size)  # type: ignore[assignment]
+        size = self.view_size(output)
+        scaled = size != output
+        world, radii, inst = self._world()
+        screen_eyes = self.camera.eyes(*size)
+        eyes = self._seen_eyes(screen_eyes)
+        runs = [self._eye_runs(eye, slot, world, radii, inst) for slot, eye in enumerate(eyes)]
+        mark = self._stage("upload_ms", start)
         lights = self.lights or [DEFAULT_LIGHT]
         shadow_index = self._shadow_light(lights)
         light_vp = None
         if shadow_index >= 0 and len(world):
-            light_vp = self._shadow_pass(lights[shadow_index], world)
-        fbo = self._scene_fbo
+            light_vp = self._shadow_pass(lights[shadow_index], world, radii, inst)
+        mark = self._stage("shadow_ms", mark)
+        steps = self.post.steps(self.anomalies, [(eye_geometry(eye, size), eye.viewport)
+                                                 for eye in screen_eyes], size)
+        post = bool(steps)
+        if post or scaled:  # read as a texture; else the view goes straight to the target
+            self._ensure_scene_targets(size)
+        fbo = self._scene_fbo if post or scaled else self.target.fbo
         fbo.use()
         fbo.viewport = (0, 0, *size)
         fbo.clear(*self.background, 1.0, depth=1.0)
         self.ctx.enable(self.ctx.DEPTH_TEST)
-        self._shadow_tex.use(glsl.TEXTURE_UNITS["u_shadow_map"])
-        lit = self._lit(lights, shadow_index if light_vp is not None else -1)
-        for eye in self.camera.eyes(*size):
+        self._shadows.texture.use(glsl.TEXTURE_UNITS["u_shadow_map"])
+        shadowing = shadow_index if light_vp is not None else -1
+        for slot, (eye, eye_runs) in enumerate(zip(eyes, runs, strict=True)):
             fbo.viewport = eye.viewport
             configured: set[int] = set()
-            for batch in self._batches:
+            for run in eye_runs:
+                batch = run.batch
                 if batch.key[3]:
                     self._begin_overlay()
-                program = lit
+                program = self._lit(lights, shadowing, batch.key[1] != _WHITE)
                 compiled = self.shaders.state(batch.key[2]) if batch.key[2] else None
                 if compiled is not None:
                     program = compiled.program
@@ -660,24 +906,78 @@ class Renderer:
                     self._frame_uniforms(program, eye, lights, shadow_index, light_vp)
                     configured.add(program.glo)
                 self._textures[batch.key[1]].use(glsl.TEXTURE_UNITS["u_texture"])
-                self._cull(batch)
-                vao = self._vao(batch, program)
-                self.stats.instances += batch.stop - batch.start
+                self._face_culling(batch)
+                vao = self._vao(batch, run.level, slot, program)
+                self.stats.instances += len(run.parts)
                 if compiled is not None and compiled.per_object:
-                    self._draw_per_object(program, vao, eye, world[batch.start:batch.stop])
+                    self._draw_per_object(program, vao, eye, world[run.parts])
                     continue
-                vao.render(instances=batch.stop - batch.start)
+                vao.render(instances=len(run.parts))
                 self.stats.draw_calls += 1
             self.ctx.enable(self.ctx.DEPTH_TEST)
             self.ctx.disable(self.ctx.BLEND)
         self.ctx.disable(self.ctx.CULL_FACE)
         self.stats.batches = len(self._batches)
-        out = self.post.run(self._scene_tex, self._scene_depth, size, self.time) \
-            if self.post.active() else None
-        self.ctx.copy_framebuffer(self.target.fbo, out or self._scene_fbo)
-        self.hud.draw(self.target.fbo, size)  # type: ignore[arg-type]
+        mark = self._stage("draw_ms", mark)
+        if post:
+            self.post.run(steps, self._scene_tex, self._scene_depth, size, self.time,
+                          self._scaled_output(size)[1] if scaled else self.target.fbo)
+        if scaled:
+            self._scale_up(self._scaled_output(size)[0] if post else self._scene_tex, output)
+        mark = self._stage("post_ms", mark)
+        self.hud.draw(self.target.fbo, output)
+        if self.before_present is not None:
+            self.ctx.finish()
+            self.before_present()
         self.target.present()
-        self.stats.frame_ms = (_time.perf_counter() - start) * 1000.0
+        end = self._stage("present_ms", mark)
+        self.stats.frame_ms = (end - start) * 1000.0
+
+    def _scaled_output(self, size: tuple[int, int]) -> tuple[Any, Any]:
+        """Where the post chain ends when the view is drawn smaller: a texture of the
+        view's size (and its framebuffer), scaled up from there."""
+        if self._scaled is None or tuple(self._scaled[0].size) != size:
+            for obj in self._scaled or ():
+                obj.release()
+            texture = self.ctx.texture(size, 4)
+            texture.filter = (self.ctx.LINEAR, self.ctx.LINEAR)
+            texture.repeat_x = texture.repeat_y = False
+            self._scaled = (texture, self.ctx.framebuffer(color_attachments=[texture]))
+        return self._scaled
+
+    def _scale_up(self, texture: Any, output: tuple[int, int]) -> None:
+        """Draw the view, drawn smaller, over the whole output (bilinear)."""
+        if self._upscale is None:
+            program = self.ctx.program(vertex_shader=glsl.FULLSCREEN_VERTEX,
+                                       fragment_shader=glsl.UPSCALE_FRAGMENT)
+            self._upscale = (program, self.ctx.vertex_array(program, []))
+        program, vao = self._upscale
+        self.ctx.disable(self.ctx.DEPTH_TEST)
+        self.target.fbo.use()
+        self.target.fbo.viewport = (0, 0, *output)
+        texture.use(0)
+        write_uniform(program, "u_scene", 0)
+        vao.render(vertices=3)
+
+    def _seen_eyes(self, eyes: list[Eye]) -> list[Eye]:
+        """The eyes as the perspective anomalies that are on show them (field of view, tilt,
+        aspect); culling and drawing use these, the anomalies' passes the screen's."""
+        for anomaly in self.anomalies:
+            if anomaly.kind != "perspective":
+                continue
+            eyes = [adjust_eye(eye, anomaly.values)
+                    if len(eyes) == 1 or anomaly.eye in ("both", ("left", "right")[i]) else eye
+                    for i, eye in enumerate(eyes)]
+        return eyes
+
+    def _stage(self, name: str, since: float) -> float:
+        """Record the milliseconds since ``since`` as stage ``name`` of this frame's stats
+        (waiting for the GPU first when profiling); returns now."""
+        if self.profile:
+            self.ctx.finish()
+        now = _time.perf_counter()
+        setattr(self.stats, name, (now - since) * 1000.0)
+        return now
 
     # ----------------------------------------------------------------- output
     def read_pixels(self) -> np.ndarray:
@@ -698,10 +998,7 @@ class Renderer:
     def release(self) -> None:
         """Free GPU objects (the context itself belongs to the target)."""
         for batch in self._batches:
-            for vao in batch.vaos.values():
-                vao.release()
-            if batch.buffer is not None:
-                batch.buffer.release()
+            batch.release()
         for key, mesh in self._meshes.items():
             if key not in self._skinning.groups:  # skin groups' buffers are the skinning's
                 mesh.vbo.release()
@@ -709,8 +1006,10 @@ class Renderer:
         self._skinning.release()
         for tex in self._textures.values():
             tex.release()
-        for obj in (self._scene_fbo, self._scene_tex, self._scene_depth, self._shadow_fbo,
-                    self._shadow_tex, self._depth, *self._lit_programs.values()):
+        self._shadows.release()
+        for obj in (self._scene_fbo, self._scene_tex, self._scene_depth, self._depth,
+                    *(self._scaled or ()), *(self._upscale or ()),
+                    *self._lit_programs.values()):
             if obj is not None:
                 obj.release()
         self.post.release()

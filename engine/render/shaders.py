@@ -212,8 +212,9 @@ def write_uniform(program: Any, name: str, value: UniformValue) -> bool:
         return False
     value = _as_uniform_value(value)
     dims = getattr(member, "dimension", 1)
-    if isinstance(value, tuple) and len(value) != dims and getattr(member, "array_length", 1) == 1:
-        raise ValueError(f"uniform {name!r} takes {dims} values, got {len(value)}")
+    given = len(value) if isinstance(value, tuple) else 1
+    if given != dims and getattr(member, "array_length", 1) == 1:
+        raise ValueError(f"uniform {name!r} takes {dims} values, got {given}")
     if getattr(member, "fmt", "f").endswith("i") and not isinstance(value, tuple):
         value = int(value)
     member.value = value
@@ -225,7 +226,10 @@ def write_uniform(program: Any, name: str, value: UniformValue) -> bool:
 PER_OBJECT_UNIFORMS = tuple(glsl.PER_OBJECT_UNIFORMS)
 #: Uniforms no user value is needed for: the engine's, and GLSL's own.
 _SUPPLIED = frozenset(glsl.ENGINE_UNIFORMS) | frozenset(glsl.PER_OBJECT_UNIFORMS)
-_DECLARED = re.compile(r"^[ \t]*uniform\s+(?:(?:lowp|mediump|highp)\s+)?\w+\s+(\w+)", re.MULTILINE)
+#: A uniform's declaration: at a line's start or after another statement on its line
+#: (``in vec3 p; uniform mat4 m;``), its first name (``uniform mat4 a, b;``: ``a``).
+_DECLARED = re.compile(r"(?:^|;)[ \t]*uniform\s+(?:(?:lowp|mediump|highp)\s+)?\w+\s+(\w+)",
+                       re.MULTILINE)
 
 
 @dataclass(slots=True)

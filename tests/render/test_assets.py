@@ -13,7 +13,9 @@ from render_helpers import pixel_at
 
 from components import Shape, Visual
 from engine.assets import Assets
+from engine.assets.generated import DARK, LIGHT, MARKER_BALL
 from engine.assets.loaders import MODEL_EXTENSIONS
+from engine.render import CameraView
 from engine.render.materials import CHECKER_A
 
 CENTRE = (0.0, 0.0, 0.5)
@@ -127,3 +129,32 @@ def test_mesh_shape_from_raw_triangles_draws(make_renderer):
     r.render()
     rgb = pixel_at(r, r.read_pixels(), CENTRE)
     assert rgb[2] > 60 and rgb[2] > 2 * rgb[0]
+
+
+def test_the_hands_marker_ball_is_a_generated_checker_drawn_on_the_sphere(make_renderer,
+                                                                          tmp_path):
+    """The marker's texture is made, not read (no file): an 8 x 4 checker of two tones that,
+    drawn on the marker's sphere, shows as light and dark patches under the same light as
+    an untextured ball (the textured frame over the plain one is the texture's tone)."""
+    assets = Assets(tmp_path)
+    image = assets.image(MARKER_BALL)
+    assert assets.image(MARKER_BALL) is image and not assets.loads  # made once, read never
+    tones = image.rgba[..., 0]
+    assert set(np.unique(tones).tolist()) == {LIGHT, DARK}
+    assert (tones == LIGHT).mean() == 0.5 and (image.rgba[..., 3] == 255).all()
+    assert tones[0, 0] == tones[0, 16] != tones[0, 8] and tones[0, 0] != tones[16, 0]
+
+    def frame(texture: str | None) -> np.ndarray:
+        r = make_renderer(root=tmp_path)
+        r.camera = CameraView.looking_at((0.0, -3.0, 0.5), CENTRE)
+        r.add(1, Visual(shapes=[Shape("sphere", (0.5,))], color=(1.0, 0.85, 0.2, 1.0),
+                        texture=texture), position=CENTRE)
+        r.render()
+        return r.read_pixels()[..., :3].astype(float)
+
+    plain, marked = frame(None), frame(MARKER_BALL)
+    ball = np.abs(plain - plain[0, 0]).max(axis=2) > 30  # not the background
+    lit = ball & (plain.max(axis=2) > 40)  # the lit face, where a ratio means something
+    assert lit.sum() > 500, lit.sum()
+    share = marked.max(axis=2)[lit] / plain.max(axis=2)[lit]
+    assert (share > 0.9).mean() > 0.2 and (share < 0.6).mean() > 0.2  # both tones show

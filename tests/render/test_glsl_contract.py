@@ -88,3 +88,10 @@ def test_a_uniform_nothing_sets_is_told_with_its_file_and_the_engines_name(
         _, drawn = _draw(make_renderer, tmp_path, WRONG_NAME.replace("u_projection", "u_proj"))
     assert np.allclose(drawn, (255, 0, 255), atol=2)
     assert not [r for r in caplog.records if "never set" in r.getMessage()]
+    caplog.clear()
+    one_line = WRONG_NAME.replace("in mat4 i_model;\nuniform mat4 u_view;\nuniform",
+                                  "in mat4 i_model; uniform mat4 u_view; uniform")
+    with caplog.at_level(logging.WARNING, "colosseum.render"):  # its file, not the other
+        _draw(make_renderer, tmp_path, one_line)
+    assert [r.getMessage().split(": uniform")[0] for r in caplog.records
+            if "never set" in r.getMessage()] == [f"{tmp_path / 'v.vert'}:3"]

@@ -11,6 +11,7 @@ from engine.app import Engine, EngineConfig
 from engine.render.math3d import look_at_orientation
 from engine.scene.factory import instantiate
 from engine.scene.loader import spec_from_text
+from engine.services import SwapGate
 from systems.render import RenderOptions, RenderPlugin, RenderSystem
 
 LISTING_3 = """
@@ -131,3 +132,49 @@ def test_threaded_mode_draws_interpolated_physics_states():
         rs = eng.resource(RenderSystem)
         assert ball in rs.renderer and rs.renderer.errors == []
         assert rs.renderer.pose(ball)[0][2] < 3.0  # it is falling, and drawn where physics has it
+
+
+class _Gate:
+    """A swap gate that notes, each time it is passed, the frame as drawn so far and how
+    many frames the target had been asked to show."""
+
+    def __init__(self, system: RenderSystem) -> None:
+        self.system = system
+        self.seen: list[tuple[np.ndarray, int]] = []
+        self.presents = 0
+
+    def before_swap(self) -> None:
+        self.seen.append((self.system.renderer.read_pixels(), self.presents))
+
+
+def test_a_swap_gate_is_passed_between_the_finished_frame_and_its_swap(tmp_path):
+    with _engine() as eng:
+        eng.spawn(Transform((0.0, 0.0, 0.6)), Visual(shapes=[Shape("sphere", (0.5,))],
+                                                   color=(1.0, 0.0, 0.0, 1.0)))
+        eng.spawn(Transform((0.0, -6.0, 0.6)), Camera(look_at=(0.0, 0.0, 0.6)))
+        eng.run(frames=1)
+        system = eng.resource(RenderSystem)
+        gate = _Gate(system)
+        eng.insert_resource(gate, as_type=SwapGate)
+        shown = system._target.present
+
+        def present() -> None:
+            gate.presents += 1
+            shown()
+
+        system._target.present = present
+        eng.run(frames=2)
+    # passed once a frame, with the frame drawn (the red sphere in the middle) and not yet
+    # swapped: one swap after each pass
+    assert [presents for _, presents in gate.seen] == [0, 1] and gate.presents == 2
+    for pixels, _ in gate.seen:
+        assert pixels[H // 2, W // 2, 0] > 100 and pixels[H // 2, W // 2, 1] < 40
+
+
+def test_the_frame_drawn_for_a_screenshot_at_the_end_passes_no_gate(tmp_path):
+    with _engine(screenshot=tmp_path / "end.png", draw_every_frame=False) as eng:
+        eng.spawn(Transform((0.0, 0.0, 0.5)), Visual(shapes=[Shape("box", (1, 1, 1))]))
+        gate = _Gate(None)  # type: ignore[arg-type]
+        eng.insert_resource(gate, as_type=SwapGate)
+        eng.run(frames=3)
+    assert (tmp_path / "end.png").is_file() and gate.seen == []
