@@ -24,6 +24,7 @@ from components.transform import Transform
 from components.trigger import Trigger
 from components.user import UserOwned
 from components.visual import Visual
+from components.wheelchair import Wheelchair
 
 __all__ = [
     "Avatar",
@@ -47,4 +48,5 @@ __all__ = [
     "Trigger",
     "UserOwned",
     "Visual",
+    "Wheelchair",
 ]

@@ -24,7 +24,8 @@ class Hand:
     ``button`` of device ``glove`` is down, what it touches is held. Farther than
     ``deviation_distance`` (m) from the tracker it passes through things (section 5.4).
     ``frame`` is the entity the tracker is calibrated relative to (a wheelchair), or None
-    for the world; ``holding`` the scene IDs held when a saved state was written."""
+    for the world; ``holding`` the scene IDs held when a saved state was written. The
+    ``*_model`` files are drawn in each mode (None: the object's own look, tinted)."""
 
     tracker: str = ""
     glove: str = ""
@@ -37,6 +38,7 @@ class Hand:
     deviation_distance: float = 0.3
     break_force: float | None = None
     marker: bool = True
+    neutral_model: str | None = None
     contact_model: str | None = None
     grasp_model: str | None = None
     frame: int | None = None

@@ -17,12 +17,14 @@ import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
+from components import Transform
 from engine.events import Despawned, EventBus, Spawned
-from engine.physics.backend import WorldSettings
+from engine.memory import paused_gc
+from engine.physics.backend import BackendName, WorldSettings
 from engine.physics.driver import DetachedPhysics, PhysicsPort
 from engine.realtime import CostLog, Pacing, RealTimeController, Tick, advance
 from engine.system import (
@@ -36,6 +38,9 @@ from engine.system import (
 )
 from engine.world import AccessAudit, World
 
+if TYPE_CHECKING:
+    from engine.input import InputState
+
 log = logging.getLogger("colosseum")
 
 R = TypeVar("R")
@@ -48,7 +53,7 @@ class EngineConfig:
 
     content_dir: Path | None = None
     mode: str = "serial"  # "serial" | "threaded"
-    backend: str = "ode"
+    backend: str = BackendName.ODE
     dt: float = 1.0 / 60.0
     substeps: int = 1
     seed: int = 0
@@ -61,6 +66,9 @@ class EngineConfig:
     render: bool = False
     sound: str = "null"
     world: WorldSettings = field(default_factory=WorldSettings)
+    #: Folders besides the content folder that its scene and scripts may name files in
+    #: (``--allow-path``; see :mod:`engine.confine`).
+    allow_paths: tuple[Path, ...] = ()
     options: dict[str, Any] = field(default_factory=dict)
     #: Check that every system touches only the component types it declares (slower; the
     #: test suite turns it on with COLOSSEUM_DEBUG=1, ``colosseum run --debug`` too).
@@ -106,9 +114,10 @@ class Engine:
         self._started = False
         self._closed = False
         self._quit = False
+        self._input: InputState | None = None
         #: The wall clock every controller of this engine reads (injectable for tests).
         self.clock = clock
-        self.physics: PhysicsPort = DetachedPhysics()
+        self.physics: PhysicsPort = DetachedPhysics(cfg.world.limits)
         self.controller = RealTimeController(cfg.pacing(), clock=clock, sleep=sleep)
         for plugin in plugins:
             self.add_plugin(plugin)
@@ -132,9 +141,10 @@ class Engine:
 
     def add_plugin(self, plugin: Plugin) -> Plugin:
         """Build a plugin once; a second plugin of the same name is ignored."""
-        if plugin.name in self.plugins:
-            return self.plugins[plugin.name]
-        self.plugins[plugin.name] = plugin
+        name = str(plugin.name)  # a PluginName is kept as its plain text
+        if name in self.plugins:
+            return self.plugins[name]
+        self.plugins[name] = plugin
         plugin.build(self)
         return plugin
 
@@ -142,7 +152,7 @@ class Engine:
                         aliases: Iterable[str] = ()) -> None:
         """Make a plugin loadable by name (``requestPlugin`` in Lua)."""
         for key in (name, *aliases):
-            self.plugin_factories[key] = factory
+            self.plugin_factories[str(key)] = factory
 
     def request_plugin(self, name: str) -> Plugin:
         factory = self.plugin_factories.get(name)
@@ -160,6 +170,21 @@ class Engine:
 
     def try_resource(self, kind: type[R]) -> R | None:
         return self.resources.get(kind)
+
+    @property
+    def input(self) -> InputState:
+        """The latest input state (``engine.input.tracker("hand_r")``), the input plugin's
+        table: set when that plugin starts (the engine core cannot name the input layer
+        itself, a service above it)."""
+        if self._input is None:
+            raise LookupError("engine.input: no input state; the input plugin provides it "
+                              "when the engine starts (requestPlugin(\"input\"), or "
+                              "systems.create_engine)")
+        return self._input
+
+    @input.setter
+    def input(self, state: InputState) -> None:
+        self._input = state
 
     # -- structural changes ---------------------------------------------------
     def spawn(self, *components: Any) -> int:
@@ -188,7 +213,9 @@ class Engine:
         """Run ``action`` on the main thread at the next phase boundary."""
         self._deferred.append(action)
 
-    def _flush(self) -> None:
+    def flush(self) -> None:
+        """Apply what was deferred (despawns) and deliver the events emitted, as at a phase
+        boundary (a tool measuring a deletion calls it outside a frame)."""
         while self._deferred:
             actions, self._deferred = self._deferred, []
             for action in actions:
@@ -200,10 +227,11 @@ class Engine:
         if self._started:
             return
         self._started = True
-        for phase in Phase:
-            for system in self.systems[phase]:
-                system.setup(self)
-        self._flush()
+        with paused_gc():  # setups make what lives as long as the world: a scene's worth
+            for phase in Phase:
+                for system in self.systems[phase]:
+                    system.setup(self)
+        self.flush()
 
     def step(self) -> None:
         """Run one frame: every phase in order."""
@@ -224,7 +252,7 @@ class Engine:
                         system.run(self, tick.dt)
                 except Exception as exc:
                     raise SystemFailure(system.name, exc) from exc
-            self._flush()
+            self.flush()
         self.frame += 1
         self.time = (self.physics.time if self.config.mode == "threaded"
                      else advance(self.time, tick.dt))
@@ -235,16 +263,27 @@ class Engine:
             time.sleep(0)  # unpaced: still let the physics thread take the GIL
 
     def _run_audited(self, system: System, dt: float) -> None:
-        """Run ``system`` and check it touched only the component types it declares."""
+        """Run ``system`` and check it touched only the component types it declares.
+
+        Reads are the queries it made; writes the components it added or removed, and
+        for Transforms (the pose table, which physics and rendering trust) any value it
+        changed: the table is compared bit for bit before and after. Changes to other
+        components' fields are not seen.
+        """
+        readable, writable = {*system.reads, *system.writes}, set(system.writes)
+        poses = self.world.poses
+        before = None if Transform in writable or ANY_COMPONENT in writable else \
+            poses.table.copy()
         audit = self.world.audit = AccessAudit()
         try:
             system.run(self, dt)
         finally:
             self.world.audit = None
-        readable, writable = {*system.reads, *system.writes}, set(system.writes)
         undeclared = set() if ANY_COMPONENT in readable else audit.read - readable
         if ANY_COMPONENT not in writable:
             undeclared |= audit.written - writable
+        if before is not None and _changed(before, poses.table):
+            undeclared.add(Transform)
         if undeclared:
             raise UndeclaredAccess(system, sorted(t.__name__ for t in undeclared))
 
@@ -299,3 +338,10 @@ class Engine:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _changed(before: np.ndarray, after: np.ndarray) -> bool:
+    """Whether a pose table's rows changed (bit for bit: NaN equals NaN); a table that
+    grew was changed by adding Transforms, which the audit counts on its own."""
+    rows = min(len(before), len(after))
+    return not np.array_equal(before[:rows].view(np.int64), after[:rows].view(np.int64))

@@ -14,6 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from engine.input.config import input_option
+from engine.memory import keep_freed_memory
+from engine.net.protocol import BARRIER_WAIT
 from engine.physics.backend import BackendName
 from engine.runner import execute_run, fail, prepare_run
 
@@ -28,6 +30,16 @@ def _positive(kind: type) -> Any:
         return value
 
     return parse
+
+
+def render_scale_option(text: str) -> float:
+    """``--render-scale``: a share of the window's resolution, 0.25 to 1."""
+    from engine.render.renderer import MIN_RENDER_SCALE
+
+    value = float(text)
+    if not MIN_RENDER_SCALE <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"must be {MIN_RENDER_SCALE:g} to 1, got {text}")
+    return value
 
 
 def param_option(text: str) -> tuple[str, str]:
@@ -82,6 +94,16 @@ def _run_flag_table() -> dict[str, tuple[tuple[str, ...], dict[str, Any]]]:
         "hud": (("--hud",), {"action": "store_true",
                              "help": "show the HUD line (fps, physics ms, rtf)"}),
         "size": (("--size",), {"default": "640x480", "help": "window/render size WxH"}),
+        "render_scale": (("--render-scale",), {
+            "type": render_scale_option, "default": 1.0, "metavar": "S",
+            "help": "draw the 3D view at S times the window's resolution (0.25 to 1) and "
+                    "scale it up: frame rate for sharpness on a software rasteriser "
+                    "(default 1: full resolution)"}),
+        "stereo": (("--stereo",), {"choices": ["mono", "sbs"], "default": None,
+                                   "help": "sbs: two eyes side by side (HMDs, 3D displays), "
+                                           "with the camera's EyeSeparation or 0.064 m; "
+                                           "mono: one view even for a stereo camera "
+                                           "(default: as the camera says)"}),
         "save_state": (("--save-state",), {"type": Path,
                                            "help": "write the final state as a scene file"}),
         "stats": (("--stats",), {"type": Path, "help": "write run statistics as JSON"}),
@@ -93,6 +115,14 @@ def _run_flag_table() -> dict[str, tuple[tuple[str, ...], dict[str, Any]]]:
                                  "metavar": "KIND[:ARG]",
                                  "help": "open an input device: osc:PORT, serial:PATH[@BAUD], "
                                          "lsl:STREAM[,...], desktop or openxr (repeatable)"}),
+        "allow_path": (("--allow-path",), {"action": "append", "default": [], "type": Path,
+                                           "metavar": "DIR",
+                                           "help": "let the scene and its scripts name files "
+                                                   "in DIR too (by default only the content "
+                                                   "folder; repeatable)"}),
+        "sessions": (("--sessions",), {"type": Path, "metavar": "DIR",
+                                       "help": "where a scene's session log goes (a Session "
+                                               "block; default: sessions/ here)"}),
         "progress": (("--progress",), {"action": "store_true",
                                        "help": "print a status line every second, also into "
                                                "a log or pipe (on a terminal: a progress bar "
@@ -103,10 +133,11 @@ def _run_flag_table() -> dict[str, tuple[tuple[str, ...], dict[str, Any]]]:
 RUN_FLAGS = tuple(_run_flag_table())
 #: What makes sense on a server (it draws nothing) and on a node (it steps no physics).
 SERVE_FLAGS = tuple(f for f in RUN_FLAGS if f not in (
-    "headless", "screenshot", "record_frames", "record_every", "interpolate", "hud", "size"))
+    "screenshot", "record_frames", "record_every", "interpolate", "hud", "size",
+    "render_scale", "stereo"))
 JOIN_FLAGS = ("seconds", "frames", "headless", "sound", "screenshot", "record_frames",
-              "record_every", "hud", "size", "save_state", "stats", "record", "input",
-              "progress")
+              "record_every", "hud", "size", "render_scale", "stereo", "save_state", "stats",
+              "record", "input", "progress")
 
 
 def add_run_flags(parser: argparse.ArgumentParser, names: tuple[str, ...]) -> None:
@@ -115,6 +146,12 @@ def add_run_flags(parser: argparse.ArgumentParser, names: tuple[str, ...]) -> No
     for name in names:
         flags, options = table[name]
         (limit if name in ("seconds", "frames") else parser).add_argument(*flags, **options)
+
+
+def add_param_flag(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--param", action="append", default=[], type=param_option,
+                        metavar="KEY=VALUE", help="set a scene variable before the scene is "
+                        "built (repeatable; what colosseum sweep varies)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -130,9 +167,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--watch", action="store_true",
                      help="start again from the files when the scene or a model, image or "
                           "sound it uses changes on disk")
-    run.add_argument("--param", action="append", default=[], type=param_option,
-                     metavar="KEY=VALUE", help="set a scene variable before the scene is "
-                     "built (repeatable; what colosseum sweep varies)")
+    add_param_flag(run)
 
     serve = sub.add_parser("serve", help="run the authoritative simulation headless and "
                            "publish it to nodes that join (colosseum join)")
@@ -149,7 +184,11 @@ def build_parser() -> argparse.ArgumentParser:
                        help="seconds after a user's node leaves that what stands for them "
                             "(User \"NAME\" objects and avatars) leaves the world, unless "
                             "they come back (default: 10)")
+    serve.add_argument("--barrier-wait", type=_positive(float), default=BARRIER_WAIT,
+                       metavar="S", help="seconds the swap barrier waits for every display "
+                       "before it lets the ready ones go (default: %(default)g)")
     add_run_flags(serve, SERVE_FLAGS)
+    add_param_flag(serve)
 
     join = sub.add_parser("join", help="follow a server: draw, play sounds, send this "
                           "node's input (no local physics)")
@@ -193,6 +232,15 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--dt", type=_positive(float), default=None,
                        help="physics time step (s)")
 
+    score = sub.add_parser("score", help="replay a recorded session (--record) to its end and "
+                           "score it from the session log it writes again")
+    score.add_argument("recording", type=Path, help="the input recording")
+    score.add_argument("path", nargs="?", help="content folder or .scene file (default: the "
+                       "scene the recording names)")
+    score.add_argument("--sessions", type=Path, metavar="DIR",
+                       help="where the session log goes (default: sessions/ here)")
+    score.add_argument("--json", action="store_true", help="the summary as JSON")
+
     keygen = sub.add_parser("keygen", help="make CURVE keys for serve --key and join --key")
     keygen.add_argument("folder", type=Path)
     keygen.add_argument("--user", action="append", default=[], help="a user (repeatable)")
@@ -201,6 +249,8 @@ def build_parser() -> argparse.ArgumentParser:
                            epilog="exit codes: 0 no errors (warnings allowed), 1 errors, "
                                   "2 no such file or folder or a usage error")
     check.add_argument("path")
+    check.add_argument("--allow-path", action="append", default=[], type=Path, metavar="DIR",
+                       help="files the scene names may lie in DIR too, as for run")
     check.add_argument("--format", choices=["text", "json"], default="text",
                        help="text: path:line:col lines on stderr (default); json: one "
                             "object on stdout for editors and CI")
@@ -233,9 +283,12 @@ def build_parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="benchmarks, printed as tables")
     bench.add_argument("what", nargs="?", default="scheduler",
                        help="scheduler, physics, scene, scripting, sound, render, input, "
-                            "contacts, avatars, import, hands, net, sweep")
+                            "contacts, avatars, import, hands, net, sweep, accuracy, stroke")
     bench.add_argument("--backend", default=None, help="physics benchmark backend (ode, pymunk)")
     bench.add_argument("--quick", action="store_true", help="fewer sizes and steps")
+    bench.add_argument("--content", type=Path, metavar="DIR",
+                       help="the content folder a benchmark runs (stroke; default: "
+                            "content/stroke, else a stand-in of its size)")
     bench.add_argument("--json", nargs="?", const="-", metavar="FILE",
                        help="the rows and figures as JSON: to FILE, or alone on stdout")
     bench.add_argument("--plot", type=Path, metavar="FILE.png",
@@ -249,6 +302,7 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=getattr(logging, args.log_level.upper()),
                         format="%(levelname)s %(name)s: %(message)s")
     handler = COMMANDS[args.command]
+    keep_freed_memory()
     try:
         return handler(args)
     except KeyboardInterrupt:
@@ -278,8 +332,9 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 def _run_watching(args: argparse.Namespace, content: Any, config: Any, scene: Any) -> int:
     """``run --watch``: run the scene; when a file it came from changes, load it again and
-    start over from the new files (a scene with errors is told and the old one runs on).
-    Frames and seconds count across the restarts."""
+    start over from the new files (a scene with errors is told and the old one runs on);
+    a scene ``colosseum import`` wrote is imported again from its changed model first,
+    the author's edits kept. Frames and seconds count across the restarts."""
     from engine.content import ContentError, load_systems
     from engine.scene_loading import SceneLoadError, SceneWatcher, load_content_scene
     from engine.system import SystemFailure
@@ -305,8 +360,12 @@ def _run_watching(args: argparse.Namespace, content: Any, config: Any, scene: An
                 seconds is not None and seconds <= 1e-9):
             return 0
         names = ", ".join(sorted(p.name for p in watcher.changed()))
+        for again in watcher.reimport():  # a scene colosseum import wrote: imported again
+            print(f"colosseum: {again.name} imported again from its changed model",
+                  file=sys.stderr)
         try:
-            scene = load_content_scene(content, seed=args.seed, params=dict(args.param))
+            scene = load_content_scene(content, seed=args.seed, params=dict(args.param),
+                                       allow=args.allow_path)
         except SceneLoadError as exc:
             print(f"{exc}\ncolosseum: {names} changed but has errors; running the last "
                   f"good scene", file=sys.stderr)
@@ -316,9 +375,13 @@ def _run_watching(args: argparse.Namespace, content: Any, config: Any, scene: An
 
 
 def cmd_check(args: argparse.Namespace) -> int:
+    from engine.runner import allowed_problem
     from engine.scene_loading import check_path
 
-    return check_path(Path(args.path), args.format)
+    problem = allowed_problem(args)
+    if problem is not None:
+        return fail(problem)
+    return check_path(Path(args.path), args.format, args.allow_path)
 
 
 def cmd_fmt(args: argparse.Namespace) -> int:
@@ -374,8 +437,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
     for out in (None if args.json in (None, "-") else Path(args.json), args.plot):
         if out is not None and not out.parent.exists():
             return fail(f"{out}: folder {out.parent} does not exist")
+    if args.content is not None and not (args.content / "main.scene").is_file():
+        return fail(f"{args.content}: not a content folder (no main.scene)")
     return run_benchmark(args.what, backend=args.backend, quick=args.quick,
-                         json_out=args.json, plot_out=args.plot)
+                         json_out=args.json, plot_out=args.plot, content=args.content)
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
@@ -396,6 +461,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return sweep(args)
 
 
+def cmd_score(args: argparse.Namespace) -> int:
+    from engine.runner import score
+
+    return score(args)
+
+
 def cmd_keygen(args: argparse.Namespace) -> int:
     from engine.cli_net import keygen
 
@@ -407,6 +478,7 @@ COMMANDS = {
     "serve": cmd_serve,
     "join": cmd_join,
     "sweep": cmd_sweep,
+    "score": cmd_score,
     "keygen": cmd_keygen,
     "check": cmd_check,
     "fmt": cmd_fmt,

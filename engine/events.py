@@ -111,6 +111,22 @@ class Despawned:
 
 
 @dataclass(frozen=True, slots=True)
+class AnomalySwitched:
+    """A visual anomaly (engine.anomalies) was switched on or off, or its severity set:
+    ``anomaly`` its ID, ``kind`` what it is, ``enabled`` whether it is on now, ``onset`` the
+    seconds its effect takes to grow or fade, ``severity`` its parameters as (scene key,
+    value) pairs, ``source`` who did it ("scene", "lua:scripts/x.lua:12", "input:key:f2",
+    "python")."""
+
+    anomaly: str
+    kind: str
+    enabled: bool
+    onset: float
+    severity: tuple[tuple[str, Any], ...]
+    source: str
+
+
+@dataclass(frozen=True, slots=True)
 class BodyFault:
     """The dynamics backend found a body or joint in a non-finite state and reset it."""
 

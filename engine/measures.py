@@ -32,7 +32,7 @@ class Measures:
     def set(self, name: str, value: float) -> None:
         if not isinstance(name, str) or not name:
             raise ValueError(f"a measure needs a name, got {name!r}")
-        number = float(value)
+        number = math.nan if isinstance(value, bool) else float(value)  # not 1 for true
         if not math.isfinite(number):
             raise ValueError(f"measure {name!r}: {value!r} is not a finite number")
         self.values[name] = number

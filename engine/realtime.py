@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import time
+from bisect import bisect_right
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -69,23 +70,62 @@ class Tick:
 
 
 class CostLog:
-    """A growable float log with cheap mean and percentiles."""
+    """Costs (s) with a cheap mean and percentiles, in memory that does not grow.
+
+    The first :attr:`EXACT` values are kept as they are (percentiles exact); after
+    that every value is counted in a histogram of log-spaced bins, 100 a decade from
+    1 ns to 1000 s (a percentile within 2.3 %), and the mean stays exact. A run of a
+    week holds as much as a run of a minute.
+
+    >>> log = CostLog()
+    >>> for ms in range(1, 10_001):
+    ...     log.add(ms / 1000)
+    >>> round(log.mean(), 4), abs(log.percentile(50) / 5.0 - 1) < 0.023
+    (5.0005, True)
+    """
+
+    #: Values kept exactly before the histogram takes over.
+    EXACT = 4096
+    #: The histogram's bin edges (s): 100 a decade.
+    EDGES = np.geomspace(1e-9, 1e3, 1201)
+    _EDGE_LIST = EDGES.tolist()
 
     def __init__(self) -> None:
-        self._data = np.zeros(1024)
+        self._data = np.zeros(self.EXACT)
+        self._bins: np.ndarray | None = None
         self.count = 0
+        self.total = 0.0
 
     def add(self, value: float) -> None:
-        if self.count == len(self._data):
-            self._data = np.concatenate([self._data, np.zeros(len(self._data))])
-        self._data[self.count] = value
+        if self.count < self.EXACT:
+            self._data[self.count] = value
+        else:
+            if self._bins is None:
+                self._bins = np.bincount(np.searchsorted(self.EDGES, self._data, "right"),
+                                         minlength=len(self.EDGES) + 1)
+            self._bins[bisect_right(self._EDGE_LIST, value)] += 1
         self.count += 1
+        self.total += value
 
     def mean(self) -> float:
-        return float(self._data[: self.count].mean()) if self.count else 0.0
+        return self.total / self.count if self.count else 0.0
 
     def percentile(self, q: float) -> float:
-        return float(np.percentile(self._data[: self.count], q)) if self.count else 0.0
+        if not self.count:
+            return 0.0
+        if self._bins is None:
+            return float(np.percentile(self._data[: self.count], q))
+        rank = q / 100.0 * (self.count - 1)
+        cumulative = np.cumsum(self._bins)
+        i = int(np.searchsorted(cumulative, rank, "right"))
+        edges = self.EDGES
+        if i == 0:
+            return float(edges[0])
+        if i >= len(edges):
+            return float(edges[-1])
+        below = cumulative[i - 1]
+        share = (rank - below) / self._bins[i]  # where in the bin, by rank
+        return float(edges[i - 1] * (edges[i] / edges[i - 1]) ** share)
 
 
 class RealTimeController:

@@ -15,11 +15,14 @@ call; the scalar helpers (:func:`rotate`) take plain sequences for the scene cod
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
+#: A quaternion whose length is this close to 1 is unit to rounding and is kept to the bit,
+#: not divided by its length (a saved state's exact orientation comes back as written).
+UNIT_ROUNDING = 1e-12
 
 
 # -- scene angles ------------------------------------------------------------------
@@ -55,15 +58,21 @@ def exact_degrees(rad: float) -> float:
     A saved state writes angular velocities in degrees; this keeps the reload bit-exact
     for most values and within one ulp for the rest.
     """
-    d = math.degrees(rad)
-    up = down = d
+    return exact_preimage(math.radians, rad, math.degrees(rad))
+
+
+def exact_preimage(forward: Callable[[float], float], value: float, guess: float) -> float:
+    """A float ``x`` within four ulps of ``guess`` with ``forward(x) == value`` (``guess``
+    when there is none): what a saved file writes for a value its reader converts (degrees
+    to radians, per degree to per radian), so the reload gives the value to the bit."""
+    up = down = guess
     for _ in range(4):
-        if math.radians(up) == rad:
+        if forward(up) == value:
             return up
-        if math.radians(down) == rad:
+        if forward(down) == value:
             return down
         up, down = math.nextafter(up, math.inf), math.nextafter(down, -math.inf)
-    return d
+    return guess
 
 
 def rotate(q: Sequence[float], v: Sequence[float]) -> tuple[float, float, float]:
@@ -157,6 +166,20 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     return out
 
 
+def compose(position: np.ndarray, orientation: np.ndarray, scale: np.ndarray | None = None
+            ) -> np.ndarray:
+    """Model matrices ``(..., 4, 4)`` = translate · rotate · scale, batched over leading axes."""
+    position = np.asarray(position, dtype=np.float64)
+    rot = quat_to_matrix(orientation)
+    out = np.zeros(rot.shape[:-2] + (4, 4))
+    if scale is not None:
+        rot = rot * np.asarray(scale, dtype=np.float64)[..., None, :]
+    out[..., :3, :3] = rot
+    out[..., :3, 3] = position
+    out[..., 3, 3] = 1.0
+    return out
+
+
 def local_axis(q: np.ndarray, index: int) -> np.ndarray:
     """World direction of the body's local X (0), Y (1) or Z (2) axis: a matrix column."""
     return quat_to_matrix(q)[..., :, index]
@@ -164,22 +187,33 @@ def local_axis(q: np.ndarray, index: int) -> np.ndarray:
 
 def matrix_to_quat(m: np.ndarray) -> np.ndarray:
     """Unit quaternion (w, x, y, z) of a 3x3 rotation matrix."""
+    return matrices_to_quats(m)
+
+
+def matrices_to_quats(m: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``(..., 4)`` of rotation matrices ``(..., 3, 3)``, batched: each
+    from its largest component (w when the trace is positive), so none divides by a
+    small number."""
     m = np.asarray(m, dtype=np.float64)
-    trace = m[0, 0] + m[1, 1] + m[2, 2]
-    if trace > 0:
-        s = 2.0 * math.sqrt(trace + 1.0)
-        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
-    else:
-        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
-    out = np.array(q)
-    return out / np.linalg.norm(out)
+    m00, m11, m22 = m[..., 0, 0], m[..., 1, 1], m[..., 2, 2]
+    pick = np.where(m00 + m11 + m22 > 0, 0, np.where((m00 > m11) & (m00 > m22), 1,
+                                                      np.where(m11 > m22, 2, 3)))
+    square = np.stack([1.0 + m00 + m11 + m22, 1.0 + m00 - m11 - m22,
+                       1.0 - m00 + m11 - m22, 1.0 - m00 - m11 + m22], axis=-1)
+    s = 2.0 * np.sqrt(np.maximum(np.take_along_axis(square, pick[..., None], -1)[..., 0],
+                                 1e-300))
+    d21, d02, d10 = m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0], \
+        m[..., 1, 0] - m[..., 0, 1]
+    s01, s02, s12 = m[..., 0, 1] + m[..., 1, 0], m[..., 0, 2] + m[..., 2, 0], \
+        m[..., 1, 2] + m[..., 2, 1]
+    quarter = 0.25 * s
+    candidates = np.stack([
+        np.stack([quarter, d21 / s, d02 / s, d10 / s], axis=-1),
+        np.stack([d21 / s, quarter, s01 / s, s02 / s], axis=-1),
+        np.stack([d02 / s, s01 / s, quarter, s12 / s], axis=-1),
+        np.stack([d10 / s, s02 / s, s12 / s, quarter], axis=-1)], axis=-2)
+    q = np.take_along_axis(candidates, pick[..., None, None], -2)[..., 0, :]
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
 
 
 def slerp(q0: np.ndarray, q1: np.ndarray, t: float | np.ndarray) -> np.ndarray:
@@ -209,6 +243,34 @@ def rotation_vector_between(q_from: np.ndarray, q_to: np.ndarray) -> np.ndarray:
     small = s < 1e-12
     angle = 2.0 * np.arctan2(s, d[..., :1])
     return np.where(small, 2.0 * d[..., 1:], d[..., 1:] / np.where(small, 1.0, s) * angle)
+
+
+#: Lengths below this are taken as zero when turning one direction into another.
+_TINY = 1e-9
+
+
+def axis_angle_matrices(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``(n, 3, 3)`` about unit ``axis`` by ``angle`` (Rodrigues)."""
+    x, y, z = axis[:, 0], axis[:, 1], axis[:, 2]
+    c, s = np.cos(angle), np.sin(angle)
+    k = 1.0 - c
+    return np.stack([
+        np.stack([c + x * x * k, x * y * k - z * s, x * z * k + y * s], -1),
+        np.stack([y * x * k + z * s, c + y * y * k, y * z * k - x * s], -1),
+        np.stack([z * x * k - y * s, z * y * k + x * s, c + z * z * k], -1)], axis=1)
+
+
+def from_to(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """The smallest rotations ``(n, 3, 3)`` turning directions ``u`` into ``v``."""
+    un = u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), _TINY)
+    vn = v / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), _TINY)
+    cross = np.cross(un, vn)
+    s = np.linalg.norm(cross, axis=1)
+    angle = np.arctan2(s, np.einsum("ij,ij->i", un, vn))
+    fallback = np.cross(un, np.where(np.abs(un[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
+    axis = np.where((s > _TINY)[:, None], cross, fallback)
+    axis /= np.maximum(np.linalg.norm(axis, axis=1, keepdims=True), _TINY)
+    return axis_angle_matrices(axis, angle)
 
 
 def view_problem(forward: Sequence[float]) -> str | None:

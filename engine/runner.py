@@ -34,14 +34,19 @@ def prepare_run(args: argparse.Namespace) -> Any:
         return fail(str(exc))
     if getattr(args, "replay", None) is not None and not args.replay.is_file():
         return fail(f"{args.replay}: no such recording")
-    problem = outputs_problem(args)
+    if getattr(args, "replay", None) is not None:
+        problem = replay_flags(args)
+        if problem is not None:
+            return fail(problem)
+    problem = outputs_problem(args) or allowed_problem(args) or step_problem(args)
     if problem is not None:
         return fail(problem)
     headless = getattr(args, "headless", True) or not (
         os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
     try:
         scene = load_content_scene(content, seed=args.seed,
-                                   params=dict(getattr(args, "param", None) or ()))
+                                   params=dict(getattr(args, "param", None) or ()),
+                                   allow=getattr(args, "allow_path", ()), skip_broken=True)
     except SceneLoadError as exc:
         print(exc, file=sys.stderr)
         return 1
@@ -50,15 +55,90 @@ def prepare_run(args: argparse.Namespace) -> Any:
         content_dir=content.folder, mode=args.mode, seed=args.seed, fast=args.fast,
         substeps=args.substeps, early=args.early, late=args.late, max_dt=args.max_dt,
         headless=headless, sound=args.sound,
+        allow_paths=tuple(getattr(args, "allow_path", ())),
         options={"screenshot": getattr(args, "screenshot", None),
                  "record_frames": getattr(args, "record_frames", None),
                  "record_every": getattr(args, "record_every", 1),
                  "interpolate": getattr(args, "interpolate", False),
                  "hud": getattr(args, "hud", False), "size": getattr(args, "size", "640x480"),
-                 "input": args.input},
+                 "stereo": getattr(args, "stereo", None),
+                 "render_scale": getattr(args, "render_scale", 1.0),
+                 "input": args.input, "session_log": True,
+                 "sessions": getattr(args, "sessions", None),
+                 "record": getattr(args, "record", None), "replay": getattr(args, "replay", None),
+                 "run_flags": {"params": dict(getattr(args, "param", None) or ()),
+                               "dt": args.dt, "substeps": args.substeps,
+                               "backend": args.backend}},
     )
     scene.configure(config, backend=args.backend, dt=args.dt)
     return scene, config
+
+
+def replay_flags(args: argparse.Namespace) -> str | None:
+    """A replay runs with the flags that changed what its recording simulated (``--param``,
+    ``--dt``, ``--substeps``, ``--backend``: its header keeps them). Those this run leaves
+    at their defaults are taken from the recording and told; one set otherwise is warned
+    about, as the run will not repeat the recorded one. Returns what is wrong with the
+    file's header."""
+    from engine.input.record import ReplayError, read_header
+    from engine.physics.backend import BackendName
+
+    try:
+        header = read_header(args.replay)
+    except ReplayError as exc:
+        return str(exc)
+    params = header.get("params") or {}
+    if not isinstance(params, dict) or not all(
+            isinstance(k, str) and isinstance(v, str) for k, v in params.items()):
+        return f"{args.replay}: the header's params must map names to text, got {params!r}"
+    valid = {"dt": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0,
+             "substeps": lambda v: isinstance(v, int) and not isinstance(v, bool) and v > 0,
+             "backend": lambda v: v in tuple(BackendName)}
+    for key, ok in valid.items():
+        if header.get(key) is not None and not ok(header[key]):
+            return f"{args.replay}: the header's {key} {header[key]!r} is not a valid --{key}"
+    recorded: dict[str, Any] = {key: header.get(key) for key in valid}
+    recorded["dt"] = recorded["dt"] and float(recorded["dt"])
+    recorded["substeps"] = recorded["substeps"] or 1
+    if hasattr(args, "param"):
+        recorded["param"] = list(params.items())
+    defaults = {"dt": None, "substeps": 1, "backend": None, "param": []}
+    for key, value in recorded.items():
+        mine = getattr(args, key, defaults[key])
+        if mine == value:
+            continue
+        flag = (" ".join(f"--param {k}={v}" for k, v in value) if key == "param"
+                else f"--{key} {value}")
+        if mine == defaults[key]:
+            setattr(args, key, value)
+            log.info("replaying with the recording's %s", flag)
+        else:
+            log.warning("%s was recorded with %s; this run's %s differs, so it will not "
+                        "repeat the recorded one", args.replay, flag or "no --param",
+                        "--" + key)
+    return None
+
+
+def step_problem(args: argparse.Namespace) -> str | None:
+    """What is wrong with ``--dt`` (the same range as a scene's TimeStep); a long one is
+    warned about, as in a scene."""
+    from engine.scene.factory import STEP_RANGE, STEP_WARNING
+
+    dt = getattr(args, "dt", None)
+    if dt is not None and dt > STEP_RANGE[1]:
+        return f"--dt {dt:g}: the time step is at most {STEP_RANGE[1]:g} s"
+    if dt is not None and dt > STEP_WARNING:
+        log.warning("--dt %g s is long: contacts and joints lose accuracy past %g s", dt,
+                    STEP_WARNING)
+    return None
+
+
+def allowed_problem(args: argparse.Namespace) -> str | None:
+    """What is wrong with the folders ``--allow-path`` names (one that is not there)."""
+    for folder in getattr(args, "allow_path", ()):
+        if not folder.is_dir():
+            return f"--allow-path {folder}: no such folder"
+    return None
 
 
 def outputs_problem(args: argparse.Namespace) -> str | None:
@@ -165,3 +245,53 @@ def _run_limited(engine: Any, args: argparse.Namespace, progress: bool, status_l
         print(file=sys.stderr)
 
 
+
+
+def score(args: argparse.Namespace) -> int:
+    """``colosseum score RECORDING``: replay a recorded session headless and unpaced to its
+    last frame, writing its session log again, and print what the log says (tasks done
+    and when, grasps, collisions, distance) as a table or ``--json``."""
+    import json
+
+    from engine.input import ReplayError, read_recording
+    from systems import create_engine
+    from systems.session import SessionLog, summarize
+
+    try:
+        recording = read_recording(args.recording)
+    except (OSError, ReplayError) as exc:
+        return fail(f"{args.recording}: {exc}")
+    path = args.path or recording.header.get("scene") or None
+    if path is None:
+        return fail(f"{args.recording} names no scene; give the content folder too")
+    run_args = argparse.Namespace(
+        path=str(path), replay=args.recording, record=None, headless=True, fast=True,
+        mode="serial", seed=recording.header.get("seed", 0), substeps=1, early="sleep",
+        late="slowmo", max_dt=1.0 / 20.0, sound="null", backend=None, dt=None, input=[],
+        param=[], sessions=args.sessions, frames=max(recording.frames, default=0) + 1,
+        seconds=None, progress=False, save_state=None, stats=None)
+    prepared = prepare_run(run_args)
+    if isinstance(prepared, int):
+        return prepared
+    scene, config = prepared
+    engine = create_engine(config)
+    code = execute_run(engine, run_args, scene)
+    logged = engine.try_resource(SessionLog)
+    if code != 0:
+        return code
+    if logged is None or logged.path is None:
+        return fail(f"{path}: the scene keeps no session log (it has no Session block)", 1)
+    summary = {"log": str(logged.path), **summarize(logged.path)}
+    if args.json:
+        print(json.dumps(summary, indent=2))
+        return 0
+    print(f"session log: {summary['log']}")
+    for name, task in summary["tasks"].items():
+        done = "not done" if task["done"] is None else f"done at {task['done']:.2f} s"
+        print(f"  task {name:<12} {done} ({task['events']} events)")
+    print(f"  grasps {summary['grasp']}, collisions {summary['collision']}, anomaly "
+          f"switches {summary['anomaly']}, chair moved {summary['distance']:.2f} m")
+    end = summary["end"]
+    if end is not None:
+        print(f"  ended: {end['reason']} at {end['t']:.2f} s")
+    return 0

@@ -6,8 +6,11 @@ knowledge of command lines, exit codes or terminals.
 
 from __future__ import annotations
 
+import copy
+import re
 import sys
 import time
+from collections.abc import Collection, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -16,10 +19,17 @@ import numpy as np
 
 from engine.content import Content
 from engine.files import file_mode, write_atomic
+from engine.scene.diagnostics import MAX_PER_FILE, Loc
+from engine.scene.skipping import broken_parts, described, skip
 
 if TYPE_CHECKING:
     from engine.app import Engine, EngineConfig
     from engine.scene import SceneSpec
+
+#: Parts a run skips at most before it gives up on the scene (a file that is mostly wrong
+#: is better fixed than run).
+MAX_SKIPPED = 1000
+
 
 class SceneLoadError(Exception):
     """The scene has errors; ``str()`` is the full report, every error with its place."""
@@ -46,21 +56,49 @@ class LoadedScene:
 
 
 def load_content_scene(content: Content, seed: int = 0,
-                       params: dict[str, str] | None = None) -> LoadedScene:
+                       params: dict[str, str] | None = None,
+                       allow: Iterable[Path] = (), skip_broken: bool = False) -> LoadedScene:
     """The content's scene, built; its ``systems/*.py`` are imported first, so asset
     loaders they register read the scene's files. A saved state runs in the content
-    folder it names (``Content``). ``params`` set scene variables (``--param``)."""
+    folder it names (``Content``). ``params`` set scene variables (``--param``). Files it
+    names lie in that folder or one of ``allow`` (``--allow-path``). With ``skip_broken``
+    (``colosseum run``) the errors are printed and the parts they lie in left out
+    (engine.scene.skipping); without it they raise SceneLoadError."""
     from engine.content import ContentError
     from engine.scene import SceneError
     from engine.scene.diagnostics import Reporter
     from engine.scene.params import ParamError
 
-    try:
-        content, spec = _build(content, np.random.default_rng(seed), params)
-    except (ContentError, ParamError) as exc:
-        raise SceneLoadError(str(exc)) from exc
-    except SceneError as exc:
-        raise SceneLoadError(exc.render()) from exc
+    skipped: dict[Loc, str] = {}
+    told: list[SceneError] = []
+    while True:
+        try:
+            content, spec = _build(content, np.random.default_rng(seed), params, allow,
+                                   skipped)
+            break
+        except (ContentError, ParamError) as exc:
+            raise SceneLoadError(str(exc)) from exc
+        except SceneError as exc:
+            parts = broken_parts(exc.db, exc.places) if skip_broken and exc.db else []
+            fresh = [p for p in parts if p.loc not in skipped]
+            if not fresh or len(skipped) + len(fresh) > MAX_SKIPPED:
+                why = [] if not fresh else [
+                    f"colosseum: not run: more than {MAX_SKIPPED} broken parts of the scene "
+                    f"({len(skipped) + len(fresh)}); colosseum check lists the errors"]
+                raise SceneLoadError("\n".join([*(e.render() for e in told), exc.render(),
+                                                 *why])) from exc
+            told.append(exc)
+            skipped.update((p.loc, described(p)) for p in fresh)
+    for exc in told:
+        print(exc.render(), file=sys.stderr)
+    if skipped:
+        listed = sorted(skipped)
+        parts = "".join(f"\n  {skipped[loc]}" for loc in listed[:MAX_PER_FILE])
+        if len(listed) > MAX_PER_FILE:
+            parts += f"\n  and {len(listed) - MAX_PER_FILE} more"
+        print(f"colosseum: the run goes on without {len(skipped)} broken part(s) of the "
+              f"scene (the errors above; colosseum check lists them):{parts}",
+              file=sys.stderr)
     if spec.db is not None:  # warnings, and assets that failed (what they left out)
         for told in Reporter([*spec.db.warnings, *spec.problems]).diagnostics:
             print(told.render(spec.db.sources.get(told.path)), file=sys.stderr)
@@ -89,15 +127,28 @@ def content_engine(path: str | Path, seed: int = 0) -> Engine:
 class SceneWatcher:
     """The files a built scene came from (scene texts, included files, model files its
     Model blocks import, every model, image and sound it read) and when each was last
-    changed: :meth:`changed` tells which changed since (``colosseum run --watch``)."""
+    changed: :meth:`changed` tells which changed since (``colosseum run --watch``).
+
+    A scene text ``colosseum import`` wrote (its ``.imported`` base beside it) depends on
+    the model it came from as a ``Model { Import 1 }`` block does: :meth:`reimport` runs
+    that import again when the model changed, merged as ``colosseum import`` merges it
+    (the author's edits kept), so physics edited in the model arrives with its looks."""
 
     def __init__(self, spec: SceneSpec) -> None:
-        files = {Path(p) for p in (spec.db.sources if spec.db is not None else ())}
+        texts = {Path(p) for p in (spec.db.sources if spec.db is not None else ())}
+        files = set(texts)
         if spec.assets is not None:
             files |= set(spec.assets.loads)
         if spec.db is not None:
             files |= {spec.content_dir / file for file in _model_files(spec.db.root.entries)
                       if spec.content_dir is not None}
+        #: model file -> the scene texts imported from it
+        self.imports: dict[Path, list[Path]] = {}
+        for text in texts:
+            model = imported_from(text)
+            if model is not None:
+                self.imports.setdefault(model, []).append(text.resolve())
+        files |= set(self.imports)
         self.stamps = {f.resolve(): _stamp(f) for f in files if f.is_file()}
         self._looked = time.monotonic()
 
@@ -113,6 +164,45 @@ class SceneWatcher:
         self._looked = now
         return bool(self.changed())
 
+    def reimport(self) -> list[Path]:
+        """Import each changed model again into the scene texts imported from it (merged,
+        as ``colosseum import MODEL -o SCENE``); the scene texts rewritten. What the import
+        leaves out is told on stderr, as the command tells it."""
+        rewritten = []
+        changed = set(self.changed())
+        for model, scenes in self.imports.items():
+            if model.resolve() not in changed:
+                continue
+            for scene in scenes:
+                before = _stamp(scene)
+                import_path(model, scene)
+                if _stamp(scene) != before:
+                    rewritten.append(scene)
+        return rewritten
+
+
+#: The first line ``colosseum import`` writes (model.py's header): the model's name.
+_IMPORTED_FROM = re.compile(r"^// Imported from (.+) \((?:glTF|Collada); read: .*\) by "
+                            r"colosseum import\.$")
+
+
+def imported_from(scene: Path) -> Path | None:
+    """The model a scene text was imported from, when ``colosseum import`` wrote it and
+    keeps its base (``SCENE.imported``, whose first line names the model relative to the
+    scene's folder) and the model is there; else None."""
+    from engine.interchange.merge import BASE_SUFFIX
+
+    base = scene.with_name(scene.name + BASE_SUFFIX)
+    try:
+        with base.open(encoding="utf-8") as f:
+            first = f.readline().rstrip("\n")
+    except (OSError, UnicodeDecodeError):
+        return None
+    found = _IMPORTED_FROM.match(first)
+    if found is None:
+        return None
+    model = (scene.parent / found.group(1)).resolve()
+    return model if model.is_file() else None
 
 def _model_files(entries: list) -> list[str]:
     """The files of every ``Model`` block, included files' too (not spliced away)."""
@@ -135,31 +225,42 @@ def _stamp(path: Path) -> tuple[int, int] | None:
     return info.st_mtime_ns, info.st_size
 
 
-def _build(content: Content, rng: np.random.Generator,
-           params: dict[str, str] | None = None) -> tuple[Content, SceneSpec]:
-    """Parse, find the content folder, import its systems, check and build. Raises
-    SceneError (the scene's mistakes), ContentError (its systems') or ParamError."""
+def _build(content: Content, rng: np.random.Generator, params: dict[str, str] | None = None,
+           allow: Iterable[Path] = (), skipped: Collection[Loc] = ()
+           ) -> tuple[Content, SceneSpec]:
+    """Parse, leave out the parts at ``skipped``, find the content folder, import its
+    systems, check and build. Raises SceneError (the scene's mistakes; its ``db`` the
+    scene as parsed when it parsed), ContentError (its systems') or ParamError."""
     from engine.content import import_systems
-    from engine.scene import build_specs, parse_file, parse_text, validated
+    from engine.scene import SceneError, build_specs, parse_file, parse_text, validated
     from engine.scene.params import with_params
     from engine.scene.snapshot import content_folder
 
-    db = parse_text(with_params(content.scene, params), str(content.scene), rng) if params \
-        else parse_file(content.scene, rng)
+    db = parse_text(with_params(content.scene, params), str(content.scene), rng,
+                    allow=allow) if params else parse_file(content.scene, rng, allow=allow)
+    skip(db, skipped)
+    parsed = copy.copy(db)  # the top-level parts as parsed, before Model blocks expand
+    parsed.root = copy.copy(db.root)
+    parsed.root.entries = list(db.root.entries)
     content = Content(content_folder(db), content.scene)
     import_systems(content.folder)
-    spec = build_specs(validated(db, content.folder), content.folder)
+    try:
+        spec = build_specs(validated(db, content.folder, allow=allow), content.folder)
+    except SceneError as exc:
+        exc.db = parsed
+        raise
     return content, spec
 
 
-def check_path(path: Path, output: str = "text") -> int:
+def check_path(path: Path, output: str = "text", allow: Iterable[Path] = ()) -> int:
     """Report every diagnostic of a scene; the exit code says how it went.
 
     ``output`` "text": ``path:line:col: severity: message`` with the line and a caret,
     then the counts, on stderr. "json": one JSON object on stdout (``errors`` and
     ``warnings``, all counted; ``diagnostics``, those shown: objects with ``path line
     col severity message``) for editors and CI. Exit codes: 0 no errors (warnings
-    allowed), 1 errors, 2 no such file or folder.
+    allowed), 1 errors, 2 no such file or folder. Files the scene names must lie in its
+    content folder or one of ``allow`` (``--allow-path``), as for a run.
     """
     from engine.scene import Diagnostic, Report
     from engine.scene.paths import NOT_FOUND, file_problem
@@ -177,7 +278,7 @@ def check_path(path: Path, output: str = "text") -> int:
     from engine.scene.diagnostics import Reporter
 
     try:  # as a run reads it: the content's asset loaders first, a saved state's folder
-        _, spec = _build(resolve(path), np.random.default_rng(0))
+        _, spec = _build(resolve(path), np.random.default_rng(0), allow=allow)
         assert spec.db is not None
         report = Report(Reporter([*spec.db.warnings, *spec.problems]).diagnostics,
                         spec.db.sources)

@@ -13,6 +13,7 @@ from typing import Any, Protocol
 
 from components.avatar import SavedAvatar
 from components.script import SavedScript
+from engine.system import PluginName
 
 #: A uniform's value: one number or a vector of numbers.
 UniformValue = float | tuple[float, ...]
@@ -22,7 +23,7 @@ class SoundControl(Protocol):
     """Playing an entity's Sound component (the sound plugin)."""
 
     #: The plugin to request (``requestPlugin``) when this service is missing.
-    plugin = "sound"
+    plugin = PluginName.SOUND
 
     def play(self, engine: Any, entity: int) -> Any: ...
     def stop(self, entity: int) -> None: ...
@@ -30,17 +31,29 @@ class SoundControl(Protocol):
 
 
 class ShaderControl(Protocol):
-    """Changing shader uniforms at run time (the render plugin)."""
+    """Changing shader uniforms and post-processing passes at run time (the render plugin)."""
 
-    plugin = "render"
+    plugin = PluginName.RENDER
 
     def set_uniform(self, state_id: str, name: str, value: UniformValue) -> None: ...
+    def enable_post(self, name: str, enabled: bool = True) -> None: ...
+    def set_post_uniform(self, name: str, uniform: str, value: UniformValue) -> None: ...
+
+
+class SwapGate(Protocol):
+    """What a drawn frame waits for before it is shown (the net node plugin's swap
+    barrier, so the walls of a cluster swap together): the render system calls
+    :meth:`before_swap` once a frame is drawn and the GPU has finished it, then swaps."""
+
+    plugin = PluginName.NET_NODE
+
+    def before_swap(self) -> None: ...
 
 
 class ScriptStates(Protocol):
     """The running scripts' states, for a saved run (the scripting plugin)."""
 
-    plugin = "scripting"
+    plugin = PluginName.SCRIPTING
 
     def saved_scripts(self, object_name: Callable[[int], str | None]
                       ) -> dict[int, SavedScript]:
@@ -58,7 +71,7 @@ AVATAR_METHODS = ("play", "queue", "blend", "stopAnimation", "animation", "clips
 class AvatarControl(Protocol):
     """Animating avatars from scripts (the avatars plugin)."""
 
-    plugin = "avatars"
+    plugin = PluginName.AVATARS
 
     def script_call(self, entity: int, method: str, args: list[Any]) -> Any:
         """Run one of :data:`AVATAR_METHODS` on avatar ``entity``; plain data in and out;
@@ -69,7 +82,7 @@ class AvatarControl(Protocol):
 class AvatarStates(Protocol):
     """The avatars' states, for a saved run (the avatars plugin)."""
 
-    plugin = "avatars"
+    plugin = PluginName.AVATARS
 
     def saved_avatars(self, object_name: Callable[[int], str | None]
                       ) -> dict[int, SavedAvatar]:
@@ -82,7 +95,7 @@ class AvatarStates(Protocol):
 class HandControl(Protocol):
     """Virtual hands asked from scripts (the hands plugin)."""
 
-    plugin = "hands"
+    plugin = PluginName.HANDS
 
     def state(self, hand: int) -> str: ...
     def held(self, hand: int) -> tuple[int, ...]: ...

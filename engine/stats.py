@@ -136,6 +136,8 @@ STATS_SCHEMA: dict[str, Any] = {
                     "nodes": {"type": "array", "items": {"type": "string"}, "x-unit": "",
                               "description": "server: users joined at the end"},
                     "replicated": _key("integer", "", "server: objects sent to nodes"),
+                    "custom_dropped": _key("integer", "", "server: custom events the nodes "
+                                           "were not told (over 64 in a frame)"),
                     "frames_sent": _key("integer", "", "server: frames published"),
                     "bytes_sent": _key("integer", "B", "server: bytes published (each "
                                        "node receives them all)"),
@@ -145,6 +147,8 @@ STATS_SCHEMA: dict[str, Any] = {
                     "send_ms_mean": _key("number", "ms", "server: mean time its sender "
                                          "thread took to encode and send a frame"),
                     "send_ms_p99": _key("number", "ms", "server: 99th percentile of it"),
+                    "send_cpu_ms_mean": _key("number", "ms", "server: mean CPU time of "
+                                             "it (less its waits for the GIL or a core)"),
                     "frames_merged": _key("integer", "", "server: frames that took the "
                                           "place of one the sender had not sent yet"),
                     "inputs": _key("integer", "", "server: input messages from nodes"),

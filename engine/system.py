@@ -10,7 +10,7 @@ content folders add their own from ``systems/*.py``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from enum import IntEnum
+from enum import IntEnum, StrEnum
 from typing import TYPE_CHECKING, ClassVar, Protocol, runtime_checkable
 
 if TYPE_CHECKING:
@@ -20,6 +20,31 @@ if TYPE_CHECKING:
 #: In ``reads``/``writes``: every component type (a system whose behaviour comes from
 #: content, like Lua scripts, that may find, spawn and change objects of any kind).
 ANY_COMPONENT: type = object
+
+
+class PluginName(StrEnum):
+    """Every plugin's name, the one list: what ``requestPlugin`` asks for, what a service
+    names as its owner, what a plugin calls itself (``systems.PLUGINS`` maps each to its
+    module; the paper's aliases are there too)."""
+
+    PHYSICS = "physics"
+    SCRIPTING = "scripting"
+    CONTROLLERS = "controllers"
+    RENDER = "render"
+    SOUND = "sound"
+    INPUT = "input"
+    AVATARS = "avatars"
+    TRIGGERS = "triggers"
+    HANDS = "hands"
+    MEASURES = "measures"
+    WHEELCHAIR = "wheelchair"
+    SESSION = "session"
+    ANOMALIES = "anomalies"
+    #: Assembled by ``colosseum serve`` and ``join``, not requested by content.
+    NET_SERVER = "net-server"
+    NET_NODE = "net-node"
+    #: The first plugin of every default engine: it registers the others by name.
+    REGISTRY = "registry"
 
 
 class Phase(IntEnum):

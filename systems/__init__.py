@@ -12,26 +12,34 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 from engine.app import Engine, EngineConfig
+from engine.system import PluginName
 
 if TYPE_CHECKING:
     from engine.system import Plugin
 
-#: plugin name -> "module:Class"; aliases from the paper's plugin names.
-PLUGINS: dict[str, str] = {
-    "physics": "systems.dynamics:DynamicsPlugin",
-    "scripting": "systems.scripting:ScriptingPlugin",
-    "controllers": "systems.controllers:ControllersPlugin",
-    "render": "systems.render:RenderPlugin",
-    "sound": "systems.sound:SoundPlugin",
-    "input": "systems.input:InputPlugin",
-    "avatars": "systems.avatars:AvatarsPlugin",
-    "triggers": "systems.triggers:TriggersPlugin",
-    "hands": "systems.hands:HandsPlugin",
-    "measures": "systems.measures:MeasuresPlugin",
+#: plugin name -> "module:Class", in the order a default engine builds them (systems of
+#: one phase run in the order added unless they declare before/after); render last, and
+#: only when something is drawn.
+PLUGINS: dict[PluginName, str] = {
+    PluginName.INPUT: "systems.input:InputPlugin",
+    PluginName.PHYSICS: "systems.dynamics:DynamicsPlugin",
+    PluginName.SCRIPTING: "systems.scripting:ScriptingPlugin",
+    PluginName.CONTROLLERS: "systems.controllers:ControllersPlugin",
+    PluginName.SOUND: "systems.sound:SoundPlugin",
+    PluginName.AVATARS: "systems.avatars:AvatarsPlugin",
+    PluginName.TRIGGERS: "systems.triggers:TriggersPlugin",
+    PluginName.HANDS: "systems.hands:HandsPlugin",
+    PluginName.MEASURES: "systems.measures:MeasuresPlugin",
+    PluginName.WHEELCHAIR: "systems.wheelchair:WheelchairPlugin",
+    PluginName.SESSION: "systems.session:SessionPlugin",
+    PluginName.ANOMALIES: "systems.anomalies:AnomaliesPlugin",
+    PluginName.RENDER: "systems.render:RenderPlugin",
 }
-ALIASES: dict[str, str] = {"osg": "render", "osgsim": "render", "openalpp": "sound",
-                           "openal": "sound", "ode": "physics", "dynamics": "physics",
-                           "interaction": "hands"}
+#: The paper's plugin names.
+ALIASES: dict[str, PluginName] = {
+    "osg": PluginName.RENDER, "osgsim": PluginName.RENDER, "openalpp": PluginName.SOUND,
+    "openal": PluginName.SOUND, "ode": PluginName.PHYSICS, "dynamics": PluginName.PHYSICS,
+    "interaction": PluginName.HANDS}
 
 
 def load_plugin(name: str) -> Any:
@@ -50,7 +58,7 @@ def register_all(engine: Engine) -> None:
 class RegistryPlugin:
     """Registers the named plugins; the first plugin of every default engine."""
 
-    name = "registry"
+    name = PluginName.REGISTRY
 
     def build(self, engine: Engine) -> None:
         register_all(engine)
@@ -64,11 +72,10 @@ def wants_render(config: EngineConfig) -> bool:
 
 
 def default_plugins(config: EngineConfig) -> list[Plugin]:
-    plugins = [RegistryPlugin(), *(load_plugin(name) for name in
-                                   ("input", "physics", "scripting", "controllers", "sound",
-                                    "avatars", "triggers", "hands", "measures"))]
+    plugins = [RegistryPlugin(), *(load_plugin(name) for name in PLUGINS
+                                   if name != PluginName.RENDER)]
     if wants_render(config):
-        plugins.append(load_plugin("render"))
+        plugins.append(load_plugin(PluginName.RENDER))
     return plugins
 
 

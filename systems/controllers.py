@@ -54,7 +54,7 @@ from engine.physics.commands import (
     SetMotor,
 )
 from engine.rotation import IDENTITY, local_axis
-from engine.system import Phase, System
+from engine.system import Phase, PluginName, System
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -139,14 +139,13 @@ class ControllerSystem(System):
             else:
                 c.value = float(min(max(raw * c.gain, c.low), c.high))
                 target = None
-            try:
+            try:  # made and pushed: the world's limits are checked when it is pushed
                 command = self._actuate(engine, b, c, target)
+                if command is not None:
+                    physics.push(command)
             except CommandError as exc:
                 self._messages.warn(f"controller {c.input!r} -> {c.target!r}: {exc}; "
                                     "the value is not applied")
-                continue
-            if command is not None:
-                physics.push(command)
 
     def _actuate(self, engine: Engine, b: _Binding, c: Controller,
                  target: np.ndarray | None) -> Command | None:
@@ -174,7 +173,7 @@ class ControllerSystem(System):
 class ControllersPlugin:
     """Drives actuators from Controller components (``requestPlugin("controllers")``)."""
 
-    name = "controllers"
+    name = PluginName.CONTROLLERS
 
     def build(self, engine: Engine) -> None:
         from systems.input import InputPlugin

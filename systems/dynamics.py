@@ -37,10 +37,11 @@ from engine.physics.commands import (
     RemoveJoint,
     SetPose,
     SetVelocity,
+    check_limits,
 )
 from engine.physics.driver import PhysicsDriver, Snapshot
 from engine.physics.naming import SceneNames, backend_loggers
-from engine.system import Phase, System
+from engine.system import Phase, PluginName, System
 from engine.world import PoseTable, row_index
 from systems.contacts import ContactEventsSystem
 
@@ -68,6 +69,12 @@ class DynamicsSystem(System):
         self._names: dict[int, str] = {}
         self._forget: deque[tuple[int, int]] = deque()
         self._moved: set[int] = set()  # entities already told their Transform write is taken
+        #: Teleports on their way to the physics thread: entity -> (the driver's pushed
+        #: count once sent, the row written); a snapshot older than that keeps the row.
+        self._in_flight: dict[int, tuple[int, np.ndarray]] = {}
+        #: Bodies sent but in no snapshot yet: entity -> the row they were sent with (a
+        #: Transform written before the first readback is a teleport too).
+        self._unsynced: dict[int, np.ndarray] = {}
         self.messages = MessageLog(log)
         driver.names = self._names
         self._scene_names = SceneNames(self._names)  # backends' "body 7" -> "object 'crate'"
@@ -110,22 +117,23 @@ class DynamicsSystem(System):
             return
         t = t or Transform()
         try:
-            command = AddBody(entity, physical, t.position, t.orientation, t.linear_velocity,
-                              t.angular_velocity)
+            self.driver.push(AddBody(entity, physical, t.position, t.orientation,
+                                     t.linear_velocity, t.angular_velocity))
         except CommandError as exc:
             self.messages.error(f"{self.driver.describe(entity)} has no body: {exc}")
             return
-        self.driver.push(command)
+        self._unsynced[entity] = np.concatenate([t.position, t.orientation,
+                                                 t.linear_velocity, t.angular_velocity])
 
     def _push_joint(self, entity: int, joint: Joint) -> None:
         try:
-            command = AddJoint(entity, joint)
+            self.driver.push(AddJoint(entity, joint))
         except CommandError as exc:
             self.messages.error(f"{self.driver.describe(entity, joint=True)} is not made: {exc}")
-            return
-        self.driver.push(command)
 
     def _remove_body(self, entity: int) -> None:
+        self._unsynced.pop(entity, None)
+        self._in_flight.pop(entity, None)
         if any(pair[0] == entity for pair in self._new_bodies):  # never reached the backend
             self._new_bodies = [pair for pair in self._new_bodies if pair[0] != entity]
             return
@@ -141,6 +149,8 @@ class DynamicsSystem(System):
         driver = self.driver
         self._send_new(engine)
         self._forget_names(engine.frame)
+        if self._unsynced:
+            self._take_unsynced_writes(engine)
         if self._copy is not None and len(self._copy.synced_keys):
             self._take_transform_writes(engine)
         driver.teleported.clear()
@@ -171,25 +181,39 @@ class DynamicsSystem(System):
             if entity in driver.teleported or self._teleport(engine, entity, row,
                                                              copy.synced[i]):
                 copy.taken[i] = row.copy()
+                self._in_flight[entity] = (driver.pushed, copy.taken[i])
+
+    def _take_unsynced_writes(self, engine: Engine) -> None:
+        """Transforms written between a body's AddBody and its first readback."""
+        table, row_of = engine.world.poses.table, engine.world.poses.row_of
+        for entity, sent in self._unsynced.items():
+            at = row_of.get(entity)
+            if at is None or (table[at] == sent).all():
+                continue
+            row = table[at]
+            if entity in self.driver.teleported or self._teleport(engine, entity, row, sent):
+                self._unsynced[entity] = row.copy()
+                self._in_flight[entity] = (self.driver.pushed, self._unsynced[entity])
 
     def _teleport(self, engine: Engine, entity: int, row: np.ndarray,
                   before: np.ndarray) -> bool:
         """Push what was written; a value physics cannot take is undone (returns False)."""
         driver = self.driver
         try:
-            pose = SetPose(entity, row[0:3], row[3:7]) if (row[:7] != before[:7]).any() \
-                else None
-            velocity = SetVelocity(entity, row[7:10], row[10:13]) \
-                if (row[7:] != before[7:]).any() else None
+            commands = [SetPose(entity, row[0:3], row[3:7])] if (row[:7] != before[:7]).any() \
+                else []
+            if (row[7:] != before[7:]).any():
+                commands.append(SetVelocity(entity, row[7:10], row[10:13]))
+            for command in commands:
+                check_limits(command, driver.limits)
         except CommandError as exc:
             self.messages.error(f"{driver.describe(entity)}: its Transform was given a value "
                                 f"physics cannot take ({exc}); the write is undone",
                                 f"frame {engine.frame}: ")
             row[...] = before
             return False
-        for command in (pose, velocity):
-            if command is not None:
-                driver.push(command)
+        for command in commands:
+            driver.push(command)
         if entity not in self._moved:
             self._moved.add(entity)
             log.info("frame %d: the Transform of %s was written; the body is moved there "
@@ -211,6 +235,27 @@ class DynamicsSystem(System):
         if self._copy is None or not self._copy.fits(poses, bodies.keys):
             self._copy = PoseCopy(poses, bodies.keys)
         self._copy(bodies)
+        if self._unsynced:
+            unsynced = np.fromiter(self._unsynced, np.int64, len(self._unsynced))
+            for entity in unsynced[np.isin(unsynced, bodies.keys)].tolist():
+                del self._unsynced[entity]
+        if self._in_flight:
+            self._keep_in_flight(snapshot.applied)
+
+    def _keep_in_flight(self, applied: int) -> None:
+        """Rows written since this snapshot's step began (threaded: the physics thread was
+        mid-step) stay as written until a snapshot holds their teleport, instead of
+        showing the body where it was for a frame."""
+        assert self._copy is not None
+        copy = self._copy
+        index = {int(k): i for i, k in enumerate(copy.synced_keys.tolist())}
+        for entity, (sent, row) in list(self._in_flight.items()):
+            i = index.get(entity)
+            if sent <= applied or i is None:
+                del self._in_flight[entity]
+                continue
+            copy.row(i)[...] = row
+            copy.taken[i] = row
 
 
 _NONE = np.zeros(0, np.intp)
@@ -294,7 +339,7 @@ class DynamicsPlugin:
     """Physics: the backend named by ``config.backend`` (or the one given), its driver and
     the system that keeps the ECS in step with it."""
 
-    name = "physics"
+    name = PluginName.PHYSICS
 
     def __init__(self, backend: DynamicsBackend | None = None) -> None:
         self.backend = backend
@@ -303,7 +348,8 @@ class DynamicsPlugin:
         cfg = engine.config
         backend = self.backend or create_backend(cfg.backend)
         backend.configure(cfg.world)
-        driver = PhysicsDriver(backend, cfg.mode, cfg.pacing(), clock=engine.clock)
+        driver = PhysicsDriver(backend, cfg.mode, cfg.pacing(), clock=engine.clock,
+                               limits=cfg.world.limits)
         engine.attach_physics(driver)
         system = DynamicsSystem(driver)
         engine.insert_resource(system)

@@ -54,7 +54,8 @@ from components import (
 from components.hand import HandMode
 from components.joint import JointKind
 from components.physical import BodyKind
-from engine.events import Contacts, HandGrasped, HandReleased, HandTouched
+from engine.assets.generated import MARKER_BALL
+from engine.events import Contacts, CustomEvent, HandGrasped, HandReleased, HandTouched
 from engine.input import InputState
 from engine.messages import MessageLog
 from engine.physics.commands import (
@@ -63,11 +64,13 @@ from engine.physics.commands import (
     SetCollisionEnabled,
     SetDriveLimits,
     SetPose,
+    SetPoses,
     SetVelocity,
+    check_limits,
 )
 from engine.rotation import quat_multiply, quat_to_matrix
 from engine.services import HandControl
-from engine.system import Phase, System
+from engine.system import Phase, PluginName, System
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -87,6 +90,14 @@ MIN_TIME_CONSTANT = 0.03
 TELEPORT_DISTANCE = 1.0
 #: Seconds a hand whose tracker is lost keeps holding what it holds.
 RELEASE_AFTER = 1.0
+#: Seconds a hand still touches what it stopped touching: a hand settling on a cup parts
+#: from it for a step or two (threaded steps land between the frames that move its
+#: target), which would flicker the open-hand model and repeat onTouch.
+TOUCH_HOLD = 0.05
+#: A tracker sample older than this (s) no longer carries its velocity forward: a tracker
+#: that stops sending (dropped packets, a NaN the input layer refused) leaves the hand at
+#: its last pose until it is told lost, not ahead of it by the speed it last had.
+STALE_AFTER = 0.05
 #: Friction coefficient of an object pressed against the palm: a grip's shear up to this
 #: times the press does not count toward its BreakForce (skin on most things: 0.5–1).
 GRIP_FRICTION = 1.0
@@ -98,7 +109,8 @@ SEE_THROUGH_ALPHA = 0.45
 #: Colours a hand without models of its own is tinted with per mode, and when untracked.
 TINTS = {HandMode.CONTACT: (0.55, 0.85, 0.55), HandMode.GRASP: (0.95, 0.6, 0.3)}
 UNTRACKED = (0.55, 0.55, 0.55)
-#: The marker: a ball of this diameter (m) where the real hand is.
+#: The marker: a ball of this diameter (m) where the real hand is, textured with
+#: :data:`~engine.assets.generated.MARKER_BALL` (its gores show the tracker turning).
 MARKER_SIZE = 0.03
 MARKER_COLOR = (1.0, 0.85, 0.2, 1.0)
 
@@ -118,6 +130,8 @@ class _Rig:
     overlap: Future | None = None
     strain: tuple[dict[int, int], Future] | None = None  # grips asked their force, answer
     shown: tuple[str, bool, bool] | None = None  # the mode, tracking and see-through drawn
+    #: object -> the physics time the hand last touched it (kept TOUCH_HOLD seconds)
+    touched_at: dict[int, float] = field(default_factory=dict)
     force_output: str = field(init=False)
     grasp_output: str = field(init=False)
 
@@ -150,10 +164,14 @@ class Hands:
         return state
 
     def state(self, hand: int) -> str:
+        rig = self.rigs.get(hand)  # a grasp made this frame is a grasp, as held() says
+        if rig is not None and rig.grasps:
+            return str(HandMode.GRASP)
         return str(self._state(hand).mode)
 
     def held(self, hand: int) -> tuple[int, ...]:
-        return self._state(hand).held
+        rig = self.rigs.get(hand)  # what it holds now, a grasp this frame included
+        return self._state(hand).held if rig is None else tuple(rig.grasps)
 
     def grasp(self, hand: int, obj: int) -> None:
         assert self._engine is not None
@@ -168,12 +186,18 @@ class Hands:
         """Hold ``obj``: a fixed joint at its pose relative to the hand now, or a ball joint
         at the hand where another hand holds it already."""
         world = engine.world
+        if obj == rig.hand:  # a joint from its body to itself: no backend takes one
+            raise ValueError(f"hand {rig.name!r} cannot hold itself")
         if obj in rig.grasps or not world.entity_exists(obj):
             return
         physical = world.try_component(obj, Physical)
         if physical is None or physical.kind != BodyKind.DYNAMIC:
             raise ValueError(f"object {_name(world, obj)!r} is not a dynamic body; a hand "
                              "holds only what can move")
+        graspable = world.try_component(obj, Graspable)
+        if graspable is not None and not graspable.enabled:
+            raise ValueError(f"object {_name(world, obj)!r} is not graspable (its scene "
+                             "says Graspable 0)")
         others = [r for r in self.rigs.values() if obj in r.grasps]
         kind = JointKind.BALL if others else JointKind.FIXED
         rig.grasps[obj] = self._joint(engine, rig, obj, kind)
@@ -181,7 +205,7 @@ class Hands:
             if self._kind(world, other.grasps[obj]) == JointKind.FIXED:
                 engine.despawn(other.grasps[obj])
                 other.grasps[obj] = self._joint(engine, other, obj, JointKind.BALL)
-        engine.events.emit(HandGrasped(rig.hand, obj))
+        _tell(engine, HandGrasped(rig.hand, obj), "grasp")
 
     def let_go(self, engine: Engine, rig: _Rig, objects: list[int] | None = None) -> None:
         """Release ``objects`` (default: all); a single grip left on one becomes fixed."""
@@ -190,7 +214,7 @@ class Hands:
             if joint is None:
                 continue
             engine.despawn(joint)
-            engine.events.emit(HandReleased(rig.hand, obj))
+            _tell(engine, HandReleased(rig.hand, obj), "release")
             remaining = [r for r in self.rigs.values() if obj in r.grasps]
             if len(remaining) == 1 and engine.world.entity_exists(obj):
                 last = remaining[0]
@@ -215,6 +239,15 @@ def _name(world: Any, entity: int) -> str:
     return name.id if name is not None else f"entity {entity}"
 
 
+def _tell(engine: Engine, event: HandGrasped | HandReleased, kind: str) -> None:
+    """A grasp or release on the bus, and as a marker (``grasp HAND OBJECT``) on the
+    scene's Output streams, so a recording of physiological signals lines up with it."""
+    engine.events.emit(event)
+    world = engine.world
+    engine.events.emit(CustomEvent("marker", f"{kind} {_name(world, event.hand)} "
+                                             f"{_name(world, event.object)}"))
+
+
 class HandDriveSystem(System):
     """PRE_PHYSICS: trackers move the control bodies; discrepancy rule; grasp and release."""
 
@@ -225,6 +258,7 @@ class HandDriveSystem(System):
     def __init__(self, hands: Hands) -> None:
         self.hands = hands
         self._new: list[int] = []
+        self._table = np.empty((0, 13))  # the control bodies' rows, reused each frame
 
     def setup(self, engine: Engine) -> None:
         self.hands._engine = engine
@@ -246,20 +280,16 @@ class HandDriveSystem(System):
     def run(self, engine: Engine, dt: float) -> None:
         if self._new:
             self._rig_new(engine)
+        rigs = self.hands.rigs
+        if not rigs:
+            return
         inputs = engine.try_resource(InputState)
-        world = engine.world
-        for rig in self.hands.rigs.values():
-            hand = world.try_component(rig.hand, Hand)
-            state = world.try_component(rig.hand, HandState)
-            t = world.try_component(rig.hand, Transform)
-            if hand is None or state is None or t is None:
-                continue
-            pose = None if inputs is None else self._tracker_pose(engine, hand, inputs)
-            try:
-                self._drive(engine, rig, hand, state, t, pose, dt)
-            except CommandError as exc:  # a tracker pose no body can take (never NaN: the
-                self.hands.messages.error(  # input layer refuses those); the hand holds
-                    f"hand {rig.name!r}: {exc}; it holds still", f"frame {engine.frame}: ")
+        # each hand's components in one query (the world's cached one), not three looks
+        found = dict(engine.world.get_components(Hand, HandState, Transform))
+        driven = [(rig, found[rig.hand]) for rig in rigs.values() if rig.hand in found]
+        poses = self._move_controls(engine, driven, inputs)
+        for (rig, (hand, state, t)), pose in zip(driven, poses, strict=True):
+            self._drive(engine, rig, hand, state, t, pose, dt)
             pressed = inputs is not None and hand.glove != "" and inputs.button(hand.glove,
                                                                                 hand.button)
             if pressed and not rig.pressed:
@@ -286,19 +316,27 @@ class HandDriveSystem(System):
             if hand is None or t is None or not world.has_component(entity, Physical):
                 continue
             name = _name(world, entity)
+            tick = engine.config.dt / max(engine.controller.substeps, 1)
+            tau = hand.time_constant or max(2.0 * tick, MIN_TIME_CONSTANT)
+            try:  # a Hand made in Python is checked here (a scene's, at its line)
+                limits = SetDriveLimits(0, hand.max_force, hand.max_torque, tau,
+                                        hand.max_speed, hand.max_spin)
+                if not hand.deviation_distance > 0.0:
+                    raise CommandError(f"DeviationDistance must be positive, got "
+                                       f"{hand.deviation_distance!r}")
+            except CommandError as exc:
+                self.hands.messages.error(f"hand {name!r}: {exc}; it is not driven")
+                continue
             control = engine.spawn(
                 Name(f"{name} tracker"), Transform(t.position.copy(), t.orientation.copy()),
                 Physical(kind=BodyKind.KINEMATIC, mass=1.0, shapes=[], category=0, mask=0,
                          gravity=False, can_sleep=False),
                 *([Visual(shapes=[Shape("sphere", (MARKER_SIZE / 2,))], color=MARKER_COLOR,
-                          shadower=False)] if hand.marker else []))
+                          texture=MARKER_BALL, shadower=False)] if hand.marker else []))
             drive = engine.spawn(Name(f"{name} drive"), Joint(
                 kind=JointKind.SIX_DOF, body_a=entity, body_b=control,
                 motor_max_force=hand.max_force, id=f"{name} drive"))
-            tick = engine.config.dt / max(engine.controller.substeps, 1)
-            tau = hand.time_constant or max(2.0 * tick, MIN_TIME_CONSTANT)
-            engine.physics.push(SetDriveLimits(drive, hand.max_force, hand.max_torque, tau,
-                                               hand.max_speed, hand.max_spin))
+            engine.physics.push(replace(limits, key=drive))
             visual = world.try_component(entity, Visual)
             look = (None, (0.8, 0.8, 0.8, 1.0)) if visual is None else (
                 visual.model, tuple(visual.color))
@@ -352,7 +390,7 @@ class HandDriveSystem(System):
         for rig in self.hands.rigs.values():
             if entity in rig.grasps:
                 engine.despawn(rig.grasps.pop(entity))
-                engine.events.emit(HandReleased(rig.hand, entity))
+                _tell(engine, HandReleased(rig.hand, entity), "release")
 
     # -- each frame ------------------------------------------------------------------
     @staticmethod
@@ -365,6 +403,8 @@ class HandDriveSystem(System):
             return None
         p, q = tracker.position, tracker.orientation
         v, w = tracker.velocity, tracker.angular_velocity
+        if inputs.now - tracker.timestamp > STALE_AFTER:
+            v = w = np.zeros(3)
         frame = None if hand.frame is None else engine.world.try_component(hand.frame,
                                                                            Transform)
         if frame is None:
@@ -375,8 +415,51 @@ class HandDriveSystem(System):
                 frame.linear_velocity + np.cross(frame.angular_velocity, arm) + rot @ v,
                 frame.angular_velocity + rot @ w)
 
+    def _move_controls(self, engine: Engine, driven: list[tuple[_Rig, Any]],
+                       inputs: InputState | None) -> list[tuple[np.ndarray, ...] | None]:
+        """Put every tracked hand's control body at its tracker's pose, with its
+        velocities: one command for all of them (checked in one pass), before anything
+        else of the frame, so a pose no body can take changes nothing else. Each hand's
+        pose, or None where it is untracked or its pose was refused (told)."""
+        poses = [None if inputs is None else self._tracker_pose(engine, hand, inputs)
+                 for _, (hand, _, _) in driven]
+        tracked = [i for i, pose in enumerate(poses) if pose is not None]
+        if not tracked:
+            return poses
+        table = self._table
+        if len(table) < len(tracked):
+            table = self._table = np.empty((len(driven), 13))
+        for row, i in enumerate(tracked):
+            p, q, v, w = poses[i]  # type: ignore[misc]
+            table[row, 0:3], table[row, 3:7], table[row, 7:10], table[row, 10:13] = p, q, v, w
+        keys = [driven[i][0].control for i in tracked]
+        rows = table[:len(tracked)]
+        try:
+            engine.physics.push(SetPoses(keys, rows))
+        except CommandError:  # (outside the world, too fast): which hands, and why
+            good = [row for row, i in enumerate(tracked) if self._takes(engine, driven[i],
+                                                                        poses, i)]
+            if good:
+                engine.physics.push(SetPoses([keys[row] for row in good], rows[good]))
+        return poses
+
+    def _takes(self, engine: Engine, rig_comps: tuple[_Rig, Any],
+               poses: list[tuple[np.ndarray, ...] | None], i: int) -> bool:
+        """Whether a body can take hand ``i``'s pose; told, and its pose dropped, if not."""
+        rig, (hand, _, _) = rig_comps
+        try:
+            check_limits(SetPose(rig.control, *poses[i]), engine.physics.limits)  # type: ignore[misc]
+        except CommandError as exc:
+            self.hands.messages.error(
+                f"hand {rig.name!r}: tracker {hand.tracker!r} gave a pose no body can take "
+                f"({exc}); the hand holds still as if untracked", f"frame {engine.frame}: ")
+            poses[i] = None
+            return False
+        return True
+
     def _drive(self, engine: Engine, rig: _Rig, hand: Hand, state: HandState,
                t: Transform, pose: tuple[np.ndarray, ...] | None, dt: float) -> None:
+        """One hand's frame, its control body already moved (:meth:`_move_controls`)."""
         physics = engine.physics
         if pose is None:
             if state.tracked or rig.lost_for == 0.0:  # hold still where the hand is
@@ -403,7 +486,6 @@ class HandDriveSystem(System):
             state.colliding = False
         elif not state.colliding and d < COLLIDE_AGAIN * limit:
             self._collide_again(engine, rig, state)
-        physics.push(SetPose(rig.control, position, orientation, velocity, spin))
         self._look(engine, rig, hand, state)
 
     def _collide_again(self, engine: Engine, rig: _Rig, state: HandState) -> None:
@@ -423,9 +505,10 @@ class HandDriveSystem(System):
 
     @staticmethod
     def _look(engine: Engine, rig: _Rig, hand: Hand, state: HandState) -> None:
-        """The hand's look: its mode's model (or tint), see-through in the band of 5.4,
-        grey while untracked. Written only when one of those changes (a change rebuilds its
-        draw; a script may recolour the hand in between)."""
+        """The hand's look: its mode's model (or the author's look, tinted in contact and
+        grasp), see-through in the band of 5.4, grey while untracked. Written only when
+        one of those changes (a change rebuilds its draw; a script may recolour the hand
+        in between)."""
         low, high = SEE_THROUGH
         through = low * hand.deviation_distance <= state.deviation <= \
             high * hand.deviation_distance
@@ -438,7 +521,8 @@ class HandDriveSystem(System):
             return
         model, color = rig.look
         mode = HandMode(state.mode)
-        own = {HandMode.CONTACT: hand.contact_model, HandMode.GRASP: hand.grasp_model}
+        own = {HandMode.NEUTRAL: hand.neutral_model, HandMode.CONTACT: hand.contact_model,
+               HandMode.GRASP: hand.grasp_model}
         if own.get(mode):
             model = own[mode]
         elif mode in TINTS:
@@ -457,40 +541,68 @@ class HandContactSystem(System):
     hand's ``BreakForce`` let go."""
 
     phase = Phase.POST_PHYSICS
+    before = ("OutputSystem",)  # a glove gets this step's force this frame, not the next
     reads = (Hand, HandState, Physical, Graspable, Transform, Name, Joint)
     writes = (HandState, Name, Joint)
 
     def __init__(self, hands: Hands) -> None:
         self.hands = hands
+        self._seen: tuple[int, float] = (-1, 0.0)  # the physics step and time last told
 
     def run(self, engine: Engine, dt: float) -> None:
         rigs = self.hands.rigs
         if not rigs:
             return
-        touches = _hand_contacts(engine.events.frame(Contacts), rigs)
+        frames = engine.events.frame(Contacts)
+        snapshot = engine.physics.snapshot
+        # a frame without a physics step (threaded mode) has no contacts and says nothing
+        # about touching: what the last step said holds (else the mode would flicker)
+        stepped = bool(frames) or snapshot.step != self._seen[0]
+        elapsed = snapshot.time - self._seen[1] if self._seen[0] >= 0 else dt
+        if stepped:
+            self._seen = (snapshot.step, snapshot.time)
+        touches = _hand_contacts(frames, rigs)
         world = engine.world
         outputs = _outputs(engine)
+        sent = frozenset() if outputs is None else outputs.sent  # what Output blocks name
+        found = dict(world.get_components(Hand, HandState))
         for rig in rigs.values():
-            state = world.try_component(rig.hand, HandState)
-            if state is None:
+            comps = found.get(rig.hand)
+            if comps is None:
                 continue
-            impulse, others = touches.get(rig.hand, (0.0, ()))
-            force = impulse / dt if dt > 0 else 0.0
-            touching = tuple(o for o in sorted(set(others)) if _graspable(world, o))
-            if touching != state.touching:
-                for obj in set(touching) - set(state.touching):
-                    engine.events.emit(HandTouched(rig.hand, obj))
-                state.touching = touching
-            state.contact_force = force
+            hand, state = comps
+            if stepped:
+                impulse, others = touches.get(rig.hand, (0.0, ()))
+                # the steps' impulses over the physics time they took
+                state.contact_force = impulse / (elapsed if elapsed > 0 else dt)
+                if others or rig.touched_at:
+                    self._touching(engine, rig, state, others, snapshot.time)
             state.held = tuple(rig.grasps)
-            state.mode = HandMode.GRASP if rig.grasps else HandMode.CONTACT if touching \
-                else HandMode.NEUTRAL
-            if outputs is not None:
-                outputs.set(rig.force_output, force)
+            state.mode = HandMode.GRASP if rig.grasps else HandMode.CONTACT if \
+                state.touching else HandMode.NEUTRAL
+            if rig.force_output in sent:
+                outputs.set(rig.force_output, state.contact_force)
+            if rig.grasp_output in sent:
                 outputs.set(rig.grasp_output, 1.0 if rig.grasps else 0.0)
-            hand = world.try_component(rig.hand, Hand)
-            if hand is not None and hand.break_force is not None and rig.grasps:
+            if hand.break_force is not None and rig.grasps:
                 self._strain(engine, rig, hand.break_force)
+
+    @staticmethod
+    def _touching(engine: Engine, rig: _Rig, state: HandState, others: list[int],
+                  now: float) -> None:
+        """What the hand touches after this step: the graspable objects among ``others``,
+        and those it touched within :data:`TOUCH_HOLD`; HandTouched for each new one."""
+        world = engine.world
+        for obj in others:
+            if _graspable(world, obj):
+                rig.touched_at[obj] = now
+        rig.touched_at = {o: t for o, t in rig.touched_at.items()
+                          if now - t <= TOUCH_HOLD and world.entity_exists(o)}
+        touching = tuple(sorted(rig.touched_at))
+        if touching != state.touching:
+            for obj in set(touching) - set(state.touching):
+                engine.events.emit(HandTouched(rig.hand, obj))
+            state.touching = touching
 
     def _strain(self, engine: Engine, rig: _Rig, limit: float) -> None:
         """Let go of what a grip carried more than ``limit`` N for in the last step (see
@@ -579,7 +691,7 @@ def _outputs(engine: Engine) -> Any:
 class HandsPlugin:
     """Virtual hands (``requestPlugin("hands")``; the paper's "interaction")."""
 
-    name = "hands"
+    name = PluginName.HANDS
 
     def build(self, engine: Engine) -> None:
         from systems.input import InputPlugin

@@ -4,9 +4,12 @@
 options name (plus the render window's keyboard and mouse), and each frame asks the
 :class:`InputHub` for the frame's input — calibrated, filtered, the latest-state table
 (:class:`InputState`, a resource) updated — and emits every event on the bus, so
-what a device sent is visible to every later system of the same frame. Trackers bound
-to an object (``Tracker { Object "camera0" }``) move that object's Transform; a camera
-bound so takes the tracker's orientation (an HMD).
+what a device sent is visible to every later system of the same frame. A tracker bound
+to an object or a camera (``Tracker { Object "cursor" }``, ``Tracker { Camera "eye" }``)
+moves its Transform; a camera bound so takes the tracker's orientation (a headset). The
+desktop device looks through the active camera; when its hands are tracked relative to
+an object (``Hand { Frame }``, a wheelchair) it reports their poses in that object's
+frame, as a tracker on it would.
 
 :class:`OutputSystem` sends the ``Output`` blocks' values at the end of each frame, and
 task markers: Lua's ``emit("marker", text)`` or ``engine.resource(Outputs).marker(text)``.
@@ -20,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from components import Camera, Controller, Name, Physical, Transform
+from components import Camera, Controller, Hand, Name, Physical, Transform
 from engine.events import CustomEvent
 from engine.input import (
     DeviceError,
@@ -32,8 +35,9 @@ from engine.input import (
 )
 from engine.input.desktop import DesktopDevice, WindowDevice
 from engine.input.output import Publisher, make_publisher
-from engine.scene.inputs import DeviceSpec, InputSpec
-from engine.system import Phase, System
+from engine.rotation import quat_conjugate, quat_multiply, quat_to_matrix
+from engine.scene.inputs import DESKTOP_TRACKERS, DeviceSpec, InputSpec
+from engine.system import Phase, PluginName, System
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -60,7 +64,7 @@ class InputSystem(System):
     """Drains all devices once per frame and publishes what they said."""
 
     phase = Phase.INPUT
-    reads = (Name, Physical, Camera, Transform)
+    reads = (Name, Physical, Camera, Transform, Hand)
     writes = (Transform, Camera)
 
     def __init__(self, devices: Sequence[DeviceSpec | str] = ()) -> None:
@@ -89,6 +93,7 @@ class InputSystem(System):
         self.hub = hub = InputHub(spec, devices, timeouts=timeouts)
         engine.insert_resource(hub)
         engine.insert_resource(hub.state)
+        engine.input = hub.state
         engine.insert_resource(self.window)
         engine.stat_sources["input"] = hub.stats
         self._bind_objects(engine, spec)
@@ -147,8 +152,14 @@ class InputSystem(System):
                 target = (poses.position[t_row], poses.orientation[t_row])
             view = camera_from_component(camera, poses.position[row], poses.orientation[row],
                                          target)
-            desktop.view.position = np.asarray(view.position, dtype=np.float64)
-            desktop.view.orientation = np.asarray(view.orientation, dtype=np.float64)
+            position = np.asarray(view.position, dtype=np.float64)
+            orientation = np.asarray(view.orientation, dtype=np.float64)
+            frame = _desktop_hands_frame(engine)
+            if frame is not None:  # hands tracked relative to a wheelchair: so is the mouse
+                position = quat_to_matrix(frame.orientation).T @ (position - frame.position)
+                orientation = quat_multiply(quat_conjugate(frame.orientation), orientation)
+            desktop.view.position = position
+            desktop.view.orientation = orientation
             desktop.view.fov = view.fov
             width, _, height = str(engine.config.options.get("size") or "640x480").partition("x")
             desktop.view.aspect = int(width) / max(int(height), 1)
@@ -159,12 +170,26 @@ class InputSystem(System):
             self.hub.close()
 
 
+def _desktop_hands_frame(engine: Engine) -> Transform | None:
+    """The object the desktop device's hands are tracked relative to (their ``Frame``), if
+    they have one: the emulated trackers then report poses in its frame, as a tracker on
+    it would."""
+    world = engine.world
+    for _, hand in world.get_component(Hand):
+        if hand.tracker in DESKTOP_TRACKERS and hand.frame is not None:
+            return world.try_component(hand.frame, Transform)
+    return None
+
+
 class Outputs:
-    """Values Python systems publish by name (``set``) and task markers (``marker``)."""
+    """Values Python systems publish by name (``set``) and task markers (``marker``).
+    ``sent`` names the values the scene's Output blocks send: a system with a value per
+    object per frame (a hand's force) sets only those."""
 
     def __init__(self) -> None:
         self.values: dict[str, tuple[float, ...]] = {}
         self.markers: list[str] = []
+        self.sent: frozenset[str] = frozenset()
 
     def set(self, name: str, value: float | Sequence[float]) -> None:
         self.values[name] = (float(value),) if isinstance(value, (int, float)) else \
@@ -195,6 +220,8 @@ class OutputSystem(System):
                 log.error("%s; the run goes on without this output", exc)
                 continue
             self._publishers.append((publisher, spec.values, spec.markers))
+        self.outputs.sent = frozenset(name for _, names, _ in self._publishers
+                                      for name in names)
         engine.events.subscribe(CustomEvent, self._on_custom)
 
     def _on_custom(self, event: CustomEvent) -> None:
@@ -259,7 +286,7 @@ def _controller_value(c: Controller | None) -> tuple[float, ...] | None:
 class InputPlugin:
     """Input devices in, engine values out (``requestPlugin("input")``)."""
 
-    name = "input"
+    name = PluginName.INPUT
 
     def __init__(self, devices: Sequence[DeviceSpec | str] = ()) -> None:
         self.devices = devices

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 from components import Transform
 from engine.measures import Measures, quantity
 from engine.scene import SceneIds
-from engine.system import Phase, System
+from engine.system import Phase, PluginName, System
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -64,7 +64,7 @@ class MeasuresSystem(System):
 class MeasuresPlugin:
     """Adds the ``measures`` section to the run's statistics."""
 
-    name = "measures"
+    name = PluginName.MEASURES
 
     def build(self, engine: Engine) -> None:
         if engine.try_resource(Measures) is None:

@@ -2,8 +2,10 @@
 RENDER phase; lights from Light components, the view from the active Camera.
 
 Run options come from ``engine.config`` (``headless``, and ``options``: ``screenshot``,
-``record_frames``, ``record_every``, ``hud``, ``interpolate``, ``size``), which the CLI fills
-from ``--headless --screenshot --record-frames --record-every --hud --interpolate --size``.
+``record_frames``, ``record_every``, ``hud``, ``interpolate``, ``size``, ``stereo``), which
+the CLI fills from ``--headless --screenshot --record-frames --record-every --hud
+--interpolate --size --stereo``. The visual anomalies that are on (the anomalies plugin's
+:class:`engine.anomalies.Anomalies`) are handed to the renderer each frame.
 Scripts reach the renderer through the :class:`RenderSystem` resource
 (``engine.resource(RenderSystem).set_uniform("toon", "DiffuseColor", (1, 0, 0))``).
 """
@@ -20,8 +22,9 @@ import numpy as np
 
 from components import Avatar, Camera, Display, Light, Name, Transform, Visual
 from engine.animation import Palettes
+from engine.anomalies import ANOMALIES, Anomalies
 from engine.assets import AssetError, Assets
-from engine.events import KeyEvent
+from engine.events import CustomEvent, KeyEvent
 from engine.input import InputState
 from engine.input.desktop import WindowDevice
 from engine.realtime import CostLog
@@ -30,7 +33,7 @@ from engine.render.context import create_target
 from engine.render.hud import hud_line
 from engine.render.interpolate import PoseInterpolator
 from engine.render.lights import light_from_component
-from engine.render.postprocess import PostProcessing
+from engine.render.postprocess import PostPass, PostProcessing
 from engine.render.renderer import FrameStats, Renderer
 from engine.render.shaders import (
     FragmentShader,
@@ -41,8 +44,8 @@ from engine.render.shaders import (
     UniformValue,
     VertexShader,
 )
-from engine.services import ShaderControl
-from engine.system import Phase, System
+from engine.services import ShaderControl, SwapGate
+from engine.system import Phase, PluginName, System
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -51,6 +54,9 @@ log = logging.getLogger("colosseum.render")
 
 #: Key that shows and hides the HUD line.
 HUD_KEY = "f1"
+#: The distance between the eyes (m) of ``--stereo sbs`` when the camera sets none: an
+#: adult's mean interpupillary distance.
+EYE_SEPARATION = 0.064
 
 
 @dataclass(slots=True)
@@ -68,6 +74,11 @@ class RenderOptions:
     title: str = "Colosseum"
     #: False for headless runs from the CLI: only frames that are saved get drawn.
     draw_every_frame: bool = True
+    #: "sbs": two eyes side by side (the camera's EyeSeparation, else :data:`EYE_SEPARATION`);
+    #: "mono": one eye even for a stereo camera; None: as the camera says.
+    stereo: str | None = None
+    #: The share of the window's resolution the view is drawn at (Renderer.render_scale).
+    render_scale: float = 1.0
 
     @staticmethod
     def from_config(config: Any) -> RenderOptions:
@@ -83,7 +94,8 @@ class RenderOptions:
             screenshot=Path(shot) if shot else None,
             record_frames=Path(frames) if frames else None,
             record_every=int(opts.get("record_every") or 1), hud=bool(opts.get("hud")),
-            interpolate=bool(opts.get("interpolate")),
+            interpolate=bool(opts.get("interpolate")), stereo=opts.get("stereo"),
+            render_scale=float(opts.get("render_scale") or 1.0),
             draw_every_frame=backend != "headless" or bool(getattr(config, "render", False)))
 
 
@@ -140,6 +152,7 @@ class RenderSystem(System):
         self._told_displays: set[str] = set()
         self._drawn = False  # whether the last frame was drawn (headless runs skip frames)
         self._palette_version = -1
+        self._engine_anomalies: Anomalies | None = None
 
     # -- API for scripts and tools --------------------------------------------
     def set_uniform(self, state_id: str, name: str, value: UniformValue) -> None:
@@ -147,6 +160,12 @@ class RenderSystem(System):
         self._require().set_uniform(state_id, name, value)
 
     def enable_post(self, name: str, enabled: bool = True) -> None:
+        """Switch an author's pass (a ``PostPass``) on or off; an anomaly's name or ID
+        switches that anomaly (they were built-in passes once)."""
+        anomalies = self._engine_anomalies
+        if anomalies is not None and (name in anomalies.states or name in ANOMALIES):
+            anomalies.switch(name, enabled, "python")
+            return
         self._require().enable_post(name, enabled)
 
     def set_post_uniform(self, name: str, uniform: str, value: UniformValue) -> None:
@@ -178,17 +197,20 @@ class RenderSystem(System):
         self.renderer = Renderer(self._target, root=root, shadow_size=opts.shadow_size,
                                  assets=Assets.of(engine))
         self.renderer.hud.enabled = opts.hud
+        self.renderer.render_scale = opts.render_scale
         log.info("rendering with %s (%s) at %dx%d", self._target.kind,
                  self._target.renderer_name, *self._target.size)
         library = engine.try_resource(ShaderLibrary) or self._scene_shaders(engine)
         if library is not None:
             self.renderer.load_shaders(library)
-        post = engine.try_resource(PostProcessing)
+        post = engine.try_resource(PostProcessing) or self._scene_post(engine)
         if post is not None:
             self.renderer.set_post_passes(post.passes)
         self._target.input = engine.try_resource(WindowDevice)  # keys and mouse: input layer
         engine.events.subscribe(KeyEvent, self._on_key)
+        engine.events.subscribe(CustomEvent, self._on_custom)
         engine.world.on_remove(Visual, lambda entity, _: self._forget(entity))
+        self._engine_anomalies = engine.try_resource(Anomalies)
         engine.insert_resource(self)
         engine.insert_resource(self, as_type=ShaderControl)
         engine.stat_sources["render"] = self._stats
@@ -202,9 +224,27 @@ class RenderSystem(System):
         ids = engine.try_resource(SceneIds)
         return None if ids is None else library_from_scene_spec(ids.spec)
 
+    @staticmethod
+    def _scene_post(engine: Engine) -> PostProcessing | None:
+        """The scene's ``PostPass`` blocks as an author's post-processing chain."""
+        from engine.scene.factory import SceneIds
+
+        ids = engine.try_resource(SceneIds)
+        if ids is None or not ids.spec.post_passes:
+            return None
+        return PostProcessing([PostPass(p.id, file=p.file, uniforms=dict(p.uniforms),
+                                        enabled=p.enabled, feedback=p.feedback,
+                                        origin=p.origin) for p in ids.spec.post_passes])
+
     def _on_key(self, event: KeyEvent) -> None:
         if event.key == HUD_KEY and event.pressed and self.renderer is not None:
             self.renderer.hud.toggle()
+
+    def _on_custom(self, event: CustomEvent) -> None:
+        """``emit("hud", text)``: the HUD's status line (task progress), shown while not
+        empty."""
+        if event.name == "hud" and self.renderer is not None:
+            self.renderer.hud.status = "" if event.data is None else str(event.data)
 
     def _forget(self, entity: int) -> None:
         self._signatures.pop(entity, None)
@@ -239,13 +279,18 @@ class RenderSystem(System):
             self._require().screenshot(opts.record_frames / f"frame_{engine.frame:06d}.png")
             self.frames_written += 1
 
-    def _draw(self, engine: Engine, dt: float) -> None:
+    def _draw(self, engine: Engine, dt: float, gated: bool = True) -> None:
+        """Draw a frame; ``gated``: through the engine's :class:`SwapGate`, if it has one
+        (it is swapped once the gate lets it)."""
         renderer = self._require()
         world = engine.world
+        start = time.perf_counter()
         self._sync_visuals(engine)
         self._sync_poses(engine)
         self._sync_palettes(engine)
         renderer.camera = self._camera(engine)
+        anomalies = engine.try_resource(Anomalies)
+        renderer.anomalies = anomalies.active() if anomalies is not None else []
         lights = []
         for entity, (light,) in world.get_components(Light):
             row = world.poses.row_of.get(entity)
@@ -262,7 +307,11 @@ class RenderSystem(System):
             steps = engine.physics.controller.step_costs
             renderer.hud.text = hud_line(self._fps, steps.mean() * 1e3,
                                          engine.real_time_factor)
+        scene_ms = (time.perf_counter() - start) * 1e3
+        gate = engine.try_resource(SwapGate) if gated else None  # type: ignore[type-abstract]
+        renderer.before_present = None if gate is None else gate.before_swap
         renderer.render(dt)
+        renderer.stats.scene_ms = scene_ms
         self.frames_drawn += 1
         self._last = replace(renderer.stats)
         self.render_costs.add(renderer.stats.frame_ms / 1e3)
@@ -343,8 +392,17 @@ class RenderSystem(System):
             if camera.follow is not None and camera.follow in poses.row_of:
                 t_row = poses.row_of[camera.follow]
                 target = (poses.position[t_row], poses.orientation[t_row])
-            return camera_from_component(camera, pos, quat, target)
-        return CameraView()
+            return self._stereo(camera_from_component(camera, pos, quat, target))
+        return self._stereo(CameraView())
+
+    def _stereo(self, view: CameraView) -> CameraView:
+        """The view with ``--stereo`` applied."""
+        stereo = self.options.stereo if self.options is not None else None
+        if stereo == "mono":
+            view.eye_separation = 0.0
+        elif stereo == "sbs" and view.eye_separation <= 0.0:
+            view.eye_separation = EYE_SEPARATION
+        return view
 
     def _display_view(self, engine: Engine, name: str) -> CameraView | None:
         """The off-axis view of the scene's Display ``name`` from the viewer's eye."""
@@ -379,8 +437,8 @@ class RenderSystem(System):
         opts = self.options
         try:
             if opts is not None and opts.screenshot is not None:
-                if not self._drawn:
-                    self._draw(engine, engine.tick.dt)
+                if not self._drawn:  # drawn for the file: no wall waits to swap it
+                    self._draw(engine, engine.tick.dt, gated=False)
                 path = renderer.screenshot(opts.screenshot)
                 log.info("screenshot written to %s", path)
         finally:
@@ -393,7 +451,7 @@ class RenderSystem(System):
 class RenderPlugin:
     """Adds the render system (``requestPlugin("osg")`` in the paper's Lua)."""
 
-    name = "render"
+    name = PluginName.RENDER
 
     def __init__(self, options: RenderOptions | None = None) -> None:
         self.options = options

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -40,7 +40,7 @@ from engine.scripting.api import ScriptAPI
 from engine.scripting.runtime import Script as LoadedScript
 from engine.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRuntime
 from engine.services import ScriptStates
-from engine.system import ANY_COMPONENT, Phase, System
+from engine.system import ANY_COMPONENT, Phase, PluginName, System
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -84,6 +84,7 @@ class ScriptingSystem(System):
         self.contact_events = 0
         #: This frame's newest pose per tracker: scripts hear each tracker once a frame.
         self._poses: dict[str, TrackerPose] = {}
+        self._exists: Callable[[int], bool] = lambda entity: True
 
     # -- setup ------------------------------------------------------------------
     def setup(self, engine: Engine) -> None:
@@ -99,6 +100,7 @@ class ScriptingSystem(System):
         engine.insert_resource(self)
         engine.insert_resource(self, as_type=ScriptStates)
         world = engine.world
+        self._exists = world.entity_exists
         world.on_add(Script, lambda e, c: self._pending.append((e, c)))
         world.on_remove(Script, lambda e, c: self._unload(e))
         for entity, script in world.get_component(Script):
@@ -298,6 +300,19 @@ class ScriptingSystem(System):
         for script in scene:
             for ea, eb, j in zip(pa, pb, totals, strict=True):
                 runtime.collide_scene(script, ea, eb, j)
+        self._forget_gone({*pa, *pb})
+
+    def _forget_gone(self, entities: Iterable[int]) -> None:
+        """Drop the Lua handles the callbacks just made for objects already deleted: a
+        contact of a step under way when a script deleted its body (threaded) or a touch
+        ending with a deleted object is told after the Despawned event that dropped the
+        handle, and the handle made for it would stay for good (a soak's handle table
+        grew by one per churned box)."""
+        assert self.runtime is not None
+        forget, exists = self.runtime.kernel.forget, self._exists
+        for entity in entities:
+            if entity >= 0 and not exists(entity):
+                forget(entity)
 
     def _deliver_poses(self, runtime: ScriptRuntime) -> None:
         poses, self._poses = self._poses, {}
@@ -312,6 +327,7 @@ class ScriptingSystem(System):
         for script in (*self._by_entity.get(hand, ()), *self._by_entity.get(obj, ()),
                        *self._scene):
             runtime.call_objects(script, callback, (hand, obj))
+        self._forget_gone((hand, obj))
 
     def _on_touch(self, callback: str, a: int, b: int, extra: tuple[float, ...]) -> None:
         """A pair began or stopped touching: each side's object scripts hear the other
@@ -324,6 +340,7 @@ class ScriptingSystem(System):
                 runtime.call_objects(script, callback, (other,), *extra)
         for script in self._scene:
             runtime.call_objects(script, callback, (a, b), *extra)
+        self._forget_gone((a, b))
 
 
     def saved_scripts(self, object_name: Callable[[int], str | None]
@@ -350,6 +367,8 @@ class ScriptingSystem(System):
         return states
 
     def shutdown(self, engine: Engine) -> None:
+        if self.api is not None:
+            self.api.flush()  # how often each repeated message came again
         self._pending.clear()
         self._broken.clear()
 
@@ -357,7 +376,7 @@ class ScriptingSystem(System):
 class ScriptingPlugin:
     """Runs the scene's Lua scripts (``requestPlugin("scripting")``)."""
 
-    name = "scripting"
+    name = PluginName.SCRIPTING
 
     def __init__(self, limits: ScriptLimits | None = None,
                  reload_interval: float = RELOAD_INTERVAL) -> None:

@@ -42,7 +42,7 @@ from engine.events import Contacts, Spawned
 from engine.physics.backend import CONTACT_DTYPE
 from engine.rotation import view_problem
 from engine.services import SoundControl
-from engine.system import Phase, System
+from engine.system import Phase, PluginName, System
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -243,7 +243,7 @@ _NO_CONTACTS = np.zeros(0, dtype=CONTACT_DTYPE)
 class SoundPlugin:
     """Opens the audio backend named by ``--sound`` and adds the sound system."""
 
-    name = "sound"
+    name = PluginName.SOUND
 
     def __init__(self, spec: str | None = None, *, pool_size: int | None = None,
                  hrtf: bool = False, distance_model: str = "inverse_clamped",

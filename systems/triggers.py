@@ -24,7 +24,7 @@ import numpy as np
 from components import Name, Physical, Shape, Transform, Trigger
 from engine.events import CustomEvent
 from engine.rotation import quat_to_matrix
-from engine.system import Phase, System
+from engine.system import Phase, PluginName, System
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -148,7 +148,7 @@ class TriggerSystem(System):
 class TriggersPlugin:
     """Tells scripts and systems which bodies enter and leave triggers."""
 
-    name = "triggers"
+    name = PluginName.TRIGGERS
 
     def build(self, engine: Engine) -> None:
         engine.add_system(TriggerSystem())

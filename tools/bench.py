@@ -35,6 +35,7 @@ BENCHMARKS: dict[str, str] = {
     "net": "tools.bench_net:run_bench",
     "sweep": "tools.bench_sweep:run_bench",
     "accuracy": "tools.bench_accuracy:run_bench",
+    "stroke": "tools.bench_stroke:run_bench",
 }
 
 
@@ -51,6 +52,13 @@ class Figure:
     @property
     def ratio(self) -> float:
         return self.ours / self.reference if self.reference else float("inf")
+
+
+def cpus() -> int:
+    """The cores this process may run on (``nproc``): a benchmark of several processes
+    says it beside its figures."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
+        os.cpu_count() or 1
 
 
 def _by_row(label: Callable[[dict[str, Any]], str], ours: str, reference: str, unit: str,
@@ -117,13 +125,30 @@ def _net_figures(rows: list[dict[str, Any]]) -> list[Figure]:
     out = []
     for r in rows:
         n = r["nodes"]
+        if r.get("case") == "avatars":
+            out.append(Figure(f"{r['avatars']} walking avatars ({r['joints']} joints): bytes/s "
+                              "per node", r["bytes/s per node"], r["float32 bytes/s"], "B/s",
+                              "their joints and roots as plain float32 arrays"))
+            continue
         out += [Figure(f"{n} node(s): latency p99", r["latency p99 ms"], r["bare zmq p99 ms"],
                        "ms", "a bare pyzmq PUB/SUB of the same bytes to as many processes"),
                 Figure(f"{n} node(s): bytes/s per node", r["bytes/s per node"],
                        r["float32 bytes/s"], "B/s", "the bodies as plain float32 arrays"),
                 Figure(f"{n} node(s): server frame", r["server ms/frame"], r["alone ms/frame"],
-                       "ms/frame", "the same server with no node")]
+                       "ms/frame", "the same server with no node"),
+                Figure(f"{n} node(s): server frame CPU", r["server cpu ms/frame"],
+                       r["alone cpu ms/frame"], "ms/frame", "the same server with no node")]
     return out
+
+
+def _stroke_figures(rows: list[dict[str, Any]]) -> list[Figure]:
+    serial, threaded, everything, scaled = rows
+    return [Figure("threaded frames/s", threaded["fps"], serial["fps"], "frames/s",
+                   "serial mode, the same run"),
+            Figure("serial frames/s", serial["fps"], everything["fps"], "frames/s",
+                   "culling, levels of detail and the shadow cache off"),
+            Figure("serial frames/s at --render-scale 0.75", scaled["fps"], serial["fps"],
+                   "frames/s", "serial mode at full resolution, the same run")]
 
 
 #: benchmark -> how its rows become figures (ours beside the reference).
@@ -132,15 +157,20 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
                          "bare loop ms", "ms/frame", "a bare loop calling the same functions"),
     "physics": _physics_figures,
     "scene": _scene_figures,
-    "scripting": _by_row(lambda r: r["benchmark"], "us_per_call", "bare_lupa_us", "us/call",
-                         "a bare lupa call"),
+    "scripting": lambda rows: [
+        *_by_row(lambda r: r["benchmark"], "us_per_call", "bare_lupa_us", "us/call",
+                 "a bare lupa call")(rows),
+        *_by_row(lambda r: r["benchmark"], "ms_per_box", "ms_100_bodies", "ms/box",
+                 "the same among 100 bodies")(rows)],
     "sound": _by_row(lambda r: r["case"], "ours_ms", "raw_al_ms", "ms/frame",
                      "raw OpenAL calls for the same sources"),
     "render": _render_figures,
     "input": _input_figures,
-    "contacts": _by_row(lambda r: f"{r['pairs']} touching pairs", "ms/frame", "unique ms",
-                        "ms/frame", "pair keys and np.unique of the same contacts alone"),
-    "hands": lambda rows: [Figure(r["case"], r["ms_per_step"], r["without_hands_ms"],
+    "contacts": _by_row(lambda r: f"{r['pairs']} pairs {r['state']}", "ms/frame",
+                        "unique ms", "ms/frame",
+                        "pair keys and np.unique of the same contacts alone"),
+    "hands": lambda rows: [Figure(f"{r['case']} ({r['backend']})", r["ms_per_step"],
+                                  r["without_hands_ms"],
                                   "ms/step", "the same scene without the hands")
                            for r in rows if "ms_per_step" in r],
     "avatars": lambda rows: [Figure(f"{r['avatars']} avatars, {r['case']}", r["ms_per_frame"],
@@ -151,6 +181,7 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "sweep": _by_row(lambda r: f"{r['runs']} runs on {r['workers']} Dask workers",
                      "runs/min", "loop runs/min", "runs/min", "the same runs in a plain loop"),
     "accuracy": _accuracy_figures,
+    "stroke": _stroke_figures,
 }
 
 
@@ -180,8 +211,10 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
-def measure(what: str, backend: str | None = None, quick: bool = False) -> list[dict[str, Any]]:
-    """Run one benchmark (a spinner with the elapsed time on a terminal); its rows."""
+def measure(what: str, backend: str | None = None, quick: bool = False,
+            content: Path | None = None) -> list[dict[str, Any]]:
+    """Run one benchmark (a spinner with the elapsed time on a terminal); its rows.
+    ``content`` is the content folder of a benchmark that runs one (stroke)."""
     from engine.progress import progress
 
     module_name, func_name = BENCHMARKS[what].split(":")
@@ -192,6 +225,8 @@ def measure(what: str, backend: str | None = None, quick: bool = False) -> list[
         kwargs["backend"] = backend
     if quick:
         kwargs["quick"] = True
+    if content is not None:
+        kwargs["content"] = content
     with progress(f"bench {what}"):
         return func(**kwargs)
 
@@ -245,9 +280,10 @@ def plot(data: dict[str, Any], path: Path) -> Path:
 
 
 def run_benchmark(what: str, backend: str | None = None, quick: bool = False,
-                  json_out: str | None = None, plot_out: Path | None = None) -> int:
+                  json_out: str | None = None, plot_out: Path | None = None,
+                  content: Path | None = None) -> int:
     """Measure, then print the table (or the JSON: ``json_out`` "-" is stdout), and plot."""
-    rows = measure(what, backend, quick)
+    rows = measure(what, backend, quick, content)
     data = report(what, rows, backend, quick)
     if json_out == "-":
         print(json.dumps(data, indent=2))
@@ -379,39 +415,52 @@ def _fastest_ms(fn: Callable[[], None], frames: int, rounds: int = 3) -> float:
     return best
 
 
-def _contacts_case(pairs: int, frames: int) -> dict[str, Any]:
-    """One size of bench_contacts: our tracker and the reference, alternating rounds."""
+def _contacts_case(pairs: int, frames: int, asleep: bool) -> dict[str, Any]:
+    """One size of bench_contacts: our tracker and the reference, alternating rounds. Pairs
+    ``asleep`` touched once and are reported no more (their bodies asleep where they were:
+    the tracker checks each frame that none moved)."""
     import numpy as np
 
     from engine.app import EngineConfig
     from engine.events import Contacts
-    from engine.physics.backend import CONTACT_DTYPE
+    from engine.physics.backend import CONTACT_DTYPE, BodyState
+    from engine.physics.driver import Snapshot
     from systems.contacts import ContactEventsSystem, pair_keys
 
     rng = np.random.default_rng(pairs)
     batch = np.zeros(2 * pairs, CONTACT_DTYPE)  # two contacts per pair
-    ids = rng.permutation(10 * pairs)[:pairs]
-    batch["a"] = np.repeat(ids, 2)
-    batch["b"] = np.repeat(np.where(rng.random(pairs) < 0.5, -1, ids + 1), 2)
-    batch["impulse"] = 0.1
     with create_engine(EngineConfig(backend="ballistic", fast=True)) as engine:
+        keys = np.array(engine.world.create_entities([[]] * (2 * pairs)))  # bodies of pairs
+        ids = rng.permutation(keys[:pairs])
+        batch["a"] = np.repeat(ids, 2)
+        batch["b"] = np.repeat(np.where(rng.random(pairs) < 0.5, -1, keys[pairs:]), 2)
+        batch["impulse"] = 0.1
         tracker = ContactEventsSystem()
+        rest = np.zeros((len(keys), 3))
+        engine.physics.snapshot = Snapshot(1, 0.0, BodyState.from_arrays(
+            keys, rng.random((len(keys), 3)), np.tile([1.0, 0, 0, 0], (len(keys), 1)), rest,
+            rest).freeze())
 
         def frame() -> None:
-            tracker._collect(Contacts(batch))
+            if not asleep:
+                tracker._collect(Contacts(batch))
             tracker.run(engine, 0.01)
 
-        frame()  # every pair begins: what follows is the steady state
+        tracker._collect(Contacts(batch))
+        tracker.run(engine, 0.01)  # every pair begins: what follows is the steady state
         ours = _fastest_ms(frame, frames)
+        assert len(tracker.touching) == pairs  # asleep: still touching
         ref = _fastest_ms(lambda: np.unique(pair_keys(batch["a"], batch["b"]),
                                             return_inverse=True), frames)
-    return {"pairs": pairs, "contacts": len(batch), "ms/frame": ours, "unique ms": ref,
-            "ratio": ours / ref}
+    return {"pairs": pairs, "state": "asleep" if asleep else "touching",
+            "contacts": len(batch), "ms/frame": ours, "unique ms": ref, "ratio": ours / ref}
 
 
 def bench_contacts(quick: bool = False) -> list[dict[str, Any]]:
     """Contact begin/end tracking (systems.contacts) with every pair touching frame after
-    frame; reference: the least any tracker does, one pair key per contact and np.unique,
-    timed in the same run."""
-    return [_contacts_case(pairs, 50 if quick else 200)
-            for pairs in ((200, 2000) if quick else (200, 2000, 20000))]
+    frame, and with every pair asleep (touched once, then checked for motion); reference:
+    the least any tracker does, one pair key per contact and np.unique, timed in the same
+    run."""
+    return [_contacts_case(pairs, 50 if quick else 200, asleep)
+            for pairs in ((200, 2000) if quick else (200, 2000, 20000))
+            for asleep in (False, True)]

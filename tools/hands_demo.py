@@ -16,13 +16,13 @@ Run: ``python -m tools.hands_demo [--out FILE]``.
 from __future__ import annotations
 
 import argparse
-import json
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from engine.content import REPO_ROOT
+from tools.recordings import record_session
 
 CONTENT = REPO_ROOT / "content" / "hands"
 TOP = 0.75  # the table top
@@ -84,22 +84,12 @@ def path(points: list[tuple[float, tuple[float, float, float]]]
 
 def record(out: Path, seconds: float = SECONDS) -> Path:
     """Run the content folder with the session fed in, the input layer recording it."""
-    from engine import EngineConfig, Phase, system
-    from engine.input import InputHub
+    from engine import Phase, system
     from engine.input.events import Button, TrackerPose
-    from engine.input.replay import InputRecorder
-    from engine.scene import instantiate, load_spec
-    from systems import create_engine
 
     trackers = {"hand_r": path(RIGHT), "hand_l": path(LEFT)}
-    spec = load_spec(CONTENT / "main.scene")
-    config = EngineConfig(content_dir=CONTENT, fast=True, dt=spec.time_step, debug=False)
-    with create_engine(config) as engine:
-        engine.add_system(InputRecorder(out))
-        instantiate(engine, spec)
-        engine.start()
-        hub = engine.resource(InputHub)
-        hub.clock = lambda: engine.time
+
+    def feeder(engine, hub):
         pressed: dict[str, bool] = {}
 
         @system(Phase.INPUT, before=("InputSystem",))
@@ -115,13 +105,9 @@ def record(out: Path, seconds: float = SECONDS) -> Path:
                     pressed[glove] = down
                     hub.inject(Button(glove, "pinch", down, t))
 
-        engine.add_system(session)
-        engine.run(seconds=seconds)
-    lines = out.read_text().splitlines()
-    header = json.loads(lines[0])
-    header["scene"] = "content/hands/main.scene"  # not this machine's path
-    out.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
-    return out
+        return session
+
+    return record_session(CONTENT, out, feeder, seconds)
 
 
 def main() -> None:

@@ -6,6 +6,7 @@ same way: ``scene:line:col: error: cannot load model "rock.obj" (models/rock.obj
 from __future__ import annotations
 
 import json
+import os
 from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -14,7 +15,7 @@ from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 import numpy as np
 
-from engine.assets import loaders
+from engine.assets import generated, loaders
 from engine.assets.registry import UnknownExtension, loader_for
 from engine.assets.types import ImageAsset, ModelAsset
 
@@ -87,6 +88,8 @@ class Assets:
         self._shown: dict[Path, Path] = {}  # resolved path -> as joined, for messages
         self._places: dict[Path, Where] = {}
         self._told: set[Path] = set()
+        #: models of nodes checked already, by id (held, so an id is never reused)
+        self._checked: dict[int, ModelAsset] = {}
 
     @classmethod
     def of(cls, engine: Any) -> Assets:
@@ -110,7 +113,9 @@ class Assets:
 
         def build() -> ModelAsset:
             model = document.mesh_model(nodes[0]) if mesh else document.node_model(nodes)
-            _check_model(model)
+            if self._checked.get(id(model)) is not model:  # nodes drawing alike share one
+                _check_model(model)
+                self._checked[id(model)] = model
             return model
 
         return self.derived(("nodes", path, nodes, mesh), "load model", _called(name), path,
@@ -124,7 +129,15 @@ class Assets:
 
     def image(self, name: str | Path, where: Where | None = None,
               root: Path | None = None) -> ImageAsset:
-        """The image file ``name``: RGBA pixels, its size checked before decoding."""
+        """The image file ``name``: RGBA pixels, its size checked before decoding; a
+        ``generated:`` name is made instead (:mod:`engine.assets.generated`)."""
+        make = generated.IMAGES.get(str(name))
+        if make is not None:
+            key = ("generated", str(name))
+            found = self._cache.get(key)
+            if found is None:
+                found = self._cache[key] = ImageAsset(Path(str(name)), make())
+            return found
         return self._load("image", name, where, root, _check_image)
 
     def skinned(self, name: str | Path, where: Where | None = None,
@@ -257,7 +270,8 @@ def split_nodes(name: str) -> tuple[str, tuple[str, ...] | None, bool]:
 def _called(name: str | Path) -> str:
     """The name a message quotes: as the scene wrote it, or a full path's file name (the
     full path follows it in parentheses)."""
-    return Path(name).name if Path(name).is_absolute() else str(name)
+    text = os.fspath(name)  # os.path, not pathlib: asked for every model a scene draws
+    return os.path.basename(text) if os.path.isabs(text) else text
 
 
 def reason(exc: BaseException) -> str:

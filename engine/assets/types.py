@@ -20,9 +20,10 @@ class MeshPart:
     """One material's triangles of a model, in metres, Z up.
 
     ``vertices`` and ``normals`` ``(N, 3)`` float64, ``faces`` ``(M, 3)`` int64 indices,
-    ``uv`` ``(N, 2)`` or None, ``colors`` per-vertex RGBA ``(N, 4)`` in 0..1 or None,
-    ``color`` the material's base colour, ``texture`` its RGBA uint8 image ``(H, W, 4)``
-    (rows top to bottom) or None.
+    ``uv`` ``(N, 2)`` or None (v = 0 at the texture's bottom row, as OpenGL and trimesh
+    have it; glTF's v runs down from the top), ``colors`` per-vertex RGBA ``(N, 4)`` in
+    0..1 or None, ``color`` the material's base colour, ``texture`` its RGBA uint8 image
+    ``(H, W, 4)`` (rows top to bottom) or None.
     """
 
     vertices: np.ndarray

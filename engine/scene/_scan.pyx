@@ -2,7 +2,7 @@
 """The parser's one fast path: plain entries read straight from the text, compiled.
 
 :func:`scan_plain` reads ``KEY "string"``, ``KEY number``, ``KEY [numbers or simple
-items]``, ``KEY {`` and ``}`` a character at a time, without tokens, and stops where
+items]``, ``KEY ["strings"]``, ``KEY {`` and ``}`` a character at a time, without tokens, and stops where
 the text needs the general grammar (comments, expressions, errors, typographic
 quotes), leaving the rest to the token path. It must make exactly what the token
 path (the reference) would: the same entries, places, expression texts, token
@@ -20,7 +20,18 @@ from cpython.ref cimport Py_DECREF, Py_INCREF, PyObject
 from cpython.tuple cimport PyTuple_SET_ITEM
 from libc.math cimport isfinite, isinf
 
-from engine.scene.db import FLOAT, INCLUDE, INT, STRING, STRUCTURE, VECTOR, Block, Entry, Value
+from engine.scene.db import (
+    FLOAT,
+    INCLUDE,
+    INT,
+    STRING,
+    STRINGVECTOR,
+    STRUCTURE,
+    VECTOR,
+    Block,
+    Entry,
+    Value,
+)
 from engine.scene.diagnostics import Loc
 from engine.scene.expr import CONSTANTS, OPERATOR_TEXT, number_text, number_value
 from engine.scene.lexer import (
@@ -282,6 +293,11 @@ cdef object _vector(list scopes, str text, Py_ssize_t n, Py_ssize_t pos, object 
     cdef bint flt, flt2, num, num2, plain
     cdef double x, y
     cdef list texts
+    while _space(_at(text, i, n)):
+        i += 1
+    if _at(text, i, n) == _QUOTE:
+        return _strings(text, n, i, loc, path, line, line_start, end, used)
+    i = pos
     # Only numbers, one space apart? Check, then read them.
     plain = _at(text, i, n) == u']'
     while not plain:
@@ -388,6 +404,42 @@ cdef object _vector(list scopes, str text, Py_ssize_t n, Py_ssize_t pos, object 
         i = e2
     end[0] = i
     return _value(VECTOR, items, loc)
+
+
+cdef object _strings(str text, Py_ssize_t n, Py_ssize_t i, object loc, object path,
+                     Py_ssize_t line, Py_ssize_t line_start, Py_ssize_t *end,
+                     Py_ssize_t *used):
+    """The STRINGVECTOR from ``i`` (its first ``"``), or None if an item is not a plain
+    string (an escape, another quote, a line break) or something else stands between
+    them: ``["Door" "Handle"]``, as scenes name nodes (an imported one, every object)."""
+    cdef list items = []
+    cdef Py_ssize_t a
+    cdef Py_UCS4 c
+    while True:
+        c = _at(text, i, n)
+        if c == u']':
+            break
+        if c != _QUOTE:
+            return None
+        a = i
+        i += 1
+        c = _at(text, i, n)
+        while not (_cls(c) & (C_QUOTE | C_ESCAPE | C_NEWLINE) or c == _END):
+            i += 1
+            c = _at(text, i, n)
+        if c != _QUOTE:
+            return None
+        items.append(_value(STRING, text[a + 1:i], _loc(path, line, a - line_start + 1)))
+        i += 1
+        c = _at(text, i, n)
+        if not (_space(c) or c == u']'):
+            return None
+        while _space(c):
+            i += 1
+            c = _at(text, i, n)
+    end[0] = i + 1
+    used[0] = 3 + len(items)
+    return _value(STRINGVECTOR, items, loc)
 
 
 def scan_plain(p, cur, Py_ssize_t pos, Py_ssize_t count, list entries, dict scope,

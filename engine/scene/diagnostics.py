@@ -20,7 +20,10 @@ import json
 import re
 from collections.abc import Iterable, Iterator
 from dataclasses import asdict, dataclass, field
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
+
+if TYPE_CHECKING:
+    from engine.scene.db import SceneDB
 
 ERROR = "error"
 WARNING = "warning"
@@ -89,6 +92,13 @@ class SceneError(Exception):
     def __init__(self, diagnostics: Iterable[Diagnostic], sources: dict[str, str] | None = None):
         self.diagnostics: list[Diagnostic] = list(diagnostics)
         self.sources = sources or {}
+        #: The scene as parsed, when the errors came after parsing (a run skips the
+        #: parts they lie in: engine.scene.skipping).
+        self.db: SceneDB | None = None
+        #: Where every error lies, those past MAX_PER_FILE (not shown, only counted) too:
+        #: a run leaves out the parts they lie in all at once.
+        self.places: list[Loc] = [Loc(d.path, d.line, d.col) for d in self.diagnostics
+                                  if d.is_error and not isinstance(d, Omitted)]
         super().__init__(self.diagnostics)
 
     @property
@@ -223,16 +233,27 @@ class Reporter:
                  sources: dict[str, str] | None = None):
         self.sources: dict[str, str] = sources if sources is not None else {}
         self._kept: dict[str, list[tuple[int, int, int, Diagnostic]]] = {}
-        self._omitted: dict[str, Omitted] = {}
+        #: path -> [line, col, errors, warnings] of what is only counted (made an Omitted
+        #: when asked for: 200,000 errors must not format 200,000 messages)
+        self._omitted: dict[str, list[int]] = {}
         self._seq = 0
         self._errors = 0
+        self._places: list[Loc] = []  # of every error added, shown or not
         for d in diagnostics:
             self.add(d)
 
     def error(self, loc: Loc, message: str) -> None:
+        if not self.accepts(loc):  # only counted: no record made (200,000 errors are cheap)
+            self._errors += 1
+            self._places.append(Loc(*loc))
+            self._omit(loc.path, loc.line, loc.col, 1, 0)
+            return
         self.add(Diagnostic(loc.path, loc.line, loc.col, ERROR, message))
 
     def warning(self, loc: Loc, message: str) -> None:
+        if not self.accepts(loc):
+            self._omit(loc.path, loc.line, loc.col, 0, 1)
+            return
         self.add(Diagnostic(loc.path, loc.line, loc.col, WARNING, message))
 
     def accepts(self, loc: Loc) -> bool:
@@ -244,6 +265,8 @@ class Reporter:
     def add(self, d: Diagnostic) -> None:
         if d.is_error:
             self._errors += 1
+            if not isinstance(d, Omitted):
+                self._places.append(Loc(d.path, d.line, d.col))
         if isinstance(d, Omitted):
             self._omit(d.path, d.line, d.col, d.errors, d.warnings)
             return
@@ -261,11 +284,13 @@ class Reporter:
 
     def _omit(self, path: str, line: int, col: int, errors: int, warnings: int) -> None:
         o = self._omitted.get(path)
-        if o is not None:
-            errors, warnings = errors + o.errors, warnings + o.warnings
-            if (o.line, o.col) < (line, col):
-                line, col = o.line, o.col
-        self._omitted[path] = Omitted.of(path, line, col, errors, warnings)
+        if o is None:
+            self._omitted[path] = [line, col, errors, warnings]
+            return
+        o[2] += errors
+        o[3] += warnings
+        if (line, col) < (o[0], o[1]):
+            o[0], o[1] = line, col
 
     @property
     def diagnostics(self) -> list[Diagnostic]:
@@ -273,7 +298,8 @@ class Reporter:
         :class:`Omitted` after its own."""
         items = [(path, -i[0], -i[1], -i[2], i[3]) for path, kept in self._kept.items()
                  for i in kept]
-        items += [(path, o.line, o.col, self._seq + 1, o) for path, o in self._omitted.items()]
+        items += [(path, o[0], o[1], self._seq + 1, Omitted.of(path, *o))
+                  for path, o in self._omitted.items()]
         items.sort(key=lambda i: i[:4])
         return [i[4] for i in items]
 
@@ -283,7 +309,9 @@ class Reporter:
 
     def raise_if_errors(self) -> None:
         if self.has_errors:
-            raise SceneError(self.diagnostics, self.sources)
+            error = SceneError(self.diagnostics, self.sources)
+            error.places = self._places
+            raise error
 
 
 def suggest(name: str, candidates: Iterable[str]) -> str:

@@ -17,6 +17,7 @@ ids; a spec is consumed by instantiating it once.
 from __future__ import annotations
 
 import math
+from collections import ChainMap
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -48,6 +49,7 @@ from components import (
     Trigger,
     UserOwned,
     Visual,
+    Wheelchair,
 )
 from components.avatar import (
     SavedAvatar,
@@ -57,15 +59,29 @@ from components.avatar import (
     SavedLayer,
     SavedRequest,
 )
-from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
+from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, SPRING_KINDS, JointKind, Spring
 from components.script import SavedScript, ScriptHandler, ScriptTimer
+from components.wheelchair import NavigationMode
+from engine.anomalies import AnomalySpec
 from engine.assets import AssetError, Assets, nodes_name
 from engine.assets.geometry import convex_hull
 from engine.measures import MeasureSpec
-from engine.physics.backend import MaterialPair, SleepState, WorldSettings
-from engine.physics.commands import SetSleepState
+from engine.memory import paused_gc
+from engine.physics.backend import (
+    MAX_DENSITY,
+    MAX_MASS,
+    MAX_SPEED,
+    WORLD_EXTENT,
+    BackendName,
+    MaterialPair,
+    SleepState,
+    WorldSettings,
+    metres,
+)
+from engine.physics.commands import HINGE2_BODIES, TWO_AXES, SetSleepState, parallel
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
-from engine.rotation import euler_to_quat, rotate, view_problem
+from engine.rotation import UNIT_ROUNDING, euler_to_quat, rotate, view_problem
+from engine.scene.anomalies import read_anomalies
 from engine.scene.db import (
     INCLUDE,
     STRINGVECTOR,
@@ -85,7 +101,6 @@ from engine.scene.diagnostics import (
     suggest,
 )
 from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS, InputSpec, read_inputs
-from engine.scene.parser import paused_gc
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -136,6 +151,18 @@ class ShaderProgramSpec:
 
 
 @dataclass(slots=True)
+class PostPassSpec:
+    """A ``PostPass`` block: a full-screen pass (a fragment shader file) over the frame."""
+
+    id: str
+    file: str
+    uniforms: dict[str, float | tuple[float, ...]]
+    enabled: bool
+    feedback: bool
+    origin: str
+
+
+@dataclass(slots=True)
 class SceneSpec:
     """Everything a scene file declares, ready to instantiate."""
 
@@ -147,7 +174,7 @@ class SceneSpec:
     shader_states: dict[str, ShaderStateSpec] = field(default_factory=dict)
     world: WorldSettings = field(default_factory=WorldSettings)
     time_step: float = 0.01
-    backend: str = "ode"
+    backend: str = BackendName.ODE
     time: float = 0.0
     #: The scene's random generator when a saved state was written (see random_state).
     random_state: dict[str, object] | None = None
@@ -167,6 +194,10 @@ class SceneSpec:
     input: InputSpec = field(default_factory=InputSpec)
     #: The ``Measure`` blocks: values the run reports at its end.
     measures: list[MeasureSpec] = field(default_factory=list)
+    #: The visual anomalies declared (``DoubleVision``, ``Hemianopia``, ...).
+    anomalies: list[AnomalySpec] = field(default_factory=list)
+    #: The ``PostPass`` blocks, in order.
+    post_passes: list[PostPassSpec] = field(default_factory=list)
 
 
 @dataclass(slots=True)
@@ -191,28 +222,62 @@ class SpawnRecord:
 class SceneIds:
     """Resource left by :func:`instantiate`: object ID <-> entity id, and the spec.
 
-    ``spawned`` lists, oldest first, what scripts made since (see :class:`SpawnRecord`;
-    recorded on the main thread by the scripting API), so ``write_state`` can write it.
+    :attr:`spawned` lists, oldest first, what scripts made since (see
+    :class:`SpawnRecord`; recorded on the main thread by the scripting API), so
+    ``write_state`` can write it. A record is dropped, snippet and all, as soon as the
+    last entity it made is gone (:meth:`released`), so a script that spawns and deletes
+    forever holds nothing of what it deleted.
     """
 
     entities: dict[str, int]
     joints: dict[str, int]
     spec: SceneSpec
-    spawned: list[SpawnRecord] = field(default_factory=list)
-    _kept: int = 16
+    #: record number -> record, oldest first
+    _records: dict[int, SpawnRecord] = field(default_factory=dict)
+    #: record number -> how many entities it made are still alive
+    _alive: dict[int, int] = field(default_factory=dict)
+    #: entity -> the number of the record that made it
+    _made_by: dict[int, int] = field(default_factory=dict)
+    _count: int = 0
+
+    @property
+    def spawned(self) -> list[SpawnRecord]:
+        return list(self._records.values())
 
     def record(self, made: SpawnRecord, exists: Callable[[int], bool]) -> None:
-        """Keep ``made``; now and then forget records whose entities are all gone, so a
-        script that spawns and deletes forever does not hold their snippets forever."""
-        self.spawned.append(made)
-        if len(self.spawned) >= 2 * self._kept:
-            self.spawned = [r for r in self.spawned
-                            if any(exists(e) for e in (*r.objects, *r.joints, *r.avatars))]
-            self._kept = max(len(self.spawned), 16)
+        """Keep ``made`` while an entity it made (``exists``) is alive."""
+        alive = [e for e in (*made.objects, *made.joints, *made.avatars)
+                 if e >= 0 and exists(e)]
+        if not alive:
+            return
+        number = self._count
+        self._count += 1
+        self._records[number] = made
+        self._alive[number] = len(alive)
+        for entity in alive:
+            self._made_by[entity] = number
+
+    def released(self, entity: int) -> None:
+        """``entity`` left the world; the record that made it goes with its last one."""
+        number = self._made_by.pop(entity, None)
+        if number is None:
+            return
+        self._alive[number] -= 1
+        if not self._alive[number]:
+            del self._alive[number], self._records[number]
 
 
 _DEFAULTS = {name: {k: f.default for k, f in fields.items()}
              for name, fields in sc.SCHEMAS.items()}
+
+#: The time steps a file may ask for (s): past the upper one a step jumps whole seconds
+#: (``TimeStep 10`` ran 3,000 simulated seconds in 300 frames); above ``STEP_WARNING``
+#: contacts and joints lose accuracy, which is told as a warning.
+STEP_RANGE = (0.0, 1.0)
+STEP_WARNING = 0.05
+#: The largest World Extent (m): ODE's hash space needs every bounding box within about
+#: 4.5e15 m, and past 1e12 m doubles no longer place a body to the millimetre.
+MAX_EXTENT = 1e12
 
 
 class _Reader(dict):
@@ -274,8 +339,30 @@ class _Index:
         return found[-1].value if found else None
 
 
+def _below(parents: Any, node: int | None, ancestor: int | None) -> bool:
+    """Whether ``node`` lies in the subtree under ``ancestor`` (not ``ancestor`` itself)."""
+    if node is None or ancestor is None:
+        return False
+    node = int(parents[node])
+    while node >= 0:
+        if node == ancestor:
+            return True
+        node = int(parents[node])
+    return False
+
+
 def _floats(t: Any) -> tuple[float, ...]:
     return tuple(map(float, t))
+
+
+def _uniforms(r: _Reader) -> dict[str, float | tuple[float, ...]]:
+    """A block's ``Uniform`` entries: name -> number or numbers."""
+    uniforms: dict[str, float | tuple[float, ...]] = {}
+    for u in r.blocks("Uniform"):
+        ur = _Reader(u, "Uniform")
+        val = ur("Value")
+        uniforms[ur("ID")] = _floats(val) if isinstance(val, tuple) else float(val)
+    return uniforms
 
 
 Pose = tuple[tuple[float, ...], tuple[float, ...]]
@@ -284,21 +371,22 @@ Pose = tuple[tuple[float, ...], tuple[float, ...]]
 def build_specs(db: SceneDB, content_dir: str | Path | None = None,
                 materials: dict[str, MaterialProps] | None = None,
                 bodies: Mapping[str, Pose] | None = None,
-                assets: Assets | None = None) -> SceneSpec:
+                assets: Assets | None = None, extent: float | None = None) -> SceneSpec:
     """SceneDB -> SceneSpec. Raises SceneError (with places) for mistakes in the text;
     assets that cannot be used skip their object and are listed in ``spec.problems``.
 
     ``materials`` and ``bodies`` (object ID -> position, orientation) exist elsewhere
     (the running scene, when a script spawns a snippet) and may be used by ID here;
-    ``assets`` is the running scene's cache (a new one when None).
+    ``assets`` is the running scene's cache (a new one when None); ``extent`` the running
+    world's (default: the file's ``World { Extent }``), which positions must lie in.
     """
     folder = Path(content_dir) if content_dir is not None else Path(db.path).parent
     b = _Builder(folder, Reporter(sources=dict(db.sources)), assets or Assets(folder))
+    b.extent = extent
     if materials:
         b.materials.update(materials)
-    if bodies:
-        b.poses.update(bodies)
-        b.physical_ids.update(bodies)
+    if bodies is not None:  # the snippet's own objects come first; the world's looked up
+        b.poses = ChainMap(b.own_poses, bodies)  # type: ignore[arg-type]
     with paused_gc():
         spec = b.build(db)
     b.report.raise_if_errors()
@@ -318,26 +406,37 @@ class _Builder:
         self.skipped: set[str] = set()  # IDs of objects left out for a failed asset
         self.materials: dict[str, MaterialProps] = {"default": MaterialProps()}
         self.dense_materials: set[str] = set()
-        self.poses: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
+        #: Object ID -> pose (position, quaternion), the file's own ...
+        self.own_poses: dict[str, Pose] = {}
+        #: ... and, for a spawned snippet, the running world's bodies after them
+        self.poses: Mapping[str, Pose] = self.own_poses
         self.physical_ids: set[str] = set()
+        self.static_ids: set[str] = set()  # bodies that never move (a joint sees no body)
         self.sleep: dict[str, SleepState] = {}
         self.hand_frames: dict[str, str] = {}
         self.hand_inputs: list[tuple[str, _Reader]] = []  # what each hand's Hand names
         #: Owner -> the saved state its script resumes from, and the block that said so.
         self.script_states: dict[str, SavedScript] = {}
         self.script_blocks: dict[str, Block] = {}
+        #: Points of the file must lie within +-extent (m) on every axis.
+        self.extent: float | None = None
         #: Avatar ID -> the AvatarState block it resumes from (a loaded saved state).
         self.avatar_states: dict[str, Block] = {}
 
     def build(self, db: SceneDB) -> SceneSpec:
         spec = SceneSpec()
         root = _Index(db.root)
+        if self.extent is None:
+            self.extent = self.world_extent(root)
         self.script_states = self.saved_scripts(root)
         self.avatar_states = {str(_Reader(b, "AvatarState")("Owner")): b
                               for b in root.blocks("AvatarState")}
         for blk in root.blocks("Material"):
             r = _Reader(blk, "Material")
             name = str(r("ID"))
+            density = r.value("Density")
+            if density is not None:
+                self.limited(density, "Density", MAX_DENSITY, "kg/m³")
             self.materials[name] = MaterialProps(
                 name=name, friction=float(r("Friction")), bounce=float(r("Bounce")),
                 bounce_velocity=float(r("BounceVelocity")), softness=float(r("Softness")),
@@ -359,6 +458,7 @@ class _Builder:
         self.world(root, spec)
         self.scene_entities(root, spec)
         spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
+        spec.anomalies = read_anomalies(root.blocks, self.report, self.problems)
         self.check_hand_inputs(spec.input)
         for i, blk in enumerate(root.blocks("Avatar")):
             spec.entities.append(self.avatar(blk, i))
@@ -404,7 +504,7 @@ class _Builder:
         if norm == 0.0:
             self.report.error(r.value(key).loc, f"{key} must not be all zeros")
             return _IDENTITY
-        return quat if abs(norm - 1.0) <= 1e-12 else tuple(q / norm for q in quat)
+        return quat if abs(norm - 1.0) <= UNIT_ROUNDING else tuple(q / norm for q in quat)
 
     def orientation(self, r: _Reader) -> tuple[float, ...]:
         """The exact ``Quaternion`` where one is written, else ``Orientation`` (degrees)."""
@@ -412,10 +512,14 @@ class _Builder:
             r("Orientation"))
 
     def object_components(self, r: _Reader, oid: str, blk: Block) -> EntitySpec:
+        self.inside(r.value("Position"), "Position")
+        self.fits(r.value("Size"))
+        for key in ("Velocity", "AngularVelocity", "Spin"):
+            self.slow_enough(r, key)
         position = _floats(r("Position"))
         quat = self.orientation(r)
-        angular = tuple(map(math.radians, r("AngularVelocity"))) if r.has(
-            "AngularVelocity") else _ORIGIN
+        angular = tuple(_floats(r("Spin"))) if r.has("Spin") else tuple(
+            map(math.radians, r("AngularVelocity"))) if r.has("AngularVelocity") else _ORIGIN
         comps: list[Any] = [Name(oid), Transform(position, quat, r("Velocity"), angular)]
         size = r("Size")
         hand_blk = r.value("Hand")
@@ -438,15 +542,17 @@ class _Builder:
         if phys_blk is not None or bare:
             body = self.physical(r, phys, size, visual_shapes, model, scale, position, quat)
             if hand_blk is not None:
-                self.hand_body(body, phys, oid)
+                self.hand_body(body, phys, _Reader(hand_blk.data, "Hand"), oid)
             comps.append(body)
             if phys("Trigger"):
                 comps.append(Trigger(mask=int(phys("Mask"))))
             self.physical_ids.add(oid)
+            if body.kind == "static":
+                self.static_ids.add(oid)
             if any(map(r.has, ("Asleep", "SleepVelocity", "SleepTimer", "SleepReference",
-                               "RestSteps", "RestSlid", "RestForce"))):
+                               "RestSteps", "RestSlid", "RestForce", "RestPreloaded"))):
                 self.sleep[oid] = self.sleep_spec(r)
-        self.poses[oid] = (position, quat)
+        self.own_poses[oid] = (position, quat)
         if r.has("Sound"):
             sr = _Reader(r.value("Sound").data, "Sound")
             if self.sound_file(sr, "File", f"object '{oid}' has no sound") is not None:
@@ -458,6 +564,10 @@ class _Builder:
                                phys_blk is not None or bare)
         if not r("Graspable"):
             comps.append(Graspable(False))
+        if r.has("Wheelchair"):
+            chair_blk = r.value("Wheelchair")
+            comps += self.wheelchair(_Reader(chair_blk.data, "Wheelchair"), oid, chair_blk.loc,
+                                     phys_blk is not None or bare)
         if r.has("User"):
             comps.append(UserOwned(r("User")))
         if r.has("Controller"):
@@ -487,19 +597,53 @@ class _Builder:
                                    "virtual hand is a body (leave both Visual- and "
                                    "PhysicalAttributes out for the default hand box)")
             return []
+        # the drive's bounds and response reach the backend: refused here, at their line
+        for key, least in (("MaxForce", 0.0), ("MaxTorque", 0.0), ("TimeConstant", 0.0),
+                           ("MaxSpeed", None), ("MaxSpin", None), ("DeviationDistance", None),
+                           ("BreakForce", None)):
+            value = h(key)
+            if value is not None and not (value > 0 or value == least):
+                self.report.error(h.value(key).loc, f"hand '{oid}': {key} must be "
+                                  f"{'positive' if least is None else '>= 0'}, got {value:g}")
         if h.has("Frame"):
             self.hand_frames[oid] = h("Frame")
         self.hand_inputs.append((oid, h))
-        models = {key: self.model(h, key) for key in ("ContactModel", "GraspModel")}
+        models = {key: self.model(h, key) for key in ("NeutralModel", "ContactModel",
+                                                      "GraspModel")}
         hand = Hand(tracker=h("Tracker"), glove=h("Glove"), button=h("Button"),
                     max_force=float(h("MaxForce")), max_torque=float(h("MaxTorque")),
                     time_constant=float(h("TimeConstant")), max_speed=float(h("MaxSpeed")),
                     max_spin=math.radians(float(h("MaxSpin"))),
                     deviation_distance=float(h("DeviationDistance")),
                     break_force=_opt(h("BreakForce")), marker=bool(h("Marker")),
+                    neutral_model=models["NeutralModel"],
                     contact_model=models["ContactModel"], grasp_model=models["GraspModel"],
                     holding=tuple(h("Holding") or ()))
         return [hand, HandState()]
+
+    def wheelchair(self, w: _Reader, oid: str, loc: Loc, has_body: bool) -> list[Any]:
+        """A wheelchair's chassis: a body, and settings that must be positive."""
+        if not has_body:
+            self.report.error(loc, f"object '{oid}' has a Wheelchair but no "
+                                   "PhysicalAttributes: the chassis is a body the wheels "
+                                   "are jointed to")
+            return []
+        keys = ("WheelRadius", "MaxSpeed", "MaxTorque", "RimInertia", "MaxPush")
+        for key in keys:
+            if not w(key) > 0 or not math.isfinite(w(key)):
+                self.report.error(w.value(key).loc, f"{key} must be positive, got {w(key)}")
+        wheels, axles = w("Wheels"), w("Axles")
+        mode = NavigationMode.FEEDBACK if w("Feedback") else NavigationMode.VELOCITY
+        lag, measured = w("Lag") or (0.0, 0.0), w("Measured") or (0.0, 0.0)
+        pending = w("Pending") or (0.0, 0.0)
+        return [Wheelchair(mode=mode, wheels=(wheels[0], wheels[1]),
+                           axles=(axles[0], axles[1]), wheel_radius=float(w("WheelRadius")),
+                           max_speed=float(w("MaxSpeed")), max_torque=float(w("MaxTorque")),
+                           rim_inertia=float(w("RimInertia")), max_push=float(w("MaxPush")),
+                           lag=(float(lag[0]), float(lag[1])),
+                           measured=(float(measured[0]), float(measured[1])),
+                           pending=(float(pending[0]), float(pending[1])),
+                           still=max(float(w("Still")), 0.0))]
 
     def check_hand_inputs(self, inputs: InputSpec) -> None:
         """A hand's tracker and glove must be ones the scene declares (or the desktop
@@ -524,22 +668,45 @@ class _Builder:
                                         f"declared nowhere; it must come from a device that "
                                         f"sends it (known here: {known}){hint}")
 
-    def hand_body(self, body: Physical, phys: _Reader, oid: str) -> None:
+    def limited(self, value: Value, key: str, most: float, unit: str) -> None:
+        """Report a Mass or Density not positive, or past what any body may have."""
+        if not (value.data > 0 and math.isfinite(value.data)):
+            self.report.error(value.loc, f"{key} must be positive, got {value.data:g}")
+        elif value.data > most:
+            self.report.error(value.loc, f"{key} {value.data:g} {unit} is past the most a "
+                                         f"body may have ({most:g} {unit})")
+
+    def hand_body(self, body: Physical, phys: _Reader, h: _Reader, oid: str) -> None:
         """A hand floats (its drive holds it up) and never sleeps; it weighs a hand's
-        0.45 kg unless the author gave it a mass."""
+        0.45 kg unless the author gave it a mass: the Hand's ``Mass``, or its
+        PhysicalAttributes' Mass or Density (one of them; both is an error)."""
         if phys.has("Gravity") and phys("Gravity"):
             self.report.warning(phys.value("Gravity").loc, f"object '{oid}' is a hand: hands "
                                 "float, so Gravity 1 is ignored")
         body.gravity = False
         body.can_sleep = False
-        if not (phys.has("Mass") or phys.has("Density")):
-            body.mass = HAND_MASS
+        own = next((key for key in ("Mass", "Density") if phys.has(key)), None)
+        mass = h.value("Mass")
+        if mass is None:
+            if own is None:
+                body.mass = HAND_MASS
+        elif own is not None:
+            self.report.error(mass.loc, f"hand '{oid}': Mass {mass.data:g} kg here and "
+                              f"{own} {phys(own):g} in its PhysicalAttributes: give the "
+                              "hand's weight once")
+        else:
+            self.limited(mass, "Mass", MAX_MASS, "kg")
+            body.mass = float(mass.data)
 
     def physical(self, r: _Reader, phys: _Reader, size: Any, visual_shapes: list[Shape],
                  model: str | None, scale: tuple[float, ...], position: tuple[float, ...],
                  quat: tuple[float, ...]) -> Physical:
         shapes, has_plane = self.physical_shapes(phys, size, visual_shapes, model, scale,
                                                  position, quat)
+        for key, most, unit in (("Mass", MAX_MASS, "kg"), ("Density", MAX_DENSITY, "kg/m³")):
+            value = phys.value(key)
+            if value is not None:
+                self.limited(value, key, most, unit)
         mat_name = str(phys("Material"))
         material = self.materials.get(mat_name) or MaterialProps(name=mat_name)
         if phys.has("Density"):
@@ -562,7 +729,32 @@ class _Builder:
                         linear_damping=float(phys("LinearDamping")),
                         angular_damping=float(phys("AngularDamping")),
                         can_sleep=bool(phys("CanSleep")), category=int(phys("Category")),
-                        mask=int(phys("Mask")), gravity=bool(phys("Gravity")))
+                        mask=int(phys("Mask")), gravity=bool(phys("Gravity")),
+                        **self.mass_frame(phys))
+
+    def mass_frame(self, phys: _Reader) -> dict[str, Any]:
+        """``CenterOfMass``, ``Inertia`` and ``InertiaOrientation`` as Physical fields; a
+        centre not finite or a moment not positive is told at its number and left to the
+        shapes."""
+        out: dict[str, Any] = {}
+        for key, ok, need in (("CenterOfMass", math.isfinite, "finite numbers of metres"),
+                              ("Inertia", lambda x: 0 < x < math.inf,
+                               "positive moments of kg*m^2")):
+            value = phys.value(key)
+            if value is None or value.kind != VECTOR:
+                continue
+            bad = next((item for item in value.data if not ok(item.data)), None)
+            if bad is not None:
+                self.report.error(bad.loc, f"{key} must be {need}, got {bad.data:g}")
+                continue
+            out["center_of_mass" if key == "CenterOfMass" else "inertia"] = _floats(phys(key))
+        if "inertia" in out:
+            out["inertia_rotation"] = euler_to_quat(phys("InertiaOrientation"))
+        elif phys.has("InertiaOrientation") and not phys.has("Inertia"):
+            self.told(phys.value("InertiaOrientation").loc, "InertiaOrientation turns the "
+                      "axes of Inertia's moments; without Inertia it does nothing", WARNING)
+        self.inside(phys.value("CenterOfMass"), "CenterOfMass")
+        return out
 
     def physical_shapes(self, phys: _Reader, size: Any, visual_shapes: Any, model: str | None,
                         scale: tuple[float, ...], position: tuple[float, ...],
@@ -571,6 +763,8 @@ class _Builder:
         has_plane = False
         for g in phys.blocks("Geometry"):
             gr = _Reader(g, "Geometry")
+            self.fits(gr.value("Size"))
+            self.inside(gr.value("Offset"), "Offset")
             if gr.has("File") or gr.has("ParseMethod"):
                 file_v = gr.value("File")
                 file, fscale = (_model_name(gr), _floats(gr("Scale"))) if file_v else (model,
@@ -690,8 +884,18 @@ class _Builder:
                 self.report.error(r.value("FootIK").loc, f"FootIK names bones in threes (hip, "
                                   f"knee, ankle), got {len(bones)}")
             for k in range(0, len(bones) - len(bones) % 3, 3):
-                if all([bone(bones[k + j], items[k + j].loc) for j in range(3)]):
+                if not all([bone(bones[k + j], items[k + j].loc) for j in range(3)]):
+                    continue
+                hip, knee, ankle = (model.node(bones[k + j]) for j in range(3))
+                for upper, lower, j in ((hip, knee, 1), (knee, ankle, 2)):
+                    if not _below(model.parents, lower, upper):
+                        self.told(items[k + j].loc, f'"{bones[k + j]}" does not hang below '
+                                  f'"{bones[k + j - 1]}" in model "{file}": a leg is hip, knee, '
+                                  "ankle, each below the one before; that leg is left out")
+                        break
+                else:
                     legs.append((bones[k], bones[k + 1], bones[k + 2]))
+        self.inside(r.value("Position"), "Position")
         path = self.points(r, "Path")
         holds = []
         for b in r.blocks("Hold"):
@@ -747,6 +951,9 @@ class _Builder:
         """A path: ``r(key)`` as points [x y z ...]."""
         if not r.has(key):
             return []
+        items = r.value(key).data
+        for k in range(0, len(items) - 2, 3):  # each point x y z within the world
+            self.inside(Value(VECTOR, items[k:k + 3], items[k].loc), f"{key} point")
         flat = _floats(r(key))
         if len(flat) % 3:
             self.report.error(r.value(key).loc, f"{key} is points [x y z ...], got {len(flat)} "
@@ -837,7 +1044,8 @@ class _Builder:
         return SleepState(bool(r("Asleep")), velocity("SleepVelocity"),
                           max(float(r("SleepTimer")), 0.0), velocity("SleepReference"),
                           min(max(steps, 0), 2), bool(r("RestSlid")),
-                          None if force is None else np.array(_floats(force)))
+                          None if force is None else np.array(_floats(force)),
+                          bool(r("RestPreloaded")))
 
     # -- joints ------------------------------------------------------------
     def joint(self, blk: Block, index: int, spawned: set[str]) -> JointSpec | None:
@@ -856,10 +1064,34 @@ class _Builder:
                 f"joint '{jid}' is left out: its body '{left_out[0]}' was (see its error)"))
             return JointSpec(jid, Joint(kind=kind, id=jid), (a, b), blk.loc, skipped=True)
         for name in bodies:
-            if name not in self.physical_ids:
+            if name not in self.physical_ids and (
+                    name in self.own_poses or name not in self.poses):
                 self.report.error(r.value("Bodies").loc,
                                   f"joint body '{name}' has no PhysicalAttributes")
                 return None
+        if b is not None and a == b:
+            self.report.error(r.value("Bodies").loc, f"a joint needs two different bodies, "
+                                                     f"got '{a}' twice (one body alone: "
+                                                     f"Bodies [\"{a}\"] joins it to the world)")
+            return None
+        for key in _AXES_NEEDED.get(kind, ()):
+            axis = r.value(key)
+            if axis is not None and not any(item.data for item in axis.data):
+                self.report.error(axis.loc, f"{key} must not be zero: a {r('Type')} joint "
+                                            "turns or slides along it")
+        if kind in TWO_AXES and any(r("Axis")) and any(r("Axis2")) and \
+                parallel(r("Axis"), r("Axis2")):
+            key, other = ("Axis2", "Axis") if r.has("Axis2") else ("Axis", "Axis2")
+            given = " ".join(f"{x:g}" for x in r(other))
+            self.report.error(r.value(key).loc, f"{key} must not be parallel to {other} "
+                              f"[{given}]{'' if r.has(other) else ' (its default)'}: a "
+                              f"{r('Type')} joint turns about two different axes")
+        if kind == JointKind.HINGE2 and (b is None or {a, b} & self.static_ids):
+            self.report.error(r.value("Bodies").loc, f"{HINGE2_BODIES} (Bodies [\"wheel\" "
+                                                     "\"chassis\"], both dynamic)")
+        self.inside(r.value("Anchor"), "Anchor")
+        for key in ("ReferencePose1", "ReferencePose2"):
+            self.inside(r.value(key), key)
         linear = kind in LINEAR_KINDS
         conv = (lambda x: x) if linear else math.radians
         anchor = _floats(r("Anchor")) if r.has("Anchor") else self.poses[a][0]
@@ -878,8 +1110,41 @@ class _Builder:
                       low=None if low is None else conv(low),
                       high=None if high is None else conv(high),
                       motor_velocity=conv(r("MotorVelocity")),
-                      motor_max_force=float(r("MotorMaxForce")), id=jid, reference=reference)
+                      motor_max_force=float(r("MotorMaxForce")), id=jid, reference=reference,
+                      spring=self.spring(r, kind))
         return JointSpec(jid, joint, (a, b), blk.loc)
+
+    def spring(self, r: _Reader, kind: str) -> Spring | None:
+        """The joint's ``Spring`` block in the engine's units (per radian), or None (told
+        when it cannot act: a joint without one free axis, nothing to pull with)."""
+        blk = r.value("Spring")
+        if blk is None or blk.kind != STRUCTURE:
+            return None
+        s = _Reader(blk.data, "Spring")
+        if kind not in SPRING_KINDS:
+            self.report.error(blk.loc, f"a {r('Type')} joint takes no Spring (Hinge, "
+                                       f"MotorizedHinge and Slider do: one free axis)")
+            return None
+        bad = False
+        for key in ("Stiffness", "Damping"):
+            if not 0 <= s(key) < math.inf:
+                self.report.error(s.value(key).loc, f"Spring {key} must be 0 or more, got "
+                                                    f"{s(key):g}")
+                bad = True
+        most = s("MaxForce")
+        if most is not None and not most > 0:
+            self.report.error(s.value("MaxForce").loc, f"Spring MaxForce must be above 0, "
+                                                       f"got {most:g}")
+            bad = True
+        if not bad and s("Stiffness") == 0 and s("Damping") == 0:
+            self.report.error(blk.loc, "a Spring needs a Stiffness or a Damping above 0")
+            bad = True
+        if bad:
+            return None
+        per = 1.0 if kind in LINEAR_KINDS else math.degrees(1.0)  # per degree -> per radian
+        return Spring(float(s("Stiffness")) * per, float(s("Damping")) * per,
+                      float(s("Target")) if kind in LINEAR_KINDS else math.radians(s("Target")),
+                      math.inf if most is None else float(most))
 
     # -- shaders, world, scene-level entities ---------------------------------
     def shaders(self, root: _Index, spec: SceneSpec) -> None:
@@ -894,16 +1159,71 @@ class _Builder:
                 files["FragmentShader"].get(r("FragmentShader")), bool(r("Enable")))
         for b in root.blocks("ShaderState"):
             r = _Reader(b, "ShaderState")
-            uniforms = {}
-            for u in r.blocks("Uniform"):
-                ur = _Reader(u, "Uniform")
-                val = ur("Value")
-                uniforms[ur("ID")] = _floats(val) if isinstance(val, tuple) else float(val)
-            spec.shader_states[r("ID")] = ShaderStateSpec(r("ShaderProgram"), uniforms)
+            spec.shader_states[r("ID")] = ShaderStateSpec(r("ShaderProgram"), _uniforms(r))
+        for b in root.blocks("PostPass"):
+            r = _Reader(b, "PostPass")
+            spec.post_passes.append(PostPassSpec(
+                str(r("ID")), str(r("File")), _uniforms(r), bool(r("Enabled")),
+                bool(r("Feedback")), f"{b.loc.path}:{b.loc.line}"))
+
+    def world_extent(self, root: _Index) -> float:
+        """The file's World Extent (m), checked; the default where it is refused."""
+        blk = root.value("World")
+        w = _Reader(blk.data if blk else None, "World")
+        extent = w("Extent")
+        if not (0 < extent <= MAX_EXTENT):
+            self.report.error(w.value("Extent").loc, f"Extent must be a positive number of "
+                              f"metres up to {MAX_EXTENT:g}, got {extent:g}")
+            return WORLD_EXTENT
+        return float(extent)
+
+    def inside(self, value: Value | None, what: str) -> None:
+        """Report a point the file wrote (a VECTOR whose first three numbers are x y z)
+        outside the world, at the number that is."""
+        if value is None or value.kind != VECTOR:
+            return
+        extent = self.extent or WORLD_EXTENT
+        for axis, item in zip("xyz", value.data, strict=False):
+            if abs(item.data) > extent:
+                self.report.error(item.loc, f"{what} {axis} = {item.data:g} is outside the "
+                                  f"world ({metres(extent)}; World {{ Extent }} sets it)")
+                return
+
+    def fits(self, size: Value | None) -> None:
+        """Report a Size the file wrote that is not positive or larger than the world (a
+        body's bounding box must stay in ODE's range)."""
+        if size is None or size.kind != VECTOR:
+            return
+        extent = self.extent or WORLD_EXTENT
+        for item in size.data:
+            if not item.data > 0:
+                self.report.error(item.loc, f"Size must be positive, got {item.data:g}")
+                return
+            if item.data > extent:
+                self.report.error(item.loc, f"Size {item.data:g} m is larger than the world "
+                                            f"({metres(extent)}; World {{ Extent }} sets it)")
+                return
+
+    def slow_enough(self, r: _Reader, key: str) -> None:
+        """Report a velocity the file wrote that no backend can take."""
+        value = r.value(key)
+        if value is None or value.kind != VECTOR:
+            return
+        numbers = [item.data for item in value.data]
+        speed = math.hypot(*(map(math.radians, numbers) if key == "AngularVelocity"
+                             else numbers))
+        if speed > MAX_SPEED:
+            unit = "rad/s" if key == "AngularVelocity" else "m/s"
+            self.report.error(value.loc, f"{key} is {speed:g} {unit}, over the limit of "
+                                         f"{MAX_SPEED:g} {unit}")
 
     def world(self, root: _Index, spec: SceneSpec) -> None:
         blk = root.value("World")
         w = _Reader(blk.data if blk else None, "World")
+        self.time_step(w)
+        for key in ("Iterations", "MaxContacts"):
+            if w(key) < 1:
+                self.report.error(w.value(key).loc, f"{key} must be at least 1, got {w(key)}")
         pairs = []
         for b in root.blocks("MaterialPair"):
             p = _Reader(b, "MaterialPair")
@@ -935,7 +1255,8 @@ class _Builder:
                                    sleep_linear=_positive(w("SleepLinear"), SLEEP_LINEAR),
                                    sleep_angular=math.radians(_positive(
                                        w("SleepAngular"), math.degrees(SLEEP_ANGULAR))),
-                                   material_pairs=pairs, solver_seed=w("SolverSeed"))
+                                   material_pairs=pairs, solver_seed=w("SolverSeed"),
+                                   extent=self.extent or WORLD_EXTENT)
         spec.material_pairs = pairs
         spec.time_step = float(w("TimeStep"))
         spec.backend = w("Dynamics")
@@ -945,6 +1266,20 @@ class _Builder:
                 spec.random_state = random_state.parse(str(w("RandomState")))
             except ValueError as exc:
                 self.report.error(w.value("RandomState").loc, str(exc))
+
+    def time_step(self, w: _Reader) -> None:
+        """TimeStep within :data:`STEP_RANGE` (an error), up to :data:`STEP_WARNING` (else
+        a warning: the step is suspicious)."""
+        step, where = w("TimeStep"), w.value("TimeStep")
+        low, high = STEP_RANGE
+        if not (low < step <= high):
+            self.report.error(where.loc, f"TimeStep must be more than {low:g} s and at most "
+                                         f"{high:g} s, got {step:g}")
+        elif step > STEP_WARNING:
+            self.problems.append(Diagnostic(
+                where.loc.path, where.loc.line, where.loc.col, WARNING,
+                f"TimeStep {step:g} s is long: contacts and joints lose accuracy past "
+                f"{STEP_WARNING:g} s (0.01 is the default)"))
 
     def scene_entities(self, root: _Index, spec: SceneSpec) -> None:
         for i, b in enumerate(root.blocks("Camera")):
@@ -1039,6 +1374,14 @@ class _Builder:
             states[owner] = SavedScript(str(r("Globals")), str(r("Locals")), timers, handlers)
             self.script_blocks[owner] = blk
         return states
+
+
+#: The axes a joint kind turns or slides along (a zero one is an error).
+_AXES_NEEDED = {
+    JointKind.HINGE: ("Axis",), JointKind.MOTORIZED_HINGE: ("Axis",),
+    JointKind.SLIDER: ("Axis",), JointKind.UNIVERSAL: ("Axis", "Axis2"),
+    JointKind.HINGE2: ("Axis", "Axis2"),
+}
 
 
 def _positive(value: float, default: float) -> float:
@@ -1152,7 +1495,10 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
         sleep = [SetSleepState(ids[oid], state) for oid, state in spec.sleep.items()]
         engine.defer(lambda: [engine.physics.push(command) for command in sleep])
     if as_scene:
-        engine.insert_resource(SceneIds(ids, joints, spec))
+        scene_ids = SceneIds(ids, joints, spec)
+        engine.insert_resource(scene_ids)
+        # every entity a script makes is named: its record goes with the last of them
+        engine.world.on_remove(Name, lambda entity, _name: scene_ids.released(entity))
         if spec.assets is not None:  # render, sound and spawns use the files it read
             assets = engine.try_resource(Assets)
             if assets is None:

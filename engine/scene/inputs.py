@@ -105,6 +105,7 @@ class TrackerSpec:
     min_cutoff: float = 1.0
     beta: float = 10.0
     predict: float = 0.0  # seconds
+    #: The ID of the object (or camera) the tracker's pose moves.
     object: str | None = None
 
 
@@ -261,13 +262,16 @@ def _tracker(k: _Keys, report: Reporter) -> TrackerSpec:
         report.error(k.loc_of("Predict"), "Predict must not be negative (ms ahead)")
     if float(k("Scale")) == 0:
         report.error(k.loc_of("Scale"), "Scale must not be 0")
+    if k("Object") is not None and k("Camera") is not None:
+        report.error(k.loc_of("Camera"), "a Tracker moves one Object or one Camera, not both")
+    moved = k("Object") if k("Object") is not None else k("Camera")
     return TrackerSpec(
         str(k("ID")), str(k("Device")), _vec3(k("Offset")),
         euler_to_quat(k("Rotation")),
         float(k("Scale")), axes, str(k("Filter")),
         _positive(k, "MinCutoff", report), float(k("Beta")),
         max(float(k("Predict")), 0.0) / 1000.0,
-        None if k("Object") is None else str(k("Object")))
+        None if moved is None else str(moved))
 
 
 def _vec3(v: Any) -> tuple[float, float, float]:

@@ -34,6 +34,10 @@ _EXAMPLES: dict[tuple[str, str], str] = {
     ("Visual", "Texture"): '"textures/wood.png"', ("Visual", "ShaderState"): '"toon"',
     ("Visual", "Color"): "[0.72 0.52 0.3]",
     ("Physical", "Mass"): "2", ("Physical", "Density"): "700", ("Physical", "Material"): '"wood"',
+    ("Physical", "CenterOfMass"): "[0 0 -0.3]", ("Physical", "Inertia"): "[0.2 0.2 0.05]",
+    ("Physical", "InertiaOrientation"): "[0 0 45]",
+    ("Spring", "Stiffness"): "0.5", ("Spring", "Damping"): "0.05", ("Spring", "Target"): "10",
+    ("Spring", "MaxForce"): "20",
     ("Geometry", "File"): '"models/rock.obj"', ("Geometry", "Size"): "[0.6]",
     ("Geometry", "ParseMethod"): '"ConvexHull"',
     ("Material", "ID"): '"wood"', ("Material", "ContactSound"): '"sounds/knock.wav"',
@@ -86,6 +90,10 @@ _EXAMPLES: dict[tuple[str, str], str] = {
     ("HeldState", "Last"): "[0.4 0.2 1.1]",
     ("BoneDrive", "Bone"): '"hand.L"', ("BoneDrive", "Position"): "[0.3 0.4 1.2]",
     ("BoneDrive", "Quaternion"): "[1 0 0 0]",
+    ("Session", "Folder"): '"sessions"', ("Session", "Name"): '"stroke"',
+    ("Session", "Chair"): '"wheelchair"', ("Session", "Ground"): '["floor" "ramp"]',
+    ("Wheelchair", "Lag"): "[0.0012 -0.0004]", ("Wheelchair", "Measured"): "[2.1 2.05]",
+    ("Wheelchair", "Pending"): "[0.6 0.6]", ("Wheelchair", "Still"): "0.3",
 }
 
 
@@ -95,7 +103,7 @@ def _number(x: Any) -> str:
 
 def _value(value: Any) -> str:
     if isinstance(value, tuple):
-        return "[" + " ".join(_number(x) for x in value) + "]"
+        return "[" + " ".join(_value(x) for x in value) + "]"
     if isinstance(value, str):
         return f'"{value}"'
     return _number(value)
@@ -136,7 +144,11 @@ def example(block: str, key: str, field: sc.Field) -> str:
         return f'{key} "{field.allowed[0]}"'
     if field.default is not None:
         return f"{key} {_value(field.default)}"
-    typical = {sc.INT_T: 1, sc.FLOAT_T: 1.0, sc.VEC3_T: (0.0, 0.0, 1.0)}
+    if field.type == sc.VECTOR_T:  # as many numbers as it takes
+        return f"{key} {_value((0.0,) * (field.lengths[0] if field.lengths else 3))}"
+    if field.type == sc.STRINGVECTOR_T:
+        return f'{key} ["a" "b"]'
+    typical = {sc.INT_T: 1, sc.FLOAT_T: 1.0, sc.BOOL_T: 1, sc.VEC3_T: (0.0, 0.0, 1.0)}
     return f"{key} {_value(typical.get(field.type, 'name'))}"
 
 

@@ -66,6 +66,8 @@ _Q = char_class(QUOTES)
 _STARTS = char_class(SPACE_CHARS + NEWLINE + NAME_CHARS + QUOTES + OPERATORS + BRACKETS)
 
 #: Whitespace, then one lexeme; the kind of a lexeme follows from its first characters.
+#: Repeats of alternatives are possessive: nothing after them can need a shorter match,
+#: and a backtracking repeat keeps a frame per character (190 MB for a 1 MB line).
 _TOKEN_RE = re.compile(
     rf"""
     ([{SPACE}\n]*)
@@ -73,13 +75,13 @@ _TOKEN_RE = re.compile(
       {NUMBER_RE}
     | {NAME_RE}
     | [{char_class(BRACKETS + OPERATORS.replace("/", ""))}]
-    | [{_Q}](?:[^{_Q}\\\n]|\\[^\n])*[{_Q}]
+    | [{_Q}](?:[^{_Q}\\\n]|\\[^\n])*+[{_Q}]
     | //[^\n]*
     | /\*.*?\*/
     | /\*.*
     | /
     | [{_Q}][^\n]*
-    | (?:[^{_STARTS}.]|\.(?!{_D}))+
+    | (?:[^{_STARTS}.]|\.(?!{_D}))++
     | \Z
     )
     """,

@@ -31,10 +31,9 @@ counts once; blank lines first or last in a block are dropped), and a block whos
 
 from __future__ import annotations
 
-import gc
 import os
 from bisect import bisect_right
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,6 +41,8 @@ from pathlib import Path
 import numpy as np
 
 import engine.scene.expr as ex
+from engine.confine import Confinement, resolved
+from engine.memory import paused_gc
 from engine.scene.db import (
     FLOAT,
     INCLUDE,
@@ -58,7 +59,7 @@ from engine.scene.db import (
 from engine.scene.diagnostics import Loc, Reporter, quoted
 from engine.scene.lexer import EOF, IDENT, NUMBER, OPERATORS, PUNCT, Comment, Lexer, Token
 from engine.scene.lexer import STRING as T_STRING
-from engine.scene.paths import NOT_FOUND, file_problem, resolved, shown
+from engine.scene.paths import NOT_FOUND, file_problem, shown
 
 #: A block opened by the scanner and not closed yet: (its entry, the parent's entries, the
 #: parent's scope, the block, the line of its '{').
@@ -117,9 +118,11 @@ class Parser:
     """One parse of a file and what it includes, sharing a reporter, an rng and scopes."""
 
     def __init__(self, rng: np.random.Generator | None, limits: Limits,
-                 base_dir: Path | None = None):
+                 base_dir: Path | None = None, confine: Confinement | None = None):
         self.rng = rng if rng is not None else np.random.default_rng(0)
         self.base_dir = base_dir
+        #: Where included files may be (the content folder and the folders allowed).
+        self.confine = confine or Confinement.of(base_dir or Path.cwd())
         self.limits = limits
         self.report = Reporter()
         self.scopes: list[dict[str, float]] = [{}]
@@ -456,6 +459,10 @@ class Parser:
             return None
         base = Path(cur.path).parent if os.path.isfile(cur.path) else (
             self.base_dir or Path.cwd())
+        outside = self.confine.problem(base / value.data)
+        if outside is not None:  # refused before it is looked at: nothing of it is told
+            self.report.error(value.loc, f'cannot include "{quoted(value.data)}": {outside}')
+            return None
         target = resolved(base / value.data)
         if str(target) in self.stack:
             chain = " -> ".join(Path(p).name for p in [*self.stack, str(target)])
@@ -492,49 +499,30 @@ def token_path_only() -> Iterator[None]:
         scan_plain = fast
 
 
-@contextmanager
-def paused_gc() -> Iterator[None]:
-    """Pause the cyclic GC while building many small objects that all stay alive.
-
-    Without this, collections re-scan the growing tree again and again. A big
-    load (a scene file, its specs, its entities) is then frozen (``gc.freeze``):
-    it lives as long as the scene, so scanning it in later collections would only
-    cost time (about a third of a second per collection for 10,000 objects).
-    """
-    was_enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if gc.get_count()[0] > _FREEZE_AFTER:
-            gc.freeze()
-        if was_enabled:
-            gc.enable()
-
-
-#: New GC-tracked objects above which a load is frozen instead of scanned later.
-_FREEZE_AFTER = 100_000
-
-
 def parse_text(text: str, path: str = "<string>", rng: np.random.Generator | None = None,
-               limits: Limits | None = None, base_dir: str | os.PathLike | None = None
-               ) -> SceneDB:
+               limits: Limits | None = None, base_dir: str | os.PathLike | None = None,
+               allow: Iterable[str | os.PathLike] = ()) -> SceneDB:
     """Parse scene text. Raises :class:`SceneError` listing every error found.
 
     ``Include`` paths are relative to ``path``'s folder when it is a file, else to
-    ``base_dir`` (default: the working directory).
+    ``base_dir`` (default: the working directory), and must lie inside that folder or
+    one of ``allow`` (:mod:`engine.confine`).
     """
-    p = Parser(rng, limits or Limits(), Path(base_dir) if base_dir is not None else None)
+    base = Path(base_dir) if base_dir is not None else None
+    home = Path(path).parent if os.path.isfile(path) else base or Path.cwd()
+    p = Parser(rng, limits or Limits(), base, Confinement.of(home, allow))
     with paused_gc():
         root = p.parse_source(text, path)
     return _finish(p, root, path)
 
 
 def parse_file(path: str | os.PathLike, rng: np.random.Generator | None = None,
-               limits: Limits | None = None) -> SceneDB:
-    """Parse a scene file and what it includes. Raises :class:`SceneError`."""
-    p = Parser(rng, limits or Limits())
+               limits: Limits | None = None, allow: Iterable[str | os.PathLike] = ()
+               ) -> SceneDB:
+    """Parse a scene file and what it includes (inside its folder or one of ``allow``).
+    Raises :class:`SceneError`."""
     target = resolved(Path(path))
+    p = Parser(rng, limits or Limits(), confine=Confinement.of(target.parent, allow))
     with paused_gc():
         root = p.parse_file(target)
     return _finish(p, root, str(target))

@@ -8,7 +8,6 @@ into a reason to report, where ``Path.resolve`` or ``Path.is_file`` would raise.
 from __future__ import annotations
 
 import errno
-import os
 import stat
 from pathlib import Path
 
@@ -30,15 +29,6 @@ def file_problem(path: Path) -> str | None:
     if stat.S_ISDIR(mode):
         return FOLDER
     return None if stat.S_ISREG(mode) else "it is not a regular file"
-
-
-def resolved(path: Path) -> Path:
-    """``path`` absolute with symlinks resolved where they can be (a loop, a NUL or an
-    over-long name leave it as written: :func:`file_problem` then says why)."""
-    try:
-        return path.resolve()
-    except (OSError, RuntimeError, ValueError):
-        return Path(os.path.abspath(path))
 
 
 def shown(path: Path | str, limit: int = 160) -> str:

@@ -23,8 +23,9 @@ from typing import Any
 
 from components.joint import SCENE_JOINT_TYPES
 from components.shape import ShapeKind
+from engine.anomalies import ANOMALIES, COMMON_DOCS, EYES, ONSET_DEFAULT
 from engine.measures import QUANTITIES
-from engine.physics.backend import BackendName, WorldSettings
+from engine.physics.backend import WORLD_EXTENT, BackendName, WorldSettings
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
 
 #: The solver settings' defaults, defined once (engine.physics.backend.WorldSettings).
@@ -118,10 +119,16 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Model": _f(STRUCT_T, doc="a model file (glTF, Collada) whose bodies, joints and "
                     "materials join the scene", repeat=True, struct="Model"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
+        "PostPass": _f(STRUCT_T, doc="a full-screen pass over the drawn frame (your GLSL "
+                       "fragment shader; engine.render.postprocess)", repeat=True,
+                       struct="PostPass"),
         "Input": _f(STRUCT_T, doc="input devices and how their trackers, wheels and buttons "
                     "are calibrated (engine.input)", repeat=True, struct="Input"),
         "Output": _f(STRUCT_T, doc="engine values published every frame over OSC or LSL",
                      repeat=True, struct="Output"),
+        "Session": _f(STRUCT_T, None, "a session log: one JSON-lines file per run with the "
+                      "time, task events, grasps, the chair's pose and collisions, anomaly "
+                      "switches (the session plugin)", struct="Session"),
         "Content": _f(STRING_T, None, "the content folder a saved state continues (relative "
                       "to this file): its file names are relative to that folder, its "
                       "systems/ and scripts/ are the ones used"),
@@ -140,6 +147,9 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                          lengths=(4,)),
         "Velocity": _f(VEC3_T, (0.0, 0.0, 0.0), "m/s"),
         "AngularVelocity": _f(VEC3_T, (0.0, 0.0, 0.0), "deg/s about world X, Y, Z"),
+        "Spin": _f(VEC3_T, None, "exact angular velocity, rad/s about world X, Y, Z; wins "
+                   "over AngularVelocity (a saved state writes it where degrees cannot hold "
+                   "the value to the bit)"),
         "Dynamic": _f(BOOL_T, 1, "0 makes the body static"),
         "Kinematic": _f(BOOL_T, 0, "moved by scripts/controllers, not by forces"),
         "Size": _f(VECTOR_T, None, "primitive size for every geometry (see module doc)",
@@ -156,6 +166,9 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                    "tracker's pose with bounded force, grasping on a glove's button",
                    struct="Hand"),
         "Graspable": _f(BOOL_T, 1, "0: hands cannot hold it (dynamic bodies can by default)"),
+        "Wheelchair": _f(STRUCT_T, None, "makes the object a wheelchair's chassis: input "
+                         "wheel counters drive its rear axle joints (the wheelchair plugin)",
+                         struct="Wheelchair"),
         "User": _f(STRING_T, None, "the user (colosseum join --user NAME) it stands for — an "
                    "avatar, a wheelchair, hands: a server takes it out of the world "
                    "--leave-after s after that user's node leaves, unless the user comes "
@@ -177,6 +190,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "RestSlid": _f(BOOL_T, 0, "1: it slid while its weight was carried over, and has been "
                        "pushed sideways since"),
         "RestForce": _f(VEC3_T, None, "N, the force its contacts hold it with, averaged"),
+        "RestPreloaded": _f(BOOL_T, 0, "1: its weight was carried over at the last step (it "
+                            "stays so up to a faster drift than it may start at)"),
     },
     "Visual": {
         "Geometry": _f(STRUCT_T, None,
@@ -187,7 +202,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Shadower": _f(BOOL_T, 1, "casts shadows"),
         "Shadowed": _f(BOOL_T, 1, "receives shadows"),
         "Color": _f(VECTOR_T, (0.8, 0.8, 0.8, 1.0), "RGB or RGBA, 0..1", lengths=(3, 4)),
-        "Texture": _f(ASSET_T, None, "image file mapped with the model's texture coordinates"),
+        "Texture": _f(ASSET_T, None, "image file mapped with the model's texture coordinates "
+                      "(or \"generated:marker-ball\", the hands' marker checker, made not read)"),
         "Visible": _f(BOOL_T, 1, "0 hides it"),
     },
     "Physical": {
@@ -206,6 +222,13 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Trigger": _f(BOOL_T, 0, "1: a sensor: nothing collides with it; bodies whose "
                       "Category meets its Mask are told entering and leaving it (Lua: "
                       "on(\"trigger\", fn)); static unless Kinematic"),
+        "CenterOfMass": _f(VEC3_T, None, "m, in the object's frame: where its mass is "
+                           "centred (default: its shapes' centroid; given alone, the shapes' "
+                           "inertia about their centroid moves there)"),
+        "Inertia": _f(VEC3_T, None, "kg*m^2, its principal moments of inertia about the "
+                      "centre of mass (default: its shapes' at their density, scaled to Mass)"),
+        "InertiaOrientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees, in the object's "
+                                 "frame: turns its X Y Z onto the axes of Inertia's moments"),
     },
     "Geometry": {
         "Primitive": _f(ENUM_T, None, "shape kind (default box)", allowed=PRIMITIVES),
@@ -262,6 +285,17 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                              "body's pose when the joint was first made; Anchor and axes are "
                              "as they were then (default: the body's own pose)", lengths=(7,)),
         "ReferencePose2": _f(VECTOR_T, None, "the same for the second body", lengths=(7,)),
+        "Spring": _f(STRUCT_T, None, "a spring-damper on a Hinge's, MotorizedHinge's or "
+                     "Slider's free axis (beside its limits and motor)", struct="Spring"),
+    },
+    "Spring": {
+        "Stiffness": _f(FLOAT_T, 0.0, "N*m per degree, or N/m for a slider: its pull toward "
+                        "Target"),
+        "Damping": _f(FLOAT_T, 0.0, "N*m per deg/s, or N per m/s: how it resists the joint's "
+                      "rate (alone, without Stiffness: a damper)"),
+        "Target": _f(FLOAT_T, 0.0, "degrees, or m for a slider, counted as Low and High are "
+                     "(0: where the joint was made)"),
+        "MaxForce": _f(FLOAT_T, None, "N*m, or N: the most it pulls with (default: no bound)"),
     },
     "VertexShader": {
         "ID": _id("vertex shader", True),
@@ -285,6 +319,14 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                             "the program whose uniforms it sets", required=True,
                             ref="ShaderProgram"),
         "Uniform": _f(STRUCT_T, None, "a uniform's value", repeat=True, struct="Uniform"),
+    },
+    "PostPass": {
+        "ID": _id("post-processing pass", True),
+        "File": _f(ASSET_T, None, "the fragment shader: it reads u_scene (the frame) at v_uv "
+                   "and writes one vec4 (see docs/GLSL.md)", required=True),
+        "Uniform": _f(STRUCT_T, None, "a uniform's value", repeat=True, struct="Uniform"),
+        "Enabled": _f(BOOL_T, 1, "0: declared, switched on later (Lua enablePost)"),
+        "Feedback": _f(BOOL_T, 0, "1: the pass also reads its own last output (u_previous)"),
     },
     "Uniform": {
         "ID": _f(STRING_T, None, "uniform name in the GLSL source", required=True),
@@ -351,7 +393,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     },
     "Controller": {
         "ID": _id("controller"),
-        "Input": _f(STRING_T, None, '"key:Up/Down", "axis:0", "tracker:NAME", "wheel:NAME"',
+        "Input": _f(STRING_T, None, '"key:A", "key:Up/Down", "axis:DEVICE/NAME", '
+                    '"button:DEVICE/NAME", "button:ID", "tracker:NAME" or "wheel:NAME" (rad/s)',
                     required=True),
         "Target": _f(STRING_T, None, '"motor:JOINT", "force:OBJECT" or "kinematic:OBJECT"',
                      required=True),
@@ -366,6 +409,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Glove": _f(STRING_T, "", "the input device whose Button holds what the hand touches "
                     "(glove_l/glove_r: the desktop device's mouse button)"),
         "Button": _f(STRING_T, "pinch", "the glove's button that grasps while down"),
+        "Mass": _f(FLOAT_T, None, "kg the hand's body weighs (default 0.45; give it here or "
+                   "as PhysicalAttributes' Mass or Density, not both)"),
         "MaxForce": _f(FLOAT_T, 300.0, "N the drive may push with: a heavier load lags, a "
                        "wall stops the hand"),
         "MaxTorque": _f(FLOAT_T, 30.0, "N*m the drive may turn with"),
@@ -382,6 +427,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                          "toward the hand and any shear beyond what pressing the object "
                          "against the palm holds (none: never)"),
         "Marker": _f(BOOL_T, 1, "show a ball where the real hand (the tracker) is"),
+        "NeutralModel": _f(ASSET_T, None, "model drawn while the hand touches nothing it "
+                           "could grasp (a relaxed hand); default: the object's own look"),
         "ContactModel": _f(ASSET_T, None, "model drawn while the hand touches something it "
                            "could grasp (an open hand); default: the object's own look"),
         "GraspModel": _f(ASSET_T, None, "model drawn while it holds something (a closed hand)"),
@@ -389,6 +436,60 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                     "wheelchair): the hand follows it", ref="Object"),
         "Holding": _f(STRINGVECTOR_T, None, "objects held when this state was saved (written "
                       "by --save-state; they are held again on load)"),
+    },
+    "Session": {
+        "Folder": _f(STRING_T, "", "the folder session logs go to, relative to the working "
+                     "directory (default: sessions/ there; never inside the content folder, "
+                     "never out of the working directory); colosseum run --sessions DIR "
+                     "wins"),
+        "Name": _f(STRING_T, "", "the log file's name before its date and time (a name, "
+                   "not a path; default: the content folder's name)"),
+        "Chair": _f(REF_T, None, "the wheelchair whose pose is logged at PoseRate and whose "
+                    "collisions are logged (its chassis and what is jointed to it)",
+                    ref="Object"),
+        "PoseRate": _f(FLOAT_T, 10.0, "Hz: how often the chair's pose is logged"),
+        "Ground": _f(STRINGVECTOR_T, ("floor",), "objects the chair rolls on: touching them "
+                     "is not a collision", ref="Object"),
+        "EndRun": _f(BOOL_T, 1, "1: the run stops when a script ends the session "
+                     "(emit(\"session_end\", {reason = ...}))"),
+    },
+    "Wheelchair": {
+        "Feedback": _f(BOOL_T, 0, "0: velocity mode (the paper's): the wheels turn only as "
+                       "the real ones do and the chair never rolls by itself; 1: feedback "
+                       "mode: a change of the real wheel's speed pushes the free simulated "
+                       "wheel, gravity and walls act, and each wheel's speed and push are "
+                       "published (Output values wheelchair:ID/left/speed, "
+                       "wheelchair:ID/left/torque, and right)"),
+        "Wheels": _f(STRINGVECTOR_T, ("left", "right"), "the input wheel counters (Input { "
+                     "Wheel { ID } }, or the desktop device's left and right) of the left "
+                     "and right rear wheel", lengths=(2,)),
+        "Axles": _f(STRINGVECTOR_T, ("axle_l", "axle_r"), "the left and right rear wheels' "
+                    "hinge joints, their axes pointing so that turning forward is a "
+                    "positive rate", ref="Joint", lengths=(2,)),
+        "WheelRadius": _f(FLOAT_T, 0.305, "m, the rear wheels' radius (rim speed = rate * "
+                          "radius)"),
+        "MaxSpeed": _f(FLOAT_T, 3.0, "m/s at the rim: faster wheel input is clamped (told "
+                       "once)"),
+        "MaxTorque": _f(FLOAT_T, 30.0, "N*m each velocity-mode motor turns and holds its "
+                        "wheel with (a user's arm: 2 m/s^2 for a 90 kg chair, enough to hold "
+                        "it on a 1:12 ramp)"),
+        "RimInertia": _f(FLOAT_T, 4.29, "kg*m^2, the real wheel's moment of inertia: its "
+                         "measured change of speed times this is the push in feedback mode "
+                         "(a rig that feels like the chair: its rolling inertia (M + sum "
+                         "I/r^2) r^2 shared by two wheels; 4.29 for 90 kg on 0.305 m "
+                         "wheels)"),
+        "MaxPush": _f(FLOAT_T, 30.0, "N*m, the largest torque a push applies in feedback "
+                      "mode; a harder push (a key pressed) is spread over the next frames"),
+        "Lag": _f(VECTOR_T, None, "rad each simulated wheel [left right] was behind its real "
+                  "one, which velocity mode makes up (written by --save-state)", lengths=(2,)),
+        "Measured": _f(VECTOR_T, None, "rad/s the real wheels [left right] turned at in the "
+                       "last frame, which feedback mode's pushes are changes of (written by "
+                       "--save-state)", lengths=(2,)),
+        "Pending": _f(VECTOR_T, None, "N*m*s of pushes [left right] beyond MaxPush, still "
+                      "to be applied (written by --save-state)", lengths=(2,)),
+        "Still": _f(FLOAT_T, 0.0, "s the chair has stood still in velocity mode with its real "
+                    "wheels still; at the world's SleepTime it sleeps (written by "
+                    "--save-state)"),
     },
     "ScriptState": {
         "Owner": _f(STRING_T, None, "the object whose script this is, or the scene script's "
@@ -534,7 +635,11 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     },
     "World": {
         "Gravity": _f(VEC3_T, (0.0, 0.0, -9.81), "m/s^2"),
-        "TimeStep": _f(FLOAT_T, 0.01, "s, fixed dynamics step"),
+        "TimeStep": _f(FLOAT_T, 0.01, "s, fixed dynamics step (more than 0, at most 1; "
+                       "past 0.05 contacts and joints lose accuracy)"),
+        "Extent": _f(FLOAT_T, WORLD_EXTENT, "m: bodies stay within this distance of the "
+                     "origin on every axis; positions beyond it are refused, and a body "
+                     "that leaves it is stopped (up to 1e12)"),
         "Dynamics": _f(ENUM_T, "ode", "dynamics backend: ode (3D) or pymunk (2D, X-Z plane)",
                        allowed=BACKENDS),
         "Iterations": _f(INT_T, _WORLD.iterations,
@@ -612,8 +717,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Beta": _f(FLOAT_T, 10.0, "one-euro: s/m, how fast the cutoff rises with speed "
                    "(higher: less lag in fast moves)"),
         "Predict": _f(FLOAT_T, 0.0, "ms of constant-velocity prediction"),
-        "Object": _f(REF_T, None, "an object without physics (a cursor, a camera) whose pose "
+        "Object": _f(REF_T, None, "an object without physics (a cursor, a marker) whose pose "
                      "follows the tracker", ref="Object"),
+        "Camera": _f(REF_T, None, "a camera (give it an ID) whose pose follows the tracker: "
+                     "a headset", ref="Camera"),
     },
     "InputWheel": {
         "ID": Field(STRING_T, None, "the counter's name as its device sends it",
@@ -643,6 +750,35 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Markers": _f(BOOL_T, 1, "1: send task markers (Lua emit(\"marker\", text))"),
     },
 }
+
+def _anomaly_blocks() -> dict[str, dict[str, Field]]:
+    """A block per anomaly (engine.anomalies is the one vocabulary): its common keys, then
+    a key per severity parameter with its range and unit in the docs."""
+    blocks = {}
+    for kind in ANOMALIES.values():
+        fields = {
+            "ID": _f(STRING_T, "", COMMON_DOCS["ID"]),
+            "Enabled": _f(BOOL_T, 1, COMMON_DOCS["Enabled"]),
+            "Onset": _f(FLOAT_T, ONSET_DEFAULT, COMMON_DOCS["Onset"]),
+            "Eye": _f(ENUM_T, "both", COMMON_DOCS["Eye"], allowed=EYES),
+            "Input": _f(STRING_T, None, COMMON_DOCS["Input"]),
+        }
+        for p in kind.params:
+            doc = f"{p.doc} ({p.range_text()})"
+            if p.choices:
+                fields[p.key] = _f(ENUM_T, p.default, doc, allowed=p.choices)
+            elif p.size > 1:
+                fields[p.key] = _f(VECTOR_T, p.default, doc, lengths=(p.size,))
+            else:
+                fields[p.key] = _f(FLOAT_T, p.default, doc)
+        blocks[kind.block] = fields
+    return blocks
+
+
+for _kind in ANOMALIES.values():
+    SCHEMAS["Scene"][_kind.block] = _f(STRUCT_T, doc=f"a visual anomaly: {_kind.doc} "
+                                       "(engine.anomalies)", repeat=True, struct=_kind.block)
+SCHEMAS.update(_anomaly_blocks())
 
 #: Declarations whose ``ID`` others may reference, by the schema name used in ``Field.ref``.
 ID_KINDS = ("Object", "Material", "Joint", "VertexShader", "FragmentShader", "ShaderProgram",

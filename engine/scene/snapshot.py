@@ -22,22 +22,37 @@ An avatar's block gets its root pose; an ``AvatarState`` says what it was doing 
 clips, fades and queue, its path, ground following, held objects, driven bones and its
 capsule's pose; see :class:`components.avatar.SavedAvatar`), so it continues instead of
 starting as its block says.
+
+Each visual anomaly's block (engine.anomalies) says whether it is on and its severity as
+the run left them, so anomalies switched or set by a script or an input stay so.
 """
 
 from __future__ import annotations
 
+import math
 import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 import engine.scene.random_state as random_state
 import engine.scene.schema as sc
-from components import HandState, Joint, Name, Transform
+from components import HandState, Joint, Name, Transform, Wheelchair
 from components.avatar import SavedAvatar
-from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES
-from engine.physics.backend import SleepState, SupportsSleepState
+from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, Spring
+from components.wheelchair import NavigationMode
+from engine.anomalies import ANOMALIES, Anomalies
+from engine.assets.generated import is_generated
+from engine.physics.backend import (
+    BodyState,
+    SleepState,
+    SupportsExactState,
+    SupportsSleepState,
+)
 from engine.physics.driver import PhysicsUnavailable
-from engine.rotation import exact_degrees, quat_to_euler
+from engine.rotation import exact_degrees, exact_preimage, quat_to_euler
 from engine.scene.db import (
     FLOAT,
     INT,
@@ -89,7 +104,7 @@ def _rebase_assets(block: Block, schema: str, src: Path, dst: Path) -> None:
         f = fields.get(e.key)
         if f is None:
             continue
-        if f.type == sc.ASSET_T and e.value.kind == STRING:
+        if f.type == sc.ASSET_T and e.value.kind == STRING and not is_generated(e.value.data):
             e.value.data = Path(os.path.relpath(src / e.value.data, dst)).as_posix()
         elif f.type == sc.STRUCT_T and e.value.kind == STRUCTURE:
             _rebase_assets(e.value.data, f.struct, src, dst)
@@ -99,7 +114,7 @@ def _sleep_keys(block: Block, state: SleepState | None) -> None:
     """Write a body's sleep-rule state and resting standing (``None``: fresh, or a backend
     that keeps none)."""
     for key in ("Asleep", "SleepVelocity", "SleepTimer", "SleepReference", "RestSteps",
-                "RestSlid", "RestForce"):
+                "RestSlid", "RestForce", "RestPreloaded"):
         _drop(block, key)
     if state is None:
         return
@@ -107,6 +122,8 @@ def _sleep_keys(block: Block, state: SleepState | None) -> None:
         _set(block, "RestSteps", Value(INT, int(state.rest_steps), _HERE))
     if state.rest_slid:
         _set(block, "RestSlid", Value(INT, 1, _HERE))
+    if state.rest_preloaded:
+        _set(block, "RestPreloaded", Value(INT, 1, _HERE))
     if state.rest_force is not None:
         _set(block, "RestForce", _vec(state.rest_force.tolist()))
     if state.asleep:
@@ -142,11 +159,33 @@ def _write_pose(blk: Block, t: Transform) -> None:
     _set(blk, "Quaternion", _vec(q))
 
 
-def _write_body(blk: Block, t: Transform, sleep: SleepState | None) -> None:
+@dataclass(frozen=True, slots=True)
+class _Row:
+    """A body's state as its backend would have it put back (SupportsExactState)."""
+
+    position: np.ndarray
+    orientation: np.ndarray
+    linear_velocity: np.ndarray
+    angular_velocity: np.ndarray
+
+
+def _rows(state: BodyState) -> dict[int, _Row]:
+    """Body key (its entity) -> its exact row."""
+    t = state.table
+    return {int(k): _Row(t[i, :3], t[i, 3:7], t[i, 7:10], t[i, 10:13])
+            for i, k in enumerate(state.keys.tolist())}
+
+
+def _write_body(blk: Block, t: Transform | _Row, sleep: SleepState | None) -> None:
     """An object's pose, velocities and auto-sleep state now."""
     _write_pose(blk, t)
     _set(blk, "Velocity", _vec(t.linear_velocity))
-    _set(blk, "AngularVelocity", _vec(exact_degrees(float(w)) for w in t.angular_velocity))
+    spin = [float(w) for w in t.angular_velocity]
+    degrees = [exact_degrees(w) for w in spin]
+    _set(blk, "AngularVelocity", _vec(degrees))
+    _drop(blk, "Spin")
+    if any(math.radians(d) != w for d, w in zip(degrees, spin, strict=True)):
+        _set(blk, "Spin", _vec(spin))  # no degrees give it back to the bit
     _sleep_keys(blk, sleep)
 
 
@@ -206,9 +245,10 @@ class _Spawns:
     """Writes what scripts made (:class:`SpawnRecord`) after the file's own entries."""
 
     def __init__(self, world: World, root: Block, names: dict[int, str], taken: set[str],
-                 sleep: dict[int, SleepState] | None, dst: Path | None):
+                 sleep: dict[int, SleepState] | None, dst: Path | None,
+                 exact: dict[int, _Row]):
         self.world, self.root, self.names, self.taken = world, root, names, taken
-        self.sleep, self.dst = sleep, dst
+        self.sleep, self.dst, self.exact = sleep, dst, exact
         #: avatar entity -> the ID its spawned Avatar block is written with
         self.avatars: dict[int, str] = {}
         #: material ID written -> its definition (see _definition)
@@ -255,7 +295,8 @@ class _Spawns:
                 _set(physical, "Material", _string(renamed[material.data]))
             self.names[entity] = oid = self.name(entity, "object")
             _set(blk, "ID", _string(oid))
-            _write_body(blk, t, None if self.sleep is None else self.sleep.get(entity))
+            _write_body(blk, self.exact.get(entity, t),
+                        None if self.sleep is None else self.sleep.get(entity))
             out.append(entry)
         for entry, entity in zip(root.get_all("Joint"), rec.joints, strict=True):
             joint = _live_joint(self.world, entity, self.names)
@@ -289,9 +330,24 @@ class _Spawns:
         for key, limit in (("Low", joint.low), ("High", joint.high)):
             if limit is not None:
                 entries.append((key, Value(FLOAT, conv(float(limit)), _HERE)))
+        if joint.spring is not None:
+            entries.append(("Spring", _spring_block(joint.kind, joint.spring)))
         entry = _block("Joint", entries)
         _write_joint(entry.value.data, joint)
         self.root.entries.append(entry)
+
+
+def _spring_block(kind: str, spring: Spring) -> Value:
+    """A spawned joint's spring as a Spring block, in file units (per degree and degrees
+    for a hinge) that read back to the same values (see :func:`exact_preimage`)."""
+    per = 1.0 if kind in LINEAR_KINDS else math.degrees(1.0)
+    entries = [(key, Value(FLOAT, exact_preimage(lambda f: f * per, v, v / per), _HERE))
+               for key, v in (("Stiffness", spring.stiffness), ("Damping", spring.damping))]
+    target = spring.target if kind in LINEAR_KINDS else exact_degrees(spring.target)
+    entries.append(("Target", Value(FLOAT, target, _HERE)))
+    if math.isfinite(spring.max_force):
+        entries.append(("MaxForce", Value(FLOAT, spring.max_force, _HERE)))
+    return _block("Spring", entries).value
 
 
 def _drop_follows(root: Block, written: set[str]) -> None:
@@ -437,6 +493,45 @@ def _holding(world: World, hands: dict[int, Block], names: dict[int, str]) -> No
                                               _HERE))
 
 
+def _wheelchair(blk: Block, chair: Wheelchair) -> None:
+    """A wheelchair's mode now and its plugin's memory (the servo's lag, the last rates)."""
+    entry = blk.value("Wheelchair")
+    if entry is None or entry.kind != STRUCTURE:
+        return
+    _set(entry.data, "Feedback", _flag(chair.mode == NavigationMode.FEEDBACK))
+    _set(entry.data, "Lag", _vec(chair.lag))
+    _set(entry.data, "Measured", _vec(chair.measured))
+    _set(entry.data, "Pending", _vec(chair.pending))
+    _set(entry.data, "Still", _number(chair.still))
+
+
+def _anomalies(engine: Engine, root: Block) -> None:
+    """Each visual anomaly as the run left it: switched and set (one a script declared gets
+    a block of its own; a ramp in progress is saved as where it is going)."""
+    anomalies = engine.try_resource(Anomalies)
+    if anomalies is None:
+        return
+    blocks: dict[str, Block] = {}
+    for kind in ANOMALIES.values():
+        for entry in root.entries:
+            if entry.key == kind.block and entry.value.kind == STRUCTURE:
+                written = entry.value.data.value("ID")
+                blocks[str(written.data) if written is not None and written.data
+                       else kind.name] = entry.value.data
+    for state in anomalies.states.values():
+        block = blocks.get(state.id)
+        if block is None:
+            entry = _block(state.kind.block, [("ID", _string(state.id))])
+            root.entries.append(entry)
+            block = entry.value.data
+        _set(block, "Enabled", Value(INT, int(state.enabled), _HERE))
+        _set(block, "Onset", _number(state.onset))
+        _set(block, "Eye", _string(state.eye))
+        for key, value in state.values.items():
+            _set(block, key, _string(value) if isinstance(value, str) else
+                 _vec(value) if isinstance(value, tuple) else _number(value))
+
+
 def _taken(ids: SceneIds) -> set[str]:
     """IDs of the file's own entries (those without one are written with the one they
     were given by their place, so loading the saved file keeps every name)."""
@@ -451,7 +546,8 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
     its ``main.scene`` names them). With ``out_path`` (where the text will be saved) the
     file also says where that folder is, relative to it (``Content``), so it runs from
     anywhere as long as the two keep their places. ``names``, when given, receives the
-    object ID each written entity got (a network server tells its nodes which is which).
+    object or avatar ID each written entity got (a network server tells its nodes which
+    is which).
     Without local physics (a network node) the solver's and sleep states are left out.
     """
     ids: SceneIds = engine.resource(SceneIds)
@@ -465,14 +561,16 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
         root.entries.insert(0, Entry("Content", _string(
             Path(os.path.relpath(dst, here)).as_posix()), _HERE))
     world = engine.world
-    # the solver's random state and each body's auto-sleep state, where the backend has them
+    # the solver's random state, each body's auto-sleep state and its exact state, where
+    # the backend has them
     try:
-        seed, sleep = engine.physics.request(lambda backend: (
+        seed, sleep, exact = engine.physics.request(lambda backend: (
             getattr(backend, "solver_seed", None),
-            backend.sleep_states() if isinstance(backend, SupportsSleepState) else None)
+            backend.sleep_states() if isinstance(backend, SupportsSleepState) else None,
+            _rows(backend.exact_state()) if isinstance(backend, SupportsExactState) else {})
         ).result(5.0)
-    except PhysicsUnavailable:
-        seed, sleep = None, None
+    except PhysicsUnavailable:  # no physics here (a node), or it stopped: poses only
+        seed, sleep, exact = None, None, {}
     names = {} if names is None else names  # entity -> the object ID written for it
     hands: dict[int, Block] = {}  # hand entity -> its written Object block
     objects = [e for e in root.entries if e.key == "Object"]
@@ -486,9 +584,12 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
         blk = entry.value.data
         if blk.value("ID") is None:  # its name by place would move as others are left out
             _set(blk, "ID", _string(oid))
-        _write_body(blk, t, None if sleep is None else sleep.get(eid))
+        _write_body(blk, exact.get(eid, t), None if sleep is None else sleep.get(eid))
         if world.has_component(eid, HandState):
             hands[eid] = blk
+        chair = world.try_component(eid, Wheelchair)
+        if chair is not None:
+            _wheelchair(blk, chair)
     joints = [e for e in root.entries if e.key == "Joint"]
     for js, entry in zip(spec.joints, joints, strict=False):
         joint = _live_joint(world, ids.joints.get(js.id), names)
@@ -499,7 +600,7 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
             _set(entry.value.data, "ID", _string(js.id))
         _write_joint(entry.value.data, joint)
     avatars = _avatars(world, ids, root, set(names.values()))  # before spawned ones come
-    spawns = _Spawns(world, root, names, _taken(ids), sleep, dst)
+    spawns = _Spawns(world, root, names, _taken(ids), sleep, dst, exact)
     for rec in ids.spawned:
         if rec.db is None:
             spawns.joint(rec.joints[0])
@@ -510,6 +611,8 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
     _holding(world, hands, names)
     _avatar_states(engine, root, avatars, names)
     _script_states(engine, ids, root, names | avatars)
+    _anomalies(engine, root)
+    names.update(avatars)  # the caller's map names avatars too
     world_entry = next((e for e in root.entries if e.key == "World"), None)
     if world_entry is None or world_entry.value.kind != STRUCTURE:
         world_entry = Entry("World", Value(STRUCTURE, Block(), _HERE), _HERE)
@@ -531,6 +634,12 @@ def content_folder(db: SceneDB) -> Path:
     if named is None or not isinstance(named.data, str):  # (the schema check reports one
         return Path(db.path).parent                        # that is not a string)
     folder = (Path(db.path).parent / named.data).resolve()
+    if folder.is_dir() and not (folder / "main.scene").is_file():  # not one to trust
+        raise SceneError([Diagnostic(
+            named.loc.path, named.loc.line, named.loc.col, ERROR,
+            f"this saved state continues {named.data!r}, which is not a content folder (it "
+            "has no main.scene); a saved state's files are read from the content folder it "
+            "continues, so it must name one")], db.sources)
     if folder.is_dir():
         return folder
     raise SceneError([Diagnostic(

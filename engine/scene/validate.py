@@ -8,11 +8,13 @@ IDs that do not exist (with suggestions) and asset files that are not there
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import engine.scene.schema as sc
+from engine.assets.generated import is_generated
+from engine.confine import Confinement
 from engine.scene.db import (
     FLOAT,
     INCLUDE,
@@ -41,31 +43,54 @@ class _Ctx:
     report: Reporter
     ids: dict[str, dict[str, Loc]] = field(default_factory=lambda: {k: {} for k in sc.ID_KINDS})
     refs: list[tuple[str, Value]] = field(default_factory=list)
+    #: IDs declared elsewhere, by kind (looked up, never copied: the running world's
+    #: objects, for a snippet a script spawns, may be many)
+    known: Mapping[str, Collection[str]] = field(default_factory=dict)
+    #: Where an ID declared elsewhere is told as first declared (the file's start).
+    elsewhere: Loc | None = None
     assets: list[Value] = field(default_factory=list)
     targets: list[Value] = field(default_factory=list)
 
 
 def validate(db: SceneDB, content_dir: Path | None, report: Reporter,
-             known: Mapping[str, Iterable[str]] | None = None) -> None:
+             known: Mapping[str, Collection[str]] | None = None,
+             allow: Iterable[Path] = ()) -> None:
     """Check ``db`` against the schema; problems go to ``report``.
 
     ``known`` names IDs declared elsewhere (the running scene, for a snippet a
-    script spawns), by kind, so references to them resolve.
+    script spawns), by kind, so references to them resolve and declaring one again is a
+    duplicate; it is only asked whether it holds a name (and listed for a "did you mean"
+    when one is unknown), so a live view of a large world costs nothing per object.
+    Asset files must lie in ``content_dir`` or one of ``allow`` (:mod:`engine.confine`).
     """
-    ctx = _Ctx(report)
-    for kind, names in (known or {}).items():
-        ctx.ids[kind].update(dict.fromkeys(names, db.root.loc))
+    ctx = _Ctx(report, known=known or {}, elsewhere=db.root.loc)
     _block(db.root, "Scene", ctx, db.root.loc, None)
     _resolve(ctx)
     if content_dir is not None:
-        for v in ctx.assets:
-            target = content_dir / v.data
-            problem = file_problem(target)
-            if problem == NOT_FOUND:
-                report.error(v.loc, f'file not found: "{quoted(v.data)}" (looked for '
-                                    f'{shown(target)})')
-            elif problem is not None:
-                report.error(v.loc, f'cannot use file "{quoted(v.data)}": {problem}')
+        confine = Confinement.of(content_dir, allow)
+        told: dict[str, str | None] = {}  # a file's problem, looked at once however often
+        for v in ctx.assets:              # it is named (an imported model: every object)
+            if is_generated(v.data):  # made by the asset service, not read
+                continue
+            if v.data not in told:
+                told[v.data] = _asset_problem(content_dir, v.data, confine)
+            message = told[v.data]
+            if message is not None:
+                report.error(v.loc, message)
+
+
+def _asset_problem(content_dir: Path, name: str, confine: Confinement) -> str | None:
+    """Why the file ``name`` (relative to ``content_dir``) cannot be used, or None."""
+    target = content_dir / name
+    problem = confine.problem(target)
+    if problem is not None:  # refused before it is looked at
+        return f'cannot use file "{quoted(name)}": {problem}'
+    problem = file_problem(target)
+    if problem == NOT_FOUND:
+        return f'file not found: "{quoted(name)}" (looked for {shown(target)})'
+    if problem is not None:
+        return f'cannot use file "{quoted(name)}": {problem}'
+    return None
 
 
 def _block(block: Block, name: str, ctx: _Ctx, where: Loc, size: Value | None) -> None:
@@ -105,6 +130,8 @@ def _block(block: Block, name: str, ctx: _Ctx, where: Loc, size: Value | None) -
         idv = seen["ID"].value
         key = str(idv.data)
         first = ctx.ids[name].get(key)
+        if first is None and key in ctx.known.get(name, ()):  # declared elsewhere: there
+            first = ctx.elsewhere
         if first is not None:
             ctx.report.error(idv.loc, f"duplicate {name} ID '{quoted(key)}' (first declared at "
                                       f"{first.path}:{first.line}:{first.col})")
@@ -271,14 +298,14 @@ _TARGET_KINDS = {"motor": "Joint", "force": "Object", "kinematic": "Object"}
 def _resolve(ctx: _Ctx) -> None:
     for kind, v in ctx.refs:
         name = str(v.data)
-        if name in ctx.ids[kind]:
+        if _declared(ctx, kind, name):
             continue
         if kind == "Material" and (v.kind == INT or name == "default"):
             if v.kind == INT:
                 ctx.report.warning(v.loc, f"Material {quoted(name)} is not declared; default "
                                           "material properties are used")
             continue
-        hint = suggest(name, ctx.ids[kind]) if ctx.report.accepts(v.loc) else ""
+        hint = suggest(name, _names(ctx, kind)) if ctx.report.accepts(v.loc) else ""
         ctx.report.error(v.loc, f"unknown {kind} '{quoted(name)}'{hint}")
     for v in ctx.targets:
         prefix, _, name = v.data.partition(":")
@@ -286,6 +313,15 @@ def _resolve(ctx: _Ctx) -> None:
         if kind is None:
             ctx.report.error(v.loc, f"controller target \"{quoted(v.data)}\" must start with "
                                     "motor:, force: or kinematic:")
-        elif name not in ctx.ids[kind]:
-            hint = suggest(name, ctx.ids[kind]) if ctx.report.accepts(v.loc) else ""
+        elif not _declared(ctx, kind, name):
+            hint = suggest(name, _names(ctx, kind)) if ctx.report.accepts(v.loc) else ""
             ctx.report.error(v.loc, f"unknown {kind} '{quoted(name)}' in controller target{hint}")
+
+
+def _declared(ctx: _Ctx, kind: str, name: str) -> bool:
+    return name in ctx.ids[kind] or name in ctx.known.get(kind, ())
+
+
+def _names(ctx: _Ctx, kind: str) -> list[str]:
+    """Every ID of ``kind`` (for a suggestion, when a reference is unknown)."""
+    return [*ctx.ids[kind], *ctx.known.get(kind, ())]

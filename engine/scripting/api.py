@@ -18,8 +18,9 @@ Objects (``obj:method(...)``)::
     obj:setKinematicTarget(x, y, z) obj:delete()
     obj:playSound()                 obj:stopSound()   (its Sound component)
     obj:setGain(gain)               volume of its sound, now and for later plays
-    hand:getHandState() -> "neutral" | "contact" | "grasp"   (a virtual hand's mode)
-    hand:getHeld() -> {obj, ...}    hand:grasp(obj)   hand:release()
+    hand:getHandState() -> "neutral" | "contact" | "grasp"   (a virtual hand's mode; also
+    hand.state)   hand:getHeld() -> {obj, ...} (also hand.held)   hand:grasp(obj)
+    hand:release()
 
 Avatars (``Avatar`` blocks; the avatars plugin)::
 
@@ -37,10 +38,19 @@ Scene and engine::
 
     find(id) -> obj or nil          spawn(sceneText) -> {obj, ...}   (scene format)
     delete(obj)                     setMotor(joint, velocity, maxForce)
-    createJoint{kind=, a=obj, b=obj|nil, anchor={..}, axis={..}, low=, high=, id=}
-        -> joint id;                breakJoint(joint)   (joint: id string or number)
+    createJoint{kind=, a=obj, b=obj|nil, anchor={..}, axis={..}, low=, high=, id=,
+                spring={stiffness=, damping=, target=, maxForce=}}   (radians, N·m/rad;
+        a slider's in m, N/m) -> joint id;   breakJoint(joint)   (joint: id string or number)
     playSound(obj) / stopSound(obj) / setGain(obj, gain)
     setUniform(state, name, value | {v1, v2, ...})
+    setAnomaly(id, on [, {param=value, onset=s, eye="left"}])   a visual anomaly (a name of
+                                    engine.anomalies.ANOMALIES or a scene block's ID): on
+                                    true/false switches it (its effect ramps over onset s),
+                                    nil leaves it; params as the scene keys, lower-case first
+                                    (offset={2, 0}, mix=0.5, side="right", sparing=5); out of
+                                    range: clamped, told at the calling line
+    getAnomaly(id) -> {kind=, enabled=, level=, onset=, eye=, <params>}
+    enablePost(id, on)              setPostUniform(id, uniform, value)   a scene's PostPass
     setCamera{position=, lookAt=, follow=obj, offset=, fov=, id=}
     requestPlugin(name) -> bool     (the engine's plugin names and the paper's aliases:
                                      osg, osgsim -> render; openalpp -> sound; the paper's
@@ -96,14 +106,20 @@ from __future__ import annotations
 
 import difflib
 import logging
+import math
+from collections import OrderedDict
+from collections.abc import Callable, Iterator, Mapping
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from components import Camera, Hand, Joint, Name, Physical, Sound, Transform
-from components.joint import SCENE_JOINT_TYPES
+from components.joint import SCENE_JOINT_TYPES, JointKind, Spring
+from engine.anomalies import Anomalies
 from engine.input.state import InputState
+from engine.messages import MessageLog
 from engine.physics import commands as cmd
 from engine.scripting.runtime import ScriptRuntime, to_python
 from engine.services import AVATAR_METHODS, AvatarControl, HandControl, ShaderControl, SoundControl
+from engine.system import PluginName
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -114,6 +130,55 @@ S = TypeVar("S")
 
 #: The joint kinds a script may create: those a scene file may declare.
 JOINT_KINDS = tuple(SCENE_JOINT_TYPES.values())
+#: Scene IDs of deleted objects remembered, so a call on one still names it.
+GONE_NAMES = 1024
+
+
+def _number(value: Any) -> float:
+    """A script's number (not a boolean, which Python would take for 0 or 1)."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise TypeError(f"not a number: {value!r}")
+    return float(value)
+
+
+def _numbers(value: Any) -> tuple[float, ...]:
+    return tuple(_number(v) for v in value)
+
+
+#: A createJoint spring's fields (engine units: per radian, radians; N·m, or N and m for a
+#: slider) and the Spring fields they set.
+_SPRING_FIELDS = {"stiffness": "stiffness", "damping": "damping", "target": "target",
+                  "maxForce": "max_force"}
+
+
+def _spring(value: Any) -> Spring:
+    """A script's ``spring={stiffness=, damping=, target=, maxForce=}`` as a Spring (its
+    values are checked where every joint's are: the AddJoint command)."""
+    if not isinstance(value, dict) or any(k not in _SPRING_FIELDS for k in value):
+        raise ValueError(f"not a spring table: {value!r}")
+    return Spring(**{_SPRING_FIELDS[k]: _number(v) for k, v in value.items()})
+
+
+#: createJoint's fields: how each is read, and what it must be (for the message).
+_JOINT_FIELDS: dict[str, tuple[Callable[[Any], Any], str]] = {
+    "anchor": (_numbers, "a table {x, y, z}"), "axis": (_numbers, "a table {x, y, z}"),
+    "axis2": (_numbers, "a table {x, y, z}"), "low": (_number, "a number"),
+    "high": (_number, "a number"), "motor_velocity": (_number, "a number"),
+    "motor_max_force": (_number, "a number"), "id": (str, "a string"),
+    "spring": (_spring, "a table {stiffness=, damping=, target=, maxForce=} of numbers"),
+}
+
+
+def _finite(what: str, key: str, value: Any, n: int) -> tuple[float, ...]:
+    """``n`` finite numbers from a script's value, or ScriptAPIError naming ``key``."""
+    try:
+        numbers = tuple(_number(v) for v in value)
+    except (TypeError, ValueError):
+        numbers = ()
+    if len(numbers) != n or not all(map(math.isfinite, numbers)):
+        form = "a number" if n == 1 else f"{n} finite numbers {{x, y, z}}"
+        raise ScriptAPIError(f"{what}: {key} must be {form}, got {value!r}")
+    return numbers
 
 
 class ScriptAPIError(RuntimeError):
@@ -125,20 +190,24 @@ local K, P = ...
 local Object, handle, id_of = K.Object, K.handle, K.id_of
 local type, error = type, error
 
-local function vec(what, x, y, z)
+local function on(h)  -- " for object \"ID\"" when h is an object's handle
+  local id = id_of(h)
+  return id == nil and "" or " for " .. P.called(id)
+end
+local function vec(what, x, y, z, h)
   if type(x) == "table" then x, y, z = x[1], x[2], x[3] end
   if type(x) ~= "number" or type(y) ~= "number" or type(z) ~= "number" then
-    error(what .. ": expected three numbers or a table {x, y, z}", 3)
+    error(what .. ": expected three numbers or a table {x, y, z}" .. on(h), 3)
   end
   return x, y, z
 end
-local function point(what, x, y, z)
+local function point(what, x, y, z, h)
   if x == nil then return nil, nil, nil end
-  return vec(what, x, y, z)
+  return vec(what, x, y, z, h)
 end
-local function oid(what, h)
+local function oid(what, h, owner)  -- owner: the object the call is on, named if h is bad
   local id = id_of(h)
-  if id == nil then error(what .. ": expected an object, got " .. type(h), 3) end
+  if id == nil then error(what .. ": expected an object, got " .. type(h) .. on(owner), 3) end
   return id
 end
 local function joint(what, j)
@@ -155,31 +224,31 @@ function Object.getOrientation(h) return P.get(oid("getOrientation", h), 1) end
 function Object.getVelocity(h) return P.get(oid("getVelocity", h), 2) end
 function Object.getAngularVelocity(h) return P.get(oid("getAngularVelocity", h), 3) end
 function Object.setPosition(h, x, y, z)
-  P.set_position(oid("setPosition", h), vec("setPosition", x, y, z))
+  P.set_position(oid("setPosition", h), vec("setPosition", x, y, z, h))
 end
 function Object.setOrientation(h, w, x, y, z)
   if type(w) == "table" then w, x, y, z = w[1], w[2], w[3], w[4] end
   P.set_orientation(oid("setOrientation", h), w, x, y, z)
 end
 function Object.setVelocity(h, x, y, z)
-  P.set_velocity(oid("setVelocity", h), 0, vec("setVelocity", x, y, z))
+  P.set_velocity(oid("setVelocity", h), 0, vec("setVelocity", x, y, z, h))
 end
 function Object.setAngularVelocity(h, x, y, z)
-  P.set_velocity(oid("setAngularVelocity", h), 1, vec("setAngularVelocity", x, y, z))
+  P.set_velocity(oid("setAngularVelocity", h), 1, vec("setAngularVelocity", x, y, z, h))
 end
 function Object.addForce(h, x, y, z, px, py, pz)
-  local fx, fy, fz = vec("addForce", x, y, z)
-  P.push(oid("addForce", h), 0, fx, fy, fz, point("addForce", px, py, pz))
+  local fx, fy, fz = vec("addForce", x, y, z, h)
+  P.push(oid("addForce", h), 0, fx, fy, fz, point("addForce", px, py, pz, h))
 end
 function Object.addTorque(h, x, y, z)
-  P.push(oid("addTorque", h), 1, vec("addTorque", x, y, z))
+  P.push(oid("addTorque", h), 1, vec("addTorque", x, y, z, h))
 end
 function Object.addImpulse(h, x, y, z, px, py, pz)
-  local ix, iy, iz = vec("addImpulse", x, y, z)
-  P.push(oid("addImpulse", h), 2, ix, iy, iz, point("addImpulse", px, py, pz))
+  local ix, iy, iz = vec("addImpulse", x, y, z, h)
+  P.push(oid("addImpulse", h), 2, ix, iy, iz, point("addImpulse", px, py, pz, h))
 end
 function Object.setKinematicTarget(h, x, y, z)
-  P.kinematic(oid("setKinematicTarget", h), vec("setKinematicTarget", x, y, z))
+  P.kinematic(oid("setKinematicTarget", h), vec("setKinematicTarget", x, y, z, h))
 end
 function Object.delete(h) P.delete(oid("delete", h)) end
 function Object.playSound(h) P.sound(oid("playSound", h), true) end
@@ -192,7 +261,8 @@ function Object.getHeld(h)
   for i = 1, #ids do out[i] = handle(ids[i]) end
   return out
 end
-function Object.grasp(h, other) P.hand_grasp(oid("grasp", h), oid("grasp", other)) end
+function Object.grasp(h, other) P.hand_grasp(oid("grasp", h), oid("grasp", other, h)) end
+K.Fields.state, K.Fields.held = Object.getHandState, Object.getHeld  -- hand.state, hand.held
 for i = 1, #P.avatar_methods do  -- avatar:play("Run", {fade=0.3}), avatar:blend{...}, ...
   local method = P.avatar_methods[i]
   Object[method] = function(h, ...)
@@ -234,6 +304,21 @@ function C.setCamera(opts)
   if type(opts) ~= "table" then error("setCamera: expected a table of options", 2) end
   P.set_camera(plain(opts))
 end
+function C.setAnomaly(id, on, params)
+  if type(id) ~= "string" then
+    error("setAnomaly: expected an anomaly's name or ID, got " .. type(id), 2)
+  end
+  if on ~= nil and type(on) ~= "boolean" then
+    error("setAnomaly: the second argument switches it: true, false or nil, got " .. type(on), 2)
+  end
+  if params ~= nil and type(params) ~= "table" then
+    error("setAnomaly: the third argument is a table of parameters, got " .. type(params), 2)
+  end
+  P.set_anomaly(K.where(2), id, on, plain(params))
+end
+function C.getAnomaly(id) return P.get_anomaly(id) end
+function C.enablePost(id, on) P.enable_post(id, on ~= false) end
+function C.setPostUniform(id, name, value) P.set_post_uniform(id, name, plain(value)) end
 function C.requestPlugin(name) return P.request_plugin(name) end
 C.requrestPlugin = C.requestPlugin
 function C.time() return P.time() end
@@ -253,31 +338,118 @@ return G
 """
 
 
+class NameIndex:
+    """Scene ID -> the entities named so (the latest last), kept by the world's Name
+    hooks: finding an object costs the same in a world of any size, and a deleted
+    object's ID leaves the index with it (a script spawning and deleting forever grows
+    nothing). The IDs of the last :data:`GONE_NAMES` deleted entities are remembered, so
+    a call on one still names it."""
+
+    def __init__(self, world: Any) -> None:
+        self._by_name: dict[str, list[int]] = {}
+        self.gone: OrderedDict[int, str] = OrderedDict()
+        world.on_add(Name, self._added)
+        world.on_remove(Name, self._removed)
+        for entity, name in sorted(world.get_component(Name), key=lambda pair: pair[0]):
+            self._added(entity, name)
+
+    def _added(self, entity: int, name: Name) -> None:
+        self._by_name.setdefault(name.id, []).append(entity)
+
+    def _removed(self, entity: int, name: Name) -> None:
+        found = self._by_name.get(name.id)
+        if found is not None and entity in found:
+            found.remove(entity)
+            if not found:
+                del self._by_name[name.id]
+        self.gone[entity] = name.id
+        if len(self.gone) > GONE_NAMES:
+            self.gone.popitem(last=False)
+
+    def entities(self, name: str) -> list[int]:
+        """The entities named ``name``, the latest last (empty: none)."""
+        return self._by_name.get(name, [])
+
+
+class LivePoses(Mapping[str, tuple[tuple[float, ...], tuple[float, ...]]]):
+    """Object ID -> current pose (position, quaternion) of the latest body of that ID,
+    read when asked: what a spawned snippet's joints may attach to, without copying the
+    world's poses on every spawn."""
+
+    def __init__(self, world: Any, names: NameIndex) -> None:
+        self._world, self._names = world, names
+
+    def _body(self, name: str) -> Transform | None:
+        for entity in reversed(self._names.entities(name)):
+            if self._world.has_component(entity, Physical):
+                return self._world.try_component(entity, Transform)
+        return None
+
+    def __getitem__(self, name: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        t = self._body(name) if isinstance(name, str) else None
+        if t is None:
+            raise KeyError(name)
+        return tuple(map(float, t.position)), tuple(map(float, t.orientation))
+
+    def __contains__(self, name: object) -> bool:
+        return isinstance(name, str) and self._body(name) is not None
+
+    def __iter__(self) -> Iterator[str]:  # the whole world: only for "did you mean"
+        return (n.id for _, (n, _t, _p) in self._world.get_components(Name, Transform,
+                                                                      Physical))
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
+
+
 class ScriptAPI:
     """The Python side of the API, bound to one engine (main thread only)."""
 
     def __init__(self, engine: Engine) -> None:
         self.engine = engine
-        self._names: dict[str, int] = {}
+        self._names = NameIndex(engine.world)
+        self._poses = LivePoses(engine.world, self._names)
         self._warned: set[str] = set()
+        self._messages = MessageLog(log)
         self.runtime: ScriptRuntime | None = None
 
-    def _push(self, what: str, make: Any, *args: Any) -> None:
-        """Make the command ``make(*args)`` and queue it; a bad value fails here, at the
-        script's line, with the object's scene ID."""
+    def flush(self) -> None:
+        """Tell the repeats of messages said once (at the end of a run)."""
+        self._messages.flush()
+
+    def _called(self, entity: int, joint: bool = False) -> str:
+        """How a message names an object (or joint): by its scene ID."""
+        named = self.engine.world.try_component(entity, Name) \
+            if self.engine.world.entity_exists(entity) else None
+        name = named.id if named is not None else self._names.gone.get(entity)
+        what = "joint" if joint else "object"
+        return f'{what} "{name}"' if name else f"an unnamed {what}"
+
+    def _command(self, what: str, make: Callable[..., cmd.Command], *args: Any,
+                 target: str | None = None) -> cmd.Command:
+        """The command ``make(*args)``, checked as made and against the world's limits; a
+        bad value fails here, at the script's line: ``what: why for object "ID"`` (or
+        for ``target``)."""
         try:
             command = make(*args)
+            cmd.check_limits(command, self.engine.physics.limits)
         except cmd.CommandError as exc:
-            target = self.name(args[0]) if args and isinstance(args[0], int) else None
-            on = f" for object {target!r}" if target else ""
-            raise ScriptAPIError(f"{what}{on}: {str(exc).partition(': ')[2]}") from None
-        self.engine.physics.push(command)
+            if target is None and args and isinstance(args[0], int):
+                target = self._called(args[0], make.on_joint)  # type: ignore[attr-defined]
+            on = "" if target is None else f" for {target}"
+            raise ScriptAPIError(f"{what}: {str(exc).partition(': ')[2]}{on}") from None
+        return command
+
+    def _push(self, what: str, make: Callable[..., cmd.Command], *args: Any) -> None:
+        """Make the command (checked: :meth:`_command`) and queue it."""
+        self.engine.physics.push(self._command(what, make, *args))
 
     def install(self, runtime: ScriptRuntime) -> Any:
         """Build the Lua API table for ``runtime`` (passed as ``api=`` to it)."""
         self.runtime = runtime
         P = runtime.lua.table_from({
-            "name": self.name, "get": self.get, "set_position": self.set_position,
+            "name": self.name, "called": self._called, "get": self.get,
+            "set_position": self.set_position,
             "set_orientation": self.set_orientation, "set_velocity": self.set_velocity,
             "push": self.push, "kinematic": self.kinematic, "delete": self.delete,
             "sound": self.sound, "find": self.find, "spawn": self.spawn,
@@ -290,7 +462,9 @@ class ScriptAPI:
             "time": self.time, "measure": self.measure, "tracker": self.tracker,
             "wheel": self.wheel,
             "button": self.button, "axis": self.axis, "key": self.key,
-            "avatar": self.avatar,
+            "avatar": self.avatar, "set_anomaly": self.set_anomaly,
+            "get_anomaly": self.get_anomaly, "enable_post": self.enable_post,
+            "set_post_uniform": self.set_post_uniform,
             "avatar_methods": runtime.lua.table_from(AVATAR_METHODS),
         })
         return runtime.lua.execute(_LUA_API, runtime.kernel, P, name="=colosseum")
@@ -299,22 +473,19 @@ class ScriptAPI:
     def find(self, name: Any) -> int:
         """Entity id of the object whose scene ID is ``name`` (-1: none)."""
         if isinstance(name, int | float) and not isinstance(name, bool):
+            if not (math.isfinite(name) and float(name).is_integer()):
+                return -1
             entity = int(name)
             return entity if self.engine.world.entity_exists(entity) else -1
         if not isinstance(name, str):
             raise ScriptAPIError(f"find: expected an object ID string, got {name!r}")
-        world = self.engine.world
-        entity = self._names.get(name)
-        if entity is not None and world.entity_exists(entity):
-            named = world.try_component(entity, Name)
-            if named is not None and named.id == name:
-                return entity
-        self._names = {n.id: e for e, n in world.get_component(Name)}
-        return self._names.get(name, -1)
+        found = self._names.entities(name)
+        return found[-1] if found else -1
 
     def _entity(self, entity: int, what: str) -> int:
         if not self.engine.world.entity_exists(entity):
-            raise ScriptAPIError(f"{what}: object {entity} no longer exists")
+            raise ScriptAPIError(f"{what}: {self._called(entity)} no longer exists "
+                                 "(it was deleted)")
         return entity
 
     def _joint(self, ref: Any, what: str) -> tuple[int, Joint]:
@@ -335,7 +506,7 @@ class ScriptAPI:
     def _transform(self, entity: int, what: str) -> Transform:
         t = self.engine.world.try_component(self._entity(entity, what), Transform)
         if t is None:
-            raise ScriptAPIError(f"{what}: object {entity} has no position")
+            raise ScriptAPIError(f"{what}: {self._called(entity)} has no position")
         return t
 
     def get(self, entity: int, which: int) -> tuple[float, ...]:
@@ -355,10 +526,7 @@ class ScriptAPI:
                   orientation: Any) -> None:
         """Check the pose (a SetPose command), teleport the body if it has one, and write
         the Transform so the script reads back what it set."""
-        try:
-            pose = cmd.SetPose(entity, position, orientation)
-        except cmd.CommandError as exc:
-            raise ScriptAPIError(f"{what}: {str(exc).partition(': ')[2]}") from None
+        pose = self._command(what, cmd.SetPose, entity, position, orientation)
         if self.engine.world.has_component(entity, Physical):
             self.engine.physics.set_pose(entity, pose.position, pose.orientation)
         t.position[:] = pose.position
@@ -369,10 +537,7 @@ class ScriptAPI:
         t = self._transform(entity, what)
         linear = (x, y, z) if which == 0 else t.linear_velocity
         angular = (x, y, z) if which == 1 else t.angular_velocity
-        try:
-            velocity = cmd.SetVelocity(entity, linear, angular)
-        except cmd.CommandError as exc:
-            raise ScriptAPIError(f"{what}: {str(exc).partition(': ')[2]}") from None
+        velocity = self._command(what, cmd.SetVelocity, entity, linear, angular)
         if self.engine.world.has_component(entity, Physical):
             self.engine.physics.set_velocity(entity, velocity.linear, velocity.angular)
         t.linear_velocity[:] = velocity.linear
@@ -381,20 +546,39 @@ class ScriptAPI:
     def push(self, entity: int, kind: int, x: float, y: float, z: float,
              px: float | None = None, py: float | None = None, pz: float | None = None) -> None:
         what = ("addForce", "addTorque", "addImpulse")[kind]
-        if not self.engine.world.has_component(self._entity(entity, what), Physical):
-            raise ScriptAPIError(f"{what}: object {entity} has no physical body")
+        physical = self.engine.world.try_component(self._entity(entity, what), Physical)
+        if physical is None:
+            raise ScriptAPIError(f"{what}: {self._called(entity)} has no physical body")
         where = None if px is None else (px, py, pz)
-        if kind == 0:
-            self._push(what, cmd.ApplyForce, entity, (x, y, z), where)
-        elif kind == 1:
+        if kind == 1:
             self._push(what, cmd.ApplyTorque, entity, (x, y, z))
-        else:
-            self._push(what, cmd.ApplyImpulse, entity, (x, y, z), where)
+            return
+        make = cmd.ApplyForce if kind == 0 else cmd.ApplyImpulse
+        load = self._command(what, make, entity, (x, y, z), where)
+        if physical.mass:  # the speed it gives in one step is known here: refused at the call
+            seconds = self.engine.config.dt if kind == 0 else 1.0
+            reach = math.hypot(x, y, z) * seconds / physical.mass
+            limit = self.engine.physics.limits.max_speed
+            if reach > limit:
+                raise ScriptAPIError(
+                    f"{what}: {math.hypot(x, y, z):g} {'N' if kind == 0 else 'N s'} on "
+                    f"{physical.mass:g} kg gives {reach:g} m/s in one step, over the limit "
+                    f"of {limit:g} m/s, for {self._called(entity)}")
+        self.engine.physics.push(load)
 
     def kinematic(self, entity: int, x: float, y: float, z: float) -> None:
-        t = self._transform(entity, "setKinematicTarget")
-        self._push("setKinematicTarget", cmd.SetKinematicTarget, entity, (x, y, z),
-                   t.orientation, self.engine.config.dt)
+        what = "setKinematicTarget"
+        t = self._transform(entity, what)
+        dt = self.engine.config.dt
+        target = self._command(what, cmd.SetKinematicTarget, entity, (x, y, z),
+                               t.orientation, dt)
+        limit = self.engine.physics.limits.max_speed
+        speed = math.dist(target.position, t.position) / dt
+        if speed > limit:  # known here, from where the body is: refused at the call
+            raise ScriptAPIError(f"{what}: reaching ({x:g}, {y:g}, {z:g}) in one step of "
+                                 f"{dt:g} s needs {speed:g} m/s, over the limit of "
+                                 f"{limit:g} m/s, for {self._called(entity)}")
+        self.engine.physics.push(target)
 
     def delete(self, entity: int) -> None:
         self.engine.despawn(entity)
@@ -432,7 +616,8 @@ class ScriptAPI:
         try:
             spec = spec_from_text(str(text), content, self.engine.rng, path="<spawn>",
                                   scene=None if scene is None else scene.spec,
-                                  bodies=self._body_poses())
+                                  bodies=self._poses,
+                                  allow=self.engine.config.allow_paths)
         except SceneError as exc:
             raise ScriptAPIError(f"spawn: {exc}") from None
         for problem in spec.problems:  # an asset failed: told, its object left out
@@ -458,7 +643,6 @@ class ScriptAPI:
                 joint.reference = self._reference(joint.body_a, joint.body_b)
             joints.append(self.engine.spawn(Name(js.id), joint))
         made = [e for e in (*made, *joints) if e >= 0]
-        self._names.update({name: e for name, e in ids.items() if e >= 0})
         if scene is not None:
             scene.record(SpawnRecord(spec.db, spec.content_dir, objects, joints, avatars),
                          self.engine.world.entity_exists)
@@ -484,19 +668,10 @@ class ScriptAPI:
 
         return pose(ta), None if tb is None else pose(tb)
 
-    def _body_poses(self) -> dict[str, tuple[tuple[float, ...], tuple[float, ...]]]:
-        """Object ID -> current pose of every named body, for joints in spawned snippets."""
-        world = self.engine.world
-        return {name.id: (tuple(t.position), tuple(t.orientation))
-                for _, (name, t, _p) in world.get_components(Name, Transform, Physical)}
-
     def set_motor(self, ref: Any, velocity: Any, max_force: Any) -> None:
         entity, joint = self._joint(ref, "setMotor")
-        try:
-            motor = cmd.SetMotor(entity, velocity, max_force)
-        except cmd.CommandError as exc:
-            raise ScriptAPIError(f"setMotor on joint {joint.id or ref!r}: "
-                                 f"{str(exc).partition(': ')[2]}") from None
+        motor = self._command("setMotor", cmd.SetMotor, entity, velocity, max_force)
+        assert isinstance(motor, cmd.SetMotor)
         joint.motor_velocity, joint.motor_max_force = motor.velocity, motor.max_force
         self.engine.physics.push(motor)
 
@@ -517,16 +692,32 @@ class ScriptAPI:
         b = None if b_ref is None else self.find(b_ref)
         if a < 0 or (b is not None and b < 0):
             raise ScriptAPIError("createJoint: a and b must be existing objects")
-        fields = {"anchor": tuple, "axis": tuple, "axis2": tuple, "low": float, "high": float,
-                  "motor_velocity": float, "motor_max_force": float, "id": str}
+        if a == b:
+            raise ScriptAPIError(f"createJoint: a joint needs two different bodies, got "
+                                 f"{self._called(a)} as both a and b (leave b out to join "
+                                 "it to the world)")
+        if kind == JointKind.HINGE2 and b is not None and not all(
+                getattr(self.engine.world.try_component(e, Physical), "kind", "static")
+                != "static" for e in (a, b)):
+            raise ScriptAPIError(f"createJoint: {cmd.HINGE2_BODIES}; got "
+                                 f"{self._called(a)} and {self._called(b)}")
         kwargs: dict[str, Any] = {}
+        named = opts.get("id")
+        target = f'joint "{named}"' if named else f"the joint on {self._called(a)}"
         for key, value in opts.items():
             key = {"maxForce": "motor_max_force", "velocity": "motor_velocity"}.get(key, key)
-            if key not in fields:
-                raise ScriptAPIError(f"createJoint: unknown field {key!r}")
-            kwargs[key] = fields[key](value)
+            if key not in _JOINT_FIELDS:
+                raise ScriptAPIError(f"createJoint: unknown field {key!r} for {target}")
+            kind_of, form = _JOINT_FIELDS[key]
+            try:
+                kwargs[key] = kind_of(value)
+            except (TypeError, ValueError):
+                raise ScriptAPIError(f"createJoint: {key} must be {form}, got "
+                                     f"{value!r} for {target}") from None
         joint = Joint(kind=kind, body_a=a, body_b=b, **kwargs)
         joint.reference = self._reference(a, b)
+        self._command("createJoint", cmd.AddJoint, a, joint,  # its values, checked now
+                      target=f'joint "{joint.id}"' if joint.id else target)
         entity = self.engine.spawn(Name(joint.id or f"joint{a}_{b}"), joint)
         scene = self.engine.try_resource(SceneIds)
         if scene is not None:
@@ -544,8 +735,8 @@ class ScriptAPI:
         hands = self.engine.try_resource(HandControl)
         self._entity(entity, what)
         if hands is None:
-            raise ScriptAPIError(f"{what}: the hands plugin is not loaded "
-                                 "(requestPlugin('hands') loads it)")
+            raise ScriptAPIError(f"{what}: the {HandControl.plugin} plugin is not loaded "
+                                 f"(requestPlugin('{HandControl.plugin}') loads it)")
         return hands
 
     def _hand_call(self, what: str, entity: int, call: Any) -> Any:
@@ -566,7 +757,9 @@ class ScriptAPI:
         return self.runtime.lua.table_from(list(held))
 
     def hand_grasp(self, entity: int, obj: int) -> None:
-        self._entity(obj, "grasp")
+        if not self.engine.world.entity_exists(obj):
+            raise ScriptAPIError(f"grasp: nothing to hold: {self._called(obj)} does not exist "
+                                 f"(any more), for {self._called(self._entity(entity, 'grasp'))}")
         self._hand_call("grasp", entity, lambda h: h.grasp(entity, obj))
 
     def hand_release(self, entity: int) -> None:
@@ -608,13 +801,13 @@ class ScriptAPI:
         if found is None and what not in self._warned:
             self._warned.add(what)
             plugin = kind.plugin  # type: ignore[attr-defined]
-            if plugin == "render" and self.engine.config.headless:  # nothing to look at
+            if plugin == PluginName.RENDER and self.engine.config.headless:  # nothing to look at
                 log.warning("%s: nothing is drawn in this run (headless, without --screenshot "
                             "or --record-frames), so the call does nothing; run it with a "
                             "display, or with --screenshot FILE.png, to see it", what)
             else:
                 log.warning("%s: the %s plugin is not loaded; the call does nothing "
-                            "(requestPlugin(%r) loads it)", what, plugin, plugin)
+                            "(requestPlugin('%s') loads it)", what, plugin, plugin)
         return found
 
     def sound(self, entity: int, play: bool) -> None:
@@ -624,14 +817,15 @@ class ScriptAPI:
         if play:
             system.play(self.engine, self._entity(entity, "playSound"))
         else:
-            system.stop(entity)
+            system.stop(self._entity(entity, "stopSound"))
 
     def set_gain(self, entity: int, gain: Any) -> None:
         if not isinstance(gain, int | float) or isinstance(gain, bool) or not 0 <= gain < 1e6:
-            raise ScriptAPIError(f"setGain: gain must be a number >= 0, got {gain!r}")
+            raise ScriptAPIError(f"setGain: gain must be a number from 0 to 1e6, got {gain!r} "
+                                 f"for {self._called(entity)}")
         sound = self.engine.world.try_component(self._entity(entity, "setGain"), Sound)
         if sound is None:
-            raise ScriptAPIError("setGain: the object has no Sound")
+            raise ScriptAPIError(f"setGain: {self._called(entity)} has no Sound")
         sound.gain = float(gain)
         system = self._service(SoundControl, "setGain")
         if system is not None:
@@ -648,6 +842,9 @@ class ScriptAPI:
             if isinstance(plain, dict) else []
         try:
             result = control.script_call(self._entity(entity, method), method, listed)
+        except cmd.CommandError as exc:  # a pose no world can take: named like the rest
+            raise ScriptAPIError(f"{method}: {str(exc).partition(': ')[2]} for "
+                                 f"{self._called(entity)}") from None
         except (KeyError, ValueError) as exc:
             raise ScriptAPIError(f"{method}: {exc.args[0] if exc.args else exc}") from None
         assert self.runtime is not None
@@ -657,15 +854,67 @@ class ScriptAPI:
         system = self._service(ShaderControl, "setUniform")
         if system is None:
             return
-        value = to_python(value)
-        if isinstance(value, list) and all(isinstance(v, int | float) for v in value):
-            value = tuple(float(v) for v in value)
-        elif not isinstance(value, int | float):
-            raise ScriptAPIError("setUniform: value must be a number or a table of numbers")
+        value = _uniform_value("setUniform", value)
         try:
             system.set_uniform(str(state), str(name), value)
         except (KeyError, ValueError) as exc:
-            raise ScriptAPIError(f"setUniform: {exc}") from None
+            raise ScriptAPIError(f"setUniform: {exc.args[0] if exc.args else exc}") from None
+
+    def set_anomaly(self, where: str, anomaly: str, on: bool | None, params: Any) -> None:
+        """``setAnomaly(id, on, {param=value, onset=s, eye="left"})``: switch and set a visual
+        anomaly; a value out of range is clamped and told at the script's line (once per
+        message), the call goes on."""
+        anomalies = self._service(Anomalies, "setAnomaly")
+        if anomalies is None:
+            return
+        options = to_python(params) if params is not None else {}
+        if not isinstance(options, dict):
+            raise ScriptAPIError("setAnomaly: parameters are a table {offset={2, 0}, mix=0.5, "
+                                 "onset=1, eye=\"left\"}")
+        onset, eye = options.pop("onset", None), options.pop("eye", None)
+        call = f"setAnomaly({anomaly!r})"
+        try:
+            problems = anomalies.set(anomaly, f"lua:{where.rstrip(': ')}", on, options, onset,
+                                     None if eye is None else str(eye))
+        except (KeyError, ValueError) as exc:
+            raise ScriptAPIError(f"{call}: {exc.args[0] if exc.args else exc}") from None
+        for problem in problems:
+            self._messages.warn(f"{where}{call}: {problem}")
+
+    def get_anomaly(self, anomaly: Any) -> Any:
+        """``getAnomaly(id)``: a table of what it is and is set to (``enabled``, ``level``,
+        the ramp's progress 0..1, ``onset``, ``eye``, ``kind`` and its parameters)."""
+        anomalies = self._service(Anomalies, "getAnomaly")
+        if anomalies is None:
+            return None
+        try:
+            state = anomalies.get(str(anomaly))
+        except KeyError as exc:
+            raise ScriptAPIError(f"getAnomaly: {exc.args[0]}") from None
+        out: dict[str, Any] = {"kind": state.kind.name, "enabled": state.enabled,
+                               "level": state.level, "onset": state.onset, "eye": state.eye}
+        out.update({state.kind.param(key).lua: value for key, value in state.values.items()})
+        assert self.runtime is not None
+        return self.runtime.to_lua(out)
+
+    def enable_post(self, name: Any, on: bool) -> None:
+        """``enablePost(id, on)``: switch a scene's PostPass."""
+        system = self._service(ShaderControl, "enablePost")
+        if system is not None:
+            try:
+                system.enable_post(str(name), bool(on))
+            except KeyError as exc:
+                raise ScriptAPIError(f"enablePost: {exc.args[0]}") from None
+
+    def set_post_uniform(self, name: Any, uniform: Any, value: Any) -> None:
+        """``setPostUniform(id, uniform, value)``: retune a scene's PostPass."""
+        system = self._service(ShaderControl, "setPostUniform")
+        if system is not None:
+            try:
+                system.set_post_uniform(str(name), str(uniform), _uniform_value(
+                    "setPostUniform", value))
+            except (KeyError, ValueError) as exc:
+                raise ScriptAPIError(f"setPostUniform: {exc.args[0]}") from None
 
     def set_camera(self, opts: Any) -> None:
         """Move, aim or attach the active camera (or the one named ``id``)."""
@@ -684,15 +933,19 @@ class ScriptAPI:
             if key == "position":
                 t = world.try_component(entity, Transform)
                 if t is not None:
-                    t.position[:] = [float(v) for v in value]
+                    t.position[:] = _finite("setCamera", key, value, 3)
             elif key == "lookAt":
-                camera.look_at = tuple(float(v) for v in value)
+                camera.look_at = _finite("setCamera", key, value, 3)
             elif key == "follow":
                 camera.follow = None if value is None else self.find(value)
             elif key == "offset":
-                camera.offset = tuple(float(v) for v in value)
+                camera.offset = _finite("setCamera", key, value, 3)
             elif key == "fov":
-                camera.fov = float(value)
+                fov = _finite("setCamera", key, [value], 1)[0]
+                if not 0 < fov < 180:
+                    raise ScriptAPIError(f"setCamera: fov is degrees between 0 and 180, got "
+                                         f"{fov:g}")
+                camera.fov = fov
             else:
                 raise ScriptAPIError(f"setCamera: unknown option {key!r} "
                                      "(position, lookAt, follow, offset, fov, id)")
@@ -712,3 +965,14 @@ class ScriptAPI:
                                  f"(known: {', '.join(known) or 'none'})")
         engine.request_plugin(name)
         return True
+
+
+def _uniform_value(what: str, value: Any) -> float | tuple[float, ...]:
+    """A uniform's value from Lua: a finite number or a table of them (true is not 1)."""
+    value = to_python(value)
+    numbers = value if isinstance(value, list) else [value]
+    if not numbers or not all(isinstance(v, int | float) and not isinstance(v, bool) and
+                              math.isfinite(v) for v in numbers):
+        raise ScriptAPIError(f"{what}: value must be a finite number or a table of them, "
+                             f"got {value!r}")
+    return tuple(float(v) for v in value) if isinstance(value, list) else value

@@ -112,6 +112,9 @@ local function text(...)
 end
 local function number(v, what)
   if type(v) ~= "number" then error(what .. ": expected a number, got " .. type(v), 3) end
+  if v ~= v or v == math.huge or v == -math.huge then
+    error(what .. ": expected a finite number of seconds, got " .. tostring(v), 3)
+  end
   return v
 end
 local function fn(v, what)

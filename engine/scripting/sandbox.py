@@ -14,11 +14,13 @@ finalizers, ``collectgarbage`` modes other than count/collect/step, and any
 attribute of a Python object (the runtime's attribute filter refuses all).
 ``require`` resolves only modules in the content folder's ``scripts/``.
 
-The budget is an instruction count hook; CPU time spent inside C library calls
-the hook cannot see (pattern matching, sorting, string building) is measured
-and charged to the same budget (process CPU time: in threaded mode the physics
-thread's share makes this conservative), and patterns whose backtracking could
-run for seconds on the given subject are refused before they start.
+The budget is an instruction count hook; work done inside C library calls the
+hook cannot see is charged to the same budget: by its size where the arguments
+or the result tell it (strings built, items sorted, moved or concatenated), so
+the charge is the same in every run, and for pattern matching by the bytes it may scan
+and the CPU time a call takes beyond a tenth of a millisecond (backtracking).
+Patterns whose backtracking could run for seconds on the given subject are
+refused before they start.
 
 Once a callback exceeds the budget the kernel enters a *killed* state in which
 the hook raises on every instruction of any Lua function except the kernel's
@@ -84,7 +86,8 @@ def resolve_module(scripts_dir: Path | None, name: object) -> Path:
     return path
 
 
-#: The kernel: args (hook step, budget ticks, budget message); returns table K.
+#: The kernel: args (hook step, budget ticks, budget message, instructions per second);
+#: returns table K.
 KERNEL = r"""
 local STEP, LIMIT, BUDGET_MESSAGE, INSTRUCTIONS_PER_SECOND = ...
 local sethook, getinfo, traceback = debug.sethook, debug.getinfo, debug.traceback
@@ -99,6 +102,13 @@ local format, sub, raw_find = string.format, string.sub, string.find
 
 local K = {}
 local budget, limit, killed, kill_message = 0, LIMIT, false, nil
+-- A safety net for work inside one statement that neither the count nor the charges
+-- below see (joining megabyte strings with ..): a callback running over WALL_SECONDS of
+-- real time (os.time's whole seconds: stopped between 1 and 2 s) is stopped too.
+-- `started` is the running callback's start (nil between callbacks: the kernel's own
+-- loops, a batch's scripts without the function, are never judged by an old start);
+-- `outer` holds the starts of the callbacks a nested one runs inside.
+local time, WALL_SECONDS, started, outer, depth = os.time, 1, nil, {}, 0
 local exempt = setmetatable({}, {__mode = "k"})
 
 local function where(level)
@@ -121,13 +131,33 @@ local function hook()
     error(kill_message, 0)
   end
   budget = budget - 1
+  local why
   if budget < 0 then
-    killed = true
-    kill_message = where(2) .. format("%s (%d instructions per callback)", BUDGET_MESSAGE,
-                                      limit * STEP)
-    sethook(co_running(), hook, "", 1)
-    error(kill_message, 0)
+    why = format("%d instructions per callback", limit * STEP)
+  elseif started ~= nil and time() - started > WALL_SECONDS then
+    why = "ran over a second of real time, in work the instruction count cannot see "
+          .. "such as joining long strings"
+  else
+    return
   end
+  -- Asked only here, where a script is about to be stopped, so the common tick stays
+  -- cheap: the kernel's own code around a callback is not the script's (a tick landing in
+  -- finish before it resets the budget raised outside xpcall, into the engine), and
+  -- neither is kernel work the engine asks for between callbacks (the names of a
+  -- reloaded script, garbage collection): that starts the count afresh. A script's own
+  -- code run between callbacks (a metamethod Python touched) is still stopped.
+  local info = getinfo(2, "Sf")
+  if info and exempt[info.func] then return end
+  if started == nil and info and info.source == "=colosseum" then
+    budget = limit
+    return
+  end
+  -- the message first: a tick landing in where() while `killed` stood without it
+  -- raised nil, and the script was told "error object is a nil value"
+  kill_message = where(2) .. format("%s (%s)", BUDGET_MESSAGE, why)
+  killed = true
+  sethook(co_running(), hook, "", 1)
+  error(kill_message, 0)
 end
 
 local function handler(e)
@@ -151,8 +181,17 @@ local function handler(e)
   return cut and sub(tb, 1, cut - 1) or tb
 end
 
+-- A callback starts: a fresh budget and start time (finish restores the outer start).
+local function enter()
+  depth = depth + 1
+  outer[depth] = started or false
+  budget, started = limit, time()
+end
+
 local function finish(ok, err)
-  budget = limit
+  budget, started = limit, outer[depth] or nil
+  outer[depth] = nil
+  depth = depth - 1
   if killed then  -- still exempt here: restore the normal hook, then leave the killed state
     sethook(hook, "", STEP)
     killed = false
@@ -164,7 +203,7 @@ end
 
 -- Run fn(...) under a fresh budget. Returns nil, or the error message with traceback.
 local function dispatch(fn, ...)
-  budget = limit
+  enter()
   return finish(xpcall(fn, handler, ...))
 end
 
@@ -172,11 +211,12 @@ end
 local function call(env, name, ...)
   local fn = rawget(env, name)
   if fn == nil then return nil end
-  budget = limit
+  enter()
   return finish(xpcall(fn, handler, ...))
 end
 
-exempt[hook] = true; exempt[handler] = true; exempt[finish] = true
+K.where = where  -- "file:line: " of the script calling an API function (for its messages)
+exempt[hook] = true; exempt[handler] = true; exempt[enter] = true; exempt[finish] = true
 exempt[dispatch] = true; exempt[call] = true
 K.dispatch, K.call = dispatch, call
 sethook(hook, "", STEP)
@@ -208,9 +248,14 @@ local handle_ids = setmetatable({}, {__mode = "k"})
 local handles = {}
 local Object = {}
 K.Object = Object
+-- Read-only fields computed when read (hand.state, hand.held): name -> getter(handle)
+local Fields = {}
+K.Fields = Fields
 local handle_mt = {
   __index = function(h, k)
     if k == "id" then return handle_ids[h] end
+    local field = Fields[k]
+    if field ~= nil then return field(h) end
     return Object[k]
   end,
   __newindex = function() error("object handles are read-only", 2) end,
@@ -249,13 +294,13 @@ end
 function K.collide(env, other, impulse)
   local fn = rawget(env, "onCollision")
   if fn == nil then return nil end
-  budget = limit
+  enter()
   return finish(xpcall(fn, handler, K.handle(other), impulse))
 end
 function K.collide_scene(env, a, b, impulse)
   local fn = rawget(env, "onCollision")
   if fn == nil then return nil end
-  budget = limit
+  enter()
   return finish(xpcall(fn, handler, K.handle(a), K.handle(b), impulse))
 end
 -- Many onCollision calls in one go: returns nil, or the index that failed and its error.
@@ -264,7 +309,7 @@ local function collide_batch(envs, others, impulses, n, i)
   while i <= n do
     local fn = rawget(envs[i], "onCollision")
     if fn ~= nil then
-      budget = limit
+      enter()
       local err = finish(xpcall(fn, handler, handle(others[i]), impulses[i]))
       if err ~= nil then return i, err end
     end
@@ -278,7 +323,7 @@ local function call_batch(envs, name, n, i, ...)
   while i <= n do
     local fn = rawget(envs[i], name)
     if fn ~= nil then
-      budget = limit
+      enter()
       local err = finish(xpcall(fn, handler, ...))
       if err ~= nil then return i, err end
     end
@@ -293,7 +338,7 @@ function K.call_handles(env, name, n, ...)
   if fn == nil then return nil end
   local args = pack(...)
   for i = 1, n do args[i] = K.handle(args[i]) end
-  budget = limit
+  enter()
   return finish(xpcall(fn, handler, unpack(args, 1, args.n)))
 end
 exempt[K.call_handles] = true
@@ -335,25 +380,19 @@ local SAFE = {
 }
 K.SAFE = SAFE
 -- Pattern matching runs in C, out of the hook's reach, and backtracks: ("a"):rep(1e5)
--- :find("a+b") takes 40 s. Estimate the worst case before matching: within a run of
--- repeated items not separated by a literal, k repetitions cost up to n^k/k! steps when
--- something after them can fail (a trailing run never backtracks: one repetition less);
--- an unanchored search multiplies by n start positions. Refuse above MATCH_STEPS.
+-- :find("a+b") takes 40 s, and ("a"):rep(63):find(("a*"):rep(7) .. "b") a minute. Estimate
+-- the worst case before matching: within a run of repeated items not separated by a
+-- literal, k repetitions cost up to n^k/k! steps when something after them can fail (a
+-- trailing run never backtracks: one repetition less); an unanchored search multiplies by
+-- n start positions. Refuse above MATCH_STEPS. A pattern's runs are read once (RUNS).
 local MATCH_STEPS = 2e7
 local QUANT = {["*"] = true, ["+"] = true, ["-"] = true}
-local function check_pattern(what, s, p, plain)
-  if plain or type(s) ~= "string" or type(p) ~= "string" then return end
-  local n = #s
-  if n < 64 then return end
-  local i, len = 1, #p
-  local anchored = sub(p, 1, 1) == "^"
-  if anchored then i = 2 end
-  local k, worst = 0, 1
-  local function close(reps)
-    local cost = 1
-    for j = 1, reps do cost = cost * n / j end
-    if cost > worst then worst = cost end
-  end
+local RUNS, runs_cached = {}, 0
+local function pattern_runs(p)
+  local runs = RUNS[p]
+  if runs then return runs end
+  runs = {anchored = sub(p, 1, 1) == "^"}
+  local i, len, k = runs.anchored and 2 or 1, #p, 0
   while i <= len do
     local c = sub(p, i, i)
     local item_end, literal = i, false
@@ -365,7 +404,7 @@ local function check_pattern(what, s, p, plain)
         item_end = j or len
       else
         item_end = i + 1
-        literal = not d:match("%w")
+        literal = not raw_find(d, "^%w")  -- the kernel's own find: no recursion
       end
     elseif c == "[" then
       local j = i + 1
@@ -388,50 +427,152 @@ local function check_pattern(what, s, p, plain)
     elseif q == "?" then
       item_end = item_end + 1
     elseif literal or (c == "$" and i == len) then
-      close(k)
+      if k > 0 then runs[#runs + 1] = k end
       k = 0
     end
     i = item_end + 1
   end
-  close(k - 1)  -- a trailing run succeeds as soon as it has expanded
-  if not anchored then worst = worst * n end
+  if k > 1 then runs[#runs + 1] = k - 1 end  -- a trailing run succeeds once it has expanded
+  if runs_cached >= 256 then RUNS, runs_cached = {}, 0 end
+  RUNS[p], runs_cached = runs, runs_cached + 1
+  return runs
+end
+local function check_pattern(what, s, p, plain)
+  if plain or type(s) ~= "string" or type(p) ~= "string" then return end
+  local n = #s
+  local runs = pattern_runs(p)
+  local worst = 1
+  for r = 1, #runs do
+    local cost = 1
+    for j = 1, runs[r] do cost = cost * n / j end
+    if cost > worst then worst = cost end
+  end
+  if not runs.anchored then worst = worst * n end
   if worst > MATCH_STEPS then
     error(format("%s: pattern %q on a %d-byte string may backtrack for up to %.0e steps "
                  .. "(limit %.0e); use a plain find (4th argument true) or split the text",
                  what, p, n, worst, MATCH_STEPS), 3)
   end
 end
--- Time spent in C (matching, sorting, building strings) is invisible to the count hook:
--- measure it with the CPU clock and take it from the same budget.
+-- Work done in C (building strings, sorting, moving table items, matching) is invisible
+-- to the count hook. Where its size is known from the arguments or the result it is
+-- charged by size, the same in every run: one instruction per byte built or scanned and
+-- four per item sorted, concatenated or moved (measured on Lua 5.4: ~3 ns a byte, ~15 ns
+-- an item, ~3.5 ns an instruction). Matching, whose cost depends on backtracking, is
+-- charged the bytes it may scan and, beyond MATCH_FREE seconds a call, the time it took on
+-- the process's CPU clock: an ordinary match costs the same in every run (a tick of the
+-- clock or an interrupt during one used to be charged as hundreds of thousands of
+-- instructions, and a script near its budget was stopped in one run and not the next),
+-- while a backtracking one still pays for what it does.
 local clock = os.clock
 local TICKS_PER_SECOND = INSTRUCTIONS_PER_SECOND / STEP
+local MATCH_FREE = 1e-4
+local ITEM = 4
+local COMPILE = 10  -- instructions charged per byte of source a script compiles
+local function charge(instructions)
+  budget = budget - instructions / STEP
+end
 local function charged(t0, ...)
-  budget = budget - (clock() - t0) * TICKS_PER_SECOND
+  local spent = clock() - t0
+  if spent > MATCH_FREE then budget = budget - (spent - MATCH_FREE) * TICKS_PER_SECOND end
   return ...
+end
+local function scanned(s, init)  -- bytes a match from `init` may look at
+  if type(s) ~= "string" then return 0 end
+  init = math.tointeger(init) or 1
+  if init < 0 then init = #s + init + 1 end
+  return math.max(#s - math.max(init, 1) + 1, 0)
+end
+local function bytes_out(r, ...)  -- charge the string a call returned
+  if type(r) == "string" then charge(#r) end
+  return r, ...
+end
+local function count(n)  -- a size argument as a number to charge (0 when it is not one)
+  n = tonumber(n)
+  if n == nil or n ~= n or n < 0 then return 0 end
+  return n
 end
 local s_find, s_match, s_gmatch, s_gsub = string.find, string.match, string.gmatch,
   string.gsub
 string.find = function(s, p, init, plain)
   check_pattern("string.find", s, p, plain)
+  charge(scanned(s, init))
+  if plain then return s_find(s, p, init, plain) end
   return charged(clock(), s_find(s, p, init, plain))
 end
 string.match = function(s, p, init)
   check_pattern("string.match", s, p)
+  charge(scanned(s, init))
   return charged(clock(), s_match(s, p, init))
 end
 string.gmatch = function(s, p, init)
   check_pattern("string.gmatch", s, p)
+  charge(scanned(s, init))  -- its steps together scan the subject once
   local step = s_gmatch(s, p, init)
   return function() return charged(clock(), step()) end
 end
 string.gsub = function(s, p, repl, n)
   check_pattern("string.gsub", s, p)
-  return charged(clock(), s_gsub(s, p, repl, n))
+  charge(scanned(s))
+  return bytes_out(charged(clock(), s_gsub(s, p, repl, n)))
 end
-local s_rep, t_sort, t_concat = string.rep, table.sort, table.concat
-string.rep = function(...) return charged(clock(), s_rep(...)) end
-table.sort = function(...) return charged(clock(), t_sort(...)) end
-table.concat = function(...) return charged(clock(), t_concat(...)) end
+local s_rep = string.rep
+string.rep = function(s, n, sep)  -- charged before it runs: rep(s, 1e12) never starts
+  if type(s) == "string" or type(s) == "number" then
+    local reps = count(n)
+    local each = #tostring(s) + ((type(sep) == "string" or type(sep) == "number")
+                                 and #tostring(sep) or 0)
+    charge(reps * each)
+    if budget < 0 then hook() end
+  end
+  return s_rep(s, n, sep)
+end
+for _, name in ipairs({"upper", "lower", "reverse", "sub", "format", "char", "pack"}) do
+  local f = string[name]
+  string[name] = function(...) return bytes_out(f(...)) end
+end
+local s_byte, s_len = string.byte, string.len
+string.byte = function(s, i, j)  -- one value per byte asked for
+  local r = pack(s_byte(s, i, j))
+  charge(r.n * ITEM)
+  return unpack(r, 1, r.n)
+end
+local t_sort, t_concat, t_insert, t_remove, t_move, t_unpack = table.sort, table.concat,
+  table.insert, table.remove, table.move, table.unpack
+table.sort = function(t, comp)
+  if type(t) == "table" then
+    local n = #t
+    if n > 1 then charge(n * math.log(n, 2) * ITEM) end
+    if budget < 0 then hook() end
+  end
+  return t_sort(t, comp)
+end
+table.concat = function(t, sep, i, j)
+  if type(t) == "table" then charge(count((j or #t) - (i or 1) + 1) * ITEM) end
+  return bytes_out(t_concat(t, sep, i, j))
+end
+table.insert = function(t, ...)  -- an insert or removal before the end shifts the rest
+  if select("#", ...) == 2 and type(t) == "table" then charge(#t * ITEM) end
+  return t_insert(t, ...)
+end
+table.remove = function(t, ...)
+  if select("#", ...) > 0 and type(t) == "table" then charge(#t * ITEM) end
+  return t_remove(t, ...)
+end
+table.move = function(a1, f, e, t, a2)
+  charge(count((tonumber(e) or 0) - (tonumber(f) or 0) + 1) * ITEM)
+  if budget < 0 then hook() end
+  return t_move(a1, f, e, t, a2)
+end
+table.unpack = function(t, i, j)
+  if type(t) == "table" then charge(count((j or #t) - (i or 1) + 1) * ITEM) end
+  return t_unpack(t, i, j)
+end
+local u_len = utf8.len
+utf8.len = function(s, ...)
+  if type(s) == "string" then charge(s_len(s)) end
+  return u_len(s, ...)
+end
 -- math.random's position cannot be read back (a saved state cannot keep it): count the
 -- draws so saving can say the sequence is not kept.
 local m_random, random_calls = math.random, 0
@@ -470,6 +611,18 @@ function K.new_env(extra)
     end
     if type(chunk) == "string" and sub(chunk, 1, 4) == "\27Lua" then
       return nil, "load: binary chunks are not allowed"
+    end
+    if type(chunk) == "string" then  -- compiling costs ~30 ns a byte, unseen by the count
+      charge(#chunk * COMPILE)
+      if budget < 0 then hook() end
+    elseif type(chunk) == "function" then
+      local read = chunk
+      chunk = function()
+        local piece = read()
+        if type(piece) == "string" then charge(#piece * COMPILE) end
+        if budget < 0 then hook() end
+        return piece
+      end
     end
     return base_load(chunk, name, "t", e or env)
   end

@@ -94,3 +94,10 @@ def test_a_limited_run_shows_a_bar_on_a_terminal_and_nothing_in_a_pipe() -> None
 
 def test_a_bench_shows_a_spinner_on_a_terminal() -> None:
     assert "bench scheduler" in _on_a_terminal("bench", "scheduler", "--quick")
+
+
+def test_the_help_names_every_benchmark() -> None:
+    shown = colosseum("bench", "--help")
+    assert shown.returncode == 0
+    listed = set(re.findall(r"[a-z]+", " ".join(shown.stdout.split())))
+    assert set(BENCHMARKS) <= listed, set(BENCHMARKS) - listed

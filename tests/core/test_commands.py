@@ -34,6 +34,12 @@ NAN, INF = float("nan"), float("inf")
     (lambda: cmd.AddJoint(2, Joint(kind="hinge", body_a=1, axis=(0, 0, 0))), "axis must not"),
     (lambda: cmd.AddJoint(2, Joint(kind="wormhole", body_a=1)), "unknown kind 'wormhole'"),
     (lambda: cmd.RemoveBody("crate"), "target must be an entity id"),
+    (lambda: cmd.SetPoses([3, 4], np.zeros((2, 13))), "body 3's orientation must be a "
+                                                      "non-zero quaternion"),
+    (lambda: cmd.SetPoses([3, 4], [[0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0],
+                                   [NAN, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0]]),
+     "body 4's row is not 13 finite numbers"),
+    (lambda: cmd.SetPoses([3], np.zeros((1, 7))), r"1 keys need a table of shape \(1, 13\)"),
 ])
 def test_bad_values_are_refused_when_the_command_is_made(make, message):
     with pytest.raises(cmd.CommandError, match=message):
@@ -43,6 +49,24 @@ def test_bad_values_are_refused_when_the_command_is_made(make, message):
 def test_a_ball_joint_needs_no_axis_and_quaternions_are_normalised():
     cmd.AddJoint(2, Joint(kind="ball", body_a=1, axis=(0, 0, 0)))
     assert cmd.SetPose(1, (0, 0, 0), (0, 0, 0, 3)).orientation == (0.0, 0.0, 0.0, 1.0)
+    rows = np.zeros((2, 13))
+    rows[:, 3] = (1.0 + 1e-17, 2.0)  # unit to rounding, and not
+    poses = cmd.SetPoses([1, 2], rows)
+    assert poses.table[:, 3].tolist() == [1.0, 1.0] and rows[1, 3] == 2.0  # a copy
+    assert poses.key == 1
+
+
+@pytest.mark.parametrize("column, value, message", [
+    (1, 2e6, r"SetPoses: body 8: y = 2e\+06 is outside the world"),
+    (8, 3e5, r"SetPoses: body 8: linear velocity 300000 m/s is over the limit"),
+    (12, -2e5, r"SetPoses: body 8: angular velocity 200000 rad/s is over the limit"),
+])
+def test_poses_set_together_are_checked_against_the_world_row_by_row(column, value, message):
+    rows = np.zeros((2, 13))
+    rows[:, 3] = 1.0
+    rows[1, column] = value
+    with pytest.raises(cmd.CommandError, match=message):
+        DetachedPhysics().push(cmd.SetPoses([7, 8], rows))
 
 
 def every_command() -> list[cmd.Command | cmd.Step]:
@@ -56,6 +80,7 @@ def every_command() -> list[cmd.Command | cmd.Step]:
             cmd.SetMotor(9, 1.5, 20), cmd.ApplyForce(4, (1, 0, 0), (0, 0, 1)),
             cmd.ApplyTorque(4, (0, 0, 2)), cmd.ApplyImpulse(4, (0, 1, 0)),
             cmd.SetPose(4, (0, 0, 5), (0, 1, 0, 0)), cmd.SetVelocity(4, (1, 1, 1), (0, 0, 0)),
+            cmd.SetPoses([4, 5], np.arange(26.0).reshape(2, 13)),
             cmd.SetKinematicTarget(4, (0, 0, 1), (1, 0, 0, 0), 0.01),
             cmd.SetCollisionEnabled(4, False), cmd.SetGravityEnabled(4, False),
             cmd.SetSleeping(4, True), cmd.SetSleepState(4, sleep),
@@ -106,6 +131,10 @@ def jointed_run(backend: str, log: cmd.CommandLog) -> np.ndarray:
                 e.physics.push(cmd.SetMotor(axle, 4.0, 10.0))
             if e.frame == 90:
                 e.physics.set_pose(boxes[0], (-3, 0, 2), (1, 0, 0, 0))
+            if e.frame == 120:  # two boxes put back up, turned, moving (as hands' controls)
+                e.physics.push(cmd.SetPoses(boxes[1:3], [
+                    [-1, 0, 3, 0.96, 0, 0.28, 0, 0.5, 0, 0, 0, 1.0, 0],
+                    [1, 0, 4, 1, 0, 0, 0, 0, 0, -1.0, 0, 0, 0]]))
 
         eng.add_system(drive)
         eng.run(frames=240)
@@ -118,7 +147,7 @@ def test_a_recorded_command_stream_replays_bit_identically(backend):
     live = jointed_run(backend, log)
     entries = json.loads(json.dumps(log.entries))  # what a file or a socket would carry
     assert sum(e["command"] == "Step" for e in entries) == 240
-    assert {"AddBody", "AddJoint", "ApplyImpulse", "SetMotor", "SetPose"} <= {
+    assert {"AddBody", "AddJoint", "ApplyImpulse", "SetMotor", "SetPose", "SetPoses"} <= {
         e["command"] for e in entries}
     fresh = create_backend(backend)
     fresh.configure(EngineConfig().world)
@@ -138,6 +167,22 @@ def test_a_command_for_a_body_that_never_comes_is_dropped_with_its_scene_id(capl
             eng.run(frames=10)
         assert "ApplyImpulse dropped: no object 'ghost' in the physics world" in caplog.text
         assert f"frame {2 + WAIT_STEPS - 1}:" in caplog.text  # after waiting a few steps
+        assert eng.world.component_for_entity(ball, Transform).position[2] < 5  # runs on
+
+
+@pytest.mark.parametrize("mode", ["serial", "threaded"])
+def test_a_command_for_a_removed_body_is_dropped_with_its_scene_id(mode, caplog):
+    with create_engine(EngineConfig(backend="ode", mode=mode, fast=True)) as eng:
+        crate = eng.spawn(Name("crate"), Transform(position=(0, 0, 5)), Physical())
+        ball = eng.spawn(Name("ball"), Transform(position=(3, 0, 5)), Physical())
+        eng.run(frames=3)
+        eng.despawn(crate)
+        eng.run(frames=2)
+        with caplog.at_level(logging.WARNING, "colosseum.physics"):
+            eng.physics.push(cmd.ApplyImpulse(crate, (1, 0, 0)))
+            eng.run(frames=10)
+        assert "ApplyImpulse dropped: no object 'crate' in the physics world" in caplog.text
+        assert "removed" in caplog.text
         assert eng.world.component_for_entity(ball, Transform).position[2] < 5  # runs on
 
 

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
-from engine.realtime import Pacing, RealTimeController
+from engine.realtime import CostLog, Pacing, RealTimeController
 from systems import create_engine
 
 
@@ -122,3 +123,22 @@ def test_engine_paces_frames_and_reports_physics_time_over_wall_time():
         assert len(clock.sleeps) == 50 and all(s == pytest.approx(0.01) for s in clock.sleeps)
         assert eng.physics.time == pytest.approx(0.5)
         assert eng.real_time_factor == pytest.approx(1.0)  # paced: one simulated s per s
+
+
+def test_cost_log_holds_a_long_run_in_fixed_memory_with_its_percentiles() -> None:
+    """A week of frames must not grow the statistics: past the exact first values the
+    costs go into a fixed histogram, whose percentiles stay within a bin (2.3 %) of the
+    exact ones and whose mean stays exact."""
+    rng = np.random.default_rng(3)
+    costs = rng.lognormal(np.log(0.004), 0.6, 300_000)  # seconds, a frame-time spread
+    log = CostLog()
+    for value in costs[:CostLog.EXACT * 2].tolist():
+        log.add(value)
+    held = log._data.nbytes + log._bins.nbytes
+    for value in costs[CostLog.EXACT * 2:].tolist():
+        log.add(value)
+    assert log._data.nbytes + log._bins.nbytes == held  # nothing grew with 290,000 more
+    assert log.count == len(costs)
+    assert log.mean() == pytest.approx(costs.mean(), rel=1e-12)
+    for q in (1, 50, 90, 99, 99.9):
+        assert log.percentile(q) == pytest.approx(np.percentile(costs, q), rel=0.023)

@@ -208,3 +208,25 @@ def test_debug_mode_stops_a_system_that_touches_what_it_does_not_declare():
                     eng.step()
             else:
                 eng.step()  # the check costs nothing when it is off
+
+
+def test_debug_mode_stops_a_system_that_changes_a_transform_it_declares_only_reading():
+    @system(Phase.SCRIPT, reads=(Transform,))
+    def nudge(e, dt):
+        if e.frame == 2:
+            for _, t in e.world.get_component(Transform):
+                t.orientation[0] = float("nan")  # in place: no add, no remove, no query of it
+
+    @system(Phase.SCRIPT, reads=(Transform,), writes=(Transform,))
+    def honest(e, dt):
+        for _, t in e.world.get_component(Transform):
+            t.position[0] += 1.0
+
+    with make_engine(debug=True) as eng:
+        eng.spawn(Transform())
+        eng.add_system(honest)
+        eng.add_system(nudge)
+        eng.run(frames=2)  # reading alone, and a declared write, pass
+        with pytest.raises(SystemFailure, match=r"nudge touched Transform without declaring "
+                           r"it \(it declares reads: Transform; writes: nothing\)"):
+            eng.step()

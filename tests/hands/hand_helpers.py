@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,8 +24,9 @@ G = 9.81
 @dataclass
 class Rig:
     """An engine running ``scene`` whose trackers follow ``paths`` (time -> position) and
-    whose gloves are down while ``gloves`` (time -> bool) say so. Tracker poses carry the
-    path's velocity (a central difference), as a tracking system reports one."""
+    whose gloves are down while ``gloves`` (time -> bool) say so, turned as ``turns`` say.
+    Tracker poses carry the path's velocity (a central difference), as a tracking system
+    reports one; the input layer derives their angular velocity from the turns."""
 
     scene: str
     folder: Path
@@ -32,11 +34,14 @@ class Rig:
     mode: str = "serial"
     dt: float = 1.0 / 120.0
     paths: dict[str, Path3] = field(default_factory=dict)
+    #: tracker -> time -> its orientation (w, x, y, z; default the identity)
+    turns: dict[str, Callable[[float], tuple[float, ...]]] = field(default_factory=dict)
     gloves: dict[str, Callable[[float], bool]] = field(default_factory=dict)
+    options: dict[str, object] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         cfg = EngineConfig(backend=self.backend, mode=self.mode, fast=True, dt=self.dt,
-                           content_dir=self.folder)
+                           content_dir=self.folder, options=dict(self.options))
         self.engine = create_engine(cfg)
         self.ids = instantiate(self.engine, spec_from_text(self.scene, self.folder))
         self.engine.start()
@@ -51,7 +56,9 @@ class Rig:
             for name, path in self.paths.items():
                 h = 1e-4
                 v = (path(t + h) - path(t - h)) / (2 * h)
-                hub.inject(TrackerPose(name, tuple(path(t)), IDENTITY, tuple(v), t))
+                turn = self.turns.get(name)
+                hub.inject(TrackerPose(name, tuple(path(t)), IDENTITY if turn is None else
+                                       tuple(turn(t)), tuple(v), t))
             for glove, down in self.gloves.items():
                 now = bool(down(t))
                 if now != self.pressed.get(glove, False):
@@ -65,6 +72,14 @@ class Rig:
 
     def position(self, name: str) -> np.ndarray:
         return self.engine.world.component_for_entity(self.ids[name], Transform).position.copy()
+
+    def orientation(self, name: str) -> np.ndarray:
+        return self.engine.world.component_for_entity(self.ids[name],
+                                                      Transform).orientation.copy()
+
+    def spin(self, name: str) -> np.ndarray:
+        return self.engine.world.component_for_entity(self.ids[name],
+                                                      Transform).angular_velocity.copy()
 
     def state(self, name: str) -> HandState:
         return self.engine.world.component_for_entity(self.ids[name], HandState)
@@ -112,3 +127,9 @@ def waypoints(*points: tuple[float, tuple[float, ...]]) -> Path3:
 
 def between(t0: float, t1: float = float("inf")) -> Callable[[float], bool]:
     return lambda t: t0 <= t < t1
+
+
+def about_y(angle: Callable[[float], float]) -> Callable[[float], tuple[float, ...]]:
+    """Orientations turning by ``angle(t)`` radians about +Y (the one turn pymunk's plane
+    has too)."""
+    return lambda t: (math.cos(angle(t) / 2), 0.0, math.sin(angle(t) / 2), 0.0)

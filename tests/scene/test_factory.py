@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import shutil
 from pathlib import Path
 
@@ -212,7 +213,8 @@ def test_a_snippet_spawned_again_may_declare_its_ids_again(tmp_path):
 def test_snippets_include_relative_to_the_content_folder():
     spec = spec_from_text('Include "../include/materials.scene"\n'
                           'Object { ID "b" Position [0 0 height] '
-                          'PhysicalAttributes { Material "rubber" } }', REP)
+                          'PhysicalAttributes { Material "rubber" } }', REP,
+                          allow=[REP.parent / "include"])  # outside the folder: allowed
     c = comps(spec, "b")
     assert c[Transform].position[2] == 2.5 and c[Physical].material.bounce == 0.7
 
@@ -237,3 +239,61 @@ def test_a_scene_sound_is_placed_only_when_it_has_a_position(tmp_path):
     kinds = {es.id: {type(c) for c in es.components} for es in spec.entities}
     assert Transform not in kinds["music"] and Sound in kinds["music"]
     assert Transform in kinds["tap"]
+
+
+def test_mass_frame_keys_become_the_bodys_centre_and_principal_axes():
+    spec = spec_from_text('''Object { ID "door" PhysicalAttributes { Mass 4
+  CenterOfMass [0.3 0 -0.1] Inertia [0.5 0.4 0.2] InertiaOrientation [0 0 90]
+  Geometry { Primitive "box" Size [1 0.1 2] } } }
+Object { ID "plain" PhysicalAttributes { Mass 1 } }''', DATA)
+    door, plain = (next(c for c in es.components if isinstance(c, Physical))
+                   for es in spec.entities)
+    assert door.center_of_mass == (0.3, 0.0, -0.1) and door.inertia == (0.5, 0.4, 0.2)
+    np.testing.assert_allclose(door.inertia_rotation,
+                               (math.cos(math.pi / 4), 0, 0, math.sin(math.pi / 4)))
+    assert plain.center_of_mass is None and plain.inertia is None
+
+
+@pytest.mark.parametrize("keys, message", [
+    ("Inertia [0.5 0 0.2]", "Inertia must be positive moments of kg*m^2, got 0"),
+    ("Inertia [0.5 -1 0.2]", "Inertia must be positive moments of kg*m^2, got -1"),
+    ("CenterOfMass [0 0 1e9]", "CenterOfMass z = 1e+09 is outside the world"),
+])
+def test_a_mass_frame_no_body_can_have_is_told_at_its_number(keys, message):
+    with pytest.raises(SceneError, match=re.escape(message)) as caught:
+        spec_from_text(f'Object {{ ID "b" PhysicalAttributes {{ {keys} }} }}', DATA)
+    assert caught.value.diagnostics[0].line == 1
+
+
+def test_inertia_axes_without_moments_are_told_as_doing_nothing():
+    spec = spec_from_text('Object { ID "b" PhysicalAttributes { InertiaOrientation [0 0 10] '
+                          '} }', DATA)
+    (told,) = spec.problems
+    assert (told.severity, told.line) == ("warning", 1)
+    assert "without Inertia it does nothing" in told.message
+
+
+def test_a_joint_spring_is_in_si_units_on_the_joint():
+    spec = spec_from_text('''Object { ID "lid" PhysicalAttributes { Mass 1 } }
+Object { ID "cart" Position [2 0 0] PhysicalAttributes { Mass 1 } }
+Joint { Type "Hinge" Bodies ["lid"] Axis [0 1 0]
+  Spring { Stiffness 0.5 Damping 0.01 Target 30 } }
+Joint { Type "Slider" Bodies ["cart"] Axis [1 0 0] Spring { Stiffness 20 MaxForce 4 } }''', DATA)
+    hinge, rail = (js.joint.spring for js in spec.joints)
+    per_radian = 180 / math.pi
+    assert (hinge.stiffness, hinge.damping, hinge.target, hinge.max_force) == pytest.approx(
+        (0.5 * per_radian, 0.01 * per_radian, math.radians(30), math.inf))
+    assert (rail.stiffness, rail.damping, rail.target, rail.max_force) == (20, 0, 0, 4)
+
+
+@pytest.mark.parametrize("joint, message", [
+    ('Type "Ball" Spring { Stiffness 1 }', "a Ball joint takes no Spring"),
+    ('Type "Hinge" Spring { Stiffness -1 }', "Spring Stiffness must be 0 or more, got -1"),
+    ('Type "Hinge" Spring { Target 10 }', "a Spring needs a Stiffness or a Damping above 0"),
+    ('Type "Slider" Spring { Damping 1 MaxForce 0 }', "Spring MaxForce must be above 0"),
+])
+def test_a_spring_that_cannot_act_is_told_at_its_block(joint, message):
+    with pytest.raises(SceneError, match=message) as caught:
+        spec_from_text(f'Object {{ ID "b" PhysicalAttributes {{ Mass 1 }} }}\n'
+                       f'Joint {{ Bodies ["b"] {joint} }}', DATA)
+    assert caught.value.diagnostics[0].line == 2

@@ -83,6 +83,8 @@ def test_the_compiled_scanner_is_the_fast_path():
     'a 2\nV [1 -2 +3 .5 1. 1e3 2E-2 -0 -0.0 12345678901234567 1e999]\nW [ ]\nZ []\n',
     "a 2\nb -1\nV [a*2 -a/2 +a+1 a-1 pi e 3*a 1.5/a 2/0 a*b q]\nX [a 1e400*2 -b]\n",
     'S ["x" "y"]\nT "a\\"b"\nU \u201cq\u201d\nN 12345678901234567890\nM 1e999\n',
+    'S [ "a"  "b" ]\nT ["a" 1]\nU ["a"\n"b"]\nV ["a""b"]\nW ["a" \u201cq\u201d]\nX ["a\\"b"]\n'
+    'Y ["a" "b" x]\nZ ["" "\u00e9"]\nA ["a"] B 2\n',
     "O {\n  A 1 B { C [1 2] }\n  D 2 // c\n}\n}\nE 1 + 2\nF {}\n",
     "K 1 2\nL 1\n.5\nM [1\n2]\nN [1  2 ]\nP [1 2x]\nQ 3 x\nR 4.e5\n",
     "a 1\n\n\nb { c 2 }\n// x\n\nd 3\nE {\n\n  f 1\n\n  g [1 2]\n\n}\nH { i 1\n}\n",

@@ -30,7 +30,7 @@ Script "scripts/maker.lua"
 """
 
 #: Acts as the clock crosses a time, so a state saved later does not act again: a ball at
-#: 0.2 s, a motorized hinge (limits, motor) from it to the file's arm at 0.3 s, and at
+#: 0.2 s, a motorized hinge (limits, motor, spring) from it to the file's arm at 0.3 s, and at
 #: 0.5 s a pendulum bob on a hinge to the world, in a snippet that may hold ``{more}``.
 MAKER = """\
 local last = time()
@@ -45,7 +45,8 @@ function onUpdate(dt)
     local x, y, z = find("ball"):getPosition()
     createJoint{kind = "motorized_hinge", a = find("ball"), b = find("arm"),
                 anchor = {x - 0.2, y, z}, axis = {0, 1, 0}, low = -0.5, high = 0.7,
-                velocity = 1.3, maxForce = 5, id = "wrist"}
+                velocity = 1.3, maxForce = 5, id = "wrist",
+                spring = {stiffness = 2, damping = 0.1, target = 0.2}}
   end
   if crosses(0.5, now) then
     spawn([[Object { ID "bob" Position [-2 0.8 2]
@@ -111,6 +112,9 @@ def test_spawned_objects_and_joints_continue_exactly(tmp_path: Path, more: str) 
     assert wrist["Low"] == pytest.approx(-28.6479, abs=1e-4)  # -0.5 rad, in degrees
     assert wrist["MotorVelocity"] == pytest.approx(74.4845, abs=1e-4)  # 1.3 rad/s
     assert len(wrist["ReferencePose2"]) == 7  # the arm's pose when the script made it
+    spring = {e.key: e.value.py() for e in wrist["Spring"]}  # per degree, in degrees
+    assert spring == pytest.approx({"Stiffness": 2 / math.degrees(1), "Target": 11.4592,
+                                    "Damping": 0.1 / math.degrees(1)}, abs=1e-4)
 
 
 #: The same snippet three times: a named ball on a world joint, and an object without ID.

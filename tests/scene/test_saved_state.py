@@ -247,6 +247,41 @@ def test_saved_jointed_state_continues_on_the_2d_backend_too(tmp_path: Path) -> 
     np.testing.assert_allclose(again, straight, atol=1e-6, rtol=0)
 
 
+#: A pendulum whose mass sits off its one small shape, with inertia axes of its own and a
+#: hinge spring; a cart on a slider spring that pulls at most 3 N, against its limits.
+MASS_FRAMES_AND_SPRINGS = """\
+World { TimeStep 0.01 AutoSleep 0 }
+Object { ID "weighted" Position [0 0 2] Orientation [0 20 0]
+  PhysicalAttributes { Mass 2 CenterOfMass [0 0 -0.4] Inertia [0.1 0.05 0.02]
+    InertiaOrientation [0 0 30] Geometry { Primitive "sphere" Size [0.1] } } }
+Joint { Type "Hinge" Bodies ["weighted"] Anchor [0 0 2] Axis [0 1 0]
+  Spring { Stiffness 0.05 Damping 0.001 Target 10 } }
+Object { ID "cart" Position [3 0 1] Velocity [0.5 0 0]
+  PhysicalAttributes { Mass 1 Gravity 0 Geometry { Primitive "box" Size [0.2] } } }
+Joint { Type "Slider" Bodies ["cart"] Axis [1 0 0] Low -0.3 High 0.3
+  Spring { Stiffness 20 Target 0.1 MaxForce 3 } }
+"""
+
+
+@pytest.mark.parametrize("backend", ["ode", "pymunk"])
+def test_a_saved_state_keeps_mass_frames_and_springs(backend: str, tmp_path: Path) -> None:
+    """A given centre of mass and inertia and joint springs are written in the saved state
+    and act after it as before: saved at 2 s, 1 s more is the uninterrupted 3 s run."""
+    scene = MASS_FRAMES_AND_SPRINGS.replace("TimeStep 0.01", f'TimeStep 0.01 Dynamics '
+                                                             f'"{backend}"')
+    straight, _ = run(scene, 3.0, tmp_path)
+    start, _ = run(scene, 0.0, tmp_path)
+    again, (saved, _) = resumed(scene, [2.0, 1.0], tmp_path)
+    np.testing.assert_allclose(again, straight, atol=1e-6, rtol=0)
+    assert np.abs(straight - start).max() > 0.1  # it really moved
+    db = parse_text(saved)
+    assert [x.data for x in db.find("Object[weighted]/PhysicalAttributes/CenterOfMass").data
+            ] == [0, 0, -0.4]
+    springs = [e.value.data.get("Spring") for e in db.root.entries if e.key == "Joint"]
+    assert [(s.get("Stiffness"), s.get("Target"), s.get("MaxForce")) for s in springs] == [
+        (0.05, 10, None), (20, 0.1, 3)]
+
+
 def _asleep(db: SceneDB, oid: str) -> bool:
     return db.find(f"Object[{oid}]/Asleep") is not None
 
