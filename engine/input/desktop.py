@@ -153,7 +153,9 @@ class DesktopDevice:
         return None
 
     def _turn_wheels(self, now: float) -> list[AnyInput]:
-        dt = 0.0 if self._last_poll is None else now - self._last_poll
+        # A clock set back (a replay's, a test's switched to simulated time) turns nothing:
+        # a negative interval would wind the counters back by however far it jumped.
+        dt = 0.0 if self._last_poll is None else max(now - self._last_poll, 0.0)
         self._last_poll = now
         out: list[AnyInput] = []
         if not self.held:

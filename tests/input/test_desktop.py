@@ -73,6 +73,22 @@ def test_wasd_turn_the_wheel_counters(keys: str, left: float, right: float):
     assert counts == {"left": round(500 * left), "right": round(500 * right)}
 
 
+def test_a_clock_set_back_turns_the_wheels_no_further_back():
+    """Polled on one clock and then on another that reads less (a wall clock's hours, then
+    a run's simulated seconds): the jump back is no motion, W held turns the counters at
+    their rate from there, as if the clock had never read more."""
+    window = WindowDevice()
+    desktop = DesktopDevice("desktop", window, turns_per_second=0.5, counts_per_turn=1000)
+    desktop.poll(10800.0)
+    window.key("w", True)
+    counts: dict[str, int] = {}
+    for frame in range(61):
+        for event in desktop.poll(frame / 60):
+            if isinstance(event, WheelCount):
+                counts[event.device] = event.count
+    assert counts == {"left": 500, "right": 500}
+
+
 def test_the_view_maps_window_corners_through_the_lens():
     view = DesktopView(np.zeros(3), np.array(euler_to_quat((0.0, 0.0, 90.0))), fov=90.0,
                        aspect=2.0)

@@ -363,8 +363,11 @@ DESKTOP_YAW = 2 * DESKTOP_SPEED / 0.55
 
 
 def desktop(engine) -> WindowDevice:
-    """The window's keys, stamped and read on the simulation's clock (a fast run is not
-    paced: on the wall clock a released key would stop the counters late)."""
+    """The window's keys, stamped and read on the simulation's clock from the first frame
+    on (a fast run is not paced: on the wall clock a released key would stop the counters
+    late, and a clock switched after the devices were polled would start the counters
+    from wherever the machine's clock stood)."""
+    engine.start()  # the input hub and the window are made at start
     window = engine.resource(WindowDevice)
     engine.resource(InputHub).clock = window.clock = lambda: engine.time
     return window
@@ -384,8 +387,9 @@ def test_the_desktop_w_key_drives_the_chair_in_both_modes(tmp_path, feedback):
     rim inertia is the rolling chair's (each key press a push of the same speed)."""
     with session_engine(CONTENT, tmp_path, {"chair_feedback": feedback}) as engine:
         ids = {n.id: e for e, n in engine.world.get_component(Name)}
+        window = desktop(engine)
         engine.run(frames=2)
-        desktop(engine).key("w", True)
+        window.key("w", True)
         engine.run(seconds=1.0)  # (at 0.67 m/s the feet reach the kitchen threshold at 1.1 s)
         chair = engine.world.component_for_entity(ids["wheelchair"], Transform)
         forward = quat_to_matrix(chair.orientation)[:, 1]
@@ -401,9 +405,10 @@ def test_the_desktop_s_key_backs_the_chair_in_both_modes(tmp_path, feedback):
     coasts, slowed by its casters swinging round to trail the other way."""
     with session_engine(CONTENT, tmp_path, {"chair_feedback": feedback}) as engine:
         chair = {n.id: e for e, n in engine.world.get_component(Name)}["wheelchair"]
+        window = desktop(engine)
         engine.run(frames=2)
         yaw, _ = heading(engine, chair)
-        desktop(engine).key("s", True)
+        window.key("s", True)
         speeds = []
         for _ in range(16):
             engine.run(seconds=0.05)
@@ -426,9 +431,10 @@ def test_the_desktop_a_and_d_keys_turn_the_chair_left_and_right(tmp_path, feedba
     with session_engine(CONTENT, tmp_path, {"chair_feedback": feedback}) as engine:
         ids = {n.id: e for e, n in engine.world.get_component(Name)}
         chair = ids["wheelchair"]
+        window = desktop(engine)
         engine.run(frames=2)
         yaw, _ = heading(engine, chair)
-        desktop(engine).key(key, True)
+        window.key(key, True)
         engine.run(seconds=0.6)
         turned = heading(engine, chair)[0] - yaw
         assert sense * math.degrees(turned) > 10.0
@@ -464,8 +470,8 @@ def test_the_m_key_switches_the_chair_between_its_modes(tmp_path):
             pushes.append(values["wheelchair:wheelchair/left/torque"][0] * dt)
 
         engine.add_system(tap)
-        engine.run(frames=2)
         window = desktop(engine)
+        engine.run(frames=2)
         axles = [engine.world.component_for_entity(ids[a], Joint) for a in ("axle_l",
                                                                            "axle_r")]
         chair = engine.world.component_for_entity(ids["wheelchair"], Wheelchair)
