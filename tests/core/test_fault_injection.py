@@ -711,23 +711,17 @@ def test_bad_input_events_from_a_node_are_counted_and_dropped(
     bad: each is counted as malformed and dropped with one message naming the node (told
     once, then counted), none reaches the input state, no traceback, and the good event
     sent after them arrives; the server's world goes on."""
-    import zmq
 
     from engine.input.state import InputState
     from engine.net import protocol
-    from tests.net.net_helpers import free_port, local_server
+    from tests.net.net_helpers import free_port, hello, local_server, raw_control
 
     bad = _bad_node_events()
     port = free_port()
     caplog.set_level(logging.INFO)
     with local_server(port) as server:
-        ctx = zmq.Context()
-        node = ctx.socket(zmq.DEALER)
-        node.linger = 0
-        node.connect(f"tcp://127.0.0.1:{port + 1}")
-        try:
-            node.send(protocol.encode({"type": "hello", "v": protocol.VERSION, "user": "eve",
-                                       "content": server.server.content}))
+        with raw_control(port) as node:
+            node.send(hello("eve", server.server.content))
             server.step_until(lambda e: server.server.peers, 10, "eve joining")
             counts = server.server.counts
             before = counts["malformed"]
@@ -747,9 +741,6 @@ def test_bad_input_events_from_a_node_are_counted_and_dropped(
             time_now = server.engine.time
             server.run_for(0.1)
             assert server.engine.time > time_now  # still stepping
-        finally:
-            node.close(0)
-            ctx.term()
         trackers = [state.tracker(name) for name in ("eve/hand_r",)]
     assert malformed == len(bad), (malformed, len(bad))
     assert trackers == [None]  # not one bad pose reached the input state

@@ -21,6 +21,31 @@ MULTIUSER = ROOT / "content" / "multiuser"
 PROCESS_LIMIT = 60.0
 
 
+@contextlib.contextmanager
+def raw_control(port: int) -> Iterator[Any]:
+    """A node's control socket without a NetClient (a DEALER on the server's PORT + 1), for
+    tests that send what a real node never would; closed, and its context ended, after."""
+    import zmq
+
+    ctx = zmq.Context()
+    sock = ctx.socket(zmq.DEALER)
+    sock.linger = 0
+    sock.connect(f"tcp://127.0.0.1:{port + 1}")
+    try:
+        yield sock
+    finally:
+        sock.close(0)
+        ctx.term()
+
+
+def hello(user: str, content: str) -> bytes:
+    """The hello a node opens with, as ``user`` holding ``content`` (its fingerprint)."""
+    from engine.net import protocol
+
+    return protocol.encode({"type": "hello", "v": protocol.VERSION, "user": user,
+                            "content": content})
+
+
 def free_port() -> int:
     """A port P with P and P + 1 free on 127.0.0.1 (a server takes both)."""
     for _ in range(100):

@@ -21,10 +21,12 @@ from engine.scene import SceneIds
 from systems.scripting import ScriptingSystem
 from tests.net.net_helpers import (
     free_port,
+    hello,
     join_args,
     local_server,
     object_block,
     processes,
+    raw_control,
     serve_args,
     stats,
 )
@@ -99,11 +101,7 @@ def test_malformed_and_oversized_messages_are_counted_not_fatal(tmp_path: Path) 
                b'{"type": "input", "events": [{"type": "tracker"}]}',
                b'{"x": "' + b"a" * (protocol.MAX_MESSAGE + 10) + b'"}']
     with local_server(port) as server, processes(tmp_path) as procs:
-        ctx = zmq.Context()
-        raw = ctx.socket(zmq.DEALER)
-        raw.linger = 0
-        raw.connect(f"tcp://127.0.0.1:{port + 1}")
-        try:
+        with raw_control(port) as raw:
             for message in garbage:
                 raw.send(message)
             raw.send_multipart([b"two", b"frames"])
@@ -111,8 +109,7 @@ def test_malformed_and_oversized_messages_are_counted_not_fatal(tmp_path: Path) 
             server.step_until(lambda e: counts["malformed"] + counts["oversized"] >= 5, 5,
                               "the garbage arriving")
             # a node joined now sends a broken event among good ones
-            raw.send(protocol.encode({"type": "hello", "v": protocol.VERSION, "user": "eve",
-                                      "content": server.server.content}))
+            raw.send(hello("eve", server.server.content))
             server.step_until(lambda e: server.server.peers, 5, "eve joining")
             raw.send(protocol.encode({"type": "input", "events": [
                 {"type": "tracker", "device": "hand_r", "position": [0, 0, "x"],
@@ -121,9 +118,6 @@ def test_malformed_and_oversized_messages_are_counted_not_fatal(tmp_path: Path) 
             state = server.engine.resource(InputState)
             server.step_until(lambda e: state.buttons.get(("eve/glove", "index")), 5,
                               "eve's good event arriving")
-        finally:
-            raw.close(0)
-            ctx.term()
         assert counts["oversized"] == 1 and counts["malformed"] == 6, dict(counts)
         node = procs.start("bob", *join_args(port, "bob", "--frames", 30))
         server.step_until(lambda e: node.poll() is not None, 20, "a good node running after")
@@ -194,31 +188,25 @@ def test_a_node_building_its_scene_is_not_let_go() -> None:
     port = free_port()
     server = NetServer(f"tcp://127.0.0.1:{port}", "content", timeout=2.0, clock=lambda: now[0])
     server.bind()
-    ctx = zmq.Context()
-    node = ctx.socket(zmq.DEALER)
-    node.linger = 0
-    node.connect(f"tcp://127.0.0.1:{port + 1}")
     try:
-        node.send(protocol.encode({"type": "hello", "v": protocol.VERSION, "user": "slow",
-                                   "content": "content"}))
-        end = time.monotonic() + 5
-        while not server.peers and time.monotonic() < end:
+        with raw_control(port) as node:
+            node.send(hello("slow", "content"))
+            end = time.monotonic() + 5
+            while not server.peers and time.monotonic() < end:
+                server.poll()
+                time.sleep(0.01)
+            assert server.peers
+            now[0] = JOIN_GRACE - 1.0  # still building
             server.poll()
-            time.sleep(0.01)
-        assert server.peers
-        now[0] = JOIN_GRACE - 1.0  # still building
-        server.poll()
-        assert server.peers and not server.left
-        node.send(protocol.encode({"type": "beat"}))
-        while not server.counts["beat"] and time.monotonic() < end:
+            assert server.peers and not server.left
+            node.send(protocol.encode({"type": "beat"}))
+            while not server.counts["beat"] and time.monotonic() < end:
+                server.poll()
+                time.sleep(0.01)
+            now[0] += 2.5  # running now: the timeout holds
             server.poll()
-            time.sleep(0.01)
-        now[0] += 2.5  # running now: the timeout holds
-        server.poll()
-        assert not server.peers and [p.user for p in server.left] == ["slow"]
+            assert not server.peers and [p.user for p in server.left] == ["slow"]
     finally:
-        node.close(0)
-        ctx.term()
         server.close()
 
 
@@ -230,17 +218,13 @@ def test_custom_events_beyond_a_frames_limit_are_counted_and_told(
 
     port = free_port()
     caplog.set_level(logging.WARNING, "colosseum.net")
-    with local_server(port) as server:
-        ctx = zmq.Context()
-        control, state = ctx.socket(zmq.DEALER), ctx.socket(zmq.SUB)
-        for sock in (control, state):
-            sock.linger = 0
-        control.connect(f"tcp://127.0.0.1:{port + 1}")
+    with local_server(port) as server, raw_control(port) as control:
+        state = control.context.socket(zmq.SUB)
+        state.linger = 0
         state.setsockopt(zmq.SUBSCRIBE, b"")
         state.connect(f"tcp://127.0.0.1:{port}")
         try:
-            control.send(protocol.encode({"type": "hello", "v": protocol.VERSION,
-                                          "user": "eve", "content": server.server.content}))
+            control.send(hello("eve", server.server.content))
             server.step_until(lambda e: state.poll(0), 10, "frames reaching eve")
             for i in range(MAX_CUSTOM + 6):
                 server.engine.events.emit(CustomEvent("tick", i))
@@ -256,9 +240,7 @@ def test_custom_events_beyond_a_frames_limit_are_counted_and_told(
 
             server.step_until(custom, 5, "the frame of the ticks reaching eve")
         finally:
-            control.close(0)
             state.close(0)
-            ctx.term()
         assert [data for name, data in told if name == "tick"] == list(range(MAX_CUSTOM))
         assert server.engine.stat_sources["net"]()["custom_dropped"] == 6
     assert f"the first {MAX_CUSTOM}, not the other 6 ('tick')" in caplog.text
