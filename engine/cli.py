@@ -193,8 +193,9 @@ def build_parser() -> argparse.ArgumentParser:
     join = sub.add_parser("join", help="follow a server: draw, play sounds, send this "
                           "node's input (no local physics)")
     join.add_argument("address", metavar="tcp://HOST:PORT", help="the server's --bind")
-    join.add_argument("path", nargs="?", help="the content folder (default: the server's "
-                      "folder, when it is at the same place here)")
+    join.add_argument("path", nargs="?", help="the content folder or a .scene file in it, as "
+                      "serve takes (default: the server's folder, when it is at the same "
+                      "place here)")
     join.add_argument("--user", default=None, help="this node's user name: its input drives "
                       "the trackers, buttons and wheels named USER/... on the server "
                       "(default: the login name and process id)")
@@ -358,6 +359,8 @@ def _run_watching(args: argparse.Namespace, content: Any, config: Any, scene: An
             seconds -= engine.time
         if not watcher.changed() or (frames is not None and frames <= 0) or (
                 seconds is not None and seconds <= 1e-9):
+            if scene.errors:  # as a run without --watch: went on without them, exit 1
+                return fail(f"the content had {scene.errors} error(s) (told above)", 1)
             return 0
         names = ", ".join(sorted(p.name for p in watcher.changed()))
         for again in watcher.reimport():  # a scene colosseum import wrote: imported again

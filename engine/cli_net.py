@@ -98,10 +98,13 @@ def join(args: argparse.Namespace) -> int:
     except KeyProblem as exc:
         return fail(str(exc), 1)
     folder = None
-    if args.path is not None:
-        folder = Path(args.path)
-        if not (folder / "main.scene").is_file():
-            return fail(f"{folder}: not a content folder (it has no main.scene)")
+    if args.path is not None:  # a content folder or a .scene file, as serve takes
+        from engine.content import ContentError, resolve
+
+        try:
+            folder = resolve(args.path).folder
+        except ContentError as exc:
+            return fail(str(exc))
     client = NetClient(args.address, user, "" if folder is None else
                        content_fingerprint(folder), args.display, keys, timeout=args.timeout)
     try:
@@ -111,7 +114,7 @@ def join(args: argparse.Namespace) -> int:
             if folder is not None or not exc.reply.get("content_dir"):
                 return fail(str(exc), 1)
             folder = Path(exc.reply["content_dir"])  # the server's folder, if it is here too
-            if not (folder / "main.scene").is_file():
+            if not folder.is_dir():
                 return fail(f"the server runs {folder}, which is not here; give this node's "
                             "copy of the content folder: colosseum join ADDRESS PATH", 1)
             client.content = content_fingerprint(folder)

@@ -198,6 +198,11 @@ def execute_run(engine: Any, args: argparse.Namespace, scene: Any,
     log.info("ran %d frames, %.2f simulated s in %.2f wall s (real-time factor %.2f)",
              stats["frames"], stats["sim_seconds"], stats["wall_seconds"],
              stats["real_time_factor"])
+    errors = getattr(scene, "errors", 0)
+    if errors:  # the run went on without the broken parts; a script or CI must still know
+        print(f"colosseum: the content had {errors} error(s) (told above; colosseum check "
+              f"lists them): exit code 1", file=sys.stderr)
+        return 1
     return 0
 
 

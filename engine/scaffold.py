@@ -8,6 +8,8 @@ MAIN_SCENE = """\
 // {name}: a ground, a ball and a box. Units: metres, kilograms, seconds; Z is up.
 World {{ Gravity [0 0 -9.81] TimeStep 0.01 }}
 
+mass 5  // a scene variable: colosseum sweep {name} --param mass=1,2 varies it
+
 Material {{ ID "rubber" Friction 0.8 Bounce 0.6 }}
 
 Object {{
@@ -31,7 +33,7 @@ Object {{
   Position [1.5 0 0.5]
   Size [1 1 1]
   VisualAttributes {{ Geometry {{ Primitive "box" }} }}
-  PhysicalAttributes {{ Mass 5 Geometry {{ Primitive "box" }} }}
+  PhysicalAttributes {{ Mass mass Geometry {{ Primitive "box" }} }}
 }}
 
 Camera {{ ID "main" Position [0 -8 2.5] LookAt [0 0 0.5] }}

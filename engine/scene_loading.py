@@ -40,6 +40,9 @@ class LoadedScene:
     spec: SceneSpec
     #: The content folder the scene runs in (a saved state's ``Content``, else its folder).
     content: Content
+    #: Errors in the content told while loading (broken parts skipped, objects whose files
+    #: could not be used): a run goes on without those parts and exits 1 at the end.
+    errors: int = 0
 
     def configure(self, config: EngineConfig, backend: str | None = None,
                   dt: float | None = None) -> None:
@@ -99,10 +102,12 @@ def load_content_scene(content: Content, seed: int = 0,
         print(f"colosseum: the run goes on without {len(skipped)} broken part(s) of the "
               f"scene (the errors above; colosseum check lists them):{parts}",
               file=sys.stderr)
+    errors = max(sum(len(exc.places) for exc in told), len(skipped))
     if spec.db is not None:  # warnings, and assets that failed (what they left out)
-        for told in Reporter([*spec.db.warnings, *spec.problems]).diagnostics:
-            print(told.render(spec.db.sources.get(told.path)), file=sys.stderr)
-    return LoadedScene(spec, content)
+        for said in Reporter([*spec.db.warnings, *spec.problems]).diagnostics:
+            print(said.render(spec.db.sources.get(said.path)), file=sys.stderr)
+            errors += said.is_error
+    return LoadedScene(spec, content, errors)
 
 
 def content_engine(path: str | Path, seed: int = 0) -> Engine:
@@ -278,9 +283,10 @@ def check_path(path: Path, output: str = "text", allow: Iterable[Path] = ()) -> 
     from engine.scene.diagnostics import Reporter
 
     try:  # as a run reads it: the content's asset loaders first, a saved state's folder
-        _, spec = _build(resolve(path), np.random.default_rng(0), allow=allow)
+        content, spec = _build(resolve(path), np.random.default_rng(0), allow=allow)
         assert spec.db is not None
-        report = Report(Reporter([*spec.db.warnings, *spec.problems]).diagnostics,
+        report = Report(Reporter([*spec.db.warnings, *spec.problems,
+                                  *shader_diagnostics(spec, content.folder)]).diagnostics,
                         spec.db.sources)
     except ContentError as exc:
         report = Report([Diagnostic(str(path), 1, 1, "error", str(exc))])
@@ -294,6 +300,36 @@ def check_path(path: Path, output: str = "text", allow: Iterable[Path] = ()) -> 
             print(report.render(), file=sys.stderr)
         print(f"{path}: {errors} error(s), {warnings} warning(s)", file=sys.stderr)
     return 1 if errors else 0
+
+
+def shader_diagnostics(spec: SceneSpec, folder: Path) -> list:
+    """Warnings, from the GLSL source alone (no GPU), about what a run that draws would
+    warn about: uniforms of a program that nothing sets, vertex inputs the engine never
+    feeds (:func:`engine.render.shaders.unset_in_source`), at the shader file's line."""
+    from engine.render.glsl import DEFAULT_USER_VERTEX
+    from engine.render.shaders import unset_in_source
+    from engine.scene import Diagnostic
+    from engine.scene.diagnostics import WARNING
+
+    found = []
+    for program_id, program in spec.shader_programs.items():
+        if not program.enabled or program.fragment is None:
+            continue
+        stages = []
+        for kind, file in (("vertex", program.vertex), ("fragment", program.fragment)):
+            if file is None:
+                stages.append((kind, "<default vertex stage>", DEFAULT_USER_VERTEX))
+                continue
+            try:
+                stages.append((kind, str(file), (folder / file).read_text(encoding="utf-8")))
+            except (OSError, UnicodeDecodeError):
+                break  # the scene's check tells a shader file it cannot read
+        else:
+            given = {name for state in spec.shader_states.values()
+                     if state.program == program_id for name in state.uniforms}
+            for file, line, message in unset_in_source(str(program_id), stages, given):
+                found.append(Diagnostic(file, line, 1, WARNING, message))
+    return found
 
 
 def format_path(path: Path, write: bool = False) -> int:
@@ -354,9 +390,24 @@ def import_path(model: Path, out: Path | None, force: bool = False) -> int:
               f"{', '.join(FORMATS)})", file=sys.stderr)
         return 2
     folder = Path.cwd() if out is None else out.parent.resolve()
-    if not folder.is_dir():
-        print(f"colosseum: error: {out}: folder {out.parent} does not exist", file=sys.stderr)
-        return 2
+    if out is not None:
+        try:  # `import MODEL -o my_sim/main.scene` makes the content folder my_sim
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            print(f"colosseum: error: {out}: cannot make folder {out.parent} "
+                  f"({exc.strerror or exc})", file=sys.stderr)
+            return 2
+        base_path = out.with_name(out.name + BASE_SUFFIX)
+        if out.exists() and not force and not base_path.is_file():
+            print(f"colosseum: error: {out} exists and no import wrote it (there is no "
+                  f"{base_path.name}); nothing is overwritten: give --force to replace it "
+                  f"(a .bak is kept)", file=sys.stderr)
+            return 1
+        try:  # a model outside the scene's folder is copied in beside it (confinement)
+            model = bring_in(model, folder, replace=force or base_path.is_file())
+        except OSError as exc:
+            print(f"colosseum: error: {exc}", file=sys.stderr)
+            return 1
     file_ref = Path(os.path.relpath(model.resolve(), folder)).as_posix()
     try:
         imported = import_model(file_ref, file_ref, Assets(folder), root=folder, header=True)
@@ -373,13 +424,7 @@ def import_path(model: Path, out: Path | None, force: bool = False) -> int:
     if out is None:
         sys.stdout.write(text)
         return failed
-    base_path = out.with_name(out.name + BASE_SUFFIX)
     if out.exists() and not force:
-        if not base_path.is_file():
-            print(f"colosseum: error: {out} exists and no import wrote it (there is no "
-                  f"{base_path.name}); nothing is overwritten: give --force to replace it "
-                  f"(a .bak is kept)", file=sys.stderr)
-            return 1
         try:
             result = merge(parse_file(base_path), parse_file(out), parse_text(text, str(out)))
         except SceneError as exc:
@@ -401,6 +446,58 @@ def import_path(model: Path, out: Path | None, force: bool = False) -> int:
     write_atomic(out, text_out)
     write_atomic(base_path, text)
     return failed
+
+
+def model_files(model: Path) -> list[Path]:
+    """The files a model is made of, relative to its folder: itself and, for a ``.gltf``,
+    the buffers and images its ``uri``s name beside or below it (not ``data:`` URIs)."""
+    import json
+    from urllib.parse import unquote
+
+    files = [Path(model.name)]
+    if model.suffix.lower() != ".gltf":
+        return files
+    try:
+        document = json.loads(model.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return files  # the import tells what is wrong with it
+    for kind in ("buffers", "images"):
+        for item in document.get(kind) or ():
+            uri = item.get("uri") if isinstance(item, dict) else None
+            if not isinstance(uri, str) or uri.startswith("data:") or "://" in uri:
+                continue
+            name = Path(unquote(uri))
+            if not name.is_absolute() and ".." not in name.parts and \
+                    (model.parent / name).is_file():
+                files.append(name)
+    return files
+
+
+def bring_in(model: Path, folder: Path, replace: bool = False) -> Path:
+    """``model`` as a file inside ``folder``: itself when it lies there already, else a
+    copy beside the scene (``folder/NAME``, a glTF's buffers and images with it), since a
+    scene may name only files in its content folder. A different file of that name is
+    replaced only when ``replace`` (an earlier import's copy, or ``--force``); else
+    OSError."""
+    import shutil
+
+    source = model.resolve()
+    if source.is_relative_to(folder.resolve()):
+        return model
+    target = folder / model.name
+    for name in model_files(model):
+        src, dst = model.parent / name, folder / name
+        if dst.exists() and not replace and dst.read_bytes() != src.read_bytes():
+            raise OSError(f"{dst} exists and is not {src}; nothing is overwritten: give "
+                          f"--force to replace it with a copy of the model")
+    for name in model_files(model):
+        dst = folder / name
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(model.parent / name, dst)
+    print(f"colosseum: copied {model} into {folder} (a scene names only files in its "
+          f"content folder); import {model} -o again to bring in its changes",
+          file=sys.stderr)
+    return target
 
 
 def export_path(scene: Path, out: Path) -> int:

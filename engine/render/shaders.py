@@ -232,6 +232,75 @@ _DECLARED = re.compile(r"(?:^|;)[ \t]*uniform\s+(?:(?:lowp|mediump|highp)\s+)?\w
                        re.MULTILINE)
 
 
+#: A line or block comment of GLSL.
+_COMMENT = re.compile(r"//[^\n]*|/\*.*?\*/", re.DOTALL)
+#: A declaration at a line's start or after another statement: ``uniform mat4 a, b[2];``
+#: and ``in vec3 p;`` (``layout(...)`` and precision qualifiers allowed); not a block.
+_DECLARATION = re.compile(
+    r"(?:^|;)[ \t]*(?:layout\s*\([^)]*\)\s*)?(uniform|in|attribute)\s+"
+    r"(?:(?:lowp|mediump|highp|flat|smooth|noperspective)\s+)*(\w+)\s+([\w\s,\[\]]+);",
+    re.MULTILINE)
+
+
+def _uncommented(source: str) -> str:
+    """``source`` with its comments blanked (newlines kept, so lines still count)."""
+    return _COMMENT.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), source)
+
+
+def unset_message(name: str, program_id: str) -> str:
+    """What is wrong with a uniform ``name`` a program uses that nothing sets (the run-time
+    warning and ``colosseum check`` say the same)."""
+    close = difflib.get_close_matches(name, sorted(_SUPPLIED), n=1, cutoff=0.5)
+    hint = f"; did you mean {close[0]!r}, which the engine supplies?" if close else ""
+    return (f"uniform {name!r} of program {program_id!r} is never set: the engine does not "
+            f"supply it and no ShaderState gives it a value, so it stays 0 (a zero matrix "
+            f"draws nothing; a script's setUniform is the only other way){hint}")
+
+
+def unset_in_source(program_id: str, stages: list[tuple[str, str, str]],
+                    given: set[str]) -> list[tuple[str, int, str]]:
+    """What :meth:`ShaderManager` warns about when it draws, found from the GLSL source
+    alone (no GPU: ``colosseum check``): the uniforms a program declares and uses that
+    neither the engine nor its ShaderStates (``given``) set, and the vertex stage's inputs
+    the engine never feeds (it gives :data:`glsl.VERTEX_INPUTS` and
+    :data:`glsl.INSTANCE_INPUTS`). ``stages`` are (kind "vertex"/"fragment", file name,
+    source); the result is (file, line, message) per problem, in file order. A name that
+    is declared but never used is left alone, as the compiler drops it."""
+    inputs = {**glsl.VERTEX_INPUTS, **glsl.INSTANCE_INPUTS}
+    texts = [(kind, file, _uncommented(source)) for kind, file, source in stages]
+    uses: dict[str, int] = {}
+    for _, _, text in texts:
+        for word in re.findall(r"\b\w+\b", text):
+            uses[word] = uses.get(word, 0) + 1
+    found: list[tuple[str, int, str]] = []
+    told: set[str] = set()
+    for kind, file, text in texts:
+        for m in _DECLARATION.finditer(text):
+            qualifier, names = m.group(1), m.group(3)
+            line = text.count("\n", 0, m.start(3)) + 1
+            for name in (n.split("[")[0].strip() for n in names.split(",")):
+                if not name or name in told:
+                    continue
+                declared = len(re.findall(rf"\b{name}\b", m.group(0)))
+                if uses.get(name, 0) <= declared:  # declared only: the compiler drops it
+                    continue
+                if qualifier == "uniform":
+                    if name.startswith(("gl_", "c_")) or name in _SUPPLIED or name in given:
+                        continue
+                    told.add(name)
+                    found.append((file, line, unset_message(name, program_id)))
+                elif kind == "vertex" and qualifier in ("in", "attribute") and \
+                        not is_legacy(stages[[s[1] for s in stages].index(file)][2]) and \
+                        name not in inputs:
+                    told.add(name)
+                    close = difflib.get_close_matches(name, sorted(inputs), n=1, cutoff=0.5)
+                    hint = f"; did you mean {close[0]!r}?" if close else ""
+                    found.append((file, line, (
+                        f"vertex input {name!r} of program {program_id!r} is never set: the "
+                        f"engine feeds only {', '.join(inputs)}, so it reads 0{hint}")))
+    return found
+
+
 @dataclass(slots=True)
 class CompiledState:
     """A shader state ready to draw with: its program and current uniform values."""
@@ -326,12 +395,7 @@ class ShaderManager:
                           for file, source in self._sources[program_id]
                           for m in _DECLARED.finditer(source) if m.group(1) == name),
                          self._sources[program_id][-1][0])
-            close = difflib.get_close_matches(name, sorted(_SUPPLIED), n=1, cutoff=0.5)
-            hint = f"; did you mean {close[0]!r}, which the engine supplies?" if close else ""
-            log.warning("%s: uniform %r of program %r is never set: the engine does not supply "
-                        "it and no ShaderState gives it a value, so it stays 0 (a zero matrix "
-                        "draws nothing; a script's setUniform is the only other way)%s",
-                        where, name, program_id, hint)
+            log.warning("%s: %s", where, unset_message(name, program_id))
 
     def _build(self, decl: ShaderProgram, vertex: dict[str, VertexShader],
                fragment: dict[str, FragmentShader]) -> Any:

@@ -93,19 +93,21 @@ def test_a_custom_system_that_fails_to_import_names_its_file(sim: Path):
 
 def test_scene_errors_are_reported_with_places_and_the_run_goes_on_without_them(sim: Path):
     """check stops at an error; run reports it, leaves out the part it lies in (the crate
-    with a misspelt key; of World only its broken key) and runs the rest."""
+    with a misspelt key; of World only its broken key), runs the rest and exits 1 (errors
+    in the content, issue 31)."""
     scene = sim / "main.scene"
-    scene.write_text(scene.read_text().replace('Mass 5', 'Mas 5')
+    scene.write_text(scene.read_text().replace('Mass mass', 'Mas mass')
                      .replace("TimeStep 0.01", "TimeStep 0"))
     checked = colosseum("check", sim)
     assert checked.returncode == 1 and "did you mean 'Mass'" in checked.stderr
     result = colosseum("run", sim, "--frames", "61", "--fast", "--save-state",
                        sim / "state.scene")
-    assert result.returncode == 0, result.stderr
+    assert result.returncode == 1, result.stderr
+    assert "the content had 2 error(s)" in result.stderr
     assert re.search(r"main\.scene:\d+:\d+: error: unknown key 'Mas'", result.stderr)
     assert "did you mean 'Mass'" in result.stderr and "TimeStep must be" in result.stderr
     assert re.search(r'without 2 broken part\(s\).*\n  \S*main\.scene:2: TimeStep\n'
-                     r'  \S*main\.scene:22: Object "crate"', result.stderr), result.stderr
+                     r'  \S*main\.scene:24: Object "crate"', result.stderr), result.stderr
     assert "ball z=" in result.stdout  # the rest ran, the World's gravity kept
     saved = (sim / "state.scene").read_text()
     assert '"ball"' in saved and '"crate"' not in saved and "Gravity [0 0 -9.81]" in saved
