@@ -71,6 +71,39 @@ cdef extern from *:
         return 0;
     }
 
+    /* Some of ODE's checks print to stdout instead of calling a handler (dCreateConvex:
+       "WARNING: Polygon N is not defined counterclockwise", "Plane N does not contain the
+       origin"). Around such a call the process's stdout goes to a temporary file, whose
+       text is then handed to the engine's logging. */
+    #include <unistd.h>
+    static FILE* colosseum_stdout_begin(int* saved) {
+        FILE* tmp;
+        fflush(stdout);
+        *saved = -1;
+        tmp = tmpfile();
+        if (tmp == NULL) return NULL;
+        *saved = dup(1);
+        if (*saved < 0 || dup2(fileno(tmp), 1) < 0) {
+            if (*saved >= 0) close(*saved);
+            *saved = -1;
+            fclose(tmp);
+            return NULL;
+        }
+        return tmp;
+    }
+    static int colosseum_stdout_end(FILE* tmp, int saved, char* out, int size) {
+        size_t n;
+        if (tmp == NULL) return 0;
+        fflush(stdout);
+        dup2(saved, 1);
+        close(saved);
+        rewind(tmp);
+        n = fread(out, 1, (size_t)(size - 1), tmp);
+        out[n] = 0;
+        fclose(tmp);
+        return (int)n;
+    }
+
     static const char* colosseum_ode_failure(void) { return colosseum_ode_text; }
     static int colosseum_ode_failure_code(void) { return colosseum_ode_code; }
     static int colosseum_ode_take_notes(char* out, int size) {
@@ -90,6 +123,10 @@ cdef extern from *:
     const char* ode_failure "colosseum_ode_failure"() noexcept nogil
     int ode_failure_code "colosseum_ode_failure_code"() noexcept nogil
     int take_notes_c "colosseum_ode_take_notes"(char* out, int size) noexcept nogil
+    ctypedef struct CFILE "FILE"
+    CFILE* stdout_begin "colosseum_stdout_begin"(int* saved) noexcept nogil
+    int stdout_end "colosseum_stdout_end"(CFILE* tmp, int saved, char* out,
+                                          int size) noexcept nogil
 
 
 class OdeFailure(RuntimeError):
@@ -103,3 +140,22 @@ def take_notes() -> tuple:
     cdef char text[512]
     cdef int n = take_notes_c(text, sizeof(text))
     return n, ((<char*>text).decode("utf-8", "replace") if n else "")
+
+
+#: What ODE printed to stdout during the calls made under ``printed_by`` (lines), until
+#: :func:`take_printed` takes them.
+_printed = []
+
+
+def take_printed() -> list:
+    """The lines ODE printed to stdout since the last call (see ``colosseum_stdout_begin``),
+    for the backend to log; the list emptied."""
+    lines = list(_printed)
+    _printed.clear()
+    return lines
+
+
+cdef void keep_printed(const char* text, int n) noexcept:
+    if n > 0:
+        _printed.extend(line for line in (<bytes>text[:n]).decode("utf-8", "replace")
+                        .splitlines() if line.strip())

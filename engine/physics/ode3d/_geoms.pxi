@@ -18,6 +18,9 @@ def add_geom(World w, key, int kind, double[::1] dims, double[::1] offset, doubl
     cdef cnp.ndarray idx
     cdef cnp.ndarray pl
     cdef cnp.ndarray poly
+    cdef CFILE* printed
+    cdef int saved
+    cdef char text[16384]
     keep = None
     q[0] = rotation[0]
     q[1] = rotation[1]
@@ -59,8 +62,10 @@ def add_geom(World w, key, int kind, double[::1] dims, double[::1] offset, doubl
         pl = np.ascontiguousarray(planes, dtype=np.float64)
         verts = np.ascontiguousarray(vertices, dtype=np.float64)
         poly = np.ascontiguousarray(polygons, dtype=np.uint32)
+        printed = stdout_begin(&saved)  # ODE prints its checks of the data to stdout
         g = dCreateConvex(w.space, <dReal*>pl.data, pl.shape[0], <dReal*>verts.data,
                           verts.shape[0], <unsigned int*>poly.data)
+        keep_printed(text, stdout_end(printed, saved, text, sizeof(text)))
         keep = (pl, verts, poly)
         if s.body != NULL:
             # ODE has no convex mass; the same triangles as a mesh give it exactly.

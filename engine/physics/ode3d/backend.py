@@ -145,7 +145,7 @@ class OdeBackend:
         try:
             for g in geoms:
                 _ode.add_geom(
-                    self._world, int(key), g.kind, g.dims, vec(g.shape.offset, 3, "shape offset"),
+                    self._world, int(key), g.kind, g.dims, vec(g.offset(), 3, "shape offset"),
                     vec(g.shape.rotation, 4, "shape rotation"), float(body.material.density),
                     material, body.category & _ALL_BITS, body.mask & _ALL_BITS, **g.extra)
             mass = float(body.mass) if body.mass else -1.0
@@ -153,8 +153,17 @@ class OdeBackend:
         except ValueError as exc:
             _ode.remove_body(self._world, int(key))
             raise ValueError(f"body {key}: {exc}") from None
+        finally:
+            self._tell_printed(key)
         if not body.can_sleep:
             self._restless.add(int(key))
+
+    def _tell_printed(self, key: int) -> None:
+        """What ODE printed to stdout while the body's shapes were made (dCreateConvex's
+        checks of the data it was given), told through the log: once per kind of message,
+        its repeats counted (the numbers of bodies and polygons aside)."""
+        for line in _ode.take_printed():
+            self._notes.warn(f"body {key}: ODE: {line.strip()}")
 
     def add_static_plane(self, normal: tuple[float, float, float] = (0.0, 0.0, 1.0),
                          offset: float = 0.0, material: MaterialProps | None = None) -> None:

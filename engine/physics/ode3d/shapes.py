@@ -27,10 +27,17 @@ SIZES = {"sphere": 1, "box": 3, "capsule": 2, "cylinder": 2, "plane": 4}
 
 @dataclass(frozen=True, slots=True)
 class Hull:
-    planes: np.ndarray  # (F, 4) outward normal and offset
-    points: np.ndarray  # (V, 3)
+    """A convex hull as dCreateConvex wants it: in a frame whose origin is ``center``, a
+    point inside the hull, so every plane's offset is positive (the plane "contains the
+    origin") and every polygon's first three points, seen from that origin, turn
+    counter-clockwise (ODE checks both and prints to stdout when they do not hold; its
+    convex-convex and convex-primitive tests assume them)."""
+
+    planes: np.ndarray  # (F, 4) outward normal and offset, relative to center
+    points: np.ndarray  # (V, 3), relative to center
     polygons: np.ndarray  # flat [3, i, j, k, 3, ...]
     triangles: np.ndarray  # (F, 3), wound counter-clockwise seen from outside
+    center: np.ndarray  # (3,) the frame's origin in the shape's frame: the vertices' mean
 
 
 @dataclass(frozen=True, slots=True)
@@ -41,13 +48,28 @@ class Geom:
     kind: int
     dims: np.ndarray
     extra: dict
+    #: Where the geom's own origin lies in the shape's frame (a hull's inner point).
+    center: np.ndarray | None = None
+
+    def offset(self) -> np.ndarray:
+        """The geom's offset in the body's frame: the shape's, plus its centre turned by
+        the shape's rotation."""
+        offset = np.asarray(self.shape.offset, dtype=np.float64).reshape(-1)
+        if self.center is None or not np.any(self.center):
+            return offset
+        from engine.rotation import rotate
+
+        return offset + np.asarray(rotate(self.shape.rotation, self.center))
 
 
 def hull(vertices: np.ndarray) -> Hull:
-    """Convex hull of a point cloud in the form dCreateConvex wants (planes + polygons)."""
+    """Convex hull of a point cloud in the form dCreateConvex wants (planes + polygons),
+    relative to a point inside it (:class:`Hull`)."""
     from scipy.spatial import ConvexHull  # only scenes with hulls pay for importing scipy
 
     pts = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    center = pts[ConvexHull(pts).vertices].mean(axis=0)  # inside: the corners' mean
+    pts = pts - center
     found = ConvexHull(pts)
     points = pts[found.vertices]
     remap = np.full(len(pts), -1, np.int64)
@@ -59,7 +81,26 @@ def hull(vertices: np.ndarray) -> Hull:
     tris[flip] = tris[flip][:, ::-1]
     planes = np.column_stack([normals, -found.equations[:, 3]])
     polygons = np.column_stack([np.full(len(tris), 3), tris]).astype(np.uint32).ravel()
-    return Hull(planes, points, polygons, tris.astype(np.uint32))
+    return Hull(planes, points, polygons, tris.astype(np.uint32), center)
+
+
+def convex_problems(planes: np.ndarray, points: np.ndarray,
+                    polygons: np.ndarray) -> list[str]:
+    """What ODE's dCreateConvex would warn about (libode 0.16 ``dxConvex``'s checks, which
+    it prints to stdout): a polygon whose first three points do not turn counter-clockwise
+    seen from the origin, a plane that does not contain the origin (negative offset)."""
+    problems = []
+    flat = np.asarray(polygons, dtype=np.int64).ravel()
+    at = 0
+    for i in range(len(planes)):
+        count = int(flat[at])
+        a, b, c = points[flat[at + 1:at + 4]]
+        if float(np.dot(a, np.cross(b, c))) < 0:
+            problems.append(f"polygon {i} is not defined counterclockwise")
+        if planes[i][3] < 0:
+            problems.append(f"plane {i} does not contain the origin")
+        at += count + 1
+    return problems
 
 
 def prepare(key: int, shape: Shape) -> Geom:
@@ -90,7 +131,8 @@ def prepare(key: int, shape: Shape) -> Geom:
         raise ValueError(f"body {key}: cannot build a convex hull: {exc}") from None
     return Geom(shape, kind, np.zeros(1), {"vertices": found.points, "faces": found.triangles,
                                            "planes": found.planes,
-                                           "polygons": found.polygons})
+                                           "polygons": found.polygons},
+                found.center)
 
 
 def _primitive_dims(key: int, shape: Shape) -> np.ndarray:
