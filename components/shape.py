@@ -35,3 +35,8 @@ class Shape:
     rotation: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
     vertices: np.ndarray | None = None
     faces: np.ndarray | None = None
+    #: This shape's own collision bits (None: its body's ``category``/``mask``): a body
+    #: of several colliders with different filters (KHR_physics_rigid_bodies, per
+    #: collider). The ODE backend honours them; pymunk uses the body's.
+    category: int | None = None
+    mask: int | None = None

@@ -299,7 +299,8 @@ class _Exporter:
                 self.w.khr(holder, trigger=part)
                 continue
             part["physicsMaterial"] = self._material(body)
-            bits = self._filter(body.category, body.mask)
+            bits = self._filter(body.category if shape.category is None else shape.category,
+                                body.mask if shape.mask is None else shape.mask)
             if bits is not None:
                 part["collisionFilter"] = bits
             self.w.khr(holder, collider=part)

@@ -549,10 +549,10 @@ class _Importer:
         com, diagonal, turn = (found.get(k) for k in given)
         if com is not None and any(com):
             obj.center_of_mass = vector(self._frame(i).scale * (Y_UP_TO_Z_UP @ np.array(com)))
-        if diagonal is not None and any(diagonal):
-            if min(diagonal) <= 0:
+        if diagonal is not None:  # a 0 is infinite: the body never turns about that axis
+            if min(diagonal) < 0:
                 self.problems.error(name, f"its inertiaDiagonal {given['inertiaDiagonal']} is "
-                                          f"not 3 positive moments; left out (the shapes' "
+                                          f"not 3 moments of 0 or more; left out (the shapes' "
                                           f"inertia is used)")
                 return
             obj.inertia = vector(np.abs(Y_UP_TO_Z_UP) @ np.array(diagonal))
@@ -620,12 +620,12 @@ class _Importer:
                 self.problems.warn(name, f"a body has one material here: '{obj.id}' keeps "
                                          f"'{obj.material}', this collider's '{found}' is not "
                                          f"used")
+        own_filter = None
         if not obj.trigger:
             found_filter = self._filter(family, filter_index, name)
             if found_filter is not None:
                 if obj.category is not None and (obj.category, obj.mask) != found_filter:
-                    self.problems.warn(name, f"a body has one collision filter here: "
-                                             f"'{obj.id}' keeps its first")
+                    own_filter = found_filter  # a compound's colliders filter apart
                 else:
                     obj.category, obj.mask = found_filter
         rel = self._relative(obj, i)
@@ -634,6 +634,8 @@ class _Importer:
         else:
             decl = self._mesh_shape(i, shape, rel)
         if decl is not None:
+            if own_filter is not None:
+                decl.category, decl.mask = own_filter
             obj.shapes.append(decl)
 
     def _implicit(self, name: str, shape: _Shape, rel: Frame, obj: ObjectDecl,
@@ -844,7 +846,7 @@ class _Importer:
         if body_a is body_b:
             self.problems.warn(name, "its joint connects a body to itself; left out")
             return None
-        if spec.get("enableCollision"):
+        if spec.get("enableCollision") and body_a is not None and body_b is not None:
             self.problems.once("enable-collision", name, "jointed bodies never collide here "
                                                          "(enableCollision is not represented)")
         # the attachment frames: their axes are the file's local axes, seen in Z-up world
@@ -857,6 +859,12 @@ class _Importer:
                              self.problems)
         if made is None:
             return None
+        # joined to a static body: named after the moving one (the world's side, as when
+        # left out), so the two never touch unless the file asks (enableCollision)
+        other = self.owner.get(connected if body_b is None else i)
+        if (body_a is None or body_b is None) and other is not None and \
+                other.kind == "static" and not spec.get("enableCollision"):
+            made.bodies = (*made.bodies, other.id)
         self._drive(name, desc, made, body_b or body_a)
         unique = not self.doc.node_ref(i).startswith("#")
         return made.decl(name if unique else "+".join(

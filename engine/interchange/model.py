@@ -112,6 +112,9 @@ class ShapeDecl:
     nodes: tuple[str, ...] = ()
     mesh: str | None = None
     scale: Vec3 = (1.0, 1.0, 1.0)
+    #: This collider's own collision bits, where they differ from its object's.
+    category: int | None = None
+    mask: int | None = None
 
 
 @dataclass(slots=True)
@@ -452,16 +455,22 @@ def _shape(b: _Blocks, s: ShapeDecl, file_ref: str) -> list[Entry]:
         euler = quat_to_euler(s.rotation)
         if any(abs(a) > 1e-7 for a in euler):
             out.append(b.entry("Orientation", b.vec(euler)))
+    if s.category is not None:
+        out.append(b.entry("Category", b.num(s.category)))
+    if s.mask is not None:
+        out.append(b.entry("Mask", b.num(s.mask)))
     return out
 
 
 # -- material combination --------------------------------------------------------------
 def combine(mode_a: str | None, mode_b: str | None, a: float, b: float) -> float:
     """Two materials' values combined as KHR_physics_rigid_bodies and OMI say: average
-    wins over minimum, over maximum, over multiply (unsaid: :data:`DEFAULT_COMBINE`);
-    last, the engine's own geometric mean (:data:`GEOMETRIC_MEAN`, which our export
-    writes in a material's extras)."""
-    modes = {mode_a or DEFAULT_COMBINE, mode_b or DEFAULT_COMBINE}
+    wins over minimum, over maximum, over multiply; a material that says no mode takes the
+    other's (the conformance scene Materials_01: restitution 0.5 by "minimum" against a
+    material that says nothing does not bounce), and when neither says,
+    :data:`DEFAULT_COMBINE`; last, the engine's own geometric mean
+    (:data:`GEOMETRIC_MEAN`, which our export writes in a material's extras)."""
+    modes = {m for m in (mode_a, mode_b) if m} or {DEFAULT_COMBINE}
     if "average" in modes:
         return (a + b) / 2
     if "minimum" in modes:

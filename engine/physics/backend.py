@@ -54,6 +54,25 @@ class Limits:
                 raise ValueError(f"{name} must be a positive number, got {value!r}")
 
 
+#: A principal moment of 0 means infinite (KHR_physics_rigid_bodies: the body never turns
+#: about that axis). A backend takes it as this many times the largest finite moment (or
+#: the mass, in kg m^2, when every moment is 0): its inverse is then 1e-6 of the others',
+#: which no torque the solver meets makes a visible turn of, and the solver stays well
+#: conditioned (a true 0 inverse is not what ODE's mass takes).
+LOCKED_INERTIA_RATIO = 1e6
+
+
+def locked_inertia(moments: tuple[float, ...] | np.ndarray, mass: float = 0.0) -> np.ndarray:
+    """Principal moments with each 0 (infinite: a locked axis) made finite and very large
+    (:data:`LOCKED_INERTIA_RATIO`)."""
+    m = np.asarray(moments, dtype=np.float64).copy()
+    if np.all(m > 0):
+        return m
+    scale = float(m.max()) if np.any(m > 0) else (mass if mass and mass > 0 else 1.0)
+    m[m <= 0] = LOCKED_INERTIA_RATIO * scale
+    return m
+
+
 class BackendFailure(RuntimeError):
     """The backend's library failed inside a step and cannot step again (ODE's internal
     errors, see docs/ODE.md); the message says what it reported. The driver stops

@@ -266,15 +266,16 @@ def _check_spring(command: str, joint: Joint) -> None:
 
 
 def _check_mass_frame(command: str, body: Physical) -> None:
-    """A given centre of mass finite, principal moments positive (ODE aborts the process on
-    an inertia that is not positive definite), their axes' turn a quaternion."""
+    """A given centre of mass finite, principal moments 0 or more (0: infinite, made a
+    large finite moment by the backend: ODE aborts the process on an inertia that is not
+    positive definite), their axes' turn a quaternion."""
     if body.center_of_mass is not None:
         _vector(command, "centre of mass", body.center_of_mass, 3)
     if body.inertia is not None:
         moments = _vector(command, "inertia", body.inertia, 3)
-        if not min(moments) > 0:
-            raise CommandError(f"{command}: inertia must be 3 positive moments (kg m^2), got "
-                               f"{body.inertia!r}")
+        if not min(moments) >= 0:
+            raise CommandError(f"{command}: inertia must be 3 moments of 0 or more (kg m^2; "
+                               f"0: infinite), got {body.inertia!r}")
     if body.inertia_rotation != _IDENTITY:
         _quaternion(command, body.inertia_rotation)
 

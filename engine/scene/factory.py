@@ -734,12 +734,13 @@ class _Builder:
 
     def mass_frame(self, phys: _Reader) -> dict[str, Any]:
         """``CenterOfMass``, ``Inertia`` and ``InertiaOrientation`` as Physical fields; a
-        centre not finite or a moment not positive is told at its number and left to the
-        shapes."""
+        centre not finite or a moment negative or not finite is told at its number and
+        left to the shapes. A moment of 0 is infinite: the body never turns about that
+        axis (as KHR_physics_rigid_bodies says)."""
         out: dict[str, Any] = {}
         for key, ok, need in (("CenterOfMass", math.isfinite, "finite numbers of metres"),
-                              ("Inertia", lambda x: 0 < x < math.inf,
-                               "positive moments of kg*m^2")):
+                              ("Inertia", lambda x: 0 <= x < math.inf,
+                               "moments of kg*m^2, 0 or more (0: infinite)")):
             value = phys.value(key)
             if value is None or value.kind != VECTOR:
                 continue
@@ -777,14 +778,14 @@ class _Builder:
                 shape = self.mesh_shape(file, fscale, gr("ParseMethod") or "ConvexHull", loc)
                 shape.offset = _floats(gr("Offset"))
                 shape.rotation = euler_to_quat(gr("Orientation"))
-                shapes.append(shape)
+                shapes.append(_own_bits(shape, gr))
             elif gr("Primitive") == "plane":
                 has_plane = True
                 normal = rotate(quat, (0.0, 0.0, 1.0))
                 d = sum(n * p for n, p in zip(normal, position, strict=True))
                 shapes.append(Shape("plane", (*normal, d)))
             else:
-                shapes.append(_primitive(gr, size))
+                shapes.append(_own_bits(_primitive(gr, size), gr))
         if not shapes:
             if visual_shapes:
                 shapes = [_copy_shape(s) for s in visual_shapes]
@@ -1429,6 +1430,15 @@ def _model_name(gr: _Reader) -> str:
     if gr.has("Nodes"):
         return nodes_name(gr("File"), gr("Nodes"))
     return nodes_name(gr("File"), [gr("Mesh")], mesh=True) if gr.has("Mesh") else gr("File")
+
+
+def _own_bits(shape: Shape, gr: _Reader) -> Shape:
+    """``shape`` with the Geometry block's own ``Category``/``Mask``, where it gives them."""
+    if gr.has("Category"):
+        shape.category = int(gr("Category"))
+    if gr.has("Mask"):
+        shape.mask = int(gr("Mask"))
+    return shape
 
 
 def _primitive(gr: _Reader, size: Any) -> Shape:

@@ -226,7 +226,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                            "centred (default: its shapes' centroid; given alone, the shapes' "
                            "inertia about their centroid moves there)"),
         "Inertia": _f(VEC3_T, None, "kg*m^2, its principal moments of inertia about the "
-                      "centre of mass (default: its shapes' at their density, scaled to Mass)"),
+                      "centre of mass; 0 is infinite: it never turns about that axis "
+                      "(default: its shapes' at their density, scaled to Mass)"),
         "InertiaOrientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees, in the object's "
                                  "frame: turns its X Y Z onto the axes of Inertia's moments"),
     },
@@ -244,6 +245,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees, in the object's frame"),
         "ParseMethod": _f(ENUM_T, None, "physics shape derived from the model",
                           allowed=PARSE_METHODS),
+        "Category": _f(INT_T, None, "physics: this shape's own collision category bits "
+                       "(default: the object's Category)"),
+        "Mask": _f(INT_T, None, "physics: the category bits this shape collides with "
+                   "(default: the object's Mask)"),
     },
     "Model": {
         "File": _f(ASSET_T, None, "a .gltf, .glb or .dae file", required=True),

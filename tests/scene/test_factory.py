@@ -255,8 +255,8 @@ Object { ID "plain" PhysicalAttributes { Mass 1 } }''', DATA)
 
 
 @pytest.mark.parametrize("keys, message", [
-    ("Inertia [0.5 0 0.2]", "Inertia must be positive moments of kg*m^2, got 0"),
-    ("Inertia [0.5 -1 0.2]", "Inertia must be positive moments of kg*m^2, got -1"),
+    ("Inertia [0.5 -1 0.2]", "Inertia must be moments of kg*m^2, 0 or more (0: infinite), "
+                             "got -1"),
     ("CenterOfMass [0 0 1e9]", "CenterOfMass z = 1e+09 is outside the world"),
 ])
 def test_a_mass_frame_no_body_can_have_is_told_at_its_number(keys, message):

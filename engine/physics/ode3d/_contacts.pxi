@@ -84,6 +84,14 @@ cdef int spread_contacts(dContact* buf, int n, int keep) noexcept nogil:
     return keep
 
 
+cdef inline bint linked_to_static(Ctx* c, int64_t body, int64_t static) noexcept nogil:
+    cdef int i
+    for i in range(c.nlinked):
+        if c.linked[2 * i] == body and c.linked[2 * i + 1] == static:
+            return True
+    return False
+
+
 cdef void near_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
     cdef Ctx* c = <Ctx*>data
     cdef GeomInfo* g1
@@ -124,6 +132,8 @@ cdef void near_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
         return                   # both asleep (or asleep on static ground): nothing to solve
     if b2 != NULL and dAreConnectedExcluding(b1, b2, dJointTypeContact):
         return
+    if b2 == NULL and c.nlinked and linked_to_static(c, g1.key, g2.key):
+        return                   # jointed to this static body: no contacts, as between bodies
     p = &c.pairs[g1.material * c.nmat + g2.material]
     if p.collide == 0:
         return

@@ -260,6 +260,7 @@ def create_joint(World w, key, int kind, key_a, key_b, anchor, axis, axis2, low,
     rec.drive = d if kind == JOINT_SIX_DOF else None
     rec.spring = sp
     w.joints[key] = rec
+    relink(w)
     if sign < 0.0:
         low, high = (None if high is None else -high), (None if low is None else -low)
     if kind not in (JOINT_BALL, JOINT_FIXED, JOINT_SIX_DOF):
@@ -556,6 +557,34 @@ def remove_joint(World w, key) -> None:
     wake_joint(w, rec)
     free_joint(rec)
     del w.joints[key]
+    relink(w)
+
+
+cdef void relink(World w) except *:
+    """The (body, static body) pairs joints hold together, for the near callback: bodies
+    joined to each other never touch (ODE's dAreConnected), and a body joined to a static
+    one (a joint to ODE's world) must not touch that static body's geoms either."""
+    links = []
+    for rec in w.joints.values():
+        a, b = (<_JointRec>rec).bodies
+        if b is None or a not in w.slot_of or b not in w.slot_of:
+            continue
+        if w.slots[w.slot_of[b]].body == NULL:
+            links.append((a, b))
+        elif w.slots[w.slot_of[a]].body == NULL:
+            links.append((b, a))
+    free(w.ctx.linked)
+    w.ctx.linked = NULL
+    w.ctx.nlinked = 0
+    if not links:
+        return
+    w.ctx.linked = <int64_t*>malloc(2 * len(links) * sizeof(int64_t))
+    if w.ctx.linked == NULL:
+        raise MemoryError()
+    for i, (a, b) in enumerate(links):
+        w.ctx.linked[2 * i] = a
+        w.ctx.linked[2 * i + 1] = b
+    w.ctx.nlinked = len(links)
 
 
 def has_joint(World w, key) -> bool:

@@ -55,6 +55,8 @@ cdef struct Ctx:         # what the near callback needs, passed through ODE's vo
     int nchunks
     int oom
     double dt            # the step in progress
+    int64_t* linked      # (body key, static key) pairs a joint holds together: no contacts
+    int nlinked
     CsState stepper      # stepper.h: the warm start's contacts, the islands
     CsSettings cfg
 
@@ -171,6 +173,9 @@ cdef class World:
         free(self.ctx.recs)
         free(self.ctx.buf)
         free(self.ctx.pairs)
+        free(self.ctx.linked)
+        self.ctx.linked = NULL
+        self.ctx.nlinked = 0
         free(self.slots)
         free(self.faults)
         free(self.woken)

@@ -23,6 +23,7 @@ from engine.physics.backend import (
     RayHit,
     WorldSettings,
     fault_message,
+    locked_inertia,
 )
 from engine.physics.ode3d import _ode, joints, shapes
 from engine.physics.ode3d.materials import MaterialTable
@@ -147,7 +148,10 @@ class OdeBackend:
                 _ode.add_geom(
                     self._world, int(key), g.kind, g.dims, vec(g.offset(), 3, "shape offset"),
                     vec(g.shape.rotation, 4, "shape rotation"), float(body.material.density),
-                    material, body.category & _ALL_BITS, body.mask & _ALL_BITS, **g.extra)
+                    material,
+                    (body.category if g.shape.category is None else g.shape.category) & _ALL_BITS,
+                    (body.mask if g.shape.mask is None else g.shape.mask) & _ALL_BITS,
+                    **g.extra)
             mass = float(body.mass) if body.mass else -1.0
             _ode.finish_body(self._world, int(key), mass, *_mass_frame(body))
         except ValueError as exc:
@@ -431,5 +435,6 @@ def _mass_frame(body: Physical) -> tuple[np.ndarray | None, np.ndarray | None]:
     if body.inertia is None:
         return com, None
     turn = quat_to_matrix(vec(body.inertia_rotation, 4, "inertia rotation"))
-    tensor = turn @ np.diag(vec(body.inertia, 3, "inertia")) @ turn.T
+    moments = locked_inertia(vec(body.inertia, 3, "inertia"), float(body.mass or 0.0))
+    tensor = turn @ np.diag(moments) @ turn.T
     return com, np.ascontiguousarray((tensor + tensor.T) / 2).reshape(9)

@@ -44,6 +44,7 @@ from engine.physics.backend import (
     RayHit,
     WorldSettings,
     fault_message,
+    locked_inertia,
 )
 from engine.physics.pymunk2d import _rows
 from engine.physics.pymunk2d.batch import Buffers, SpaceReader
@@ -427,7 +428,8 @@ class PymunkBackend:
             centre = (float(c[0]), float(c[2]))
         if body.inertia is not None:
             axes = turn @ quat_to_matrix(np.asarray(body.inertia_rotation, np.float64))
-            moment = float((axes @ np.diag(np.asarray(body.inertia, np.float64)) @ axes.T)[1, 1])
+            moments = locked_inertia(body.inertia, float(body.mass or 0.0))
+            moment = float((axes @ np.diag(moments) @ axes.T)[1, 1])
         return mass, moment, centre
 
     def _shape_mass(self, obj: str, body: Physical,
