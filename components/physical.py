@@ -54,6 +54,9 @@ class Physical:
     category: int = 1
     mask: int = 0xFFFFFFFF
     gravity: bool = True
+    #: Gravity on this body times this (KHR's gravityFactor): 0.5 half, -0.5 it rises at
+    #: half g; ``gravity`` False switches it off whatever the factor.
+    gravity_factor: float = 1.0
     center_of_mass: tuple[float, float, float] | None = None
     inertia: tuple[float, float, float] | None = None
     inertia_rotation: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)

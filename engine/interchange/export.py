@@ -277,6 +277,8 @@ class _Exporter:
                 motion["angularVelocity"] = to_gltf(turn @ t.angular_velocity)
             if not body.gravity:
                 motion["gravityFactor"] = 0.0
+            elif body.gravity_factor != 1.0:
+                motion["gravityFactor"] = float(body.gravity_factor)
             if body.center_of_mass is not None:
                 motion["centerOfMass"] = to_gltf(body.center_of_mass)
             if body.inertia is not None:  # glTF's X Y Z moments are the engine's X Z Y

@@ -513,12 +513,12 @@ class _Importer:
             obj.density = VOLUME_DENSITY
         self._mass_frame(i, obj, motion)
         gravity = _number(motion.get("gravityFactor", 1.0))
-        if gravity is None or gravity not in (0.0, 1.0):
-            self.problems.warn(name, f"gravityFactor {motion.get('gravityFactor')} is not "
-                                     f"represented (gravity acts fully or not at all here): "
-                                     f"{'full' if gravity is None or gravity > 0.5 else 'no'} "
-                                     f"gravity")
-        obj.gravity = gravity is not None and gravity > 0.5
+        if gravity is None or abs(gravity) > 1e3:
+            self.problems.error(name, f"gravityFactor {motion.get('gravityFactor')} is not a "
+                                      f"finite number up to 1000; full gravity")
+            gravity = 1.0
+        obj.gravity = gravity != 0.0
+        obj.gravity_factor = tidy(gravity) if gravity not in (0.0, 1.0) else 1.0
         # KHR gives velocities in node space (the node's rotation, not its scale); OMI
         # says nothing, and Godot writes its bodies' velocities in world axes
         turn = self._frame(i).rotation if family == "KHR" else UNTURNED

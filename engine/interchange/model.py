@@ -145,6 +145,7 @@ class ObjectDecl:
     velocity: Vec3 = (0.0, 0.0, 0.0)
     angular_velocity: Vec3 = (0.0, 0.0, 0.0)
     gravity: bool = True
+    gravity_factor: float = 1.0
     #: The file's centre of mass (object frame, m) and principal moments (kg m^2) with
     #: their axes' turn (None: the shapes').
     center_of_mass: Vec3 | None = None
@@ -403,6 +404,8 @@ def _object(b: _Blocks, o: ObjectDecl, file_ref: str, prefix: str) -> list[Entry
             phys.append(b.entry("Mask", b.num(o.mask)))
         if not o.gravity:
             phys.append(b.entry("Gravity", b.num(0)))
+        elif o.gravity_factor != 1.0:
+            phys.append(b.entry("GravityFactor", b.num(o.gravity_factor)))
         if o.center_of_mass is not None:
             phys.append(b.entry("CenterOfMass", b.vec(o.center_of_mass)))
         if o.inertia is not None:

@@ -278,6 +278,9 @@ def _check_mass_frame(command: str, body: Physical) -> None:
                                f"0: infinite), got {body.inertia!r}")
     if body.inertia_rotation != _IDENTITY:
         _quaternion(command, body.inertia_rotation)
+    factor = body.gravity_factor
+    if factor != 1.0 and not (isinstance(factor, (int, float)) and math.isfinite(factor)):
+        raise CommandError(f"{command}: gravity factor must be a finite number, got {factor!r}")
 
 
 def _check_shape(command: str, shape: Shape) -> None:

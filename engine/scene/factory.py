@@ -730,7 +730,17 @@ class _Builder:
                         angular_damping=float(phys("AngularDamping")),
                         can_sleep=bool(phys("CanSleep")), category=int(phys("Category")),
                         mask=int(phys("Mask")), gravity=bool(phys("Gravity")),
+                        gravity_factor=self.gravity_factor(phys),
                         **self.mass_frame(phys))
+
+    def gravity_factor(self, phys: _Reader) -> float:
+        """``GravityFactor``, finite and not too large (told at its number, else 1)."""
+        factor = float(phys("GravityFactor"))
+        if not math.isfinite(factor) or abs(factor) > 1e3:
+            self.report.error(phys.value("GravityFactor").loc, f"GravityFactor must be a "
+                              f"finite number from -1000 to 1000, got {factor:g}")
+            return 1.0
+        return factor
 
     def mass_frame(self, phys: _Reader) -> dict[str, Any]:
         """``CenterOfMass``, ``Inertia`` and ``InertiaOrientation`` as Physical fields; a

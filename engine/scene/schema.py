@@ -219,6 +219,8 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Category": _f(INT_T, 1, "collision category bits"),
         "Mask": _f(INT_T, 0xFFFFFFFF, "collides with these category bits"),
         "Gravity": _f(BOOL_T, 1, "0: gravity does not act on this body"),
+        "GravityFactor": _f(FLOAT_T, 1.0, "gravity on this body times this (0.5: half; "
+                            "-0.5: it rises at half g; KHR's gravityFactor)"),
         "Trigger": _f(BOOL_T, 0, "1: a sensor: nothing collides with it; bodies whose "
                       "Category meets its Mask are told entering and leaving it (Lua: "
                       "on(\"trigger\", fn)); static unless Kinematic"),

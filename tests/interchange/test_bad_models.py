@@ -253,7 +253,7 @@ def test_a_collada_constraint_naming_a_missing_body_is_told_and_left_out(tmp_pat
 
 def unrepresentable(folder: Path) -> Path:
     """A glTF file of things the engine approximates: static friction apart from dynamic
-    (a material two bodies use), a gravity factor of 0.5, tapered capsules on two nodes
+    (a material two bodies use), tapered capsules on two nodes
     of one body, a joint limit of several soft axes, enableCollision on two joints, a
     cone limit, and a position drive on a universal joint."""
     b = GltfBuilder()
@@ -304,7 +304,6 @@ def test_each_thing_the_engine_cannot_represent_is_told_once_naming_file_and_nod
     expected = {
         "physics material 0: static friction 0.9 differs from dynamic friction 0.4; contacts "
         "here have one Coulomb coefficient, the dynamic one": None,
-        "gravityFactor 0.5 is not represented": "Floaty",
         "a tapered capsule (radii 0.1 and 0.2) is a capsule of the larger radius here": "Tip0",
         "soft joint limits (stiffness 100) are hard here": "Soft",
         "jointed bodies never collide here (enableCollision is not represented)": "Touchy",
@@ -320,6 +319,8 @@ def test_each_thing_the_engine_cannot_represent_is_told_once_naming_file_and_nod
     # the second tapered capsule is told too (a different node), but nothing twice
     assert any(d.message.startswith("node 'Tip1': a tapered capsule") for d in told)
     assert len({d.message for d in told}) == len(told)
+    # a gravity factor of 0.5 is represented now (issue 31): nothing to tell
+    assert not [d for d in told if "gravityFactor" in d.message]
 
 
 def test_static_friction_is_told_once_and_the_dynamic_one_used(tmp_path):

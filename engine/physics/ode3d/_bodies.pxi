@@ -382,6 +382,27 @@ def set_gravity(World w, key, bint enabled) -> None:
     wake(w, b)
 
 
+def add_scaled_gravity(World w, int64_t[::1] keys, double[::1] factors, double gx, double gy,
+                       double gz) -> None:
+    """Gravity times ``factors - 1`` on each body (mass times g): with ODE's own gravity,
+    gravity times the factor (KHR's gravityFactor). Bodies asleep, kinematic or with
+    gravity off get nothing, and nothing is woken."""
+    cdef int k
+    cdef dBodyID b
+    cdef dMass m
+    cdef double f
+    for k in range(keys.shape[0]):
+        if keys[k] not in w.slot_of:
+            continue
+        b = w.slots[w.slot_of[keys[k]]].body
+        if b == NULL or dBodyIsKinematic(b) or not dBodyIsEnabled(b) or \
+                not dBodyGetGravityMode(b):
+            continue
+        dBodyGetMass(b, &m)
+        f = (factors[k] - 1.0) * m.mass
+        dBodyAddForce(b, f * gx, f * gy, f * gz)
+
+
 def set_collision(World w, key, bint enabled) -> None:
     """Every geom of the body in or out of collision (ODE skips disabled geoms in
     dSpaceCollide and ray casts); the body itself moves on."""

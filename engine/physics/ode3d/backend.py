@@ -60,6 +60,9 @@ class OdeBackend:
         self._rule = SleepRule()
         self._bound = -1  # the rule's arrays' generation the world's step is bound to
         self._notes = MessageLog(log)  # ODE's informational messages, told once each
+        #: bodies whose gravity is scaled (Physical.gravity_factor), and by how much
+        self._gravity_factors: dict[int, float] = {}
+        self._scaled: tuple[np.ndarray, np.ndarray] | None = None
         self._material(MaterialProps())
         self.configure(settings or WorldSettings())
 
@@ -96,6 +99,11 @@ class OdeBackend:
         sleep = self._settings.auto_sleep
         if sleep:
             self._sleep_rule()  # laid out and bound for the current slots
+        if self._gravity_factors:  # gravity x factor: ODE's, plus (factor - 1) of it
+            if self._scaled is None:
+                self._scaled = (np.fromiter(self._gravity_factors, np.int64),
+                                np.fromiter(self._gravity_factors.values(), np.float64))
+            _ode.add_scaled_gravity(self._world, *self._scaled, *self._settings.gravity)
         try:
             bad = self._world.step(dt, sleep)
         except _ode.OdeFailure as exc:
@@ -161,6 +169,9 @@ class OdeBackend:
             self._tell_printed(key)
         if not body.can_sleep:
             self._restless.add(int(key))
+        if body.gravity_factor != 1.0 and kind == _ode.BODY_DYNAMIC:
+            self._gravity_factors[int(key)] = float(body.gravity_factor)
+            self._scaled = None
 
     def _tell_printed(self, key: int) -> None:
         """What ODE printed to stdout while the body's shapes were made (dCreateConvex's
@@ -182,6 +193,8 @@ class OdeBackend:
         _ode.remove_body(self._world, int(key))
         self._restless.discard(int(key))
         self._keys = None
+        if self._gravity_factors.pop(int(key), None) is not None:
+            self._scaled = None
 
     def body_count(self) -> int:
         return _ode.body_count(self._world)

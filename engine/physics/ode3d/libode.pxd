@@ -124,6 +124,7 @@ cdef extern from "ode/ode.h" nogil:
     void dBodySetKinematic(dBodyID)
     int dBodyIsKinematic(dBodyID)
     void dBodySetGravityMode(dBodyID, int)
+    int dBodyGetGravityMode(dBodyID)
     void dBodySetLinearDamping(dBodyID, dReal)
     const dReal* dBodyGetForce(dBodyID)
     const dReal* dBodyGetTorque(dBodyID)

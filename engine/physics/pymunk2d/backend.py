@@ -405,8 +405,10 @@ class PymunkBackend:
             shape.elasticity = float(mat.bounce)
             shape.filter = filt
             shape.collision_type = ctype
-        if not static and (not body.gravity or body.linear_damping or body.angular_damping):
-            pbody.velocity_func = _velocity_func(body.gravity, body.linear_damping,
+        if not static and (not body.gravity or body.gravity_factor != 1.0
+                           or body.linear_damping or body.angular_damping):
+            pbody.velocity_func = _velocity_func(body.gravity * body.gravity_factor,
+                                                 body.linear_damping,
                                                  body.angular_damping)
         self._space.add(pbody, *shapes)
         rec = _BodyRecord(key, pbody, shapes, body, float(position[1]), rest,
@@ -660,7 +662,8 @@ class PymunkBackend:
         if rec.body.body_type == pymunk.Body.STATIC:
             return
         phys = rec.physical
-        rec.body.velocity_func = _velocity_func(bool(enabled), phys.linear_damping,
+        rec.body.velocity_func = _velocity_func(bool(enabled) * phys.gravity_factor,
+                                                phys.linear_damping,
                                                 phys.angular_damping)
         self._wake(rec)
 
@@ -1074,13 +1077,15 @@ _SET_VELOCITY = pymunk.Body.velocity.fset
 _SET_FORCE = pymunk.Body.force.fset
 
 
-def _velocity_func(gravity: bool, linear_damping: float, angular_damping: float):
-    """Per-body gravity switch and ODE-style damping (velocity × (1 − damping) per step)."""
+def _velocity_func(gravity: float, linear_damping: float, angular_damping: float):
+    """Per-body gravity (0: off; a factor: scaled) and ODE-style damping (velocity ×
+    (1 − damping) per step)."""
     keep_v = 1.0 - min(max(linear_damping, 0.0), 1.0)
     keep_w = 1.0 - min(max(angular_damping, 0.0), 1.0)
+    scale = float(gravity)
 
     def update(body: pymunk.Body, g: tuple[float, float], damping: float, dt: float) -> None:
-        pymunk.Body.update_velocity(body, g if gravity else (0.0, 0.0), damping, dt)
+        pymunk.Body.update_velocity(body, (g[0] * scale, g[1] * scale), damping, dt)
         if keep_v != 1.0:
             body.velocity = body.velocity * keep_v
         if keep_w != 1.0:
