@@ -46,10 +46,14 @@ class Trace:
 
     def z_range(self, i: int, frame: int = -1) -> tuple[float, float]:
         """The lowest and highest world z of body ``i``'s shapes at ``frame``."""
-        lows, highs = zip(*(shape_z_range(s, self.position[frame, i],
-                                          self.orientation[frame, i])
-                            for s in self.bodies[i].shapes if s.kind != "plane"), strict=True)
-        return min(lows), max(highs)
+        low, high = self.bounds(i, frame)
+        return float(low[2]), float(high[2])
+
+    def bounds(self, i: int, frame: int = -1) -> tuple[np.ndarray, np.ndarray]:
+        """The world box around body ``i``'s shapes (planes aside) at ``frame``."""
+        boxes = [shape_bounds(s, self.position[frame, i], self.orientation[frame, i])
+                 for s in self.bodies[i].shapes if s.kind != "plane"]
+        return (np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0))
 
     def velocity(self, i: int, frames: int = 5) -> np.ndarray:
         """Body ``i``'s mean velocity over the last ``frames`` frames (m/s)."""
@@ -62,27 +66,29 @@ class Trace:
         return float(np.degrees(2 * np.arccos(min(1.0, abs(float(q0 @ q1))))))
 
 
-def shape_z_range(shape: Shape, position: np.ndarray, orientation: np.ndarray
-                  ) -> tuple[float, float]:
-    """A shape's lowest and highest world z, its body at ``position``/``orientation``."""
+def shape_bounds(shape: Shape, position: np.ndarray, orientation: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """A shape's world box, its body at ``position``/``orientation``."""
     body = quat_to_matrix(np.asarray(orientation, float))
     turn = body @ quat_to_matrix(np.asarray(shape.rotation, float))
     center = np.asarray(position, float) + body @ np.asarray(shape.offset, float)
     size = np.asarray(shape.size, float)
     if shape.kind == "sphere":
-        r = size[0]
-        return center[2] - r, center[2] + r
-    if shape.kind == "box":
-        reach = float(np.abs(turn[2]) @ (size[:3] / 2))
-        return center[2] - reach, center[2] + reach
-    if shape.kind in ("capsule", "cylinder"):
+        reach = np.full(3, size[0])
+    elif shape.kind == "box":
+        reach = np.abs(turn) @ (size[:3] / 2)
+    elif shape.kind in ("capsule", "cylinder"):
         r, length = size[0], size[1]
-        az = abs(turn[2, 2])
-        disc = r if shape.kind == "capsule" else r * np.sqrt(max(0.0, 1 - az * az))
-        reach = length / 2 * az + disc
-        return center[2] - reach, center[2] + reach
-    world = (np.asarray(shape.vertices, float).reshape(-1, 3) @ turn.T) + center
-    return float(world[:, 2].min()), float(world[:, 2].max())
+        axis = turn[:, 2]
+        if shape.kind == "capsule":
+            disc = np.full(3, r)
+        else:
+            disc = r * np.sqrt(np.clip(1 - axis * axis, 0.0, 1.0))
+        reach = length / 2 * np.abs(axis) + disc
+    else:
+        world = (np.asarray(shape.vertices, float).reshape(-1, 3) @ turn.T) + center
+        return world.min(axis=0), world.max(axis=0)
+    return center - reach, center + reach
 
 
 def world_of(model: Path, folder: Path, backend: str | None = None) -> tuple[Any, Any]:
