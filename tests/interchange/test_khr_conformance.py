@@ -50,12 +50,7 @@ def at_rest(trace: Trace, i: int, speed: float = 0.05) -> bool:
 # -- ColliderTypeMatrix: every static shape x every dynamic shape -------------------------
 
 #: Scenes where the engine does not do what the README says yet, and why.
-KNOWN = {
-    ("ColliderTypeMatrix", 16): "a dynamic triangle mesh on a static capsule is not supported "
-                                "stably by ODE's trimesh-capsule contacts",
-    ("ColliderTypeMatrix", 17): "a dynamic triangle mesh on a static capsule is not supported "
-                                "stably by ODE's trimesh-capsule contacts",
-}
+KNOWN: dict[tuple[str, int], str] = {}
 
 
 def known(family: str, number: int) -> None:

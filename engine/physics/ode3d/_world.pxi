@@ -56,6 +56,7 @@ cdef struct Ctx:         # what the near callback needs, passed through ODE's vo
     int oom
     double dt            # the step in progress
     int64_t* linked      # (body key, static key) pairs a joint holds together: no contacts
+    dGeomID proxy        # a sphere in no space: a capsule's stand-in against a triangle mesh
     int nlinked
     CsState stepper      # stepper.h: the warm start's contacts, the islands
     CsSettings cfg
@@ -116,6 +117,7 @@ cdef class World:
         self.ctx.world = self.world
         self.ctx.group = dJointGroupCreate(0)
         self.ctx.max_contacts = 4
+        self.ctx.proxy = dCreateSphere(NULL, 1.0)
         self.ctx.buf = <dContact*>calloc(CANDIDATES, sizeof(dContact))
         self.ctx.nmat = 1
         self.ctx.pairs = <Pair*>calloc(1, sizeof(Pair))
@@ -163,6 +165,9 @@ cdef class World:
             free_geom(entry)
         self.static_geoms = []
         dJointGroupDestroy(self.ctx.group)
+        if self.ctx.proxy != NULL:
+            dGeomDestroy(self.ctx.proxy)
+            self.ctx.proxy = NULL
         dSpaceDestroy(self.space)
         dWorldDestroy(self.world)
         self.world = NULL

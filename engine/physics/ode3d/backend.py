@@ -60,6 +60,14 @@ class OdeBackend:
         self._rule = SleepRule()
         self._bound = -1  # the rule's arrays' generation the world's step is bound to
         self._notes = MessageLog(log)  # ODE's informational messages, told once each
+        #: moving bodies' thickness (m: the least half extent of their shapes) and mask,
+        #: for the sweep that keeps a fast one from passing through static geometry
+        self._thickness: dict[int, tuple[float, int]] = {}
+        self._static_keys: set[int] = set()
+        #: static bodies with triangle meshes (surfaces of no thickness): only with them
+        #: does a step sweep (primitives have inside to push a body out of)
+        self._thin_statics: set[int] = set()
+        self._thick_rows: np.ndarray | None = None  # per state row: thickness (inf: none)
         #: bodies whose gravity is scaled (Physical.gravity_factor), and by how much
         self._gravity_factors: dict[int, float] = {}
         self._scaled: tuple[np.ndarray, np.ndarray] | None = None
@@ -104,6 +112,7 @@ class OdeBackend:
                 self._scaled = (np.fromiter(self._gravity_factors, np.int64),
                                 np.fromiter(self._gravity_factors.values(), np.float64))
             _ode.add_scaled_gravity(self._world, *self._scaled, *self._settings.gravity)
+        swept = self._sweep(dt) if self._thin_statics and self._thickness else ()
         try:
             bad = self._world.step(dt, sleep)
         except _ode.OdeFailure as exc:
@@ -111,9 +120,54 @@ class OdeBackend:
         if bad:
             extent = self._settings.extent
             self._faults.extend((key, fault_message(_CAUSES[why], extent)) for key, why in bad)
+        for key, point, normal, thick in swept:
+            self._stop_at(key, point, normal, thick)
         count, note = _ode.take_notes()
         if count:  # one line per kind of message (the log compares them numbers aside)
             self._notes.warn(f"ODE: {note.strip()}")
+
+    def _sweep(self, dt: float) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
+        """The moving bodies that this step carries further than half their thickness, and
+        the static surface ahead of each along its velocity (a ray from its origin), when
+        the step would reach it: a ball faster than its radius per step would pass
+        through a floor of no thickness between two steps, which no contact sees."""
+        state = self.read_state()
+        if self._thick_rows is None or len(self._thick_rows) != len(state.keys):
+            self._thick_rows = np.array([self._thickness.get(int(k), (np.inf, 0))[0]
+                                         for k in state.keys])
+        speed = np.sqrt(np.einsum("ij,ij->i", state.linear_velocity, state.linear_velocity))
+        found = []
+        for row in np.flatnonzero(speed * dt > 0.5 * self._thick_rows):
+            key = int(state.keys[row])
+            thick = self._thickness[key]
+            v = state.linear_velocity[row]
+            reach = float(speed[row]) * dt + thick[0]
+            hit = self.raycast(state.position[row], v, reach, ignore=key, mask=thick[1])
+            if hit is None or (hit.key >= 0 and hit.key not in self._static_keys):
+                continue
+            normal = np.asarray(hit.normal, np.float64)
+            if normal @ v > 0:  # a face seen from behind: its normal faces the ray
+                normal = -normal
+            found.append((key, np.asarray(hit.position, np.float64), normal, thick[0]))
+        return found
+
+    def _stop_at(self, key: int, point: np.ndarray, normal: np.ndarray, thick: float) -> None:
+        """A swept body that went past the surface at ``point`` (or deeper into it than
+        half its thickness) is put back on it, its velocity into it taken away; the next
+        step's contacts hold it from there."""
+        if not _ode.has_body(self._world, key):
+            return
+        position, orientation = _ode.pose(self._world, key)
+        depth = float((position - point) @ normal)
+        if depth >= 0.5 * thick:
+            return
+        position = position + (thick - depth) * normal
+        state = self.read_state()
+        row = int(np.flatnonzero(state.keys == key)[0])
+        v = state.linear_velocity[row].copy()
+        v -= min(0.0, float(v @ normal)) * normal
+        self.set_pose(key, position, orientation)
+        self.set_velocity(key, v, state.angular_velocity[row])
 
     def close(self) -> None:
         self._world.close()
@@ -169,6 +223,13 @@ class OdeBackend:
             self._tell_printed(key)
         if not body.can_sleep:
             self._restless.add(int(key))
+        if kind == _ode.BODY_DYNAMIC and body.shapes and body.mask:
+            self._thickness[int(key)] = (_thickness(body), int(body.mask) & _ALL_BITS)
+        elif kind == _ode.BODY_STATIC:
+            self._static_keys.add(int(key))
+            if any(s.kind in ("mesh", "trimesh") for s in body.shapes):
+                self._thin_statics.add(int(key))
+        self._thick_rows = None
         if body.gravity_factor != 1.0 and kind == _ode.BODY_DYNAMIC:
             self._gravity_factors[int(key)] = float(body.gravity_factor)
             self._scaled = None
@@ -195,6 +256,10 @@ class OdeBackend:
         self._keys = None
         if self._gravity_factors.pop(int(key), None) is not None:
             self._scaled = None
+        self._thickness.pop(int(key), None)
+        self._static_keys.discard(int(key))
+        self._thin_statics.discard(int(key))
+        self._thick_rows = None
 
     def body_count(self) -> int:
         return _ode.body_count(self._world)
@@ -438,6 +503,24 @@ class OdeBackend:
             return None
         key, pos, normal, dist = hit
         return RayHit(int(key), pos, normal, float(dist))
+
+
+def _thickness(body: Physical) -> float:
+    """How thin a body is (m): the least half extent of its shapes (a sphere's or a
+    capsule's radius, half a box's or a mesh's thinnest side), the distance a step may
+    carry it before a surface of no thickness can slip between two of its poses."""
+    thin = []
+    for s in body.shapes:
+        size = np.asarray(s.size, np.float64).reshape(-1)
+        if s.kind in ("sphere", "capsule", "cylinder"):
+            thin.append(float(size[0]) if s.kind != "cylinder" else
+                        float(min(size[0], size[1] / 2)))
+        elif s.kind == "box":
+            thin.append(float(np.min(np.abs(size[:3]))) / 2)
+        elif s.vertices is not None and len(s.vertices):
+            v = np.asarray(s.vertices, np.float64).reshape(-1, 3)
+            thin.append(float(np.min(v.max(axis=0) - v.min(axis=0))) / 2)
+    return max(min(thin, default=0.0), 1e-6)
 
 
 def _mass_frame(body: Physical) -> tuple[np.ndarray | None, np.ndarray | None]:

@@ -190,7 +190,14 @@ cdef extern from "ode/ode.h" nogil:
     enum:
         dSphereClass
         dBoxClass
+        dCapsuleClass
         dPlaneClass
+        dTriMeshClass
+    void dGeomGetAABB(dGeomID, dReal aabb[6])
+    const dReal* dGeomGetPosition(dGeomID)
+    const dReal* dGeomGetRotation(dGeomID)
+    void dGeomCapsuleGetParams(dGeomID, dReal* radius, dReal* length)
+    void dGeomSphereSetRadius(dGeomID, dReal)
 
     dJointID dJointCreateContact(dWorldID, dJointGroupID, const dContact*)
     dJointID dJointCreateHinge(dWorldID, dJointGroupID)
