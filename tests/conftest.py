@@ -60,3 +60,32 @@ def fuzz_briefly(capsys: pytest.CaptureFixture[str]):
         return result
 
     return fuzz
+
+
+@pytest.fixture(autouse=True)
+def exports_are_valid_gltf(request: pytest.FixtureRequest):
+    """Every file ``colosseum export`` writes in a test is checked against the
+    KHR_physics_rigid_bodies and KHR_implicit_shapes JSON schemas of ../shared (when they
+    are there): a test whose export does not validate fails (issue 31)."""
+    from engine.interchange import export as export_module
+
+    written: list = []
+    original = export_module.GltfWriter.write
+
+    def write(self, path):  # type: ignore[no-untyped-def]
+        out = original(self, path)
+        if self.doc["asset"].get("generator") == "colosseum export":
+            written.append(out)
+        return out
+
+    export_module.GltfWriter.write = write  # type: ignore[method-assign]
+    try:
+        yield
+    finally:
+        export_module.GltfWriter.write = original  # type: ignore[method-assign]
+    from tests.interchange import gltf_schema
+
+    if written and gltf_schema.available():
+        bad = {str(p): gltf_schema.problems(p) for p in written if p.exists()}
+        bad = {p: found for p, found in bad.items() if found}
+        assert not bad, f"exports that do not validate: {bad}"

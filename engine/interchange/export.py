@@ -33,6 +33,7 @@ from engine.assets import AssetError, Assets
 from engine.assets.gltf import Y_UP_TO_Z_UP
 from engine.interchange.gltf_physics import KHR, KHR_SHAPES
 from engine.interchange.model import GEOMETRIC_MEAN, Problems
+from engine.physics.backend import locked_inertia
 from engine.render.meshes import primitive
 from engine.rotation import matrix_to_quat, quat_to_matrix
 from engine.scene.diagnostics import Diagnostic
@@ -267,8 +268,10 @@ class _Exporter:
             if body.kind == "kinematic":
                 motion["isKinematic"] = True
             # the mass the engine gives it: the file's, or its shapes' volume x density
-            motion["mass"] = float(body.mass if body.mass is not None else
+            motion["mass"] = float(body.mass if body.mass else
                                    body.material.density * sum(map(volume, body.shapes)))
+            if not motion["mass"] > 0:  # infinite: as KHR says it, which its schema refuses
+                motion.pop("mass")
             # KHR velocities are in node space: the world's turned into the body's frame
             turn = quat_to_matrix(np.asarray(t.orientation, np.float64)).T
             if np.any(t.linear_velocity):
@@ -282,7 +285,14 @@ class _Exporter:
             if body.center_of_mass is not None:
                 motion["centerOfMass"] = to_gltf(body.center_of_mass)
             if body.inertia is not None:  # glTF's X Y Z moments are the engine's X Z Y
-                motion["inertiaDiagonal"] = [float(x) for x in np.abs(_TO_GLTF) @ body.inertia]
+                moments = np.abs(_TO_GLTF) @ np.asarray(body.inertia, np.float64)
+                if np.any(moments <= 0):
+                    # infinite (0): the extension's text says 0, its schema wants more
+                    # than 0; the file gets the large moment the backends use, and its
+                    # extras the axes that are infinite, which our import reads back
+                    motion["extras"] = {"infiniteInertia": [bool(x <= 0) for x in moments]}
+                    moments = locked_inertia(moments, float(motion["mass"]))
+                motion["inertiaDiagonal"] = [float(x) for x in moments]
                 motion["inertiaOrientation"] = gltf_rotation(body.inertia_rotation)
             self.w.khr(node, motion=motion)
         own = len(body.shapes) == 1 and _at_origin(body.shapes[0])
@@ -322,7 +332,10 @@ class _Exporter:
             return None
         mesh = self.w.mesh(np.asarray(s.vertices) @ _TO_GLTF.T, np.asarray(s.faces),
                            f"{oid}.collider", None)
-        return {"mesh": mesh, "convexHull": s.kind == "hull"}
+        # the schema names mesh geometry by a node that holds the mesh: one outside the
+        # scene, in the collider node's frame (as Blender 4.4's add-on writes it)
+        holder = self.w.node(f"{oid}.collider", mesh=mesh, in_scene=False)
+        return {"node": holder, "convexHull": s.kind == "hull"}
 
     def _material(self, body: Physical) -> int:
         m = body.material

@@ -547,6 +547,11 @@ class _Importer:
                 self.problems.error(name, f"its {key} {given[key]} is not {n} finite numbers; "
                                           f"left out (the shapes' is used)")
         com, diagonal, turn = (found.get(k) for k in given)
+        extras = motion.get("extras") if isinstance(motion.get("extras"), dict) else {}
+        infinite = extras.get("infiniteInertia")  # our export's: those moments are 0
+        if diagonal is not None and isinstance(infinite, list) and len(infinite) == 3:
+            diagonal = [0.0 if flag is True else x for x, flag in zip(diagonal, infinite,
+                                                                      strict=True)]
         if com is not None and any(com):
             obj.center_of_mass = vector(self._frame(i).scale * (Y_UP_TO_Z_UP @ np.array(com)))
         if diagonal is not None:  # a 0 is infinite: the body never turns about that axis

@@ -137,6 +137,10 @@ def test_new_check_fmt_run_export(fresh: Path) -> None:
     assert 'ID "ball"' in text
     colosseum(".venv/bin/colosseum export my_sim -o my_sim.glb", fresh)
     assert (fresh / "my_sim.glb").read_bytes()[:4] == b"glTF"
+    from tests.interchange import gltf_schema
+
+    if gltf_schema.available():  # valid against the extensions' schemas
+        assert gltf_schema.problems(fresh / "my_sim.glb") == []
 
 
 def test_keys(fresh: Path) -> None:
