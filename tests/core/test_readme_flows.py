@@ -248,7 +248,7 @@ def test_serve_and_join(fresh: Path, form: str) -> None:
     argv = shlex.split(serve.replace("content/multiuser", path))
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     server = subprocess.Popen([str(BIN), *argv[1:], "--bind", f"tcp://127.0.0.1:{port}",
-                               "--seconds", "8"], cwd=fresh, stdout=subprocess.PIPE,
+                               "--seconds", "5"], cwd=fresh, stdout=subprocess.PIPE,
                               stderr=subprocess.PIPE, text=True, env=env)
     try:
         time.sleep(1.5)
