@@ -20,6 +20,9 @@ class JointKind(StrEnum):
     SIX_DOF = "six_dof"
     ANGULAR_MOTOR = "angular_motor"
     LINEAR_MOTOR = "linear_motor"
+    #: Holds the bodies' relative orientation, leaves them free to move apart (a joint of
+    #: KHR_physics_rigid_bodies locking its angular axes only).
+    ALIGN = "align"
 
 
 #: The scene format's ``Joint { Type ... }`` names (the paper's spelling) and their kinds.
@@ -27,12 +30,14 @@ SCENE_JOINT_TYPES: dict[str, JointKind] = {
     "Hinge": JointKind.HINGE, "MotorizedHinge": JointKind.MOTORIZED_HINGE,
     "Ball": JointKind.BALL, "Slider": JointKind.SLIDER, "Universal": JointKind.UNIVERSAL,
     "Hinge2": JointKind.HINGE2, "Fixed": JointKind.FIXED, "SixDOF": JointKind.SIX_DOF,
+    "Align": JointKind.ALIGN,
 }
 
 #: Kinds whose limits and motor act along a line (metres, m/s, N) rather than an angle.
 LINEAR_KINDS = frozenset({JointKind.SLIDER, JointKind.LINEAR_MOTOR})
 #: Kinds with no axis of their own (a zero ``axis`` is no mistake for them).
-AXISLESS_KINDS = frozenset({JointKind.BALL, JointKind.FIXED, JointKind.SIX_DOF})
+AXISLESS_KINDS = frozenset({JointKind.BALL, JointKind.FIXED, JointKind.SIX_DOF,
+                            JointKind.ALIGN})
 
 
 @dataclass(frozen=True, slots=True)

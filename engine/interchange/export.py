@@ -477,6 +477,7 @@ _LOCK_LINEAR = [{"linearAxes": [0, 1, 2], "max": 0.0}]
 _LIMITS = {
     JointKind.FIXED: lambda j: _LOCK_LINEAR + _locked("angular", (0, 1, 2)),
     JointKind.BALL: lambda j: list(_LOCK_LINEAR),
+    JointKind.ALIGN: lambda j: _locked("angular", (0, 1, 2)),
     JointKind.HINGE: lambda j: _LOCK_LINEAR + _locked("angular", (1, 2)) + _limit(
         "angular", 0, j),
     JointKind.MOTORIZED_HINGE: lambda j: _LOCK_LINEAR + _locked("angular", (1, 2)) + _limit(

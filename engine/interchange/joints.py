@@ -150,9 +150,10 @@ def _classify(name: str, dofs: list[Dof], axes: np.ndarray, anchor: np.ndarray,
         return make("Ball", None)
     if len(lin_free) == 1:
         return make("Slider", lin_free[0], lin_free[0])
-    problems.warn(name, f"a joint that holds only rotation (linear axes {_axes(lin_free)} free) "
-                        f"has no joint type here; left out")
-    return None
+    if any(dofs[k][0] == "limited" for k in lin_free):
+        problems.warn(name, f"an Align joint's linear limits ({_axes(lin_free)}) are left "
+                            f"out: those axes are free")
+    return make("Align", None)
 
 
 def _axes(dofs: list[int]) -> str:

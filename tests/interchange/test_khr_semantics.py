@@ -145,3 +145,47 @@ def test_a_kinematic_body_keeps_its_angular_velocity(tmp_path: Path) -> None:
     for frame in (10, 20, 40):
         assert trace.turned(screw, frame) == pytest.approx(
             math.degrees(6.0 * trace.times[frame]) % 360, rel=1e-3)
+
+
+# -- a joint that holds only rotation -------------------------------------------------------
+
+ALIGN = """\
+World {{ Gravity [0 0 -9.81] }}
+Object {{
+  ID "box"
+  Position [0 0 10]
+  Size [1 0.5 0.25]
+  PhysicalAttributes {{ Mass 1 Geometry {{ Primitive "box" }} }}
+}}
+Joint {{ Type "Align" Bodies ["box"] }}
+"""
+
+
+@pytest.mark.parametrize("backend", ["ode", "pymunk"])
+def test_an_align_joint_holds_the_turn_and_leaves_the_fall(tmp_path: Path, backend: str):
+    """KHR joints that lock the angular axes only (Robot_skinned has two) are Align joints:
+    a torque about every axis turns the body not at all, gravity moves it freely."""
+    pytest.importorskip("engine.physics.ode3d" if backend == "ode" else "pymunk")
+    from engine.app import EngineConfig
+    from engine.content import resolve
+    from engine.physics.commands import ApplyTorque
+    from engine.scene_loading import load_content_scene
+    from systems import create_engine
+
+    (tmp_path / "main.scene").write_text(ALIGN.format())
+    scene = load_content_scene(resolve(tmp_path))
+    config = EngineConfig(content_dir=tmp_path, fast=True, headless=True)
+    scene.configure(config, backend=backend)
+    engine = create_engine(config)
+    try:
+        scene.instantiate(engine)
+        (entity, _), = [(e, n) for e, n in engine.world.get_component(Name) if n.id == "box"]
+        for _ in range(60):
+            engine.physics.push(ApplyTorque(entity, (1.0, 1.0, 1.0)))
+            engine.run(frames=1)
+        t = engine.world.component_for_entity(entity, Transform)
+        assert abs(float(np.asarray(t.orientation) @ np.array([1.0, 0, 0, 0]))) > 1 - 1e-6
+        assert 10 - float(t.position[2]) == pytest.approx(9.81 * engine.time ** 2 / 2,
+                                                          rel=0.02)
+    finally:
+        engine.close()

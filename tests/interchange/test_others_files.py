@@ -121,11 +121,9 @@ def test_collada_files(path: Path, tmp_path: Path) -> None:
     assert implausible(trace) == []
 
 
-@pytest.mark.xfail(reason="17 of 19: two joints hold only rotation (their linear axes free), "
-                          "which no joint type here represents; the import tells and leaves "
-                          "them out", strict=True)
 def test_robot_skinned_has_its_19_joints(tmp_path: Path) -> None:
-    """Robot_skinned declares 19 physics joints over 10 descriptions: every one imported,
+    """Robot_skinned declares 19 physics joints over 10 descriptions: every one imported
+    (17 before issue 31: two hold only rotation, their linear axes free, now Align joints),
     and it runs."""
     path = SHARED / "khr" / "Robot_skinned" / "Robot_skinned.gltf"
     if not path.is_file():

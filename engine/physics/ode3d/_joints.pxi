@@ -111,7 +111,8 @@ def create_joint(World w, key, int kind, key_a, key_b, anchor, axis, axis2, low,
     # ODE aborts the process on these (see _errors.pxi): refused at the door as well
     if key_b is not None and key_b == key_a:
         raise ValueError(f"joint {key}: a joint needs two different bodies")
-    if (kind not in (JOINT_BALL, JOINT_FIXED, JOINT_SIX_DOF) and not any(axis)) or (
+    if (kind not in (JOINT_BALL, JOINT_FIXED, JOINT_SIX_DOF, JOINT_ALIGN) and
+            not any(axis)) or (
             kind in (JOINT_UNIVERSAL, JOINT_HINGE2) and not any(axis2)):
         raise ValueError(f"joint {key}: a zero axis")
     cdef int ia = w.slot(key_a)
@@ -192,6 +193,17 @@ def create_joint(World w, key, int kind, key_a, key_b, anchor, axis, axis2, low,
             else:
                 dJointAttach(j, ba, bb)
             dJointSetFixed(j)
+        elif kind == JOINT_ALIGN:
+            # ODE's angular motor in Euler mode measures the three angles between the
+            # bodies from where they are now; stops at 0 on all three hold them there
+            j = dJointCreateAMotor(w.world, NULL)
+            dJointAttach(j, ba, bb)
+            dJointSetAMotorMode(j, dAMotorEuler)
+            dJointSetAMotorAxis(j, 0, 1, 1.0, 0.0, 0.0)
+            dJointSetAMotorAxis(j, 2, 2 if bb != NULL else 0, 0.0, 0.0, 1.0)
+            for stop in (dParamLoStop, dParamHiStop, dParamLoStop2, dParamHiStop2,
+                         dParamLoStop3, dParamHiStop3):
+                dJointSetAMotorParam(j, stop, 0.0)
         elif kind == JOINT_AMOTOR:
             j = dJointCreateAMotor(w.world, NULL)
             dJointAttach(j, ba, bb)
@@ -263,7 +275,7 @@ def create_joint(World w, key, int kind, key_a, key_b, anchor, axis, axis2, low,
     relink(w)
     if sign < 0.0:
         low, high = (None if high is None else -high), (None if low is None else -low)
-    if kind not in (JOINT_BALL, JOINT_FIXED, JOINT_SIX_DOF):
+    if kind not in (JOINT_BALL, JOINT_FIXED, JOINT_SIX_DOF, JOINT_ALIGN):
         if low is not None:
             joint_param(rec, dParamLoStop, low)
         if high is not None:
@@ -335,7 +347,7 @@ def set_motor(World w, key, double velocity, double max_force) -> None:
     if rec.kind == JOINT_HINGE2:
         joint_param(rec, dParamVel2, rec.sign * velocity)
         joint_param(rec, dParamFMax2, max_force)
-    elif rec.kind in (JOINT_BALL, JOINT_FIXED, JOINT_SIX_DOF):
+    elif rec.kind in (JOINT_BALL, JOINT_FIXED, JOINT_SIX_DOF, JOINT_ALIGN):
         raise ValueError("this joint kind has no motor")
     else:
         joint_param(rec, dParamVel, velocity)

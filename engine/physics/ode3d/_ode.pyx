@@ -74,6 +74,7 @@ JOINT_FIXED = 5
 JOINT_AMOTOR = 6
 JOINT_LMOTOR = 7
 JOINT_SIX_DOF = 8
+JOINT_ALIGN = 9
 
 #: Columns of the material pair table handed to ``World.set_pairs``.
 PAIR_COLUMNS = ("collide", "mode", "mu", "bounce", "bounce_vel", "soft_erp", "soft_cfm")

@@ -31,7 +31,8 @@ JOINT_KINDS = {JointKind.HINGE: _ode.JOINT_HINGE, JointKind.MOTORIZED_HINGE: _od
                JointKind.BALL: _ode.JOINT_BALL, JointKind.SLIDER: _ode.JOINT_SLIDER,
                JointKind.UNIVERSAL: _ode.JOINT_UNIVERSAL, JointKind.HINGE2: _ode.JOINT_HINGE2,
                JointKind.FIXED: _ode.JOINT_FIXED, JointKind.ANGULAR_MOTOR: _ode.JOINT_AMOTOR,
-               JointKind.LINEAR_MOTOR: _ode.JOINT_LMOTOR, JointKind.SIX_DOF: _ode.JOINT_SIX_DOF}
+               JointKind.LINEAR_MOTOR: _ode.JOINT_LMOTOR, JointKind.SIX_DOF: _ode.JOINT_SIX_DOF,
+               JointKind.ALIGN: _ode.JOINT_ALIGN}
 
 
 def create(world: _ode.World, key: int, joint: Joint) -> None:

@@ -69,8 +69,10 @@ cdef extern from "ode/ode.h" nogil:
         dJointTypeContact
         dAllocateMaskAll
         dAMotorUser
+        dAMotorEuler
         dParamLoStop, dParamHiStop, dParamVel, dParamFMax
         dParamLoStop2, dParamHiStop2, dParamVel2, dParamFMax2
+        dParamLoStop3, dParamHiStop3
         dParamVel3, dParamFMax3, dParamCFM
 
     int dInitODE2(unsigned int flags)

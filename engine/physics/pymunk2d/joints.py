@@ -46,7 +46,7 @@ PIVOTS = frozenset({JointKind.HINGE, JointKind.MOTORIZED_HINGE, JointKind.BALL,
                     JointKind.UNIVERSAL, JointKind.HINGE2})
 #: Kinds whose axis is turned onto ±Y (the one axis the plane has).
 ON_AXIS = frozenset({JointKind.HINGE, JointKind.MOTORIZED_HINGE, JointKind.HINGE2})
-SUPPORTED = PIVOTS | {JointKind.SLIDER, JointKind.FIXED, JointKind.SIX_DOF}
+SUPPORTED = PIVOTS | {JointKind.SLIDER, JointKind.FIXED, JointKind.SIX_DOF, JointKind.ALIGN}
 
 
 @dataclass(slots=True)
@@ -248,6 +248,8 @@ def build_joint(spec: Joint, a: pymunk.Body, b: pymunk.Body, warn: Warn) -> Join
         rec.constraints.append(pymunk.GearJoint(a, b, b.angle - a.angle, 1.0))
         rec.slider_velocity = spec.motor_velocity
         rec.slider_max_force = spec.motor_max_force
+    elif kind == JointKind.ALIGN:  # the angle between them held, nothing else
+        rec.constraints.append(pymunk.GearJoint(a, b, b.angle - a.angle, 1.0))
     elif kind in (JointKind.FIXED, JointKind.SIX_DOF):
         pivot = pymunk.PivotJoint(a, b, (0.0, 0.0), b.world_to_local(a.position))
         gear = pymunk.GearJoint(a, b, b.angle - a.angle, 1.0)
