@@ -248,8 +248,7 @@ class _Exporter:
             scale = np.asarray(visual.scale, np.float64)
             parts += [(p.vertices * scale, p.faces, p.color) for p in model.parts]
         for s in visual.shapes:
-            if s.kind == "plane":
-                continue
+            # a plane is infinite: drawn, as the renderer draws it, as a large square
             mesh = primitive(s.kind, s.size)
             placed = mesh.positions @ quat_to_matrix(np.asarray(s.rotation)).T + s.offset
             parts.append((placed, mesh.indices.reshape(-1, 3), visual.color))
