@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from components import Joint, Physical, Shape, Transform, Trigger, Visual
+from components import Avatar, Joint, Physical, Shape, Transform, Trigger, Visual
 from components.joint import JointKind
 from engine.assets import AssetError, Assets
 from engine.assets.gltf import Y_UP_TO_Z_UP
@@ -145,6 +145,105 @@ class GltfWriter:
             self.doc["scenes"][0]["nodes"].append(index)
         return index
 
+    def merge(self, source: Path, parent: int, scale: float = 1.0) -> list[int]:
+        """Copy the glTF file ``source`` whole (nodes, meshes, skins, animations, materials,
+        textures and images, its buffers' bytes) under node ``parent``, its scene's roots in
+        a node of ``scale`` (glTF axes as the file has them: a skinned model keeps its own
+        frame); the new nodes' indices. Raises ValueError for a file it cannot read."""
+        doc, buffers = _read_gltf(source)
+        d = self.doc
+        base = {key: len(d.setdefault(key, [])) for key in (
+            "nodes", "meshes", "accessors", "bufferViews", "materials", "textures", "images",
+            "samplers", "skins", "animations")}
+        starts = []
+        for data in buffers:
+            while len(self.bin) % 8:
+                self.bin.append(0)
+            starts.append(len(self.bin))
+            self.bin += data
+        for view in doc.get("bufferViews", []):
+            view = dict(view)
+            view["byteOffset"] = starts[view.get("buffer", 0)] + view.get("byteOffset", 0)
+            view["buffer"] = 0
+            d["bufferViews"].append(view)
+
+        def shift(item: dict[str, Any], key: str, kind: str) -> None:
+            if key in item:
+                item[key] += base[kind]
+
+        for acc in doc.get("accessors", []):
+            acc = json.loads(json.dumps(acc))
+            shift(acc, "bufferView", "bufferViews")
+            for part in ("indices", "values"):
+                if part in acc.get("sparse", {}):
+                    shift(acc["sparse"][part], "bufferView", "bufferViews")
+            d["accessors"].append(acc)
+        for image in doc.get("images", []):
+            image = dict(image)
+            if "uri" in image and not str(image["uri"]).startswith("data:"):
+                continue  # an external image is not carried (the model keeps its colours)
+            shift(image, "bufferView", "bufferViews")
+            d["images"].append(image)
+        d["samplers"] += doc.get("samplers", [])
+        for texture in doc.get("textures", []):
+            texture = dict(texture)
+            shift(texture, "source", "images")
+            shift(texture, "sampler", "samplers")
+            d["textures"].append(texture)
+        for material in doc.get("materials", []):
+            material = json.loads(json.dumps(material))
+            for holder in (material, material.get("pbrMetallicRoughness", {})):
+                for key, info in holder.items():
+                    if key.endswith("Texture") and isinstance(info, dict):
+                        shift(info, "index", "textures")
+            material.pop("extensions", None)
+            d["materials"].append(material)
+        for mesh in doc.get("meshes", []):
+            mesh = json.loads(json.dumps(mesh))
+            for prim in mesh.get("primitives", []):
+                prim["attributes"] = {k: v + base["accessors"]
+                                      for k, v in prim["attributes"].items()}
+                shift(prim, "indices", "accessors")
+                shift(prim, "material", "materials")
+                prim["targets"] = [{k: v + base["accessors"] for k, v in t.items()}
+                                   for t in prim.get("targets", [])] or None
+                if prim["targets"] is None:
+                    del prim["targets"]
+                prim.pop("extensions", None)
+            d["meshes"].append(mesh)
+        for node in doc.get("nodes", []):
+            node = json.loads(json.dumps(node))
+            shift(node, "mesh", "meshes")
+            shift(node, "skin", "skins")
+            node.pop("camera", None)
+            node.pop("extensions", None)
+            if "children" in node:
+                node["children"] = [c + base["nodes"] for c in node["children"]]
+            d["nodes"].append(node)
+        for skin in doc.get("skins", []):
+            skin = dict(skin)
+            skin["joints"] = [j + base["nodes"] for j in skin["joints"]]
+            shift(skin, "skeleton", "nodes")
+            shift(skin, "inverseBindMatrices", "accessors")
+            d["skins"].append(skin)
+        for animation in doc.get("animations", []):
+            animation = json.loads(json.dumps(animation))
+            for channel in animation["channels"]:
+                shift(channel["target"], "node", "nodes")
+            for sampler in animation["samplers"]:
+                sampler["input"] += base["accessors"]
+                sampler["output"] += base["accessors"]
+            d["animations"].append(animation)
+        scene = (doc.get("scenes") or [{}])[doc.get("scene", 0)]
+        roots = [r + base["nodes"] for r in scene.get("nodes", [])]
+        holder = self.node(f"{d['nodes'][parent].get('name', 'model')}.model", parent=parent,
+                           scale=None if scale == 1.0 else [scale] * 3)
+        d["nodes"][holder]["children"] = roots
+        for key in ("materials", "textures", "images", "samplers", "skins", "animations"):
+            if not d[key]:
+                del d[key]
+        return list(range(base["nodes"], base["nodes"] + len(doc.get("nodes", []))))
+
     def khr(self, index: int, **parts: Any) -> None:
         """Set ``KHR_physics_rigid_bodies`` parts (motion, collider, trigger, joint)."""
         self.use(KHR)
@@ -205,7 +304,8 @@ class _Exporter:
                 continue
             comps = {type(c): c for c in es.components}
             t = comps.get(Transform)
-            if t is None or (Visual not in comps and Physical not in comps):
+            if t is None or (Visual not in comps and Physical not in comps
+                             and Avatar not in comps):
                 continue
             self._object(es.id, t, comps)
         for js in self.spec.joints:
@@ -231,11 +331,31 @@ class _Exporter:
         node = self.w.node(oid, to_gltf(t.position), rotation=gltf_rotation(t.orientation))
         self.nodes[oid] = node
         visual = comps.get(Visual)
-        if visual is not None and visual.visible:
+        avatar = comps.get(Avatar)
+        if avatar is not None:
+            self._avatar(oid, node, avatar)
+        elif visual is not None and visual.visible:
             self._visual(oid, node, visual)
         physical = comps.get(Physical)
         if physical is not None:
             self._physical(oid, node, physical, t, comps.get(Trigger))
+
+    def _avatar(self, oid: str, node: int, avatar: Avatar) -> None:
+        """An avatar as its model file is: skinned meshes, skeleton and clips, copied
+        whole under its node (at its Scale); its Capsule as a kinematic capsule collider
+        standing on the avatar's origin (the body the avatars plugin moves)."""
+        try:
+            self.w.merge(self.assets.resolve(avatar.model, self.spec.content_dir), node,
+                         float(avatar.scale))
+        except (OSError, ValueError, KeyError, IndexError, struct.error) as exc:
+            self.problems.error(oid, f"its model {avatar.model} is not exported ({exc})")
+        if avatar.capsule is not None:
+            radius, length = (float(x) for x in avatar.capsule)
+            holder = self.w.node(f"{oid}.capsule", to_gltf((0.0, 0.0, radius + length / 2)),
+                                 parent=node)
+            self.w.khr(node, motion={"isKinematic": True})
+            self.w.khr(holder, collider={"geometry": self.w.shape(
+                "capsule", radiusTop=radius, radiusBottom=radius, height=length)})
 
     def _visual(self, oid: str, node: int, visual: Visual) -> None:
         parts: list[tuple[np.ndarray, np.ndarray, Sequence[float]]] = []
@@ -455,6 +575,28 @@ def _unit(v: Sequence[float]) -> np.ndarray:
     a = np.asarray(v, np.float64)
     n = float(np.linalg.norm(a))
     return a / n if n > 0 else a
+
+
+def _read_gltf(path: Path) -> tuple[dict[str, Any], list[bytes]]:
+    """A .glb's or .gltf's JSON and its buffers' bytes (a .gltf's beside it or data URIs)."""
+    data = path.read_bytes()
+    if data[:4] == b"glTF":
+        (length,) = struct.unpack("<I", data[12:16])
+        doc = json.loads(data[20:20 + length])
+        rest = data[20 + length:]
+        chunk = rest[8:8 + struct.unpack("<I", rest[:4])[0]] if len(rest) >= 8 else b""
+        buffers = [chunk] if doc.get("buffers") else []
+        for extra in doc.get("buffers", [])[1:]:
+            buffers.append(_uri_bytes(path, extra["uri"]))
+        return doc, buffers
+    doc = json.loads(data)
+    return doc, [_uri_bytes(path, b["uri"]) for b in doc.get("buffers", [])]
+
+
+def _uri_bytes(path: Path, uri: str) -> bytes:
+    if uri.startswith("data:"):
+        return base64.b64decode(uri.split(",", 1)[1])
+    return (path.parent / uri).read_bytes()
 
 
 def _locked(kind: str, axes: Sequence[int]) -> list[dict[str, Any]]:

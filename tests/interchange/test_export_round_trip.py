@@ -98,3 +98,37 @@ def test_the_demo_exported_by_the_command_line_validates(tmp_path: Path) -> None
                   for n in doc["nodes"]
                   if "collider" in n.get("extensions", {}).get("KHR_physics_rigid_bodies", {})]
     assert geometries and all(("shape" in g) != ("node" in g) for g in geometries)
+
+
+def test_avatars_are_exported_with_skins_clips_and_capsules(tmp_path: Path) -> None:
+    """content/avatars: each avatar's model goes into the file whole (skinned meshes,
+    skeleton, clips), and its Capsule as a kinematic capsule collider; the file validates
+    and the engine's own skinned-model reader reads every skin and clip back."""
+    from engine.assets.skinned import load_skinned
+    from engine.cli import main
+
+    out = tmp_path / "avatars.glb"
+    assert main(["export", str(ROOT / "content" / "avatars"), "-o", str(out)]) == 0
+    if gltf_schema.available():
+        assert gltf_schema.problems(out) == []
+    doc = gltf_schema.document(out)
+    walker = gltf_schema.document(ROOT / "content" / "avatars" / "models" / "walker.glb")
+    hound = gltf_schema.document(ROOT / "content" / "avatars" / "models" / "hound.glb")
+    assert len(doc["skins"]) == 4  # leader, buddy, porter (walker.glb), hound
+    assert len(doc["animations"]) == 3 * len(walker["animations"]) + len(hound["animations"])
+    by_name: dict = {}
+    for n in doc["nodes"]:  # the avatars' own nodes come first (a model may reuse a name)
+        by_name.setdefault(n.get("name"), n)
+    for oid in ("leader", "buddy", "porter", "hound"):
+        body = by_name[oid]["extensions"]["KHR_physics_rigid_bodies"]
+        assert body["motion"] == {"isKinematic": True}
+        capsule = by_name[f"{oid}.capsule"]["extensions"]["KHR_physics_rigid_bodies"]
+        shape = doc["extensions"]["KHR_implicit_shapes"]["shapes"][
+            capsule["collider"]["geometry"]["shape"]]
+        assert shape["type"] == "capsule"
+    model = load_skinned(out)
+    assert model.skin_count == 4 and "Walk" in model.clip_names
+    # imported again: the four capsules are kinematic bodies where the avatars stand
+    again = load(tmp_path / "again", out)
+    kinds = {oid: kind for oid, (kind, *_) in world(again).items()}
+    assert all(kinds.get(oid) == "kinematic" for oid in ("leader", "buddy", "porter", "hound"))
