@@ -71,7 +71,21 @@ def prepare_run(args: argparse.Namespace) -> Any:
                                "backend": args.backend}},
     )
     scene.configure(config, backend=args.backend, dt=args.dt)
+    _tell_shaders(scene, config)
     return scene, config
+
+
+def _tell_shaders(scene: Any, config: Any) -> None:
+    """A run that draws nothing compiles no shader, so the renderer's warning about a
+    uniform nothing sets never comes: it is told here from the GLSL source, as
+    ``colosseum check`` tells it (a run that draws tells it from the compiled program)."""
+    from engine.scene_loading import shader_diagnostics
+    from systems import wants_render
+
+    if wants_render(config) or not scene.spec.shader_programs:
+        return
+    for said in shader_diagnostics(scene.spec, scene.content.folder):
+        print(said.render(), file=sys.stderr)
 
 
 def replay_flags(args: argparse.Namespace) -> str | None:

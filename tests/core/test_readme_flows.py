@@ -371,3 +371,8 @@ def test_check_reports_what_a_shader_is_never_given(fresh: Path) -> None:
     text = subprocess.run([str(BIN), "check", "my_sim"], cwd=fresh, capture_output=True,
                           text=True, timeout=LIMIT_S).stderr
     assert "did you mean 'u_proj'" in text and "did you mean 'in_normal'" in text
+    # a headless run draws nothing, so no program is compiled: it says the same
+    run = subprocess.run([str(BIN), "run", "my_sim", "--frames", "3", "--fast", "--headless"],
+                         cwd=fresh, capture_output=True, text=True, timeout=LIMIT_S)
+    assert run.returncode == 0, run.stderr
+    assert "did you mean 'u_proj'" in run.stderr
