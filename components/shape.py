@@ -37,6 +37,6 @@ class Shape:
     faces: np.ndarray | None = None
     #: This shape's own collision bits (None: its body's ``category``/``mask``): a body
     #: of several colliders with different filters (KHR_physics_rigid_bodies, per
-    #: collider). The ODE backend honours them; pymunk uses the body's.
+    #: collider). Both backends honour them.
     category: int | None = None
     mask: int | None = None

@@ -225,3 +225,16 @@ def test_motion_properties(traces, number: int) -> None:
         low, _ = trace.z_range(i)
         _, top = trace.z_range(trace.static()[0])
         assert abs(low - top) < 0.03 and at_rest(trace, i)
+
+
+@pytest.mark.parametrize("number", [2, 3])
+def test_compound_collision_filters_in_2d(number: int, tmp_path: Path) -> None:
+    """pymunk keeps each collider's own filter too: of 02/03's two bodies one rests on the
+    box, the other 2 m lower (its lower collider inside the box), neither falls through."""
+    pytest.importorskip("pymunk")
+    trace = run(scene("CollisionFilter", number), tmp_path, 3.0, backend="pymunk")
+    (static,) = trace.static()
+    bottom, top = trace.z_range(static)
+    heights = sorted(float(trace.position[-1, i, 2]) for i in trace.dynamic())
+    assert heights[0] > bottom and heights[1] - heights[0] == pytest.approx(2.0, abs=0.05)
+    assert all(at_rest(trace, i) for i in trace.dynamic())

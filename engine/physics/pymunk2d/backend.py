@@ -83,6 +83,8 @@ class _BodyRecord:
     joints: set[int] = field(default_factory=set)
     #: (x, z, θ) where it was made: its last good pose until a read has seen it
     made_at: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    #: each shape's collision filter (its own bits, else the body's)
+    filters: list[pymunk.ShapeFilter] = field(default_factory=list)
 
 
 @dataclass(slots=True)
@@ -383,9 +385,11 @@ class PymunkBackend:
                        "baked into its 2D silhouette")
         pbody = pymunk.Body(body_type=_KINDS[body.kind])
         static = body.kind != BodyKind.DYNAMIC
-        built = [b for spec in body.shapes
-                 if (b := build_shape(pbody, spec, rest, body.kind == BodyKind.STATIC,
-                                      lambda t, m: self._warn(obj, t, m))) is not None]
+        made = [(spec, b) for spec in body.shapes
+                if (b := build_shape(pbody, spec, rest, body.kind == BodyKind.STATIC,
+                                     lambda t, m: self._warn(obj, t, m))) is not None]
+        built = [b for _, b in made]
+        filters = [self._filter(body, spec) for spec, _ in made]
         if body.kind == BodyKind.DYNAMIC:
             pbody.mass, pbody.moment, pbody.center_of_gravity = self._mass_properties(
                 obj, body, built, rest)
@@ -395,11 +399,10 @@ class PymunkBackend:
         if mat.softness:
             self._warn(f"material {mat.name}", "softness",
                        "softness is not supported by pymunk; ignored")
-        filt = self._filter(body)
         ctype = (self._bouncy(mat.name) if mat.bounce > 0
                  else self._material_types.get(mat.name, 0))
         shapes = [b.shape for b in built]
-        for shape in shapes:
+        for shape, filt in zip(shapes, filters, strict=True):
             # pymunk multiplies the two frictions: √μ each gives the geometric mean, as ODE
             shape.friction = math.sqrt(min(float(mat.friction), 1e12))
             shape.elasticity = float(mat.bounce)
@@ -412,7 +415,8 @@ class PymunkBackend:
                                                  body.angular_damping)
         self._space.add(pbody, *shapes)
         rec = _BodyRecord(key, pbody, shapes, body, float(position[1]), rest,
-                          made_at=(pbody.position.x, pbody.position.y, pbody.angle))
+                          made_at=(pbody.position.x, pbody.position.y, pbody.angle),
+                          filters=filters)
         self._bodies[key] = rec
         self._dirty = True
         if linear_velocity is not None or angular_velocity is not None:
@@ -651,9 +655,9 @@ class PymunkBackend:
     def set_collision_enabled(self, key: int, enabled: bool) -> None:
         """Off: the body's shapes filter out every other shape (and every ray)."""
         rec = self._record(key)
-        filt = self._filter(rec.physical) if enabled else NOTHING
-        for shape in rec.shapes:
-            shape.filter = filt
+        for shape, filt in zip(rec.shapes, rec.filters or [self._filter(rec.physical)] *
+                               len(rec.shapes), strict=True):
+            shape.filter = filt if enabled else NOTHING
         self._wake(rec)
 
     def set_gravity_enabled(self, key: int, enabled: bool) -> None:
@@ -674,9 +678,12 @@ class PymunkBackend:
         self._woken.add(rec.key)
 
     @staticmethod
-    def _filter(body: Physical) -> pymunk.ShapeFilter:
-        return pymunk.ShapeFilter(categories=body.category & 0xFFFFFFFF,
-                                  mask=body.mask & 0xFFFFFFFF)
+    def _filter(body: Physical, shape: Shape | None = None) -> pymunk.ShapeFilter:
+        """The collision filter of ``shape`` (its own bits where it has them, else its
+        body's; KHR colliders of one body may filter apart)."""
+        category = body.category if shape is None or shape.category is None else shape.category
+        mask = body.mask if shape is None or shape.mask is None else shape.mask
+        return pymunk.ShapeFilter(categories=category & 0xFFFFFFFF, mask=mask & 0xFFFFFFFF)
 
     # -- joints ------------------------------------------------------------
     def add_joint(self, key: int, joint: Joint) -> None:
@@ -980,10 +987,10 @@ class PymunkBackend:
         """Keys of the bodies (-1: static geometry) the body's shapes intersect now, its own
         collisions on or off, as its collision bits allow."""
         rec = self._record(key)
-        wanted = self._filter(rec.physical)
         found: set[int] = set()
-        for shape in rec.shapes:
-            own, shape.filter = shape.filter, wanted
+        wanted = rec.filters or [self._filter(rec.physical)] * len(rec.shapes)
+        for shape, filt in zip(rec.shapes, wanted, strict=True):
+            own, shape.filter = shape.filter, filt
             try:
                 hits = self._space.shape_query(shape)
             finally:
