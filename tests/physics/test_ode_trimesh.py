@@ -1,9 +1,10 @@
 """Triangle meshes in contact (issue 31): a moving triangle mesh rests on every static
 primitive (on a capsule too: libode's capsule-trimesh test threw it off, so the near
-callback takes the capsule there as the sphere of its radius at the point of its axis
-nearest the mesh), and a surface of no thickness (a triangle-mesh floor) stops bodies
-that a step carries further than half their thickness (the backend sweeps them: a ray
-ahead along their velocity, and a body that went past the surface put back on it).
+callback takes the capsule there as its parts, the cylinder between its caps and the two
+cap spheres, each collided with the mesh), and a surface of no thickness (a triangle-mesh
+floor) stops bodies that a step carries further than half their thickness (the backend
+sweeps them: a ray ahead along their velocity, and a body that went past the surface put
+back on it).
 """
 
 from __future__ import annotations
@@ -46,14 +47,8 @@ STATICS = {
 }
 
 
-SLIDES = pytest.mark.xfail(strict=True, reason="on a lying capsule the tetrahedron tips "
-                           "onto an edge and creeps along the axis (0.2 m/s after 4 s): the "
-                           "stand-in sphere curves where the capsule is straight")
-
-
-@pytest.mark.parametrize("static, mesh", [
-    pytest.param(s, m, marks=SLIDES) if (s, m) == ("capsule lying", "tetrahedron") else (s, m)
-    for s in STATICS for m in ("tetrahedron", "cube")])
+@pytest.mark.parametrize("static, mesh", [(s, m) for s in STATICS
+                                           for m in ("tetrahedron", "cube")])
 def test_a_moving_mesh_rests_on_every_static_primitive(static: str, mesh: str) -> None:
     shape, at, turn, top = STATICS[static]
     vertices, faces = TETRA if mesh == "tetrahedron" else CUBE
@@ -71,7 +66,7 @@ def test_a_moving_mesh_rests_on_every_static_primitive(static: str, mesh: str) -
         turn = quat_to_matrix(state.orientation[row])
         low = state.position[row, 2] + (vertices @ turn.T)[:, 2].min()
         if static.startswith(("sphere", "capsule")):  # curved: it may tip over the top
-            assert low > top - 0.05 and state.position[row, 2] > top, low
+            assert low > top - 0.05 and state.position[row, 2] > top - 0.01, low
         else:
             assert abs(low - top) < 0.03, f"lowest point {low:.3f} m on a top at {top} m"
         assert np.linalg.norm(state.position[row, :2]) < 0.25

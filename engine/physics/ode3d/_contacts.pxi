@@ -85,39 +85,46 @@ cdef int spread_contacts(dContact* buf, int n, int keep) noexcept nogil:
 
 
 cdef int collide(Ctx* c, dGeomID o1, dGeomID o2, int most) noexcept nogil:
-    """dCollide into ``c.buf``, but a capsule against a triangle mesh as the sphere of the
-    capsule's radius at the point of its axis nearest the mesh's box centre: libode's
-    capsule-trimesh test throws a small mesh resting on a large capsule off it (the
-    conformance scenes ColliderTypeMatrix 16 and 17), its sphere-trimesh test holds it.
-    Where a mesh rests along a capsule, the contact is that one sphere's, not the line."""
+    """dCollide into ``c.buf``, but a capsule against a triangle mesh as its parts: the
+    cylinder between its caps and the two cap spheres, each collided with the mesh (libode's
+    capsule-trimesh test throws a small mesh resting on a large capsule off it: the
+    conformance scenes ColliderTypeMatrix 16 and 17; its sphere- and cylinder-trimesh tests
+    hold it). The contacts of the three, up to ``most``, the caller thins as ever."""
     cdef int k1 = dGeomGetClass(o1)
     cdef int k2 = dGeomGetClass(o2)
     cdef dGeomID cap
-    cdef dGeomID mesh
-    cdef dReal box[6]
-    cdef dReal r, length, t
+    cdef dReal r, length
     cdef const dReal* p
     cdef const dReal* R
-    cdef double d[3]
-    cdef int n, i
+    cdef int n = 0
+    cdef int i, part
+    cdef double side
+    cdef dGeomID proxy
     if not ((k1 == dCapsuleClass and k2 == dTriMeshClass) or
             (k1 == dTriMeshClass and k2 == dCapsuleClass)) or c.proxy == NULL:
         return dCollide(o1, o2, most, &c.buf[0].geom, sizeof(dContact))
-    cap, mesh = (o1, o2) if k1 == dCapsuleClass else (o2, o1)
+    cap = o1 if k1 == dCapsuleClass else o2
     dGeomCapsuleGetParams(cap, &r, &length)
-    dGeomGetAABB(mesh, box)
     p = dGeomGetPosition(cap)
     R = dGeomGetRotation(cap)   # 3x4, row-major: the axis (local Z) is column 2
-    for i in range(3):
-        d[i] = (box[2 * i] + box[2 * i + 1]) / 2 - p[i]
-    t = d[0] * R[2] + d[1] * R[6] + d[2] * R[10]
-    t = min(max(t, -length / 2), length / 2)
     dGeomSphereSetRadius(c.proxy, r)
-    dGeomSetPosition(c.proxy, p[0] + t * R[2], p[1] + t * R[6], p[2] + t * R[10])
-    if k1 == dCapsuleClass:
-        n = dCollide(c.proxy, o2, most, &c.buf[0].geom, sizeof(dContact))
-    else:
-        n = dCollide(o1, c.proxy, most, &c.buf[0].geom, sizeof(dContact))
+    dGeomSphereSetRadius(c.proxy_end, r)
+    dGeomCylinderSetParams(c.proxy_body, r, length if length > 0 else 1e-9)
+    dGeomSetPosition(c.proxy_body, p[0], p[1], p[2])
+    dGeomSetRotation(c.proxy_body, R)
+    for part in range(3):
+        if n >= most:
+            break
+        if part == 0:
+            proxy = c.proxy_body
+        else:
+            side = length / 2 if part == 1 else -length / 2
+            proxy = c.proxy if part == 1 else c.proxy_end
+            dGeomSetPosition(proxy, p[0] + side * R[2], p[1] + side * R[6], p[2] + side * R[10])
+        if k1 == dCapsuleClass:
+            n += dCollide(proxy, o2, most - n, &c.buf[n].geom, sizeof(dContact))
+        else:
+            n += dCollide(o1, proxy, most - n, &c.buf[n].geom, sizeof(dContact))
     for i in range(n):
         c.buf[i].geom.g1 = o1
         c.buf[i].geom.g2 = o2

@@ -57,6 +57,8 @@ cdef struct Ctx:         # what the near callback needs, passed through ODE's vo
     double dt            # the step in progress
     int64_t* linked      # (body key, static key) pairs a joint holds together: no contacts
     dGeomID proxy        # a sphere in no space: a capsule's stand-in against a triangle mesh
+    dGeomID proxy_end    # another sphere, and a cylinder: with it, the capsule's other parts
+    dGeomID proxy_body
     int nlinked
     CsState stepper      # stepper.h: the warm start's contacts, the islands
     CsSettings cfg
@@ -118,6 +120,8 @@ cdef class World:
         self.ctx.group = dJointGroupCreate(0)
         self.ctx.max_contacts = 4
         self.ctx.proxy = dCreateSphere(NULL, 1.0)
+        self.ctx.proxy_end = dCreateSphere(NULL, 1.0)
+        self.ctx.proxy_body = dCreateCylinder(NULL, 1.0, 1.0)
         self.ctx.buf = <dContact*>calloc(CANDIDATES, sizeof(dContact))
         self.ctx.nmat = 1
         self.ctx.pairs = <Pair*>calloc(1, sizeof(Pair))
@@ -167,6 +171,8 @@ cdef class World:
         dJointGroupDestroy(self.ctx.group)
         if self.ctx.proxy != NULL:
             dGeomDestroy(self.ctx.proxy)
+            dGeomDestroy(self.ctx.proxy_end)
+            dGeomDestroy(self.ctx.proxy_body)
             self.ctx.proxy = NULL
         dSpaceDestroy(self.space)
         dWorldDestroy(self.world)

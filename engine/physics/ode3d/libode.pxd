@@ -200,6 +200,8 @@ cdef extern from "ode/ode.h" nogil:
     const dReal* dGeomGetRotation(dGeomID)
     void dGeomCapsuleGetParams(dGeomID, dReal* radius, dReal* length)
     void dGeomSphereSetRadius(dGeomID, dReal)
+    void dGeomSetRotation(dGeomID, const dMatrix3)
+    void dGeomCylinderSetParams(dGeomID, dReal radius, dReal length)
 
     dJointID dJointCreateContact(dWorldID, dJointGroupID, const dContact*)
     dJointID dJointCreateHinge(dWorldID, dJointGroupID)
