@@ -45,6 +45,9 @@ log = logging.getLogger("colosseum")
 
 R = TypeVar("R")
 PHASES = tuple(Phase)
+#: A frame that takes no physics step (a headset's frame between two steps, see
+#: engine.xr.timing) reads input and draws; the simulation's phases wait for a step.
+DISPLAY_PHASES = (Phase.INPUT, Phase.RENDER)
 
 
 @dataclass(slots=True)
@@ -243,7 +246,7 @@ class Engine:
         self.physics_seconds = None
         self.physics.frame = self.frame
         audited = self.config.debug
-        for phase in PHASES:
+        for phase in PHASES if tick.substeps > 0 else DISPLAY_PHASES:
             for system in self.systems[phase]:
                 try:
                     if audited:
@@ -254,8 +257,10 @@ class Engine:
                     raise SystemFailure(system.name, exc) from exc
             self.flush()
         self.frame += 1
-        self.time = (self.physics.time if self.config.mode == "threaded"
-                     else advance(self.time, tick.dt))
+        if self.config.mode == "threaded":
+            self.time = self.physics.time
+        elif tick.substeps > 0:
+            self.time = advance(self.time, tick.dt)
         self.events.end_frame()
         self.frame_costs.add(self.controller.clock() - t0)
         self.controller.end(tick, self.physics_seconds)

@@ -104,6 +104,16 @@ def _run_flag_table() -> dict[str, tuple[tuple[str, ...], dict[str, Any]]]:
                                            "with the camera's EyeSeparation or 0.064 m; "
                                            "mono: one view even for a stereo camera "
                                            "(default: as the camera says)"}),
+        "xr": (("--xr",), {"action": argparse.BooleanOptionalAction, "default": None,
+                           "help": "draw into a headset through the active OpenXR runtime "
+                                   "(--no-xr: not even when the scene's Display asks for it; "
+                                   "see docs/headset.md)"}),
+        "xr_mirror": (("--xr-mirror",), {"choices": ["none", "left", "both"], "default": None,
+                                         "help": "with --xr: a window showing the left eye "
+                                                 "or both (default: as the scene says; none)"}),
+        "xr_fallback": (("--xr-fallback",), {"action": "store_true",
+                                             "help": "with --xr: when no headset can be used, "
+                                                     "run in the window instead of ending"}),
         "save_state": (("--save-state",), {"type": Path,
                                            "help": "write the final state as a scene file"}),
         "stats": (("--stats",), {"type": Path, "help": "write run statistics as JSON"}),
@@ -134,7 +144,7 @@ RUN_FLAGS = tuple(_run_flag_table())
 #: What makes sense on a server (it draws nothing) and on a node (it steps no physics).
 SERVE_FLAGS = tuple(f for f in RUN_FLAGS if f not in (
     "screenshot", "record_frames", "record_every", "interpolate", "hud", "size",
-    "render_scale", "stereo"))
+    "render_scale", "stereo", "xr", "xr_mirror", "xr_fallback"))
 JOIN_FLAGS = ("seconds", "frames", "headless", "sound", "screenshot", "record_frames",
               "record_every", "hud", "size", "render_scale", "stereo", "save_state", "stats",
               "record", "input", "progress")

@@ -71,7 +71,22 @@ def prepare_run(args: argparse.Namespace) -> Any:
                                "backend": args.backend}},
     )
     scene.configure(config, backend=args.backend, dt=args.dt)
+    headset(args, scene, config)
     return scene, config
+
+
+def headset(args: argparse.Namespace, scene: Any, config: Any) -> None:
+    """Whether the run draws into a headset (``--xr``, or the scene's ``Display { Kind
+    "openxr" }`` unless ``--no-xr``), and the headset flags, into ``config``."""
+    from components import Headset
+
+    declared = any(isinstance(c, Headset) for e in scene.spec.entities for c in e.components)
+    flag = getattr(args, "xr", None)
+    wanted = flag if flag is not None else declared
+    config.options.update({"xr": bool(wanted), "xr_mirror": getattr(args, "xr_mirror", None),
+                           "xr_fallback": bool(getattr(args, "xr_fallback", False))})
+    if wanted:
+        config.render = True
 
 
 def replay_flags(args: argparse.Namespace) -> str | None:
@@ -198,7 +213,16 @@ def execute_run(engine: Any, args: argparse.Namespace, scene: Any,
     log.info("ran %d frames, %.2f simulated s in %.2f wall s (real-time factor %.2f)",
              stats["frames"], stats["sim_seconds"], stats["wall_seconds"],
              stats["real_time_factor"])
-    return 0
+    return 1 if _headset_failed(engine) else 0
+
+
+def _headset_failed(engine: Any) -> bool:
+    """Whether the run was to draw into a headset and could not (told already), or lost it."""
+    from engine.xr.display import XrDisplay
+
+    plugin = engine.plugins.get("xr")
+    display = getattr(plugin, "display", None) or engine.try_resource(XrDisplay)
+    return bool(display is not None and display.failed and not display.unavailable)
 
 
 def _short_status(engine: Any) -> str:

@@ -101,3 +101,17 @@ class HandControl(Protocol):
     def held(self, hand: int) -> tuple[int, ...]: ...
     def grasp(self, hand: int, obj: int) -> None: ...
     def release(self, hand: int) -> None: ...
+
+
+class HeadsetControl(Protocol):
+    """The headset display (the xr plugin): controller pulses and recentering."""
+
+    plugin = PluginName.XR
+
+    def haptic(self, source: str, amplitude: float, seconds: float) -> bool:
+        """Pulse the controller of ``source`` (``hand_l``/``hand_r``); False when none."""
+        ...
+
+    def recenter(self) -> None:
+        """Move the player over the active camera, facing its way."""
+        ...

@@ -34,6 +34,7 @@ from engine.input import (
     parse_input_option,
 )
 from engine.input.desktop import DesktopDevice, WindowDevice
+from engine.input.device import PluginDevices
 from engine.input.output import Publisher, make_publisher
 from engine.rotation import quat_conjugate, quat_multiply, quat_to_matrix
 from engine.scene.inputs import DESKTOP_TRACKERS, DeviceSpec, InputSpec
@@ -86,6 +87,7 @@ class InputSystem(System):
             except (DeviceError, ValueError) as exc:
                 log.error("input device %r: %s; the run goes on without it", device_spec.id,
                           exc)
+        devices.extend(engine.try_resource(PluginDevices) or ())
         self._desktops = [d for d in devices if isinstance(d, DesktopDevice)]
         if not self._desktops:
             devices.append(self.window)  # the window's keys, as they are

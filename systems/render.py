@@ -46,6 +46,7 @@ from engine.render.shaders import (
 )
 from engine.services import ShaderControl, SwapGate
 from engine.system import Phase, PluginName, System
+from engine.xr.display import XrDisplay
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -153,6 +154,7 @@ class RenderSystem(System):
         self._drawn = False  # whether the last frame was drawn (headless runs skip frames)
         self._palette_version = -1
         self._engine_anomalies: Anomalies | None = None
+        self._headset: XrDisplay | None = None
 
     # -- API for scripts and tools --------------------------------------------
     def set_uniform(self, state_id: str, name: str, value: UniformValue) -> None:
@@ -192,7 +194,10 @@ class RenderSystem(System):
         if self.options is None:
             self.options = RenderOptions.from_config(engine.config)
         opts = self.options
-        self._target = create_target(opts.backend, opts.size, opts.title)
+        headset = engine.try_resource(XrDisplay)
+        self._headset = headset if headset is not None and headset.target is not None else None
+        self._target = (self._headset.target if self._headset is not None
+                        else create_target(opts.backend, opts.size, opts.title))
         root = engine.config.content_dir or Path(".")
         self.renderer = Renderer(self._target, root=root, shadow_size=opts.shadow_size,
                                  assets=Assets.of(engine))
@@ -269,6 +274,16 @@ class RenderSystem(System):
     def run(self, engine: Engine, dt: float) -> None:
         if self.closing:
             engine.request_quit()
+        headset = self._headset
+        if headset is not None:  # the runtime says when to draw
+            if headset.frame is None:
+                return
+            if not headset.should_render:
+                headset.skip()
+                return
+            self._draw(engine, dt)
+            self._drawn = True
+            return
         opts = self.options or RenderOptions()
         record = opts.record_frames is not None and engine.frame % max(opts.record_every, 1) == 0
         self._drawn = opts.draw_every_frame or self._target.kind == "window" or record
@@ -289,6 +304,8 @@ class RenderSystem(System):
         self._sync_poses(engine)
         self._sync_palettes(engine)
         renderer.camera = self._camera(engine)
+        if self._headset is not None:
+            renderer.camera = self._headset.camera(renderer.camera)
         anomalies = engine.try_resource(Anomalies)
         renderer.anomalies = anomalies.active() if anomalies is not None else []
         lights = []
@@ -444,7 +461,8 @@ class RenderSystem(System):
         finally:
             self._errors = list(renderer.errors)
             renderer.release()
-            self._target.close()
+            if self._headset is None:  # the headset's target is the display's to close
+                self._target.close()
             self.renderer = None
 
 

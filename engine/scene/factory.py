@@ -36,6 +36,7 @@ from components import (
     Graspable,
     Hand,
     HandState,
+    Headset,
     Hold,
     Joint,
     Light,
@@ -59,6 +60,7 @@ from components.avatar import (
     SavedLayer,
     SavedRequest,
 )
+from components.display import HEADSET_ACTIONS, HEADSET_PROFILES
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, SPRING_KINDS, JointKind, Spring
 from components.script import SavedScript, ScriptHandler, ScriptTimer
 from components.wheelchair import NavigationMode
@@ -160,6 +162,18 @@ class PostPassSpec:
     enabled: bool
     feedback: bool
     origin: str
+
+
+def _binding_problem(action: str, profile: str, path: str) -> str | None:
+    """What is wrong with a headset's ``Bind`` (None: nothing)."""
+    if action not in HEADSET_ACTIONS:
+        return f"unknown action {action!r}{suggest(action, HEADSET_ACTIONS)} " \
+               f"(actions: {', '.join(HEADSET_ACTIONS)})"
+    if profile not in HEADSET_PROFILES:
+        return f"unknown interaction profile {profile!r}{suggest(profile, HEADSET_PROFILES)}"
+    if not path.startswith(("/user/hand/left/", "/user/hand/right/")):
+        return f"the path {path!r} must start with /user/hand/left/ or /user/hand/right/"
+    return None
 
 
 @dataclass(slots=True)
@@ -1304,6 +1318,13 @@ class _Builder:
             spec.measures.append(MeasureSpec(r("ID"), r("Object"), r("Value")))
         for b in root.blocks("Display"):
             r = _Reader(b, "Display")
+            if r("Kind") == "openxr":
+                self.headset(spec, r, b)
+                continue
+            if not r("ID"):
+                self.report.error(b.loc, "a screen Display needs an ID (the name "
+                                  "colosseum join --display gives); it is left out")
+                continue
             display = Display(_floats(r("LowerLeft")), _floats(r("LowerRight")),
                               _floats(r("UpperLeft")), None, r("Tracker"), _floats(r("Eye")),
                               float(r("Near")), float(r("Far")))
@@ -1343,6 +1364,35 @@ class _Builder:
                 self.problems.append(Diagnostic(
                     block.loc.path, block.loc.line, block.loc.col, WARNING,
                     f"ScriptState for {owner!r}, which runs no script here; ignored"))
+
+    def headset(self, spec: SceneSpec, r: _Reader, b: Any) -> None:
+        """``Display { Kind "openxr" }``: the headset, as a Headset component (one)."""
+        if any(isinstance(c, Headset) for e in spec.entities for c in e.components):
+            self.report.error(b.loc, "a second headset Display: a run draws into one headset; "
+                              "this one is left out")
+            return
+        scale = float(r("RenderScale"))
+        if not 0.25 <= scale <= 2.0:
+            self.report.error(r.value("RenderScale").loc,
+                              f"RenderScale must be 0.25 to 2, got {scale:g}")
+            scale = min(max(scale, 0.25), 2.0)
+        bindings = []
+        for bind in b.blocks("Bind"):
+            rb = _Reader(bind, "Bind")
+            problem = _binding_problem(rb("Action"), rb("Profile"), rb("Path"))
+            if problem is not None:
+                self.report.error(bind.loc, f"Bind: {problem}; this binding is left out")
+                continue
+            bindings.append((rb("Action"), rb("Profile"), rb("Path")))
+        headset = Headset(
+            space=r("Space"), when_hidden=r("WhenHidden"), mirror=r("Mirror"),
+            fallback=r("Fallback"), refresh_rate=float(r("RefreshRate")), render_scale=scale,
+            depth=bool(r("Depth")), recenter_key=str(r("RecenterKey")).lower(),
+            haptic_grasp=min(max(float(r("HapticGrasp")), 0.0), 1.0),
+            haptic_touch=min(max(float(r("HapticTouch")), 0.0), 1.0),
+            haptic_impulse=max(float(r("HapticImpulse")), 0.0), bindings=tuple(bindings))
+        hid = r("ID") or "headset"
+        spec.entities.append(EntitySpec(hid, [Name(hid), headset], b.loc))
 
     def camera_view(self, r: _Reader, cid: str, blk: Block) -> None:
         """Warn about a camera with no well-defined view direction (the picture and the

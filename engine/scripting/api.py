@@ -52,6 +52,9 @@ Scene and engine::
     getAnomaly(id) -> {kind=, enabled=, level=, onset=, eye=, <params>}
     enablePost(id, on)              setPostUniform(id, uniform, value)   a scene's PostPass
     setCamera{position=, lookAt=, follow=obj, offset=, fov=, id=}
+    haptic(hand, amplitude, seconds) -> bool   pulse the headset controller driving a hand
+                                    (a hand object or a tracker name, "hand_r"); amplitude 0..1
+    recenter()                      put the headset's wearer over the camera, facing its way
     requestPlugin(name) -> bool     (the engine's plugin names and the paper's aliases:
                                      osg, osgsim -> render; openalpp -> sound; the paper's
                                      spelling ``requrestPlugin`` works too)
@@ -118,7 +121,14 @@ from engine.input.state import InputState
 from engine.messages import MessageLog
 from engine.physics import commands as cmd
 from engine.scripting.runtime import ScriptRuntime, to_python
-from engine.services import AVATAR_METHODS, AvatarControl, HandControl, ShaderControl, SoundControl
+from engine.services import (
+    AVATAR_METHODS,
+    AvatarControl,
+    HandControl,
+    HeadsetControl,
+    ShaderControl,
+    SoundControl,
+)
 from engine.system import PluginName
 
 if TYPE_CHECKING:
@@ -319,6 +329,11 @@ end
 function C.getAnomaly(id) return P.get_anomaly(id) end
 function C.enablePost(id, on) P.enable_post(id, on ~= false) end
 function C.setPostUniform(id, name, value) P.set_post_uniform(id, name, plain(value)) end
+function C.haptic(hand, amplitude, seconds)
+  if type(hand) ~= "string" then hand = oid("haptic", hand) end
+  return P.haptic(hand, amplitude, seconds)
+end
+function C.recenter() P.recenter() end
 function C.requestPlugin(name) return P.request_plugin(name) end
 C.requrestPlugin = C.requestPlugin
 function C.time() return P.time() end
@@ -949,6 +964,31 @@ class ScriptAPI:
             else:
                 raise ScriptAPIError(f"setCamera: unknown option {key!r} "
                                      "(position, lookAt, follow, offset, fov, id)")
+
+    def haptic(self, hand: Any, amplitude: Any, seconds: Any) -> bool:
+        """Pulse the headset controller driving ``hand`` (a hand object, or a tracker name
+        such as ``hand_r``); False without a headset or a controller for it."""
+        for what, value, top in (("amplitude", amplitude, 1.0), ("seconds", seconds, 10.0)):
+            if not isinstance(value, int | float) or isinstance(value, bool) or \
+                    not 0 <= value <= top:
+                raise ScriptAPIError(f"haptic: {what} must be a number from 0 to {top:g}, "
+                                     f"got {value!r}")
+        if isinstance(hand, str):
+            source = hand
+        else:
+            component = self.engine.world.try_component(self._entity(hand, "haptic"), Hand)
+            if component is None:
+                raise ScriptAPIError(f"haptic: {self._called(hand)} is not a hand")
+            source = component.tracker
+        headset = self._service(HeadsetControl, "haptic")  # type: ignore[type-abstract]
+        return bool(headset is not None and headset.haptic(source, float(amplitude),
+                                                           float(seconds)))
+
+    def recenter(self) -> None:
+        """Put the headset's wearer over the active camera, facing its way."""
+        headset = self._service(HeadsetControl, "recenter")  # type: ignore[type-abstract]
+        if headset is not None:
+            headset.recenter()
 
     def request_plugin(self, name: Any) -> bool:
         """Load an engine plugin by the name (or alias) the engine registered it under."""
