@@ -296,6 +296,9 @@ def build_parser() -> argparse.ArgumentParser:
                             "contacts, avatars, import, hands, net, sweep, accuracy, stroke")
     bench.add_argument("--backend", default=None, help="physics benchmark backend (ode, pymunk)")
     bench.add_argument("--quick", action="store_true", help="fewer sizes and steps")
+    bench.add_argument("--stereo", action="store_true",
+                       help="render: a headset's stereo frame (both eyes in one pass, and one "
+                            "pass an eye) beside a mono frame at one eye's size (bench stereo)")
     bench.add_argument("--content", type=Path, metavar="DIR",
                        help="the content folder a benchmark runs (stroke; default: "
                             "content/stroke, else a stand-in of its size)")
@@ -442,6 +445,10 @@ def cmd_new(args: argparse.Namespace) -> int:
 def cmd_bench(args: argparse.Namespace) -> int:
     from tools.bench import BENCHMARKS, run_benchmark
 
+    if args.stereo:
+        if args.what not in ("render", "stereo"):
+            return fail("--stereo goes with bench render")
+        args.what = "stereo"
     if args.what not in BENCHMARKS:
         return fail(f"unknown benchmark {args.what!r}; choose from {', '.join(BENCHMARKS)}")
     for out in (None if args.json in (None, "-") else Path(args.json), args.plot):

@@ -177,7 +177,7 @@ class XrSystem(System):
         except XrError as exc:
             display.failed = True
             if self.fallback:
-                log.error("headset: %s; running in the window instead (the fallback asked "
+                log.error("headset: %s; running without the headset (the fallback asked "
                           "for)", exc)
                 display.unavailable = True
                 engine.controller = RealTimeController(engine.config.pacing(), engine.clock)

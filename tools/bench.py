@@ -27,6 +27,7 @@ BENCHMARKS: dict[str, str] = {
     "scripting": "tools.bench_scripting:run_bench",
     "sound": "tools.bench_sound:run_bench",
     "render": "tools.bench_render:run_bench",
+    "stereo": "tools.bench_render:run_stereo_bench",
     "input": "tools.bench_input:run_bench",
     "contacts": "tools.bench:bench_contacts",
     "avatars": "tools.bench_avatars:run_bench",
@@ -165,6 +166,10 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "sound": _by_row(lambda r: r["case"], "ours_ms", "raw_al_ms", "ms/frame",
                      "raw OpenAL calls for the same sources"),
     "render": _render_figures,
+    "stereo": lambda rows: [Figure(f"{r['boxes']} boxes, {r['case']}, {r['size']}",
+                                   r["cpu_ms"], rows[0]["cpu_ms"], "CPU ms/frame",
+                                   "a mono frame at one eye's size, the same run")
+                            for r in rows[1:]],
     "input": _input_figures,
     "contacts": _by_row(lambda r: f"{r['pairs']} pairs {r['state']}", "ms/frame",
                         "unique ms", "ms/frame",

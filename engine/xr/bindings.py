@@ -107,7 +107,8 @@ PROFILES: tuple[Profile, ...] = (
         "a": _both("input/a/click"), "b": _both("input/b/click")}),
     Profile("/interaction_profiles/htc/vive_controller", None, {
         **_common(True, "input/squeeze/click", "trackpad"), "menu": _both("input/menu/click")}),
-    Profile("/interaction_profiles/hp/mixed_reality_controller", None, {
+    Profile("/interaction_profiles/hp/mixed_reality_controller",
+            "XR_EXT_hp_mixed_reality_controller", {
         **_common(False, "input/squeeze/value", "thumbstick"), **_face(("x", "y"), ("a", "b")),
         "menu": _both("input/menu/click")}),
     Profile("/interaction_profiles/microsoft/motion_controller", None, {

@@ -79,9 +79,8 @@ def current_glx() -> GlxHandles:
     glx.glXGetCurrentDrawable.restype = ctypes.c_ulong
     glx.glXQueryContext.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
                                     ctypes.POINTER(ctypes.c_int)]
-    glx.glXChooseFBConfig.restype = ctypes.POINTER(ctypes.c_void_p)
-    glx.glXChooseFBConfig.argtypes = [ctypes.c_void_p, ctypes.c_int,
-                                      ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_int)]
+    glx.glXGetFBConfigs.restype = ctypes.POINTER(ctypes.c_void_p)
+    glx.glXGetFBConfigs.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.POINTER(ctypes.c_int)]
     glx.glXGetFBConfigAttrib.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
                                          ctypes.POINTER(ctypes.c_int)]
     x11.XDefaultScreen.argtypes = [ctypes.c_void_p]
@@ -90,12 +89,18 @@ def current_glx() -> GlxHandles:
         raise BindingError("no GLX context is current")
     fb_id = ctypes.c_int()
     glx.glXQueryContext(display, context, GLX_FBCONFIG_ID, ctypes.byref(fb_id))
-    attributes = (ctypes.c_int * 3)(GLX_FBCONFIG_ID, fb_id.value, 0)
     count = ctypes.c_int()
-    configs = glx.glXChooseFBConfig(display, x11.XDefaultScreen(display), attributes,
-                                    ctypes.byref(count))
-    if not configs or count.value < 1:
+    # Mesa's glXChooseFBConfig finds no config by its ID, so the configs are searched
+    configs = glx.glXGetFBConfigs(display, x11.XDefaultScreen(display), ctypes.byref(count))
+    found = None
+    for i in range(count.value if configs else 0):
+        value = ctypes.c_int()
+        glx.glXGetFBConfigAttrib(display, configs[i], GLX_FBCONFIG_ID, ctypes.byref(value))
+        if value.value == fb_id.value:
+            found = configs[i]
+            break
+    if found is None:
         raise BindingError(f"no GLX FB config with ID {fb_id.value}")
     visual = ctypes.c_int()
-    glx.glXGetFBConfigAttrib(display, configs[0], 0x800B, ctypes.byref(visual))  # VISUAL_ID
-    return GlxHandles(display, visual.value, configs[0], glx.glXGetCurrentDrawable(), context)
+    glx.glXGetFBConfigAttrib(display, found, 0x800B, ctypes.byref(visual))  # GLX_VISUAL_ID
+    return GlxHandles(display, visual.value, found, glx.glXGetCurrentDrawable(), context)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ctypes
 import logging
+import os
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -136,6 +137,10 @@ class XrSession:
             offered = {_name(p.extension_name)
                        for p in xr.enumerate_instance_extension_properties()}
         except xr.exception.RuntimeUnavailableError as exc:
+            named = os.environ.get("XR_RUNTIME_JSON")
+            if named:
+                raise XrError(f"the OpenXR runtime XR_RUNTIME_JSON names ({named}) cannot be "
+                              "loaded: is the file there, and the library it names?") from exc
             raise XrError(NO_RUNTIME) from exc
         except xr.exception.XrException as exc:
             raise XrError(f"the OpenXR runtime cannot be loaded: {exc}") from exc
@@ -156,6 +161,10 @@ class XrSession:
             self.close()
             raise XrError(f"the OpenXR runtime {self.runtime or ''} refused the session: "
                           f"{exc}".replace("  ", " ")) from exc
+        except Exception as exc:  # pyopenxr's own errors: still one message, no traceback
+            self.close()
+            raise XrError(f"opening the OpenXR session failed ({type(exc).__name__}: "
+                          f"{exc})") from exc
 
     def _create(self, binding: str) -> None:
         xr, h = self._xr, self._h
@@ -190,19 +199,29 @@ class XrSession:
                  if self.color_format else "?", self.reference)
 
     def _binding(self, binding: str) -> Any:
+        """The graphics binding of the current context (kept referenced until the session
+        exists: the create info only points to it). pyopenxr types its handle fields as
+        PyOpenGL's opaque pointers, so the integers are cast to them."""
+        from xr.platform import linux as xr_linux
+
         xr = self._xr
         if binding == "egl":
             egl = current_egl()
-            return xr.GraphicsBindingEGLMNDX(
-                get_proc_address=ctypes.cast(egl.get_proc_address,
-                                             xr.PFN_xrEglGetProcAddressMNDX),
-                display=egl.display, config=egl.config, context=egl.context)
+            self._h["binding"] = xr.GraphicsBindingEGLMNDX(
+                get_proc_address=xr.PFN_xrEglGetProcAddressMNDX(egl.get_proc_address),
+                display=ctypes.cast(ctypes.c_void_p(egl.display), xr_linux.EGLDisplay),
+                config=ctypes.cast(ctypes.c_void_p(egl.config), xr_linux.EGLConfig),
+                context=ctypes.cast(ctypes.c_void_p(egl.context), xr_linux.EGLContext))
+            return self._h["binding"]
         glx = current_glx()
-        return xr.GraphicsBindingOpenGLXlibKHR(
-            x_display=ctypes.cast(glx.x_display, type(xr.GraphicsBindingOpenGLXlibKHR().
-                                                      x_display)),
-            visualid=glx.visual_id, glx_fbconfig=glx.fb_config, glx_drawable=glx.drawable,
-            glx_context=glx.context)
+        fields = dict(xr_linux.GraphicsBindingOpenGLXlibKHR._fields_)
+        self._h["binding"] = xr.GraphicsBindingOpenGLXlibKHR(
+            x_display=ctypes.cast(ctypes.c_void_p(glx.x_display), fields["x_display"]),
+            visualid=glx.visual_id,
+            glx_fbconfig=ctypes.cast(ctypes.c_void_p(glx.fb_config), fields["glx_fbconfig"]),
+            glx_drawable=glx.drawable,
+            glx_context=ctypes.cast(ctypes.c_void_p(glx.context), fields["glx_context"]))
+        return self._h["binding"]
 
     def _spaces(self, session: Any) -> None:
         xr, h = self._xr, self._h
@@ -307,8 +326,9 @@ class XrSession:
             if wanted is not None and rates:
                 best = min(rates, key=lambda r: abs(r - wanted))
                 xr.request_display_refresh_rate_fb(session, best)
-            self.refresh_rate = float(xr.get_display_refresh_rate_fb(session))
-        except (xr.exception.XrException, AttributeError) as exc:
+            rate = xr.get_display_refresh_rate_fb(session)
+            self.refresh_rate = float(getattr(rate, "value", rate))
+        except (xr.exception.XrException, AttributeError, TypeError, ValueError) as exc:
             log.warning("OpenXR: the display's refresh rate cannot be set: %s", exc)
 
     # -- events --------------------------------------------------------------------
@@ -363,7 +383,8 @@ class XrSession:
         xr = self._xr
         t = time.clock_gettime_ns(time.CLOCK_MONOTONIC)
         spec = xr.timespec(t // 1_000_000_000, t % 1_000_000_000)
-        return int(xr.convert_timespec_time_to_time_khr(self._h["instance"], spec))
+        now = xr.convert_timespec_time_to_time_khr(self._h["instance"], spec)
+        return int(getattr(now, "value", now))
 
     def sample_input(self, when: int) -> InputSample:
         """Sync the actions and read the controllers at display time ``when``."""
@@ -455,37 +476,49 @@ class XrSession:
             environment_blend_mode=xr.EnvironmentBlendMode.OPAQUE, layers=layers))
         self._began = False
 
-    def _sub_image(self, name: str, eye: int, size: tuple[int, int]) -> Any:
-        xr = self._xr
-        return xr.SwapchainSubImage(swapchain=self._h[name], image_rect=xr.Rect2Di(
-            offset=xr.Offset2Di(eye * size[0], 0), extent=xr.Extent2Di(*size)))
+    @staticmethod
+    def _fill(sub: Any, swapchain: Any, eye: int, size: tuple[int, int]) -> None:
+        """Point a ``XrSwapchainSubImage`` at eye ``eye``'s half of ``swapchain``."""
+        sub.swapchain = swapchain
+        sub.image_rect.offset.x, sub.image_rect.offset.y = eye * size[0], 0
+        sub.image_rect.extent.width, sub.image_rect.extent.height = size
+        sub.image_array_index = 0
 
     def _projection(self, views: list[LocatedView]) -> Any:
-        xr = self._xr
+        xr, h = self._xr, self._h
         s = self.settings
         located = self._views
-        out = []
-        for eye, _ in enumerate(views):
-            view = xr.CompositionLayerProjectionView(
-                pose=located[eye].pose, fov=located[eye].fov,
-                sub_image=self._sub_image("color", eye, self.eye_size))
-            if "depth" in self._h:
-                view.next = ctypes.cast(ctypes.pointer(xr.CompositionLayerDepthInfoKHR(
-                    sub_image=self._sub_image("depth", eye, self.eye_size), min_depth=0.0,
-                    max_depth=1.0, near_z=s.near, far_z=s.far)), ctypes.c_void_p)
-            out.append(view)
-        self._keep = out  # the layer points into these until xrEndFrame returns
-        return xr.CompositionLayerProjection(space=self._h["space"], views=out)
+        out = (xr.CompositionLayerProjectionView * len(views))()
+        depths = (xr.CompositionLayerDepthInfoKHR * len(views))()
+        for eye in range(len(views)):
+            view = out[eye]
+            view.type = xr.StructureType.COMPOSITION_LAYER_PROJECTION_VIEW
+            view.next = None
+            view.pose, view.fov = located[eye].pose, located[eye].fov
+            self._fill(view.sub_image, h["color"], eye, self.eye_size)
+            if "depth" in h:
+                depth = depths[eye]
+                depth.type = xr.StructureType.COMPOSITION_LAYER_DEPTH_INFO_KHR
+                depth.next = None
+                self._fill(depth.sub_image, h["depth"], eye, self.eye_size)
+                depth.min_depth, depth.max_depth = 0.0, 1.0
+                depth.near_z, depth.far_z = s.near, s.far
+                view.next = ctypes.cast(ctypes.pointer(depth), ctypes.c_void_p)
+        self._keep = (out, depths)  # the layer points into these until xrEndFrame returns
+        self._layer = xr.CompositionLayerProjection(space=h["space"], views=out)
+        return self._layer
 
     def _hud_quad(self) -> Any:
         xr = self._xr
         (x, y, z), width = HUD_POSE
-        return xr.CompositionLayerQuad(
+        quad = xr.CompositionLayerQuad(
             layer_flags=xr.CompositionLayerFlags.BLEND_TEXTURE_SOURCE_ALPHA_BIT,
             space=self._h["view"], eye_visibility=xr.EyeVisibility.BOTH,
-            sub_image=self._sub_image("hud", 0, HUD_SIZE),
             pose=xr.Posef(position=xr.Vector3f(x, y, z)),
             size=xr.Extent2Df(width, width * HUD_SIZE[1] / HUD_SIZE[0]))
+        self._fill(quad.sub_image, self._h["hud"], 0, HUD_SIZE)
+        self._quad = quad
+        return quad
 
     def haptic(self, source: str, amplitude: float, seconds: float,
                frequency: float = 0.0) -> bool:

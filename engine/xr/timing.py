@@ -53,12 +53,10 @@ class StepPlanner:
             period = 0.0
         self.carry += period
         n = int((self.carry + 1e-9 * self.dt) // self.dt)
+        self.carry -= n * self.dt
         if n > self.max_steps:
             self.dropped += (n - self.max_steps) * self.dt
             n = self.max_steps
-            self.carry = min(self.carry - n * self.dt, self.dt)
-        else:
-            self.carry -= n * self.dt
         if abs(self.carry) < 1e-12:
             self.carry = 0.0
         self._taken += n
