@@ -123,6 +123,13 @@ class XrTarget:
         ctx.depth_func = "<"
         ctx.disable(ctx.DEPTH_TEST)
 
+    def read_image(self, color_gl: int) -> np.ndarray:
+        """A swapchain image as the runtime will read it: ``(height, width, 4)`` uint8,
+        first row at the top (tests check what reached the runtime with it)."""
+        fbo = next(f for (c, _), f in self._wrapped.items() if c == color_gl)
+        data = fbo.read(viewport=(0, 0, *self.size), components=4, alignment=1)
+        return np.flipud(np.frombuffer(data, np.uint8).reshape(self.size[1], self.size[0], 4))
+
     def copy_hud(self, hud_gl: int) -> None:
         ctx = self.ctx
         fbo = self._wrapped.get((hud_gl, -1))
@@ -175,11 +182,16 @@ class XrDisplay:
         self.unavailable = False
         self.frame: Any = None
         self.views: list[LocatedView] = []
+        #: The display time the eyes drawn last were located at (ns, the runtime's clock).
+        self.views_time: int | None = None
         self._ctx: Any = None
         self._window: Any = None
         self._owns_ctx = False
         self._render_start = 0.0
         self._drew = False
+        #: Read each submitted image back before it is released (``captured``; tests).
+        self.capture = False
+        self.captured: np.ndarray | None = None
         self._pressed: dict[tuple[str, str], bool] = {}
         self._axes: dict[tuple[str, str], float] = {}
 
@@ -297,6 +309,7 @@ class XrDisplay:
         if when is None or not self.should_render:
             return base
         self.views = self.session.locate_views(when)
+        self.views_time = when
         near, far = base.near, base.far
         self.settings.near, self.settings.far = near, far
         assert self.origin is not None
@@ -318,6 +331,8 @@ class XrDisplay:
         if drawn:
             images = session.acquire()
             target.copy_into(images.color, images.depth, session.color_format.decode)
+            if self.capture:
+                self.captured = target.read_image(images.color)
             if images.hud is not None and target.hud_shown:
                 target.copy_hud(images.hud)
             target.ctx.finish()
