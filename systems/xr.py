@@ -231,6 +231,8 @@ class HapticSystem(System):
     def __init__(self, display: XrDisplay) -> None:
         self.display = display
         self.pulses = 0
+        #: The pulses the last frame asked for: controller -> (amplitude, seconds).
+        self.last: dict[str, tuple[float, float]] = {}
         self._pending: list[tuple[int, float, float]] = []
 
     def setup(self, engine: Engine) -> None:
@@ -253,19 +255,23 @@ class HapticSystem(System):
 
     def run(self, engine: Engine, dt: float) -> None:
         pending, self._pending = self._pending, []
-        if not pending or self.display.target is None:
-            return
+        self.last = self.strongest(engine, pending)
+        for source, (amplitude, seconds) in self.last.items():
+            if self.display.haptic(source, amplitude, seconds):
+                self.pulses += 1
+
+    @staticmethod
+    def strongest(engine: Engine, pending: list[tuple[int, float, float]]
+                  ) -> dict[str, tuple[float, float]]:
+        """Per controller (a hand's tracker), the strongest pulse this frame asks for."""
         world = engine.world
-        strongest: dict[str, tuple[float, float]] = {}
+        out: dict[str, tuple[float, float]] = {}
         for entity, amplitude, seconds in pending:
             hand = world.try_component(entity, Hand) if entity >= 0 else None
             if hand is None or not hand.tracker:
                 continue
-            best = strongest.get(hand.tracker, (0.0, 0.0))
-            strongest[hand.tracker] = max(best, (amplitude, seconds))
-        for source, (amplitude, seconds) in strongest.items():
-            if self.display.haptic(source, amplitude, seconds):
-                self.pulses += 1
+            out[hand.tracker] = max(out.get(hand.tracker, (0.0, 0.0)), (amplitude, seconds))
+        return out
 
 
 class XrPlugin:

@@ -24,7 +24,14 @@ from engine.render.camera import CameraView, HeadsetEye
 from engine.render.context import has_display
 from engine.xr.lifecycle import Action
 from engine.xr.projection import XrOrigin, fov_projection
-from engine.xr.session import HUD_SIZE, LocatedView, XrError, XrSession, XrSettings
+from engine.xr.session import (
+    HUD_SIZE,
+    InputSample,
+    LocatedView,
+    XrError,
+    XrSession,
+    XrSettings,
+)
 from engine.xr.timing import FrameCounts, seconds
 
 log = logging.getLogger("colosseum.xr")
@@ -144,6 +151,27 @@ class XrTarget:
         for obj in (self.fbo, self.color, self.depth, self.hud_fbo, self.hud_color,
                     self._copy_vao, self._copy):
             obj.release()
+
+
+def input_events(sample: InputSample, origin: XrOrigin, pressed: dict[tuple[str, str], bool],
+                 axes: dict[tuple[str, str], float], now: float) -> list[AnyInput]:
+    """What the controllers said as the engine's input events: every pose placed in the
+    world by ``origin``; a button or a value only when it changed since the last sample
+    (``pressed`` and ``axes`` keep the last, and are updated)."""
+    events: list[AnyInput] = []
+    for name, (p, q) in sample.poses.items():
+        position, orientation = origin.place_xr(p, q)
+        events.append(TrackerPose(name, tuple(position.tolist()), tuple(orientation.tolist()),
+                                  None, now))
+    for key, down in sample.buttons.items():
+        if pressed.get(key, False) != down:
+            pressed[key] = down
+            events.append(Button(key[0], key[1], down, now))
+    for key, value in sample.axes.items():
+        if axes.get(key) != value:
+            axes[key] = value
+            events.append(Axis(key[0], key[1], value, now))
+    return events
 
 
 def _gl() -> Any:
@@ -281,23 +309,10 @@ class XrDisplay:
         if when is None or self.origin is None or not self.lifecycle.focused:
             return []
         sample = self.session.sample_input(when)
-        events: list[AnyInput] = []
         head = self.session.locate_head(when)
         if head is not None:
             sample.poses["hmd"] = head
-        for name, (p, q) in sample.poses.items():
-            position, orientation = self.origin.place_xr(p, q)
-            events.append(TrackerPose(name, tuple(position.tolist()),
-                                      tuple(orientation.tolist()), None, now))
-        for key, pressed in sample.buttons.items():
-            if self._pressed.get(key, False) != pressed:
-                self._pressed[key] = pressed
-                events.append(Button(key[0], key[1], pressed, now))
-        for key, value in sample.axes.items():
-            if self._axes.get(key) != value:
-                self._axes[key] = value
-                events.append(Axis(key[0], key[1], value, now))
-        return events
+        return input_events(sample, self.origin, self._pressed, self._axes, now)
 
     # -- drawing ---------------------------------------------------------------------
     def camera(self, base: CameraView) -> CameraView:
