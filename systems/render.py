@@ -305,7 +305,7 @@ class RenderSystem(System):
         self._sync_palettes(engine)
         renderer.camera = self._camera(engine)
         if self._headset is not None:
-            renderer.camera = self._headset.camera(renderer.camera)
+            renderer.camera = self._headset.camera(renderer.camera, self._camera_follows(engine))
         anomalies = engine.try_resource(Anomalies)
         renderer.anomalies = anomalies.active() if anomalies is not None else []
         lights = []
@@ -411,6 +411,12 @@ class RenderSystem(System):
                 target = (poses.position[t_row], poses.orientation[t_row])
             return self._stereo(camera_from_component(camera, pos, quat, target))
         return self._stereo(CameraView())
+
+    @staticmethod
+    def _camera_follows(engine: Engine) -> bool:
+        """Whether the active camera follows an object (a headset's wearer rides along)."""
+        return any(camera.active and camera.follow is not None
+                   for _, camera in engine.world.get_component(Camera))
 
     def _stereo(self, view: CameraView) -> CameraView:
         """The view with ``--stereo`` applied."""

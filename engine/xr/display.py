@@ -22,6 +22,7 @@ import numpy as np
 from engine.input.events import AnyInput, Axis, Button, TrackerPose
 from engine.render.camera import CameraView, HeadsetEye
 from engine.render.context import has_display
+from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS
 from engine.xr.lifecycle import Action
 from engine.xr.projection import XrOrigin, fov_projection
 from engine.xr.session import (
@@ -37,6 +38,9 @@ from engine.xr.timing import FrameCounts, seconds
 log = logging.getLogger("colosseum.xr")
 
 MIRRORS = ("none", "left", "both")
+#: A controller's squeeze is also the pinch of the glove the desktop emulation names for
+#: that hand, so content made for gloves (``Hand { Glove "glove_r" }``) grasps with it.
+SQUEEZE_PINCHES = dict(zip(DESKTOP_TRACKERS, DESKTOP_GLOVES, strict=True))
 
 #: Copies the drawn eyes into a swapchain image: colour decoded to linear light for a
 #: linear image (see engine.xr.formats), depth as it is.
@@ -167,6 +171,8 @@ def input_events(sample: InputSample, origin: XrOrigin, pressed: dict[tuple[str,
         if pressed.get(key, False) != down:
             pressed[key] = down
             events.append(Button(key[0], key[1], down, now))
+            if key[1] == "squeeze" and key[0] in SQUEEZE_PINCHES:  # a glove's pinch too
+                events.append(Button(SQUEEZE_PINCHES[key[0]], "pinch", down, now))
     for key, value in sample.axes.items():
         if axes.get(key) != value:
             axes[key] = value
@@ -202,6 +208,7 @@ class XrDisplay:
         self.mirror_mode = mirror
         self.counts = FrameCounts()
         self.origin: XrOrigin | None = None
+        self._relative: XrOrigin | None = None  # the origin in the camera's frame
         self.target: XrTarget | None = None
         self.quit = False
         #: The headset could not be used, or its session was lost: the run exits 1.
@@ -216,6 +223,7 @@ class XrDisplay:
         self._window: Any = None
         self._owns_ctx = False
         self._render_start = 0.0
+        self._last_shown: int | None = None
         self._drew = False
         #: Read each submitted image back before it is released (``captured``; tests).
         self.capture = False
@@ -270,7 +278,11 @@ class XrDisplay:
         start = time.perf_counter()
         self.frame = self.session.wait()
         self.counts.wait.add(time.perf_counter() - start)
-        return seconds(int(self.frame.predicted_display_period))
+        shown = int(self.frame.predicted_display_time)
+        last, self._last_shown = self._last_shown, shown
+        if last is None or shown <= last:
+            return seconds(int(self.frame.predicted_display_period))
+        return seconds(shown - last)  # the headset's own clock: a missed frame counts too
 
     @property
     def display_time(self) -> int | None:
@@ -281,11 +293,15 @@ class XrDisplay:
         return self.frame is not None and bool(self.frame.should_render)
 
     # -- input -----------------------------------------------------------------------
-    def place(self, anchor: tuple[np.ndarray, np.ndarray]) -> None:
+    def place(self, anchor: tuple[np.ndarray, np.ndarray], carried: bool = False) -> None:
         """Put the player where ``anchor`` (the scene camera's world pose) is, the first
-        time the origin is needed."""
+        time; ``carried``: the camera follows something (a wheelchair), and the player
+        rides along with it, keeping their place relative to it."""
         if self.origin is None:
             self.origin = XrOrigin.under(anchor[0], anchor[1], self.session.floor)
+            self._relative = self.origin.relative_to(*anchor)
+        elif carried and self._relative is not None:
+            self.origin = self._relative.carried_by(*anchor)
 
     def recenter(self, anchor: tuple[np.ndarray, np.ndarray]) -> None:
         """Move the origin so the head is over ``anchor`` and faces its way."""
@@ -300,6 +316,7 @@ class XrDisplay:
         current = self.origin or XrOrigin()
         self.origin = current.recentered(np.asarray(p), np.asarray(q), anchor[0], anchor[1],
                                          self.session.floor)
+        self._relative = self.origin.relative_to(*anchor)
         log.info("recentered the headset over the camera")
 
     def sample(self, now: float) -> list[AnyInput]:
@@ -315,11 +332,12 @@ class XrDisplay:
         return input_events(sample, self.origin, self._pressed, self._axes, now)
 
     # -- drawing ---------------------------------------------------------------------
-    def camera(self, base: CameraView) -> CameraView:
+    def camera(self, base: CameraView, carried: bool = False) -> CameraView:
         """The eyes at this frame's display time, as a camera the renderer draws (``base``
-        gives the clip planes and, the first time, where the player stands)."""
+        gives the clip planes and where the player stands: the first time, or every frame
+        when ``carried``, see :meth:`place`)."""
         self._render_start = time.perf_counter()
-        self.place((base.position, base.orientation))
+        self.place((base.position, base.orientation), carried)
         when = self.display_time
         if when is None or not self.should_render:
             return base

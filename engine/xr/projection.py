@@ -122,3 +122,17 @@ class XrOrigin:
         if floor:
             position[2] = self.position[2]
         return XrOrigin(position, yaw)
+
+    def relative_to(self, position: np.ndarray, orientation: np.ndarray) -> XrOrigin:
+        """This origin in the frame of an anchor at a pose (its position and heading)."""
+        yaw = yaw_of(orientation)
+        back = quat_to_matrix(yaw_quat(-yaw))
+        return XrOrigin(back @ (self.position - np.asarray(position, np.float64)),
+                        self.yaw - yaw)
+
+    def carried_by(self, position: np.ndarray, orientation: np.ndarray) -> XrOrigin:
+        """The origin whose place in an anchor's frame is this one (``relative_to``'s
+        inverse): the player carried along by what the camera follows (a wheelchair)."""
+        yaw = yaw_of(orientation)
+        return XrOrigin(np.asarray(position, np.float64) + quat_to_matrix(yaw_quat(yaw))
+                        @ self.position, self.yaw + yaw)

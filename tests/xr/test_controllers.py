@@ -50,7 +50,8 @@ def test_the_conversion_places_poses_and_tells_changes_only():
     pose = events[0]
     # 0.5 m ahead of the origin, turned a quarter left: along world -x; 1 m up
     assert np.allclose(pose.position, (0.5, 2.0, 1.0))
-    assert [type(e).__name__ for e in events] == ["TrackerPose", "Button", "Axis"]
+    assert [type(e).__name__ for e in events] == ["TrackerPose", "Button", "Button", "Axis"]
+    assert (events[2].device, events[2].name, events[2].pressed) == ("glove_r", "pinch", True)
     again = input_events(sample, origin, pressed, axes, 3.1)
     assert [type(e).__name__ for e in again] == ["TrackerPose"]  # nothing changed
 

@@ -62,6 +62,11 @@ def test_hands_in_the_headset_reaches_focused_submits_and_ends_cleanly(tmp_path:
          "--seconds", "10", "--headless", "--stats", stats],
         capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert result.returncode == 0, result.stderr[-3000:]
+    import jsonschema
+
+    from engine.stats import STATS_SCHEMA
+
+    jsonschema.validate(json.loads(stats.read_text()), STATS_SCHEMA)
     xr = json.loads(stats.read_text())["xr"]
     assert xr["session_state_max"] == "FOCUSED" and xr["session_end"] == "exiting"
     frames = json.loads(stats.read_text())["frames"]

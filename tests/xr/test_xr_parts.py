@@ -201,3 +201,16 @@ def test_a_field_of_view_that_cannot_be_drawn_is_refused():
         fov_projection(Fov(0.5, -0.5, 0.5, -0.5), 0.1, 10.0)
     with pytest.raises(ValueError, match="within ±90°"):
         fov_projection(Fov(-2.0, 0.5, 0.5, -0.5), 0.1, 10.0)
+
+
+def test_a_player_carried_by_a_moving_camera_keeps_their_place_on_it():
+    chair = (np.array([1.0, 2.0, 0.3]), np.array([math.cos(0.3), 0.0, 0.0, math.sin(0.3)]))
+    origin = XrOrigin.under(*chair, floor=True)
+    relative = origin.relative_to(*chair)
+    assert np.allclose(relative.carried_by(*chair).position, origin.position)
+    moved = (np.array([4.0, -1.0, 0.3]), np.array([math.cos(0.9), 0.0, 0.0, math.sin(0.9)]))
+    carried = relative.carried_by(*moved)
+    head = (np.array([0.0, 0.0, 1.2]), np.array([1.0, 0.0, 0.0, 0.0]))
+    position, orientation = carried.place(*head)
+    assert np.allclose(position[:2], moved[0][:2]) and math.isclose(position[2], 1.2)
+    assert math.isclose(yaw_of(orientation), 1.8, abs_tol=1e-12)  # turned with the chair
