@@ -123,6 +123,7 @@ class XrSession:
         self._images: dict[str, list[int]] = {}
         self._frame: Any = None
         self._began = False
+        self._haptic_told = False
 
     # -- opening -------------------------------------------------------------------
     def open(self, binding: str) -> None:
@@ -531,9 +532,15 @@ class XrSession:
         vibration = xr.HapticVibration(
             duration=max(1, int(seconds * 1e9)), frequency=frequency,
             amplitude=min(max(amplitude, 0.0), 1.0))
-        xr.apply_haptic_feedback(h["session"], xr.HapticActionInfo(
-            action=h["actions"]["haptic"], subaction_path=h["hands"][hands[source]]),
-            ctypes.cast(ctypes.byref(vibration), ctypes.POINTER(xr.HapticBaseHeader)))
+        try:
+            xr.apply_haptic_feedback(h["session"], xr.HapticActionInfo(
+                action=h["actions"]["haptic"], subaction_path=h["hands"][hands[source]]),
+                vibration)  # pyopenxr passes it by reference as the base header
+        except xr.exception.XrException as exc:
+            if not self._haptic_told:
+                self._haptic_told = True
+                log.warning("OpenXR: the runtime refused a haptic pulse: %s", exc)
+            return False
         return True
 
     # -- closing -------------------------------------------------------------------

@@ -130,3 +130,46 @@ def test_the_eyes_drawn_are_the_pose_at_the_predicted_display_time(tmp_path: Pat
         assert np.isfinite(position).all()
     finally:
         engine.close()
+
+
+CONTROLLERS = """
+import json, sys
+from pathlib import Path
+from engine.app import EngineConfig
+from engine.content import resolve
+from engine.input.state import InputState
+from engine.scene_loading import load_content_scene
+from engine.services import HeadsetControl
+from systems import create_engine
+
+folder = Path(sys.argv[1])
+scene = load_content_scene(resolve(folder))
+config = EngineConfig(content_dir=folder, render=True, headless=True, options={"xr": True})
+scene.configure(config)
+engine = create_engine(config)
+scene.instantiate(engine)
+engine.run(frames=15)
+state = engine.resource(InputState)
+out = {name: None if state.tracker(name) is None else list(state.tracker(name).position)
+       for name in ("hmd", "hand_l", "hand_r", "hand_r_aim")}
+out["haptic"] = engine.resource(HeadsetControl).haptic("hand_r", 0.5, 0.1)
+out["origin"] = list(engine.plugins["xr"].display.origin.position)
+engine.close()
+print("RESULT " + json.dumps(out))
+"""
+
+
+def test_the_runtimes_controllers_are_the_hands_trackers_and_take_a_pulse(tmp_path: Path):
+    """Monado's simulated controllers (SIMULATED_LEFT/RIGHT) stand 0.2 m to each side,
+    1.3 m up and 0.5 m ahead of the stage's origin: they arrive as hand_l/hand_r there,
+    in the world, and a haptic pulse is taken."""
+    env = dict(os.environ, SIMULATED_LEFT="simple", SIMULATED_RIGHT="simple")
+    result = subprocess.run([sys.executable, "-c", CONTROLLERS, _scene(tmp_path)],
+                            capture_output=True, text=True, timeout=120, env=env, cwd=ROOT)
+    assert result.returncode == 0, result.stderr[-3000:]
+    out = json.loads(result.stdout.split("RESULT ")[-1])
+    origin = np.array(out["origin"])  # under the camera at (0, -2), facing +y
+    assert np.allclose(np.array(out["hand_r"]) - origin, (0.2, 0.5, 1.3), atol=0.05)
+    assert np.allclose(np.array(out["hand_l"]) - origin, (-0.2, 0.5, 1.3), atol=0.05)
+    assert out["hand_r_aim"] is not None and out["hmd"][2] > 1.4
+    assert out["haptic"] is True
