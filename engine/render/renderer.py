@@ -656,17 +656,17 @@ class Renderer:
                 [(mesh.vbo, meshes.VERTEX_FORMAT, *meshes.VERTEX_ATTRIBUTES),
                  (self._buffer(batch, level, slot), _INSTANCE_FORMAT, *_INSTANCE_ATTRS)],
                 index_buffer=mesh.ibo, index_element_size=4, skip_errors=True)
+            if slot == _STEREO_SLOT:
+                _instance_divisor(vao, program, 2)
             batch.vaos[(level, slot, program.glo)] = vao
         return vao
 
     def _buffer(self, batch: _Batch, level: int, slot: int) -> Any:
-        """A batch's instance buffer for one level and slot (room for all its parts; twice
-        that in the stereo slot)."""
+        """A batch's instance buffer for one level and slot (room for all its parts)."""
         buffer = batch.buffers.get((level, slot))
         if buffer is None:
-            copies = 2 if slot == _STEREO_SLOT else 1
             buffer = batch.buffers[(level, slot)] = self.ctx.buffer(
-                reserve=(batch.stop - batch.start) * INSTANCE_FLOATS * 4 * copies, dynamic=True)
+                reserve=(batch.stop - batch.start) * INSTANCE_FLOATS * 4, dynamic=True)
         return buffer
 
     def _world(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -701,8 +701,8 @@ class Renderer:
     def _upload(self, selected: np.ndarray, order_key: np.ndarray, level: np.ndarray,
                 inst: np.ndarray, slot: int) -> list[_Run]:
         """Write the ``selected`` parts' instance rows into their batches' buffers of
-        ``slot`` (each twice in the stereo slot), in ascending ``order_key`` within each
-        batch and level of detail; returns the draws to make."""
+        ``slot``, in ascending ``order_key`` within each batch and level of detail; returns
+        the draws to make."""
         chosen = np.flatnonzero(selected)
         if not len(chosen):
             return []
@@ -710,14 +710,13 @@ class Renderer:
                                    self._part_batch[chosen]))]
         groups = self._part_batch[order] * 8 + level[order]
         cuts = np.flatnonzero(np.diff(groups)) + 1
-        copies = 2 if slot == _STEREO_SLOT else 1
-        rows = inst[order] if copies == 1 else np.repeat(inst[order], 2, axis=0)
+        rows = inst[order]
         runs = []
         for start, stop in zip(np.r_[0, cuts].tolist(), np.r_[cuts, len(order)].tolist(),
                                strict=True):
             batch = self._batches[int(self._part_batch[order[start]])]
             lod = int(level[order[start]])
-            self._buffer(batch, lod, slot).write(rows[copies * start:copies * stop].tobytes())
+            self._buffer(batch, lod, slot).write(rows[start:stop].tobytes())
             runs.append(_Run(batch, lod, order[start:stop]))
         return runs
 
@@ -1098,6 +1097,24 @@ class Renderer:
         self.post.release()
         self.shaders.release()
         self.hud.release()
+
+
+def _instance_divisor(vao: Any, program: Any, divisor: int) -> None:
+    """Make every per-instance input of ``vao`` advance every ``divisor`` instances (the
+    stereo pass draws each part twice from one row: glVertexAttribDivisor, which
+    moderngl sets to 1 only)."""
+    import ctypes
+
+    gl = ctypes.CDLL("libGL.so.1")
+    gl.glBindVertexArray(vao.glo)
+    for name in _INSTANCE_ATTRS:
+        member = program.get(name, None)
+        if member is None:
+            continue
+        columns = 4 if name == "i_model" else 1  # a mat4 takes four locations
+        for location in range(member.location, member.location + columns):
+            gl.glVertexAttribDivisor(location, divisor)
+    gl.glBindVertexArray(0)
 
 
 def _gl(matrix: np.ndarray) -> tuple[float, ...]:

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -263,7 +265,9 @@ class XrDisplay:
         """Take the runtime's events and, while the session runs, wait for the next
         frame; the display period (s), or None when no frame is due (not running yet,
         or ending)."""
-        for action in self.session.poll():
+        with self._runtime("xrPollEvent"):
+            actions = self.session.poll()
+        for action in actions if not self.quit else ():
             if action == Action.QUIT:
                 self.quit = True
                 if self.lifecycle.ended == "lost":
@@ -276,7 +280,11 @@ class XrDisplay:
             self.frame = None
             return None
         start = time.perf_counter()
-        self.frame = self.session.wait()
+        with self._runtime("xrWaitFrame"):
+            self.frame = self.session.wait()
+        if self.quit:
+            self.frame = None
+            return None
         self.counts.wait.add(time.perf_counter() - start)
         shown = int(self.frame.predicted_display_time)
         last, self._last_shown = self._last_shown, shown
@@ -306,7 +314,9 @@ class XrDisplay:
     def recenter(self, anchor: tuple[np.ndarray, np.ndarray]) -> None:
         """Move the origin so the head is over ``anchor`` and faces its way."""
         when = self.display_time
-        head = None if when is None else self.session.locate_head(when)
+        head = None
+        with self._runtime("xrLocateSpace"):
+            head = None if when is None else self.session.locate_head(when)
         if head is None:
             log.warning("recentering: the headset is not tracked now")
             return
@@ -325,8 +335,11 @@ class XrDisplay:
         when = self.display_time
         if when is None or self.origin is None or not self.lifecycle.focused:
             return []
-        sample = self.session.sample_input(when)
-        head = self.session.locate_head(when)
+        with self._runtime("xrSyncActions"):
+            sample = self.session.sample_input(when)
+            head = self.session.locate_head(when)
+        if self.quit:
+            return []
         if head is not None:
             sample.poses["hmd"] = head
         return input_events(sample, self.origin, self._pressed, self._axes, now)
@@ -341,7 +354,17 @@ class XrDisplay:
         when = self.display_time
         if when is None or not self.should_render:
             return base
-        self.views = self.session.locate_views(when)
+        self.views = []
+        with self._runtime("xrLocateViews"):
+            located = self.session.locate_views(when)
+            problems = [v.fov.problem() for v in located if v.fov.problem() is not None]
+            if problems:  # a runtime going away may answer with empty fields of view
+                log.warning("the runtime gave eyes that cannot be drawn (%s); frame skipped",
+                            problems[0])
+                return base
+            self.views = located
+        if not self.views:
+            return base
         self.views_time = when
         near, far = base.near, base.far
         self.settings.near, self.settings.far = near, far
@@ -358,9 +381,21 @@ class XrDisplay:
         said not to draw."""
         if self.frame is None:
             return
+        drawn = self.should_render and bool(self.views)
+        ended = False
+        with self._runtime("xrEndFrame"):
+            self._hand_over(target, drawn)
+            self.counts.ended(drawn, self.session.now(), int(self.frame.predicted_display_time))
+            ended = True
+        if drawn and ended:
+            self.counts.render.add(time.perf_counter() - self._render_start)
+            self._mirror(target)
+        self.frame = None
+
+    def _hand_over(self, target: XrTarget, drawn: bool) -> None:
+        """Begin the frame, copy the eyes (and the HUD) into the swapchains, end it."""
         session = self.session
         session.begin()
-        drawn = self.should_render and bool(self.views)
         if drawn:
             images = session.acquire()
             target.copy_into(images.color, images.depth, session.color_format.decode)
@@ -371,11 +406,19 @@ class XrDisplay:
             target.ctx.finish()
             session.release()
         session.end(self.views if drawn else None, hud=drawn and target.hud_shown)
-        self.counts.ended(drawn, session.now(), int(self.frame.predicted_display_time))
-        if drawn:
-            self.counts.render.add(time.perf_counter() - self._render_start)
-            self._mirror(target)
-        self.frame = None
+
+    @contextmanager
+    def _runtime(self, call: str) -> Iterator[None]:
+        """Calls into the runtime: an OpenXR error there means the runtime or the headset
+        went away; the run ends with one message (and exit status 1)."""
+        try:
+            yield
+        except self.session.errors as exc:
+            if not self.quit:
+                log.error("the OpenXR runtime went away (%s in %s); the run ends",
+                          type(exc).__name__.removesuffix("Error") or exc, call)
+            self.lifecycle.instance_lost()
+            self.quit = self.failed = True
 
     def skip(self) -> None:
         """End a frame the runtime said not to draw."""

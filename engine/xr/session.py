@@ -125,6 +125,11 @@ class XrSession:
         self._began = False
         self._haptic_told = False
 
+    @property
+    def errors(self) -> tuple[type[BaseException], ...]:
+        """The exceptions a runtime call raises (pyopenxr's), once it is loaded."""
+        return () if self._xr is None else (self._xr.exception.XrException,)
+
     # -- opening -------------------------------------------------------------------
     def open(self, binding: str) -> None:
         """Create the instance and a session bound to the current GL context

@@ -173,3 +173,48 @@ def test_the_runtimes_controllers_are_the_hands_trackers_and_take_a_pulse(tmp_pa
     assert np.allclose(np.array(out["hand_l"]) - origin, (-0.2, 0.5, 1.3), atol=0.05)
     assert out["hand_r_aim"] is not None and out["hmd"][2] > 1.4
     assert out["haptic"] is True
+
+
+SERVICE = os.environ.get("MONADO_SERVICE")
+
+
+@pytest.mark.skipif(not SERVICE or not Path(SERVICE).is_file(),
+                    reason="no out-of-process runtime to kill: MONADO_SERVICE names no "
+                           "monado-service (see docs/headset.md)")
+def test_a_runtime_killed_mid_run_is_one_message_and_a_clean_exit(tmp_path: Path):
+    """The runtime's service killed while the run draws: one message, exit status 1, the
+    state and the figures still written, within seconds (XR_RUNTIME_JSON must name the
+    service's client runtime)."""
+    import signal
+    import time
+
+    runtime_dir = tmp_path / "rt"
+    runtime_dir.mkdir(mode=0o700)
+    env = dict(os.environ, XDG_RUNTIME_DIR=str(runtime_dir), XRT_NO_STDIN="1")
+    service = subprocess.Popen([SERVICE], env=env, stdin=subprocess.DEVNULL,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 30
+        while not (runtime_dir / "monado_comp_ipc").exists():
+            assert service.poll() is None and time.monotonic() < deadline, "no service"
+            time.sleep(0.1)
+        stats, state = tmp_path / "stats.json", tmp_path / "state.scene"
+        run = subprocess.Popen(
+            [sys.executable, "-m", "engine.cli", "run", ROOT / "content" / "hands", "--xr",
+             "--seconds", "60", "--headless", "--stats", stats, "--save-state", state],
+            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+        time.sleep(6)
+        service.send_signal(signal.SIGKILL)
+        killed = time.monotonic()
+        _, err = run.communicate(timeout=30)
+        assert time.monotonic() - killed < 10  # no hang
+        assert run.returncode == 1
+        told = [line for line in err.splitlines() if "colosseum.xr" in line and "ERROR" in line]
+        assert len(told) == 1 and "went away" in told[0], err[-2000:]
+        assert "Traceback" not in err
+        figures = json.loads(stats.read_text())["xr"]
+        assert figures["session_end"] == "lost" and figures["frames_submitted"] > 0
+        assert state.is_file()
+    finally:
+        service.kill()
+        service.wait()
