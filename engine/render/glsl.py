@@ -171,7 +171,8 @@ void main() {
 #: The lit vertex stage drawing both eyes of a stereo view in one pass (instanced stereo):
 #: each part is two instances (its instance row read twice: a divisor of 2), the even one
 #: the left eye, the odd one the right; each lands in its half of the side-by-side target,
-#: clipped at the middle (``gl_ClipDistance``), so a stereo frame costs the CPU about what a mono one does.
+#: clipped at the middle (``gl_ClipDistance``), so a stereo frame costs the CPU about what
+#: a mono one does.
 LIT_VERTEX_STEREO = "#version 330" + MESH_INPUTS + """in vec4 i_flags;
 uniform mat4 u_light_vp;
 uniform mat4 u_eye_view[2];
