@@ -218,3 +218,31 @@ def test_a_runtime_killed_mid_run_is_one_message_and_a_clean_exit(tmp_path: Path
     finally:
         service.kill()
         service.wait()
+
+
+def test_the_stroke_simulator_in_the_headset_takes_each_eyes_left_field(tmp_path: Path):
+    """Left hemianopia in the headset: each eye loses its own left half of the view."""
+    from engine.app import EngineConfig
+    from engine.content import resolve
+    from engine.scene_loading import load_content_scene
+    from systems import create_engine
+
+    folder = ROOT / "content" / "stroke"
+    scene = load_content_scene(resolve(folder), params={"hemianopia_on": "1"})
+    config = EngineConfig(content_dir=folder, render=True, headless=True,
+                          options={"xr": True, "sessions": tmp_path})
+    scene.configure(config)
+    engine = create_engine(config)
+    scene.instantiate(engine)
+    display = engine.plugins["xr"].display
+    display.capture = True
+    try:
+        engine.run(frames=40)  # 2 s at the simulated headset's 20 Hz: past the 1 s onset
+        image = display.captured[:, :, :3].astype(int)
+    finally:
+        engine.close()
+    w = image.shape[1] // 2
+    for eye in (image[:, :w], image[:, w:]):
+        left, right = eye[:, : w // 2 - 20], eye[:, w // 2 + 8:]  # sparing: 3° kept
+        assert left.max() < 40  # blind: black
+        assert right.mean() > 80  # seen: the apartment
