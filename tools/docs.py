@@ -1,7 +1,9 @@
 """``python -m tools.docs``: write the generated pages of docs/ (the GLSL contract, the scene
 key reference, the --stats keys and schema, the command line, the Lua API); ``--check``
-only says which differ. Tests and the manual's build (tools/mkdocs_hooks.py) keep the
-pages equal to what this writes, so they cannot drift from the code."""
+only says which differ; ``--figures`` draws every figure of docs/figures/ again from the
+benchmark JSON committed beside it (``colosseum bench WHAT --json docs/figures/NAME.json``).
+Tests and the manual's build (tools/mkdocs_hooks.py) keep the pages equal to what this
+writes, so they cannot drift from the code."""
 
 from __future__ import annotations
 
@@ -56,8 +58,25 @@ def stale_pages() -> list[str]:
             or (DOCS / name).read_text(encoding="utf-8") != make()]
 
 
+FIGURES = DOCS / "figures"
+
+
+def plot_figures() -> list[Path]:
+    """Each docs/figures/NAME.json (a benchmark's --json, with its date and machine) drawn
+    into NAME.png beside it, as ``colosseum bench --plot`` draws it."""
+    from tools.bench import plot
+
+    return [plot(json.loads(source.read_text(encoding="utf-8")), source.with_suffix(".png"))
+            for source in sorted(FIGURES.glob("*.json"))]
+
+
 def main(argv: list[str] | None = None) -> int:
-    check = "--check" in (sys.argv[1:] if argv is None else argv)
+    args = sys.argv[1:] if argv is None else argv
+    if "--figures" in args:
+        for figure in plot_figures():
+            print(f"{figure.relative_to(DOCS.parent)} drawn from {figure.stem}.json")
+        return 0
+    check = "--check" in args
     stale = []
     for name, make in PAGES.items():
         path, text = DOCS / name, make()

@@ -4,10 +4,12 @@ are current, and the README stays short and points into the manual (issue 34).""
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import subprocess
 import sys
+from datetime import datetime
 from html.parser import HTMLParser
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
@@ -117,3 +119,17 @@ def test_the_readme_is_short_starts_with_the_two_commands_and_its_links_resolve(
         if urlsplit(link).scheme or link in PENDING:
             continue
         assert (ROOT / link).exists(), f"README links to {link}, which does not exist"
+
+
+def test_every_figure_has_its_benchmark_json_beside_it_with_date_and_machine() -> None:
+    figures = DOCS / "figures"
+    plots = sorted(figures.glob("*.png"))
+    assert plots
+    assert {p.stem for p in plots} == {j.stem for j in figures.glob("*.json")}
+    pages = "\n".join(p.read_text(encoding="utf-8") for p in DOCS.rglob("*.md"))
+    for plot in plots:
+        data = json.loads(plot.with_suffix(".json").read_text(encoding="utf-8"))
+        assert data["benchmark"] and data["figures"], plot.name
+        assert datetime.fromisoformat(data["date"]).year >= 2026, plot.name
+        assert {"platform", "cpus", "processor"} <= set(data["machine"]), plot.name
+        assert f"figures/{plot.name}" in pages and f"figures/{plot.stem}.json" in pages
