@@ -37,6 +37,8 @@ def test_the_tutorial_runs_as_written_and_ends_with_the_cup_in_the_hand(tmp_path
 
     kitchen = tmp_path / "kitchen"
     assert (kitchen / "main.scene").is_file() and (kitchen / "scripts" / "cup.lua").is_file()
+    assert (kitchen / "sounds" / "clink.wav").is_file()  # step 1: what colosseum new wrote
+    assert "bounce 1 off ground" in log and "ball z=" in log  # its script and its system ran
     assert "clink: the cup hit table" in log  # step 3: the script heard the landing
     landing, _ = soundfile.read(tmp_path / "landing.wav")
     assert np.abs(landing).max() > 0.01  # ... and the clink is in the mix
