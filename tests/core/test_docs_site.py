@@ -133,3 +133,14 @@ def test_every_figure_has_its_benchmark_json_beside_it_with_date_and_machine() -
         assert datetime.fromisoformat(data["date"]).year >= 2026, plot.name
         assert {"platform", "cpus", "processor"} <= set(data["machine"]), plot.name
         assert f"figures/{plot.name}" in pages and f"figures/{plot.stem}.json" in pages
+
+
+def test_the_input_format_page_lists_exactly_the_event_types_a_recording_holds() -> None:
+    """docs/input-format.md is written by hand: its table of events must keep to the
+    recording parser's types (engine/input/record.py)."""
+    from engine.input.record import _CLASSES
+
+    page = (DOCS / "input-format.md").read_text(encoding="utf-8")
+    table = page.split("## Events", 1)[1].split("\n## ", 1)[0]
+    listed = set(re.findall(r"^\| `(\w+)` \|", table, flags=re.M))
+    assert listed == set(_CLASSES)
