@@ -77,8 +77,25 @@ class ScaffoldError(Exception):
     pass
 
 
+def write_clink(path: Path, rate: int = 22050) -> Path:
+    """A short clink (a decaying 1.8 kHz tone, 0.2 s) as 16-bit mono WAV: a sound to play
+    from a script, made here so a new folder has one (the tutorial's cup plays it)."""
+    import math
+    import struct
+    import wave
+
+    samples = (int(12000 * math.exp(-25.0 * i / rate) * math.sin(2 * math.pi * 1800 * i / rate))
+               for i in range(rate // 5))
+    with wave.open(str(path), "wb") as out:
+        out.setnchannels(1)
+        out.setsampwidth(2)
+        out.setframerate(rate)
+        out.writeframes(b"".join(struct.pack("<h", s) for s in samples))
+    return path
+
+
 def scaffold(folder: Path) -> Path:
-    """Create ``folder`` with a working scene, a script and a custom system.
+    """Create ``folder`` with a working scene, a script, a sound and a custom system.
 
     Never touches an existing folder, so nothing an author wrote is overwritten.
     """
@@ -89,4 +106,5 @@ def scaffold(folder: Path) -> Path:
     (folder / "main.scene").write_text(MAIN_SCENE.format(name=folder.name))
     (folder / "scripts" / "ball.lua").write_text(BALL_LUA)
     (folder / "systems" / "height.py").write_text(SYSTEM_PY)
+    write_clink(folder / "sounds" / "clink.wav")
     return folder
