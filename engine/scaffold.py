@@ -24,6 +24,7 @@ Object {{
   VisualAttributes {{ Geometry {{ Primitive "sphere" }} Color [0.9 0.3 0.2] }}
   PhysicalAttributes {{ Mass 1 Material "rubber" Geometry {{ Primitive "sphere" }} }}
   Script "scripts/ball.lua"
+  Report {{ Every 1 }}   // declared in systems/height.py
 }}
 
 Object {{
@@ -51,21 +52,33 @@ end
 """
 
 SYSTEM_PY = '''\
-"""A custom system: prints the ball's height once a second.
+"""A custom system with its own scene block: ``Report { Every 1 }`` on an object prints
+its height every second.
 
-Each module in systems/ defines build(engine), which adds systems or plugins.
+Each module in systems/ defines build(engine), which adds systems or plugins. A block is
+declared beside its component (engine.scene.blocks): the scene checks its keys (try
+``Report { Evry 1 }`` and ``colosseum check``), ``colosseum keys Report --content .``
+documents it, and a saved state writes it back.
 """
+
+from dataclasses import dataclass
 
 from components import Name, Transform
 from engine import Phase, system
+from engine.scene.blocks import key, scene_block
 
 
-@system(Phase.POST_PHYSICS, reads=(Name, Transform))
+@scene_block("Report", doc="print this object's height now and then")
+@dataclass
+class Report:
+    every: float = key(1.0, "s, how often", low=0.01)
+
+
+@system(Phase.POST_PHYSICS, reads=(Report, Name, Transform))
 def report_height(engine, dt):
-    if engine.frame % 60 == 0:
-        for _, (name, transform) in engine.world.get_components(Name, Transform):
-            if name.id == "ball":
-                print(f"t={engine.time:5.2f}s ball z={transform.position[2]:.2f} m")
+    for _, (report, name, transform) in engine.world.get_components(Report, Name, Transform):
+        if engine.time % report.every < dt:
+            print(f"t={engine.time:5.2f}s {name.id} z={transform.position[2]:.2f} m")
 
 
 def build(engine):
