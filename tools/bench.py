@@ -168,7 +168,8 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
                      "raw OpenAL calls for the same sources"),
     "render": _render_figures,
     "stereo": lambda rows: [Figure(f"{r['boxes']} boxes, {r['case']}, {r['size']}",
-                                   r["cpu_ms"], rows[0]["cpu_ms"], "CPU ms/frame",
+                                   r["engine_cpu_ms"], rows[0]["engine_cpu_ms"],
+                                   "engine CPU ms/frame",
                                    "a mono frame at one eye's size, the same run")
                             for r in rows[1:]],
     "input": _input_figures,

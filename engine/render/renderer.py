@@ -158,6 +158,9 @@ class FrameStats:
     shadow_ms: float = 0.0
     #: The eyes' draw calls.
     draw_ms: float = 0.0
+    #: CPU time of this thread inside the GL driver's draws and clears (ms): on a software
+    #: rasteriser (llvmpipe) the vertex stage runs there, where a GPU would run it.
+    driver_ms: float = 0.0
     post_ms: float = 0.0
     #: Copy to the screen, HUD and buffer swap.
     present_ms: float = 0.0
@@ -787,8 +790,10 @@ class Renderer:
             runs = self._upload(selected, unsorted, level, inst, _SHADOW_SLOT)
             for run in runs:
                 self._face_culling(run.batch)
+                driver = _time.thread_time()
                 self._vao(run.batch, run.level, _SHADOW_SLOT, self._depth).render(
                     instances=len(run.parts))
+                self.stats.driver_ms += (_time.thread_time() - driver) * 1e3
             return len(runs)
 
         deforming = np.zeros(len(casts), bool)
@@ -925,7 +930,9 @@ class Renderer:
         fbo = self._scene_fbo if post or scaled else self.target.fbo
         fbo.use()
         fbo.viewport = (0, 0, *size)
+        driver = _time.thread_time()
         fbo.clear(*self.background, 1.0, depth=1.0)
+        self.stats.driver_ms += (_time.thread_time() - driver) * 1e3
         self.ctx.enable(self.ctx.DEPTH_TEST)
         self._shadows.texture.use(glsl.TEXTURE_UNITS["u_shadow_map"])
         shadowing = shadow_index if light_vp is not None else -1
@@ -960,7 +967,9 @@ class Renderer:
                 if compiled is not None and compiled.per_object:
                     self._draw_per_object(program, vao, eye, world[run.parts])
                     continue
+                driver = _time.thread_time()
                 vao.render(instances=copies * len(run.parts))
+                self.stats.driver_ms += (_time.thread_time() - driver) * 1e3
                 self.stats.draw_calls += 1
             self.ctx.enable(self.ctx.DEPTH_TEST)
             self.ctx.disable(self.ctx.BLEND)
