@@ -26,7 +26,7 @@ from engine.events import Despawned, EventBus, Spawned
 from engine.memory import paused_gc
 from engine.physics.backend import BackendName, WorldSettings
 from engine.physics.driver import DetachedPhysics, PhysicsPort
-from engine.realtime import CostLog, Pacing, RealTimeController, Tick, advance
+from engine.realtime import TIME_STEP, CostLog, Pacing, RealTimeController, Tick, advance
 from engine.system import (
     ANY_COMPONENT,
     Phase,
@@ -57,7 +57,7 @@ class EngineConfig:
     content_dir: Path | None = None
     mode: str = "serial"  # "serial" | "threaded"
     backend: str = BackendName.ODE
-    dt: float = 1.0 / 60.0
+    dt: float = TIME_STEP
     substeps: int = 1
     seed: int = 0
     fast: bool = False

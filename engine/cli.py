@@ -427,7 +427,7 @@ def cmd_keys(args: argparse.Namespace) -> int:
         except ContentError as exc:
             return fail(str(exc), 1)
     if args.block is None:
-        for block in keys.blocks():
+        for block in keys.blocks(content=args.content is not None):
             print(f"{block:<15} {keys.about(block)}")
         print("\ncolosseum keys BLOCK lists a block's keys; docs/KEYS.md has them all")
         return 0

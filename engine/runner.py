@@ -137,7 +137,7 @@ def replay_flags(args: argparse.Namespace) -> str | None:
 def step_problem(args: argparse.Namespace) -> str | None:
     """What is wrong with ``--dt`` (the same range as a scene's TimeStep); a long one is
     warned about, as in a scene."""
-    from engine.scene.factory import STEP_RANGE, STEP_WARNING
+    from engine.realtime import STEP_RANGE, STEP_WARNING
 
     dt = getattr(args, "dt", None)
     if dt is not None and dt > STEP_RANGE[1]:

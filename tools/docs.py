@@ -8,6 +8,7 @@ writes, so they cannot drift from the code."""
 from __future__ import annotations
 
 import json
+import subprocess
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -17,7 +18,8 @@ from engine.scene.keys import reference_markdown
 from engine.stats import STATS_SCHEMA, stats_markdown
 from tools.reference import cli_markdown, lua_markdown
 
-DOCS = Path(__file__).resolve().parent.parent / "docs"
+ROOT = Path(__file__).resolve().parent.parent
+DOCS = ROOT / "docs"
 
 #: page -> the function that makes its text
 PAGES: dict[str, Callable[[], str]] = {
@@ -91,3 +93,47 @@ def main(argv: list[str] | None = None) -> int:
 
 if __name__ == "__main__":
     sys.exit(main())
+
+
+TUTORIAL = ROOT / "docs" / "getting-started" / "tutorial.md"
+
+
+def shell_blocks(markdown: str) -> list[str]:
+    """A page's ``sh`` code blocks, as written."""
+    import re
+
+    return re.findall(r"^```sh\n(.*?)^```$", markdown, flags=re.S | re.M)
+
+
+def run_tutorial(folder: Path, timeout: float = 240.0) -> subprocess.CompletedProcess[str]:
+    """Every ``sh`` block of the tutorial, in order, in one shell in ``folder`` (empty),
+    with this Python's bin folder on PATH and no display (as CI runs it)."""
+    import os
+
+    script = "set -euo pipefail\n" + "\n".join(shell_blocks(TUTORIAL.read_text("utf-8")))
+    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}"
+           f"{os.environ.get('PATH', '')}"}
+    env.pop("DISPLAY", None)
+    return subprocess.run(["bash", "-c", script], cwd=folder, env=env, capture_output=True,
+                          text=True, timeout=timeout)
+
+
+def screenshots(images: Path) -> None:
+    """Draw the manual's pictures into ``images`` with the engine: the demo, and the
+    tutorial's grasp (its commands run in a scratch folder). Raises RuntimeError when a
+    run fails, so a build never shows a picture the engine no longer draws."""
+    import shutil
+    import tempfile
+
+    images.mkdir(parents=True, exist_ok=True)
+    demo = subprocess.run([sys.executable, "-m", "engine.cli", "run", str(ROOT / "content" /
+                           "demo"), "--headless", "--seconds", "2", "--screenshot",
+                           str(images / "demo.png")], capture_output=True, text=True,
+                          timeout=120)
+    if demo.returncode != 0:
+        raise RuntimeError(f"the demo's screenshot failed:\n{demo.stderr[-2000:]}")
+    with tempfile.TemporaryDirectory() as scratch:
+        result = run_tutorial(Path(scratch))
+        if result.returncode != 0:
+            raise RuntimeError(f"the tutorial failed:\n{(result.stdout + result.stderr)[-2000:]}")
+        shutil.copyfile(Path(scratch) / "grasp.png", images / "tutorial-grasp.png")

@@ -16,3 +16,13 @@ def on_pre_build(config: Any) -> None:
     if stale:
         raise PluginError(f"docs/: {', '.join(stale)} differ from the code; "
                           "run .venv/bin/python -m tools.docs")
+
+
+def on_post_build(config: Any) -> None:
+    """The manual's pictures, drawn by the engine now, over the committed copies: the demo
+    (README's picture) and the tutorial's grasp, from the tutorial's own commands."""
+    from pathlib import Path
+
+    from tools.docs import screenshots
+
+    screenshots(Path(config["site_dir"]) / "images")

@@ -180,6 +180,27 @@ def _python(value: Any, component: type, field: str) -> Any:
     return value
 
 
+def unregister(name: str) -> None:
+    """Take block ``name`` out again (a test's own block)."""
+    block = BLOCKS.pop(name, None)
+    if block is None:
+        return
+    sc.SCHEMAS.pop(name, None)
+    for place in block.inside:
+        sc.SCHEMAS[place].pop(name, None)
+        for listener in _LISTENERS:
+            listener(place)
+
+
+def from_content(name: str) -> bool:
+    """Whether block ``name`` was declared by a content folder's systems (not the
+    engine's own, so the engine's reference pages leave it out)."""
+    from engine.content import CONTENT_MODULES
+
+    block = BLOCKS.get(name)
+    return block is not None and block.component.__module__.startswith(CONTENT_MODULES)
+
+
 def on_register(listener: Callable[[str], None]) -> None:
     """Call ``listener(name)`` for each schema entry a registration adds or changes."""
     _LISTENERS.append(listener)

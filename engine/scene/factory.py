@@ -83,6 +83,7 @@ from engine.physics.backend import (
 )
 from engine.physics.commands import HINGE2_BODIES, TWO_AXES, SetSleepState, parallel
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
+from engine.realtime import STEP_RANGE, STEP_WARNING, TIME_STEP
 from engine.rotation import UNIT_ROUNDING, euler_to_quat, rotate, view_problem
 from engine.scene.anomalies import read_anomalies
 from engine.scene.db import (
@@ -188,7 +189,7 @@ class SceneSpec:
     shader_programs: dict[str, ShaderProgramSpec] = field(default_factory=dict)
     shader_states: dict[str, ShaderStateSpec] = field(default_factory=dict)
     world: WorldSettings = field(default_factory=WorldSettings)
-    time_step: float = 0.01
+    time_step: float = TIME_STEP
     backend: str = BackendName.ODE
     time: float = 0.0
     #: The scene's random generator when a saved state was written (see random_state).
@@ -287,11 +288,6 @@ _DEFAULTS = {name: {k: f.default for k, f in fields.items()}
 blocks.on_register(lambda name: _DEFAULTS.__setitem__(
     name, {k: f.default for k, f in sc.SCHEMAS[name].items()}))
 
-#: The time steps a file may ask for (s): past the upper one a step jumps whole seconds
-#: (``TimeStep 10`` ran 3,000 simulated seconds in 300 frames); above ``STEP_WARNING``
-#: contacts and joints lose accuracy, which is told as a warning.
-STEP_RANGE = (0.0, 1.0)
-STEP_WARNING = 0.05
 #: The largest World Extent (m): ODE's hash space needs every bounding box within about
 #: 4.5e15 m, and past 1e12 m doubles no longer place a body to the millimetre.
 MAX_EXTENT = 1e12
@@ -1326,7 +1322,7 @@ class _Builder:
             self.problems.append(Diagnostic(
                 where.loc.path, where.loc.line, where.loc.col, WARNING,
                 f"TimeStep {step:g} s is long: contacts and joints lose accuracy past "
-                f"{STEP_WARNING:g} s (0.01 is the default)"))
+                f"{STEP_WARNING:g} s ({TIME_STEP:g} is the default)"))
 
     def scene_entities(self, root: _Index, spec: SceneSpec) -> None:
         for i, b in enumerate(root.blocks("Camera")):

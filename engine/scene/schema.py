@@ -27,6 +27,7 @@ from engine.anomalies import ANOMALIES, COMMON_DOCS, EYES, ONSET_DEFAULT
 from engine.measures import QUANTITIES
 from engine.physics.backend import WORLD_EXTENT, BackendName, WorldSettings
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
+from engine.realtime import TIME_STEP
 
 #: The solver settings' defaults, defined once (engine.physics.backend.WorldSettings).
 _WORLD = WorldSettings()
@@ -673,7 +674,7 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     },
     "World": {
         "Gravity": _f(VEC3_T, (0.0, 0.0, -9.81), "m/s^2"),
-        "TimeStep": _f(FLOAT_T, 0.01, "s, fixed dynamics step (more than 0, at most 1; "
+        "TimeStep": _f(FLOAT_T, TIME_STEP, "s, fixed dynamics step (more than 0, at most 1; "
                        "past 0.05 contacts and joints lose accuracy)"),
         "Extent": _f(FLOAT_T, WORLD_EXTENT, "m: bodies stay within this distance of the "
                      "origin on every axis; positions beyond it are refused, and a body "

@@ -5,33 +5,18 @@ happened is checked (issue 34)."""
 from __future__ import annotations
 
 import json
-import os
-import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import soundfile
 
-ROOT = Path(__file__).resolve().parents[2]
-TUTORIAL = ROOT / "docs" / "getting-started" / "tutorial.md"
-
-
-def shell_blocks(markdown: str) -> list[str]:
-    """The page's ``sh`` code blocks, as written."""
-    return re.findall(r"^```sh\n(.*?)^```$", markdown, flags=re.S | re.M)
+from tools.docs import TUTORIAL, run_tutorial, shell_blocks
 
 
 def test_the_tutorial_runs_as_written_and_ends_with_the_cup_in_the_hand(tmp_path: Path):
     blocks = shell_blocks(TUTORIAL.read_text(encoding="utf-8"))
     assert len(blocks) >= 6 and blocks[0].startswith("colosseum new kitchen")
-    script = "set -euo pipefail\n" + "\n".join(blocks)
-    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}"
-           f"{os.environ.get('PATH', '')}"}
-    env.pop("DISPLAY", None)  # as in CI: no display, so every run is headless
-    result = subprocess.run(["bash", "-c", script], cwd=tmp_path, env=env,
-                            capture_output=True, text=True, timeout=240)
+    result = run_tutorial(tmp_path)  # as in CI: no display, so every run is headless
     log = result.stdout + result.stderr
     assert result.returncode == 0, log[-4000:]
 

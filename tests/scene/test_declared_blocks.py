@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+import engine.scene.schema as sc
 from engine.scene import blocks
 from engine.scene.blocks import BlockError, key, register, scene_block
 
@@ -110,4 +111,15 @@ def test_a_top_level_block_is_an_entity_named_by_its_id(tmp_path: Path):
         assert made and any(isinstance(c, Weather) and c.wind == (3.0, 0.0, 0.0) and c.rain
                             for c in made[0].components)
     finally:
-        blocks.BLOCKS.pop("Weather", None)
+        blocks.unregister("Weather")
+    assert "Weather" not in blocks.BLOCKS and "Weather" not in sc.SCHEMAS["Scene"]
+
+
+def test_a_content_folders_block_stays_out_of_the_engines_reference():
+    """Loaded in this process, the pool's block checks its scene but is not the engine's:
+    the scene-keys page and the plain block list leave it out."""
+    from engine.scene import keys, load_scene
+
+    load_scene(POOL)
+    assert "Buoyancy" in keys.blocks(content=True) and "Buoyancy" not in keys.blocks()
+    assert "Buoyancy" not in keys.reference_markdown()
