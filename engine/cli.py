@@ -251,6 +251,10 @@ def build_parser() -> argparse.ArgumentParser:
                        help="where the session log goes (default: sessions/ here)")
     score.add_argument("--json", action="store_true", help="the summary as JSON")
 
+    from engine.experiments.cli import add_parser as add_experiment_parser
+
+    add_experiment_parser(sub, add_run_flags, add_param_flag)
+
     keygen = sub.add_parser("keygen", help="make CURVE keys for serve --key and join --key")
     keygen.add_argument("folder", type=Path)
     keygen.add_argument("--user", action="append", default=[], help="a user (repeatable)")
@@ -484,6 +488,12 @@ def cmd_score(args: argparse.Namespace) -> int:
     return score(args)
 
 
+def cmd_experiment(args: argparse.Namespace) -> int:
+    from engine.experiments.cli import command
+
+    return command(args)
+
+
 def cmd_keygen(args: argparse.Namespace) -> int:
     from engine.cli_net import keygen
 
@@ -496,6 +506,7 @@ COMMANDS = {
     "join": cmd_join,
     "sweep": cmd_sweep,
     "score": cmd_score,
+    "experiment": cmd_experiment,
     "keygen": cmd_keygen,
     "check": cmd_check,
     "fmt": cmd_fmt,

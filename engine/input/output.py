@@ -35,7 +35,7 @@ class Publisher(Protocol):
 
     def send(self, values: dict[str, Sequence[float]]) -> None: ...
 
-    def marker(self, text: str) -> None: ...
+    def marker(self, text: str, timestamp: float | None = None) -> None: ...
 
     def close(self) -> None: ...
 
@@ -57,7 +57,7 @@ class OscOutput:
         for name, value in values.items():
             self._send(value_address(name), [float(v) for v in value])
 
-    def marker(self, text: str) -> None:
+    def marker(self, text: str, timestamp: float | None = None) -> None:
         self._send(MARKER_ADDRESS, text)
 
     def _send(self, address: str, payload: Any) -> None:
@@ -100,8 +100,12 @@ class LslOutput:
                 continue
             outlet.push_sample([float(v) for v in value])
 
-    def marker(self, text: str) -> None:
-        self._markers.push_sample([text])
+    def marker(self, text: str, timestamp: float | None = None) -> None:
+        """A marker stamped ``timestamp`` (LSL clock, s), else now."""
+        if timestamp is None:
+            self._markers.push_sample([text])
+        else:
+            self._markers.push_sample([text], timestamp)
 
     def close(self) -> None:
         self._outlets.clear()
