@@ -1,0 +1,172 @@
+"""Running sessions: Lua and Python trials, the files, a kill -9 and --resume, replay."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from conftest import experiment, rows, write_content
+
+LUA = """
+local started = {}
+function onTrialStart(trial)
+  started[trial.index] = time()
+  assert(experiment:condition("speed") == trial.condition.speed)
+end
+function onUpdate(dt)
+  local trial = experiment:trial()
+  if trial == nil then return end
+  local speed = tonumber(experiment:condition("speed"))
+  if speed > 0 and time() - started[trial.index] >= 0.1 / speed then
+    measure("ball_z", select(3, find("ball"):getPosition()))
+    trial:respond("key", "space")
+    trial:finish("reached")
+  end
+end
+function onTrialEnd(trial)
+  emit("marker", "ended " .. trial.index .. " " .. trial.outcome)
+end
+"""
+
+DESIGN = """
+  ID "lua"
+  Factor { ID "speed" Levels [0 1 2] }
+  Order "fixed"
+  Practice 1
+  Timeout 0.25
+  Track ["ball"]
+  TrackRate 0
+"""
+
+
+def test_lua_sets_ends_and_records_trials(in_tmp: Path):
+    content = write_content(in_tmp / "c", DESIGN, LUA)
+    assert experiment("run", str(content), "--participant", "3", "--fast", "--headless") == 0
+    folder = in_tmp / "sessions" / "lua" / "3"
+    table = rows(folder / "trials.csv")
+    assert [(r["block"], r["practice"], r["speed"]) for r in table] == [
+        ("0", "1", "0"), ("1", "0", "0"), ("1", "0", "1"), ("1", "0", "2")]
+    by_speed = {r["speed"]: r for r in table[1:]}
+    assert by_speed["0"]["outcome"] == "timeout"
+    assert abs(float(by_speed["0"]["end_s"]) - 0.25) < 0.011
+    for speed in ("1", "2"):
+        r = by_speed[speed]
+        assert r["outcome"] == "reached"
+        assert json.loads(r["responses"]) == {"key": "space"}
+        assert json.loads(r["measures"])["ball_z"] < 1.0  # it fell
+        assert abs(float(r["end_s"]) - float(r["start_s"]) - 0.1 / int(speed)) < 0.025
+        assert float(r["lsl_end"]) > float(r["lsl_start"]) > 0
+    # each trial's tracking: the ball every frame, falling
+    track = (folder / "tracking" / "trial-003.csv").read_text().splitlines()
+    assert track[0] == "t,frame,object,x,y,z,qw,qx,qy,qz"
+    zs = [float(line.split(",")[5]) for line in track[1:]]
+    assert len(zs) > 5 and zs == sorted(zs, reverse=True)
+    meta = json.loads((folder / "session.json").read_text())
+    assert meta["participant"] == 3 and meta["experiment"] == "lua"
+    assert len(meta["content_hash"]) == 64 and meta["engine_version"]
+    assert meta["design"]["factors"][0]["levels"] == ["0", "1", "2"]
+    # the same participant again is refused: --resume continues, nothing is overwritten
+    assert experiment("run", str(content), "--participant", "3", "--fast", "--headless") == 1
+    # replay trial 3 from its recording: the same outcome at the same time
+    assert experiment("replay", str(content), "--participant", "3", "--trial", "3",
+                      "--headless") == 0
+
+
+POLICY = '''
+from engine import Phase, system
+from engine.events import CustomEvent
+from engine.services import ExperimentControl
+
+seen = []
+
+
+def build(engine):
+    engine.events.subscribe(CustomEvent, lambda ev: seen.append(ev.name)
+                            if ev.name in ("trialStart", "trialEnd") else None)
+
+    @system(Phase.SCRIPT)
+    def policy(engine, dt):
+        control = engine.try_resource(ExperimentControl)
+        trial = control.trial_data()
+        if trial is not None and "trialStart" in seen and engine.time >= 0.05:
+            control.respond("level", control.condition("level"))
+            control.respond("events", len(seen))
+
+    engine.add_system(policy)
+'''
+
+
+def test_python_systems_respond_and_a_response_ends_the_trial(in_tmp: Path):
+    content = write_content(in_tmp / "py", """
+  ID "py"
+  Factor { ID "level" Levels ["low" "high"] }
+  Factor { ID "group" Levels ["a" "b"] Within 0 }
+  EndOn "response"
+  Timeout 1
+""", files={"systems/policy.py": POLICY})
+    assert experiment("run", str(content), "--participant", "2", "--fast", "--headless") == 0
+    table = rows(in_tmp / "sessions" / "py" / "2" / "trials.csv")
+    assert {r["group"] for r in table} == {"b"}
+    for r in table:
+        assert r["outcome"] == "response"
+        assert json.loads(r["responses"])["level"] == r["level"]
+        assert float(r["end_s"]) < 0.1
+
+
+KILL_DESIGN = """
+  ID "kill"
+  Factor { ID "size" Levels [1 2 3 4] }
+  Blocks 2
+  Order "random"
+  Seed 11
+  Timeout 0.3
+  Track ["ball"]
+"""
+
+
+def test_a_session_killed_in_trial_5_resumes_there(in_tmp: Path):
+    """Goal: SIGKILL in trial 5, --resume: trials 1-4 byte for byte, trial 5 again, none
+    twice."""
+    content = write_content(in_tmp / "k", KILL_DESIGN)
+    folder = in_tmp / "sessions" / "kill" / "1"
+    env = {**os.environ, "COLOSSEUM_DEBUG": "0"}
+    proc = subprocess.Popen([sys.executable, "-m", "engine.cli", "--log-level", "warning",
+                             "experiment", "run", str(content), "--participant", "1",
+                             "--headless"], cwd=in_tmp, env=env,
+                            stderr=subprocess.PIPE, stdout=subprocess.DEVNULL)
+    in_five = folder / "tracking" / "trial-005.bin"
+    deadline = time.monotonic() + 60
+    while not in_five.exists() and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.005)
+    assert in_five.exists(), proc.stderr.read().decode() if proc.poll() is not None else ""
+    time.sleep(0.05)  # into the trial's frames (it lasts 0.3 s in real time)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert proc.returncode == -signal.SIGKILL
+    before = (folder / "trials.csv").read_bytes()
+    assert len(rows(folder / "trials.csv")) == 4
+    tracks = {n: (folder / "tracking" / f"trial-{n:03d}.csv").read_bytes() for n in range(1, 5)}
+    inputs = {n: (folder / "input" / f"trial-{n:03d}.input").read_bytes() for n in range(1, 5)}
+    assert not (folder / "tracking" / "trial-005.csv").exists()
+
+    assert experiment("run", str(content), "--participant", "1", "--fast", "--headless",
+                      "--resume") == 0
+    after = (folder / "trials.csv").read_bytes()
+    assert after.startswith(before)
+    table = rows(folder / "trials.csv")
+    assert [int(r["trial"]) for r in table] == list(range(1, 9))
+    assert all(r["outcome"] == "timeout" for r in table)
+    for n in range(1, 5):
+        assert (folder / "tracking" / f"trial-{n:03d}.csv").read_bytes() == tracks[n]
+        assert (folder / "input" / f"trial-{n:03d}.input").read_bytes() == inputs[n]
+    assert not in_five.exists() and (folder / "tracking" / "trial-005.csv").exists()
+    # the resumed trials are the ones the plan had: each block holds every size once
+    for block in ("1", "2"):
+        assert sorted(r["size"] for r in table if r["block"] == block) == ["1", "2", "3", "4"]
+    meta = json.loads((folder / "session.json").read_text())
+    assert [run["resumed_at"] for run in meta["runs"]] == [None, 5]
