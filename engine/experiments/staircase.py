@@ -73,7 +73,7 @@ class Staircase:
             self._log_post = -0.5 * ((self._grid - s.start) / spread) ** 2
 
     def _clamp(self, x: float) -> float:
-        return min(max(float(x), self.spec.minimum), self.spec.maximum)
+        return round(min(max(float(x), self.spec.minimum), self.spec.maximum), 12)
 
     @property
     def step(self) -> float:
