@@ -75,6 +75,15 @@ def test_lua_sets_ends_and_records_trials(in_tmp: Path):
     # replay trial 3 from its recording: the same outcome at the same time
     assert experiment("replay", str(content), "--participant", "3", "--trial", "3",
                       "--headless") == 0
+    # the report: a summary per condition (practice left out) and the plots
+    assert experiment("report", str(in_tmp / "sessions" / "lua")) == 0
+    summary = rows(in_tmp / "sessions" / "lua" / "report" / "summary.csv")
+    assert [(r["speed"], r["trials"]) for r in summary] == [("0", "1"), ("1", "1"), ("2", "1")]
+    assert summary[0]["outcome_timeout"] == "1" and summary[2]["outcome_reached"] == "1"
+    assert abs(float(summary[2]["time_mean"]) - 0.05) < 0.025
+    assert float(summary[1]["measure_ball_z_mean"]) < 1.0
+    for plot in ("times.png", "trajectories.png", "heatmap.png"):
+        assert (in_tmp / "sessions" / "lua" / "report" / plot).stat().st_size > 1000
 
 
 POLICY = '''
