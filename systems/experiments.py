@@ -97,6 +97,7 @@ class TrialRunner(System):
         self._track_rows: np.ndarray | None = None
         self._track_version = -1
         self._track_entities: list[int] = []
+        self._camera: tuple[int, Camera] | None = None
 
     # -- the driver's side ---------------------------------------------------------------
     def begin(self, plan: TrialPlan, track_path: Path | None = None) -> None:
@@ -262,10 +263,13 @@ class TrialRunner(System):
                 labels.append(object_id)
             else:
                 log.warning("experiment: no object %r to track", object_id)
+        self._camera = None
         if self.design.track_camera:
-            camera = next((e for e, c in engine.world.get_component(Camera) if c.active), None)
-            if camera is not None and engine.world.has_component(camera, Transform):
-                entities.append(camera)
+            self._camera = next(((e, c) for e, c in engine.world.get_component(Camera)
+                                 if c.active), None)
+            if self._camera is None:
+                log.warning("experiment: TrackCamera, but the scene has no active camera")
+            else:
                 labels.append("head")
         self._track_entities = entities
         self._track = TrackLog(self.track_path, labels, self.design.track_rate)
@@ -282,7 +286,27 @@ class TrialRunner(System):
                             "pose")
         rows = self._track_rows
         assert rows is not None
-        self._track.sample(now, engine.frame, poses.table[rows, :7])
+        sample = poses.table[rows, :7]
+        if self._camera is not None:
+            sample = np.vstack([sample, self._head(engine)])
+        self._track.sample(now, engine.frame, sample)
+
+    def _head(self, engine: Engine) -> np.ndarray:
+        """The active camera's pose as drawn: at its offset from the object it follows."""
+        from engine.render.camera import camera_from_component
+
+        assert self._camera is not None
+        entity, camera = self._camera
+        poses = engine.world.poses
+        row = poses.row_of.get(entity)
+        pos = poses.position[row] if row is not None else np.zeros(3)
+        quat = poses.orientation[row] if row is not None else np.array([1.0, 0, 0, 0])
+        target = None
+        if camera.follow is not None and camera.follow in poses.row_of:
+            t_row = poses.row_of[camera.follow]
+            target = (poses.position[t_row], poses.orientation[t_row])
+        view = camera_from_component(camera, pos, quat, target)
+        return np.concatenate([view.position, view.orientation])[None, :]
 
     def shutdown(self, engine: Engine) -> None:
         self.abandon()

@@ -47,6 +47,8 @@ def add_parser(sub: Any, add_run_flags: Any, add_param_flag: Any) -> None:
                      help="continue the participant's session at its first unfinished trial")
     run.add_argument("--sessions", type=Path, default=Path("sessions"), metavar="DIR",
                      help="where sessions go (default: sessions/ here)")
+    run.add_argument("--stop-after", type=int, default=None, metavar="N",
+                     help="run at most N trials now (--resume goes on later)")
     add_run_flags(run, RUN_FLAGS)
     add_param_flag(run)
     report = subs.add_parser("report", help="per-condition summaries and plots of an "
@@ -196,6 +198,8 @@ def run(args: argparse.Namespace) -> int:
     count = 0
     try:
         for trial in trials(design, args.participant, files.rows, answers):
+            if args.stop_after is not None and count >= args.stop_after:
+                break
             if last_block is not None and trial.block != last_block and design.pause > 0 \
                     and not args.fast:
                 print(f"colosseum: a break of {design.pause:g} s before block {trial.block}",
