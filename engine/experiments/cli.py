@@ -206,8 +206,9 @@ def run(args: argparse.Namespace) -> int:
                       file=sys.stderr)
                 time.sleep(design.pause)
             last_block = trial.block
-            for stale in (files.trial_file("tracking", trial.index).with_suffix(".bin"),):
-                stale.unlink(missing_ok=True)
+            stale = files.trial_file("tracking", trial.index)
+            for suffix in (".bin", ".times.bin"):
+                stale.with_suffix(suffix).unlink(missing_ok=True)
             if engine is None or design.reset == "trial":
                 seed = trial_seed(args.seed, args.participant, trial.index)
                 built = _engine(args, design, trial, seed, files.folder / "logs")
