@@ -122,8 +122,8 @@ class TrialRunner(System):
 
     def trial_data(self) -> dict[str, Any] | None:
         plan = self.plan
-        if plan is None:
-            return None
+        if plan is None or not self._started:  # between trials: none (its condition is set
+            return None                         # when it starts)
         data: dict[str, Any] = {
             "index": plan.index, "block": plan.block, "blockTrial": plan.block_trial,
             "practice": plan.practice, "condition": dict(plan.condition),

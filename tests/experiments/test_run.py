@@ -179,3 +179,36 @@ def test_a_session_killed_in_trial_5_resumes_there(in_tmp: Path):
         assert sorted(r["size"] for r in table if r["block"] == block) == ["1", "2", "3", "4"]
     meta = json.loads((folder / "session.json").read_text())
     assert [run["resumed_at"] for run in meta["runs"]] == [None, 5]
+
+
+def test_one_world_through_the_session(in_tmp: Path):
+    """Reset "never": the trials follow each other in one world (its clock runs on) and
+    each trial's anomaly is switched in it."""
+    content = write_content(in_tmp / "n", """
+  ID "never"
+  Factor { ID "blur" Levels ["off" "0.5"] Anomaly "blur" Param "Acuity" }
+  Blocks 2
+  Order "fixed"
+  Reset "never"
+""", """
+local start = 0
+function onTrialStart(trial) start = time() end
+function onUpdate(dt)
+  local trial = experiment:trial()
+  if trial and time() - start >= 0.05 then
+    local blur = getAnomaly("blur")
+    trial:respond("on", blur.enabled)
+    trial:respond("acuity", blur.acuity)
+    trial:finish()
+  end
+end
+""", top="Blur { Enabled 0 Onset 0 }")
+    assert experiment("run", str(content), "--participant", "1", "--fast", "--headless") == 0
+    folder = in_tmp / "sessions" / "never" / "1"
+    table = rows(folder / "trials.csv")
+    starts = [float(r["start_s"]) for r in table]
+    assert starts == sorted(starts) and starts[-1] > 0.15  # one clock through the session
+    assert [json.loads(r["responses"])["on"] for r in table] == [False, True, False, True]
+    assert json.loads(table[1]["responses"])["acuity"] == 0.5
+    assert all(r["outcome"] == "done" for r in table)
+    assert [p.name for p in (folder / "input").iterdir()] == ["from-trial-001.input"]
