@@ -226,12 +226,18 @@ def build_parser() -> argparse.ArgumentParser:
                             "combination runs)")
     sweep.add_argument("--seeds", default="0", metavar="A..B",
                        help="seeds of each combination: A..B, N or N,M (default: 0)")
+    sweep.add_argument("--participants", metavar="A..B",
+                       help="run the content's Experiment for these participant numbers "
+                            "(a scripted participant; --param KEY=VALUE sets a scene "
+                            "variable in every run) and check the design: "
+                            "docs/experiments.md")
     sweep_limit = sweep.add_mutually_exclusive_group()
     sweep_limit.add_argument("--frames", type=_positive(int), help="frames each run takes")
     sweep_limit.add_argument("--seconds", type=_positive(float),
                              help="simulated seconds each run takes")
     sweep.add_argument("--out", type=Path, required=True, metavar="DIR",
-                       help="where results.csv and results.png go")
+                       help="where results.csv and results.png go (--participants: "
+                            "sessions/, design_check.json and report/)")
     sweep.add_argument("--scheduler", metavar="ADDRESS",
                        help="a running Dask scheduler (tcp://HOST:8786); default: a "
                             "LocalCluster on this machine")
