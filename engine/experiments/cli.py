@@ -129,6 +129,7 @@ def trials(design: Design, participant: int, rows: list[dict[str, str]],
     for i, spec in enumerate(design.staircases):
         mine = [r for r in rows if r.get(spec.id)]
         answers[spec.id] = [_truthy(_response(r, spec.response)) for r in mine]
+        index += len(mine)
         n = len(mine)
         while True:
             stair = replayed(spec, answers[spec.id])
@@ -136,11 +137,7 @@ def trials(design: Design, participant: int, rows: list[dict[str, str]],
                 break
             index += 1
             n += 1
-            trial = staircase_trial(design, participant, index, i, n, stair.intensity)
-            if trial.index > done:
-                yield trial
-            else:
-                index = max(index, trial.index)
+            yield staircase_trial(design, participant, index, i, n, stair.intensity)
 
 
 def _response(row: dict[str, str], name: str) -> Any:

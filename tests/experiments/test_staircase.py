@@ -96,3 +96,13 @@ def test_a_staircase_in_the_engine_with_a_lua_observer(in_tmp: Path):
     threshold = json.loads((folder / "session.json").read_text())["thresholds"]["loss"]
     assert threshold == replayed(spec, answers).estimate
     assert abs(threshold - target(3)) <= 0.1  # within the first step of the 79.4 % point
+
+    # stopped after 10 trials and resumed: the same staircase, trial for trial
+    again = in_tmp / "again"
+    for extra in (["--stop-after", "10"], ["--resume"]):
+        assert experiment("run", str(content), "--participant", "1", "--fast", "--headless",
+                          "--sessions", str(again), *extra) == 0
+    resumed = rows(again / "stair" / "1" / "trials.csv")
+    keep = ("trial", "block", "block_trial", "loss", "responses", "outcome")
+    assert [{k: r[k] for k in keep} for r in resumed] == [{k: r[k] for k in keep}
+                                                         for r in table]
