@@ -293,19 +293,11 @@ class TrialRunner(System):
 
     def _head(self, engine: Engine) -> np.ndarray:
         """The active camera's pose as drawn: at its offset from the object it follows."""
-        from engine.render.camera import camera_from_component
+        from engine.render.camera import camera_view_of
 
         assert self._camera is not None
         entity, camera = self._camera
-        poses = engine.world.poses
-        row = poses.row_of.get(entity)
-        pos = poses.position[row] if row is not None else np.zeros(3)
-        quat = poses.orientation[row] if row is not None else np.array([1.0, 0, 0, 0])
-        target = None
-        if camera.follow is not None and camera.follow in poses.row_of:
-            t_row = poses.row_of[camera.follow]
-            target = (poses.position[t_row], poses.orientation[t_row])
-        view = camera_from_component(camera, pos, quat, target)
+        view = camera_view_of(camera, entity, engine.world.poses)
         return np.concatenate([view.position, view.orientation])[None, :]
 
     def shutdown(self, engine: Engine) -> None:

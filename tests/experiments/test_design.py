@@ -9,7 +9,7 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
-from conftest import experiment, rows, write_content
+from experiment_helpers import experiment, rows, write_content
 
 from engine.experiments.design import Design, Factor, plan
 from engine.experiments.ordering import balanced_latin_square, latin_square

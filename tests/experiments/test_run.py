@@ -10,7 +10,7 @@ import sys
 import time
 from pathlib import Path
 
-from conftest import experiment, rows, write_content
+from experiment_helpers import experiment, rows, write_content
 
 LUA = """
 local started = {}

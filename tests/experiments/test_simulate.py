@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from conftest import rows, write_content
+from experiment_helpers import rows, write_content
 
 from engine.cli import main
 

@@ -7,7 +7,7 @@ import json
 import math
 from pathlib import Path
 
-from conftest import experiment, rows, write_content
+from experiment_helpers import experiment, rows, write_content
 
 from engine.experiments.staircase import Staircase, StaircaseSpec, replayed, simulated_observer
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from conftest import experiment, rows
+from experiment_helpers import experiment, rows
 
 from engine.experiments.design import plan
 from engine.experiments.ordering import balanced_latin_square

@@ -6,7 +6,7 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import experiment, rows, write_content
+from experiment_helpers import experiment, rows, write_content
 
 from engine.input import DeviceError
 from engine.input.lsl import load_pylsl
