@@ -15,6 +15,7 @@ import argparse
 import logging
 import sys
 import time
+import traceback
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -168,8 +169,9 @@ def _engine(args: argparse.Namespace, design: Design, trial: TrialPlan, seed: in
 
 
 def run(args: argparse.Namespace) -> int:
-    from engine.input import InputRecorder
-    from systems.experiments import ExperimentPlugin, TrialRunner
+    from engine.content import ContentError
+    from engine.input import ReplayError
+    from engine.system import SystemFailure
 
     found = _design(args)
     if isinstance(found, int):
@@ -188,6 +190,21 @@ def run(args: argparse.Namespace) -> int:
     if args.resume:
         print(f"colosseum: resuming participant {args.participant} at trial "
               f"{len(files.rows) + 1}", file=sys.stderr)
+    try:
+        return _run_trials(args, content, design, files)
+    except (ContentError, ReplayError, SystemFailure) as exc:
+        if isinstance(exc, SystemFailure):
+            trace = "".join(traceback.format_exception(exc.original))
+            return fail(f"system {exc.system_name!r} raised; the session stopped before its "
+                        f"trial ended (--resume runs it again).\n{trace}", 1)
+        return fail(f"{exc}; the session stopped (--resume runs the trial again)", 1)
+
+
+def _run_trials(args: argparse.Namespace, content: Any, design: Design,
+                files: SessionFiles) -> int:
+    from engine.input import InputRecorder
+    from systems.experiments import ExperimentPlugin, TrialRunner
+
     answers: dict[str, list[bool]] = {}
     runner = TrialRunner(design, args.participant)
     engine = scene = None
@@ -242,7 +259,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if engine is not None:
             engine.close()
-    summary = _summary(design, answers)
+    summary = _summary(design, files.rows)
     files.finish(summary)
     print(f"colosseum: participant {args.participant}: {count} trial(s) run, "
           f"{len(files.rows)} in {files.trials_path}", file=sys.stderr)
@@ -251,11 +268,13 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _summary(design: Design, answers: dict[str, list[bool]]) -> dict[str, Any]:
+def _summary(design: Design, rows: list[dict[str, str]]) -> dict[str, Any]:
+    """The session's staircase thresholds from its rows."""
     thresholds = {}
     for spec in design.staircases:
-        if answers.get(spec.id):
-            thresholds[spec.id] = replayed(spec, answers[spec.id]).estimate
+        answers = [_truthy(_response(r, spec.response)) for r in rows if r.get(spec.id)]
+        if answers:
+            thresholds[spec.id] = replayed(spec, answers).estimate
     return {"thresholds": thresholds, "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
 
 

@@ -114,6 +114,9 @@ class SessionFiles:
             raise SessionError(f"{self.folder}: participant {participant} has a session "
                                "already; --resume continues it (or choose another "
                                "participant number)")
+        if resume and not self.meta_path.exists() and self.trials_path.exists():
+            raise SessionError(f"{self.folder}: trials.csv without session.json; it cannot be "
+                               "resumed safely (move the folder away to start again)")
         if resume and self.meta_path.exists():
             meta = json.loads(self.meta_path.read_text(encoding="utf-8"))
             if meta.get("design") != json.loads(json.dumps(design_json(design))):
@@ -137,14 +140,18 @@ class SessionFiles:
                     "group": design.group(participant) if design.factors else {},
                     "square_row": design.row(participant), "runs": [run]}
             self.changed_content = False
-            with self.trials_path.open("w", newline="", encoding="utf-8") as f:
-                f.write(self._line(self.header))
-                f.flush()
-                os.fsync(f.fileno())
         (self.folder / "tracking").mkdir(exist_ok=True)
         (self.folder / "input").mkdir(exist_ok=True)
         self.meta = meta
-        write_json_atomic(self.meta_path, meta)
+        write_json_atomic(self.meta_path, meta)  # first: a trials.csv always has its design
+        if not self.trials_path.exists():
+            self._write_header()
+
+    def _write_header(self) -> None:
+        with self.trials_path.open("w", newline="", encoding="utf-8") as f:
+            f.write(self._line(self.header))
+            f.flush()
+            os.fsync(f.fileno())
 
     @staticmethod
     def _line(values: list[Any]) -> str:
@@ -154,8 +161,8 @@ class SessionFiles:
 
     def _recover(self) -> list[dict[str, str]]:
         """The rows written whole; a torn last line (a kill mid-write) is cut off."""
-        if not self.trials_path.exists():
-            raise SessionError(f"{self.folder}: no trials.csv to resume")
+        if not self.trials_path.exists():  # killed before its header was written
+            self._write_header()
         data = self.trials_path.read_bytes()
         keep = data[:data.rfind(b"\n") + 1]
         if keep != data:
@@ -163,9 +170,12 @@ class SessionFiles:
                 f.truncate(len(keep))
                 f.flush()
                 os.fsync(f.fileno())
+        if not keep:  # killed while the header was written
+            self._write_header()
+            return []
         rows = read_rows(self.trials_path)
-        first = keep.split(b"\n", 1)[0].decode("utf-8")
-        if first.split(",") != self.header:
+        first = next(csv.reader([keep.split(b"\n", 1)[0].decode("utf-8")]))
+        if first != self.header:
             raise SessionError(f"{self.trials_path}: its columns are not this design's")
         return rows
 

@@ -212,3 +212,33 @@ end
     assert json.loads(table[1]["responses"])["acuity"] == 0.5
     assert all(r["outcome"] == "done" for r in table)
     assert [p.name for p in (folder / "input").iterdir()] == ["from-trial-001.input"]
+
+
+CRASH = """
+from engine import Phase, system
+from engine.services import ExperimentControl
+
+
+def build(engine):
+    @system(Phase.SCRIPT)
+    def crash(engine, dt):
+        trial = engine.resource(ExperimentControl).trial_data()
+        if trial is not None and trial["index"] == 2:
+            raise RuntimeError("the policy broke")
+
+    engine.add_system(crash)
+"""
+
+
+def test_a_system_that_raises_stops_the_session_with_its_rows_kept(in_tmp: Path, capsys):
+    content = write_content(in_tmp / "x", """
+  ID "crash"
+  Factor { ID "a" Levels [1 2 3] }
+  Order "fixed"
+  Timeout 0.05
+""", files={"systems/crash.py": CRASH})
+    assert experiment("run", str(content), "--participant", "1", "--fast", "--headless") == 1
+    err = capsys.readouterr().err
+    assert "crash' raised" in err and "the policy broke" in err
+    table = rows(in_tmp / "sessions" / "crash" / "1" / "trials.csv")
+    assert [r["trial"] for r in table] == ["1"]
