@@ -486,6 +486,11 @@ def cmd_join(args: argparse.Namespace) -> int:
 def cmd_sweep(args: argparse.Namespace) -> int:
     from engine.sweep import sweep
 
+    if args.participants:  # an experiment's simulated participants
+        from engine.experiments.simulate import simulate
+
+        return simulate(args)
+
     return sweep(args)
 
 

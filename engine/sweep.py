@@ -111,11 +111,6 @@ def sweep(args: argparse.Namespace) -> int:
     from engine.content import ContentError, resolve
     from engine.scene.params import ParamError, with_params
 
-    if getattr(args, "participants", None):  # an experiment's simulated participants
-        from engine.experiments.simulate import simulate
-
-        return simulate(args)
-
     try:
         content = resolve(args.path)
         params = parse_params(args.param)

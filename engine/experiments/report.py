@@ -143,8 +143,10 @@ def plots(out: Path, factors: list[str], trials: list[dict[str, Any]]) -> list[P
         for ax, hax, name in zip(axes[0], haxes[0], names, strict=True):
             seen = set()
             for label, samples in paths[name]:
-                ax.plot(samples[:, 2], samples[:, 3], color=colours.get(label, "grey"),
-                        alpha=0.6, label=None if label in seen else label)
+                colour = colours.get(label, "grey")
+                ax.plot(samples[:, 2], samples[:, 3], color=colour, alpha=0.6,
+                        label=None if label in seen else label)
+                ax.plot(samples[:1, 2], samples[:1, 3], "o", color=colour, ms=3)  # start
                 seen.add(label)
             ax.set_title(f"{name} from above")
             ax.set_xlabel("x (m)")
