@@ -296,6 +296,8 @@ def build_parser() -> argparse.ArgumentParser:
     keys = sub.add_parser("keys", help="the scene keys: every block, or one block's keys with "
                           "type, default, meaning and an example")
     keys.add_argument("block", nargs="?", help="a block (Object, Camera, World, ...)")
+    keys.add_argument("--content", type=Path, metavar="DIR",
+                      help="also the blocks DIR's systems/*.py declare")
 
     new = sub.add_parser("new", help="scaffold a content folder that runs")
     new.add_argument("name")
@@ -427,8 +429,14 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 
 def cmd_keys(args: argparse.Namespace) -> int:
+    from engine.content import ContentError, import_systems
     from engine.scene import keys
 
+    if args.content is not None:
+        try:
+            import_systems(args.content)
+        except ContentError as exc:
+            return fail(str(exc), 1)
     if args.block is None:
         for block in keys.blocks():
             print(f"{block:<15} {keys.about(block)}")

@@ -128,6 +128,8 @@ STATS_SCHEMA: dict[str, Any] = {
                                    "(shouldRender false), ended empty"),
             "frames_late": _key("integer", "", "frames handed over after their predicted "
                                 "display time"),
+            "frames_with_hud": _key("integer", "", "frames submitted with the HUD as a "
+                                    "head-locked layer (--hud)"),
             "session_state_max": _key("string", "", "the furthest session state reached "
                                       "(IDLE, READY, SYNCHRONIZED, VISIBLE, FOCUSED)"),
             "session_end": {"type": ["string", "null"], "x-unit": "",

@@ -5,9 +5,9 @@ one headless run (serial, unpaced, no sound): :func:`run_once`, the same code pa
 ``colosseum run --param KEY=v --seed S --fast``, so a run of a sweep gives the numbers
 that run gives alone. The runs are Dask tasks: on a LocalCluster of ``--workers``
 processes here, or on the cluster whose scheduler ``--scheduler`` names (any machine that
-sees the content folder at the same path: dask-jobqueue's SLURMCluster, for one; see the
-README). A run that raises, or whose worker dies, is tried once more and then reported
-in the table with its error; the other runs are kept.
+sees the content folder at the same path: dask-jobqueue's SLURMCluster, for one; see
+docs/howto/sweeps.md). A run that raises, or whose worker dies, is tried once more and then
+reported in the table with its error; the other runs are kept.
 
 The results are ``DIR/results.csv`` (one row per run: parameters, seed, statistics,
 measures) and ``DIR/results.png`` (each measure against the first parameter, the mean

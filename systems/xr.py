@@ -59,6 +59,8 @@ class XrFrameController(RealTimeController):
         self.planner = StepPlanner(pacing.dt, pacing.max_substeps)
         self._paced_by_runtime = False
         self._since: float | None = None
+        #: The engine's physics (set by the plugin): paused with the headset taken off.
+        self.physics: Any = None
 
     def begin(self) -> Tick:
         period = self.display.wait_frame()
@@ -71,7 +73,10 @@ class XrFrameController(RealTimeController):
             self._waiting(now)
             return Tick(0.0, 0)
         self._paced_by_runtime = True
-        if self.display.lifecycle.paused:
+        paused = self.display.lifecycle.paused
+        if self.physics is not None:
+            self.physics.paused = paused  # threaded: the physics thread waits too
+        if paused:
             return Tick(0.0, 0)
         if self.threaded:
             return Tick(period, 1)
@@ -274,6 +279,24 @@ class HapticSystem(System):
         return out
 
 
+class _PhysicsLink(System):
+    """Hands the engine's physics (attached by the physics plugin, after this one) to the
+    frame controller, which pauses it with the headset taken off."""
+
+    phase = Phase.INPUT
+    reads = ()
+    writes = ()
+
+    def __init__(self, controller: XrFrameController) -> None:
+        self.controller = controller
+
+    def setup(self, engine: Engine) -> None:
+        self.controller.physics = engine.physics
+
+    def run(self, engine: Engine, dt: float) -> None:
+        """Nothing each frame."""
+
+
 class XrPlugin:
     """The headset display (see the module's docstring)."""
 
@@ -284,8 +307,9 @@ class XrPlugin:
 
     def build(self, engine: Engine) -> None:
         display = self.display
-        engine.controller = XrFrameController(engine.config.pacing(), display,
-                                              engine.config.mode == "threaded")
+        engine.controller = controller = XrFrameController(
+            engine.config.pacing(), display, engine.config.mode == "threaded")
+        engine.add_system(_PhysicsLink(controller))
         devices = engine.try_resource(PluginDevices)
         if devices is None:
             devices = PluginDevices()

@@ -14,6 +14,7 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -243,11 +244,24 @@ def measure(what: str, backend: str | None = None, quick: bool = False,
 
 def report(what: str, rows: list[dict[str, Any]], backend: str | None = None,
            quick: bool = False) -> dict[str, Any]:
-    """The run as plain data: the rows, our figures beside their references, the machine."""
+    """The run as plain data: the rows, our figures beside their references, when (UTC) and
+    on what machine (a figure made from it can say both)."""
     return {"benchmark": what, "backend": backend, "quick": quick, "rows": rows,
             "figures": [{**asdict(f), "ratio": f.ratio} for f in FIGURES[what](rows)],
+            "date": datetime.now(UTC).isoformat(timespec="seconds"),
             "machine": {"python": sys.version.split()[0], "platform": platform.platform(),
-                        "cpus": os.cpu_count()}}
+                        "cpus": os.cpu_count(), "processor": _processor()}}
+
+
+def _processor() -> str:
+    """The CPU's model name (Linux), else what platform knows."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.partition(":")[2].strip()
+    except OSError:
+        pass
+    return platform.processor()
 
 
 def plot(data: dict[str, Any], path: Path) -> Path:
@@ -277,7 +291,8 @@ def plot(data: dict[str, Any], path: Path) -> Path:
     values = [v for v in ours + refs if v > 0]
     if values and max(values) > 100 * min(values):  # figures a hundredfold apart
         ax.set_yscale("symlog", linthresh=min(values))
-    ax.set_title(f"colosseum bench {data['benchmark']} ({data['machine']['platform']})",
+    when = f", {data['date'][:10]}" if data.get("date") else ""  # JSON from before: no date
+    ax.set_title(f"colosseum bench {data['benchmark']} ({data['machine']['platform']}{when})",
                  fontsize=9)
     ax.legend(fontsize=8, title=None if len({f["reference_is"] for f in figures}) < 2 else
               "references: " + "; ".join(sorted({f["reference_is"] for f in figures})),

@@ -173,38 +173,20 @@ void main() {
 #: the left eye, the odd one the right; each lands in its half of the side-by-side target,
 #: clipped at the middle (``gl_ClipDistance``), so a stereo frame costs the CPU about what
 #: a mono one does.
-LIT_VERTEX_STEREO = "#version 330" + MESH_INPUTS + """in vec4 i_flags;
-uniform mat4 u_light_vp;
+LIT_VERTEX_STEREO = LIT_VERTEX.replace("uniform mat4 u_light_vp;\n", """uniform mat4 u_light_vp;
 uniform mat4 u_eye_view[2];
 uniform mat4 u_eye_proj[2];
 uniform vec3 u_eye_pos[2];
-out vec3 v_world;
-out vec3 v_normal;
-out vec2 v_uv;
-out vec4 v_color;
-out vec4 v_light_clip;
-out float v_shadowed;
 flat out vec3 v_eye_pos;
 out float gl_ClipDistance[1];
-void main() {
-    int eye = gl_InstanceID & 1;
-    vec4 world = i_model * vec4(in_position, 1.0);
-    mat3 m = mat3(i_model);
-    vec3 s2 = vec3(dot(m[0], m[0]), dot(m[1], m[1]), dot(m[2], m[2]));
-    v_world = world.xyz;
-    v_normal = m * (in_normal / s2);
-    v_uv = in_uv;
-    v_color = in_color * i_color;
-    v_light_clip = u_light_vp * world;
-    v_shadowed = i_flags.y;
+""").replace("    gl_Position = u_proj * (u_view * world);\n", """    int eye = gl_InstanceID & 1;
     v_eye_pos = u_eye_pos[eye];
     vec4 clip = u_eye_proj[eye] * (u_eye_view[eye] * world);
     float side = eye == 0 ? -1.0 : 1.0;
     gl_ClipDistance[0] = clip.w + side * clip.x;  // inside this eye's half
     clip.x = 0.5 * clip.x + 0.5 * side * clip.w;
     gl_Position = clip;
-}
-"""
+""")
 
 #: The lit fragment stage is specialised per light set (``LIGHT_KINDS`` and ``SHADOW_LIGHT``
 #: are compile-time constants) so loops unroll: llvmpipe shades far faster without dynamic

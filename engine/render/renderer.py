@@ -720,60 +720,35 @@ class Renderer:
             runs.append(_Run(batch, lod, order[start:stop]))
         return runs
 
-    def _eye_runs(self, eye: Eye, slot: int, world: np.ndarray, radii: np.ndarray,
+    def _eye_runs(self, eyes: list[Eye], slot: int, world: np.ndarray, radii: np.ndarray,
                   inst: np.ndarray) -> list[_Run]:
-        """One eye's draws: the parts in its view frustum (all of them with
-        :attr:`culling` off), each at its level of detail, near to far within a batch so
-        the depth test rejects hidden fragments before they are shaded. An eye that sees
-        what it saw last frame (the same view of parts that did not move) draws the same
-        runs from the instance buffers as they are."""
+        """The draws of one eye, or of both eyes in one pass: the parts in a view frustum
+        (all of them with :attr:`culling` off), each at its level of detail seen from the
+        eyes' middle, near to far within a batch so the depth test rejects hidden
+        fragments before they are shaded. Eyes that see what they saw last frame (the same
+        view of parts that did not move) draw the same runs from the instance buffers as
+        they are."""
         assert self._posed is not None
-        key = (self._posed.version, eye.view.tobytes(), eye.proj.tobytes(), eye.viewport,
-               self.culling, self.lod)
+        key = (self._posed.version, *(e.view.tobytes() + e.proj.tobytes() for e in eyes),
+               eyes[0].viewport, self.culling, self.lod)
         kept = self._eye_cache.get(slot)
         if kept is not None and kept[0] == key:
             self.stats.culled += kept[1]
             return kept[2]
         centres = world[:, :3, 3]
-        visible = (in_frustum(frustum_planes(eye.proj @ eye.view), centres, radii)
-                   if self.culling else np.ones(len(centres), bool))
-        distance = np.linalg.norm(centres - eye.position, axis=1)
-        levels = np.minimum(lod_levels(radii, distance, pixels_per_unit(eye.proj,
-                                                                         eye.viewport[3])),
+        visible = np.zeros(len(centres), bool) if self.culling else np.ones(len(centres), bool)
+        for eye in eyes if self.culling else ():
+            visible |= in_frustum(frustum_planes(eye.proj @ eye.view), centres, radii)
+        middle = sum(e.position for e in eyes) / len(eyes)
+        distance = np.linalg.norm(centres - middle, axis=1)
+        first = eyes[0]
+        levels = np.minimum(lod_levels(radii, distance, pixels_per_unit(first.proj,
+                                                                         first.viewport[3])),
                             self._part_coarsest) if self.lod else np.zeros(len(radii), np.int8)
         culled = int(len(visible) - visible.sum())
         self.stats.culled += culled
         runs = self._upload(visible, distance, levels, inst, slot)
         self._eye_cache[slot] = (key, culled, runs)
-        return runs
-
-    def _stereo_runs(self, eyes: list[Eye], world: np.ndarray, radii: np.ndarray,
-                     inst: np.ndarray) -> list[_Run]:
-        """Both eyes' draws in one pass: the parts either eye sees, at the level of detail
-        seen from between the eyes, near to far from there (kept while nothing changed)."""
-        assert self._posed is not None
-        left, right = eyes
-        key = (self._posed.version, left.view.tobytes(), right.view.tobytes(),
-               left.proj.tobytes(), right.proj.tobytes(), left.viewport, self.culling,
-               self.lod)
-        kept = self._eye_cache.get(_STEREO_SLOT)
-        if kept is not None and kept[0] == key:
-            self.stats.culled += kept[1]
-            return kept[2]
-        centres = world[:, :3, 3]
-        if self.culling:
-            visible = in_frustum(frustum_planes(left.proj @ left.view), centres, radii) | \
-                in_frustum(frustum_planes(right.proj @ right.view), centres, radii)
-        else:
-            visible = np.ones(len(centres), bool)
-        distance = np.linalg.norm(centres - (left.position + right.position) / 2.0, axis=1)
-        levels = np.minimum(lod_levels(radii, distance, pixels_per_unit(left.proj,
-                                                                         left.viewport[3])),
-                            self._part_coarsest) if self.lod else np.zeros(len(radii), np.int8)
-        culled = int(len(visible) - visible.sum())
-        self.stats.culled += culled
-        runs = self._upload(visible, distance, levels, inst, _STEREO_SLOT)
-        self._eye_cache[_STEREO_SLOT] = (key, culled, runs)
         return runs
 
     def _single_pass(self, eyes: list[Eye]) -> bool:
@@ -931,9 +906,9 @@ class Renderer:
         eyes = self._seen_eyes(screen_eyes)
         single = self._single_pass(eyes)
         if single:
-            runs = [self._stereo_runs(eyes, world, radii, inst)]
+            runs = [self._eye_runs(eyes, _STEREO_SLOT, world, radii, inst)]
         else:
-            runs = [self._eye_runs(eye, slot, world, radii, inst)
+            runs = [self._eye_runs([eye], slot, world, radii, inst)
                     for slot, eye in enumerate(eyes)]
         mark = self._stage("upload_ms", start)
         lights = self.lights or [DEFAULT_LIGHT]

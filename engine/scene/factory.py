@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+import engine.scene.blocks as blocks
 import engine.scene.random_state as random_state
 import engine.scene.schema as sc
 from components import (
@@ -287,6 +288,8 @@ class SceneIds:
 
 _DEFAULTS = {name: {k: f.default for k, f in fields.items()}
              for name, fields in sc.SCHEMAS.items()}
+blocks.on_register(lambda name: _DEFAULTS.__setitem__(
+    name, {k: f.default for k, f in sc.SCHEMAS[name].items()}))
 
 #: The time steps a file may ask for (s): past the upper one a step jumps whole seconds
 #: (``TimeStep 10`` ran 3,000 simulated seconds in 300 frames); above ``STEP_WARNING``
@@ -591,7 +594,37 @@ class _Builder:
             comps.append(UserOwned(r("User")))
         if r.has("Controller"):
             comps.append(_controller(_Reader(r.value("Controller").data, "Controller")))
+        comps += self.declared_blocks(r, "Object")
         return EntitySpec(oid, comps, blk.loc)
+
+    def declared_blocks(self, r: _Reader | _Index, place: str) -> list[Any]:
+        """The components of the blocks features declared for ``place`` (engine.scene.
+        blocks), a content folder's own among them."""
+        made = (self.declared(block, blk) for block in blocks.BLOCKS.values()
+                if place in block.inside for blk in r.blocks(block.name))
+        return [component for component in made if component is not None]
+
+    def declared(self, block: blocks.BlockType, blk: Block) -> Any:
+        """One declared block's component; None (told at the line) when a value is out of
+        its key's range: the block is left out."""
+        r = _Reader(blk, block.name)
+        values = {k: r(k) for k in block.keys}
+        problems = block.problems(values)
+        for k, message in problems:
+            self.report.error(r.value(k).loc, f"{block.name}: {message}")
+        return None if problems else block.build(values)
+
+    def declared_entities(self, root: _Index, spec: SceneSpec) -> None:
+        """Top-level declared blocks: an entity each, named by its ID."""
+        for block in blocks.BLOCKS.values():
+            if "Scene" not in block.inside:
+                continue
+            for i, blk in enumerate(root.blocks(block.name)):
+                component = self.declared(block, blk)
+                bid = _Reader(blk, block.name)("ID") or f"{block.name.lower()}{i}"
+                parts = [Name(bid)] + ([component] if component is not None else [])
+                spec.entities.append(EntitySpec(bid, parts, blk.loc,
+                                                skipped=component is None))
 
     def visual_geometry(self, vis: _Reader, size: Any
                         ) -> tuple[list[Shape], str | None, tuple[float, float, float]]:
@@ -1361,6 +1394,7 @@ class _Builder:
             sid = f"script{i}"
             script = Script(file=e.value.data, saved=self.script_states.pop(sid, None))
             spec.entities.append(EntitySpec(sid, [Name(sid), script], e.loc))
+        self.declared_entities(root, spec)
 
     def unclaimed_script_states(self) -> None:
         """Warn of each ScriptState no script took (after every script's owner is built)."""

@@ -401,7 +401,7 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                           "set it (0: the runtime's)"),
         "RenderScale": _f(FLOAT_T, 1.0, "openxr: the share of the runtime's recommended "
                           "resolution per eye each axis is drawn at (0.25 to 2)"),
-        "Depth": _f(BOOL_T, True, "openxr: hand the runtime the depth of each eye (for its "
+        "Depth": _f(BOOL_T, 1, "openxr: hand the runtime the depth of each eye (for its "
                     "reprojection), where it takes it"),
         "RecenterKey": _f(STRING_T, "f8", "openxr: the key that moves the player over the "
                           "camera, facing its way (Lua: recenter())"),

@@ -60,11 +60,12 @@ Scene and engine::
                                      spelling ``requrestPlugin`` works too)
     time() -> simulated seconds     log(...), warn(...), print(...)
     measure(name, value)            a final value of the run (--stats measures, sweeps)
-    experiment:condition(factor) -> level (text) of the trial running, nil outside one
-    experiment:trial() -> trial     (index, block, blockTrial, practice, condition,
-                                    participant, ...); trial:respond(name, value) records a
-                                    response, trial:finish(outcome) ends it; callbacks
-                                    onTrialStart(trial), onTrialEnd(trial) (docs/experiments.md)
+    experiment:condition(factor) -> the level (text) of the trial running, nil outside one
+    experiment:trial() -> the trial running or nil: index, block, blockTrial, practice,
+                                    condition, participant, staircase, intensity;
+                                    trial:respond(name, value) records a response,
+                                    trial:finish(outcome) ends it (``experiment``: colosseum
+                                    experiment run, docs/experiments.md)
     after(sec, fn) / every(sec, fn) -> timer; cancel(timer)
     on(name, fn(data, name)); emit(name, data)   custom events (also seen by Python);
                                     data is plain data: objects in it arrive as entity ids
@@ -89,7 +90,8 @@ clip)``), ``onReload()``
 (after the file changed and was re-run in the script's environment: write ``count =
 count or 0`` to keep state across reloads), ``onResume()`` (instead of ``onStart``
 when a saved state runs: the script's variables, timers and handlers are back, see
-:mod:`engine.scripting.persist`).
+:mod:`engine.scripting.persist`), ``onTrialStart(trial)`` and ``onTrialEnd(trial)`` (a
+trial of ``colosseum experiment run`` begins, its condition set, and ends).
 
 Input state, any time (nil before a device has said anything)::
 

@@ -388,6 +388,7 @@ class XrDisplay:
             self.counts.ended(drawn, self.session.now(), int(self.frame.predicted_display_time))
             ended = True
         if drawn and ended:
+            self.counts.hud += int(target.hud_shown)
             self.counts.render.add(time.perf_counter() - self._render_start)
             self._mirror(target)
         self.frame = None
@@ -453,7 +454,7 @@ class XrDisplay:
                 "depth_submitted": self.session.depth_format is not None,
                 "refresh_rate": self.session.refresh_rate,
                 "frames_submitted": c.submitted, "frames_skipped": c.skipped,
-                "frames_late": c.late,
+                "frames_late": c.late, "frames_with_hud": c.hud,
                 "session_state_max": self.lifecycle.furthest.name,
                 "session_end": self.lifecycle.ended,
                 "render_ms": c.render.mean() * 1e3, "render_ms_p99": c.render.percentile(99) * 1e3,

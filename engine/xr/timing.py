@@ -71,6 +71,7 @@ class FrameCounts:
     submitted: int = 0
     skipped: int = 0  # frames the runtime said not to draw (shouldRender false)
     late: int = 0  # submitted after their predicted display time
+    hud: int = 0  # frames submitted with the HUD's head-locked layer
     render: CostLog = field(default_factory=CostLog)  # seconds per stereo frame drawn
     wait: CostLog = field(default_factory=CostLog)  # seconds blocked in xrWaitFrame
 

@@ -59,7 +59,7 @@ def test_hands_in_the_headset_reaches_focused_submits_and_ends_cleanly(tmp_path:
     stats = tmp_path / "stats.json"
     result = subprocess.run(
         [sys.executable, "-m", "engine.cli", "run", ROOT / "content" / "hands", "--xr",
-         "--seconds", "10", "--headless", "--stats", stats],
+         "--seconds", "10", "--headless", "--hud", "--stats", stats],
         capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert result.returncode == 0, result.stderr[-3000:]
     import jsonschema
@@ -73,6 +73,7 @@ def test_hands_in_the_headset_reaches_focused_submits_and_ends_cleanly(tmp_path:
     # every frame the runtime asked for was ended: drawn, or skipped where it said so
     assert xr["frames_submitted"] + xr["frames_skipped"] >= frames - 2
     assert xr["frames_skipped"] <= 3
+    assert xr["frames_with_hud"] >= xr["frames_submitted"] - 2  # the HUD's own layer
     assert "Traceback" not in result.stderr
 
 
