@@ -944,7 +944,7 @@ class ScriptAPI:
             if method == "finish":
                 control.finish("done" if not args or args[0] is None else str(args[0]))
                 return None
-        except (KeyError, ValueError) as exc:
+        except (KeyError, ValueError, TypeError) as exc:  # TypeError: a function as a value
             raise ScriptAPIError(f"experiment: {exc.args[0] if exc.args else exc}") from None
         data = control.trial_data()
         return None if data is None else self.trial_table(data)
