@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 from experiment_helpers import experiment, rows, write_content
 
 LUA = """
@@ -75,6 +76,8 @@ def test_lua_sets_ends_and_records_trials(in_tmp: Path):
     # replay trial 3 from its recording: the same outcome at the same time
     assert experiment("replay", str(content), "--participant", "3", "--trial", "3",
                       "--headless") == 0
+    assert (folder / "replay" / "trial-003.csv").read_bytes() == \
+        (folder / "tracking" / "trial-003.csv").read_bytes()  # the same poses, frame for frame
     # the report: a summary per condition (practice left out) and the plots
     assert experiment("report", str(in_tmp / "sessions" / "lua")) == 0
     summary = rows(in_tmp / "sessions" / "lua" / "report" / "summary.csv")
@@ -242,3 +245,25 @@ def test_a_system_that_raises_stops_the_session_with_its_rows_kept(in_tmp: Path,
     assert "crash' raised" in err and "the policy broke" in err
     table = rows(in_tmp / "sessions" / "crash" / "1" / "trials.csv")
     assert [r["trial"] for r in table] == ["1"]
+
+
+def test_a_torn_last_line_is_cut_and_a_changed_design_refused(tmp_path: Path):
+    from engine.experiments.design import Design, Factor, plan
+    from engine.experiments.session import SessionError, SessionFiles
+
+    content = write_content(tmp_path / "c", '  Factor { ID "a" Levels [1 2 3] }')
+    design = Design("torn", (Factor("a", ("1", "2", "3")),))
+    files = SessionFiles(tmp_path / "s", design, 1, content)
+    for trial in plan(design, 1)[:2]:
+        files.write_row(trial, 0.0, 1.0, 0.0, None, None, "done", {"k": "v, w"}, {})
+    whole = files.trials_path.read_bytes()
+    with files.trials_path.open("ab") as f:
+        f.write(b"1,1,3,3,0,3,0.000000,0.5")  # a kill in the middle of a write
+    resumed = SessionFiles(tmp_path / "s", design, 1, content, resume=True)
+    assert files.trials_path.read_bytes() == whole and len(resumed.rows) == 2
+    assert resumed.rows[1]["responses"] == '{"k": "v, w"}'
+    with pytest.raises(SessionError, match="already"):
+        SessionFiles(tmp_path / "s", design, 1, content)
+    with pytest.raises(SessionError, match="changed"):
+        SessionFiles(tmp_path / "s", Design("torn", (Factor("a", ("1", "2")),)), 1, content,
+                     resume=True)
