@@ -272,7 +272,9 @@ class TrialRunner(System):
             else:
                 labels.append("head")
         self._track_entities = entities
-        self._track = TrackLog(self.track_path, labels, self.design.track_rate)
+        self._track_version = -1
+        if labels:
+            self._track = TrackLog(self.track_path, labels, self.design.track_rate)
 
     def _sample(self, engine: Engine, now: float) -> None:
         assert self._track is not None
