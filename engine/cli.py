@@ -226,12 +226,18 @@ def build_parser() -> argparse.ArgumentParser:
                             "combination runs)")
     sweep.add_argument("--seeds", default="0", metavar="A..B",
                        help="seeds of each combination: A..B, N or N,M (default: 0)")
+    sweep.add_argument("--participants", metavar="A..B",
+                       help="run the content's Experiment for these participant numbers "
+                            "(a scripted participant; --param KEY=VALUE sets a scene "
+                            "variable in every run) and check the design: "
+                            "docs/experiments.md")
     sweep_limit = sweep.add_mutually_exclusive_group()
     sweep_limit.add_argument("--frames", type=_positive(int), help="frames each run takes")
     sweep_limit.add_argument("--seconds", type=_positive(float),
                              help="simulated seconds each run takes")
     sweep.add_argument("--out", type=Path, required=True, metavar="DIR",
-                       help="where results.csv and results.png go")
+                       help="where results.csv and results.png go (--participants: "
+                            "sessions/, design_check.json and report/)")
     sweep.add_argument("--scheduler", metavar="ADDRESS",
                        help="a running Dask scheduler (tcp://HOST:8786); default: a "
                             "LocalCluster on this machine")
@@ -250,6 +256,10 @@ def build_parser() -> argparse.ArgumentParser:
     score.add_argument("--sessions", type=Path, metavar="DIR",
                        help="where the session log goes (default: sessions/ here)")
     score.add_argument("--json", action="store_true", help="the summary as JSON")
+
+    from engine.experiments.cli import add_parser as add_experiment_parser
+
+    add_experiment_parser(sub, add_run_flags, add_param_flag)
 
     keygen = sub.add_parser("keygen", help="make CURVE keys for serve --key and join --key")
     keygen.add_argument("folder", type=Path)
@@ -295,7 +305,8 @@ def build_parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="benchmarks, printed as tables")
     bench.add_argument("what", nargs="?", default="scheduler",
                        help="scheduler, physics, scene, scripting, sound, render, input, "
-                            "contacts, avatars, import, hands, net, sweep, accuracy, stroke")
+                            "contacts, avatars, import, hands, net, sweep, accuracy, stroke, "
+                            "experiment")
     bench.add_argument("--backend", default=None, help="physics benchmark backend (ode, pymunk)")
     bench.add_argument("--quick", action="store_true", help="fewer sizes and steps")
     bench.add_argument("--stereo", action="store_true",
@@ -483,6 +494,11 @@ def cmd_join(args: argparse.Namespace) -> int:
 def cmd_sweep(args: argparse.Namespace) -> int:
     from engine.sweep import sweep
 
+    if args.participants:  # an experiment's simulated participants
+        from engine.experiments.simulate import simulate
+
+        return simulate(args)
+
     return sweep(args)
 
 
@@ -490,6 +506,12 @@ def cmd_score(args: argparse.Namespace) -> int:
     from engine.runner import score
 
     return score(args)
+
+
+def cmd_experiment(args: argparse.Namespace) -> int:
+    from engine.experiments.cli import command
+
+    return command(args)
 
 
 def cmd_keygen(args: argparse.Namespace) -> int:
@@ -504,6 +526,7 @@ COMMANDS = {
     "join": cmd_join,
     "sweep": cmd_sweep,
     "score": cmd_score,
+    "experiment": cmd_experiment,
     "keygen": cmd_keygen,
     "check": cmd_check,
     "fmt": cmd_fmt,

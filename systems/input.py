@@ -191,14 +191,19 @@ class Outputs:
     def __init__(self) -> None:
         self.values: dict[str, tuple[float, ...]] = {}
         self.markers: list[str] = []
+        #: Each marker's LSL time when its sender gave one (None: when it is sent).
+        self.stamps: list[float | None] = []
         self.sent: frozenset[str] = frozenset()
 
     def set(self, name: str, value: float | Sequence[float]) -> None:
         self.values[name] = (float(value),) if isinstance(value, (int, float)) else \
             tuple(float(v) for v in value)
 
-    def marker(self, text: str) -> None:
+    def marker(self, text: str, timestamp: float | None = None) -> None:
+        """A marker; ``timestamp`` (LSL clock, s) stamps it on LSL streams, so it carries
+        the moment its sender recorded (a trial's row) rather than the moment it is sent."""
         self.markers.append(str(text))
+        self.stamps.append(timestamp)
 
 
 class OutputSystem(System):
@@ -232,6 +237,8 @@ class OutputSystem(System):
 
     def run(self, engine: Engine, dt: float) -> None:
         markers, self.outputs.markers = self.outputs.markers, []
+        stamps, self.outputs.stamps = self.outputs.stamps, []
+        stamps += [None] * (len(markers) - len(stamps))  # markers appended directly
         for publisher, names, send_markers in self._publishers:
             values = {}
             for name in names:
@@ -240,8 +247,8 @@ class OutputSystem(System):
                     values[name] = value
             publisher.send(values)
             if send_markers:
-                for text in markers:
-                    publisher.marker(text)
+                for text, stamp in zip(markers, stamps, strict=False):
+                    publisher.marker(text, stamp)
 
     def _reader(self, engine: Engine, name: str) -> Callable[[], tuple[float, ...] | None]:
         reader = self._readers.get(name)

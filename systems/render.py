@@ -28,7 +28,7 @@ from engine.events import CustomEvent, KeyEvent
 from engine.input import InputState
 from engine.input.desktop import WindowDevice
 from engine.realtime import CostLog
-from engine.render.camera import CameraView, camera_from_component
+from engine.render.camera import CameraView, camera_view_of
 from engine.render.context import create_target
 from engine.render.hud import hud_line
 from engine.render.interpolate import PoseInterpolator
@@ -402,14 +402,7 @@ class RenderSystem(System):
         for entity, (camera,) in world.get_components(Camera):
             if not camera.active:
                 continue
-            row = poses.row_of.get(entity)
-            pos = poses.position[row] if row is not None else np.zeros(3)
-            quat = poses.orientation[row] if row is not None else np.array([1.0, 0, 0, 0])
-            target = None
-            if camera.follow is not None and camera.follow in poses.row_of:
-                t_row = poses.row_of[camera.follow]
-                target = (poses.position[t_row], poses.orientation[t_row])
-            return self._stereo(camera_from_component(camera, pos, quat, target))
+            return self._stereo(camera_view_of(camera, entity, poses))
         return self._stereo(CameraView())
 
     @staticmethod

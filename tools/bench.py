@@ -38,6 +38,7 @@ BENCHMARKS: dict[str, str] = {
     "sweep": "tools.bench_sweep:run_bench",
     "accuracy": "tools.bench_accuracy:run_bench",
     "stroke": "tools.bench_stroke:run_bench",
+    "experiment": "tools.bench_experiment:run_bench",
 }
 
 
@@ -189,6 +190,10 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
                      "runs/min", "loop runs/min", "runs/min", "the same runs in a plain loop"),
     "accuracy": _accuracy_figures,
     "stroke": _stroke_figures,
+    "experiment": lambda rows: [Figure("tracking 2,000 objects every frame", r["frame ms"],
+                                       r["without ms"], "ms/frame",
+                                       "the same frames without a trial")
+                                for r in rows if r["case"] == "summary"],
 }
 
 

@@ -47,6 +47,8 @@ LAYERS = (
     Layer(3, "systems", ("systems",)),
     Layer(4, "CLI and tools", ("engine.cli", "engine.cli_net", "engine.runner",
                                "engine.sweep", "engine.scene_loading", "engine.scaffold",
+                               "engine.experiments.cli", "engine.experiments.report",
+                               "engine.experiments.simulate",
                                "tools")),
 )
 

@@ -114,3 +114,19 @@ def camera_from_component(camera: object, position: np.ndarray, orientation: np.
     return CameraView(pos, quat, fov=float(cam.fov), near=float(cam.near),  # type: ignore[attr-defined]
                       far=float(cam.far),  # type: ignore[attr-defined]
                       eye_separation=float(cam.eye_separation))  # type: ignore[attr-defined]
+
+
+def camera_view_of(camera: object, entity: int, poses: object) -> CameraView:
+    """The view of the ``components.Camera`` on ``entity`` as drawn, from the pose table
+    ``poses`` (at its offset from the object it follows)."""
+    row_of = poses.row_of  # type: ignore[attr-defined]
+    row = row_of.get(entity)
+    pos = poses.position[row] if row is not None else np.zeros(3)  # type: ignore[attr-defined]
+    quat = poses.orientation[row] if row is not None else \
+        np.array([1.0, 0, 0, 0])  # type: ignore[attr-defined]
+    target = None
+    follow = camera.follow  # type: ignore[attr-defined]
+    if follow is not None and follow in row_of:
+        t_row = row_of[follow]
+        target = (poses.position[t_row], poses.orientation[t_row])  # type: ignore[attr-defined]
+    return camera_from_component(camera, pos, quat, target)

@@ -68,6 +68,8 @@ from components.wheelchair import NavigationMode
 from engine.anomalies import AnomalySpec
 from engine.assets import AssetError, Assets, nodes_name
 from engine.assets.geometry import convex_hull
+from engine.experiments.design import Design
+from engine.experiments.scene import read_experiment
 from engine.measures import MeasureSpec
 from engine.memory import paused_gc
 from engine.physics.backend import (
@@ -212,6 +214,8 @@ class SceneSpec:
     measures: list[MeasureSpec] = field(default_factory=list)
     #: The visual anomalies declared (``DoubleVision``, ``Hemianopia``, ...).
     anomalies: list[AnomalySpec] = field(default_factory=list)
+    #: The ``Experiment`` block: the study's design (engine.experiments), if any.
+    experiment: Design | None = None
     #: The ``PostPass`` blocks, in order.
     post_passes: list[PostPassSpec] = field(default_factory=list)
 
@@ -472,6 +476,7 @@ class _Builder:
         self.scene_entities(root, spec)
         spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
         spec.anomalies = read_anomalies(root.blocks, self.report, self.problems)
+        spec.experiment = read_experiment(db.root, self.report, spec.anomalies, self.folder)
         self.check_hand_inputs(spec.input)
         for i, blk in enumerate(root.blocks("Avatar")):
             spec.entities.append(self.avatar(blk, i))

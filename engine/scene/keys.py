@@ -95,6 +95,12 @@ _EXAMPLES: dict[tuple[str, str], str] = {
     ("Session", "Chair"): '"wheelchair"', ("Session", "Ground"): '["floor" "ramp"]',
     ("Wheelchair", "Lag"): "[0.0012 -0.0004]", ("Wheelchair", "Measured"): "[2.1 2.05]",
     ("Wheelchair", "Pending"): "[0.6 0.6]", ("Wheelchair", "Still"): "0.3",
+    ("Experiment", "ID"): '"reach"', ("Experiment", "Track"): '["wheelchair" "hand_r"]',
+    ("ExperimentFactor", "ID"): '"blur"', ("ExperimentFactor", "Levels"): "[0 0.3 0.6]",
+    ("ExperimentFactor", "Variable"): '"blur_level"', ("ExperimentFactor", "Anomaly"): '"blur"',
+    ("ExperimentFactor", "Param"): '"Acuity"', ("Staircase", "ID"): '"contrast"',
+    ("Staircase", "Step"): "[0.1 0.05 0.02]", ("Staircase", "Anomaly"): '"contrast_loss"',
+    ("Staircase", "Param"): '"Loss"', ("Staircase", "Variable"): '"loss"',
 }
 
 

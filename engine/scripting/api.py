@@ -60,6 +60,12 @@ Scene and engine::
                                      spelling ``requrestPlugin`` works too)
     time() -> simulated seconds     log(...), warn(...), print(...)
     measure(name, value)            a final value of the run (--stats measures, sweeps)
+    experiment:condition(factor) -> the level (text) of the trial running, nil outside one
+    experiment:trial() -> the trial running or nil: index, block, blockTrial, practice,
+                                    condition, participant, staircase, intensity;
+                                    trial:respond(name, value) records a response,
+                                    trial:finish(outcome) ends it (``experiment``: colosseum
+                                    experiment run, docs/experiments.md)
     after(sec, fn) / every(sec, fn) -> timer; cancel(timer)
     on(name, fn(data, name)); emit(name, data)   custom events (also seen by Python);
                                     data is plain data: objects in it arrive as entity ids
@@ -84,7 +90,8 @@ clip)``), ``onReload()``
 (after the file changed and was re-run in the script's environment: write ``count =
 count or 0`` to keep state across reloads), ``onResume()`` (instead of ``onStart``
 when a saved state runs: the script's variables, timers and handlers are back, see
-:mod:`engine.scripting.persist`).
+:mod:`engine.scripting.persist`), ``onTrialStart(trial)`` and ``onTrialEnd(trial)`` (a
+trial of ``colosseum experiment run`` begins, its condition set, and ends).
 
 Input state, any time (nil before a device has said anything)::
 
@@ -124,6 +131,7 @@ from engine.scripting.runtime import ScriptRuntime, to_python
 from engine.services import (
     AVATAR_METHODS,
     AvatarControl,
+    ExperimentControl,
     HandControl,
     HeadsetControl,
     ShaderControl,
@@ -339,6 +347,11 @@ C.requrestPlugin = C.requestPlugin
 function C.time() return P.time() end
 function C.measure(name, value) P.measure(name, value) end
 
+local E = {}  -- the experiment running (colosseum experiment run), as experiment:...
+function E:condition(name) return P.experiment("condition", name) end
+function E:trial() return P.experiment("trial") end
+C.experiment = E
+
 local I = {}
 function I.tracker(name) return P.tracker(name) end
 function I.wheel(name) return P.wheel(name) end
@@ -479,7 +492,7 @@ class ScriptAPI:
             "button": self.button, "axis": self.axis, "key": self.key,
             "avatar": self.avatar, "set_anomaly": self.set_anomaly,
             "get_anomaly": self.get_anomaly, "enable_post": self.enable_post,
-            "set_post_uniform": self.set_post_uniform,
+            "set_post_uniform": self.set_post_uniform, "experiment": self.experiment,
             "avatar_methods": runtime.lua.table_from(AVATAR_METHODS),
         })
         return runtime.lua.execute(_LUA_API, runtime.kernel, P, name="=colosseum")
@@ -911,6 +924,40 @@ class ScriptAPI:
         out.update({state.kind.param(key).lua: value for key, value in state.values.items()})
         assert self.runtime is not None
         return self.runtime.to_lua(out)
+
+    def experiment(self, method: str, *args: Any) -> Any:
+        """``experiment:condition(name)``, ``experiment:trial()`` and a trial's
+        ``respond``/``finish`` (the experiment plugin's :class:`ExperimentControl`)."""
+        control = self.engine.try_resource(ExperimentControl)
+        if control is None:
+            if method in ("condition", "trial"):
+                return None
+            raise ScriptAPIError(f"trial:{method}: no experiment is running (colosseum "
+                                 "experiment run)")
+        try:
+            if method == "condition":
+                return control.condition(str(args[0]) if args else "")
+            if method == "respond":
+                name, value = (list(args) + [None, None])[:2]
+                control.respond(str(name), to_python(value))
+                return None
+            if method == "finish":
+                control.finish("done" if not args or args[0] is None else str(args[0]))
+                return None
+        except (KeyError, ValueError, TypeError) as exc:  # TypeError: a function as a value
+            raise ScriptAPIError(f"experiment: {exc.args[0] if exc.args else exc}") from None
+        data = control.trial_data()
+        return None if data is None else self.trial_table(data)
+
+    def trial_table(self, data: dict[str, Any]) -> Any:
+        """A Lua table of the trial's data with its methods ``respond`` and ``finish``."""
+        assert self.runtime is not None
+        table = self.runtime.to_lua(data)
+        table["respond"] = lambda _t, name=None, value=None: self.experiment(
+            "respond", name, value)
+        table["finish"] = lambda _t, outcome=None: self.experiment("finish", outcome)
+        table["condition"] = lambda _t, name=None: self.experiment("condition", name)
+        return table
 
     def enable_post(self, name: Any, on: bool) -> None:
         """``enablePost(id, on)``: switch a scene's PostPass."""
