@@ -24,7 +24,7 @@ def pkg_config(flag: str) -> list[str]:
     except (OSError, subprocess.CalledProcessError) as exc:
         raise SystemExit(
             "colosseum: cannot find libode with pkg-config; install it with "
-            "`sudo apt-get install libode-dev pkg-config` (or run tools/setup.sh)"
+            "`sudo apt-get install libode-dev pkg-config` (or run tools/dev setup)"
         ) from exc
     return shlex.split(out.stdout)
 

@@ -11,7 +11,7 @@ Orientations are unit quaternions ``(w, x, y, z)``. The vocabularies
 from components.avatar import Avatar, ClipSpec, Hold
 from components.camera import Camera
 from components.controller import Controller
-from components.display import Display
+from components.display import Display, Headset
 from components.hand import Graspable, Hand, HandState
 from components.joint import Joint
 from components.light import Light
@@ -35,6 +35,7 @@ __all__ = [
     "Graspable",
     "Hand",
     "HandState",
+    "Headset",
     "Hold",
     "Joint",
     "Light",

@@ -3,8 +3,8 @@
 :data:`ANOMALIES` is the one definition of every anomaly: its name (Lua, events, markers),
 its scene block, and its severity parameters with unit, range, default and the value that
 has no effect. The scene schema and docs/KEYS.md, the Lua API (``setAnomaly``), the checks
-of scene and Lua values and the README's table are all made from it, so they cannot
-disagree.
+of scene and Lua values and the manual's table (docs/howto/anomalies.md) are all made from
+it, so they cannot disagree.
 
 :class:`Anomalies` is a run's anomalies (a resource the anomalies plugin owns): each one
 declared (by a scene block, or by its first ``setAnomaly``) is switched on and off, and its
@@ -394,7 +394,8 @@ class AnomalySpec:
 
 
 def table_markdown() -> str:
-    """The anomalies and their parameters as a Markdown table (README, docs/KEYS.md)."""
+    """The anomalies and their parameters as a Markdown table (docs/howto/anomalies.md and
+    docs/KEYS.md)."""
     rows = ["| anomaly (Lua name) | scene block | parameter | range | default | meaning |",
             "|---|---|---|---|---|---|"]
     for kind in ANOMALIES.values():

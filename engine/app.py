@@ -26,7 +26,7 @@ from engine.events import Despawned, EventBus, Spawned
 from engine.memory import paused_gc
 from engine.physics.backend import BackendName, WorldSettings
 from engine.physics.driver import DetachedPhysics, PhysicsPort
-from engine.realtime import CostLog, Pacing, RealTimeController, Tick, advance
+from engine.realtime import TIME_STEP, CostLog, Pacing, RealTimeController, Tick, advance
 from engine.system import (
     ANY_COMPONENT,
     Phase,
@@ -45,6 +45,9 @@ log = logging.getLogger("colosseum")
 
 R = TypeVar("R")
 PHASES = tuple(Phase)
+#: A frame that takes no physics step (a headset's frame between two steps, see
+#: engine.xr.timing) reads input and draws; the simulation's phases wait for a step.
+DISPLAY_PHASES = (Phase.INPUT, Phase.RENDER)
 
 
 @dataclass(slots=True)
@@ -54,7 +57,7 @@ class EngineConfig:
     content_dir: Path | None = None
     mode: str = "serial"  # "serial" | "threaded"
     backend: str = BackendName.ODE
-    dt: float = 1.0 / 60.0
+    dt: float = TIME_STEP
     substeps: int = 1
     seed: int = 0
     fast: bool = False
@@ -243,7 +246,7 @@ class Engine:
         self.physics_seconds = None
         self.physics.frame = self.frame
         audited = self.config.debug
-        for phase in PHASES:
+        for phase in PHASES if tick.substeps > 0 else DISPLAY_PHASES:
             for system in self.systems[phase]:
                 try:
                     if audited:
@@ -254,8 +257,10 @@ class Engine:
                     raise SystemFailure(system.name, exc) from exc
             self.flush()
         self.frame += 1
-        self.time = (self.physics.time if self.config.mode == "threaded"
-                     else advance(self.time, tick.dt))
+        if self.config.mode == "threaded":
+            self.time = self.physics.time
+        elif tick.substeps > 0:
+            self.time = advance(self.time, tick.dt)
         self.events.end_frame()
         self.frame_costs.add(self.controller.clock() - t0)
         self.controller.end(tick, self.physics_seconds)

@@ -104,6 +104,16 @@ def _run_flag_table() -> dict[str, tuple[tuple[str, ...], dict[str, Any]]]:
                                            "with the camera's EyeSeparation or 0.064 m; "
                                            "mono: one view even for a stereo camera "
                                            "(default: as the camera says)"}),
+        "xr": (("--xr",), {"action": argparse.BooleanOptionalAction, "default": None,
+                           "help": "draw into a headset through the active OpenXR runtime "
+                                   "(--no-xr: not even when the scene's Display asks for it; "
+                                   "see docs/headset.md)"}),
+        "xr_mirror": (("--xr-mirror",), {"choices": ["none", "left", "both"], "default": None,
+                                         "help": "with --xr: a window showing the left eye "
+                                                 "or both (default: as the scene says; none)"}),
+        "xr_fallback": (("--xr-fallback",), {"action": "store_true",
+                                             "help": "with --xr: when no headset can be used, "
+                                                     "run in the window instead of ending"}),
         "save_state": (("--save-state",), {"type": Path,
                                            "help": "write the final state as a scene file"}),
         "stats": (("--stats",), {"type": Path, "help": "write run statistics as JSON"}),
@@ -134,7 +144,7 @@ RUN_FLAGS = tuple(_run_flag_table())
 #: What makes sense on a server (it draws nothing) and on a node (it steps no physics).
 SERVE_FLAGS = tuple(f for f in RUN_FLAGS if f not in (
     "screenshot", "record_frames", "record_every", "interpolate", "hud", "size",
-    "render_scale", "stereo"))
+    "render_scale", "stereo", "xr", "xr_mirror", "xr_fallback"))
 JOIN_FLAGS = ("seconds", "frames", "headless", "sound", "screenshot", "record_frames",
               "record_every", "hud", "size", "render_scale", "stereo", "save_state", "stats",
               "record", "input", "progress")
@@ -217,12 +227,18 @@ def build_parser() -> argparse.ArgumentParser:
                             "combination runs)")
     sweep.add_argument("--seeds", default="0", metavar="A..B",
                        help="seeds of each combination: A..B, N or N,M (default: 0)")
+    sweep.add_argument("--participants", metavar="A..B",
+                       help="run the content's Experiment for these participant numbers "
+                            "(a scripted participant; --param KEY=VALUE sets a scene "
+                            "variable in every run) and check the design: "
+                            "docs/experiments.md")
     sweep_limit = sweep.add_mutually_exclusive_group()
     sweep_limit.add_argument("--frames", type=_positive(int), help="frames each run takes")
     sweep_limit.add_argument("--seconds", type=_positive(float),
                              help="simulated seconds each run takes")
     sweep.add_argument("--out", type=Path, required=True, metavar="DIR",
-                       help="where results.csv and results.png go")
+                       help="where results.csv and results.png go (--participants: "
+                            "sessions/, design_check.json and report/)")
     sweep.add_argument("--scheduler", metavar="ADDRESS",
                        help="a running Dask scheduler (tcp://HOST:8786); default: a "
                             "LocalCluster on this machine")
@@ -241,6 +257,10 @@ def build_parser() -> argparse.ArgumentParser:
     score.add_argument("--sessions", type=Path, metavar="DIR",
                        help="where the session log goes (default: sessions/ here)")
     score.add_argument("--json", action="store_true", help="the summary as JSON")
+
+    from engine.experiments.cli import add_parser as add_experiment_parser
+
+    add_experiment_parser(sub, add_run_flags, add_param_flag)
 
     keygen = sub.add_parser("keygen", help="make CURVE keys for serve --key and join --key")
     keygen.add_argument("folder", type=Path)
@@ -277,6 +297,8 @@ def build_parser() -> argparse.ArgumentParser:
     keys = sub.add_parser("keys", help="the scene keys: every block, or one block's keys with "
                           "type, default, meaning and an example")
     keys.add_argument("block", nargs="?", help="a block (Object, Camera, World, ...)")
+    keys.add_argument("--content", type=Path, metavar="DIR",
+                      help="also the blocks DIR's systems/*.py declare")
 
     new = sub.add_parser("new", help="scaffold a content folder that runs")
     new.add_argument("name")
@@ -284,9 +306,13 @@ def build_parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="benchmarks, printed as tables")
     bench.add_argument("what", nargs="?", default="scheduler",
                        help="scheduler, physics, scene, scripting, sound, render, input, "
-                            "contacts, avatars, import, hands, net, sweep, accuracy, stroke")
+                            "contacts, avatars, import, hands, net, sweep, accuracy, stroke, "
+                            "experiment")
     bench.add_argument("--backend", default=None, help="physics benchmark backend (ode, pymunk)")
     bench.add_argument("--quick", action="store_true", help="fewer sizes and steps")
+    bench.add_argument("--stereo", action="store_true",
+                       help="render: a headset's stereo frame (both eyes in one pass, and one "
+                            "pass an eye) beside a mono frame at one eye's size (bench stereo)")
     bench.add_argument("--content", type=Path, metavar="DIR",
                        help="the content folder a benchmark runs (stroke; default: "
                             "content/stroke, else a stand-in of its size)")
@@ -406,10 +432,16 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 
 def cmd_keys(args: argparse.Namespace) -> int:
+    from engine.content import ContentError, import_systems
     from engine.scene import keys
 
+    if args.content is not None:
+        try:
+            import_systems(args.content)
+        except ContentError as exc:
+            return fail(str(exc), 1)
     if args.block is None:
-        for block in keys.blocks():
+        for block in keys.blocks(content=args.content is not None):
             print(f"{block:<15} {keys.about(block)}")
         print("\ncolosseum keys BLOCK lists a block's keys; docs/KEYS.md has them all")
         return 0
@@ -435,6 +467,10 @@ def cmd_new(args: argparse.Namespace) -> int:
 def cmd_bench(args: argparse.Namespace) -> int:
     from tools.bench import BENCHMARKS, run_benchmark
 
+    if args.stereo:
+        if args.what not in ("render", "stereo"):
+            return fail("--stereo goes with bench render")
+        args.what = "stereo"
     if args.what not in BENCHMARKS:
         return fail(f"unknown benchmark {args.what!r}; choose from {', '.join(BENCHMARKS)}")
     for out in (None if args.json in (None, "-") else Path(args.json), args.plot):
@@ -461,6 +497,11 @@ def cmd_join(args: argparse.Namespace) -> int:
 def cmd_sweep(args: argparse.Namespace) -> int:
     from engine.sweep import sweep
 
+    if args.participants:  # an experiment's simulated participants
+        from engine.experiments.simulate import simulate
+
+        return simulate(args)
+
     return sweep(args)
 
 
@@ -468,6 +509,12 @@ def cmd_score(args: argparse.Namespace) -> int:
     from engine.runner import score
 
     return score(args)
+
+
+def cmd_experiment(args: argparse.Namespace) -> int:
+    from engine.experiments.cli import command
+
+    return command(args)
 
 
 def cmd_keygen(args: argparse.Namespace) -> int:
@@ -482,6 +529,7 @@ COMMANDS = {
     "join": cmd_join,
     "sweep": cmd_sweep,
     "score": cmd_score,
+    "experiment": cmd_experiment,
     "keygen": cmd_keygen,
     "check": cmd_check,
     "fmt": cmd_fmt,

@@ -22,6 +22,8 @@ if TYPE_CHECKING:
     from engine.app import Engine
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
+#: The module names a content folder's systems/*.py are imported under start so.
+CONTENT_MODULES = "colosseum_content_"
 DEMO = REPO_ROOT / "content" / "demo"
 SCENE_NAME = "main.scene"
 
@@ -57,7 +59,7 @@ def import_systems(folder: Path) -> list[tuple[Path, ModuleType]]:
     the place to register asset loaders); returns (path, module) in name order."""
     imported = []
     for path in sorted((folder / "systems").glob("*.py")):
-        module_name = f"colosseum_content_{abs(hash(str(folder)))}_{path.stem}"
+        module_name = f"{CONTENT_MODULES}{abs(hash(str(folder)))}_{path.stem}"
         module = sys.modules.get(module_name)
         if module is None:
             try:

@@ -71,8 +71,23 @@ def prepare_run(args: argparse.Namespace) -> Any:
                                "backend": args.backend}},
     )
     scene.configure(config, backend=args.backend, dt=args.dt)
+    headset(args, scene, config)
     _tell_shaders(scene, config)
     return scene, config
+
+
+def headset(args: argparse.Namespace, scene: Any, config: Any) -> None:
+    """Whether the run draws into a headset (``--xr``, or the scene's ``Display { Kind
+    "openxr" }`` unless ``--no-xr``), and the headset flags, into ``config``."""
+    from components import Headset
+
+    declared = any(isinstance(c, Headset) for e in scene.spec.entities for c in e.components)
+    flag = getattr(args, "xr", None)
+    wanted = flag if flag is not None else declared
+    config.options.update({"xr": bool(wanted), "xr_mirror": getattr(args, "xr_mirror", None),
+                           "xr_fallback": bool(getattr(args, "xr_fallback", False))})
+    if wanted:
+        config.render = True
 
 
 def _tell_shaders(scene: Any, config: Any) -> None:
@@ -136,7 +151,7 @@ def replay_flags(args: argparse.Namespace) -> str | None:
 def step_problem(args: argparse.Namespace) -> str | None:
     """What is wrong with ``--dt`` (the same range as a scene's TimeStep); a long one is
     warned about, as in a scene."""
-    from engine.scene.factory import STEP_RANGE, STEP_WARNING
+    from engine.realtime import STEP_RANGE, STEP_WARNING
 
     dt = getattr(args, "dt", None)
     if dt is not None and dt > STEP_RANGE[1]:
@@ -212,12 +227,23 @@ def execute_run(engine: Any, args: argparse.Namespace, scene: Any,
     log.info("ran %d frames, %.2f simulated s in %.2f wall s (real-time factor %.2f)",
              stats["frames"], stats["sim_seconds"], stats["wall_seconds"],
              stats["real_time_factor"])
+    if _headset_failed(engine):
+        return 1
     errors = getattr(scene, "errors", 0)
     if errors:  # the run went on without the broken parts; a script or CI must still know
         print(f"colosseum: the content had {errors} error(s) (told above; colosseum check "
               f"lists them): exit code 1", file=sys.stderr)
         return 1
     return 0
+
+
+def _headset_failed(engine: Any) -> bool:
+    """Whether the run was to draw into a headset and could not (told already), or lost it."""
+    from engine.xr.display import XrDisplay
+
+    plugin = engine.plugins.get("xr")
+    display = getattr(plugin, "display", None) or engine.try_resource(XrDisplay)
+    return bool(display is not None and display.failed and not display.unavailable)
 
 
 def _short_status(engine: Any) -> str:

@@ -26,6 +26,7 @@ Object {{
   VisualAttributes {{ Geometry {{ Primitive "sphere" }} Color [0.9 0.3 0.2] }}
   PhysicalAttributes {{ Mass 1 Material "rubber" Geometry {{ Primitive "sphere" }} }}
   Script "scripts/ball.lua"
+  Report {{ Every 1 }}   // declared in systems/height.py
 }}
 
 Object {{
@@ -53,21 +54,33 @@ end
 """
 
 SYSTEM_PY = '''\
-"""A custom system: prints the ball's height once a second.
+"""A custom system with its own scene block: ``Report { Every 1 }`` on an object prints
+its height every second.
 
-Each module in systems/ defines build(engine), which adds systems or plugins.
+Each module in systems/ defines build(engine), which adds systems or plugins. A block is
+declared beside its component (engine.scene.blocks): the scene checks its keys (try
+``Report { Evry 1 }`` and ``colosseum check``), ``colosseum keys Report --content .``
+documents it, and a saved state writes it back.
 """
+
+from dataclasses import dataclass
 
 from components import Name, Transform
 from engine import Phase, system
+from engine.scene.blocks import key, scene_block
 
 
-@system(Phase.POST_PHYSICS, reads=(Name, Transform))
+@scene_block("Report", doc="print this object's height now and then")
+@dataclass
+class Report:
+    every: float = key(1.0, "s, how often", low=0.01)
+
+
+@system(Phase.POST_PHYSICS, reads=(Report, Name, Transform))
 def report_height(engine, dt):
-    if engine.frame % 60 == 0:
-        for _, (name, transform) in engine.world.get_components(Name, Transform):
-            if name.id == "ball":
-                print(f"t={engine.time:5.2f}s ball z={transform.position[2]:.2f} m")
+    for _, (report, name, transform) in engine.world.get_components(Report, Name, Transform):
+        if engine.time % report.every < dt:
+            print(f"t={engine.time:5.2f}s {name.id} z={transform.position[2]:.2f} m")
 
 
 def build(engine):
@@ -79,8 +92,25 @@ class ScaffoldError(Exception):
     pass
 
 
+def write_clink(path: Path, rate: int = 22050) -> Path:
+    """A short clink (a decaying 1.8 kHz tone, 0.2 s) as 16-bit mono WAV: a sound to play
+    from a script, made here so a new folder has one (the tutorial's cup plays it)."""
+    import math
+    import struct
+    import wave
+
+    samples = (int(12000 * math.exp(-25.0 * i / rate) * math.sin(2 * math.pi * 1800 * i / rate))
+               for i in range(rate // 5))
+    with wave.open(str(path), "wb") as out:
+        out.setnchannels(1)
+        out.setsampwidth(2)
+        out.setframerate(rate)
+        out.writeframes(b"".join(struct.pack("<h", s) for s in samples))
+    return path
+
+
 def scaffold(folder: Path) -> Path:
-    """Create ``folder`` with a working scene, a script and a custom system.
+    """Create ``folder`` with a working scene, a script, a sound and a custom system.
 
     Never touches an existing folder, so nothing an author wrote is overwritten.
     """
@@ -91,4 +121,5 @@ def scaffold(folder: Path) -> Path:
     (folder / "main.scene").write_text(MAIN_SCENE.format(name=folder.name))
     (folder / "scripts" / "ball.lua").write_text(BALL_LUA)
     (folder / "systems" / "height.py").write_text(SYSTEM_PY)
+    write_clink(folder / "sounds" / "clink.wav")
     return folder

@@ -111,6 +111,36 @@ STATS_SCHEMA: dict[str, Any] = {
                        "description": "shader and asset problems told while drawing",
                        "x-unit": ""},
         }),
+        "xr": _section("the headset display (present when --xr or a scene's Display { Kind "
+                       "\"openxr\" } opened it)", {
+            "runtime": _key("string", "", "the OpenXR runtime's name and version"),
+            "system": _key("string", "", "the headset, as the runtime names it"),
+            "reference_space": _key("string", "", "stage, local_floor or local"),
+            "eye_size": {"type": "array", "items": {"type": "integer"},
+                         "description": "pixels drawn per eye (width, height)", "x-unit": "px"},
+            "color_format": {"type": ["string", "null"], "x-unit": "",
+                             "description": "the eyes' swapchain format"},
+            "depth_submitted": _key("boolean", "", "each eye's depth handed to the runtime"),
+            "refresh_rate": {"type": ["number", "null"], "x-unit": "Hz",
+                             "description": "the display's rate, where the runtime says (Hz)"},
+            "frames_submitted": _key("integer", "", "frames drawn and handed to the runtime"),
+            "frames_skipped": _key("integer", "", "frames the runtime said not to draw "
+                                   "(shouldRender false), ended empty"),
+            "frames_late": _key("integer", "", "frames handed over after their predicted "
+                                "display time"),
+            "frames_with_hud": _key("integer", "", "frames submitted with the HUD as a "
+                                    "head-locked layer (--hud)"),
+            "session_state_max": _key("string", "", "the furthest session state reached "
+                                      "(IDLE, READY, SYNCHRONIZED, VISIBLE, FOCUSED)"),
+            "session_end": {"type": ["string", "null"], "x-unit": "",
+                            "description": "how the session ended: exiting, lost, or null "
+                                           "(the run ended it)"},
+            "render_ms": _key("number", "ms", "mean time from locating the eyes to handing "
+                              "the stereo frame over"),
+            "render_ms_p99": _key("number", "ms", "99th percentile of the same"),
+            "wait_ms": _key("number", "ms", "mean time blocked in xrWaitFrame (the runtime "
+                            "pacing the loop)"),
+        }),
         "sound": _section("sound (present when the sound plugin ran)", {
             "backend": _key("string", "", "openal, wave or null"),
             "pool_size": _key("integer", "", "voices that can play at once"),

@@ -5,9 +5,9 @@ one headless run (serial, unpaced, no sound): :func:`run_once`, the same code pa
 ``colosseum run --param KEY=v --seed S --fast``, so a run of a sweep gives the numbers
 that run gives alone. The runs are Dask tasks: on a LocalCluster of ``--workers``
 processes here, or on the cluster whose scheduler ``--scheduler`` names (any machine that
-sees the content folder at the same path: dask-jobqueue's SLURMCluster, for one; see the
-README). A run that raises, or whose worker dies, is tried once more and then reported
-in the table with its error; the other runs are kept.
+sees the content folder at the same path: dask-jobqueue's SLURMCluster, for one; see
+docs/howto/sweeps.md). A run that raises, or whose worker dies, is tried once more and then
+reported in the table with its error; the other runs are kept.
 
 The results are ``DIR/results.csv`` (one row per run: parameters, seed, statistics,
 measures) and ``DIR/results.png`` (each measure against the first parameter, the mean
@@ -143,6 +143,25 @@ def sweep(args: argparse.Namespace) -> int:
 def _distribute(scene: str, runs: list[tuple[dict[str, str], int]],
                 args: argparse.Namespace) -> list[dict[str, Any]]:
     """Every run on Dask; rows in the order of ``runs``, a failure as its error."""
+    calls = [(scene, params, seed, args.frames, args.seconds, args.backend, args.dt)
+             for params, seed in runs]
+    rows: list[dict[str, Any]] = []
+    for (params, seed), result in zip(runs, map_on_dask(run_once, calls, args, "runs"),
+                                      strict=True):
+        if isinstance(result, BaseException):  # reported in the table, the rest kept
+            rows.append({"params": params, "seed": seed, "measures": {},
+                         "error": _error_text(result)})
+            log.error("run %s seed %d failed: %s", params, seed, rows[-1]["error"])
+        else:
+            rows.append({"params": params, "seed": seed, **result, "error": ""})
+    return rows
+
+
+def map_on_dask(fn: Any, calls: list[tuple[Any, ...]], args: argparse.Namespace,
+                what: str = "runs") -> list[Any]:
+    """``fn(*call)`` for every call as Dask tasks (``args.scheduler``'s cluster, else a
+    LocalCluster of ``args.workers`` processes); results in the order of ``calls``, a call
+    that raised (twice: it is retried once) as its exception."""
     import dask
     from distributed import Client, LocalCluster, as_completed
 
@@ -175,34 +194,29 @@ def _distribute(scene: str, runs: list[tuple[dict[str, str], int]],
                                    silence_logs=logging.CRITICAL)
             client = Client(cluster)
         try:
-            futures = {client.submit(run_once, scene, params, seed, args.frames, args.seconds,
-                                     args.backend, args.dt, retries=1, pure=False): i
-                       for i, (params, seed) in enumerate(runs)}
-            rows: list[dict[str, Any]] = [{} for _ in runs]
+            futures = {client.submit(fn, *call, retries=1, pure=False): i
+                       for i, call in enumerate(calls)}
+            results: list[Any] = [None] * len(calls)
             done = 0
             started = time.monotonic()
-            with progress("sweep", len(runs)) as report:
+            with progress("sweep", len(calls)) as report:
                 for future in as_completed(futures):
                     i = futures[future]
-                    params, seed = runs[i]
                     try:
-                        result = future.result()
-                        rows[i] = {"params": params, "seed": seed, **result, "error": ""}
-                    except Exception as exc:  # reported in the table, the rest kept
-                        rows[i] = {"params": params, "seed": seed, "measures": {},
-                                   "error": _error_text(exc)}
-                        log.error("run %s seed %d failed: %s", params, seed, rows[i]["error"])
+                        results[i] = future.result()
+                    except Exception as exc:  # the caller reports it, the rest kept
+                        results[i] = exc
                     done += 1
-                    report(done, f"{done}/{len(runs)} runs")
-                    if not on_terminal() and (done == len(runs) or done % 10 == 0):
+                    report(done, f"{done}/{len(calls)} {what}")
+                    if not on_terminal() and (done == len(calls) or done % 10 == 0):
                         rate = done / max(time.monotonic() - started, 1e-9) * 60
-                        print(f"sweep: {done}/{len(runs)} runs done ({rate:.1f} per minute)",
-                              file=sys.stderr)
+                        print(f"sweep: {done}/{len(calls)} {what} done ({rate:.1f} per "
+                              "minute)", file=sys.stderr)
         finally:
             client.close()
             if cluster is not None:
                 cluster.close()
-    return rows
+    return results
 
 
 def _error_text(exc: BaseException) -> str:

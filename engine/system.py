@@ -40,6 +40,10 @@ class PluginName(StrEnum):
     WHEELCHAIR = "wheelchair"
     SESSION = "session"
     ANOMALIES = "anomalies"
+    #: The headset display (OpenXR): assembled by --xr or a scene's Display { Kind "openxr" }.
+    XR = "xr"
+    #: Runs an experiment's trials: assembled by ``colosseum experiment run``.
+    EXPERIMENT = "experiment"
     #: Assembled by ``colosseum serve`` and ``join``, not requested by content.
     NET_SERVER = "net-server"
     NET_NODE = "net-node"

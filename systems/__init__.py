@@ -34,6 +34,7 @@ PLUGINS: dict[PluginName, str] = {
     PluginName.SESSION: "systems.session:SessionPlugin",
     PluginName.ANOMALIES: "systems.anomalies:AnomaliesPlugin",
     PluginName.RENDER: "systems.render:RenderPlugin",
+    PluginName.XR: "systems.xr:XrPlugin",
 }
 #: The paper's plugin names.
 ALIASES: dict[str, PluginName] = {
@@ -68,12 +69,18 @@ def wants_render(config: EngineConfig) -> bool:
     """Draw when someone looks: a window, or a screenshot, recorded frames or a HUD asked for."""
     opts = config.options
     return (config.render or not config.headless or bool(opts.get("screenshot"))
-            or bool(opts.get("record_frames")))
+            or bool(opts.get("record_frames")) or bool(opts.get("xr")))
 
 
 def default_plugins(config: EngineConfig) -> list[Plugin]:
-    plugins = [RegistryPlugin(), *(load_plugin(name) for name in PLUGINS
-                                   if name != PluginName.RENDER)]
+    """The registry, then every plugin but the displays; the headset display (before the
+    input it brings devices to) where ``options["xr"]`` asks for it; the renderer last,
+    when something is drawn."""
+    plugins: list[Plugin] = [RegistryPlugin()]
+    if config.options.get("xr"):
+        plugins.append(load_plugin(PluginName.XR))
+    plugins.extend(load_plugin(name) for name in PLUGINS
+                   if name not in (PluginName.RENDER, PluginName.XR))
     if wants_render(config):
         plugins.append(load_plugin(PluginName.RENDER))
     return plugins

@@ -154,9 +154,8 @@ class DynamicsSystem(System):
         if self._copy is not None and len(self._copy.synced_keys):
             self._take_transform_writes(engine)
         driver.teleported.clear()
-        if engine.config.mode == "serial":
-            tick = engine.tick
-            engine.physics_seconds = driver.step(tick.dt, tick.substeps)
+        if engine.config.mode == "serial":  # the frame's dt, in its substeps
+            engine.physics_seconds = driver.step(dt, engine.tick.substeps)
         else:
             driver.start()  # after the first bodies are queued; no-op once running
         snapshot = driver.snapshot

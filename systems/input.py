@@ -34,6 +34,7 @@ from engine.input import (
     parse_input_option,
 )
 from engine.input.desktop import DesktopDevice, WindowDevice
+from engine.input.device import PluginDevices
 from engine.input.output import Publisher, make_publisher
 from engine.rotation import quat_conjugate, quat_multiply, quat_to_matrix
 from engine.scene.inputs import DESKTOP_TRACKERS, DeviceSpec, InputSpec
@@ -86,6 +87,7 @@ class InputSystem(System):
             except (DeviceError, ValueError) as exc:
                 log.error("input device %r: %s; the run goes on without it", device_spec.id,
                           exc)
+        devices.extend(engine.try_resource(PluginDevices) or ())
         self._desktops = [d for d in devices if isinstance(d, DesktopDevice)]
         if not self._desktops:
             devices.append(self.window)  # the window's keys, as they are
@@ -189,14 +191,19 @@ class Outputs:
     def __init__(self) -> None:
         self.values: dict[str, tuple[float, ...]] = {}
         self.markers: list[str] = []
+        #: Each marker's LSL time when its sender gave one (None: when it is sent).
+        self.stamps: list[float | None] = []
         self.sent: frozenset[str] = frozenset()
 
     def set(self, name: str, value: float | Sequence[float]) -> None:
         self.values[name] = (float(value),) if isinstance(value, (int, float)) else \
             tuple(float(v) for v in value)
 
-    def marker(self, text: str) -> None:
+    def marker(self, text: str, timestamp: float | None = None) -> None:
+        """A marker; ``timestamp`` (LSL clock, s) stamps it on LSL streams, so it carries
+        the moment its sender recorded (a trial's row) rather than the moment it is sent."""
         self.markers.append(str(text))
+        self.stamps.append(timestamp)
 
 
 class OutputSystem(System):
@@ -230,6 +237,8 @@ class OutputSystem(System):
 
     def run(self, engine: Engine, dt: float) -> None:
         markers, self.outputs.markers = self.outputs.markers, []
+        stamps, self.outputs.stamps = self.outputs.stamps, []
+        stamps += [None] * (len(markers) - len(stamps))  # markers appended directly
         for publisher, names, send_markers in self._publishers:
             values = {}
             for name in names:
@@ -238,8 +247,8 @@ class OutputSystem(System):
                     values[name] = value
             publisher.send(values)
             if send_markers:
-                for text in markers:
-                    publisher.marker(text)
+                for text, stamp in zip(markers, stamps, strict=False):
+                    publisher.marker(text, stamp)
 
     def _reader(self, engine: Engine, name: str) -> Callable[[], tuple[float, ...] | None]:
         reader = self._readers.get(name)

@@ -28,7 +28,7 @@ from engine.events import CustomEvent, KeyEvent
 from engine.input import InputState
 from engine.input.desktop import WindowDevice
 from engine.realtime import CostLog
-from engine.render.camera import CameraView, camera_from_component
+from engine.render.camera import CameraView, camera_view_of
 from engine.render.context import create_target
 from engine.render.hud import hud_line
 from engine.render.interpolate import PoseInterpolator
@@ -46,6 +46,7 @@ from engine.render.shaders import (
 )
 from engine.services import ShaderControl, SwapGate
 from engine.system import Phase, PluginName, System
+from engine.xr.display import XrDisplay
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -153,6 +154,7 @@ class RenderSystem(System):
         self._drawn = False  # whether the last frame was drawn (headless runs skip frames)
         self._palette_version = -1
         self._engine_anomalies: Anomalies | None = None
+        self._headset: XrDisplay | None = None
 
     # -- API for scripts and tools --------------------------------------------
     def set_uniform(self, state_id: str, name: str, value: UniformValue) -> None:
@@ -192,7 +194,10 @@ class RenderSystem(System):
         if self.options is None:
             self.options = RenderOptions.from_config(engine.config)
         opts = self.options
-        self._target = create_target(opts.backend, opts.size, opts.title)
+        headset = engine.try_resource(XrDisplay)
+        self._headset = headset if headset is not None and headset.target is not None else None
+        self._target = (self._headset.target if self._headset is not None
+                        else create_target(opts.backend, opts.size, opts.title))
         root = engine.config.content_dir or Path(".")
         self.renderer = Renderer(self._target, root=root, shadow_size=opts.shadow_size,
                                  assets=Assets.of(engine))
@@ -269,6 +274,16 @@ class RenderSystem(System):
     def run(self, engine: Engine, dt: float) -> None:
         if self.closing:
             engine.request_quit()
+        headset = self._headset
+        if headset is not None:  # the runtime says when to draw
+            if headset.frame is None:
+                return
+            if not headset.should_render:
+                headset.skip()
+                return
+            self._draw(engine, dt)
+            self._drawn = True
+            return
         opts = self.options or RenderOptions()
         record = opts.record_frames is not None and engine.frame % max(opts.record_every, 1) == 0
         self._drawn = opts.draw_every_frame or self._target.kind == "window" or record
@@ -289,6 +304,8 @@ class RenderSystem(System):
         self._sync_poses(engine)
         self._sync_palettes(engine)
         renderer.camera = self._camera(engine)
+        if self._headset is not None:
+            renderer.camera = self._headset.camera(renderer.camera, self._camera_follows(engine))
         anomalies = engine.try_resource(Anomalies)
         renderer.anomalies = anomalies.active() if anomalies is not None else []
         lights = []
@@ -385,15 +402,14 @@ class RenderSystem(System):
         for entity, (camera,) in world.get_components(Camera):
             if not camera.active:
                 continue
-            row = poses.row_of.get(entity)
-            pos = poses.position[row] if row is not None else np.zeros(3)
-            quat = poses.orientation[row] if row is not None else np.array([1.0, 0, 0, 0])
-            target = None
-            if camera.follow is not None and camera.follow in poses.row_of:
-                t_row = poses.row_of[camera.follow]
-                target = (poses.position[t_row], poses.orientation[t_row])
-            return self._stereo(camera_from_component(camera, pos, quat, target))
+            return self._stereo(camera_view_of(camera, entity, poses))
         return self._stereo(CameraView())
+
+    @staticmethod
+    def _camera_follows(engine: Engine) -> bool:
+        """Whether the active camera follows an object (a headset's wearer rides along)."""
+        return any(camera.active and camera.follow is not None
+                   for _, camera in engine.world.get_component(Camera))
 
     def _stereo(self, view: CameraView) -> CameraView:
         """The view with ``--stereo`` applied."""
@@ -444,7 +460,8 @@ class RenderSystem(System):
         finally:
             self._errors = list(renderer.errors)
             renderer.release()
-            self._target.close()
+            if self._headset is None:  # the headset's target is the display's to close
+                self._target.close()
             self.renderer = None
 
 

@@ -14,6 +14,7 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +28,7 @@ BENCHMARKS: dict[str, str] = {
     "scripting": "tools.bench_scripting:run_bench",
     "sound": "tools.bench_sound:run_bench",
     "render": "tools.bench_render:run_bench",
+    "stereo": "tools.bench_render:run_stereo_bench",
     "input": "tools.bench_input:run_bench",
     "contacts": "tools.bench:bench_contacts",
     "avatars": "tools.bench_avatars:run_bench",
@@ -36,6 +38,7 @@ BENCHMARKS: dict[str, str] = {
     "sweep": "tools.bench_sweep:run_bench",
     "accuracy": "tools.bench_accuracy:run_bench",
     "stroke": "tools.bench_stroke:run_bench",
+    "experiment": "tools.bench_experiment:run_bench",
 }
 
 
@@ -165,6 +168,11 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "sound": _by_row(lambda r: r["case"], "ours_ms", "raw_al_ms", "ms/frame",
                      "raw OpenAL calls for the same sources"),
     "render": _render_figures,
+    "stereo": lambda rows: [Figure(f"{r['boxes']} boxes, {r['case']}, {r['size']}",
+                                   r["engine_cpu_ms"], rows[0]["engine_cpu_ms"],
+                                   "engine CPU ms/frame",
+                                   "a mono frame at one eye's size, the same run")
+                            for r in rows[1:]],
     "input": _input_figures,
     "contacts": _by_row(lambda r: f"{r['pairs']} pairs {r['state']}", "ms/frame",
                         "unique ms", "ms/frame",
@@ -182,6 +190,10 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
                      "runs/min", "loop runs/min", "runs/min", "the same runs in a plain loop"),
     "accuracy": _accuracy_figures,
     "stroke": _stroke_figures,
+    "experiment": lambda rows: [Figure("tracking 2,000 objects every frame", r["frame ms"],
+                                       r["without ms"], "ms/frame",
+                                       "the same frames without a trial")
+                                for r in rows if r["case"] == "summary"],
 }
 
 
@@ -233,11 +245,24 @@ def measure(what: str, backend: str | None = None, quick: bool = False,
 
 def report(what: str, rows: list[dict[str, Any]], backend: str | None = None,
            quick: bool = False) -> dict[str, Any]:
-    """The run as plain data: the rows, our figures beside their references, the machine."""
+    """The run as plain data: the rows, our figures beside their references, when (UTC) and
+    on what machine (a figure made from it can say both)."""
     return {"benchmark": what, "backend": backend, "quick": quick, "rows": rows,
             "figures": [{**asdict(f), "ratio": f.ratio} for f in FIGURES[what](rows)],
+            "date": datetime.now(UTC).isoformat(timespec="seconds"),
             "machine": {"python": sys.version.split()[0], "platform": platform.platform(),
-                        "cpus": os.cpu_count()}}
+                        "cpus": os.cpu_count(), "processor": _processor()}}
+
+
+def _processor() -> str:
+    """The CPU's model name (Linux), else what platform knows."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.partition(":")[2].strip()
+    except OSError:
+        pass
+    return platform.processor()
 
 
 def plot(data: dict[str, Any], path: Path) -> Path:
@@ -267,7 +292,8 @@ def plot(data: dict[str, Any], path: Path) -> Path:
     values = [v for v in ours + refs if v > 0]
     if values and max(values) > 100 * min(values):  # figures a hundredfold apart
         ax.set_yscale("symlog", linthresh=min(values))
-    ax.set_title(f"colosseum bench {data['benchmark']} ({data['machine']['platform']})",
+    when = f", {data['date'][:10]}" if data.get("date") else ""  # JSON from before: no date
+    ax.set_title(f"colosseum bench {data['benchmark']} ({data['machine']['platform']}{when})",
                  fontsize=9)
     ax.legend(fontsize=8, title=None if len({f["reference_is"] for f in figures}) < 2 else
               "references: " + "; ".join(sorted({f["reference_is"] for f in figures})),

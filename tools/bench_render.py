@@ -102,3 +102,86 @@ def run_bench(count: int = 1000, rounds: int = 6, frames_per_round: int = 10, wa
     reference["speedup"] = 1.0
     instanced["target_30fps_met"] = instanced["fps"] >= 30.0
     return [instanced, reference]
+
+
+def _headset_camera(distance: float = 14.0) -> CameraView:
+    """Two eyes 63 mm apart with a headset's asymmetric fields of view (Monado's simulated
+    HMD's angles), looking over the boxes."""
+    from engine.render import math3d
+    from engine.render.camera import HeadsetEye
+    from engine.xr.projection import Fov, fov_projection
+
+    centre = np.array([0.0, -distance, 9.0])
+    look = math3d.look_at_orientation(centre, (0.0, 0.0, 0.0))
+    right = math3d.compose(centre, look)[:3, 0]
+    eyes = [HeadsetEye(centre + side * 0.0315 * right, look,
+                       fov_projection(Fov(left, right_angle, 0.78, -0.78), 0.05, 500.0))
+            for side, left, right_angle in ((-1, -0.74, 0.70), (1, -0.70, 0.74))]
+    return CameraView(centre, look, near=0.05, far=500.0, headset=eyes)
+
+
+class _StereoCase(_Case):
+    """Mono at one eye's size, or both eyes side by side (one pass, or one pass an eye);
+    timed by the CPU time of the thread that draws (what a headset's frame costs the
+    engine; a GPU, or llvmpipe's own threads, rasterise beside it)."""
+
+    def __init__(self, eye: tuple[int, int], count: int, eyes: int, single: bool) -> None:
+        target = HeadlessTarget((eye[0] * eyes, eye[1]))
+        super().__init__(target, True, count)
+        self.renderer.single_pass = single
+        if eyes == 2:
+            self.renderer.camera = _headset_camera()
+        self.cpu_ms: list[float] = []
+        self.engine_ms: list[float] = []
+
+    def run(self, frames: int, timed: bool = True) -> None:
+        self.target.ctx.finish()
+        start, driver = time.thread_time(), 0.0
+        renderer = self.renderer
+        for _ in range(frames):
+            super().run(1, timed=False)
+            driver += renderer.stats.driver_ms
+        if timed:
+            cpu = 1000.0 * (time.thread_time() - start) / frames
+            self.cpu_ms.append(cpu)
+            self.engine_ms.append(cpu - driver / frames)
+            self.round_ms.append(cpu)
+
+
+def run_stereo_bench(quick: bool = False, backend: str | None = None, count: int = 2000,
+                     eye: tuple[int, int] = (320, 240)) -> list[dict]:
+    """``colosseum bench render --stereo``: the CPU time of a stereo frame, both eyes in
+    one pass and one pass an eye, beside a mono frame at the same per-eye resolution
+    (rounds interleaved; median, and the spread over rounds). ``engine_cpu_ms`` is the
+    drawing thread's CPU time less what it spent inside the GL driver's draws and clears
+    (on llvmpipe the vertex stage runs there, where a GPU would run it); ``cpu_ms`` is all
+    of it."""
+    rounds, frames, warmup = (3, 5, 2) if quick else (8, 10, 4)
+    cases = {"mono": _StereoCase(eye, count, 1, True),
+             "stereo, one pass": _StereoCase(eye, count, 2, True),
+             "stereo, one pass an eye": _StereoCase(eye, count, 2, False)}
+    try:
+        for case in cases.values():
+            case.run(warmup, timed=False)
+        for _ in range(rounds):
+            for case in cases.values():
+                case.run(frames)
+        rows = []
+        mono = cases["mono"]
+        for name, case in cases.items():
+            row = case.row(name)
+            ratios = np.array(case.engine_ms) / np.array(mono.engine_ms)
+            row.update({"cpu_ms": float(np.median(case.cpu_ms)),
+                        "engine_cpu_ms": float(np.median(case.engine_ms)),
+                        "engine_vs_mono": float(np.median(ratios)),
+                        "engine_vs_mono_min": float(ratios.min()),
+                        "engine_vs_mono_max": float(ratios.max()),
+                        "cpu_vs_mono": float(np.median(np.array(case.cpu_ms)
+                                                       / np.array(mono.cpu_ms)))})
+            rows.append(row)
+    finally:
+        for case in cases.values():
+            case.renderer.release()
+            case.target.close()
+    rows[1]["goal_1.2x_met"] = rows[1]["engine_vs_mono"] <= 1.2
+    return rows

@@ -141,7 +141,7 @@ def churn_world(bodies: int) -> tuple[Any, Any, Any]:
     from systems import RegistryPlugin, load_plugin
     from systems.scripting import ScriptingPlugin
 
-    engine = Engine(EngineConfig(backend="ode", fast=True),
+    engine = Engine(EngineConfig(backend="ode", fast=True, dt=1 / 60),
                     plugins=[RegistryPlugin(), load_plugin("physics"), ScriptingPlugin()])
     text = "\n".join([
         'Object { ID "ground" Dynamic 0 PhysicalAttributes { Geometry { Primitive "plane" '

@@ -42,10 +42,13 @@ LAYERS = (
     Layer(0, "components", ("components",)),
     Layer(1, "engine core", ("engine",)),
     Layer(2, "engine services", ("engine.render", "engine.audio", "engine.scripting",
-                                 "engine.input", "engine.net", "engine.interchange.export")),
+                                 "engine.input", "engine.net", "engine.xr",
+                                 "engine.interchange.export")),
     Layer(3, "systems", ("systems",)),
     Layer(4, "CLI and tools", ("engine.cli", "engine.cli_net", "engine.runner",
                                "engine.sweep", "engine.scene_loading", "engine.scaffold",
+                               "engine.experiments.cli", "engine.experiments.report",
+                               "engine.experiments.simulate",
                                "tools")),
 )
 

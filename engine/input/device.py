@@ -117,6 +117,11 @@ class BadMessages:
         return text
 
 
+class PluginDevices(list):
+    """Devices another plugin brings (the headset display's controllers), as a resource:
+    the input system opens them beside the scene's."""
+
+
 class QueuedDevice:
     """Base of devices with an I/O thread: the thread pushes events, the frame polls them.
 

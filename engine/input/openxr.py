@@ -13,6 +13,7 @@ Machines without an OpenXR runtime get one clear message saying so and what to i
 from __future__ import annotations
 
 import ctypes
+import logging
 import os
 from typing import Any
 
@@ -53,6 +54,7 @@ def select_change(name: str, state: Any, was_pressed: bool, now: float) -> Butto
 def load_openxr() -> Any:
     """pyopenxr, quiet (the loader would print its own errors); DeviceError if missing."""
     os.environ.setdefault("XR_LOADER_DEBUG", "none")
+    logging.getLogger("OpenGL").setLevel(logging.WARNING)  # PyOpenGL, which pyopenxr loads
     try:
         import xr
     except ImportError as exc:

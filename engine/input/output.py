@@ -35,7 +35,7 @@ class Publisher(Protocol):
 
     def send(self, values: dict[str, Sequence[float]]) -> None: ...
 
-    def marker(self, text: str) -> None: ...
+    def marker(self, text: str, timestamp: float | None = None) -> None: ...
 
     def close(self) -> None: ...
 
@@ -57,7 +57,7 @@ class OscOutput:
         for name, value in values.items():
             self._send(value_address(name), [float(v) for v in value])
 
-    def marker(self, text: str) -> None:
+    def marker(self, text: str, timestamp: float | None = None) -> None:
         self._send(MARKER_ADDRESS, text)
 
     def _send(self, address: str, payload: Any) -> None:
@@ -73,35 +73,51 @@ class OscOutput:
         self._client.close()
 
 
+#: The process's LSL outlets by stream name, type, channels and format: engines built one
+#: after another in one process (an experiment's trials, --watch restarts) publish on the
+#: same streams, so a recorder (LabRecorder) keeps one stream instead of losing it.
+_OUTLETS: dict[tuple[str, str, int, int], Any] = {}
+
+
+def _outlet(lsl: Any, name: str, kind: str, channels: int, fmt: int) -> Any:
+    key = (name, kind, channels, fmt)
+    outlet = _OUTLETS.get(key)
+    if outlet is None:
+        info = lsl.StreamInfo(name, kind, channels, lsl.IRREGULAR_RATE, fmt, name)
+        outlet = _OUTLETS[key] = lsl.StreamOutlet(info)
+    return outlet
+
+
 class LslOutput:
-    """One float32 outlet per value (made at its first frame) and a marker outlet."""
+    """One float32 outlet per value (made at its first frame) and a marker outlet (both
+    kept for the process: :data:`_OUTLETS`)."""
 
     def __init__(self, name: str, scope: str = "site") -> None:
         self.name = name
         self._lsl = load_pylsl(scope)
         self._outlets: dict[str, Any] = {}
         lsl = self._lsl
-        info = lsl.StreamInfo(f"{name}-markers", "Markers", 1, lsl.IRREGULAR_RATE,
-                              lsl.cf_string, f"{name}-markers")
-        self._markers = lsl.StreamOutlet(info)
+        self._markers = _outlet(lsl, f"{name}-markers", "Markers", 1, lsl.cf_string)
 
     def send(self, values: dict[str, Sequence[float]]) -> None:
         lsl = self._lsl
         for key, value in values.items():
             outlet = self._outlets.get(key)
             if outlet is None:
-                stream = f"{self.name}-{key}"
-                info = lsl.StreamInfo(stream, "Colosseum", len(value), lsl.IRREGULAR_RATE,
-                                      lsl.cf_float32, stream)
-                outlet = self._outlets[key] = lsl.StreamOutlet(info)
+                outlet = self._outlets[key] = _outlet(lsl, f"{self.name}-{key}", "Colosseum",
+                                                      len(value), lsl.cf_float32)
             if len(value) != outlet.channel_count:
                 log.error("output %s: %d values, its stream has %d channels; not sent", key,
                           len(value), outlet.channel_count)
                 continue
             outlet.push_sample([float(v) for v in value])
 
-    def marker(self, text: str) -> None:
-        self._markers.push_sample([text])
+    def marker(self, text: str, timestamp: float | None = None) -> None:
+        """A marker stamped ``timestamp`` (LSL clock, s), else now."""
+        if timestamp is None:
+            self._markers.push_sample([text])
+        else:
+            self._markers.push_sample([text], timestamp)
 
     def close(self) -> None:
         self._outlets.clear()

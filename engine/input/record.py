@@ -72,11 +72,34 @@ class Recording:
 
 
 def scene_fingerprint(sources: dict[str, str]) -> str:
-    """A hash of the scene's text (every file it includes), to notice another scene."""
+    """A hash of the scene's text (every file it includes), to notice another scene;
+    comments and trailing blanks are left out, so a note added to a scene leaves its
+    recordings fitting it."""
     digest = hashlib.sha256()
     for path in sorted(sources):
-        digest.update(sources[path].encode("utf-8"))
+        digest.update(_without_comments(sources[path]).encode("utf-8"))
     return digest.hexdigest()
+
+
+def _without_comments(text: str) -> str:
+    """Scene text without its ``//`` comments (outside quoted strings) and blank lines.
+
+    >>> _without_comments('a 1  // one\\nFile "x//y" // two\\n\\n// three\\n')
+    'a 1\\nFile "x//y"'
+    """
+    lines = []
+    for line in text.splitlines():
+        quoted, cut = False, len(line)
+        for i, ch in enumerate(line):
+            if ch == '"':
+                quoted = not quoted
+            elif not quoted and line.startswith("//", i):
+                cut = i
+                break
+        kept = line[:cut].rstrip()
+        if kept:
+            lines.append(kept)
+    return "\n".join(lines)
 
 
 def event_record(frame: int, event: AnyInput) -> dict[str, Any]:

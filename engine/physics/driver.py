@@ -180,6 +180,8 @@ class PhysicsPort:
     contacts_total = 0
     #: Simulated time at which a physics thread stops stepping (None: never).
     stop_at: float | None = None
+    #: A physics thread waits while this is set (a headset taken off, as the scene says).
+    paused = False
     controller: RealTimeController
     #: Scene IDs of entities, for messages (kept by the physics system).
     names: Mapping[int, str]
@@ -474,7 +476,8 @@ class PhysicsDriver(PhysicsPort):
         ctl = self.controller
         try:
             while not self._stop.is_set():
-                if self.stop_at is not None and self.time >= self.stop_at - 1e-9:
+                if self.paused or (self.stop_at is not None
+                                   and self.time >= self.stop_at - 1e-9):
                     self._apply_pending()
                     self._stop.wait(0.001)
                     continue

@@ -29,6 +29,9 @@ class CameraView:
     #: A fixed screen (lower left, lower right, upper left corners, world frame) drawn
     #: off-axis from ``position`` (a wall of a cluster); None: an ordinary camera.
     screen: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+    #: A headset's eyes, each its own world pose and (off-axis) projection, drawn side by
+    #: side; None: eyes from ``position`` and ``eye_separation``.
+    headset: list[HeadsetEye] | None = None
 
     @staticmethod
     def looking_at(eye: tuple[float, float, float], target: tuple[float, float, float],
@@ -44,6 +47,11 @@ class CameraView:
 
     def eyes(self, width: int, height: int) -> list[Eye]:
         """One eye filling the viewport, or two side by side when stereo."""
+        if self.headset is not None:
+            half = width // len(self.headset)
+            return [Eye(math3d.camera_view(e.position, e.orientation), e.projection,
+                        np.asarray(e.position, np.float64), (i * half, 0, half, height))
+                    for i, e in enumerate(self.headset)]
         if self.screen is not None:
             view, proj = math3d.off_axis(self.position, *self.screen, self.near, self.far)
             return [Eye(view, proj, self.position, (0, 0, width, height))]
@@ -59,6 +67,16 @@ class CameraView:
             out.append(Eye(math3d.camera_view(pos, self.orientation), proj, pos,
                            (i * half, 0, half, height)))
         return out
+
+
+@dataclass(slots=True)
+class HeadsetEye:
+    """One eye of a headset: its world pose and its projection (the runtime's field of
+    view, see :mod:`engine.xr.projection`)."""
+
+    position: np.ndarray
+    orientation: np.ndarray
+    projection: np.ndarray
 
 
 @dataclass(slots=True)
@@ -96,3 +114,19 @@ def camera_from_component(camera: object, position: np.ndarray, orientation: np.
     return CameraView(pos, quat, fov=float(cam.fov), near=float(cam.near),  # type: ignore[attr-defined]
                       far=float(cam.far),  # type: ignore[attr-defined]
                       eye_separation=float(cam.eye_separation))  # type: ignore[attr-defined]
+
+
+def camera_view_of(camera: object, entity: int, poses: object) -> CameraView:
+    """The view of the ``components.Camera`` on ``entity`` as drawn, from the pose table
+    ``poses`` (at its offset from the object it follows)."""
+    row_of = poses.row_of  # type: ignore[attr-defined]
+    row = row_of.get(entity)
+    pos = poses.position[row] if row is not None else np.zeros(3)  # type: ignore[attr-defined]
+    quat = poses.orientation[row] if row is not None else \
+        np.array([1.0, 0, 0, 0])  # type: ignore[attr-defined]
+    target = None
+    follow = camera.follow  # type: ignore[attr-defined]
+    if follow is not None and follow in row_of:
+        t_row = row_of[follow]
+        target = (poses.position[t_row], poses.orientation[t_row])  # type: ignore[attr-defined]
+    return camera_from_component(camera, pos, quat, target)

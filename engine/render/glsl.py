@@ -168,6 +168,26 @@ void main() {
 }
 """
 
+#: The lit vertex stage drawing both eyes of a stereo view in one pass (instanced stereo):
+#: each part is two instances (its instance row read twice: a divisor of 2), the even one
+#: the left eye, the odd one the right; each lands in its half of the side-by-side target,
+#: clipped at the middle (``gl_ClipDistance``), so a stereo frame costs the CPU about what
+#: a mono one does.
+LIT_VERTEX_STEREO = LIT_VERTEX.replace("uniform mat4 u_light_vp;\n", """uniform mat4 u_light_vp;
+uniform mat4 u_eye_view[2];
+uniform mat4 u_eye_proj[2];
+uniform vec3 u_eye_pos[2];
+flat out vec3 v_eye_pos;
+out float gl_ClipDistance[1];
+""").replace("    gl_Position = u_proj * (u_view * world);\n", """    int eye = gl_InstanceID & 1;
+    v_eye_pos = u_eye_pos[eye];
+    vec4 clip = u_eye_proj[eye] * (u_eye_view[eye] * world);
+    float side = eye == 0 ? -1.0 : 1.0;
+    gl_ClipDistance[0] = clip.w + side * clip.x;  // inside this eye's half
+    clip.x = 0.5 * clip.x + 0.5 * side * clip.w;
+    gl_Position = clip;
+""")
+
 #: The lit fragment stage is specialised per light set (``LIGHT_KINDS`` and ``SHADOW_LIGHT``
 #: are compile-time constants) so loops unroll: llvmpipe shades far faster without dynamic
 #: indexing; and per textured or not. :func:`lit_fragment` fills them in.
@@ -233,14 +253,20 @@ void main() {
 """
 
 
-def lit_fragment(kinds: tuple[int, ...], shadow_light: int, textured: bool = True) -> str:
+def lit_fragment(kinds: tuple[int, ...], shadow_light: int, textured: bool = True,
+                 stereo: bool = False) -> str:
     """The lit fragment source for lights of ``kinds`` (0 directional, 1 point, 2 spot);
     without ``textured`` it skips the texture fetch (objects with no Texture: a CPU
-    rasteriser shades them a few per cent faster)."""
+    rasteriser shades them a few per cent faster); ``stereo``: after
+    :data:`LIT_VERTEX_STEREO`, the eye's position comes from the vertex stage."""
     kinds = kinds or (0,)
-    return LIT_FRAGMENT_TEMPLATE % {"n": len(kinds), "shadow": shadow_light,
-                                    "kinds": ", ".join(str(k) for k in kinds),
-                                    "textured": int(textured)}
+    source = LIT_FRAGMENT_TEMPLATE % {"n": len(kinds), "shadow": shadow_light,
+                                      "kinds": ", ".join(str(k) for k in kinds),
+                                      "textured": int(textured)}
+    if stereo:
+        source = source.replace("uniform vec3 u_camera_pos;",
+                                "flat in vec3 v_eye_pos;\n#define u_camera_pos v_eye_pos")
+    return source
 
 
 DEPTH_VERTEX = """

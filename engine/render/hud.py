@@ -59,10 +59,11 @@ class Hud:
     def toggle(self) -> None:
         self.enabled = not self.enabled
 
-    def draw(self, fbo: Any, size: tuple[int, int]) -> None:
+    def draw(self, fbo: Any, size: tuple[int, int]) -> bool:
+        """Draw the line into ``fbo`` (of ``size``); whether there was one to draw."""
         shown = " | ".join(t for t in (self.text if self.enabled else "", self.status) if t)
         if not shown:
-            return
+            return False
         if self._drawn_text != shown:
             pixels = text_image(shown)
             if self._texture is not None:
@@ -82,6 +83,7 @@ class Hud:
         self.ctx.disable(self.ctx.DEPTH_TEST)
         self._vao.render(vertices=6)
         self.ctx.disable(self.ctx.BLEND)
+        return True
 
     def release(self) -> None:
         if self._texture is not None:

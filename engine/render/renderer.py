@@ -57,6 +57,10 @@ _EYE4 = np.eye(4)
 _UNIT_KINDS = ("box", "sphere", "cylinder", "capsule")
 #: The instance-buffer slot of the shadow pass (eyes use 0 and 1).
 _SHADOW_SLOT = 2
+#: The slot of both eyes drawn in one pass (each part's row twice: see glsl.LIT_VERTEX_STEREO).
+_STEREO_SLOT = 3
+#: GL_CLIP_DISTANCE0: the single stereo pass clips each eye at the middle of the target.
+_CLIP_DISTANCE0 = 0x3000
 #: The smallest share of the output's resolution the view may be drawn at.
 MIN_RENDER_SCALE = 0.25
 
@@ -154,6 +158,9 @@ class FrameStats:
     shadow_ms: float = 0.0
     #: The eyes' draw calls.
     draw_ms: float = 0.0
+    #: CPU time of this thread inside the GL driver's draws and clears (ms): on a software
+    #: rasteriser (llvmpipe) the vertex stage runs there, where a GPU would run it.
+    driver_ms: float = 0.0
     post_ms: float = 0.0
     #: Copy to the screen, HUD and buffer swap.
     present_ms: float = 0.0
@@ -213,6 +220,9 @@ class Renderer:
         self.anomalies: list[ActiveAnomaly] = []
         #: Leave out what no eye can see (False draws everything: the test's reference).
         self.culling = True
+        #: Draw the two eyes of a stereo view in one pass (False: one pass an eye, the
+        #: benchmark's reference).
+        self.single_pass = True
         #: Draw small-looking spheres, cylinders and capsules with fewer triangles.
         self.lod = True
         #: Wait for the GPU at the end of each stage, so FrameStats' stage times include
@@ -616,15 +626,17 @@ class Renderer:
         self._eye_cache.clear()
         self._dirty = False
 
-    def _lit(self, lights: list[LightInfo], shadow_index: int, textured: bool) -> Any:
+    def _lit(self, lights: list[LightInfo], shadow_index: int, textured: bool,
+             stereo: bool = False) -> Any:
         """The default material's program, specialised for this set of lights and for
-        textured or plain objects."""
+        textured or plain objects; ``stereo``: both eyes in one pass."""
         kinds = tuple(KIND_CODES.get(light.kind, 0) for light in lights[:glsl.MAX_LIGHTS])
-        key = (kinds, shadow_index, textured)
+        key = (kinds, shadow_index, textured, stereo)
         program = self._lit_programs.get(key)
         if program is None:
-            program = self.ctx.program(vertex_shader=glsl.LIT_VERTEX,
-                                       fragment_shader=glsl.lit_fragment(*key))
+            program = self.ctx.program(
+                vertex_shader=glsl.LIT_VERTEX_STEREO if stereo else glsl.LIT_VERTEX,
+                fragment_shader=glsl.lit_fragment(*key))
             self._lit_programs[key] = program
         return program
 
@@ -647,6 +659,8 @@ class Renderer:
                 [(mesh.vbo, meshes.VERTEX_FORMAT, *meshes.VERTEX_ATTRIBUTES),
                  (self._buffer(batch, level, slot), _INSTANCE_FORMAT, *_INSTANCE_ATTRS)],
                 index_buffer=mesh.ibo, index_element_size=4, skip_errors=True)
+            if slot == _STEREO_SLOT:
+                _instance_divisor(vao, program, 2)
             batch.vaos[(level, slot, program.glo)] = vao
         return vao
 
@@ -709,32 +723,55 @@ class Renderer:
             runs.append(_Run(batch, lod, order[start:stop]))
         return runs
 
-    def _eye_runs(self, eye: Eye, slot: int, world: np.ndarray, radii: np.ndarray,
+    def _eye_runs(self, eyes: list[Eye], slot: int, world: np.ndarray, radii: np.ndarray,
                   inst: np.ndarray) -> list[_Run]:
-        """One eye's draws: the parts in its view frustum (all of them with
-        :attr:`culling` off), each at its level of detail, near to far within a batch so
-        the depth test rejects hidden fragments before they are shaded. An eye that sees
-        what it saw last frame (the same view of parts that did not move) draws the same
-        runs from the instance buffers as they are."""
+        """The draws of one eye, or of both eyes in one pass: the parts in a view frustum
+        (all of them with :attr:`culling` off), each at its level of detail seen from the
+        eyes' middle, near to far within a batch so the depth test rejects hidden
+        fragments before they are shaded. Eyes that see what they saw last frame (the same
+        view of parts that did not move) draw the same runs from the instance buffers as
+        they are."""
         assert self._posed is not None
-        key = (self._posed.version, eye.view.tobytes(), eye.proj.tobytes(), eye.viewport,
-               self.culling, self.lod)
+        key = (self._posed.version, *(e.view.tobytes() + e.proj.tobytes() for e in eyes),
+               eyes[0].viewport, self.culling, self.lod)
         kept = self._eye_cache.get(slot)
         if kept is not None and kept[0] == key:
             self.stats.culled += kept[1]
             return kept[2]
         centres = world[:, :3, 3]
-        visible = (in_frustum(frustum_planes(eye.proj @ eye.view), centres, radii)
-                   if self.culling else np.ones(len(centres), bool))
-        distance = np.linalg.norm(centres - eye.position, axis=1)
-        levels = np.minimum(lod_levels(radii, distance, pixels_per_unit(eye.proj,
-                                                                         eye.viewport[3])),
+        visible = np.zeros(len(centres), bool) if self.culling else np.ones(len(centres), bool)
+        for eye in eyes if self.culling else ():
+            visible |= in_frustum(frustum_planes(eye.proj @ eye.view), centres, radii)
+        middle = sum(e.position for e in eyes) / len(eyes)
+        distance = np.linalg.norm(centres - middle, axis=1)
+        first = eyes[0]
+        levels = np.minimum(lod_levels(radii, distance, pixels_per_unit(first.proj,
+                                                                         first.viewport[3])),
                             self._part_coarsest) if self.lod else np.zeros(len(radii), np.int8)
         culled = int(len(visible) - visible.sum())
         self.stats.culled += culled
         runs = self._upload(visible, distance, levels, inst, slot)
         self._eye_cache[slot] = (key, culled, runs)
         return runs
+
+    def _single_pass(self, eyes: list[Eye]) -> bool:
+        """Whether this frame's two eyes are drawn in one pass: side by side, alike in
+        size, and every batch drawn by the engine's own material (an author's shader
+        takes its matrices per eye)."""
+        if not self.single_pass or len(eyes) != 2:
+            return False
+        (x0, y0, w0, h0), (x1, y1, w1, h1) = eyes[0].viewport, eyes[1].viewport
+        if (w0, h0, y0) != (w1, h1, y1) or x1 != x0 + w0:
+            return False
+        return not any(batch.key[2] for batch in self._batches)
+
+    def _stereo_uniforms(self, program: Any, eyes: list[Eye]) -> None:
+        for name, values in (("u_eye_view", [e.view.T for e in eyes]),
+                             ("u_eye_proj", [e.proj.T for e in eyes]),
+                             ("u_eye_pos", [e.position for e in eyes])):
+            member = program.get(name, None)
+            if member is not None:
+                member.write(np.ascontiguousarray(np.stack(values), dtype=np.float32).tobytes())
 
     def _shadow_light(self, lights: list[LightInfo]) -> int:
         return next((i for i, light in enumerate(lights) if light.shadows), -1)
@@ -753,8 +790,10 @@ class Renderer:
             runs = self._upload(selected, unsorted, level, inst, _SHADOW_SLOT)
             for run in runs:
                 self._face_culling(run.batch)
+                driver = _time.thread_time()
                 self._vao(run.batch, run.level, _SHADOW_SLOT, self._depth).render(
                     instances=len(run.parts))
+                self.stats.driver_ms += (_time.thread_time() - driver) * 1e3
             return len(runs)
 
         deforming = np.zeros(len(casts), bool)
@@ -870,7 +909,12 @@ class Renderer:
         world, radii, inst = self._world()
         screen_eyes = self.camera.eyes(*size)
         eyes = self._seen_eyes(screen_eyes)
-        runs = [self._eye_runs(eye, slot, world, radii, inst) for slot, eye in enumerate(eyes)]
+        single = self._single_pass(eyes)
+        if single:
+            runs = [self._eye_runs(eyes, _STEREO_SLOT, world, radii, inst)]
+        else:
+            runs = [self._eye_runs([eye], slot, world, radii, inst)
+                    for slot, eye in enumerate(eyes)]
         mark = self._stage("upload_ms", start)
         lights = self.lights or [DEFAULT_LIGHT]
         shadow_index = self._shadow_light(lights)
@@ -886,36 +930,51 @@ class Renderer:
         fbo = self._scene_fbo if post or scaled else self.target.fbo
         fbo.use()
         fbo.viewport = (0, 0, *size)
+        driver = _time.thread_time()
         fbo.clear(*self.background, 1.0, depth=1.0)
+        self.stats.driver_ms += (_time.thread_time() - driver) * 1e3
         self.ctx.enable(self.ctx.DEPTH_TEST)
         self._shadows.texture.use(glsl.TEXTURE_UNITS["u_shadow_map"])
         shadowing = shadow_index if light_vp is not None else -1
-        for slot, (eye, eye_runs) in enumerate(zip(eyes, runs, strict=True)):
-            fbo.viewport = eye.viewport
+        passes = [(_STEREO_SLOT, eyes[0], runs[0])] if single else \
+            list(zip(range(len(eyes)), eyes, runs, strict=True))
+        if single:
+            self.ctx.enable_direct(_CLIP_DISTANCE0)
+        for slot, eye, eye_runs in passes:
+            fbo.viewport = (eyes[0].viewport[0], eyes[0].viewport[1],
+                            eyes[0].viewport[2] * 2, eyes[0].viewport[3]) if single \
+                else eye.viewport
             configured: set[int] = set()
             for run in eye_runs:
                 batch = run.batch
                 if batch.key[3]:
                     self._begin_overlay()
-                program = self._lit(lights, shadowing, batch.key[1] != _WHITE)
+                program = self._lit(lights, shadowing, batch.key[1] != _WHITE, single)
                 compiled = self.shaders.state(batch.key[2]) if batch.key[2] else None
                 if compiled is not None:
                     program = compiled.program
                     self.shaders.apply(compiled)
                 if program.glo not in configured:
                     self._frame_uniforms(program, eye, lights, shadow_index, light_vp)
+                    if single:
+                        self._stereo_uniforms(program, eyes)
                     configured.add(program.glo)
                 self._textures[batch.key[1]].use(glsl.TEXTURE_UNITS["u_texture"])
                 self._face_culling(batch)
                 vao = self._vao(batch, run.level, slot, program)
-                self.stats.instances += len(run.parts)
+                copies = 2 if single else 1
+                self.stats.instances += copies * len(run.parts)
                 if compiled is not None and compiled.per_object:
                     self._draw_per_object(program, vao, eye, world[run.parts])
                     continue
-                vao.render(instances=len(run.parts))
+                driver = _time.thread_time()
+                vao.render(instances=copies * len(run.parts))
+                self.stats.driver_ms += (_time.thread_time() - driver) * 1e3
                 self.stats.draw_calls += 1
             self.ctx.enable(self.ctx.DEPTH_TEST)
             self.ctx.disable(self.ctx.BLEND)
+        if single:
+            self.ctx.disable_direct(_CLIP_DISTANCE0)
         self.ctx.disable(self.ctx.CULL_FACE)
         self.stats.batches = len(self._batches)
         mark = self._stage("draw_ms", mark)
@@ -925,7 +984,14 @@ class Renderer:
         if scaled:
             self._scale_up(self._scaled_output(size)[0] if post else self._scene_tex, output)
         mark = self._stage("post_ms", mark)
-        self.hud.draw(self.target.fbo, output)
+        if hasattr(self.target, "frame_depth"):  # a headset's: hands the depth on
+            self.target.frame_depth = self._scene_depth if post or scaled else None
+        hud_fbo = getattr(self.target, "hud_fbo", None)
+        if hud_fbo is not None:  # a headset's HUD is its own (head-locked) layer
+            hud_fbo.clear(0.0, 0.0, 0.0, 0.0)
+            self.target.hud_shown = self.hud.draw(hud_fbo, self.target.hud_size)
+        else:
+            self.hud.draw(self.target.fbo, output)
         if self.before_present is not None:
             self.ctx.finish()
             self.before_present()
@@ -1015,6 +1081,24 @@ class Renderer:
         self.post.release()
         self.shaders.release()
         self.hud.release()
+
+
+def _instance_divisor(vao: Any, program: Any, divisor: int) -> None:
+    """Make every per-instance input of ``vao`` advance every ``divisor`` instances (the
+    stereo pass draws each part twice from one row: glVertexAttribDivisor, which
+    moderngl sets to 1 only)."""
+    import ctypes
+
+    gl = ctypes.CDLL("libGL.so.1")
+    gl.glBindVertexArray(vao.glo)
+    for name in _INSTANCE_ATTRS:
+        member = program.get(name, None)
+        if member is None:
+            continue
+        columns = 4 if name == "i_model" else 1  # a mat4 takes four locations
+        for location in range(member.location, member.location + columns):
+            gl.glVertexAttribDivisor(location, divisor)
+    gl.glBindVertexArray(0)
 
 
 def _gl(matrix: np.ndarray) -> tuple[float, ...]:

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+import engine.scene.blocks as blocks
 import engine.scene.random_state as random_state
 import engine.scene.schema as sc
 from components import (
@@ -36,6 +37,7 @@ from components import (
     Graspable,
     Hand,
     HandState,
+    Headset,
     Hold,
     Joint,
     Light,
@@ -59,12 +61,15 @@ from components.avatar import (
     SavedLayer,
     SavedRequest,
 )
+from components.display import HEADSET_ACTIONS, HEADSET_PROFILES
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, SPRING_KINDS, JointKind, Spring
 from components.script import SavedScript, ScriptHandler, ScriptTimer
 from components.wheelchair import NavigationMode
 from engine.anomalies import AnomalySpec
 from engine.assets import AssetError, Assets, nodes_name
 from engine.assets.geometry import convex_hull
+from engine.experiments.design import Design
+from engine.experiments.scene import read_experiment
 from engine.measures import MeasureSpec
 from engine.memory import paused_gc
 from engine.physics.backend import (
@@ -80,6 +85,7 @@ from engine.physics.backend import (
 )
 from engine.physics.commands import HINGE2_BODIES, TWO_AXES, SetSleepState, parallel
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
+from engine.realtime import STEP_RANGE, STEP_WARNING, TIME_STEP
 from engine.rotation import UNIT_ROUNDING, euler_to_quat, rotate, view_problem
 from engine.scene.anomalies import read_anomalies
 from engine.scene.db import (
@@ -162,6 +168,18 @@ class PostPassSpec:
     origin: str
 
 
+def _binding_problem(action: str, profile: str, path: str) -> str | None:
+    """What is wrong with a headset's ``Bind`` (None: nothing)."""
+    if action not in HEADSET_ACTIONS:
+        return f"unknown action {action!r}{suggest(action, HEADSET_ACTIONS)} " \
+               f"(actions: {', '.join(HEADSET_ACTIONS)})"
+    if profile not in HEADSET_PROFILES:
+        return f"unknown interaction profile {profile!r}{suggest(profile, HEADSET_PROFILES)}"
+    if not path.startswith(("/user/hand/left/", "/user/hand/right/")):
+        return f"the path {path!r} must start with /user/hand/left/ or /user/hand/right/"
+    return None
+
+
 @dataclass(slots=True)
 class SceneSpec:
     """Everything a scene file declares, ready to instantiate."""
@@ -173,7 +191,7 @@ class SceneSpec:
     shader_programs: dict[str, ShaderProgramSpec] = field(default_factory=dict)
     shader_states: dict[str, ShaderStateSpec] = field(default_factory=dict)
     world: WorldSettings = field(default_factory=WorldSettings)
-    time_step: float = 0.01
+    time_step: float = TIME_STEP
     backend: str = BackendName.ODE
     time: float = 0.0
     #: The scene's random generator when a saved state was written (see random_state).
@@ -196,6 +214,8 @@ class SceneSpec:
     measures: list[MeasureSpec] = field(default_factory=list)
     #: The visual anomalies declared (``DoubleVision``, ``Hemianopia``, ...).
     anomalies: list[AnomalySpec] = field(default_factory=list)
+    #: The ``Experiment`` block: the study's design (engine.experiments), if any.
+    experiment: Design | None = None
     #: The ``PostPass`` blocks, in order.
     post_passes: list[PostPassSpec] = field(default_factory=list)
 
@@ -269,12 +289,9 @@ class SceneIds:
 
 _DEFAULTS = {name: {k: f.default for k, f in fields.items()}
              for name, fields in sc.SCHEMAS.items()}
+blocks.on_register(lambda name: _DEFAULTS.__setitem__(
+    name, {k: f.default for k, f in sc.SCHEMAS[name].items()}))
 
-#: The time steps a file may ask for (s): past the upper one a step jumps whole seconds
-#: (``TimeStep 10`` ran 3,000 simulated seconds in 300 frames); above ``STEP_WARNING``
-#: contacts and joints lose accuracy, which is told as a warning.
-STEP_RANGE = (0.0, 1.0)
-STEP_WARNING = 0.05
 #: The largest World Extent (m): ODE's hash space needs every bounding box within about
 #: 4.5e15 m, and past 1e12 m doubles no longer place a body to the millimetre.
 MAX_EXTENT = 1e12
@@ -459,6 +476,7 @@ class _Builder:
         self.scene_entities(root, spec)
         spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
         spec.anomalies = read_anomalies(root.blocks, self.report, self.problems)
+        spec.experiment = read_experiment(db.root, self.report, spec.anomalies, self.folder)
         self.check_hand_inputs(spec.input)
         for i, blk in enumerate(root.blocks("Avatar")):
             spec.entities.append(self.avatar(blk, i))
@@ -572,7 +590,37 @@ class _Builder:
             comps.append(UserOwned(r("User")))
         if r.has("Controller"):
             comps.append(_controller(_Reader(r.value("Controller").data, "Controller")))
+        comps += self.declared_blocks(r, "Object")
         return EntitySpec(oid, comps, blk.loc)
+
+    def declared_blocks(self, r: _Reader | _Index, place: str) -> list[Any]:
+        """The components of the blocks features declared for ``place`` (engine.scene.
+        blocks), a content folder's own among them."""
+        made = (self.declared(block, blk) for block in blocks.BLOCKS.values()
+                if place in block.inside for blk in r.blocks(block.name))
+        return [component for component in made if component is not None]
+
+    def declared(self, block: blocks.BlockType, blk: Block) -> Any:
+        """One declared block's component; None (told at the line) when a value is out of
+        its key's range: the block is left out."""
+        r = _Reader(blk, block.name)
+        values = {k: r(k) for k in block.keys}
+        problems = block.problems(values)
+        for k, message in problems:
+            self.report.error(r.value(k).loc, f"{block.name}: {message}")
+        return None if problems else block.build(values)
+
+    def declared_entities(self, root: _Index, spec: SceneSpec) -> None:
+        """Top-level declared blocks: an entity each, named by its ID."""
+        for block in blocks.BLOCKS.values():
+            if "Scene" not in block.inside:
+                continue
+            for i, blk in enumerate(root.blocks(block.name)):
+                component = self.declared(block, blk)
+                bid = _Reader(blk, block.name)("ID") or f"{block.name.lower()}{i}"
+                parts = [Name(bid)] + ([component] if component is not None else [])
+                spec.entities.append(EntitySpec(bid, parts, blk.loc,
+                                                skipped=component is None))
 
     def visual_geometry(self, vis: _Reader, size: Any
                         ) -> tuple[list[Shape], str | None, tuple[float, float, float]]:
@@ -1290,7 +1338,7 @@ class _Builder:
             self.problems.append(Diagnostic(
                 where.loc.path, where.loc.line, where.loc.col, WARNING,
                 f"TimeStep {step:g} s is long: contacts and joints lose accuracy past "
-                f"{STEP_WARNING:g} s (0.01 is the default)"))
+                f"{STEP_WARNING:g} s ({TIME_STEP:g} is the default)"))
 
     def scene_entities(self, root: _Index, spec: SceneSpec) -> None:
         for i, b in enumerate(root.blocks("Camera")):
@@ -1315,6 +1363,13 @@ class _Builder:
             spec.measures.append(MeasureSpec(r("ID"), r("Object"), r("Value")))
         for b in root.blocks("Display"):
             r = _Reader(b, "Display")
+            if r("Kind") == "openxr":
+                self.headset(spec, r, b)
+                continue
+            if not r("ID"):
+                self.report.error(b.loc, "a screen Display needs an ID (the name "
+                                  "colosseum join --display gives); it is left out")
+                continue
             display = Display(_floats(r("LowerLeft")), _floats(r("LowerRight")),
                               _floats(r("UpperLeft")), None, r("Tracker"), _floats(r("Eye")),
                               float(r("Near")), float(r("Far")))
@@ -1346,6 +1401,7 @@ class _Builder:
             sid = f"script{i}"
             script = Script(file=e.value.data, saved=self.script_states.pop(sid, None))
             spec.entities.append(EntitySpec(sid, [Name(sid), script], e.loc))
+        self.declared_entities(root, spec)
 
     def unclaimed_script_states(self) -> None:
         """Warn of each ScriptState no script took (after every script's owner is built)."""
@@ -1354,6 +1410,35 @@ class _Builder:
                 self.problems.append(Diagnostic(
                     block.loc.path, block.loc.line, block.loc.col, WARNING,
                     f"ScriptState for {owner!r}, which runs no script here; ignored"))
+
+    def headset(self, spec: SceneSpec, r: _Reader, b: Any) -> None:
+        """``Display { Kind "openxr" }``: the headset, as a Headset component (one)."""
+        if any(isinstance(c, Headset) for e in spec.entities for c in e.components):
+            self.report.error(b.loc, "a second headset Display: a run draws into one headset; "
+                              "this one is left out")
+            return
+        scale = float(r("RenderScale"))
+        if not 0.25 <= scale <= 2.0:
+            self.report.error(r.value("RenderScale").loc,
+                              f"RenderScale must be 0.25 to 2, got {scale:g}")
+            scale = min(max(scale, 0.25), 2.0)
+        bindings = []
+        for bind in b.blocks("Bind"):
+            rb = _Reader(bind, "Bind")
+            problem = _binding_problem(rb("Action"), rb("Profile"), rb("Path"))
+            if problem is not None:
+                self.report.error(bind.loc, f"Bind: {problem}; this binding is left out")
+                continue
+            bindings.append((rb("Action"), rb("Profile"), rb("Path")))
+        headset = Headset(
+            space=r("Space"), when_hidden=r("WhenHidden"), mirror=r("Mirror"),
+            fallback=r("Fallback"), refresh_rate=float(r("RefreshRate")), render_scale=scale,
+            depth=bool(r("Depth")), recenter_key=str(r("RecenterKey")).lower(),
+            haptic_grasp=min(max(float(r("HapticGrasp")), 0.0), 1.0),
+            haptic_touch=min(max(float(r("HapticTouch")), 0.0), 1.0),
+            haptic_impulse=max(float(r("HapticImpulse")), 0.0), bindings=tuple(bindings))
+        hid = r("ID") or "headset"
+        spec.entities.append(EntitySpec(hid, [Name(hid), headset], b.loc))
 
     def camera_view(self, r: _Reader, cid: str, blk: Block) -> None:
         """Warn about a camera with no well-defined view direction (the picture and the

@@ -16,6 +16,7 @@ import difflib
 from typing import Any
 
 import engine.scene.schema as sc
+from engine.scene.blocks import from_content
 
 _TYPES = {
     sc.INT_T: "INT", sc.FLOAT_T: "FLOAT", sc.BOOL_T: "INT 0/1", sc.STRING_T: "STRING",
@@ -94,6 +95,12 @@ _EXAMPLES: dict[tuple[str, str], str] = {
     ("Session", "Chair"): '"wheelchair"', ("Session", "Ground"): '["floor" "ramp"]',
     ("Wheelchair", "Lag"): "[0.0012 -0.0004]", ("Wheelchair", "Measured"): "[2.1 2.05]",
     ("Wheelchair", "Pending"): "[0.6 0.6]", ("Wheelchair", "Still"): "0.3",
+    ("Experiment", "ID"): '"reach"', ("Experiment", "Track"): '["wheelchair" "hand_r"]',
+    ("ExperimentFactor", "ID"): '"blur"', ("ExperimentFactor", "Levels"): "[0 0.3 0.6]",
+    ("ExperimentFactor", "Variable"): '"blur_level"', ("ExperimentFactor", "Anomaly"): '"blur"',
+    ("ExperimentFactor", "Param"): '"Acuity"', ("Staircase", "ID"): '"contrast"',
+    ("Staircase", "Step"): "[0.1 0.05 0.02]", ("Staircase", "Anomaly"): '"contrast_loss"',
+    ("Staircase", "Param"): '"Loss"', ("Staircase", "Variable"): '"loss"',
 }
 
 
@@ -171,8 +178,9 @@ def about(block: str) -> str:
     return f"{where}{' as ' + key if key != block else ''}: {doc}"
 
 
-def blocks() -> list[str]:
-    return list(sc.SCHEMAS)
+def blocks(content: bool = False) -> list[str]:
+    """Every block; with ``content``, those content folders declared too."""
+    return [b for b in sc.SCHEMAS if content or not from_content(b)]
 
 
 def find_block(name: str) -> str | None:
@@ -218,8 +226,10 @@ def reference_markdown() -> str:
            "left out takes it), what it means and an example. Units: metres, kilograms, "
            "seconds, degrees; Z is up. Keys starting with a lower-case letter are your own "
            "variables. `colosseum keys BLOCK` prints one block in a terminal.", ""]
-    out += ["Blocks: " + ", ".join(f"[{b}](#{b.lower()})" for b in sc.SCHEMAS), ""]
-    for block, fields in sc.SCHEMAS.items():
+    out += ["Blocks: " + ", ".join(f"[{b}](#{b.lower()})" for b in blocks()), ""]
+    for block in blocks():
+        fields = {k: f for k, f in sc.SCHEMAS[block].items()
+                  if not (f.struct and from_content(f.struct))}
         out += [f"## {block}", "", about(block)[0].upper() + about(block)[1:] + ".", "",
                 "| key | type | default | meaning | example |", "|---|---|---|---|---|"]
         for key, field in fields.items():

@@ -13,7 +13,7 @@ import numpy as np
 
 from engine.memory import paused_gc
 from engine.scene.db import SceneDB
-from engine.scene.diagnostics import Diagnostic, Report, Reporter, SceneError
+from engine.scene.diagnostics import ERROR, Diagnostic, Report, Reporter, SceneError
 from engine.scene.factory import Pose, SceneSpec, build_specs
 from engine.scene.parser import Limits, parse_file, parse_text
 from engine.scene.paths import FOLDER, NOT_FOUND, file_problem, shown
@@ -87,7 +87,22 @@ def _with_folder(path: str | Path, rng: np.random.Generator | None,
         raise unreadable
     db = parse_file(target, rng, limits, allow)
     folder = content_folder(db)
+    _declare_blocks(folder)
     return validated(db, folder, allow=allow), folder
+
+
+def _declare_blocks(folder: Path) -> None:
+    """Import the content folder's systems/*.py first: the blocks they declare
+    (engine.scene.blocks) are part of the scene's language. A module that fails is a
+    SceneError at its file."""
+    from engine.content import ContentError, import_systems
+
+    try:
+        import_systems(folder)
+    except ContentError as exc:
+        path = str(exc).split(":", 1)[0]
+        raise SceneError([Diagnostic(path, 1, 1, ERROR, str(exc).split(": ", 1)[-1])]
+                         ) from exc
 
 
 class Besides(Collection[str]):

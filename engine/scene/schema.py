@@ -24,9 +24,11 @@ from typing import Any
 from components.joint import SCENE_JOINT_TYPES
 from components.shape import ShapeKind
 from engine.anomalies import ANOMALIES, COMMON_DOCS, EYES, ONSET_DEFAULT
+from engine.experiments.ordering import ORDERS as EXPERIMENT_ORDERS
 from engine.measures import QUANTITIES
 from engine.physics.backend import WORLD_EXTENT, BackendName, WorldSettings
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
+from engine.realtime import TIME_STEP
 
 #: The solver settings' defaults, defined once (engine.physics.backend.WorldSettings).
 _WORLD = WorldSettings()
@@ -129,6 +131,9 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Session": _f(STRUCT_T, None, "a session log: one JSON-lines file per run with the "
                       "time, task events, grasps, the chair's pose and collisions, anomaly "
                       "switches (the session plugin)", struct="Session"),
+        "Experiment": _f(STRUCT_T, None, "a study's design: factors and levels, blocks, "
+                         "counterbalancing, practice trials, staircases (colosseum experiment "
+                         "run; docs/experiments.md)", struct="Experiment"),
         "Content": _f(STRING_T, None, "the content folder a saved state continues (relative "
                       "to this file): its file names are relative to that folder, its "
                       "systems/ and scripts/ are the ones used"),
@@ -374,7 +379,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                     "of the run", allowed=QUANTITIES),
     },
     "Display": {
-        "ID": _id("display", required=True),
+        "ID": _id("display (a screen's is required)"),
+        "Kind": _f(ENUM_T, "screen", "screen: a flat screen of a wall or CAVE (the keys "
+                   "below up to Far); openxr: the headset, through the active OpenXR runtime "
+                   "(the keys from Space on)", allowed=("screen", "openxr")),
         "LowerLeft": _f(VEC3_T, (-1.0, 0.0, 0.0), "m, world frame: the screen's lower left "
                         "corner"),
         "LowerRight": _f(VEC3_T, (1.0, 0.0, 0.0), "m, world frame: its lower right corner"),
@@ -387,6 +395,41 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Eye": _f(VEC3_T, (0.0, -2.0, 0.75), "m, world frame: the eye while no head is tracked"),
         "Near": _f(FLOAT_T, 0.05, "m, nearest distance drawn"),
         "Far": _f(FLOAT_T, 500.0, "m, farthest distance drawn"),
+        "Space": _f(ENUM_T, "stage", "openxr: the tracking space (stage: the floor at z = 0; "
+                    "local_floor, then local, where the runtime has no stage)",
+                    allowed=("stage", "local_floor", "local")),
+        "WhenHidden": _f(ENUM_T, "run", "openxr: a headset taken off pauses the simulation "
+                         "(pause) or not (run)", allowed=("run", "pause")),
+        "Mirror": _f(ENUM_T, "none", "openxr: a window for the experimenter showing the left "
+                     "eye or both (needs a display)", allowed=("none", "left", "both")),
+        "Fallback": _f(ENUM_T, "none", "openxr: when no headset can be used, run in the "
+                       "window (window) or end with the message (none)",
+                       allowed=("none", "window")),
+        "RefreshRate": _f(FLOAT_T, 0.0, "Hz, openxr: the display's rate where the runtime can "
+                          "set it (0: the runtime's)"),
+        "RenderScale": _f(FLOAT_T, 1.0, "openxr: the share of the runtime's recommended "
+                          "resolution per eye each axis is drawn at (0.25 to 2)"),
+        "Depth": _f(BOOL_T, 1, "openxr: hand the runtime the depth of each eye (for its "
+                    "reprojection), where it takes it"),
+        "RecenterKey": _f(STRING_T, "f8", "openxr: the key that moves the player over the "
+                          "camera, facing its way (Lua: recenter())"),
+        "HapticGrasp": _f(FLOAT_T, 0.6, "openxr: amplitude 0..1 of the pulse a grasp gives "
+                          "the holding controller (0: none)"),
+        "HapticTouch": _f(FLOAT_T, 0.25, "openxr: amplitude 0..1 of the pulse when a hand "
+                          "starts touching something it could grasp (0: none)"),
+        "HapticImpulse": _f(FLOAT_T, 0.5, "1/(N s), openxr: a hand's contact pulses with "
+                            "amplitude impulse times this (capped at 1; 0: none)"),
+        "Bind": _f(STRUCT_T, None, "openxr: bind an action to another input of a "
+                   "controller", repeat=True, struct="Bind"),
+    },
+    "Bind": {
+        "Action": _f(STRING_T, None, "the action: grip, aim, trigger, trigger_value, squeeze, "
+                     "squeeze_value, thumbstick, thumbstick_click, a, b, x, y, menu, select, "
+                     "haptic", required=True),
+        "Profile": _f(STRING_T, None, "the interaction profile, e.g. oculus/touch_controller",
+                      required=True),
+        "Path": _f(STRING_T, None, "the input, e.g. /user/hand/right/input/trigger/value",
+                   required=True),
     },
     "Light": {
         "ID": _id("light"),
@@ -459,6 +502,74 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                      "is not a collision", ref="Object"),
         "EndRun": _f(BOOL_T, 1, "1: the run stops when a script ends the session "
                      "(emit(\"session_end\", {reason = ...}))"),
+    },
+    "Experiment": {
+        "ID": _f(STRING_T, "", "the experiment's name: sessions go to "
+                 "sessions/<ID>/<participant>/ (default: the content folder's name)"),
+        "Factor": _f(STRUCT_T, None, "a factor and its levels", repeat=True,
+                     struct="ExperimentFactor"),
+        "Staircase": _f(STRUCT_T, None, "an adaptive procedure: one block of trials after "
+                        "the factorial ones", repeat=True, struct="Staircase"),
+        "Order": _f(ENUM_T, "random", "the order of the within cells: random (a seed per "
+                    "participant and block), latin (a Latin square's row by participant "
+                    "number), balanced (a balanced Latin square's), fixed (as declared)",
+                    allowed=EXPERIMENT_ORDERS),
+        "Blocks": _f(INT_T, 1, "blocks; each holds every cell Repeats times"),
+        "Repeats": _f(INT_T, 1, "trials per cell in each block"),
+        "Practice": _f(INT_T, 0, "practice trials before the first block (block 0, marked)"),
+        "Timeout": _f(FLOAT_T, 60.0, "s of simulated time after which a trial ends with "
+                      "outcome \"timeout\""),
+        "Reset": _f(ENUM_T, "trial", "trial: every trial starts from a freshly built world; "
+                    "never: one world runs through the session", allowed=("trial", "never")),
+        "EndOn": _f(ENUM_T, "finish", "what ends a trial besides the timeout: finish "
+                    "(trial:finish(outcome)) or response (also the first trial:respond)",
+                    allowed=("finish", "response")),
+        "Seed": _f(INT_T, 0, "the design's seed: random orders come from it and the "
+                   "participant number"),
+        "Track": _f(STRINGVECTOR_T, None, "objects whose poses are logged each trial "
+                    "(tracking/trial-NNN.csv)", ref="Object"),
+        "TrackCamera": _f(BOOL_T, 0, "1: log the active camera (the head) too"),
+        "TrackRate": _f(FLOAT_T, 30.0, "Hz of the tracking log (0: every frame)"),
+        "Break": _f(FLOAT_T, 0.0, "s of pause between blocks (none with --fast)"),
+    },
+    "ExperimentFactor": {
+        "ID": Field(STRING_T, None, "the factor's name (a trials.csv column; Lua "
+                    "experiment:condition(ID))", required=True),
+        "Levels": Field(ANY_T, None, "its levels: numbers [0 0.5 1] or names "
+                        "[\"none\" \"left\"]", required=True),
+        "Within": _f(BOOL_T, 1, "1: every participant meets every level; 0: between "
+                     "participants, by participant number"),
+        "Variable": _f(STRING_T, None, "a scene variable the level sets before the world is "
+                       "built (as --param)"),
+        "Anomaly": _f(STRING_T, None, "an anomaly the level switches: \"off\" or \"none\" "
+                      "off, any other level on"),
+        "Param": _f(STRING_T, None, "the Anomaly's parameter the level sets (Acuity, Side, "
+                    "Loss, ...)"),
+    },
+    "Staircase": {
+        "ID": Field(STRING_T, None, "its name (a trials.csv column holding the intensity)",
+                    required=True),
+        "Method": _f(ENUM_T, "updown", "updown: a transformed up/down staircase; quest: a "
+                     "Bayesian (QUEST-style) one", allowed=("updown", "quest")),
+        "Start": _f(FLOAT_T, 0.5, "the first trial's intensity"),
+        "Step": _f(VECTOR_T, (0.1,), "step sizes: the first, then one more after each "
+                   "reversal (the last kept)"),
+        "Down": _f(INT_T, 3, "correct answers in a row that lower the intensity"),
+        "Up": _f(INT_T, 1, "wrong answers in a row that raise it"),
+        "Trials": _f(INT_T, 40, "at most this many trials"),
+        "Reversals": _f(INT_T, 0, "stop after this many reversals (0: after Trials)"),
+        "Average": _f(INT_T, 6, "the threshold is the mean of the last this many reversals"),
+        "Min": _f(FLOAT_T, 0.0, "the lowest intensity"),
+        "Max": _f(FLOAT_T, 1.0, "the highest intensity"),
+        "Response": _f(STRING_T, "seen", "the response (trial:respond(name, value)) whose "
+                       "true value is a correct answer"),
+        "Slope": _f(FLOAT_T, 10.0, "quest: the logistic psychometric function's slope "
+                    "(per unit of intensity)"),
+        "Guess": _f(FLOAT_T, 0.0, "quest: the guess rate"),
+        "Lapse": _f(FLOAT_T, 0.01, "quest: the lapse rate"),
+        "Variable": _f(STRING_T, None, "a scene variable the intensity sets"),
+        "Anomaly": _f(STRING_T, None, "an anomaly switched on at the intensity"),
+        "Param": _f(STRING_T, None, "the Anomaly's parameter the intensity sets"),
     },
     "Wheelchair": {
         "Feedback": _f(BOOL_T, 0, "0: velocity mode (the paper's): the wheels turn only as "
@@ -642,7 +753,7 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     },
     "World": {
         "Gravity": _f(VEC3_T, (0.0, 0.0, -9.81), "m/s^2"),
-        "TimeStep": _f(FLOAT_T, 0.01, "s, fixed dynamics step (more than 0, at most 1; "
+        "TimeStep": _f(FLOAT_T, TIME_STEP, "s, fixed dynamics step (more than 0, at most 1; "
                        "past 0.05 contacts and joints lose accuracy)"),
         "Extent": _f(FLOAT_T, WORLD_EXTENT, "m: bodies stay within this distance of the "
                      "origin on every axis; positions beyond it are refused, and a body "

@@ -33,10 +33,11 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+import engine.scene.blocks as blocks
 import engine.scene.random_state as random_state
 import engine.scene.schema as sc
 from components import HandState, Joint, Name, Transform, Wheelchair
@@ -538,6 +539,29 @@ def _taken(ids: SceneIds) -> set[str]:
     return {es.id for es in ids.spec.entities} | {js.id for js in ids.spec.joints}
 
 
+def _declared(world: World, entity: int, blk: Block) -> None:
+    """The components of declared blocks (engine.scene.blocks) as they are now."""
+    for component in world.components_for_entity(entity):
+        block = blocks.of_component(component)
+        if block is None:
+            continue
+        entries = [(k, _literal_value(v)) for k, v in block.save(component).items()]
+        _set(blk, block.name, _block(block.name, entries).value)
+
+
+def _literal_value(value: Any) -> Value:
+    """A Python value as scene text: a number, a flag, text or a vector."""
+    if isinstance(value, bool):
+        return _flag(value)
+    if isinstance(value, int):
+        return Value(INT, value, _HERE)
+    if isinstance(value, float):
+        return _number(value)
+    if isinstance(value, str):
+        return _string(value)
+    return _vec(value)
+
+
 def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
                 names: dict[int, str] | None = None) -> str:
     """Scene text of the running simulation; needs a scene loaded with ``instantiate``.
@@ -590,6 +614,7 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
         chair = world.try_component(eid, Wheelchair)
         if chair is not None:
             _wheelchair(blk, chair)
+        _declared(world, eid, blk)
     joints = [e for e in root.entries if e.key == "Joint"]
     for js, entry in zip(spec.joints, joints, strict=False):
         joint = _live_joint(world, ids.joints.get(js.id), names)

@@ -12,6 +12,7 @@ from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import engine.scene.blocks as blocks
 import engine.scene.schema as sc
 from engine.assets.generated import is_generated
 from engine.confine import Confinement
@@ -235,6 +236,16 @@ def _quick(owner: str, key: str, f: sc.Field) -> tuple[frozenset[str], tuple[int
 _CHECKS = {name: {k: (f, *_quick(name, k, f)) for k, f in fields.items()}
            for name, fields in sc.SCHEMAS.items()}
 _ID_KINDS = frozenset(sc.ID_KINDS)
+
+
+def _refresh(name: str) -> None:
+    """A block registered (engine.scene.blocks): its checks and the parent's anew."""
+    fields = sc.SCHEMAS[name]
+    _REQUIRED[name] = [k for k, f in fields.items() if f.required]
+    _CHECKS[name] = {k: (f, *_quick(name, k, f)) for k, f in fields.items()}
+
+
+blocks.on_register(_refresh)
 #: Field types whose check is only the value's kind.
 _KINDS = {sc.FLOAT_T: (INT, FLOAT), sc.STRUCT_T: (STRUCTURE,),
           sc.NUMBER_OR_VECTOR_T: (INT, FLOAT, VECTOR)}

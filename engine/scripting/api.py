@@ -52,11 +52,20 @@ Scene and engine::
     getAnomaly(id) -> {kind=, enabled=, level=, onset=, eye=, <params>}
     enablePost(id, on)              setPostUniform(id, uniform, value)   a scene's PostPass
     setCamera{position=, lookAt=, follow=obj, offset=, fov=, id=}
+    haptic(hand, amplitude, seconds) -> bool   pulse the headset controller driving a hand
+                                    (a hand object or a tracker name, "hand_r"); amplitude 0..1
+    recenter()                      put the headset's wearer over the camera, facing its way
     requestPlugin(name) -> bool     (the engine's plugin names and the paper's aliases:
                                      osg, osgsim -> render; openalpp -> sound; the paper's
                                      spelling ``requrestPlugin`` works too)
     time() -> simulated seconds     log(...), warn(...), print(...)
     measure(name, value)            a final value of the run (--stats measures, sweeps)
+    experiment:condition(factor) -> the level (text) of the trial running, nil outside one
+    experiment:trial() -> the trial running or nil: index, block, blockTrial, practice,
+                                    condition, participant, staircase, intensity;
+                                    trial:respond(name, value) records a response,
+                                    trial:finish(outcome) ends it (``experiment``: colosseum
+                                    experiment run, docs/experiments.md)
     after(sec, fn) / every(sec, fn) -> timer; cancel(timer)
     on(name, fn(data, name)); emit(name, data)   custom events (also seen by Python);
                                     data is plain data: objects in it arrive as entity ids
@@ -81,7 +90,8 @@ clip)``), ``onReload()``
 (after the file changed and was re-run in the script's environment: write ``count =
 count or 0`` to keep state across reloads), ``onResume()`` (instead of ``onStart``
 when a saved state runs: the script's variables, timers and handlers are back, see
-:mod:`engine.scripting.persist`).
+:mod:`engine.scripting.persist`), ``onTrialStart(trial)`` and ``onTrialEnd(trial)`` (a
+trial of ``colosseum experiment run`` begins, its condition set, and ends).
 
 Input state, any time (nil before a device has said anything)::
 
@@ -118,7 +128,15 @@ from engine.input.state import InputState
 from engine.messages import MessageLog
 from engine.physics import commands as cmd
 from engine.scripting.runtime import ScriptRuntime, to_python
-from engine.services import AVATAR_METHODS, AvatarControl, HandControl, ShaderControl, SoundControl
+from engine.services import (
+    AVATAR_METHODS,
+    AvatarControl,
+    ExperimentControl,
+    HandControl,
+    HeadsetControl,
+    ShaderControl,
+    SoundControl,
+)
 from engine.system import PluginName
 
 if TYPE_CHECKING:
@@ -319,10 +337,20 @@ end
 function C.getAnomaly(id) return P.get_anomaly(id) end
 function C.enablePost(id, on) P.enable_post(id, on ~= false) end
 function C.setPostUniform(id, name, value) P.set_post_uniform(id, name, plain(value)) end
+function C.haptic(hand, amplitude, seconds)
+  if type(hand) ~= "string" then hand = oid("haptic", hand) end
+  return P.haptic(hand, amplitude, seconds)
+end
+function C.recenter() P.recenter() end
 function C.requestPlugin(name) return P.request_plugin(name) end
 C.requrestPlugin = C.requestPlugin
 function C.time() return P.time() end
 function C.measure(name, value) P.measure(name, value) end
+
+local E = {}  -- the experiment running (colosseum experiment run), as experiment:...
+function E:condition(name) return P.experiment("condition", name) end
+function E:trial() return P.experiment("trial") end
+C.experiment = E
 
 local I = {}
 function I.tracker(name) return P.tracker(name) end
@@ -464,7 +492,7 @@ class ScriptAPI:
             "button": self.button, "axis": self.axis, "key": self.key,
             "avatar": self.avatar, "set_anomaly": self.set_anomaly,
             "get_anomaly": self.get_anomaly, "enable_post": self.enable_post,
-            "set_post_uniform": self.set_post_uniform,
+            "set_post_uniform": self.set_post_uniform, "experiment": self.experiment,
             "avatar_methods": runtime.lua.table_from(AVATAR_METHODS),
         })
         return runtime.lua.execute(_LUA_API, runtime.kernel, P, name="=colosseum")
@@ -897,6 +925,40 @@ class ScriptAPI:
         assert self.runtime is not None
         return self.runtime.to_lua(out)
 
+    def experiment(self, method: str, *args: Any) -> Any:
+        """``experiment:condition(name)``, ``experiment:trial()`` and a trial's
+        ``respond``/``finish`` (the experiment plugin's :class:`ExperimentControl`)."""
+        control = self.engine.try_resource(ExperimentControl)
+        if control is None:
+            if method in ("condition", "trial"):
+                return None
+            raise ScriptAPIError(f"trial:{method}: no experiment is running (colosseum "
+                                 "experiment run)")
+        try:
+            if method == "condition":
+                return control.condition(str(args[0]) if args else "")
+            if method == "respond":
+                name, value = (list(args) + [None, None])[:2]
+                control.respond(str(name), to_python(value))
+                return None
+            if method == "finish":
+                control.finish("done" if not args or args[0] is None else str(args[0]))
+                return None
+        except (KeyError, ValueError, TypeError) as exc:  # TypeError: a function as a value
+            raise ScriptAPIError(f"experiment: {exc.args[0] if exc.args else exc}") from None
+        data = control.trial_data()
+        return None if data is None else self.trial_table(data)
+
+    def trial_table(self, data: dict[str, Any]) -> Any:
+        """A Lua table of the trial's data with its methods ``respond`` and ``finish``."""
+        assert self.runtime is not None
+        table = self.runtime.to_lua(data)
+        table["respond"] = lambda _t, name=None, value=None: self.experiment(
+            "respond", name, value)
+        table["finish"] = lambda _t, outcome=None: self.experiment("finish", outcome)
+        table["condition"] = lambda _t, name=None: self.experiment("condition", name)
+        return table
+
     def enable_post(self, name: Any, on: bool) -> None:
         """``enablePost(id, on)``: switch a scene's PostPass."""
         system = self._service(ShaderControl, "enablePost")
@@ -949,6 +1011,31 @@ class ScriptAPI:
             else:
                 raise ScriptAPIError(f"setCamera: unknown option {key!r} "
                                      "(position, lookAt, follow, offset, fov, id)")
+
+    def haptic(self, hand: Any, amplitude: Any, seconds: Any) -> bool:
+        """Pulse the headset controller driving ``hand`` (a hand object, or a tracker name
+        such as ``hand_r``); False without a headset or a controller for it."""
+        for what, value, top in (("amplitude", amplitude, 1.0), ("seconds", seconds, 10.0)):
+            if not isinstance(value, int | float) or isinstance(value, bool) or \
+                    not 0 <= value <= top:
+                raise ScriptAPIError(f"haptic: {what} must be a number from 0 to {top:g}, "
+                                     f"got {value!r}")
+        if isinstance(hand, str):
+            source = hand
+        else:
+            component = self.engine.world.try_component(self._entity(hand, "haptic"), Hand)
+            if component is None:
+                raise ScriptAPIError(f"haptic: {self._called(hand)} is not a hand")
+            source = component.tracker
+        headset = self._service(HeadsetControl, "haptic")  # type: ignore[type-abstract]
+        return bool(headset is not None and headset.haptic(source, float(amplitude),
+                                                           float(seconds)))
+
+    def recenter(self) -> None:
+        """Put the headset's wearer over the active camera, facing its way."""
+        headset = self._service(HeadsetControl, "recenter")  # type: ignore[type-abstract]
+        if headset is not None:
+            headset.recenter()
 
     def request_plugin(self, name: Any) -> bool:
         """Load an engine plugin by the name (or alias) the engine registered it under."""

@@ -27,7 +27,7 @@ REPO = Path(__file__).resolve().parents[2]
 def _engine(sound: str, backend: str = "ballistic", fast: bool = True,
             gravity: tuple[float, float, float] = (0.0, 0.0, 0.0),
             content: Path | None = None) -> Engine:
-    cfg = EngineConfig(backend=backend, fast=fast, sound=sound, content_dir=content,
+    cfg = EngineConfig(backend=backend, fast=fast, sound=sound, content_dir=content, dt=1 / 60,
                        world=WorldSettings(gravity=gravity, auto_sleep=False))
     engine = create_engine(cfg)
     engine.add_plugin(SoundPlugin())

@@ -107,7 +107,7 @@ def test_scene_errors_are_reported_with_places_and_the_run_goes_on_without_them(
     assert re.search(r"main\.scene:\d+:\d+: error: unknown key 'Mas'", result.stderr)
     assert "did you mean 'Mass'" in result.stderr and "TimeStep must be" in result.stderr
     assert re.search(r'without 2 broken part\(s\).*\n  \S*main\.scene:2: TimeStep\n'
-                     r'  \S*main\.scene:24: Object "crate"', result.stderr), result.stderr
+                     r'  \S*main\.scene:25: Object "crate"', result.stderr), result.stderr
     assert "ball z=" in result.stdout  # the rest ran, the World's gravity kept
     saved = (sim / "state.scene").read_text()
     assert '"ball"' in saved and '"crate"' not in saved and "Gravity [0 0 -9.81]" in saved

@@ -187,7 +187,7 @@ def test_a_command_for_a_removed_body_is_dropped_with_its_scene_id(mode, caplog)
 
 
 def test_a_command_waits_for_a_body_that_reaches_the_backend_later():
-    with create_engine(EngineConfig(backend="ballistic", fast=True,)) as eng:
+    with create_engine(EngineConfig(backend="ballistic", fast=True, dt=1 / 60)) as eng:
         late = eng.spawn(Physical(gravity=False))  # its Transform comes after the spawn
         eng.physics.push(cmd.SetVelocity(late, (2, 0, 0), (0, 0, 0)))
         eng.world.add_component(late, Transform())
@@ -198,7 +198,7 @@ def test_a_command_waits_for_a_body_that_reaches_the_backend_later():
 def test_an_engine_without_physics_keeps_commands_for_a_plugin_that_comes_later():
     from engine.app import Engine
 
-    with Engine(EngineConfig(backend="ballistic", fast=True)) as eng:
+    with Engine(EngineConfig(backend="ballistic", fast=True, dt=1 / 60)) as eng:
         assert isinstance(eng.physics, DetachedPhysics)
         ball = eng.spawn(Transform(position=(0, 0, 1)), Physical(gravity=False))
         eng.physics.set_velocity(ball, (0, 3, 0), (0, 0, 0))

@@ -16,7 +16,7 @@ from systems.dynamics import DynamicsSystem
 
 def drifting_engine(n: int) -> tuple[Engine, list[int]]:
     """Bodies without gravity, body i moving at (i + 1) m/s along X from x = 0."""
-    cfg = EngineConfig(backend="ballistic", mode="threaded", fast=True,
+    cfg = EngineConfig(backend="ballistic", mode="threaded", fast=True, dt=1 / 60,
                        world=WorldSettings(gravity=(0.0, 0.0, 0.0)))
     eng = create_engine(cfg)
     ids = [eng.spawn(Transform(linear_velocity=(i + 1.0, 0, 0)), Physical()) for i in range(n)]
@@ -73,7 +73,7 @@ def test_commands_from_the_main_thread_are_applied_between_steps():
 
 
 def test_threaded_seconds_stops_physics_at_the_requested_time():
-    cfg = EngineConfig(backend="ballistic", mode="threaded", fast=True)
+    cfg = EngineConfig(backend="ballistic", mode="threaded", fast=True, dt=1 / 60)
     with create_engine(cfg) as eng:
         ball = eng.spawn(Transform(position=(0, 0, 10)), Physical())
         eng.run(seconds=0.5)

@@ -113,3 +113,28 @@ def test_a_pose_past_float_range_is_dropped_and_the_filter_starts_afresh(caplog)
     assert np.isfinite(tracker.position).all() and np.isfinite(tracker.velocity).all()
     assert tracker.position[0] == pytest.approx(0.5e301)  # the filter was reset at 0.5
     assert "pose is not finite (check the Tracker's Scale" in caplog.text
+
+
+def test_the_orientation_filter_follows_a_fast_turn_and_stills_a_resting_one() -> None:
+    """The rotation filter's cutoff rises with the angular speed, as the position one's
+    does with speed: a 3 rad/s turn is followed within a few hundredths of a radian
+    (at the resting cutoff of 1 Hz it would trail by half a radian), while 0.01 rad of
+    jitter on a still hand is cut (white jitter at 120 Hz reads as some speed itself, so
+    by less than a slow drift would be)."""
+    from engine.input.filters import OneEuroRotation
+    from engine.rotation import quat_from_rotation_vector, rotation_vector
+
+    rate, speed = 120.0, 3.0
+    turning = OneEuroRotation()
+    for i in range(121):
+        t = i / rate
+        out = turning(quat_from_rotation_vector((0.0, 0.0, speed * t)), t)
+    lag = np.linalg.norm(rotation_vector(out, quat_from_rotation_vector((0.0, 0.0, speed))))
+    assert lag < 0.05
+    rng = np.random.default_rng(0)
+    still = OneEuroRotation()
+    noise = rng.normal(0.0, 0.01, (600, 3))
+    seen = np.array([rotation_vector((1.0, 0.0, 0.0, 0.0),
+                                     still(quat_from_rotation_vector(tuple(n)), i / rate))
+                     for i, n in enumerate(noise)])
+    assert seen[120:].std() < 0.75 * noise.std()

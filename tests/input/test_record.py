@@ -225,3 +225,15 @@ def test_past_the_end_of_a_replay_wheels_come_to_rest_and_sources_are_lost(tmp_p
     assert sorted(e.device for e in lost) == ["hand_r", "left"]
     assert not hub.state.tracker("hand_r").tracked
     assert "the recorded input ended at frame 29" in caplog.text
+
+
+def test_a_scenes_fingerprint_ignores_comments_but_not_what_it_says() -> None:
+    from engine.input.record import scene_fingerprint
+
+    scene = 'Object { ID "a" Position [0 0 1] }\nFile "x//y"\n'
+    same = scene_fingerprint({"main.scene": scene})
+    noted = '// how to run it\nObject { ID "a" Position [0 0 1] }  // the ball\n\nFile "x//y"\n'
+    assert scene_fingerprint({"main.scene": noted}) == same
+    changed = scene.replace("[0 0 1]", "[0 0 2]")
+    assert scene_fingerprint({"main.scene": changed}) != same
+    assert scene_fingerprint({"main.scene": scene.replace("x//y", "x")}) != same

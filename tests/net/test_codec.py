@@ -97,3 +97,16 @@ def test_broken_blobs_are_refused(damage: str) -> None:
         blob[0] = 9
     with pytest.raises(CodecError):
         PoseDecoder().decode(bytes(blob))
+
+
+def test_a_pose_handed_over_with_its_quaternion_negated_decodes_the_same_turn() -> None:
+    """q and -q are one rotation; physics hands either. A change against a quaternion of
+    the other sign is the short way round, not the long: every frame here flips the sign
+    of the turning bodies' quaternions, and the nodes still follow within a step."""
+    ids = np.arange(1, 101, dtype=np.uint32)
+    coder, decoder = PoseCoder(), PoseDecoder()
+    for f, pose in enumerate(tumbling(len(ids), 120, seed=3)):
+        if f % 2:
+            pose[:, 3:] *= -1.0
+        decoder.decode(coder.encode(ids, pose))
+        assert angle_between(decoder.poses[:, 3:], pose[:, 3:]).max() < 4 / ROTATION_SCALE

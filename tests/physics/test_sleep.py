@@ -272,3 +272,18 @@ def test_the_compiled_step_is_the_numpy_formulation_to_the_bit(seed: int) -> Non
             np.testing.assert_array_equal(getattr(rules[0], name), getattr(rules[1], name),
                                           err_msg=f"{name} at step {step}")
     assert rules[0].started.any() and (rules[0].timer > 0).any()  # the tests had work
+
+
+@pytest.mark.parametrize("ramp, sleeps", [(0.0, True), (0.02, False)])
+def test_a_slow_body_that_is_being_accelerated_stays_awake(ramp: float, sleeps: bool) -> None:
+    """Slow all along (under SleepLinear for the whole second), but speeding up at
+    0.02 m/s²: its velocity leaves the steady band, so it is not quiet and stays awake;
+    the same body at a constant slow speed falls asleep after SleepTime."""
+    rule = _rule(1)
+    slept = False
+    for i in range(100):  # 1 s at 0.01 s
+        rule.velocity[0, 0] = 0.005 + ramp * i * 0.01
+        assert rule.velocity[0, 0] < SLEEP_LINEAR
+        rows, _ = rule.update(0.01, None, lambda: np.zeros((0, 2), np.int64))
+        slept |= bool(len(rows))
+    assert slept is sleeps

@@ -205,7 +205,12 @@ def test_what_rests_is_not_worked_out_again_and_the_picture_is_the_same(make_ren
 
 def test_stereo_eyes_are_culled_each_for_itself(make_renderer):
     r = make_renderer(size=(2 * W, H))
+    r.single_pass = False  # one pass an eye: each culled for itself
     r.camera = CameraView.looking_at((0.0, -6.0, 3.0), (0.0, 0.0, 0.5), eye_separation=0.065)
     _ring(r)
     r.render()
     assert r.stats.culled >= 16  # every eye leaves out those behind it
+    each = r.stats.culled
+    r.single_pass = True  # one pass for both: what neither eye sees is left out once
+    r.render()
+    assert each // 2 - 1 <= r.stats.culled < each

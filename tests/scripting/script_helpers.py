@@ -35,7 +35,8 @@ def write_content(root: Path, scene: str, scripts: dict[str, str]) -> Path:
 
 def scripted_engine(content: Path, backend: str = "pymunk", mode: str = "serial",
                     extra_plugins: tuple = ()) -> Engine:
-    config = EngineConfig(backend=backend, fast=True, content_dir=content, mode=mode)
+    config = EngineConfig(backend=backend, fast=True, content_dir=content, mode=mode,
+                          dt=1 / 60)
     engine = Engine(config, plugins=[RegistryPlugin(), load_plugin("physics"),
                                      ScriptingPlugin(LIMITS, reload_interval=0.0),
                                      ControllersPlugin(), *extra_plugins])

@@ -49,7 +49,7 @@ def _resident_bytes() -> int:
 
 
 def _churning_engine(backend: str, per: int, keep: int, content: Path) -> Engine:
-    config = EngineConfig(backend=backend, fast=True, content_dir=content)
+    config = EngineConfig(backend=backend, fast=True, content_dir=content, dt=1 / 60)
     engine = Engine(config, plugins=[RegistryPlugin(), load_plugin("physics"),
                                      ScriptingPlugin()])
     instantiate(engine, spec_from_text('Object { ID "still" Position [0 -5 1] }', content))

@@ -1,0 +1,201 @@
+"""``colosseum experiment report sessions/<experiment>``: what the sessions say.
+
+Reads every participant's trials.csv (practice trials left out of the summaries), and
+writes into ``--out`` (default ``<folder>/report``):
+
+- ``summary.csv``: per condition (each factor's level) the number of trials, the task
+  time's mean, standard deviation, minimum and maximum (s), each outcome's count, and the
+  mean of every numeric measure and response;
+- ``thresholds.csv``: each participant's staircase estimates (session.json);
+- ``times.png``: task times per condition (a box per condition, the trials as points);
+- ``trajectories.png``: the tracked objects' paths from above (x, y), a colour per
+  condition, one panel per object;
+- ``heatmap.png``: where each tracked object went (a 2D histogram of its samples).
+
+The table is printed too. Exit codes: 0 written, 1 nothing to report.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import sys
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+from engine.experiments.tracking import read_tracking
+
+#: Panels of trajectories and heat maps at most (the first tracked objects).
+MAX_PANELS = 4
+
+
+def _sessions(folder: Path) -> list[Path]:
+    return sorted((p for p in folder.iterdir() if (p / "trials.csv").is_file()),
+                  key=lambda p: (not p.name.isdigit(), int(p.name) if p.name.isdigit()
+                                 else 0, p.name)) if folder.is_dir() else []
+
+
+def _number(value: Any) -> float | None:
+    if isinstance(value, bool):
+        return float(value)
+    if isinstance(value, int | float) and math.isfinite(value):
+        return float(value)
+    return None
+
+
+def _stats(xs: list[float]) -> dict[str, float]:
+    n = len(xs)
+    mean = sum(xs) / n
+    sd = math.sqrt(sum((x - mean) ** 2 for x in xs) / (n - 1)) if n > 1 else 0.0
+    return {"mean": mean, "sd": sd, "min": min(xs), "max": max(xs)}
+
+
+def summarise(folder: Path) -> tuple[list[str], list[dict[str, Any]], list[dict[str, Any]]]:
+    """The condition columns, one summary per condition, every trial (with its session)."""
+    trials: list[dict[str, Any]] = []
+    factors: list[str] = []
+    for session in _sessions(folder):
+        meta = json.loads((session / "session.json").read_text(encoding="utf-8"))
+        design = meta.get("design", {})
+        factors = [f["id"] for f in design.get("factors", [])] + \
+                  [s["id"] for s in design.get("staircases", [])]
+        with (session / "trials.csv").open(newline="", encoding="utf-8") as f:
+            for row in csv.DictReader(f):
+                trials.append({**row, "_session": session})
+    groups: dict[tuple[str, ...], list[dict[str, Any]]] = defaultdict(list)
+    for t in trials:
+        if t["practice"] != "1":
+            groups[tuple(t.get(k, "") for k in factors)].append(t)
+    summaries = []
+    for key, group in sorted(groups.items()):
+        times = [float(t["end_s"]) - float(t["start_s"]) for t in group]
+        row: dict[str, Any] = dict(zip(factors, key, strict=True))
+        row["trials"] = len(group)
+        row.update({f"time_{k}": round(v, 6) for k, v in _stats(times).items()})
+        outcomes: dict[str, int] = defaultdict(int)
+        values: dict[str, list[float]] = defaultdict(list)
+        for t in group:
+            outcomes[t["outcome"]] += 1
+            for column in ("measures", "responses"):
+                for name, value in json.loads(t[column] or "{}").items():
+                    number = _number(value)
+                    if number is not None:
+                        values[f"{column[:-1]}_{name}"].append(number)
+        row.update({f"outcome_{k}": v for k, v in sorted(outcomes.items())})
+        row.update({f"{k}_mean": round(sum(v) / len(v), 6) for k, v in sorted(values.items())})
+        summaries.append(row)
+    return factors, summaries, trials
+
+
+def _write_csv(path: Path, rows: list[dict[str, Any]]) -> None:
+    columns: list[str] = []
+    for row in rows:
+        columns += [k for k in row if k not in columns]
+    with path.open("w", newline="", encoding="utf-8") as f:
+        writer = csv.DictWriter(f, columns, restval="")
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def _label(factors: list[str], trial: dict[str, Any]) -> str:
+    return " ".join(f"{k}={trial[k]}" for k in factors if trial.get(k)) or "-"
+
+
+def plots(out: Path, factors: list[str], trials: list[dict[str, Any]]) -> list[Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    made = []
+    real = [t for t in trials if t["practice"] != "1"]
+    labels = sorted({_label(factors, t) for t in real})
+    if labels:
+        fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(labels)), 4))
+        data = [[float(t["end_s"]) - float(t["start_s"]) for t in real
+                 if _label(factors, t) == label] for label in labels]
+        ax.boxplot(data)
+        ax.set_xticks(range(1, len(labels) + 1), labels, rotation=30, ha="right")
+        for i, ys in enumerate(data, start=1):
+            ax.plot([i] * len(ys), ys, "o", alpha=0.4, color="tab:blue")
+        ax.set_ylabel("task time (s)")
+        ax.set_title("task times per condition")
+        fig.tight_layout()
+        fig.savefig(out / "times.png", dpi=100)
+        plt.close(fig)
+        made.append(out / "times.png")
+    paths: dict[str, list[tuple[str, Any]]] = defaultdict(list)
+    for t in real:
+        track = Path(t["_session"]) / "tracking" / f"trial-{int(t['trial']):03d}.csv"
+        if track.is_file():
+            for name, samples in read_tracking(track).items():
+                paths[name].append((_label(factors, t), samples))
+    names = sorted(paths)[:MAX_PANELS]
+    if names:
+        import numpy as np
+
+        colours = {label: plt.cm.tab10(i % 10) for i, label in enumerate(labels)}
+        fig, axes = plt.subplots(1, len(names), figsize=(5 * len(names), 5), squeeze=False)
+        heat, haxes = plt.subplots(1, len(names), figsize=(5 * len(names), 4.5),
+                                   squeeze=False)
+        for ax, hax, name in zip(axes[0], haxes[0], names, strict=True):
+            seen = set()
+            for label, samples in paths[name]:
+                colour = colours.get(label, "grey")
+                ax.plot(samples[:, 2], samples[:, 3], color=colour, alpha=0.6,
+                        label=None if label in seen else label)
+                ax.plot(samples[:1, 2], samples[:1, 3], "o", color=colour, ms=3)  # start
+                seen.add(label)
+            ax.set_title(f"{name} from above")
+            ax.set_xlabel("x (m)")
+            ax.set_ylabel("y (m)")
+            ax.set_aspect("equal", adjustable="datalim")
+            ax.legend(fontsize="small")
+            xy = np.concatenate([s[:, 2:4] for _, s in paths[name]])
+            counts = hax.hist2d(xy[:, 0], xy[:, 1], bins=40, cmap="magma")[3]
+            heat.colorbar(counts, ax=hax, label="samples")
+            hax.set_title(f"where {name} went")
+            hax.set_xlabel("x (m)")
+            hax.set_ylabel("y (m)")
+        fig.tight_layout()
+        fig.savefig(out / "trajectories.png", dpi=100)
+        heat.tight_layout()
+        heat.savefig(out / "heatmap.png", dpi=100)
+        plt.close(fig)
+        plt.close(heat)
+        made += [out / "trajectories.png", out / "heatmap.png"]
+    return made
+
+
+def report(folder: Path, out: Path | None = None) -> int:
+    folder = Path(folder)
+    if not _sessions(folder):
+        print(f"colosseum: error: {folder}: no sessions (sessions/<experiment>/<participant>/"
+              "trials.csv)", file=sys.stderr)
+        return 1
+    out = Path(out) if out is not None else folder / "report"
+    out.mkdir(parents=True, exist_ok=True)
+    factors, summaries, trials = summarise(folder)
+    _write_csv(out / "summary.csv", summaries)
+    thresholds = []
+    for session in _sessions(folder):
+        meta = json.loads((session / "session.json").read_text(encoding="utf-8"))
+        for sid, value in (meta.get("thresholds") or {}).items():
+            thresholds.append({"participant": session.name, "staircase": sid,
+                               "threshold": value})
+    if thresholds:
+        _write_csv(out / "thresholds.csv", thresholds)
+    made = plots(out, factors, trials)
+    participants = len(_sessions(folder))
+    print(f"{folder}: {participants} participant(s), {len(trials)} trial(s)")
+    for row in summaries:
+        label = " ".join(f"{k}={row[k]}" for k in factors if row.get(k)) or "-"
+        print(f"  {label:<32} n={row['trials']:<4} time {row['time_mean']:.3f} ± "
+              f"{row['time_sd']:.3f} s")
+    for row in thresholds:
+        print(f"  participant {row['participant']}: staircase {row['staircase']} threshold "
+              f"{row['threshold']:.4g}")
+    print(f"written: {', '.join(str(p) for p in [out / 'summary.csv', *made])}")
+    return 0

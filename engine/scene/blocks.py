@@ -1,0 +1,214 @@
+"""Scene blocks a feature declares for itself, a content folder's own systems included.
+
+A block is declared next to the component it builds: a plain dataclass whose fields
+are the block's keys (``water_level`` is the key ``WaterLevel``), typed, with defaults,
+meanings, units and ranges given by :func:`key`::
+
+    @scene_block("Buoyancy", doc="floats in a pool of water")
+    @dataclass
+    class Buoyancy:
+        density: float = key(1000.0, "kg/m³, the liquid's density", low=0.0)
+        level: float = key(0.0, "m, the surface's height (z)")
+
+From then on ``Object { ... Buoyancy { Density 800 } }`` builds that component on the
+object; ``colosseum check`` tells a wrong key or value at its line, with a did-you-mean;
+``colosseum keys Buoyancy`` documents it; ``--save-state`` writes the component's values
+back. A content folder declares its blocks in ``systems/*.py``, which is imported before
+its scene is read. ``inside=("Scene",)`` makes a top-level block (``ID`` names its
+entity) instead.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, TypeVar, get_type_hints
+
+import engine.scene.schema as sc
+
+T = TypeVar("T")
+#: Where a block may stand: inside an ``Object``, or at the top of a scene.
+PLACES = ("Object", "Scene")
+#: Python types of a component's fields -> the scene's types.
+_TYPES: dict[Any, str] = {float: sc.FLOAT_T, int: sc.INT_T, bool: sc.BOOL_T,
+                          str: sc.STRING_T}
+_NAME = re.compile(r"^[A-Z][A-Za-z0-9]*$")
+
+
+class BlockError(ValueError):
+    """A block declared wrongly (by its author: a programming error, told at import)."""
+
+
+@dataclass(frozen=True, slots=True)
+class KeyInfo:
+    """What :func:`key` adds to a dataclass field: meaning, and a range where one holds."""
+
+    doc: str
+    low: float | None = None
+    high: float | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class BlockType:
+    """A registered block: its schema name, where it stands, the component it builds."""
+
+    name: str
+    component: type
+    inside: tuple[str, ...]
+    doc: str
+    #: scene key -> (field name, range info)
+    keys: Mapping[str, tuple[str, KeyInfo]]
+
+    def build(self, values: Mapping[str, Any]) -> Any:
+        """The component from checked values (scene keys)."""
+        return self.component(**{field: _python(values[k], self.component, field)
+                                 for k, (field, _) in self.keys.items() if k in values})
+
+    def save(self, component: Any) -> dict[str, Any]:
+        """The component's values as scene keys (what a saved state writes)."""
+        return {k: getattr(component, field) for k, (field, _) in self.keys.items()}
+
+    def problems(self, values: Mapping[str, Any]) -> list[tuple[str, str]]:
+        """(key, message) for every value outside its key's range."""
+        out = []
+        for k, (_, info) in self.keys.items():
+            value = values.get(k)
+            if not isinstance(value, int | float) or isinstance(value, bool):
+                continue
+            if info.low is not None and value < info.low:
+                out.append((k, f"{k} must be at least {info.low:g}, got {value:g}"))
+            elif info.high is not None and value > info.high:
+                out.append((k, f"{k} must be at most {info.high:g}, got {value:g}"))
+        return out
+
+
+#: Every registered block, by name.
+BLOCKS: dict[str, BlockType] = {}
+#: Called with a block's name when it is registered (caches of the schema refresh).
+_LISTENERS: list[Callable[[str], None]] = []
+
+
+def key(default: Any, doc: str, low: float | None = None, high: float | None = None) -> Any:
+    """A block key as a dataclass field: its default, meaning (with its unit first, as
+    ``"kg/m³, the liquid's density"``) and range."""
+    if isinstance(default, list):
+        default = tuple(default)
+    return dataclasses.field(default=default, metadata={"colosseum": KeyInfo(doc, low, high)})
+
+
+def key_name(field: str) -> str:
+    """A field's scene key: ``water_level`` -> ``WaterLevel``."""
+    return "".join(part[:1].upper() + part[1:] for part in field.split("_"))
+
+
+def scene_block(name: str, inside: tuple[str, ...] = ("Object",), doc: str = ""
+                ) -> Callable[[type[T]], type[T]]:
+    """Declare the dataclass below as block ``name`` (see the module's docstring)."""
+    def declare(component: type[T]) -> type[T]:
+        register(name, component, inside, doc or (component.__doc__ or "").strip())
+        return component
+    return declare
+
+
+def register(name: str, component: type, inside: tuple[str, ...] = ("Object",),
+             doc: str = "") -> BlockType:
+    """Register ``component`` (a dataclass) as block ``name``; again with the same
+    component (a module imported anew) replaces it, a name taken otherwise is refused."""
+    if not _NAME.match(name):
+        raise BlockError(f"block {name!r}: a block's name is a word in CamelCase")
+    if not dataclasses.is_dataclass(component):
+        raise BlockError(f"block {name!r}: {component!r} is not a dataclass")
+    if not inside or any(p not in PLACES for p in inside):
+        raise BlockError(f"block {name!r}: inside must name some of {', '.join(PLACES)}")
+    known = BLOCKS.get(name)
+    if (known is None and name in sc.SCHEMAS) or (
+            known is not None and known.component.__qualname__ != component.__qualname__):
+        raise BlockError(f"block {name!r} exists already; choose another name")
+    fields, keys = _schema(name, component)
+    block = BlockType(name, component, tuple(inside), doc or name, keys)
+    BLOCKS[name] = block
+    sc.SCHEMAS[name] = fields
+    for place in inside:
+        sc.SCHEMAS[place][name] = sc.Field(sc.STRUCT_T, None, block.doc, struct=name,
+                                           repeat=place == "Scene")
+    for listener in _LISTENERS:
+        for changed in (name, *inside):
+            listener(changed)
+    return block
+
+
+def _schema(name: str, component: type) -> tuple[dict[str, sc.Field],
+                                                 dict[str, tuple[str, KeyInfo]]]:
+    hints = get_type_hints(component)
+    fields: dict[str, sc.Field] = {}
+    keys: dict[str, tuple[str, KeyInfo]] = {}
+    for f in dataclasses.fields(component):
+        info = f.metadata.get("colosseum") or KeyInfo("")
+        kind = _scene_type(name, f.name, hints.get(f.name), f.default)
+        default = None if f.default is dataclasses.MISSING else f.default
+        if isinstance(default, bool):  # the scene writes flags as 0 and 1
+            default = int(default)
+        scene_key = key_name(f.name)
+        fields[scene_key] = sc.Field(kind, default, info.doc, lengths=(
+            (len(default),) if kind == sc.VECTOR_T and default is not None else ()))
+        keys[scene_key] = (f.name, info)
+    if "ID" not in fields:
+        fields["ID"] = sc.Field(sc.STRING_T, "", f"name of this {name}")
+    return fields, keys
+
+
+def _scene_type(block: str, field: str, hint: Any, default: Any) -> str:
+    if hint in _TYPES:
+        return _TYPES[hint]
+    if isinstance(default, tuple) and all(isinstance(x, int | float) for x in default):
+        return sc.VEC3_T if len(default) == 3 else sc.VECTOR_T
+    raise BlockError(f"block {block!r}: field {field!r} must be a float, int, bool, str or "
+                     "a tuple of numbers with a default")
+
+
+def _python(value: Any, component: type, field: str) -> Any:
+    """A checked scene value as the field's Python value (vectors as tuples of floats)."""
+    if isinstance(value, list | tuple):
+        return tuple(float(x) for x in value)
+    hint = get_type_hints(component).get(field)
+    if hint is float and isinstance(value, int) and not isinstance(value, bool):
+        return float(value)
+    if hint is bool:
+        return bool(value)
+    return value
+
+
+def unregister(name: str) -> None:
+    """Take block ``name`` out again (a test's own block)."""
+    block = BLOCKS.pop(name, None)
+    if block is None:
+        return
+    sc.SCHEMAS.pop(name, None)
+    for place in block.inside:
+        sc.SCHEMAS[place].pop(name, None)
+        for listener in _LISTENERS:
+            listener(place)
+
+
+def from_content(name: str) -> bool:
+    """Whether block ``name`` was declared by a content folder's systems (not the
+    engine's own, so the engine's reference pages leave it out)."""
+    from engine.content import CONTENT_MODULES
+
+    block = BLOCKS.get(name)
+    return block is not None and block.component.__module__.startswith(CONTENT_MODULES)
+
+
+def on_register(listener: Callable[[str], None]) -> None:
+    """Call ``listener(name)`` for each schema entry a registration adds or changes."""
+    _LISTENERS.append(listener)
+
+
+def of_component(component: Any) -> BlockType | None:
+    """The block that builds components of this one's type (None: no such block)."""
+    for block in BLOCKS.values():
+        if type(component) is block.component:
+            return block
+    return None
