@@ -128,7 +128,8 @@ def test_an_author_registers_a_format_in_the_content_systems(tmp_path: Path):
     run = subprocess.run([sys.executable, "-m", "engine.cli", "run", str(folder), "--headless",
                           "--frames", "3", "--fast", "--sound", "null", "--size", "64x48",
                           "--screenshot", str(shot)], capture_output=True, text=True, timeout=120)
-    assert run.returncode == 0 and "Traceback" not in run.stderr, run.stderr
+    # it ran without the broken object, and says the content had an error (exit 1)
+    assert run.returncode == 1 and "Traceback" not in run.stderr, run.stderr
     assert "wedge" not in run.stderr and "object 'odd' is left out" in run.stderr
 
 
