@@ -323,9 +323,22 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    """The command line as parsed, where a command's trailing path may also come after its
+    options (``join tcp://HOST:PORT --user alice my_sim``: argparse alone stops taking
+    positionals once an option follows the first)."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if (len(extra) == 1 and not extra[0].startswith("-") and hasattr(args, "path")
+            and args.path is None):
+        args.path = extra[0]
+    elif extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
     logging.basicConfig(level=getattr(logging, args.log_level.upper()),
                         format="%(levelname)s %(name)s: %(message)s")
     handler = COMMANDS[args.command]

@@ -168,3 +168,14 @@ def test_the_bundled_demo_resumes_from_a_saved_state(tmp_path: Path):
     assert a.keys() == b.keys() and {"gift1", "gift2", "gift3", "ball"} <= a.keys()
     for name in a:
         assert b[name] == pytest.approx(a[name], abs=1e-6), name
+
+
+def test_a_commands_path_may_come_after_its_options() -> None:
+    from engine.cli import parse_args
+
+    args = parse_args(["join", "tcp://127.0.0.1:5555", "--user", "alice", "my_sim"])
+    assert (args.address, args.user, args.path) == ("tcp://127.0.0.1:5555", "alice", "my_sim")
+    assert parse_args(["join", "tcp://127.0.0.1:5555", "my_sim", "--user", "bob"]).path == \
+        "my_sim"
+    with pytest.raises(SystemExit):  # two paths: the second is not taken silently
+        parse_args(["join", "tcp://127.0.0.1:5555", "a", "--user", "bob", "b"])
