@@ -31,7 +31,8 @@ import numpy as np
 from components import Camera, Name, Transform
 from engine.events import CustomEvent
 from engine.experiments.design import OFF_LEVELS, Design, TrialPlan
-from engine.experiments.tracking import TrackLog
+from engine.experiments.tracking import TrackLog, WheelLog
+from engine.input.state import InputState
 from engine.measures import Measures
 from engine.services import ExperimentControl
 from engine.system import Phase, PluginName, System
@@ -94,6 +95,7 @@ class TrialRunner(System):
         self._start = self._wall = 0.0
         self._lsl_start: float | None = None
         self._track: TrackLog | None = None
+        self._wheels: WheelLog | None = None
         self._track_rows: np.ndarray | None = None
         self._track_version = -1
         self._track_entities: list[int] = []
@@ -220,6 +222,9 @@ class TrialRunner(System):
         if self._track is not None:
             self._track.close()
             self._track = None
+        if self._wheels is not None:
+            self._wheels.close()
+            self._wheels = None
         self._marker(f"trial_end {plan.index} {self._ending}", lsl_end)
         engine.events.emit(CustomEvent("trialEnd", self.trial_data()))
         self._call_scripts(engine, "onTrialEnd")
@@ -229,6 +234,9 @@ class TrialRunner(System):
         if self._track is not None:
             self._track.abandon()
             self._track = None
+        if self._wheels is not None:
+            self._wheels.abandon()
+            self._wheels = None
 
     # -- helpers -----------------------------------------------------------------------------
     def _marker(self, text: str, stamp: float | None) -> None:
@@ -292,6 +300,13 @@ class TrialRunner(System):
         if self._camera is not None:
             sample = np.vstack([sample, self._head(engine)])
         self._track.sample(now, engine.frame, sample)
+        inputs = engine.try_resource(InputState)
+        if inputs is not None and inputs.wheels:  # the wheelchair's counters, beside
+            if self._wheels is None:
+                assert self.track_path is not None
+                self._wheels = WheelLog(self.track_path.with_name(
+                    self.track_path.stem + ".wheels.csv"))
+            self._wheels.sample(now, engine.frame, inputs.wheels)
 
     def _head(self, engine: Engine) -> np.ndarray:
         """The active camera's pose as drawn: at its offset from the object it follows."""

@@ -10,7 +10,9 @@ writes into ``--out`` (default ``<folder>/report``):
 - ``times.png``: task times per condition (a box per condition, the trials as points);
 - ``trajectories.png``: the tracked objects' paths from above (x, y), a colour per
   condition, one panel per object;
-- ``heatmap.png``: where each tracked object went (a 2D histogram of its samples).
+- ``heatmap.png``: where each tracked object went (a 2D histogram of its samples);
+- ``gaze.png``: where the head looked (TrackCamera): the floor point its line of sight
+  meets, or, looking above the horizon, the point :data:`GAZE_REACH` m ahead of it.
 
 The table is printed too. Exit codes: 0 written, 1 nothing to report.
 """
@@ -29,6 +31,31 @@ from engine.experiments.tracking import read_tracking
 
 #: Panels of trajectories and heat maps at most (the first tracked objects).
 MAX_PANELS = 4
+#: How far ahead (m) a look that never meets the floor is counted, on the floor plan.
+GAZE_REACH = 3.0
+
+
+def gaze_points(samples: Any) -> Any:
+    """Where a head looked, per tracking sample (rows of t, frame, x y z, qw qx qy qz; the
+    camera looks along its local +y): on the floor plan (x, y), the point its line of
+    sight meets the floor (z = 0), or the point GAZE_REACH m ahead when it looks level or
+    up, or would meet the floor farther than that.
+
+    >>> import numpy as np
+    >>> down = [0, 0, 0, 0, 1.6, np.cos(-np.pi / 8), np.sin(-np.pi / 8), 0, 0]  # 45° down
+    >>> [round(float(v), 6) for v in gaze_points(np.array([down]))[0]]
+    [0.0, 1.6]
+    """
+    import numpy as np
+
+    from engine.rotation import quat_to_matrix
+
+    eye = samples[:, 2:5]
+    forward = np.array([quat_to_matrix(q)[:, 1] for q in samples[:, 5:9]])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        reach = np.where(forward[:, 2] < -1e-9, -eye[:, 2] / forward[:, 2], np.inf)
+    reach = np.minimum(reach, GAZE_REACH)
+    return (eye + forward * reach[:, None])[:, :2]
 
 
 def _sessions(folder: Path) -> list[Path]:
@@ -166,7 +193,27 @@ def plots(out: Path, factors: list[str], trials: list[dict[str, Any]]) -> list[P
         plt.close(fig)
         plt.close(heat)
         made += [out / "trajectories.png", out / "heatmap.png"]
+    if paths.get("head"):
+        made.append(_gaze_plot(out, [s for _, s in paths["head"]], plt))
     return made
+
+
+def _gaze_plot(out: Path, samples: list[Any], plt: Any) -> Path:
+    """``gaze.png``: a 2D histogram of where the head looked (see :func:`gaze_points`)."""
+    import numpy as np
+
+    xy = np.concatenate([gaze_points(s) for s in samples])
+    fig, ax = plt.subplots(figsize=(5.5, 4.5))
+    counts = ax.hist2d(xy[:, 0], xy[:, 1], bins=40, cmap="viridis")[3]
+    fig.colorbar(counts, ax=ax, label="samples")
+    ax.set_title(f"where the head looked (the floor, or {GAZE_REACH:g} m ahead)")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_aspect("equal", adjustable="datalim")
+    fig.tight_layout()
+    fig.savefig(out / "gaze.png", dpi=100)
+    plt.close(fig)
+    return out / "gaze.png"
 
 
 def report(folder: Path, out: Path | None = None) -> int:

@@ -93,6 +93,38 @@ class TrackLog:
         self._times_file.close()
 
 
+#: The columns of a trial's wheel log (``trial-NNN.wheels.csv``).
+WHEEL_COLUMNS = ("t", "frame", "wheel", "count", "turns", "rad_s")
+
+
+class WheelLog:
+    """The wheel counters' counts and rates at the tracking samples of one trial, written
+    to ``path`` as they come (a few wheels: text is cheap), flushed and fsynced at its
+    end; a trial run again starts the file afresh."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = Path(path)
+        self._file = self.path.open("w", encoding="utf-8", newline="")
+        self._file.write(",".join(WHEEL_COLUMNS) + "\n")
+        self.samples = 0
+
+    def sample(self, t: float, frame: int, wheels: dict) -> None:
+        """One sample of every wheel: name -> its state (count, turns, angular velocity)."""
+        for name, wheel in sorted(wheels.items()):
+            self._file.write(f"{t:.6f},{int(frame)},{name},{int(wheel.count)},"
+                             f"{float(wheel.turns):.6f},{float(wheel.angular_velocity):.6f}\n")
+        self.samples += 1
+
+    def close(self) -> Path:
+        self._file.flush()
+        os.fsync(self._file.fileno())
+        self._file.close()
+        return self.path
+
+    def abandon(self) -> None:
+        self._file.close()
+
+
 def read_tracking(path: Path) -> dict[str, np.ndarray]:
     """A tracking CSV's rows by object: (n, 9) arrays of t, frame, x y z, qw qx qy qz."""
     out: dict[str, list[list[float]]] = {}

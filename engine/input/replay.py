@@ -50,6 +50,9 @@ class InputRecorder(System):
     """Records every frame's raw input to a file (``--record``)."""
 
     phase = Phase.INPUT
+    #: Set up once the input system has made the hub (a content system ordered before the
+    #: input system must not bring the recorder's setup ahead of it).
+    after = ("InputSystem",)
 
     def __init__(self, path: Path) -> None:
         self.path = Path(path)
@@ -67,6 +70,7 @@ class InputReplayer(System):
     """Delivers a recording instead of the live devices (``--replay``)."""
 
     phase = Phase.INPUT
+    after = ("InputSystem",)  # see InputRecorder
 
     def __init__(self, path: Path) -> None:
         self.recording = read_recording(Path(path))

@@ -267,3 +267,34 @@ def test_a_torn_last_line_is_cut_and_a_changed_design_refused(tmp_path: Path):
     with pytest.raises(SessionError, match="changed"):
         SessionFiles(tmp_path / "s", Design("torn", (Factor("a", ("1", "2")),)), 1, content,
                      resume=True)
+
+
+WHEELS_PY = '''
+from engine import Phase, system
+from engine.input import InputHub
+from engine.input.events import WheelCount
+
+
+def build(engine):
+    @system(Phase.INPUT, before=("InputSystem",))
+    def turn(e, dt):  # the left wheel turns at one turn a second: 100 counts per turn
+        e.resource(InputHub).inject(WheelCount("left", int(e.time * 100), e.time))
+    engine.add_system(turn)
+'''
+
+
+def test_the_wheel_counters_are_logged_beside_the_tracked_poses(in_tmp: Path):
+    """Issue 33: the per-frame tracking holds the wheel counts too (the wheelchair's)."""
+    design = 'ID "wheels"\n  Factor { ID "speed" Levels [1] }\n  Timeout 0.5\n' \
+             '  Track ["ball"]\n  TrackRate 20'
+    content = write_content(in_tmp / "w", design,
+                            top='Input { Wheel { ID "left" CountsPerTurn 100 } }',
+                            files={"systems/wheels.py": WHEELS_PY})
+    assert experiment("run", str(content), "--participant", "1", "--fast", "--headless") == 0
+    tracking = in_tmp / "sessions" / "wheels" / "1" / "tracking"
+    logged = rows(tracking / "trial-001.wheels.csv")
+    assert len(logged) >= 8 and {r["wheel"] for r in logged} == {"left"}
+    counts = [int(r["count"]) for r in logged]
+    assert counts == sorted(counts) and counts[-1] >= 40  # half a second at 100 counts/s
+    assert float(logged[-1]["turns"]) == pytest.approx(counts[-1] / 100)  # CountsPerTurn
+    assert "rad_s" in logged[-1]  # the input layer's rate (its own clock decides it)
