@@ -9,7 +9,8 @@ writes into ``--out`` (default ``<folder>/report``):
 - ``thresholds.csv``: each participant's staircase estimates (session.json);
 - ``times.png``: task times per condition (a box per condition, the trials as points);
 - ``trajectories.png``: the tracked objects' paths from above (x, y), a colour per
-  condition, one panel per object;
+  condition, one panel per object, over the floor plan (the content's static boxes:
+  walls, counters, tables);
 - ``heatmap.png``: where each tracked object went (a 2D histogram of its samples);
 - ``gaze.png``: where the head looked (TrackCamera): the floor point its line of sight
   meets, or, looking above the horizon, the point :data:`GAZE_REACH` m ahead of it.
@@ -33,6 +34,53 @@ from engine.experiments.tracking import read_tracking
 MAX_PANELS = 4
 #: How far ahead (m) a look that never meets the floor is counted, on the floor plan.
 GAZE_REACH = 3.0
+
+
+def floor_plan(content: Path) -> list[Any]:
+    """The footprints (4 corners x, y each) of the static boxes of a content folder's
+    scene that stand between the floor and head height (walls, counters, tables): drawn
+    under the trajectories. Empty when the scene cannot be read (told in the log)."""
+    import logging
+
+    import numpy as np
+
+    from components import Physical, Transform
+    from engine.rotation import quat_to_matrix
+    from engine.scene import SceneError, load_spec
+
+    try:
+        spec = load_spec(Path(content))
+    except (SceneError, OSError) as exc:
+        logging.getLogger("colosseum.experiment").warning(
+            "report: no floor plan from %s: %s", content, str(exc).splitlines()[0])
+        return []
+    plan = []
+    for entity in spec.entities:
+        body = next((c for c in entity.components if isinstance(c, Physical)), None)
+        pose = next((c for c in entity.components if isinstance(c, Transform)), None)
+        if body is None or pose is None or body.kind != "static":
+            continue
+        turn = quat_to_matrix(np.asarray(pose.orientation, float))
+        for shape in body.shapes:
+            if shape.kind != "box":
+                continue
+            centre = np.asarray(pose.position, float) + turn @ np.asarray(shape.offset, float)
+            axes = turn @ quat_to_matrix(np.asarray(shape.rotation, float))
+            half = np.asarray(shape.size[:3], float) / 2
+            if centre[2] + half[2] < 0.05 or centre[2] - half[2] > 2.0:
+                continue
+            corners = [centre + axes @ (half * np.array([sx, sy, 0.0]))
+                       for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+            plan.append(np.array(corners)[:, :2])
+    return plan
+
+
+def _draw_plan(ax: Any, plan: list[Any]) -> None:
+    from matplotlib.patches import Polygon
+
+    for corners in plan:
+        ax.add_patch(Polygon(corners, closed=True, facecolor="0.85", edgecolor="0.55",
+                             linewidth=0.5, zorder=0))
 
 
 def gaze_points(samples: Any) -> Any:
@@ -130,7 +178,8 @@ def _label(factors: list[str], trial: dict[str, Any]) -> str:
     return " ".join(f"{k}={trial[k]}" for k in factors if trial.get(k)) or "-"
 
 
-def plots(out: Path, factors: list[str], trials: list[dict[str, Any]]) -> list[Path]:
+def plots(out: Path, factors: list[str], trials: list[dict[str, Any]],
+          plan: list[Any] | None = None) -> list[Path]:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -168,6 +217,7 @@ def plots(out: Path, factors: list[str], trials: list[dict[str, Any]]) -> list[P
         heat, haxes = plt.subplots(1, len(names), figsize=(5 * len(names), 4.5),
                                    squeeze=False)
         for ax, hax, name in zip(axes[0], haxes[0], names, strict=True):
+            _draw_plan(ax, plan or [])
             seen = set()
             for label, samples in paths[name]:
                 colour = colours.get(label, "grey")
@@ -234,7 +284,11 @@ def report(folder: Path, out: Path | None = None) -> int:
                                "threshold": value})
     if thresholds:
         _write_csv(out / "thresholds.csv", thresholds)
-    made = plots(out, factors, trials)
+    contents = {json.loads((session / "session.json").read_text(encoding="utf-8")).get(
+        "content") for session in _sessions(folder)}
+    content = next(iter(contents)) if len(contents) == 1 else None
+    plan = floor_plan(Path(content)) if content and Path(content).is_dir() else []
+    made = plots(out, factors, trials, plan)
     participants = len(_sessions(folder))
     print(f"{folder}: {participants} participant(s), {len(trials)} trial(s)")
     for row in summaries:

@@ -51,3 +51,17 @@ def test_the_report_draws_the_gaze_map_where_the_head_was_tracked(tmp_path: Path
              "end_s": "5", "blur": "0"}
     made = plots(tmp_path, ["blur"], [trial])
     assert tmp_path / "gaze.png" in made and (tmp_path / "gaze.png").stat().st_size > 1000
+
+
+def test_the_floor_plan_is_the_static_boxes_between_floor_and_head_height():
+    """content/stroke's apartment: its outer walls frame the plan (0..10 by 0..8 m), and a
+    wall's footprint is its length by its thickness."""
+    from engine.experiments.report import floor_plan
+
+    plan = floor_plan(Path(__file__).resolve().parents[2] / "content" / "stroke")
+    corners = np.concatenate(plan)
+    assert corners[:, 0].min() == pytest.approx(-0.05, abs=0.01)
+    assert corners[:, 0].max() == pytest.approx(10.05, abs=0.01)
+    assert corners[:, 1].max() == pytest.approx(8.05, abs=0.01)
+    spans = {tuple(np.round(c.max(axis=0) - c.min(axis=0), 3)) for c in plan}
+    assert (10.1, 0.1) in spans  # "wall 0.0": 10.1 m long, 0.1 m thick
