@@ -219,24 +219,22 @@ class TrialRunner(System):
         self.result = TrialResult(plan, self._start, now, self._wall, self._lsl_start,
                                   lsl_end, self._ending, dict(self._responses),
                                   final_values(engine))
-        if self._track is not None:
-            self._track.close()
-            self._track = None
-        if self._wheels is not None:
-            self._wheels.close()
-            self._wheels = None
+        self._stop_logs(keep=True)
         self._marker(f"trial_end {plan.index} {self._ending}", lsl_end)
         engine.events.emit(CustomEvent("trialEnd", self.trial_data()))
         self._call_scripts(engine, "onTrialEnd")
 
     def abandon(self) -> None:
         """The run stopped mid-trial: no row, no tracking CSV."""
-        if self._track is not None:
-            self._track.abandon()
-            self._track = None
-        if self._wheels is not None:
-            self._wheels.abandon()
-            self._wheels = None
+        self._stop_logs(keep=False)
+
+    def _stop_logs(self, keep: bool) -> None:
+        """Close the trial's tracking and wheel logs (``keep``: written out, else
+        abandoned)."""
+        for trial_log in (self._track, self._wheels):
+            if trial_log is not None:
+                trial_log.close() if keep else trial_log.abandon()
+        self._track = self._wheels = None
 
     # -- helpers -----------------------------------------------------------------------------
     def _marker(self, text: str, stamp: float | None) -> None:

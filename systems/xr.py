@@ -59,7 +59,8 @@ class XrFrameController(RealTimeController):
         self.planner = StepPlanner(pacing.dt, pacing.max_substeps)
         self._paced_by_runtime = False
         self._since: float | None = None
-        #: The engine's physics (set by the plugin): paused with the headset taken off.
+        #: The engine's physics (set by XrSystem once plugins are built): paused with the
+        #: headset taken off.
         self.physics: Any = None
 
     def begin(self) -> Tick:
@@ -165,6 +166,8 @@ class XrSystem(System):
         self.fallback = False
 
     def setup(self, engine: Engine) -> None:
+        if isinstance(engine.controller, XrFrameController):  # physics is attached by now
+            engine.controller.physics = engine.physics
         headset = scene_headset(engine)
         options = engine.config.options
         display = self.display
@@ -279,24 +282,6 @@ class HapticSystem(System):
         return out
 
 
-class _PhysicsLink(System):
-    """Hands the engine's physics (attached by the physics plugin, after this one) to the
-    frame controller, which pauses it with the headset taken off."""
-
-    phase = Phase.INPUT
-    reads = ()
-    writes = ()
-
-    def __init__(self, controller: XrFrameController) -> None:
-        self.controller = controller
-
-    def setup(self, engine: Engine) -> None:
-        self.controller.physics = engine.physics
-
-    def run(self, engine: Engine, dt: float) -> None:
-        """Nothing each frame."""
-
-
 class XrPlugin:
     """The headset display (see the module's docstring)."""
 
@@ -307,9 +292,8 @@ class XrPlugin:
 
     def build(self, engine: Engine) -> None:
         display = self.display
-        engine.controller = controller = XrFrameController(
-            engine.config.pacing(), display, engine.config.mode == "threaded")
-        engine.add_system(_PhysicsLink(controller))
+        engine.controller = XrFrameController(engine.config.pacing(), display,
+                                              engine.config.mode == "threaded")
         devices = engine.try_resource(PluginDevices)
         if devices is None:
             devices = PluginDevices()
@@ -317,11 +301,3 @@ class XrPlugin:
         devices.append(HeadsetControllers(display))
         engine.add_system(XrSystem(display))
         engine.add_system(HapticSystem(display))
-
-
-def wants_headset(options: dict[str, Any], scene_has_headset: bool) -> bool:
-    """Whether a run draws into a headset: ``--xr``, or the scene's ``Display { Kind
-    "openxr" }`` unless ``--no-xr``."""
-    if options.get("xr") is False:
-        return False
-    return bool(options.get("xr")) or scene_has_headset

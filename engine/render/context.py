@@ -6,6 +6,8 @@ display and headless otherwise.
 
 from __future__ import annotations
 
+import ctypes
+import functools
 import os
 import sys
 from typing import Any, Protocol
@@ -25,6 +27,14 @@ class InputSink(Protocol):
     def scroll(self, notches: float) -> None: ...
 
     def mouse_button(self, name: str, pressed: bool) -> None: ...
+
+
+@functools.cache
+def libgl() -> Any:
+    """The GL library, for the few calls moderngl does not make (an instance divisor, an
+    external depth attachment, a scaled blit): GLVND dispatches them to the current
+    context, EGL or GLX."""
+    return ctypes.CDLL("libGL.so.1")
 
 
 class RenderBackendError(RuntimeError):

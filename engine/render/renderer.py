@@ -26,6 +26,7 @@ from engine.assets.skinned import AVATAR_AXES
 from engine.render import glsl, math3d, meshes
 from engine.render.anomalies import adjust_eye, eye_geometry
 from engine.render.camera import CameraView, Eye
+from engine.render.context import libgl
 from engine.render.culling import (
     LOD_PIXELS,
     SHADOW_LEVEL,
@@ -57,7 +58,7 @@ _EYE4 = np.eye(4)
 _UNIT_KINDS = ("box", "sphere", "cylinder", "capsule")
 #: The instance-buffer slot of the shadow pass (eyes use 0 and 1).
 _SHADOW_SLOT = 2
-#: The slot of both eyes drawn in one pass (each part's row twice: see glsl.LIT_VERTEX_STEREO).
+#: The slot of both eyes drawn in one pass (each part's row read twice: glsl.LIT_VERTEX_STEREO).
 _STEREO_SLOT = 3
 #: GL_CLIP_DISTANCE0: the single stereo pass clips each eye at the middle of the target.
 _CLIP_DISTANCE0 = 0x3000
@@ -936,14 +937,16 @@ class Renderer:
         self.ctx.enable(self.ctx.DEPTH_TEST)
         self._shadows.texture.use(glsl.TEXTURE_UNITS["u_shadow_map"])
         shadowing = shadow_index if light_vp is not None else -1
-        passes = [(_STEREO_SLOT, eyes[0], runs[0])] if single else \
-            list(zip(range(len(eyes)), eyes, runs, strict=True))
-        if single:
+        copies = 2 if single else 1  # instances a part is drawn as (one an eye, one pass)
+        if single:  # both eyes' viewports as one, each clipped at the middle
+            x, y, w, h = eyes[0].viewport
+            passes = [(_STEREO_SLOT, eyes[0], runs[0], (x, y, 2 * w, h))]
             self.ctx.enable_direct(_CLIP_DISTANCE0)
-        for slot, eye, eye_runs in passes:
-            fbo.viewport = (eyes[0].viewport[0], eyes[0].viewport[1],
-                            eyes[0].viewport[2] * 2, eyes[0].viewport[3]) if single \
-                else eye.viewport
+        else:
+            passes = [(slot, eye, eye_runs, eye.viewport)
+                      for slot, (eye, eye_runs) in enumerate(zip(eyes, runs, strict=True))]
+        for slot, eye, eye_runs, viewport in passes:
+            fbo.viewport = viewport
             configured: set[int] = set()
             for run in eye_runs:
                 batch = run.batch
@@ -962,7 +965,6 @@ class Renderer:
                 self._textures[batch.key[1]].use(glsl.TEXTURE_UNITS["u_texture"])
                 self._face_culling(batch)
                 vao = self._vao(batch, run.level, slot, program)
-                copies = 2 if single else 1
                 self.stats.instances += copies * len(run.parts)
                 if compiled is not None and compiled.per_object:
                     self._draw_per_object(program, vao, eye, world[run.parts])
@@ -1087,9 +1089,7 @@ def _instance_divisor(vao: Any, program: Any, divisor: int) -> None:
     """Make every per-instance input of ``vao`` advance every ``divisor`` instances (the
     stereo pass draws each part twice from one row: glVertexAttribDivisor, which
     moderngl sets to 1 only)."""
-    import ctypes
-
-    gl = ctypes.CDLL("libGL.so.1")
+    gl = libgl()
     gl.glBindVertexArray(vao.glo)
     for name in _INSTANCE_ATTRS:
         member = program.get(name, None)

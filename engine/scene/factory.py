@@ -168,8 +168,9 @@ class PostPassSpec:
     origin: str
 
 
-def _binding_problem(action: str, profile: str, path: str) -> str | None:
-    """What is wrong with a headset's ``Bind`` (None: nothing)."""
+def binding_problem(action: str, profile: str, path: str) -> str | None:
+    """What is wrong with a headset's ``Bind`` (None: nothing): the scene's check, and
+    the OpenXR display's (engine.xr.bindings.Rebinding)."""
     if action not in HEADSET_ACTIONS:
         return f"unknown action {action!r}{suggest(action, HEADSET_ACTIONS)} " \
                f"(actions: {', '.join(HEADSET_ACTIONS)})"
@@ -1425,7 +1426,7 @@ class _Builder:
         bindings = []
         for bind in b.blocks("Bind"):
             rb = _Reader(bind, "Bind")
-            problem = _binding_problem(rb("Action"), rb("Profile"), rb("Path"))
+            problem = binding_problem(rb("Action"), rb("Profile"), rb("Path"))
             if problem is not None:
                 self.report.error(bind.loc, f"Bind: {problem}; this binding is left out")
                 continue

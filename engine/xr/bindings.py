@@ -132,14 +132,10 @@ class Rebinding:
     path: str
 
     def problem(self) -> str | None:
-        if self.action not in ACTION_NAMES:
-            return f"unknown action {self.action!r} (actions: {', '.join(ACTION_NAMES)})"
-        if self.profile not in PROFILE_PATHS:
-            return (f"unknown interaction profile {self.profile!r} (profiles: "
-                    f"{', '.join(PROFILE_PATHS)})")
-        if not self.path.startswith((LEFT + "/", RIGHT + "/")):
-            return f"the path {self.path!r} must start with {LEFT}/ or {RIGHT}/"
-        return None
+        """What is wrong with it: the scene's own check of a ``Bind`` block."""
+        from engine.scene.factory import binding_problem
+
+        return binding_problem(self.action, self.profile, self.path)
 
 
 def suggestions(extensions: set[str] | frozenset[str], rebinding: tuple[Rebinding, ...] = ()

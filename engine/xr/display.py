@@ -23,7 +23,7 @@ import numpy as np
 
 from engine.input.events import AnyInput, Axis, Button, TrackerPose
 from engine.render.camera import CameraView, HeadsetEye
-from engine.render.context import has_display
+from engine.render.context import has_display, libgl
 from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS
 from engine.xr.lifecycle import Action
 from engine.xr.projection import XrOrigin, fov_projection
@@ -182,17 +182,11 @@ def input_events(sample: InputSample, origin: XrOrigin, pressed: dict[tuple[str,
     return events
 
 
-def _gl() -> Any:
-    import ctypes
-
-    return ctypes.CDLL("libGL.so.1")
-
-
 def _attach_depth(fbo: Any, depth_gl: int, depth_format: Any) -> None:
     """Attach a runtime's depth image to ``fbo`` (moderngl takes no external depth
     texture as an attachment, so GL is asked directly)."""
     stencil = depth_format is not None and "STENCIL" in depth_format.name
-    gl = _gl()
+    gl = libgl()
     gl.glBindFramebuffer(0x8D40, fbo.glo)  # GL_FRAMEBUFFER
     gl.glFramebufferTexture2D(0x8D40, 0x821A if stencil else 0x8D00,  # (DEPTH_)STENCIL_ATTACHMENT
                               0x0DE1, depth_gl, 0)  # GL_TEXTURE_2D
@@ -357,7 +351,7 @@ class XrDisplay:
         self.views = []
         with self._runtime("xrLocateViews"):
             located = self.session.locate_views(when)
-            problems = [v.fov.problem() for v in located if v.fov.problem() is not None]
+            problems = [p for p in (v.fov.problem() for v in located) if p is not None]
             if problems:  # a runtime going away may answer with empty fields of view
                 log.warning("the runtime gave eyes that cannot be drawn (%s); frame skipped",
                             problems[0])
@@ -482,7 +476,7 @@ class XrDisplay:
 def _blit(target: XrTarget, fbo: Any, src: tuple[int, int, int, int],
           dst: tuple[int, int, int, int]) -> None:
     """Scale part of the eyes' image into a window (glBlitFramebuffer)."""
-    gl = _gl()
+    gl = libgl()
     target.fbo.use()
     read = target.fbo.glo
     gl.glBindFramebuffer(0x8CA8, read)  # GL_READ_FRAMEBUFFER

@@ -84,15 +84,3 @@ def choose_depth_format(offered: list[int]) -> SwapchainFormat | None:
         if candidate in offered:
             return SwapchainFormat(candidate, DEPTH_FORMATS[candidate], False)
     return None
-
-
-def srgb_to_linear(value: float) -> float:
-    """The sRGB transfer function's inverse (IEC 61966-2-1), for one channel in 0..1;
-    the GLSL copy pass does the same per pixel.
-
-    >>> round(srgb_to_linear(0.5), 4)
-    0.214
-    """
-    if value <= 0.04045:
-        return value / 12.92
-    return ((value + 0.055) / 1.055) ** 2.4

@@ -122,7 +122,6 @@ class XrSession:
         self._h: dict[str, Any] = {}
         self._images: dict[str, list[int]] = {}
         self._frame: Any = None
-        self._began = False
         self._haptic_told = False
 
     @property
@@ -301,7 +300,6 @@ class XrSession:
             actions[spec.name] = xr.create_action(action_set, xr.ActionCreateInfo(
                 action_type=types[spec.kind], action_name=spec.name,
                 localized_action_name=spec.localized, subaction_paths=hands))
-        self.profiles: list[str] = []
         for profile, pairs in suggestions(self.extensions, self.settings.rebinding).items():
             bindings = [xr.ActionSuggestedBinding(actions[action],
                                                   xr.string_to_path(instance, path))
@@ -311,7 +309,6 @@ class XrSession:
                     instance, xr.InteractionProfileSuggestedBinding(
                         interaction_profile=xr.string_to_path(instance, profile),
                         suggested_bindings=bindings))
-                self.profiles.append(profile)
             except xr.exception.XrException as exc:
                 log.warning("OpenXR: the runtime refused the bindings for %s: %s", profile, exc)
         xr.attach_session_action_sets(session, xr.SessionActionSetsAttachInfo(
@@ -448,7 +445,6 @@ class XrSession:
 
     def begin(self) -> None:
         self._xr.begin_frame(self._h["session"])
-        self._began = True
 
     def acquire(self) -> Images:
         """The swapchain images to draw this frame into (waited for)."""
@@ -480,7 +476,6 @@ class XrSession:
         xr.end_frame(h["session"], xr.FrameEndInfo(
             display_time=self._frame.predicted_display_time,
             environment_blend_mode=xr.EnvironmentBlendMode.OPAQUE, layers=layers))
-        self._began = False
 
     @staticmethod
     def _fill(sub: Any, swapchain: Any, eye: int, size: tuple[int, int]) -> None:
