@@ -24,7 +24,7 @@ import dataclasses
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, TypeVar, get_type_hints
+from typing import Any, NamedTuple, TypeVar, get_type_hints
 
 import engine.scene.schema as sc
 
@@ -50,6 +50,14 @@ class KeyInfo:
     high: float | None = None
 
 
+class BlockKey(NamedTuple):
+    """A block key's dataclass field, its meaning and range, and its Python type."""
+
+    field: str
+    info: KeyInfo
+    hint: Any
+
+
 @dataclass(frozen=True, slots=True)
 class BlockType:
     """A registered block: its schema name, where it stands, the component it builds."""
@@ -58,22 +66,22 @@ class BlockType:
     component: type
     inside: tuple[str, ...]
     doc: str
-    #: scene key -> (field name, range info)
-    keys: Mapping[str, tuple[str, KeyInfo]]
+    #: scene key -> its field
+    keys: Mapping[str, BlockKey]
 
     def build(self, values: Mapping[str, Any]) -> Any:
         """The component from checked values (scene keys)."""
-        return self.component(**{field: _python(values[k], self.component, field)
-                                 for k, (field, _) in self.keys.items() if k in values})
+        return self.component(**{key.field: _python(values[k], key.hint)
+                                 for k, key in self.keys.items() if k in values})
 
     def save(self, component: Any) -> dict[str, Any]:
         """The component's values as scene keys (what a saved state writes)."""
-        return {k: getattr(component, field) for k, (field, _) in self.keys.items()}
+        return {k: getattr(component, key.field) for k, key in self.keys.items()}
 
     def problems(self, values: Mapping[str, Any]) -> list[tuple[str, str]]:
         """(key, message) for every value outside its key's range."""
         out = []
-        for k, (_, info) in self.keys.items():
+        for k, (_, info, _) in self.keys.items():
             value = values.get(k)
             if not isinstance(value, int | float) or isinstance(value, bool):
                 continue
@@ -139,11 +147,10 @@ def register(name: str, component: type, inside: tuple[str, ...] = ("Object",),
     return block
 
 
-def _schema(name: str, component: type) -> tuple[dict[str, sc.Field],
-                                                 dict[str, tuple[str, KeyInfo]]]:
+def _schema(name: str, component: type) -> tuple[dict[str, sc.Field], dict[str, BlockKey]]:
     hints = get_type_hints(component)
     fields: dict[str, sc.Field] = {}
-    keys: dict[str, tuple[str, KeyInfo]] = {}
+    keys: dict[str, BlockKey] = {}
     for f in dataclasses.fields(component):
         info = f.metadata.get("colosseum") or KeyInfo("")
         kind = _scene_type(name, f.name, hints.get(f.name), f.default)
@@ -153,7 +160,7 @@ def _schema(name: str, component: type) -> tuple[dict[str, sc.Field],
         scene_key = key_name(f.name)
         fields[scene_key] = sc.Field(kind, default, info.doc, lengths=(
             (len(default),) if kind == sc.VECTOR_T and default is not None else ()))
-        keys[scene_key] = (f.name, info)
+        keys[scene_key] = BlockKey(f.name, info, hints.get(f.name))
     if "ID" not in fields:
         fields["ID"] = sc.Field(sc.STRING_T, "", f"name of this {name}")
     return fields, keys
@@ -168,11 +175,11 @@ def _scene_type(block: str, field: str, hint: Any, default: Any) -> str:
                      "a tuple of numbers with a default")
 
 
-def _python(value: Any, component: type, field: str) -> Any:
-    """A checked scene value as the field's Python value (vectors as tuples of floats)."""
+def _python(value: Any, hint: Any) -> Any:
+    """A checked scene value as a field's Python value (its type ``hint``; vectors as
+    tuples of floats)."""
     if isinstance(value, list | tuple):
         return tuple(float(x) for x in value)
-    hint = get_type_hints(component).get(field)
     if hint is float and isinstance(value, int) and not isinstance(value, bool):
         return float(value)
     if hint is bool:
