@@ -239,10 +239,7 @@ def execute_run(engine: Any, args: argparse.Namespace, scene: Any,
 
 def _headset_failed(engine: Any) -> bool:
     """Whether the run was to draw into a headset and could not (told already), or lost it."""
-    from engine.xr.display import XrDisplay
-
-    plugin = engine.plugins.get("xr")
-    display = getattr(plugin, "display", None) or engine.try_resource(XrDisplay)
+    display = getattr(engine.plugins.get("xr"), "display", None)
     return bool(display is not None and display.failed and not display.unavailable)
 
 
