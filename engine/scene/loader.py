@@ -54,6 +54,7 @@ def validated(db: SceneDB, content_dir: Path | None = None,
     from engine.interchange.models import expand_models
 
     folder = content_dir if content_dir is not None else Path(db.path).parent
+    _declare_blocks(folder)
     report = Reporter(list(db.warnings), dict(db.sources))
     with paused_gc():
         left_out = expand_models(db, folder, report, known, allow)
@@ -87,14 +88,14 @@ def _with_folder(path: str | Path, rng: np.random.Generator | None,
         raise unreadable
     db = parse_file(target, rng, limits, allow)
     folder = content_folder(db)
-    _declare_blocks(folder)
     return validated(db, folder, allow=allow), folder
 
 
 def _declare_blocks(folder: Path) -> None:
-    """Import the content folder's systems/*.py first: the blocks they declare
-    (engine.scene.blocks) are part of the scene's language. A module that fails is a
-    SceneError at its file."""
+    """Import the content folder's systems/*.py before its scene is checked, wherever the
+    scene comes from (its file, a saved state, a server's state on a node): the blocks
+    they declare (engine.scene.blocks) are part of the scene's language. A module that
+    fails is a SceneError at its file."""
     from engine.content import ContentError, import_systems
 
     try:

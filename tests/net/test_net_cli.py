@@ -144,3 +144,17 @@ def test_serve_binds_loopback_unless_told_and_warns_off_it_without_a_key(
     assert serving_engine(parser.parse_args(["serve", str(MULTIUSER), "--bind", off,
                                              "--key", str(keys)])) == 1
     assert "without --key" not in caplog.text
+
+
+def test_a_node_joins_content_whose_systems_declare_blocks(tmp_path: Path) -> None:
+    """The server's state names the content's own block (content/pool's Buoyancy): the node
+    checks it knowing that block, joined with the same argument serve was given."""
+    port = free_port()
+    scene = ROOT / "content" / "pool" / "main.scene"
+    with processes(tmp_path) as procs:
+        server = procs.start("server", "serve", scene, "--bind", f"tcp://127.0.0.1:{port}",
+                             "--seconds", "20")
+        node = procs.start("node", *join_args(port, "alice", "--frames", 20, path=scene))
+        assert node.wait(timeout=60) == 0, procs.log(node)
+        assert "unknown key" not in procs.log(node)
+        server.kill()
