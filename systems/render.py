@@ -303,9 +303,11 @@ class RenderSystem(System):
         self._sync_visuals(engine)
         self._sync_poses(engine)
         self._sync_palettes(engine)
-        renderer.camera = self._camera(engine)
-        if self._headset is not None:
-            renderer.camera = self._headset.camera(renderer.camera, self._camera_follows(engine))
+        active = self._active_camera(engine)
+        renderer.camera = self._camera(engine, active)
+        if self._headset is not None:  # its wearer rides along what the camera follows
+            carried = active is not None and active[1].follow is not None
+            renderer.camera = self._headset.camera(renderer.camera, carried)
         anomalies = engine.try_resource(Anomalies)
         renderer.anomalies = anomalies.active() if anomalies is not None else []
         lights = []
@@ -391,7 +393,7 @@ class RenderSystem(System):
             if interpolated is not None and len(interpolated[0]):
                 renderer.set_poses(*interpolated)
 
-    def _camera(self, engine: Engine) -> CameraView:
+    def _camera(self, engine: Engine, active: tuple[int, Camera] | None) -> CameraView:
         world = engine.world
         poses = world.poses
         wall = engine.config.options.get("display")
@@ -399,17 +401,15 @@ class RenderSystem(System):
             view = self._display_view(engine, wall)
             if view is not None:
                 return view
-        for entity, (camera,) in world.get_components(Camera):
-            if not camera.active:
-                continue
-            return self._stereo(camera_view_of(camera, entity, poses))
-        return self._stereo(CameraView())
+        if active is None:
+            return self._stereo(CameraView())
+        return self._stereo(camera_view_of(active[1], active[0], poses))
 
     @staticmethod
-    def _camera_follows(engine: Engine) -> bool:
-        """Whether the active camera follows an object (a headset's wearer rides along)."""
-        return any(camera.active and camera.follow is not None
-                   for _, camera in engine.world.get_component(Camera))
+    def _active_camera(engine: Engine) -> tuple[int, Camera] | None:
+        """The camera drawn from: the first active one (None: there is none)."""
+        return next(((entity, camera) for entity, (camera,) in
+                     engine.world.get_components(Camera) if camera.active), None)
 
     def _stereo(self, view: CameraView) -> CameraView:
         """The view with ``--stereo`` applied."""
