@@ -75,6 +75,32 @@ class Pointer:
     timestamp: float = 0.0
 
 
+#: The 26 joints of a tracked hand, in OpenXR's order (``XR_EXT_hand_tracking``): palm,
+#: wrist, four of the thumb, then five of each finger from metacarpal to tip.
+HAND_JOINTS: tuple[str, ...] = (
+    "palm", "wrist",
+    "thumb_metacarpal", "thumb_proximal", "thumb_distal", "thumb_tip",
+    *(f"{finger}_{bone}" for finger in ("index", "middle", "ring", "little")
+      for bone in ("metacarpal", "proximal", "intermediate", "distal", "tip")),
+)
+#: The fingers, thumb first (a joint's name starts with its finger's).
+FINGERS: tuple[str, ...] = ("thumb", "index", "middle", "ring", "little")
+
+
+@dataclass(frozen=True, slots=True)
+class HandJoints:
+    """A tracked hand's 26 joints (:data:`HAND_JOINTS` order), in engine coordinates:
+    each a position (m), an orientation ``(w, x, y, z)`` and a radius (m); ``valid`` says
+    which joints the tracker saw this time (an invalid joint's values are the last known)."""
+
+    device: str
+    positions: tuple[Vec3, ...]
+    orientations: tuple[Quat, ...]
+    radii: tuple[float, ...]
+    valid: tuple[bool, ...]
+    timestamp: float = 0.0
+
+
 @dataclass(frozen=True, slots=True)
 class DeviceLost:
     """A source sent nothing for its timeout: its trackers are untracked until it is found."""
@@ -93,9 +119,10 @@ class DeviceFound:
 
 #: Any typed input event.
 AnyInput = TrackerPose | Button | Axis | WheelCount | KeyEvent | Pointer | DeviceLost | \
-    DeviceFound
+    DeviceFound | HandJoints
 
 #: The recording format's ``type`` of each event class.
 TAGS: dict[type, str] = {TrackerPose: "tracker", Button: "button", Axis: "axis",
                          WheelCount: "wheel", KeyEvent: "key", Pointer: "pointer",
-                         DeviceLost: "lost", DeviceFound: "found"}
+                         DeviceLost: "lost", DeviceFound: "found",
+                         HandJoints: "hand"}
