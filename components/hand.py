@@ -25,7 +25,9 @@ class Hand:
     ``deviation_distance`` (m) from the tracker it passes through things (section 5.4).
     ``frame`` is the entity the tracker is calibrated relative to (a wheelchair), or None
     for the world; ``holding`` the scene IDs held when a saved state was written. The
-    ``*_model`` files are drawn in each mode (None: the object's own look, tinted)."""
+    ``*_model`` files are drawn in each mode (None: the object's own look, tinted).
+    ``fingers``: the palm and each finger's phalanges are bodies driven toward the 26
+    tracked joints of input hand ``tracker`` (palm only, the paper's hand, when False)."""
 
     tracker: str = ""
     glove: str = ""
@@ -43,13 +45,17 @@ class Hand:
     grasp_model: str | None = None
     frame: int | None = None
     holding: tuple[str, ...] = ()
+    fingers: bool = False
 
 
 @dataclass(slots=True)
 class HandState:
     """A hand's standing, kept by the hands system: its mode, whether its tracker is seen,
     whether it collides, how far it is from the tracker (m), what it touches and holds
-    (entities), and the force its contacts pushed with last frame (N)."""
+    (entities), and the force its contacts pushed with last frame (N). A fingered hand
+    also says which fingers grip what it holds (``grip``, thumb first, "palm" included)
+    and how far each finger's tip is from its tracked tip (``finger_deviation``, m,
+    thumb to little): a blocked finger is drawn as a ghost where it is tracked."""
 
     mode: str = HandMode.NEUTRAL
     tracked: bool = False
@@ -58,6 +64,8 @@ class HandState:
     touching: tuple[int, ...] = ()
     held: tuple[int, ...] = ()
     contact_force: float = 0.0
+    grip: tuple[str, ...] = ()
+    finger_deviation: tuple[float, ...] = ()
 
 
 @dataclass(slots=True)

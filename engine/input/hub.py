@@ -34,6 +34,7 @@ from engine.input.events import (
     Button,
     DeviceFound,
     DeviceLost,
+    HandJoints,
     KeyEvent,
     Pointer,
     TrackerPose,
@@ -343,6 +344,9 @@ class InputHub:
             return event
         if isinstance(event, Pointer):
             state.pointers[event.device] = (event.x, event.y)
+            return event
+        if isinstance(event, HandJoints):
+            state.hands[event.device] = event
             return event
         tracked = isinstance(event, DeviceFound)
         if tracked:

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from engine.input.events import HandJoints
 from engine.input.wheel import WheelRate
 
 _KINDS = ("tracker:NAME, wheel:NAME, axis:DEVICE/NAME, button:DEVICE/NAME, button:ID, key:A "
@@ -90,6 +91,8 @@ class InputState:
         self.buttons: dict[tuple[str, str], bool] = {}
         self.axes: dict[tuple[str, str], float] = {}
         self.keys: set[str] = set()
+        #: Each tracked hand's latest 26 joints (calibrated and filtered), by source name.
+        self.hands: dict[str, HandJoints] = {}
         #: Pointer position (0..1, y down) per pointing device.
         self.pointers: dict[str, tuple[float, float]] = {}
         #: ``Input { Button { ID } }`` names -> (device, name).
@@ -101,6 +104,10 @@ class InputState:
 
     def tracker(self, name: str) -> TrackerState | None:
         return self.trackers.get(name)
+
+    def hand(self, name: str) -> HandJoints | None:
+        """A hand's latest joints, or None before it was seen or while it is lost."""
+        return None if name in self.lost else self.hands.get(name)
 
     def wheel(self, name: str) -> WheelState | None:
         return self.wheels.get(name)
