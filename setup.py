@@ -1,7 +1,7 @@
 """Builds the compiled parts: the private ODE binding against the system libode
 (engine/physics/ode3d/_ode.pyx, which includes the .pxi files beside it, one per concept,
 cimports their libode.pxd declarations and includes stepper.h, the step policy it shares
-with tools/bench_ode.c, and through it engine/physics/sleep.h), the sleep rule's per-body
+with app/bench/bench_ode.c, and through it engine/physics/sleep.h), the sleep rule's per-body
 pass (engine/physics/_sleep.pyx, over sleep.h), the pass that turns pymunk.batch buffers
 into engine rows (engine/physics/pymunk2d/_rows.pyx), the scene scanner
 (engine/scene/_scan.pyx) and the network pose codec's per-frame passes

@@ -1,7 +1,7 @@
 """The experiment plugin: runs an experiment's trials in the engine
 (``colosseum experiment run``; engine.experiments has the design and the files).
 
-The driver (engine.experiments.cli) hands the :class:`TrialRunner` one trial at a time
+The driver (app.experiments.cli) hands the :class:`TrialRunner` one trial at a time
 (:meth:`TrialRunner.begin`); in the trial's first frame (POST_PHYSICS, after the scripts
 have started) the runner sets its condition — each factor's anomaly switched and set, the
 levels readable by ``experiment:condition(name)`` from the start — stamps the start on

@@ -37,7 +37,7 @@ class Layer:
     prefixes: tuple[str, ...]
 
 
-#: Longest prefix wins, so ``engine.cli`` is the CLI although ``engine`` is the core.
+#: Longest prefix wins, so ``app.cli`` is the CLI although ``engine`` is the core.
 LAYERS = (
     Layer(0, "components", ("components",)),
     Layer(1, "engine core", ("engine",)),
@@ -45,10 +45,10 @@ LAYERS = (
                                  "engine.input", "engine.net", "engine.xr",
                                  "engine.interchange.export")),
     Layer(3, "systems", ("systems",)),
-    Layer(4, "CLI and tools", ("engine.cli", "engine.cli_net", "engine.runner",
-                               "engine.sweep", "engine.scene_loading", "engine.scaffold",
-                               "engine.experiments.cli", "engine.experiments.report",
-                               "engine.experiments.simulate",
+    Layer(4, "CLI and tools", ("app.cli", "app.cli_net", "app.runner",
+                               "app.sweep", "app.scene_loading", "app.scaffold",
+                               "app.experiments.cli", "app.experiments.report",
+                               "app.experiments.simulate",
                                "tools")),
 )
 

@@ -147,7 +147,7 @@ def test_a_session_killed_in_trial_5_resumes_there(in_tmp: Path):
     content = write_content(in_tmp / "k", KILL_DESIGN)
     folder = in_tmp / "sessions" / "kill" / "1"
     env = {**os.environ, "COLOSSEUM_DEBUG": "0"}
-    proc = subprocess.Popen([sys.executable, "-m", "engine.cli", "--log-level", "warning",
+    proc = subprocess.Popen([sys.executable, "-m", "app.cli", "--log-level", "warning",
                              "experiment", "run", str(content), "--participant", "1",
                              "--headless"], cwd=in_tmp, env=env,
                             stderr=subprocess.PIPE, stdout=subprocess.DEVNULL)

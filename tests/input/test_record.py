@@ -14,9 +14,9 @@ import pytest
 from input_helpers import input_engine
 from pythonosc.udp_client import SimpleUDPClient
 
+from app.cli import main
 from components import Physical, Transform
 from engine import Phase, system
-from engine.cli import main
 from engine.input import (
     DeviceLost,
     InputHub,

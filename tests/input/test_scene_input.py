@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.cli import main
+from app.cli import main
 from engine.input.config import parse_input_option
 from engine.scene import SceneError, spec_from_text
 from engine.scene.inputs import IDENTITY_AXES

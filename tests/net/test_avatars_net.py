@@ -97,8 +97,8 @@ def _content(root: Path) -> Path:
 
 def _node(port: int, folder: Path, user: str, *flags: Any) -> tuple[Any, Any, NetClient]:
     """A node engine in this process (as ``colosseum join`` builds it), joined."""
-    from engine.cli import build_parser
-    from engine.cli_net import node_engine
+    from app.cli import build_parser
+    from app.cli_net import node_engine
 
     args = build_parser().parse_args([str(a) for a in join_args(port, user, *flags,
                                                                 path=folder)])

@@ -8,8 +8,8 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from engine.cli import build_parser
-from engine.cli_net import node_engine
+from app.cli import build_parser
+from app.cli_net import node_engine
 from engine.events import CustomEvent
 from engine.input.desktop import WindowDevice
 from engine.net.client import NetClient

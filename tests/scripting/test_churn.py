@@ -12,12 +12,12 @@ from pathlib import Path
 
 import pytest
 
+from app.bench.scripting import churn_round, churn_world
 from components import Name, Script, Transform
 from engine.app import Engine, EngineConfig
 from engine.scene import SceneIds, instantiate, spec_from_text
 from systems import RegistryPlugin, load_plugin
 from systems.scripting import ScriptingPlugin
-from tools.bench_scripting import churn_round, churn_world
 
 #: Bytes the process may grow by per churned object (the issue's bound).
 MAX_BYTES_PER_OBJECT = 30

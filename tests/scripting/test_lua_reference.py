@@ -6,7 +6,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from tools.reference import documented_lua_api, live_lua_api, lua_markdown
+from app.reference import documented_lua_api, live_lua_api, lua_markdown
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -14,9 +14,10 @@ import pytest
 from chair_helpers import CONTENT
 from PIL import Image
 
+from app.cli import main
+from app.scene_loading import load_content_scene
 from components import Joint, Name, Physical, Transform, Wheelchair
 from engine import EngineConfig, Phase, system
-from engine.cli import main
 from engine.content import load_systems, resolve
 from engine.events import CustomEvent
 from engine.input import InputHub, Key
@@ -24,7 +25,6 @@ from engine.input.desktop import WindowDevice
 from engine.input.events import WheelCount
 from engine.rotation import quat_to_matrix
 from engine.scene import check
-from engine.scene_loading import load_content_scene
 from systems import create_engine
 from systems.hands import Hands
 from systems.input import Outputs

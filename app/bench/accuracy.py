@@ -28,7 +28,7 @@ The cases:
 * a motorized hinge lifting a 10 kg bar (gravity load up to 49 N·m of its
   60 N·m) turns at its 2 rad/s.
 
-Run: ``python -m tools.bench_accuracy [--quick] [--backend ode|pymunk]``, or
+Run: ``python -m app.bench.accuracy [--quick] [--backend ode|pymunk]``, or
 ``colosseum bench accuracy [--json F] [--plot F]``.
 """
 
@@ -44,11 +44,11 @@ from typing import Any
 import numpy as np
 from scipy.special import ellipk
 
+from app.bench import print_row, print_table
 from components import Joint, MaterialProps, Physical, Shape
 from engine.physics import create_backend
 from engine.physics.backend import DynamicsBackend, WorldSettings
 from engine.rotation import quat_from_rotation_vector, quat_to_matrix
-from tools.bench import print_row, print_table
 
 #: Time steps every case runs at (s): coarse, the default, fine.
 STEPS = (0.02, 0.01, 0.001)

@@ -13,7 +13,7 @@ add-on, :func:`godot_omi` as Godot 4.4's OMI export, :func:`blender_collada`,
 :func:`maya_collada` and :func:`bullet_collada`), so the tests meet every quirk the
 importer reads without carrying anyone else's files.
 
-``python -m tools.interchange_samples DIR`` writes them all into DIR; the tests call the
+``python -m app.bench.interchange_samples DIR`` writes them all into DIR; the tests call the
 functions into a temporary folder. Positions are given in the engine's axes (Z up) and
 written in each format's own (glTF +Y up; Collada says Z_UP).
 """
@@ -50,7 +50,7 @@ class GltfBuilder(GltfWriter):
     """A glTF document built node by node, nodes placed in the engine's axes."""
 
     def __init__(self) -> None:
-        super().__init__("colosseum tools/interchange_samples.py")
+        super().__init__("colosseum app/bench/interchange_samples.py")
 
     def node(self, name: str, at: Sequence[float] = (0, 0, 0),  # type: ignore[override]
              parent: int | None = None, rotation: Sequence[float] | None = None,
@@ -841,7 +841,7 @@ def _dae(path: Path, layout: str, up: str, unit: float | None, *parts: str) -> P
     """A Collada 1.4.1 file: its asset (the tool whose ``layout`` it follows; no
     ``<unit>`` when ``unit`` is None, so metres) and ``parts`` in the order given, which
     differs from tool to tool."""
-    tool = f"colosseum tools/interchange_samples.py, laid out as {layout} writes it"
+    tool = f"colosseum app/bench/interchange_samples.py, laid out as {layout} writes it"
     scale = "" if unit is None else f'<unit meter="{unit}" name="unit"/>'
     path.write_text(f"""<?xml version="1.0" encoding="utf-8"?>
 <COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
@@ -1080,7 +1080,7 @@ SAMPLES = {"shapes.glb": shapes, "joints.glb": joints, "drives.glb": drives,
 
 def main(argv: list[str]) -> int:
     if len(argv) != 1:
-        print("usage: python -m tools.interchange_samples DIR", file=sys.stderr)
+        print("usage: python -m app.bench.interchange_samples DIR", file=sys.stderr)
         return 2
     folder = Path(argv[0])
     folder.mkdir(parents=True, exist_ok=True)

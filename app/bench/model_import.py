@@ -23,7 +23,7 @@ GOAL_S = 2.0
 
 
 def run_bench(quick: bool = False, repeats: int = 3) -> list[dict[str, Any]]:
-    from tools.interchange_samples import many_bodies
+    from app.bench.interchange_samples import many_bodies
 
     nodes = 1_000 if quick else 10_000
     with tempfile.TemporaryDirectory() as tmp:

@@ -20,11 +20,11 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from app.runner import fail, prepare_run
 from engine.experiments.design import Design, TrialPlan, plan, staircase_trial
 from engine.experiments.ordering import rng_for
 from engine.experiments.session import SessionError, SessionFiles, read_rows
 from engine.experiments.staircase import replayed
-from engine.runner import fail, prepare_run
 
 log = logging.getLogger("colosseum.experiment")
 
@@ -70,7 +70,7 @@ def command(args: argparse.Namespace) -> int:
     if args.experiment_command == "run":
         return run(args)
     if args.experiment_command == "report":
-        from engine.experiments.report import report
+        from app.experiments.report import report
 
         return report(args.folder, args.out)
     return replay(args)
@@ -78,8 +78,8 @@ def command(args: argparse.Namespace) -> int:
 
 def _design(args: argparse.Namespace) -> tuple[Any, Design] | int:
     """The content and its design, or an exit code (the problem told)."""
+    from app.scene_loading import SceneLoadError, load_content_scene
     from engine.content import ContentError, resolve
-    from engine.scene_loading import SceneLoadError, load_content_scene
 
     try:
         content = resolve(args.path)

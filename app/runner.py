@@ -24,9 +24,9 @@ def fail(message: str, code: int = USAGE_ERROR) -> int:
 def prepare_run(args: argparse.Namespace) -> Any:
     """The scene and engine configuration a run's flags ask for, or an exit code (the
     problem told). ``run`` and ``serve`` share it."""
+    from app.scene_loading import SceneLoadError, load_content_scene
     from engine.app import EngineConfig
     from engine.content import ContentError, resolve
-    from engine.scene_loading import SceneLoadError, load_content_scene
 
     try:
         content = resolve(args.path)
@@ -94,7 +94,7 @@ def _tell_shaders(scene: Any, config: Any) -> None:
     """A run that draws nothing compiles no shader, so the renderer's warning about a
     uniform nothing sets never comes: it is told here from the GLSL source, as
     ``colosseum check`` tells it (a run that draws tells it from the compiled program)."""
-    from engine.scene_loading import shader_diagnostics
+    from app.scene_loading import shader_diagnostics
     from systems import wants_render
 
     if wants_render(config) or not scene.spec.shader_programs:
@@ -202,7 +202,7 @@ def execute_run(engine: Any, args: argparse.Namespace, scene: Any,
         progress = args.progress or sys.stderr.isatty()
         _run_limited(engine, args, progress, status_line)
         if args.save_state is not None:
-            from engine.scene_loading import save_state
+            from app.scene_loading import save_state
 
             if before_save is not None:
                 before_save(engine)

@@ -11,7 +11,7 @@
  *
  * Sleeping is the engine's own rule (engine/physics/sleep.py), run as the engine's step
  * runs it: stepper.h's cs_sleep after each step, the per-body pass of sleep.h over the
- * rule's arrays and the islands of the step, with the limits tools/bench_physics.py
+ * rule's arrays and the islands of the step, with the limits app/bench/physics.py
  * passes in (SleepTime, SleepLinear, SleepAngular, the steady share and the smoothing
  * time). ODE's own auto-disable stays off, as in the engine, so both sides put the same
  * boxes to sleep on the same steps and do the same work.
@@ -29,7 +29,7 @@
  * Prints: ms_per_step=<mean ms> mean_z=<mean box height at the end> contacts=<last step>
  *         impulse=<sum of the last step's contact impulses, 0 without feedback>
  *         asleep=<bodies asleep at the end>
- * Built and run by tools/bench_physics.py
+ * Built and run by app/bench/physics.py
  * (cc -O2 -I engine/physics/ode3d $(pkg-config --cflags --libs ode)).
  */
 #include <math.h>

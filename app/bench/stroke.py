@@ -2,7 +2,7 @@
 1280x720, in real time, serial beside threaded, and where each millisecond of a frame goes.
 
 The content is ``--content DIR`` if given, else content/stroke when it exists, else a
-stand-in of comparable size (:mod:`tools.stroke_standin`: about 2,000 objects in view, 300
+stand-in of comparable size (:mod:`app.bench.stroke_standin`: about 2,000 objects in view, 300
 small dynamic bodies, written to a temporary folder). The window is on a virtual X display
 (Xvfb, started for the run) when one can be started, else the frames are drawn headless with
 EGL (a GPU machine without X); the ``target`` column says which.
@@ -80,22 +80,22 @@ def virtual_display() -> Iterator[str | None]:
 
 def content_folder(content: str | Path | None, scratch: Path) -> tuple[Path, str]:
     """The folder benchmarked and what it is."""
-    from tools.stroke_standin import write_standin
+    from app.bench.stroke_standin import write_standin
 
     if content is not None:
         return Path(content), str(content)
     if (STROKE / "main.scene").is_file():
         return STROKE, "content/stroke"
-    return write_standin(scratch / "standin"), "stand-in (tools/stroke_standin.py)"
+    return write_standin(scratch / "standin"), "stand-in (app/bench/stroke_standin.py)"
 
 
 def _case(folder: Path, mode: str, fast_paths: bool, scale: float, display: str | None,
           warmup: float, seconds: float, profiled: int) -> dict[str, float]:
     """One run of the content: frames/s and real-time factor over ``seconds`` of wall
     time after ``warmup``, then the breakdown over ``profiled`` frames."""
+    from app.scene_loading import load_content_scene
     from engine.app import EngineConfig
     from engine.content import load_systems, resolve
-    from engine.scene_loading import load_content_scene
     from systems import create_engine
     from systems.render import RenderSystem
 
@@ -165,7 +165,7 @@ def _case_in_process(folder: Path, case: str, display: str | None, timing: tuple
                                                              "PYOPENGL_PLATFORM")}
     if display is not None:
         env["DISPLAY"] = display
-    done = subprocess.run([sys.executable, "-m", "tools.bench_stroke", str(folder), case,
+    done = subprocess.run([sys.executable, "-m", "app.bench.stroke", str(folder), case,
                            *map(str, timing)], capture_output=True, text=True, env=env,
                           cwd=ROOT, timeout=600)
     if done.returncode != 0:

@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from engine.runner import execute_run, fail, outputs_problem, prepare_run
+from app.runner import execute_run, fail, outputs_problem, prepare_run
 
 log = logging.getLogger("colosseum.net")
 
@@ -144,10 +144,10 @@ def node_engine(args: argparse.Namespace, client: Any, welcome: dict[str, Any],
                 folder: Path) -> Any:
     """(engine, node plugin, scene) of a node that joined (``welcome``) — the scene not
     yet in the engine — or the exit code of a state this folder cannot build (told)."""
+    from app.scene_loading import LoadedScene
     from engine.app import Engine, EngineConfig
     from engine.content import Content
     from engine.scene import SceneError
-    from engine.scene_loading import LoadedScene
     from systems import RegistryPlugin, load_plugin, wants_render
     from systems.anomalies import AnomaliesPlugin
     from systems.net import NodePlugin, node_scene

@@ -32,10 +32,10 @@ def _scene(n: int) -> str:
 
 
 def _run(folder: Path, frames: int, track: bool) -> dict[str, Any]:
+    from app.scene_loading import load_content_scene
     from engine.app import EngineConfig
     from engine.content import resolve
     from engine.experiments.design import Design, Factor, TrialPlan
-    from engine.scene_loading import load_content_scene
     from systems import create_engine
     from systems.experiments import ExperimentPlugin, TrialRunner
 

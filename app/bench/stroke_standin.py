@@ -4,7 +4,7 @@ in view, of boxes, cylinders, spheres and capsules in many sizes and colours), a
 the viewer holding 600 more, and about 300 small dynamic bodies (crumbs, cups, plates,
 cutlery) that fall, settle and sleep. The view pans slowly, as a seated user looks around.
 
-``python -m tools.stroke_standin DIR`` writes it (``main.scene`` and a camera script) into
+``python -m app.bench.stroke_standin DIR`` writes it (``main.scene`` and a camera script) into
 DIR; the bench writes it into a temporary folder.
 """
 
@@ -164,7 +164,7 @@ def standin_scene(rng: np.random.Generator | None = None) -> tuple[str, int, int
         w.thing("box" if i % 3 else "cylinder", position,
                 (0.25, 0.12, 0.1) if i % 3 else (0.1, 0.2))
     header = [
-        "// Stand-in for content/stroke (tools/stroke_standin.py): an apartment of "
+        "// Stand-in for content/stroke (app/bench/stroke_standin.py): an apartment of "
         f"{w.count} objects, {w.dynamic} dynamic.",
         "World { TimeStep 0.01 }",
         'Material { ID "things" Friction 0.6 Bounce 0.05 }',

@@ -213,6 +213,6 @@ def churn_rows(quick: bool) -> list[dict[str, Any]]:
 
 
 if __name__ == "__main__":
-    from tools.bench import print_table
+    from app.bench import print_table
 
     print_table(run_bench())

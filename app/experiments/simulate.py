@@ -25,13 +25,13 @@ from collections import Counter, defaultdict
 from pathlib import Path
 from typing import Any
 
-from engine.runner import fail
+from app.runner import fail
 
 
 def participant_run(path: str, participant: int, sessions: str, seed: int,
                     params: list[tuple[str, str]]) -> int:
     """One simulated participant's session (a Dask task); the exit code."""
-    from engine.experiments.cli import RUN_FLAGS, run
+    from app.experiments.cli import RUN_FLAGS, run
 
     args = argparse.Namespace(
         path=path, participant=participant, resume=False, sessions=Path(sessions),
@@ -49,7 +49,7 @@ def participant_run(path: str, participant: int, sessions: str, seed: int,
 
 def check_design(folder: Path) -> dict[str, Any]:
     """What an experiment's sessions show about its design (the module doc)."""
-    from engine.experiments.report import _sessions
+    from app.experiments.report import _sessions
 
     positions: dict[str, Counter[int]] = defaultdict(Counter)
     conditions: dict[str, dict[str, Any]] = {}
@@ -90,9 +90,9 @@ def check_design(folder: Path) -> dict[str, Any]:
 
 def simulate(args: argparse.Namespace) -> int:
     """``colosseum sweep --participants``."""
-    from engine.experiments.cli import _design
-    from engine.experiments.report import report
-    from engine.sweep import SweepError, map_on_dask, parse_seeds
+    from app.experiments.cli import _design
+    from app.experiments.report import report
+    from app.sweep import SweepError, map_on_dask, parse_seeds
 
     try:
         participants = parse_seeds(args.participants)

@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from tools.bench import cpus
+from app.bench import cpus
 
 SCENE = """World { TimeStep 1/60 }
 Object { ID "ground" Dynamic 0 PhysicalAttributes { Geometry { Primitive "plane" } } }
@@ -31,7 +31,7 @@ Object { ID "ground" Dynamic 0 PhysicalAttributes { Geometry { Primitive "plane"
 
 def timed_run(scene: str, seed: int, frames: int) -> tuple[dict[str, Any], float]:
     """``run_once`` of ``scene`` and the CPU seconds its process spent on it."""
-    from engine.sweep import run_once
+    from app.sweep import run_once
 
     cpu = time.process_time()
     result = run_once(scene, {}, seed, frames, None)

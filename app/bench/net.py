@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from tools.bench import cpus
+from app.bench import cpus
 
 BODIES = 2000
 RATE = 60.0
@@ -230,8 +230,8 @@ def run_bench(quick: bool = False) -> list[dict[str, Any]]:
 
 def _serve(folder: Path) -> tuple[Any, Any, str]:
     """``colosseum serve``'s engine on ``folder``, its scene in; (engine, server, address)."""
-    from engine.cli import build_parser
-    from engine.cli_net import serving_engine
+    from app.cli import build_parser
+    from app.cli_net import serving_engine
     from engine.system import Phase
     from systems.net import PublishSystem
 

@@ -6,7 +6,7 @@ Scene (issue 4): a ground plane and N boxes of 1 m and 1 kg in columns 10 high,
 warm start of resting islands, contact softness, exact joint islands), at most 4
 contacts per pair, μ 0.5.
 
-The reference is ``tools/bench_ode.c``, compiled here with ``cc -O2`` against the
+The reference is ``app/bench/bench_ode.c``, compiled here with ``cc -O2`` against the
 same libode (pkg-config) and the engine's own step (``engine/physics/ode3d/stepper.h``,
 which both include, run with the same settings) into a temporary folder and run in the
 same session, both plain ("C") and summing the contact impulses after the step as our
@@ -21,7 +21,7 @@ backend runs) is timed on its own below.
 For each N and with sleeping off and on it reports ms per step of: plain C; our
 raw ``OdeBackend.step``; our step plus the ECS sync (every body's state written in C
 into a snapshot table and copied into the pose table as the physics system
-does, :class:`tools.bench_readback.EcsReadback`). Times are the
+does, :class:`app.bench.readback.EcsReadback`). Times are the
 stepping thread's CPU time (C: CLOCK_THREAD_CPUTIME_ID, Python: time.thread_time),
 so other work on a shared machine does not count; each variant runs ``repeats``
 times, alternating, and the fastest run counts.
@@ -32,7 +32,7 @@ the dynamics system takes today) against ``read_state_into`` the table's rows. A
 the sleep rule's own cost per step (:class:`engine.physics.sleep.SleepRule`, every
 body awake and slow, so every test runs), beside the plain-C step it rides on.
 
-Run: ``python -m tools.bench_physics [--n 100 500 2000] [--steps S] [--quick]``.
+Run: ``python -m app.bench.physics [--n 100 500 2000] [--steps S] [--quick]``.
 """
 
 from __future__ import annotations
@@ -49,6 +49,8 @@ from typing import Any
 
 import numpy as np
 
+from app.bench import print_row
+from app.bench.readback import EcsReadback, pose_table, time_readback
 from engine.physics.backend import WorldSettings
 from engine.physics.sleep import (
     SLEEP_ANGULAR,
@@ -58,8 +60,6 @@ from engine.physics.sleep import (
     STEADY_SHARE,
     SleepRule,
 )
-from tools.bench import print_row
-from tools.bench_readback import EcsReadback, pose_table, time_readback
 
 DT = 1.0 / 60.0
 SOURCE = Path(__file__).with_name("bench_ode.c")
@@ -172,7 +172,7 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
               backend: str = "ode", quick: bool = False, repeats: int = 3) -> list[dict]:
     """Measure every N with sleeping off and on; returns one row per (N, sleeping)."""
     if backend == "pymunk":
-        from tools.bench_physics2d import run_bench as run_2d
+        from app.bench.physics2d import run_bench as run_2d
 
         return run_2d((100, 500) if quick else ns, 300 if quick else steps)
     if backend != "ode":
@@ -231,7 +231,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--quick", action="store_true")
     args = parser.parse_args(argv)
-    from tools.bench import print_table
+    from app.bench import print_table
 
     rows = run_bench(tuple(args.n), args.steps, quick=args.quick, repeats=args.repeats)
     print_table(rows)

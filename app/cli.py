@@ -13,11 +13,11 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from app.runner import execute_run, fail, prepare_run
 from engine.input.config import input_option
 from engine.memory import keep_freed_memory
 from engine.net.protocol import BARRIER_WAIT
 from engine.physics.backend import BackendName
-from engine.runner import execute_run, fail, prepare_run
 
 log = logging.getLogger("colosseum")
 
@@ -258,7 +258,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="where the session log goes (default: sessions/ here)")
     score.add_argument("--json", action="store_true", help="the summary as JSON")
 
-    from engine.experiments.cli import add_parser as add_experiment_parser
+    from app.experiments.cli import add_parser as add_experiment_parser
 
     add_experiment_parser(sub, add_run_flags, add_param_flag)
 
@@ -375,8 +375,8 @@ def _run_watching(args: argparse.Namespace, content: Any, config: Any, scene: An
     start over from the new files (a scene with errors is told and the old one runs on);
     a scene ``colosseum import`` wrote is imported again from its changed model first,
     the author's edits kept. Frames and seconds count across the restarts."""
+    from app.scene_loading import SceneLoadError, SceneWatcher, load_content_scene
     from engine.content import ContentError, load_systems
-    from engine.scene_loading import SceneLoadError, SceneWatcher, load_content_scene
     from engine.system import SystemFailure
     from systems import create_engine
 
@@ -417,8 +417,8 @@ def _run_watching(args: argparse.Namespace, content: Any, config: Any, scene: An
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    from engine.runner import allowed_problem
-    from engine.scene_loading import check_path
+    from app.runner import allowed_problem
+    from app.scene_loading import check_path
 
     problem = allowed_problem(args)
     if problem is not None:
@@ -427,19 +427,19 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 
 def cmd_fmt(args: argparse.Namespace) -> int:
-    from engine.scene_loading import format_path
+    from app.scene_loading import format_path
 
     return format_path(Path(args.path), write=args.write)
 
 
 def cmd_import(args: argparse.Namespace) -> int:
-    from engine.scene_loading import import_path
+    from app.scene_loading import import_path
 
     return import_path(args.model, args.output, force=args.force)
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from engine.scene_loading import export_path
+    from app.scene_loading import export_path
 
     return export_path(args.scene, args.output)
 
@@ -467,7 +467,7 @@ def cmd_keys(args: argparse.Namespace) -> int:
 
 
 def cmd_new(args: argparse.Namespace) -> int:
-    from engine.scaffold import ScaffoldError, scaffold
+    from app.scaffold import ScaffoldError, scaffold
 
     try:
         folder = scaffold(Path(args.name))
@@ -478,7 +478,7 @@ def cmd_new(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from tools.bench import BENCHMARKS, run_benchmark
+    from app.bench import BENCHMARKS, run_benchmark
 
     if args.stereo:
         if args.what not in ("render", "stereo"):
@@ -496,22 +496,22 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
-    from engine.cli_net import serve
+    from app.cli_net import serve
 
     return serve(args)
 
 
 def cmd_join(args: argparse.Namespace) -> int:
-    from engine.cli_net import join
+    from app.cli_net import join
 
     return join(args)
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from engine.sweep import sweep
+    from app.sweep import sweep
 
     if args.participants:  # an experiment's simulated participants
-        from engine.experiments.simulate import simulate
+        from app.experiments.simulate import simulate
 
         return simulate(args)
 
@@ -519,19 +519,19 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_score(args: argparse.Namespace) -> int:
-    from engine.runner import score
+    from app.runner import score
 
     return score(args)
 
 
 def cmd_experiment(args: argparse.Namespace) -> int:
-    from engine.experiments.cli import command
+    from app.experiments.cli import command
 
     return command(args)
 
 
 def cmd_keygen(args: argparse.Namespace) -> int:
-    from engine.cli_net import keygen
+    from app.cli_net import keygen
 
     return keygen(args)
 

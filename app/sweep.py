@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from engine.runner import USAGE_ERROR, fail
+from app.runner import USAGE_ERROR, fail
 
 log = logging.getLogger("colosseum.sweep")
 
@@ -86,9 +86,9 @@ def run_once(path: str, params: dict[str, str], seed: int, frames: int | None,
              dt: float | None = None) -> dict[str, Any]:
     """One headless run, as ``colosseum run PATH --param K=V --seed S --fast`` makes it;
     returns its statistics and measures. Raises on a scene that does not load."""
+    from app.scene_loading import load_content_scene
     from engine.app import EngineConfig
     from engine.content import load_systems, resolve
-    from engine.scene_loading import load_content_scene
     from engine.stats import collect
     from systems import create_engine
 

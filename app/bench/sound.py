@@ -166,6 +166,6 @@ class _RawFrame:
 
 
 if __name__ == "__main__":
-    from tools.bench import print_table
+    from app.bench import print_table
 
     print_table(run_bench(quick=True))

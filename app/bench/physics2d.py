@@ -8,15 +8,15 @@ same pymunk settings and stepped in the same run, alternating every ten steps, s
 they see the same machine and the same simulated phase (they follow bit-identical
 trajectories; the table says so). Ours is timed with the ECS sync: every body's state
 written by ``read_state_into`` straight into the rows of a pose table of N + 1
-Transforms (:class:`tools.bench_readback.EcsReadback`), and then again with
+Transforms (:class:`app.bench.readback.EcsReadback`), and then again with
 ``contacts()`` too (which the engine collects every step). Times are medians over the
 blocks and a ratio is the median of the blocks' own ratios (this is a shared machine;
 means are in the returned dicts). Then the readback alone, old path beside new
-(:func:`tools.bench_readback.time_readback`). With ``--sleeping`` the raw space sleeps
+(:func:`app.bench.readback.time_readback`). With ``--sleeping`` the raw space sleeps
 by chipmunk's own rule after ``SLEEP_TIME`` and ours by the engine's sleep rule, so
 the two no longer follow the same trajectories.
 
-Run: ``python tools/bench_physics2d.py [--n 100 500 2000] [--steps S] [--sleeping]``.
+Run: ``python app/bench/physics2d.py [--n 100 500 2000] [--steps S] [--sleeping]``.
 """
 
 from __future__ import annotations
@@ -34,14 +34,14 @@ import pymunk
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from app.bench import print_row  # noqa: E402
+from app.bench.readback import EcsReadback, pose_table, time_readback  # noqa: E402
 from components import MaterialProps, Physical, Shape  # noqa: E402
 from engine.physics.backend import WorldSettings  # noqa: E402
 from engine.physics.pymunk2d import PymunkBackend  # noqa: E402
 from engine.physics.pymunk2d.backend import COLLISION_SLOP  # noqa: E402
 from engine.physics.pymunk2d.shapes import PLANE_DEPTH, PLANE_HALF_LENGTH  # noqa: E402
 from engine.physics.sleep import SLEEP_TIME  # noqa: E402
-from tools.bench import print_row  # noqa: E402
-from tools.bench_readback import EcsReadback, pose_table, time_readback  # noqa: E402
 
 DT = 1.0 / 60.0
 ITERATIONS = 20

@@ -61,13 +61,13 @@ def _argument_rows(parser: argparse.ArgumentParser) -> list[str]:
 
 
 def cli_markdown() -> str:
-    """Every ``colosseum`` command and its arguments, from :func:`engine.cli.build_parser`."""
-    from engine.cli import build_parser
+    """Every ``colosseum`` command and its arguments, from :func:`app.cli.build_parser`."""
+    from app.cli import build_parser
 
     parser = build_parser()
     about = (parser.description or "").removeprefix("colosseum: ").rstrip(".")
     out = ["# Command line", "",
-           "<!-- Generated from engine/cli.py's argument parser by `python -m tools.docs`; "
+           "<!-- Generated from app/cli.py's argument parser by `python -m tools.docs`; "
            "do not edit. -->", "",
            f"`colosseum [--log-level LEVEL] COMMAND ...`: {about}.", "",
            "Exit codes: 0 success, 1 errors in the content or a failing system, 2 usage "
