@@ -95,7 +95,6 @@ class InputSystem(System):
         self.hub = hub = InputHub(spec, devices, timeouts=timeouts)
         engine.insert_resource(hub)
         engine.insert_resource(hub.state)
-        engine.input = hub.state
         engine.insert_resource(self.window)
         engine.stat_sources["input"] = hub.stats
         self._bind_objects(engine, spec)
