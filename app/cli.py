@@ -14,10 +14,10 @@ from pathlib import Path
 from typing import Any
 
 from app.runner import execute_run, fail, prepare_run
-from engine.input.config import input_option
 from engine.memory import keep_freed_memory
-from engine.net.protocol import BARRIER_WAIT
 from engine.physics.backend import BackendName
+from services.input.config import input_option
+from services.net.protocol import BARRIER_WAIT
 
 log = logging.getLogger("colosseum")
 
@@ -34,7 +34,7 @@ def _positive(kind: type) -> Any:
 
 def render_scale_option(text: str) -> float:
     """``--render-scale``: a share of the window's resolution, 0.25 to 1."""
-    from engine.render.renderer import MIN_RENDER_SCALE
+    from services.render.renderer import MIN_RENDER_SCALE
 
     value = float(text)
     if not MIN_RENDER_SCALE <= value <= 1.0:

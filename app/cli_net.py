@@ -38,10 +38,10 @@ def serve(args: argparse.Namespace) -> int:
 def serving_engine(args: argparse.Namespace) -> Any:
     """(engine, bound server, scene) for ``serve``'s flags — the scene not yet in the
     engine — or an exit code, the problem told."""
-    from engine.net.keys import KeyProblem, server_keys
-    from engine.net.protocol import content_fingerprint, endpoints, is_loopback
-    from engine.net.server import NetError, NetServer
     from engine.physics import BackendUnavailable
+    from services.net.keys import KeyProblem, server_keys
+    from services.net.protocol import content_fingerprint, endpoints, is_loopback
+    from services.net.server import NetError, NetServer
     from systems import create_engine
     from systems.net import ServerPlugin
 
@@ -78,10 +78,10 @@ def serving_engine(args: argparse.Namespace) -> Any:
 
 
 def join(args: argparse.Namespace) -> int:
-    from engine.net.client import NetClient
-    from engine.net.keys import KeyProblem, client_keys
-    from engine.net.protocol import content_fingerprint, endpoints
-    from engine.net.server import NetError
+    from services.net.client import NetClient
+    from services.net.keys import KeyProblem, client_keys
+    from services.net.protocol import content_fingerprint, endpoints
+    from services.net.server import NetError
 
     try:
         endpoints(args.address)
@@ -179,7 +179,7 @@ def node_engine(args: argparse.Namespace, client: Any, welcome: dict[str, Any],
 
 
 def keygen(args: argparse.Namespace) -> int:
-    from engine.net.keys import KeyProblem, make_keys
+    from services.net.keys import KeyProblem, make_keys
 
     try:
         made = make_keys(args.folder, args.user)

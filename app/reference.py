@@ -1,5 +1,5 @@
 """The reference pages made from the code itself: the CLI (from the argparse parser) and the
-Lua API (from the declarations in :mod:`engine.scripting.api`'s docstring, with the
+Lua API (from the declarations in :mod:`services.scripting.api`'s docstring, with the
 standard library the sandbox keeps read from a live sandbox). ``python -m tools.docs``
 writes them into docs/ beside the others; tests keep them equal to what this makes."""
 
@@ -133,10 +133,10 @@ def _declaration_blocks(doc: str) -> dict[str, str]:
 
 
 def documented_lua_api() -> dict[str, set[str]]:
-    """The names :mod:`engine.scripting.api` declares: ``globals`` (also fields of the
+    """The names :mod:`services.scripting.api` declares: ``globals`` (also fields of the
     ``colosseum`` table), ``methods`` (on object, hand and avatar handles), ``fields``
     (read on a handle), ``input`` (the ``input`` table's functions) and ``callbacks``."""
-    from engine.scripting import api
+    from services.scripting import api
 
     doc = api.__doc__ or ""
     blocks = _declaration_blocks(doc)
@@ -160,8 +160,8 @@ def live_lua_api() -> dict[str, Any]:
     scripting API installed: the engine's globals, the handle methods and fields, the
     ``input`` functions, and the standard Lua the sandbox keeps (base functions, and each
     library with its functions)."""
-    from engine.scripting.api import ScriptAPI
-    from engine.scripting.runtime import ScriptRuntime
+    from services.scripting.api import ScriptAPI
+    from services.scripting.runtime import ScriptRuntime
 
     api = ScriptAPI.__new__(ScriptAPI)  # install() needs only bound methods, no engine
     runtime = ScriptRuntime(api=api.install)
@@ -190,13 +190,13 @@ def _rst_to_markdown(text: str) -> str:
 
 
 def lua_markdown() -> str:
-    """The Lua API page: the declarations of :mod:`engine.scripting.api` as they are
+    """The Lua API page: the declarations of :mod:`services.scripting.api` as they are
     written there, then every name in one list, then the standard Lua a script has."""
-    from engine.scripting import api
+    from services.scripting import api
 
     doc = api.__doc__ or ""
     out = ["# Lua API", "",
-           "<!-- Generated from engine/scripting/api.py (its declarations) and a live "
+           "<!-- Generated from services/scripting/api.py (its declarations) and a live "
            "sandbox (the standard library) by `python -m tools.docs`; do not edit. -->", ""]
     lines = doc.splitlines()
     i = 0

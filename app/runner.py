@@ -109,8 +109,8 @@ def replay_flags(args: argparse.Namespace) -> str | None:
     at their defaults are taken from the recording and told; one set otherwise is warned
     about, as the run will not repeat the recorded one. Returns what is wrong with the
     file's header."""
-    from engine.input.record import ReplayError, read_header
     from engine.physics.backend import BackendName
+    from services.input.record import ReplayError, read_header
 
     try:
         header = read_header(args.replay)
@@ -185,9 +185,9 @@ def execute_run(engine: Any, args: argparse.Namespace, scene: Any,
     exit code. ``custom_systems``: build the content's systems/*.py; ``before_save(engine)``
     runs before the state is written (a node stamps the server's time)."""
     from engine.content import ContentError
-    from engine.input import InputRecorder, InputReplayer, ReplayError
     from engine.stats import collect, sections, status_line, write_json
     from engine.system import SystemFailure
+    from services.input import InputRecorder, InputReplayer, ReplayError
 
     try:
         if getattr(args, "replay", None) is not None:
@@ -295,7 +295,7 @@ def score(args: argparse.Namespace) -> int:
     and when, grasps, collisions, distance) as a table or ``--json``."""
     import json
 
-    from engine.input import ReplayError, read_recording
+    from services.input import ReplayError, read_recording
     from systems import create_engine
     from systems.session import SessionLog, summarize
 

@@ -42,7 +42,7 @@ Light {{ Type "directional" Direction [-0.4 0.3 -1] }}
 """
 
 BALL_LUA = """\
--- Runs on the object "ball". See the scripting API in engine/scripting/api.py.
+-- Runs on the object "ball". See the scripting API in services/scripting/api.py.
 local bounces = 0
 
 function onCollision(other, impulse)

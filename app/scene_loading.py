@@ -305,11 +305,11 @@ def check_path(path: Path, output: str = "text", allow: Iterable[Path] = ()) -> 
 def shader_diagnostics(spec: SceneSpec, folder: Path) -> list:
     """Warnings, from the GLSL source alone (no GPU), about what a run that draws would
     warn about: uniforms of a program that nothing sets, vertex inputs the engine never
-    feeds (:func:`engine.render.shaders.unset_in_source`), at the shader file's line."""
-    from engine.render.glsl import DEFAULT_USER_VERTEX
-    from engine.render.shaders import unset_in_source
+    feeds (:func:`services.render.shaders.unset_in_source`), at the shader file's line."""
     from engine.scene import Diagnostic
     from engine.scene.diagnostics import WARNING
+    from services.render.glsl import DEFAULT_USER_VERTEX
+    from services.render.shaders import unset_in_source
 
     found = []
     for program_id, program in spec.shader_programs.items():
@@ -504,8 +504,8 @@ def export_path(scene: Path, out: Path) -> int:
     """``colosseum export``: a scene file or content folder (a saved state too) as glTF with
     physics extensions; what glTF cannot say is told."""
     from engine.content import ContentError, resolve
-    from engine.interchange.export import export_gltf
     from engine.scene import render_all
+    from services.export import export_gltf
 
     if out.suffix.lower() not in (".glb", ".gltf"):
         print(f"colosseum: error: {out}: the output must end in .glb or .gltf", file=sys.stderr)

@@ -43,7 +43,7 @@ log = logging.getLogger("colosseum")
 R = TypeVar("R")
 PHASES = tuple(Phase)
 #: A frame that takes no physics step (a headset's frame between two steps, see
-#: engine.xr.timing) reads input and draws; the simulation's phases wait for a step.
+#: services.xr.timing) reads input and draws; the simulation's phases wait for a step.
 DISPLAY_PHASES = (Phase.INPUT, Phase.RENDER)
 
 

@@ -32,10 +32,10 @@ from components import Camera, Name, Transform
 from engine.events import CustomEvent
 from engine.experiments.design import OFF_LEVELS, Design, TrialPlan
 from engine.experiments.tracking import TrackLog, WheelLog
-from engine.input.state import InputState
 from engine.measures import Measures
 from engine.services import ExperimentControl
 from engine.system import Phase, PluginName, System
+from services.input.state import InputState
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -308,7 +308,7 @@ class TrialRunner(System):
 
     def _head(self, engine: Engine) -> np.ndarray:
         """The active camera's pose as drawn: at its offset from the object it follows."""
-        from engine.render.camera import camera_view_of
+        from services.render.camera import camera_view_of
 
         assert self._camera is not None
         entity, camera = self._camera

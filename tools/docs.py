@@ -14,9 +14,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 from app.reference import cli_markdown, lua_markdown
-from engine.render.glsl import contract_markdown
 from engine.scene.keys import reference_markdown
 from engine.stats import STATS_SCHEMA, stats_markdown
+from services.render.glsl import contract_markdown
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"

@@ -33,13 +33,13 @@ from engine.animation import Mixer
 from engine.animation.sampling import clip_pose, joint_matrices
 from engine.animation.skinning import skin
 from engine.assets import Assets, SkinnedModel
-from engine.render.camera import CameraView
-from engine.render.context import HeadlessTarget
-from engine.render.lights import LightInfo
-from engine.render.renderer import Renderer
 from engine.rotation import compose, slerp
+from services.render.camera import CameraView
+from services.render.context import HeadlessTarget
+from services.render.lights import LightInfo
+from services.render.renderer import Renderer
 
-MODELS = Path(__file__).resolve().parent.parent / "content" / "avatars" / "models"
+MODELS = Path(__file__).resolve().parents[2] / "content" / "avatars" / "models"
 DT = 1.0 / 60.0
 GOAL_MS = 2.0
 

@@ -40,9 +40,9 @@ def _rig(scene: str, folder: Path, backend: str, paths: dict[str, Any], seconds:
          on_frame: Any = None) -> float:
     """Run ``scene`` with trackers on ``paths`` (t -> position); CPU seconds per step."""
     from engine import EngineConfig, Phase, system
-    from engine.input import InputHub
-    from engine.input.events import TrackerPose
     from engine.scene import instantiate, spec_from_text
+    from services.input import InputHub
+    from services.input.events import TrackerPose
     from systems import create_engine
 
     config = EngineConfig(backend=backend, fast=True, dt=1.0 / RATE, content_dir=folder,
@@ -101,8 +101,8 @@ def tracking(folder: Path, backend: str, seconds: float) -> dict[str, Any]:
 
 def held_cup(folder: Path, backend: str, seconds: float) -> dict[str, Any]:
     from components import Transform
-    from engine.input import InputHub
-    from engine.input.events import Button
+    from services.input import InputHub
+    from services.input.events import Button
 
     scene = ('Object { ID "table" Position [0 0 0.725] Dynamic 0\n'
              '  PhysicalAttributes { Geometry { Primitive "box" Size [1 1 0.05] } } }\n'

@@ -124,9 +124,9 @@ def _row(path: str, sent: int, latencies: np.ndarray, delivered: int,
 def _engine_run(seconds: float, folder: Path) -> list[dict[str, Any]]:
     from components import Transform
     from engine import Engine, EngineConfig, Phase, system
-    from engine.input import Button, InputHub, InputState, TrackerPose
-    from engine.input.osc import OscDevice
     from engine.scene import instantiate, spec_from_text
+    from services.input import Button, InputHub, InputState, TrackerPose
+    from services.input.osc import OscDevice
     from systems.controllers import ControllersPlugin
     from systems.dynamics import DynamicsPlugin
     from systems.input import InputPlugin, InputSystem

@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from engine.interchange.export import GltfWriter, to_gltf
 from engine.interchange.gltf_physics import KHR, OMI_BODY, OMI_JOINT, OMI_SHAPE
+from services.export import GltfWriter, to_gltf
 
 
 def gl(p: Sequence[float]) -> list[float]:

@@ -3,8 +3,8 @@
 The server is ``colosseum serve``'s engine in this process, paced at 60 frames a second
 (ODE, 2,000 spheres drifting and spinning in zero gravity, so every body moves every
 frame). Each node is its own process running a node's network path — join, receive,
-decode (:class:`~engine.net.codec.PoseDecoder`) and follow
-(:class:`~engine.net.follow.Follower`) — without an engine to draw: the bench measures
+decode (:class:`~services.net.codec.PoseDecoder`) and follow
+(:class:`~services.net.follow.Follower`) — without an engine to draw: the bench measures
 what the network costs, not drawing. Rows, per node count:
 
 * ``server ms/frame``: the server's frame (physics, scripts, gathering and handing the
@@ -28,7 +28,7 @@ what the network costs, not drawing. Rows, per node count:
 
 A last row (``avatars``) serves 10 walkers (``content/avatars``' figure walking paths with
 its feet on the ground by IK) to one node: the bytes each node receives for their
-skeletons (every joint's matrix as a pose, :mod:`engine.net.bones`) and roots, beside
+skeletons (every joint's matrix as a pose, :mod:`services.net.bones`) and roots, beside
 those joints and roots as plain float32 arrays.
 """
 
@@ -84,10 +84,10 @@ def _avatar_scene(n: int) -> str:
 def _node(address: str, content: str, name: str, seconds: float, out: Any) -> None:
     """One node's network path for ``seconds``; puts (bytes, CPU seconds per frame,
     latencies) on ``out``."""
-    from engine.net import protocol
-    from engine.net.client import NetClient
-    from engine.net.codec import CodecError, PoseDecoder
-    from engine.net.follow import Follower
+    from services.net import protocol
+    from services.net.client import NetClient
+    from services.net.codec import CodecError, PoseDecoder
+    from services.net.follow import Follower
 
     client = NetClient(address, name, content, timeout=5.0)
     client.join()
@@ -212,7 +212,7 @@ def run_bench(quick: bool = False) -> list[dict[str, Any]]:
     with tempfile.TemporaryDirectory(prefix="colosseum-bench-net-avatars-") as tmp:
         folder = Path(tmp)
         (folder / "main.scene").write_text(_avatar_scene(AVATARS), encoding="utf-8")
-        shutil.copy(Path(__file__).resolve().parents[1] / "content" / "avatars" / "models" /
+        shutil.copy(Path(__file__).resolve().parents[2] / "content" / "avatars" / "models" /
                     "walker.glb", folder / "walker.glb")
         engine, server, address = _serve(folder)
         try:

@@ -64,7 +64,7 @@ from engine.physics.sleep import (
 DT = 1.0 / 60.0
 SOURCE = Path(__file__).with_name("bench_ode.c")
 #: The engine's step over libode, which the reference includes (stepper.h).
-STEPPER = Path(__file__).resolve().parents[1] / "engine" / "physics" / "ode3d"
+STEPPER = Path(__file__).resolve().parents[2] / "engine" / "physics" / "ode3d"
 
 
 def box_positions(n: int) -> np.ndarray:

@@ -32,7 +32,7 @@ import numpy as np
 import pymunk
 
 if __package__ in (None, ""):
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 from app.bench import print_row  # noqa: E402
 from app.bench.readback import EcsReadback, pose_table, time_readback  # noqa: E402

@@ -12,10 +12,10 @@ import time
 import numpy as np
 
 from components import Shape, Visual
-from engine.render.camera import CameraView
-from engine.render.context import HeadlessTarget
-from engine.render.lights import LightInfo
-from engine.render.renderer import Renderer
+from services.render.camera import CameraView
+from services.render.context import HeadlessTarget
+from services.render.lights import LightInfo
+from services.render.renderer import Renderer
 
 
 def _scene(renderer: Renderer, count: int, rng: np.random.Generator) -> np.ndarray:
@@ -107,9 +107,9 @@ def run_bench(count: int = 1000, rounds: int = 6, frames_per_round: int = 10, wa
 def _headset_camera(distance: float = 14.0) -> CameraView:
     """Two eyes 63 mm apart with a headset's asymmetric fields of view (Monado's simulated
     HMD's angles), looking over the boxes."""
-    from engine.render import math3d
-    from engine.render.camera import HeadsetEye
-    from engine.xr.projection import Fov, fov_projection
+    from services.render import math3d
+    from services.render.camera import HeadsetEye
+    from services.xr.projection import Fov, fov_projection
 
     centre = np.array([0.0, -distance, 9.0])
     look = math3d.look_at_orientation(centre, (0.0, 0.0, 0.0))

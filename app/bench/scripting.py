@@ -55,7 +55,7 @@ def run_bench(quick: bool = False) -> list[dict[str, Any]]:
     from engine.app import Engine, EngineConfig
     from engine.events import Contacts
     from engine.physics.backend import CONTACT_DTYPE
-    from engine.scripting.runtime import ScriptRuntime
+    from services.scripting.runtime import ScriptRuntime
     from systems import RegistryPlugin, load_plugin
     from systems.scripting import ScriptingPlugin, ScriptingSystem
 
@@ -137,7 +137,7 @@ def churn_world(bodies: int) -> tuple[Any, Any, Any]:
     from components import Name, Script, Transform
     from engine.app import Engine, EngineConfig
     from engine.scene import instantiate, spec_from_text
-    from engine.scripting.runtime import ScriptRuntime
+    from services.scripting.runtime import ScriptRuntime
     from systems import RegistryPlugin, load_plugin
     from systems.scripting import ScriptingPlugin
 

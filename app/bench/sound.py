@@ -48,8 +48,8 @@ def run_bench(quick: bool = False, backend: str | None = None) -> list[dict[str,
 def _bench(folder: Path, backend: str | None, quick: bool) -> list[dict[str, Any]]:
     from components import Camera, Physical, Sound, Transform
     from engine import EngineConfig
-    from engine.audio import SoundManager
     from engine.physics.backend import WorldSettings
+    from services.audio import SoundManager
     from systems.sound import SoundPlugin, SoundSystem
 
     spec = backend or f"wave:{folder / 'bench.wav'}"

@@ -43,7 +43,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 STROKE = ROOT / "content" / "stroke"
 SIZE = (1280, 720)
 GOAL_FPS = 60.0

@@ -170,8 +170,8 @@ def _engine(args: argparse.Namespace, design: Design, trial: TrialPlan, seed: in
 
 def run(args: argparse.Namespace) -> int:
     from engine.content import ContentError
-    from engine.input import ReplayError
     from engine.system import SystemFailure
+    from services.input import ReplayError
 
     found = _design(args)
     if isinstance(found, int):
@@ -202,7 +202,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _run_trials(args: argparse.Namespace, content: Any, design: Design,
                 files: SessionFiles) -> int:
-    from engine.input import InputRecorder
+    from services.input import InputRecorder
     from systems.experiments import ExperimentPlugin, TrialRunner
 
     answers: dict[str, list[bool]] = {}
@@ -281,7 +281,7 @@ def _summary(design: Design, rows: list[dict[str, str]]) -> dict[str, Any]:
 def replay(args: argparse.Namespace) -> int:
     """Play trial N back from its recording: the same condition, seed and input; prints
     the outcome and end time beside the row's."""
-    from engine.input import InputReplayer
+    from services.input import InputReplayer
     from systems.experiments import ExperimentPlugin, TrialRunner
 
     args.param = []

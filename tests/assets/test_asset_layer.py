@@ -196,7 +196,7 @@ def test_every_model_format_loads_without_networkx_or_lxml(tmp_path: Path):
                     raise ModuleNotFoundError(name, name=name)
         sys.meta_path.insert(0, Refuse())
         import trimesh
-        from engine.render.meshes import from_part
+        from services.render.meshes import from_part
         from engine.scene import spec_from_text
         folder = {str(tmp_path)!r}
         for ext in {MODEL_EXTENSIONS!r}:

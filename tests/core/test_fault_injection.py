@@ -37,7 +37,7 @@ from engine.physics.commands import (
     SetVelocity,
 )
 from engine.scene import check, instantiate, load_spec, write_state
-from engine.scripting.runtime import ScriptRuntime
+from services.scripting.runtime import ScriptRuntime
 from systems import RegistryPlugin, load_plugin
 from systems.dynamics import DynamicsSystem
 from systems.scripting import ScriptingPlugin
@@ -713,8 +713,8 @@ def test_bad_input_events_from_a_node_are_counted_and_dropped(
     once, then counted), none reaches the input state, no traceback, and the good event
     sent after them arrives; the server's world goes on."""
 
-    from engine.input.state import InputState
-    from engine.net import protocol
+    from services.input.state import InputState
+    from services.net import protocol
     from tests.net.net_helpers import free_port, hello, local_server, raw_control
 
     bad = _bad_node_events()

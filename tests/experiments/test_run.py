@@ -271,8 +271,8 @@ def test_a_torn_last_line_is_cut_and_a_changed_design_refused(tmp_path: Path):
 
 WHEELS_PY = '''
 from engine import Phase, system
-from engine.input import InputHub
-from engine.input.events import WheelCount
+from services.input import InputHub
+from services.input.events import WheelCount
 
 
 def build(engine):

@@ -18,7 +18,7 @@ from pythonosc.udp_client import SimpleUDPClient
 
 from components import Transform
 from engine import EngineConfig
-from engine.input import (
+from services.input import (
     Button,
     DeviceError,
     DeviceFound,
@@ -29,8 +29,8 @@ from engine.input import (
     WheelCount,
     osc,
 )
-from engine.input import device as device_module
-from engine.input.osc import OscDevice
+from services.input import device as device_module
+from services.input.osc import OscDevice
 
 
 def osc_scene(extra: str = "", lost_after: float = 0.5) -> str:
@@ -319,7 +319,7 @@ def test_a_device_that_never_hears_anything_says_so_once(monkeypatch, caplog):
 def test_a_sender_inventing_names_is_held_to_a_bounded_table(tmp_path: Path, caplog):
     """A counter in the addresses would add a table entry per packet for ever: names past
     the first MAX_SOURCES are bad messages, the ones already heard keep working."""
-    from engine.input.hub import MAX_SOURCES
+    from services.input.hub import MAX_SOURCES
 
     with input_engine(osc_scene(), tmp_path) as engine:
         client = SimpleUDPClient("127.0.0.1", port_of(engine))

@@ -13,9 +13,9 @@ from app.cli import main
 from app.scene_loading import export_path
 from components import Physical, Transform, Trigger
 from engine.assets.gltf import GltfDocument
-from engine.interchange.export import export_gltf, volume
 from engine.rotation import quat_to_matrix
 from engine.scene import load_spec
+from services.export import export_gltf, volume
 from tests.interchange.helpers import Run, import_scene
 
 pytest.importorskip("engine.physics.ode3d")

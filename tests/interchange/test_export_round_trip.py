@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from components import Physical, Transform
-from engine.interchange.export import export_gltf
+from services.export import export_gltf
 from tests.interchange import gltf_schema
 from tests.interchange.conformance import ROOT, SHARED
 

@@ -40,7 +40,7 @@ def raw_control(port: int) -> Iterator[Any]:
 
 def hello(user: str, content: str) -> bytes:
     """The hello a node opens with, as ``user`` holding ``content`` (its fingerprint)."""
-    from engine.net import protocol
+    from services.net import protocol
 
     return protocol.encode({"type": "hello", "v": protocol.VERSION, "user": user,
                             "content": content})

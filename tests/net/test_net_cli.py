@@ -123,7 +123,7 @@ def test_serve_binds_loopback_unless_told_and_warns_off_it_without_a_key(
     the bind fails: no socket leaves 127.0.0.1.)"""
     from app.cli import build_parser
     from app.cli_net import serving_engine
-    from engine.net.protocol import is_loopback
+    from services.net.protocol import is_loopback
 
     parser = build_parser()
     assert is_loopback(parser.parse_args(["serve", str(MULTIUSER)]).bind)

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from engine.input.calibration import openxr_to_engine
+from services.input.calibration import openxr_to_engine
 
 ROOT = Path(__file__).resolve().parents[2]
 RUNTIME = os.environ.get("XR_RUNTIME_JSON")
@@ -78,7 +78,7 @@ def test_hands_in_the_headset_reaches_focused_submits_and_ends_cleanly(tmp_path:
 
 
 def test_what_reaches_the_runtime_is_what_the_engine_drew_per_eye(tmp_path: Path):
-    from engine.xr.display import XrDisplay
+    from services.xr.display import XrDisplay
 
     engine = _engine(_scene(tmp_path), 0)
     display = engine.plugins["xr"].display
@@ -138,7 +138,7 @@ import json, sys
 from pathlib import Path
 from engine.app import EngineConfig
 from engine.content import resolve
-from engine.input.state import InputState
+from services.input.state import InputState
 from app.scene_loading import load_content_scene
 from engine.services import HeadsetControl
 from systems import create_engine
