@@ -56,3 +56,15 @@ def test_the_layer_map_is_one_top_level_folder_per_layer_and_every_folder_has_on
     assert layer_of("app.cli").name == "application"
     with pytest.raises(ValueError, match="belongs to no layer"):
         layer_of("tests.conftest")
+
+
+def test_the_layout_page_names_every_source_folder():
+    """docs/explanation/layout.md is the map a new maintainer reads: a folder missing from
+    it is a folder nobody finds."""
+    from tools.layers import PACKAGES, ROOT
+
+    page = (ROOT / "docs" / "explanation" / "layout.md").read_text(encoding="utf-8")
+    folders = sorted({p.parent.relative_to(ROOT) for package in PACKAGES
+                      for p in (ROOT / package).rglob("*.py")})
+    missing = [str(f) for f in folders if f"{f.name}/" not in page]
+    assert not missing, f"folders the layout page does not name: {missing}"
