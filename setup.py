@@ -1,11 +1,11 @@
 """Builds the compiled parts: the private ODE binding against the system libode
 (engine/physics/ode3d/_ode.pyx, which includes the .pxi files beside it, one per concept,
 cimports their libode.pxd declarations and includes stepper.h, the step policy it shares
-with tools/bench_ode.c, and through it engine/physics/sleep.h), the sleep rule's per-body
+with app/bench/bench_ode.c, and through it engine/physics/sleep.h), the sleep rule's per-body
 pass (engine/physics/_sleep.pyx, over sleep.h), the pass that turns pymunk.batch buffers
 into engine rows (engine/physics/pymunk2d/_rows.pyx), the scene scanner
 (engine/scene/_scan.pyx) and the network pose codec's per-frame passes
-(engine/net/_codec.pyx: built without fused multiply-add, so every machine's arithmetic
+(services/net/_codec.pyx: built without fused multiply-add, so every machine's arithmetic
 is the same to the bit, as a server's copy of the poses and its nodes' must be), and the
 skeletons' hierarchy and palettes (engine/animation/_compose.pyx)."""
 
@@ -55,7 +55,7 @@ def extensions() -> list[Extension]:
                      extra_compile_args=["-O3", "-ffp-contract=off"],  # no fused a*b+c
                      define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION"),
                                     ("_GNU_SOURCE", None)])  # sincos
-    codec = Extension("engine.net._codec", ["engine/net/_codec.pyx"],
+    codec = Extension("services.net._codec", ["services/net/_codec.pyx"],
                       extra_compile_args=["-O3", "-ffp-contract=off"])
     compose = Extension("engine.animation._compose", ["engine/animation/_compose.pyx"],
                         extra_compile_args=["-O3"])

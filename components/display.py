@@ -24,7 +24,7 @@ class Display:
 
 
 #: The controllers' actions a scene may rebind (``Display { Bind { Action ... } }``); the
-#: OpenXR display (engine.xr.bindings) defines what each is.
+#: OpenXR display (services.xr.bindings) defines what each is.
 HEADSET_ACTIONS = ("grip", "aim", "trigger", "trigger_value", "squeeze", "squeeze_value",
                    "thumbstick", "thumbstick_click", "a", "b", "x", "y", "menu", "select",
                    "haptic")
@@ -39,7 +39,7 @@ HEADSET_PROFILES = ("khr/simple_controller", "oculus/touch_controller",
 @dataclass(slots=True)
 class Headset:
     """The scene's wish to be shown in a headset (``Display { Kind "openxr" }``): how the
-    OpenXR display runs (see :mod:`engine.xr`)."""
+    OpenXR display runs (see :mod:`services.xr`)."""
 
     space: str = "stage"
     when_hidden: str = "run"

@@ -12,7 +12,7 @@ severity set, from the scene, Lua, any input binding or Python. A switch ramps t
 in over the anomaly's ``Onset`` seconds, and out again when it is switched off: every
 severity parameter moves from the value without effect to its set value (smoothstep of the
 ramp's progress), so the effect grows monotonically. Once ramped out the anomaly draws
-nothing at all. What it draws is the renderer's business (engine.render.anomalies).
+nothing at all. What it draws is the renderer's business (services.render.anomalies).
 
 >>> anomalies = Anomalies()
 >>> _ = anomalies.declare("hemianopia", {"Side": "left"}, enabled=False, onset=2.0)

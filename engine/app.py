@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -38,16 +38,25 @@ from engine.system import (
 )
 from engine.world import AccessAudit, World
 
-if TYPE_CHECKING:
-    from engine.input import InputState
-
 log = logging.getLogger("colosseum")
 
 R = TypeVar("R")
 PHASES = tuple(Phase)
 #: A frame that takes no physics step (a headset's frame between two steps, see
-#: engine.xr.timing) reads input and draws; the simulation's phases wait for a step.
+#: services.xr.timing) reads input and draws; the simulation's phases wait for a step.
 DISPLAY_PHASES = (Phase.INPUT, Phase.RENDER)
+
+
+class MissingResource(KeyError):
+    """A resource no plugin provided: the message names it and what there is (a KeyError,
+    so code that asked the dict before still catches it)."""
+
+    def __init__(self, kind: type, known: list[str]) -> None:
+        super().__init__(f"no {kind.__name__} resource: the plugin that provides it is not "
+                         f"loaded (resources: {', '.join(known) or 'none'})")
+
+    def __str__(self) -> str:
+        return str(self.args[0])
 
 
 @dataclass(slots=True)
@@ -117,7 +126,6 @@ class Engine:
         self._started = False
         self._closed = False
         self._quit = False
-        self._input: InputState | None = None
         #: The wall clock every controller of this engine reads (injectable for tests).
         self.clock = clock
         self.physics: PhysicsPort = DetachedPhysics(cfg.world.limits)
@@ -169,25 +177,15 @@ class Engine:
         self.resources[as_type or type(resource)] = resource
 
     def resource(self, kind: type[R]) -> R:
-        return self.resources[kind]
+        """The one ``kind`` a plugin provides (the input plugin's ``InputState``, the
+        render plugin's ``Renderer``); :class:`MissingResource` names it when none did."""
+        try:
+            return self.resources[kind]
+        except KeyError:
+            raise MissingResource(kind, sorted(t.__name__ for t in self.resources)) from None
 
     def try_resource(self, kind: type[R]) -> R | None:
         return self.resources.get(kind)
-
-    @property
-    def input(self) -> InputState:
-        """The latest input state (``engine.input.tracker("hand_r")``), the input plugin's
-        table: set when that plugin starts (the engine core cannot name the input layer
-        itself, a service above it)."""
-        if self._input is None:
-            raise LookupError("engine.input: no input state; the input plugin provides it "
-                              "when the engine starts (requestPlugin(\"input\"), or "
-                              "systems.create_engine)")
-        return self._input
-
-    @input.setter
-    def input(self, state: InputState) -> None:
-        self._input = state
 
     # -- structural changes ---------------------------------------------------
     def spawn(self, *components: Any) -> int:

@@ -77,7 +77,7 @@ class HandReleased:
 class KeyEvent:
     """A key went down or up; names are lower case ("space", "up", "f1", "a").
 
-    Also the input layer's typed ``Key`` event (``engine.input.Key``): ``device`` is where
+    Also the input layer's typed ``Key`` event (``services.input.Key``): ``device`` is where
     it came from, ``timestamp`` when (``time.monotonic()`` seconds, 0 when unknown).
     """
 

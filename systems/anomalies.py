@@ -23,8 +23,8 @@ from typing import TYPE_CHECKING
 
 from engine.anomalies import Anomalies, AnomalySpec
 from engine.events import AnomalySwitched, CustomEvent
-from engine.input import Binding, InputState, parse_binding
 from engine.system import Phase, PluginName, System
+from services.input import Binding, InputState, parse_binding
 
 if TYPE_CHECKING:
     from engine.app import Engine

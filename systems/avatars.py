@@ -38,10 +38,10 @@ from engine.assets import AssetError, Assets, SkinnedModel
 from engine.assets.skinned import AVATAR_AXES
 from engine.messages import MessageLog
 from engine.physics import commands as cmd
-from engine.render.math3d import compose
 from engine.rotation import euler_to_quat, matrix_to_quat, quat_multiply, quat_to_matrix
 from engine.services import AVATAR_METHODS, AvatarControl, AvatarStates
 from engine.system import Phase, PluginName, System
+from services.render.math3d import compose
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -557,7 +557,7 @@ class AvatarSystem(System):
         engine = self._engine
         if engine is None:
             return
-        from engine.scripting.runtime import ScriptRuntime
+        from services.scripting.runtime import ScriptRuntime
 
         runtime = engine.try_resource(ScriptRuntime)
         if runtime is None:

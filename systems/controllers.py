@@ -5,7 +5,7 @@ Each frame a Controller's input is read, scaled by ``gain``, clamped to
 ``[low, high]``, stored in ``Controller.value`` and sent to its actuator.
 
 Inputs (``Controller.input``) are read from the input layer's latest-state table
-(:class:`engine.input.InputState`), so any device — a key, OSC, LSL, a serial
+(:class:`services.input.InputState`), so any device — a key, OSC, LSL, a serial
 encoder, a recording — drives a controller the same way:
 
 - ``key:Up/Down`` +1 while the first key is held, -1 while the second is
@@ -44,7 +44,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from components import Controller, Joint, Name, Transform
-from engine.input import Binding, InputState, parse_binding
 from engine.messages import MessageLog
 from engine.physics.commands import (
     ApplyForce,
@@ -55,6 +54,7 @@ from engine.physics.commands import (
 )
 from engine.rotation import IDENTITY, local_axis
 from engine.system import Phase, PluginName, System
+from services.input import Binding, InputState, parse_binding
 
 if TYPE_CHECKING:
     from engine.app import Engine

@@ -1,7 +1,7 @@
 """The experiment plugin: runs an experiment's trials in the engine
 (``colosseum experiment run``; engine.experiments has the design and the files).
 
-The driver (engine.experiments.cli) hands the :class:`TrialRunner` one trial at a time
+The driver (app.experiments.cli) hands the :class:`TrialRunner` one trial at a time
 (:meth:`TrialRunner.begin`); in the trial's first frame (POST_PHYSICS, after the scripts
 have started) the runner sets its condition — each factor's anomaly switched and set, the
 levels readable by ``experiment:condition(name)`` from the start — stamps the start on
@@ -32,10 +32,10 @@ from components import Camera, Name, Transform
 from engine.events import CustomEvent
 from engine.experiments.design import OFF_LEVELS, Design, TrialPlan
 from engine.experiments.tracking import TrackLog, WheelLog
-from engine.input.state import InputState
 from engine.measures import Measures
 from engine.services import ExperimentControl
 from engine.system import Phase, PluginName, System
+from services.input.state import InputState
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -308,7 +308,7 @@ class TrialRunner(System):
 
     def _head(self, engine: Engine) -> np.ndarray:
         """The active camera's pose as drawn: at its offset from the object it follows."""
-        from engine.render.camera import camera_view_of
+        from services.render.camera import camera_view_of
 
         assert self._camera is not None
         entity, camera = self._camera

@@ -56,7 +56,6 @@ from components.joint import JointKind
 from components.physical import BodyKind
 from engine.assets.generated import MARKER_BALL
 from engine.events import Contacts, CustomEvent, HandGrasped, HandReleased, HandTouched
-from engine.input import InputState
 from engine.messages import MessageLog
 from engine.physics.commands import (
     CommandError,
@@ -71,6 +70,7 @@ from engine.physics.commands import (
 from engine.rotation import quat_multiply, quat_to_matrix
 from engine.services import HandControl
 from engine.system import Phase, PluginName, System
+from services.input import InputState
 
 if TYPE_CHECKING:
     from engine.app import Engine

@@ -25,7 +25,10 @@ import numpy as np
 
 from components import Camera, Controller, Hand, Name, Physical, Transform
 from engine.events import CustomEvent
-from engine.input import (
+from engine.rotation import quat_conjugate, quat_multiply, quat_to_matrix
+from engine.scene.inputs import DESKTOP_TRACKERS, DeviceSpec, InputSpec
+from engine.system import Phase, PluginName, System
+from services.input import (
     DeviceError,
     InputHub,
     InputState,
@@ -33,12 +36,9 @@ from engine.input import (
     merge_devices,
     parse_input_option,
 )
-from engine.input.desktop import DesktopDevice, WindowDevice
-from engine.input.device import PluginDevices
-from engine.input.output import Publisher, make_publisher
-from engine.rotation import quat_conjugate, quat_multiply, quat_to_matrix
-from engine.scene.inputs import DESKTOP_TRACKERS, DeviceSpec, InputSpec
-from engine.system import Phase, PluginName, System
+from services.input.desktop import DesktopDevice, WindowDevice
+from services.input.device import PluginDevices
+from services.input.output import Publisher, make_publisher
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -95,7 +95,6 @@ class InputSystem(System):
         self.hub = hub = InputHub(spec, devices, timeouts=timeouts)
         engine.insert_resource(hub)
         engine.insert_resource(hub.state)
-        engine.input = hub.state
         engine.insert_resource(self.window)
         engine.stat_sources["input"] = hub.stats
         self._bind_objects(engine, spec)
@@ -140,7 +139,7 @@ class InputSystem(System):
     @staticmethod
     def _update_view(engine: Engine, desktop: DesktopDevice) -> None:
         """Point the desktop emulation at the active camera, as the renderer sees it."""
-        from engine.render.camera import camera_from_component
+        from services.render.camera import camera_from_component
 
         world = engine.world
         poses = world.poses

@@ -5,7 +5,7 @@
 * :class:`ServeInputSystem` (INPUT, before the input system): the nodes' requests;
   their input events are injected into the input hub with each source scoped by user
   (tracker ``hand_r`` of ``alice`` is ``alice/hand_r``, calibrated as the scene's
-  ``hand_r``: see :mod:`engine.input.hub`), so a Controller or Hand bound to
+  ``hand_r``: see :mod:`services.input.hub`), so a Controller or Hand bound to
   ``alice/hand_r`` follows alice's device, and the server's ``--record`` holds every
   user's input. A node that leaves (or goes silent) has every button it held released
   and every source it used lost, so its hands let go; scripts get the custom events
@@ -14,8 +14,8 @@
   their node does, unless they come back.
 * :class:`PublishSystem` (RENDER, the frame's last): every replicated entity (an object
   with a Transform and a Name or a Visual; cameras are each node's own) has a stable net
-  id; the frame's poses go out encoded (:mod:`engine.net.codec`), the avatars' joint
-  matrices among them (:mod:`engine.net.bones`), with its events: objects scripts spawned
+  id; the frame's poses go out encoded (:mod:`services.net.codec`), the avatars' joint
+  matrices among them (:mod:`services.net.bones`), with its events: objects scripts spawned
   (their scene text) and Python code made (text written from their components,
   :mod:`engine.scene.objects_text`) and removed, sounds played, stopped and regained,
   contact sounds, uniforms set, custom events emitted.
@@ -44,14 +44,19 @@ import numpy as np
 from components import Camera, Name, Physical, Sound, Transform, UserOwned, Visual
 from engine.animation import Palettes
 from engine.anomalies import ANOMALIES, Anomalies
-from engine.audio import ContactSoundFilter
 from engine.events import AnomalySwitched, Contacts, CustomEvent, Despawned, Spawned
-from engine.input import InputHub
-from engine.input.events import Button, DeviceLost
-from engine.input.record import FrameInput, event_from_record, event_record
 from engine.messages import MessageLog
-from engine.net import protocol
-from engine.net.bones import (
+from engine.realtime import CostLog
+from engine.scene import SceneIds
+from engine.scene.factory import SceneSpec, SpawnRecord
+from engine.services import ShaderControl, SoundControl, SwapGate, UniformValue
+from engine.system import ANY_COMPONENT, Phase, PluginName, System
+from services.audio import ContactSoundFilter
+from services.input import InputHub
+from services.input.events import Button, DeviceLost
+from services.input.record import FrameInput, event_from_record, event_record
+from services.net import protocol
+from services.net.bones import (
     BONE_FLAG,
     MAX_AVATAR_NET,
     MAX_JOINTS,
@@ -60,15 +65,10 @@ from engine.net.bones import (
     palette_poses,
     split_bone_ids,
 )
-from engine.net.client import NetClient
-from engine.net.codec import CodecError, Gap, PoseDecoder
-from engine.net.follow import Follower, Shown
-from engine.net.server import NetError, NetServer, Peer
-from engine.realtime import CostLog
-from engine.scene import SceneIds
-from engine.scene.factory import SceneSpec, SpawnRecord
-from engine.services import ShaderControl, SoundControl, SwapGate, UniformValue
-from engine.system import ANY_COMPONENT, Phase, PluginName, System
+from services.net.client import NetClient
+from services.net.codec import CodecError, Gap, PoseDecoder
+from services.net.follow import Follower, Shown
+from services.net.server import NetError, NetServer, Peer
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -405,7 +405,7 @@ class PublishSystem(System):
 
     def _skeletons(self, engine: Engine) -> tuple[np.ndarray, np.ndarray]:
         """Every replicated avatar's joint matrices as poses, with their bone ids
-        (:mod:`engine.net.bones`): what the avatars plugin published for this frame."""
+        (:mod:`services.net.bones`): what the avatars plugin published for this frame."""
         palettes = engine.try_resource(Palettes)
         if palettes is None or not palettes.offsets:
             return np.zeros(0, np.uint32), np.zeros((0, 7))

@@ -25,17 +25,19 @@ from engine.animation import Palettes
 from engine.anomalies import ANOMALIES, Anomalies
 from engine.assets import AssetError, Assets
 from engine.events import CustomEvent, KeyEvent
-from engine.input import InputState
-from engine.input.desktop import WindowDevice
 from engine.realtime import CostLog
-from engine.render.camera import CameraView, camera_view_of
-from engine.render.context import create_target
-from engine.render.hud import hud_line
-from engine.render.interpolate import PoseInterpolator
-from engine.render.lights import light_from_component
-from engine.render.postprocess import PostPass, PostProcessing
-from engine.render.renderer import FrameStats, Renderer
-from engine.render.shaders import (
+from engine.services import ShaderControl, SwapGate
+from engine.system import Phase, PluginName, System
+from services.input import InputState
+from services.input.desktop import WindowDevice
+from services.render.camera import CameraView, camera_view_of
+from services.render.context import create_target
+from services.render.hud import hud_line
+from services.render.interpolate import PoseInterpolator
+from services.render.lights import light_from_component
+from services.render.postprocess import PostPass, PostProcessing
+from services.render.renderer import FrameStats, Renderer
+from services.render.shaders import (
     FragmentShader,
     ShaderLibrary,
     ShaderProgram,
@@ -44,9 +46,7 @@ from engine.render.shaders import (
     UniformValue,
     VertexShader,
 )
-from engine.services import ShaderControl, SwapGate
-from engine.system import Phase, PluginName, System
-from engine.xr.display import XrDisplay
+from services.xr.display import XrDisplay
 
 if TYPE_CHECKING:
     from engine.app import Engine

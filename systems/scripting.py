@@ -35,12 +35,12 @@ from engine.events import (
     KeyEvent,
     TimerEvent,
 )
-from engine.input.events import Axis, Button, DeviceFound, DeviceLost, TrackerPose, WheelCount
-from engine.scripting.api import ScriptAPI
-from engine.scripting.runtime import Script as LoadedScript
-from engine.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRuntime
 from engine.services import ScriptStates
 from engine.system import ANY_COMPONENT, Phase, PluginName, System
+from services.input.events import Axis, Button, DeviceFound, DeviceLost, TrackerPose, WheelCount
+from services.scripting.api import ScriptAPI
+from services.scripting.runtime import Script as LoadedScript
+from services.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRuntime
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -346,7 +346,7 @@ class ScriptingSystem(System):
     def saved_scripts(self, object_name: Callable[[int], str | None]
                       ) -> dict[int, SavedScript]:
         """Each running script's state, by the entity it runs on (see
-        :mod:`engine.scripting.persist`); what cannot be saved is told, once per save."""
+        :mod:`services.scripting.persist`); what cannot be saved is told, once per save."""
         runtime = self.runtime
         if runtime is None:
             return {}

@@ -31,18 +31,18 @@ import numpy as np
 
 from components import Camera, Name, Physical, Sound, Transform
 from engine.assets import Assets
-from engine.audio import (
+from engine.events import Contacts, Spawned
+from engine.physics.backend import CONTACT_DTYPE
+from engine.rotation import view_problem
+from engine.services import SoundControl
+from engine.system import Phase, PluginName, System
+from services.audio import (
     ContactSoundFilter,
     ContactSoundSettings,
     SoundManager,
     Voice,
     create_audio_backend,
 )
-from engine.events import Contacts, Spawned
-from engine.physics.backend import CONTACT_DTYPE
-from engine.rotation import view_problem
-from engine.services import SoundControl
-from engine.system import Phase, PluginName, System
 
 if TYPE_CHECKING:
     from engine.app import Engine

@@ -54,11 +54,11 @@ from components import Joint, Name, Transform, Wheelchair
 from components.joint import JointKind
 from components.wheelchair import NavigationMode
 from engine.events import CustomEvent
-from engine.input import InputState
 from engine.messages import MessageLog
 from engine.physics.commands import ApplyTorque, CommandError, SetMotor, SetSleeping
 from engine.rotation import quat_to_matrix
 from engine.system import Phase, PluginName, System
+from services.input import InputState
 
 if TYPE_CHECKING:
     from engine.app import Engine

@@ -5,7 +5,7 @@ What the plugin adds:
 
 * :class:`XrFrameController`, the engine's frame pacing: ``xrWaitFrame`` in place of the
   engine's own sleep. Serial mode takes the fixed physics steps each display frame is
-  worth, the remainder carried (:class:`engine.xr.timing.StepPlanner`); threaded mode
+  worth, the remainder carried (:class:`services.xr.timing.StepPlanner`); threaded mode
   leaves physics to its own thread at its own step.
 * :class:`XrSystem` (INPUT, before the input system): opens the display; the recenter key.
 * :class:`HeadsetControllers`, an input device: head and controllers at the frame's
@@ -14,7 +14,7 @@ What the plugin adds:
 * :class:`HapticSystem` (POST_PHYSICS): a hand's touch, grasp and contacts pulse the
   controller that drives it.
 
-The render system draws into the display's target (``engine.xr.display``) when this
+The render system draws into the display's target (``services.xr.display``) when this
 plugin has opened it. Failing to open it is one message: the run ends (exit 1), or goes
 on in the window where ``Fallback "window"`` or ``--xr-fallback`` says so.
 """
@@ -28,15 +28,15 @@ import numpy as np
 
 from components import Camera, Hand, Headset
 from engine.events import ContactBegan, HandGrasped, HandTouched, KeyEvent
-from engine.input.device import DeviceStatus, PluginDevices
-from engine.input.events import AnyInput
 from engine.realtime import Pacing, RealTimeController, Tick
 from engine.services import HeadsetControl
 from engine.system import Phase, PluginName, System
-from engine.xr.bindings import Rebinding
-from engine.xr.display import XrDisplay
-from engine.xr.session import XrError, XrSettings
-from engine.xr.timing import StepPlanner
+from services.input.device import DeviceStatus, PluginDevices
+from services.input.events import AnyInput
+from services.xr.bindings import Rebinding
+from services.xr.display import XrDisplay
+from services.xr.session import XrError, XrSettings
+from services.xr.timing import StepPlanner
 
 if TYPE_CHECKING:
     from engine.app import Engine

@@ -67,7 +67,7 @@ def exports_are_valid_gltf(request: pytest.FixtureRequest):
     """Every file ``colosseum export`` writes in a test is checked against the
     KHR_physics_rigid_bodies and KHR_implicit_shapes JSON schemas of ../shared (when they
     are there): a test whose export does not validate fails (issue 31)."""
-    from engine.interchange import export as export_module
+    from services import export as export_module
 
     written: list = []
     original = export_module.GltfWriter.write

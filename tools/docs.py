@@ -13,10 +13,10 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from engine.render.glsl import contract_markdown
+from app.reference import cli_markdown, lua_markdown
 from engine.scene.keys import reference_markdown
 from engine.stats import STATS_SCHEMA, stats_markdown
-from tools.reference import cli_markdown, lua_markdown
+from services.render.glsl import contract_markdown
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
@@ -66,7 +66,7 @@ FIGURES = DOCS / "figures"
 def plot_figures() -> list[Path]:
     """Each docs/figures/NAME.json (a benchmark's --json, with its date and machine) drawn
     into NAME.png beside it, as ``colosseum bench --plot`` draws it."""
-    from tools.bench import plot
+    from app.bench import plot
 
     return [plot(json.loads(source.read_text(encoding="utf-8")), source.with_suffix(".png"))
             for source in sorted(FIGURES.glob("*.json"))]
@@ -126,7 +126,7 @@ def screenshots(images: Path) -> None:
     import tempfile
 
     images.mkdir(parents=True, exist_ok=True)
-    demo = subprocess.run([sys.executable, "-m", "engine.cli", "run", str(ROOT / "content" /
+    demo = subprocess.run([sys.executable, "-m", "app.cli", "run", str(ROOT / "content" /
                            "demo"), "--headless", "--seconds", "2", "--screenshot",
                            str(images / "demo.png")], capture_output=True, text=True,
                           timeout=120)

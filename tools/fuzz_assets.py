@@ -30,11 +30,11 @@ from typing import Any
 
 import numpy as np
 
+from app.scene_loading import import_path
 from engine.assets import AssetError, Assets
 from engine.assets.sound import AudioFileError, StreamReader
 from engine.interchange import FORMATS
 from engine.scene import check
-from engine.scene_loading import import_path
 from tools.fuzz_core import Outcome, Target, mutate_bytes
 
 #: Numbers a mutation puts in place of one in a file.
@@ -99,7 +99,8 @@ def model_seeds() -> tuple[tuple[str, bytes], ...]:
     """Small valid model files, each as (extension, bytes)."""
     import trimesh
 
-    from tools import gltf_samples, interchange_samples
+    from app.bench import interchange_samples
+    from tools import gltf_samples
 
     with tempfile.TemporaryDirectory(prefix="fuzz-models.") as tmp:
         folder = Path(tmp)

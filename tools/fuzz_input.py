@@ -19,12 +19,20 @@ from pathlib import Path
 from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
 from pythonosc.osc_message_builder import OscMessageBuilder
 
-from engine.input import InputHub, read_recording
-from engine.input.events import Axis, Button, DeviceLost, KeyEvent, Pointer, TrackerPose, WheelCount
-from engine.input.osc import PREFIX, OscDevice
-from engine.input.record import FrameInput, RecordWriter, ReplayError
-from engine.input.serial_line import LineFormat, SerialDevice
 from engine.scene.inputs import InputSpec, TrackerSpec, WheelSpec
+from services.input import InputHub, read_recording
+from services.input.events import (
+    Axis,
+    Button,
+    DeviceLost,
+    KeyEvent,
+    Pointer,
+    TrackerPose,
+    WheelCount,
+)
+from services.input.osc import PREFIX, OscDevice
+from services.input.record import FrameInput, RecordWriter, ReplayError
+from services.input.serial_line import LineFormat, SerialDevice
 from tools.fuzz_assets import HOSTILE_NUMBERS, mutate_json, mutate_numbers
 from tools.fuzz_core import Outcome, Target, mutate_bytes
 from tools.fuzz_scene import mutate

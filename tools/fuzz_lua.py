@@ -17,8 +17,8 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
-from engine.scene_loading import SceneLoadError, content_engine
-from engine.scripting.runtime import ScriptRuntime
+from app.scene_loading import SceneLoadError, content_engine
+from services.scripting.runtime import ScriptRuntime
 from tools.fuzz_core import Outcome, Target
 from tools.fuzz_scene import ASSETS, ROOT, mutate
 

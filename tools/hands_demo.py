@@ -85,7 +85,7 @@ def path(points: list[tuple[float, tuple[float, float, float]]]
 def record(out: Path, seconds: float = SECONDS) -> Path:
     """Run the content folder with the session fed in, the input layer recording it."""
     from engine import Phase, system
-    from engine.input.events import Button, TrackerPose
+    from services.input.events import Button, TrackerPose
 
     trackers = {"hand_r": path(RIGHT), "hand_l": path(LEFT)}
 

@@ -1,21 +1,23 @@
 """Dependencies run one way: a check over the project's imports (``python -m tools.layers``).
 
-Layers, lowest first (docs/ARCHITECTURE.md draws them)::
+Layers, lowest first (docs/ARCHITECTURE.md draws them), one top-level folder each::
 
-    components  <-  engine core  <-  engine services  <-  systems  <-  CLI and tools
+    components  <-  engine  <-  services  <-  systems  <-  app  <-  tools
 
-The asset layer (``engine.assets``) is core: the scene factory builds physics shapes
-from models with it, as the renderer and the sound service do. So are the importers
-(``engine.interchange``: a scene's ``Model`` block imports when it is checked); the
-exporter draws primitives with the renderer's meshes, a service.
+``engine`` is the core (world, phases, scene format, physics, assets, importers);
+``services`` what drives a device or a library for the plugins (render, audio, scripting,
+input, net, xr, and the glTF exporter, which draws primitives with the renderer's meshes);
+``systems`` the plugins; ``app`` what a user runs (the CLI, runner, sweep, benchmarks);
+``tools`` developer scripts (docs, fuzzing, this check). A module's layer is its folder:
+there is no exception to look up, so a new module is placed by where it is written.
 
 A module may import its own layer and the ones below; an import of a higher layer
 is an error, and so is any import cycle among the project's modules. Imports under
 ``if TYPE_CHECKING:`` are type hints, not dependencies, and are not counted; imports
 inside functions are (deferring an import does not remove the dependency).
 
->>> layer_of("engine.render.camera").name, layer_of("engine.scene.parser").name
-('engine services', 'engine core')
+>>> layer_of("services.render.camera").name, layer_of("engine.scene.parser").name
+('services', 'engine core')
 """
 
 from __future__ import annotations
@@ -27,42 +29,34 @@ from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-PACKAGES = ("components", "engine", "systems", "tools")
 
 
 @dataclass(frozen=True, slots=True)
 class Layer:
     rank: int
     name: str
-    prefixes: tuple[str, ...]
+    folder: str
 
 
-#: Longest prefix wins, so ``engine.cli`` is the CLI although ``engine`` is the core.
-LAYERS = (
-    Layer(0, "components", ("components",)),
-    Layer(1, "engine core", ("engine",)),
-    Layer(2, "engine services", ("engine.render", "engine.audio", "engine.scripting",
-                                 "engine.input", "engine.net", "engine.xr",
-                                 "engine.interchange.export")),
-    Layer(3, "systems", ("systems",)),
-    Layer(4, "CLI and tools", ("engine.cli", "engine.cli_net", "engine.runner",
-                               "engine.sweep", "engine.scene_loading", "engine.scaffold",
-                               "engine.experiments.cli", "engine.experiments.report",
-                               "engine.experiments.simulate",
-                               "tools")),
-)
+#: The layers, lowest first: one top-level folder each.
+LAYERS = tuple(Layer(rank, name, folder) for rank, (folder, name) in enumerate((
+    ("components", "components"),
+    ("engine", "engine core"),
+    ("services", "services"),
+    ("systems", "systems"),
+    ("app", "application"),
+    ("tools", "developer tools"),
+)))
+PACKAGES = tuple(layer.folder for layer in LAYERS)
+_BY_FOLDER = {layer.folder: layer for layer in LAYERS}
 
 
 def layer_of(module: str) -> Layer:
-    best: tuple[int, Layer] | None = None
-    for layer in LAYERS:
-        for prefix in layer.prefixes:
-            if (module == prefix or module.startswith(prefix + ".")) and (
-                    best is None or len(prefix) > best[0]):
-                best = (len(prefix), layer)
-    if best is None:
-        raise ValueError(f"{module} belongs to no layer")
-    return best[1]
+    """The layer of a dotted module name: that of its top-level folder."""
+    layer = _BY_FOLDER.get(module.split(".")[0])
+    if layer is None:
+        raise ValueError(f"{module} belongs to no layer (folders: {', '.join(PACKAGES)})")
+    return layer
 
 
 @dataclass(frozen=True, slots=True)

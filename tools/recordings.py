@@ -19,9 +19,9 @@ def record_session(folder: Path, out: Path, feeder: Callable[[Any, Any], Any],
     smaller file); the header names the scene relative to the repository, not by this
     machine's path. The run ends at ``seconds`` or when the feeder asks it to quit."""
     from engine import EngineConfig
-    from engine.input import InputHub
-    from engine.input.replay import InputRecorder
     from engine.scene import instantiate, load_spec
+    from services.input import InputHub
+    from services.input.replay import InputRecorder
     from systems import create_engine
 
     scene = folder / "main.scene"

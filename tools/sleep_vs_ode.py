@@ -31,9 +31,9 @@ from typing import Any
 
 import numpy as np
 
+from app.bench import print_table
 from components import Joint, Physical, Shape
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
-from tools.bench import print_table
 
 STEPS = (0.0005, 0.001, 0.005, 0.01, 0.02)
 AMPLITUDES = (0.5, 2.0, 5.0, 30.0)  # degrees

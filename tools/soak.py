@@ -104,7 +104,7 @@ def soak(minutes: float, mode: str, backend: str, per: int, keep: int,
     with tempfile.TemporaryDirectory(prefix="colosseum-soak-") as tmp:
         content = make_content(Path(tmp) / "soak", per, keep)
         stats = Path(tmp) / "stats.json"
-        command = [sys.executable, "-m", "engine.cli", "--log-level", "warning", "run",
+        command = [sys.executable, "-m", "app.cli", "--log-level", "warning", "run",
                    str(content), "--headless", "--mode", mode, "--backend", backend,
                    "--seconds", str(seconds), "--stats", str(stats)]
         start = time.monotonic()

@@ -180,7 +180,7 @@ def record(out: Path, seconds: float = 60.0) -> Path:
     """Run the content folder with the user's input fed in, the input layer recording it,
     until the table is set (or ``seconds`` pass)."""
     from engine import Phase, system
-    from engine.input.events import Button, TrackerPose, WheelCount
+    from services.input.events import Button, TrackerPose, WheelCount
 
     def feeder(engine: Any, hub: Any) -> Any:
         user = User(engine)

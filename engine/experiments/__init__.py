@@ -2,6 +2,6 @@
 plan of trials each participant meets, adaptive staircases and the session files.
 
 Pure logic and file I/O (engine core); the plugin that runs trials in the engine is
-``systems.experiments``, the commands ``engine.experiments.cli`` (``colosseum experiment
+``systems.experiments``, the commands ``app.experiments.cli`` (``colosseum experiment
 run|report|replay``). How to use it: docs/experiments.md.
 """

@@ -2,7 +2,7 @@
  * plain C: one copy shared by the compiled pass (_sleep.pyx, which SleepRule.update runs
  * for the pymunk backend), the ODE binding's step (ode3d/stepper.h's cs_sleep, with the
  * GIL released) and the plain-C reference of `colosseum bench physics`
- * (tools/bench_ode.c), so the reference sleeps the same bodies on the same steps as the
+ * (app/bench/bench_ode.c), so the reference sleeps the same bodies on the same steps as the
  * engine. The rule's definition, its constants and saved states stay in sleep.py; the
  * arrays here are SleepRule's own, written in place (tests/physics/test_sleep.py checks
  * this pass against the rule's numpy formulation to the bit).

@@ -1,4 +1,4 @@
-"""The scene's ``Input`` and ``Output`` blocks as plain specs (read by :mod:`engine.input`).
+"""The scene's ``Input`` and ``Output`` blocks as plain specs (read by :mod:`services.input`).
 
 ``Input { Device {...} Tracker {...} Wheel {...} Button {...} }`` names the devices to
 open and how each tracker, wheel counter and button is calibrated; ``Output {...}``

@@ -119,13 +119,13 @@ def test_an_author_registers_a_format_in_the_content_systems(tmp_path: Path):
         def build(engine):
             pass
         '''))
-    check = subprocess.run([sys.executable, "-m", "engine.cli", "check", str(folder)],
+    check = subprocess.run([sys.executable, "-m", "app.cli", "check", str(folder)],
                            capture_output=True, text=True, timeout=120)
     assert check.returncode == 1, check.stderr
     assert check.stderr.count("error:") == 1 and '"odd.tri"' in check.stderr
     assert "could not convert string to float: 'zero'" in check.stderr
     shot = tmp_path / "shot.png"
-    run = subprocess.run([sys.executable, "-m", "engine.cli", "run", str(folder), "--headless",
+    run = subprocess.run([sys.executable, "-m", "app.cli", "run", str(folder), "--headless",
                           "--frames", "3", "--fast", "--sound", "null", "--size", "64x48",
                           "--screenshot", str(shot)], capture_output=True, text=True, timeout=120)
     # it ran without the broken object, and says the content had an error (exit 1)
@@ -196,7 +196,7 @@ def test_every_model_format_loads_without_networkx_or_lxml(tmp_path: Path):
                     raise ModuleNotFoundError(name, name=name)
         sys.meta_path.insert(0, Refuse())
         import trimesh
-        from engine.render.meshes import from_part
+        from services.render.meshes import from_part
         from engine.scene import spec_from_text
         folder = {str(tmp_path)!r}
         for ext in {MODEL_EXTENSIONS!r}:

@@ -183,7 +183,7 @@ def test_the_command_line_runs_on_and_check_lists_every_broken_file(tmp_path: Pa
     folder = content(tmp_path / "sim", lines, files)
     shot, state = tmp_path / "shot.png", tmp_path / "state.scene"
     run = subprocess.run(
-        [sys.executable, "-m", "engine.cli", "run", str(folder), "--headless", "--frames", "20",
+        [sys.executable, "-m", "app.cli", "run", str(folder), "--headless", "--frames", "20",
          "--fast", "--sound", "null", "--size", "64x48", "--screenshot", str(shot),
          "--save-state", str(state)], capture_output=True, text=True, timeout=180)
     assert run.returncode == 1, run.stderr  # ran on without them; the content had errors
@@ -195,7 +195,7 @@ def test_the_command_line_runs_on_and_check_lists_every_broken_file(tmp_path: Pa
     saved = state.read_text()
     for i, each in enumerate(CASES):
         assert (f'"bad{i}"' in saved) != each.left_out
-    check = subprocess.run([sys.executable, "-m", "engine.cli", "check", str(folder)],
+    check = subprocess.run([sys.executable, "-m", "app.cli", "check", str(folder)],
                            capture_output=True, text=True, timeout=180)
     assert check.returncode == 1 and "Traceback" not in check.stderr
     assert f"{len(CASES)} error(s)" in check.stderr

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import soundfile as sf
 
-from engine.audio import SoundManager, create_audio_backend
+from services.audio import SoundManager, create_audio_backend
 
 RATE = 44100
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from engine.audio import ContactSoundFilter, ContactSoundSettings
 from engine.physics.backend import CONTACT_DTYPE
+from services.audio import ContactSoundFilter, ContactSoundSettings
 
 DT = 1 / 60
 G = 9.81

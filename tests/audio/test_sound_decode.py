@@ -9,7 +9,7 @@ import pytest
 from sound_helpers import RATE, tone
 
 from engine.assets.sound import StreamReader
-from engine.audio import AudioFileError, load_clip, probe
+from services.audio import AudioFileError, load_clip, probe
 
 FORMATS = [
     ("PCM_U8", "wav", "WAV"),

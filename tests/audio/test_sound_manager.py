@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from sound_helpers import Clock, tone
 
-from engine.audio import NullBackend, SoundManager
+from services.audio import NullBackend, SoundManager
 
 
 def _manager(clock: Clock, **options: object) -> SoundManager:

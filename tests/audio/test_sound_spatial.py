@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from sound_helpers import RATE, active, band_amplitude, pump, read, recording, rms, tone
 
-from engine.audio import SoundManager, create_audio_backend, inverse_clamped_gain
+from services.audio import SoundManager, create_audio_backend, inverse_clamped_gain
 
 
 def _channels(path: Path) -> tuple[float, float]:

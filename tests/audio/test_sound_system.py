@@ -14,9 +14,9 @@ from sound_helpers import active, read, rms, tone
 
 from components import Camera, MaterialProps, Physical, Script, Shape, Sound, Transform
 from engine import Engine, EngineConfig
-from engine.audio import SoundManager
 from engine.physics import BackendUnavailable, create_backend
 from engine.physics.backend import WorldSettings
+from services.audio import SoundManager
 from systems import create_engine
 from systems.dynamics import DynamicsSystem
 from systems.sound import SoundPlugin, SoundSystem
@@ -153,7 +153,7 @@ def test_without_a_device_openal_falls_back_to_null_with_one_warning() -> None:
     """In a fresh process whose OpenAL Soft has no usable driver; that process can no
     longer record (OpenAL Soft read its configuration) and says so."""
     code = ("import logging; logging.basicConfig(level=logging.WARNING);"
-            "from engine.audio import create_audio_backend as c, AudioDeviceError;"
+            "from services.audio import create_audio_backend as c, AudioDeviceError;"
             "print('backends', c('openal').name, c('openal').name)\n"
             "try: c('wave:/tmp/never.wav', fallback=False)\n"
             "except AudioDeviceError as e: print(e)")
@@ -168,7 +168,7 @@ def test_without_a_device_openal_falls_back_to_null_with_one_warning() -> None:
 
 
 def test_unknown_backend_name_is_an_error() -> None:
-    from engine.audio import create_audio_backend
+    from services.audio import create_audio_backend
 
     with pytest.raises(ValueError, match="unknown sound backend 'speakers'"):
         create_audio_backend("speakers")

@@ -12,7 +12,7 @@ import pytest
 from components import Name, Transform
 from engine.app import Engine, EngineConfig
 from engine.scene import instantiate, load_spec
-from engine.scripting.runtime import ScriptLimits
+from services.scripting.runtime import ScriptLimits
 from systems import RegistryPlugin, load_plugin
 from systems.avatars import AvatarsPlugin, AvatarSystem
 from systems.scripting import ScriptingPlugin

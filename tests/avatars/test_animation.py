@@ -354,7 +354,7 @@ def test_lua_hears_onanimationend_in_the_frame_the_clip_ends(tmp_path: Path):
         events = []
         engine.events.subscribe(AnimationEnded, lambda e: events.append((engine.frame, e)))
         engine.run(frames=150)
-        from engine.scripting.runtime import ScriptRuntime
+        from services.scripting.runtime import ScriptRuntime
 
         runtime = engine.resource(ScriptRuntime)
         (own,) = [s for s in runtime.scripts if s.name == "scripts/w.lua"]

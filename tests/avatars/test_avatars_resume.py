@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 from avatar_helpers import GROUND, MODELS, content
 
+from app.scene_loading import SceneLoadError, check_path, content_engine, save_state
 from components import Name, Transform
 from engine.animation import AnimationEnded
 from engine.app import Engine
 from engine.scene import format_scene, load_scene
-from engine.scene_loading import SceneLoadError, check_path, content_engine, save_state
 from systems.avatars import AvatarSystem
 
 pytest.importorskip("engine.physics.ode3d")

@@ -27,7 +27,7 @@ def test_the_avatars_content_checks_without_errors_or_warnings():
 
 def test_colosseum_runs_the_avatars_content_headless_with_a_screenshot(tmp_path: Path):
     shot = tmp_path / "avatars.png"
-    done = subprocess.run([sys.executable, "-m", "engine.cli", "run", str(FOLDER), "--headless",
+    done = subprocess.run([sys.executable, "-m", "app.cli", "run", str(FOLDER), "--headless",
                            "--fast", "--frames", "120", "--screenshot", str(shot)],
                           capture_output=True, text=True, timeout=300, cwd=ROOT)
     assert done.returncode == 0, done.stderr

@@ -10,7 +10,7 @@ import pytest
 from avatar_helpers import GROUND, avatar_engine, avatars, content, entity, position
 
 from engine.rotation import euler_to_quat, quat_to_matrix
-from engine.scripting.runtime import ScriptRuntime
+from services.scripting.runtime import ScriptRuntime
 
 WALKER = ('Avatar {{ ID "w" Model "models/walker.glb" Position [0 0 0] {extra} }}')
 

@@ -17,7 +17,7 @@ from engine.animation.skinning import skin
 from engine.assets import Assets, MeshPart, ModelAsset, SkinnedModel, register_loader
 from engine.assets.registry import unregister_loader
 from engine.assets.skinned import AVATAR_AXES
-from engine.render import (
+from services.render import (
     CameraView,
     FragmentShader,
     HeadlessTarget,
@@ -29,7 +29,7 @@ from engine.render import (
     Uniform,
     VertexShader,
 )
-from engine.render.math3d import compose, project
+from services.render.math3d import compose, project
 
 SHADERS = ROOT / "tests" / "render" / "content"
 W, H = 240, 180

@@ -11,8 +11,8 @@ import pytest
 from components import Controller, Joint, Name, Physical, Shape, Transform
 from engine import EngineConfig, Phase, system
 from engine.events import KeyEvent
-from engine.input import InputHub
 from engine.physics import commands as cmd
+from services.input import InputHub
 from systems import create_engine
 
 KEY_FRAME = 10

@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from tools.bench import BENCHMARKS, FIGURES, measure, report
+from app.bench import BENCHMARKS, FIGURES, measure, report
 
 
 def colosseum(*args: object, **kw: object) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "engine.cli", *map(str, args)],
+    return subprocess.run([sys.executable, "-m", "app.cli", *map(str, args)],
                           capture_output=True, text=True, timeout=300, **kw)
 
 
@@ -65,7 +65,7 @@ def _on_a_terminal(*args: object) -> str:
     """stderr of the command when it is a terminal (a pseudo-terminal)."""
     main, side = pty.openpty()
     try:
-        proc = subprocess.Popen([sys.executable, "-m", "engine.cli", *map(str, args)],
+        proc = subprocess.Popen([sys.executable, "-m", "app.cli", *map(str, args)],
                                 stdout=subprocess.DEVNULL, stderr=side, stdin=subprocess.DEVNULL)
         os.close(side)
         chunks = []

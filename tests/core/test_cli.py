@@ -10,11 +10,11 @@ from pathlib import Path
 
 import pytest
 
-from engine.scaffold import scaffold
+from app.scaffold import scaffold
 
 
 def colosseum(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "engine.cli", *map(str, args)],
+    return subprocess.run([sys.executable, "-m", "app.cli", *map(str, args)],
                           capture_output=True, text=True, cwd=cwd, timeout=120)
 
 
@@ -171,7 +171,7 @@ def test_the_bundled_demo_resumes_from_a_saved_state(tmp_path: Path):
 
 
 def test_a_commands_path_may_come_after_its_options() -> None:
-    from engine.cli import parse_args
+    from app.cli import parse_args
 
     args = parse_args(["join", "tcp://127.0.0.1:5555", "--user", "alice", "my_sim"])
     assert (args.address, args.user, args.path) == ("tcp://127.0.0.1:5555", "alice", "my_sim")

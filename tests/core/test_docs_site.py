@@ -152,8 +152,8 @@ def test_every_figure_has_its_benchmark_json_beside_it_with_date_and_machine() -
 
 def test_the_input_format_page_lists_exactly_the_event_types_a_recording_holds() -> None:
     """docs/input-format.md is written by hand: its table of events must keep to the
-    recording parser's types (engine/input/record.py)."""
-    from engine.input.record import _CLASSES
+    recording parser's types (services/input/record.py)."""
+    from services.input.record import _CLASSES
 
     page = (DOCS / "input-format.md").read_text(encoding="utf-8")
     table = page.split("## Events", 1)[1].split("\n## ", 1)[0]

@@ -7,12 +7,12 @@ import subprocess
 import sys
 from pathlib import Path
 
-from engine.scaffold import scaffold
+from app.scaffold import scaffold
 
 
 def run(sim: Path, tmp_path: Path, *flags: str) -> str:
     stats = tmp_path / "stats.json"
-    result = subprocess.run([sys.executable, "-m", "engine.cli", "run", str(sim), "--frames", "5",
+    result = subprocess.run([sys.executable, "-m", "app.cli", "run", str(sim), "--frames", "5",
                              "--fast", "--stats", str(stats), *flags],
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr

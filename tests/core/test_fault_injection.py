@@ -37,7 +37,7 @@ from engine.physics.commands import (
     SetVelocity,
 )
 from engine.scene import check, instantiate, load_spec, write_state
-from engine.scripting.runtime import ScriptRuntime
+from services.scripting.runtime import ScriptRuntime
 from systems import RegistryPlugin, load_plugin
 from systems.dynamics import DynamicsSystem
 from systems.scripting import ScriptingPlugin
@@ -458,7 +458,7 @@ def test_a_same_body_joint_and_a_far_object_never_reach_a_backend(tmp_path: Path
         "World { TimeStep 0 }\n"
         'Object { ID "c" Position [3 0 0] PhysicalAttributes { } }\n'
         'Joint { Type "Hinge2" Bodies ["c"] }\n')  # ODE aborted on a hinge2 on one body
-    result = subprocess.run([sys.executable, "-m", "engine.cli", "run", str(tmp_path),
+    result = subprocess.run([sys.executable, "-m", "app.cli", "run", str(tmp_path),
                              "--frames", "5", "--headless"], capture_output=True, text=True,
                             timeout=120, cwd=REPO)
     # the rest runs without the broken parts, and the exit status says there were some
@@ -564,7 +564,7 @@ def test_the_cli_run_saves_a_clean_state_with_every_fault_threaded(content: Path
     """The same content through ``colosseum run`` in its own process: it ends normally,
     prints no traceback, and its saved state runs again."""
     saved, stats = tmp_path / "state.scene", tmp_path / "stats.json"
-    result = subprocess.run([sys.executable, "-m", "engine.cli", "run", str(content),
+    result = subprocess.run([sys.executable, "-m", "app.cli", "run", str(content),
                              "--frames", "40", "--headless", "--mode", "threaded", "--fast",
                              "--save-state", str(saved), "--stats", str(stats)],
                             capture_output=True, text=True, timeout=300, cwd=REPO)
@@ -653,7 +653,7 @@ def test_tracked_input_far_outside_the_world_is_not_applied(tmp_path: Path, back
         'Input { Tracker { ID "hand" Object "cursor" } }\n')
     far = _recording(tmp_path / "far.jsonl", ["[0, 0, 1]", "[1e8, 0, 0]", "[0, 1e8, 1]"] * 5)
     saved = tmp_path / "state.scene"
-    result = subprocess.run([sys.executable, "-m", "engine.cli", "run", str(content),
+    result = subprocess.run([sys.executable, "-m", "app.cli", "run", str(content),
                              "--replay", str(far), "--frames", "20", "--headless", "--fast",
                              "--mode", mode, "--backend", backend, "--save-state", str(saved)],
                             capture_output=True, text=True, timeout=300, cwd=REPO)
@@ -668,7 +668,7 @@ def test_tracked_input_far_outside_the_world_is_not_applied(tmp_path: Path, back
     if (backend, mode) != ("ode", "serial"):
         return  # (refused while the recording is read, before any backend: once is enough)
     nan = _recording(tmp_path / "nan.jsonl", ["[0, 0, 1]", "[NaN, 0, 0]"])
-    result = subprocess.run([sys.executable, "-m", "engine.cli", "run", str(content),
+    result = subprocess.run([sys.executable, "-m", "app.cli", "run", str(content),
                              "--replay", str(nan), "--frames", "5", "--headless"],
                             capture_output=True, text=True, timeout=300, cwd=REPO)
     assert result.returncode == 1 and "Traceback" not in result.stderr
@@ -713,8 +713,8 @@ def test_bad_input_events_from_a_node_are_counted_and_dropped(
     once, then counted), none reaches the input state, no traceback, and the good event
     sent after them arrives; the server's world goes on."""
 
-    from engine.input.state import InputState
-    from engine.net import protocol
+    from services.input.state import InputState
+    from services.net import protocol
     from tests.net.net_helpers import free_port, hello, local_server, raw_control
 
     bad = _bad_node_events()
@@ -756,7 +756,7 @@ def test_bad_input_events_from_a_node_are_counted_and_dropped(
 
 
 def test_a_time_step_flag_out_of_range_is_a_usage_error(tmp_path: Path, capsys) -> None:
-    from engine.cli import main
+    from app.cli import main
 
     (tmp_path / "main.scene").write_text('Object { ID "a" }\n')
     assert main(["run", str(tmp_path), "--dt", "10", "--frames", "1", "--headless"]) == 2

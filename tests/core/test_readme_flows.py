@@ -150,8 +150,8 @@ def test_keys(fresh: Path) -> None:
 
 def _room(models: Path) -> Path:
     """models/room.glb: a room of bodies, joints and a ground, as Blender 4.4's physics
-    add-on lays it out (tools/interchange_samples.py)."""
-    from tools.interchange_samples import blender
+    add-on lays it out (app/bench/interchange_samples.py)."""
+    from app.bench.interchange_samples import blender
 
     models.mkdir(parents=True, exist_ok=True)
     return blender(models / "room.glb")

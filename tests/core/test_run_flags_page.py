@@ -6,7 +6,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from engine.cli import build_parser
+from app.cli import build_parser
 
 RUNNING = Path(__file__).resolve().parents[2] / "docs" / "howto" / "running.md"
 

@@ -26,7 +26,7 @@ def test_a_headless_screenshot_run_writes_valid_stats_with_its_drawing_counted(
     """Headless, only the --screenshot frame is drawn (at the end): it used to show as
     zero render time; now it counts."""
     stats, shot = tmp_path / "stats.json", tmp_path / "shot.png"
-    result = subprocess.run([sys.executable, "-m", "engine.cli", "run", "--frames", "30",
+    result = subprocess.run([sys.executable, "-m", "app.cli", "run", "--frames", "30",
                              "--fast", "--headless", "--screenshot", shot, "--stats", stats],
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr

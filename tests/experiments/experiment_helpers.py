@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-from engine.cli import main
+from app.cli import main
 
 BALL = """Object { ID "ball" Position [0 0 1]
   VisualAttributes { Geometry { Primitive "sphere" Size [0.2] } }

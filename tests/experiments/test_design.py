@@ -11,9 +11,9 @@ from pathlib import Path
 import pytest
 from experiment_helpers import experiment, rows, write_content
 
+from app.scene_loading import check_path
 from engine.experiments.design import Design, Factor, plan
 from engine.experiments.ordering import balanced_latin_square, latin_square
-from engine.scene_loading import check_path
 
 
 @pytest.mark.parametrize("n", range(2, 9))
@@ -80,7 +80,7 @@ def test_the_block_is_checked_at_its_lines(tmp_path: Path, capsys):
 
 
 def test_keys_documents_the_blocks(capsys):
-    from engine.cli import main
+    from app.cli import main
 
     assert main(["keys", "Experiment"]) == 0
     out = capsys.readouterr().out

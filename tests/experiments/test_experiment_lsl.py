@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 from experiment_helpers import experiment, rows, write_content
 
-from engine.input import DeviceError
-from engine.input.lsl import load_pylsl
-from engine.input.output import LslOutput
+from services.input import DeviceError
+from services.input.lsl import load_pylsl
+from services.input.output import LslOutput
 
 try:  # discovery kept to this computer for the whole test process
     lsl = load_pylsl("machine")

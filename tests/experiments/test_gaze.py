@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from engine.experiments.report import GAZE_REACH, gaze_points, plots
+from app.experiments.report import GAZE_REACH, gaze_points, plots
 from engine.experiments.tracking import COLUMNS
 
 
@@ -56,7 +56,7 @@ def test_the_report_draws_the_gaze_map_where_the_head_was_tracked(tmp_path: Path
 def test_the_floor_plan_is_the_static_boxes_between_floor_and_head_height():
     """content/stroke's apartment: its outer walls frame the plan (0..10 by 0..8 m), and a
     wall's footprint is its length by its thickness."""
-    from engine.experiments.report import floor_plan
+    from app.experiments.report import floor_plan
 
     plan = floor_plan(Path(__file__).resolve().parents[2] / "content" / "stroke")
     corners = np.concatenate(plan)

@@ -147,7 +147,7 @@ def test_a_session_killed_in_trial_5_resumes_there(in_tmp: Path):
     content = write_content(in_tmp / "k", KILL_DESIGN)
     folder = in_tmp / "sessions" / "kill" / "1"
     env = {**os.environ, "COLOSSEUM_DEBUG": "0"}
-    proc = subprocess.Popen([sys.executable, "-m", "engine.cli", "--log-level", "warning",
+    proc = subprocess.Popen([sys.executable, "-m", "app.cli", "--log-level", "warning",
                              "experiment", "run", str(content), "--participant", "1",
                              "--headless"], cwd=in_tmp, env=env,
                             stderr=subprocess.PIPE, stdout=subprocess.DEVNULL)
@@ -271,8 +271,8 @@ def test_a_torn_last_line_is_cut_and_a_changed_design_refused(tmp_path: Path):
 
 WHEELS_PY = '''
 from engine import Phase, system
-from engine.input import InputHub
-from engine.input.events import WheelCount
+from services.input import InputHub
+from services.input.events import WheelCount
 
 
 def build(engine):

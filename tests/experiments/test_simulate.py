@@ -7,7 +7,7 @@ from pathlib import Path
 
 from experiment_helpers import rows, write_content
 
-from engine.cli import main
+from app.cli import main
 
 POLICY = """
 local start = 0

@@ -7,9 +7,9 @@ from pathlib import Path
 
 from experiment_helpers import experiment, rows
 
+from app.scene_loading import load_content_scene
 from engine.experiments.design import plan
 from engine.experiments.ordering import balanced_latin_square
-from engine.scene_loading import load_content_scene
 
 STROKE = Path(__file__).resolve().parents[2] / "content" / "stroke"
 

@@ -11,9 +11,9 @@ import numpy as np
 
 from components import HandState, Transform, Visual
 from engine import EngineConfig, Phase, system
-from engine.input import InputHub
-from engine.input.events import Button, TrackerPose
 from engine.scene import instantiate, spec_from_text
+from services.input import InputHub
+from services.input.events import Button, TrackerPose
 from systems import create_engine
 
 Path3 = Callable[[float], np.ndarray]

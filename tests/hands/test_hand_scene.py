@@ -196,7 +196,7 @@ def test_scripts_hear_touch_grasp_and_release_and_drive_a_hand(tmp_path: Path):
     with Rig(scene, tmp_path, paths={"hand_r": GRAB},
              gloves={"glove_r": between(0.5)}) as rig:
         rig.run(1.2)
-        from engine.scripting.runtime import ScriptRuntime
+        from services.scripting.runtime import ScriptRuntime
 
         env = rig.engine.resource(ScriptRuntime).scripts[0].env
         # (the cup, let go, may touch the hand again as it falls away: a new touch)
@@ -220,7 +220,7 @@ def test_a_script_grasps_what_a_hand_touches_and_is_told_what_it_cannot(tmp_path
     scene = TABLE.replace('ID "cup"', 'ID "cup" Script "scripts/cup.lua"') + HAND
     with Rig(scene, tmp_path, paths={"hand_r": GRAB}) as rig:
         rig.run(1.4)
-        from engine.scripting.runtime import ScriptRuntime
+        from services.scripting.runtime import ScriptRuntime
 
         env = rig.engine.resource(ScriptRuntime).scripts[0].env
         assert env.held == "cup" and env.ok is False

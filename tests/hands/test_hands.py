@@ -13,8 +13,8 @@ from components import Transform
 from components.hand import HandMode
 from engine import Phase
 from engine.events import Contacts, HandGrasped, HandReleased, HandTouched
-from engine.input.events import TrackerPose
 from engine.rotation import local_axis, quat_to_matrix, rotation_vector
+from services.input.events import TrackerPose
 from systems.hands import UNTRACKED, Hands
 
 BACKENDS = ["ode", "pymunk"]

@@ -10,9 +10,9 @@ import numpy as np
 from components import HandState, Transform
 from engine import EngineConfig, Phase, system
 from engine.content import REPO_ROOT
-from engine.input.replay import InputReplayer
 from engine.rotation import local_axis
 from engine.scene import check, instantiate, load_spec
+from services.input.replay import InputReplayer
 from systems import create_engine
 
 CONTENT = REPO_ROOT / "content" / "hands"

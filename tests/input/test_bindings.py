@@ -16,12 +16,12 @@ from pythonosc.udp_client import SimpleUDPClient
 
 from components import Camera, Transform
 from engine import Phase, system
-from engine.input import InputHub, InputState
-from engine.input.osc import OscDevice
-from engine.render.camera import camera_from_component
 from engine.rotation import quat_to_matrix
 from engine.scene import instantiate, load_spec
-from engine.scripting.runtime import ScriptRuntime
+from services.input import InputHub, InputState
+from services.input.osc import OscDevice
+from services.render.camera import camera_from_component
+from services.scripting.runtime import ScriptRuntime
 from systems import load_plugin
 
 SCRIPT = """

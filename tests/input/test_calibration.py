@@ -7,10 +7,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from engine.input import Calibration, openxr_to_engine
-from engine.input.calibration import axes_matrix
 from engine.rotation import euler_to_quat, quat_to_matrix
 from engine.scene.inputs import axes_map
+from services.input import Calibration, openxr_to_engine
+from services.input.calibration import axes_matrix
 
 AXES = ["x y z", "x -z y", "-y x z", "z x y", "-x -y z", "y x z", "x y -z"]
 angles = st.floats(-180.0, 180.0, allow_nan=False)

@@ -10,9 +10,9 @@ import pytest
 from input_helpers import input_engine
 
 from engine.events import KeyEvent
-from engine.input import Button, InputState, WheelCount
-from engine.input.desktop import DesktopDevice, DesktopView, WindowDevice
 from engine.rotation import euler_to_quat, quat_to_matrix
+from services.input import Button, InputState, WheelCount
+from services.input.desktop import DesktopDevice, DesktopView, WindowDevice
 
 SCENE = """
 Camera { Position [0 -5 1.5] LookAt [0 0 1.5] Fov 60 }

@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from engine.input import InputHub, TrackerPose, read_recording
-from engine.input.record import FrameInput, RecordWriter
 from engine.scene.inputs import InputSpec, TrackerSpec
+from services.input import InputHub, TrackerPose, read_recording
+from services.input.record import FrameInput, RecordWriter
 
 
 def record_trace(path: Path, positions: np.ndarray, orientations: np.ndarray,
@@ -121,8 +121,8 @@ def test_the_orientation_filter_follows_a_fast_turn_and_stills_a_resting_one() -
     (at the resting cutoff of 1 Hz it would trail by half a radian), while 0.01 rad of
     jitter on a still hand is cut (white jitter at 120 Hz reads as some speed itself, so
     by less than a slow drift would be)."""
-    from engine.input.filters import OneEuroRotation
     from engine.rotation import quat_from_rotation_vector, rotation_vector
+    from services.input.filters import OneEuroRotation
 
     rate, speed = 120.0, 3.0
     turning = OneEuroRotation()

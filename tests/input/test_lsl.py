@@ -10,9 +10,9 @@ import pytest
 from input_helpers import input_engine
 
 from engine.events import CustomEvent
-from engine.input import DeviceError, InputHub, InputState
-from engine.input import lsl as lsl_device
-from engine.input.lsl import LslDevice, load_pylsl
+from services.input import DeviceError, InputHub, InputState
+from services.input import lsl as lsl_device
+from services.input.lsl import LslDevice, load_pylsl
 
 try:  # discovery kept to this computer (127.0.0.1) for the whole test process
     lsl = load_pylsl("machine")

@@ -18,8 +18,8 @@ from pathlib import Path
 import pytest
 from input_helpers import input_engine
 
-from engine.input import DeviceError
-from engine.input.lsl import INSTALL_HINT, load_pylsl
+from services.input import DeviceError
+from services.input.lsl import INSTALL_HINT, load_pylsl
 
 SCENE = """
 Input { Device { ID "lab" Kind "lsl" Scope "machine" Streams ["hand_r"] } }
@@ -57,8 +57,8 @@ def test_pylsl_without_liblsl_names_what_to_install(tmp_path: Path):
     probe = textwrap.dedent("""
         import sys
         sys.path.insert(0, sys.argv[1])
-        from engine.input import DeviceError
-        from engine.input.lsl import load_pylsl
+        from services.input import DeviceError
+        from services.input.lsl import load_pylsl
         try:
             load_pylsl("machine")
         except DeviceError as exc:

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from input_helpers import input_engine
 
-from engine.input import DeviceError
-from engine.input.openxr import POSE_VALID, OpenXRDevice, located_pose, select_change
 from engine.rotation import quat_to_matrix
+from services.input import DeviceError
+from services.input.openxr import POSE_VALID, OpenXRDevice, located_pose, select_change
 
 xr = pytest.importorskip("xr", reason="pyopenxr (the openxr extra) is not installed")
 

@@ -18,7 +18,7 @@ from pythonosc.udp_client import SimpleUDPClient
 
 from components import Transform
 from engine import EngineConfig
-from engine.input import (
+from services.input import (
     Button,
     DeviceError,
     DeviceFound,
@@ -29,8 +29,8 @@ from engine.input import (
     WheelCount,
     osc,
 )
-from engine.input import device as device_module
-from engine.input.osc import OscDevice
+from services.input import device as device_module
+from services.input.osc import OscDevice
 
 
 def osc_scene(extra: str = "", lost_after: float = 0.5) -> str:
@@ -62,8 +62,7 @@ def f32(*values: float) -> list[float]:
 def test_a_received_pose_is_in_the_state_table_at_the_next_frame(tmp_path: Path):
     with input_engine(osc_scene(), tmp_path) as engine:
         client = SimpleUDPClient("127.0.0.1", port_of(engine))
-        state = engine.input  # the issue's engine.input.tracker(...): the state table
-        assert state is engine.resource(InputState)
+        state = engine.resource(InputState)  # the one latest-state table
         poses: list[TrackerPose] = []
         engine.events.subscribe(TrackerPose, poses.append)
         engine.step()
@@ -74,20 +73,22 @@ def test_a_received_pose_is_in_the_state_table_at_the_next_frame(tmp_path: Path)
             time.sleep(0.001)
         assert state.tracker("hand_r") is None
         engine.step()  # the first frame after the packet arrived delivers it
-        tracker = engine.input.tracker("hand_r")
+        tracker = state.tracker("hand_r")
         assert tracker.position.tolist() == f32(0.1, 0.2, 1.5)
         assert tracker.orientation.tolist() == [1.0, 0.0, 0.0, 0.0]
         assert [p.device for p in poses] == ["hand_r"] and poses[0].timestamp > 0
 
 
-def test_an_engine_without_the_input_plugin_says_where_engine_input_comes_from():
+def test_an_engine_without_the_input_plugin_says_which_resource_is_missing():
     from engine import Engine
+    from engine.app import MissingResource
 
     with Engine(EngineConfig(backend="ballistic", fast=True)) as engine:
         engine.run(frames=1)
-        with pytest.raises(LookupError, match=r"engine.input: no input state; the input "
-                                              r"plugin provides it"):
-            _ = engine.input
+        with pytest.raises(MissingResource, match=r"no InputState resource: the plugin that "
+                                                  r"provides it is not loaded"):
+            engine.resource(InputState)
+        assert not hasattr(engine, "input")  # one table, the resource
 
 
 def test_buttons_axes_and_wheel_counts_arrive_typed(tmp_path: Path):
@@ -318,7 +319,7 @@ def test_a_device_that_never_hears_anything_says_so_once(monkeypatch, caplog):
 def test_a_sender_inventing_names_is_held_to_a_bounded_table(tmp_path: Path, caplog):
     """A counter in the addresses would add a table entry per packet for ever: names past
     the first MAX_SOURCES are bad messages, the ones already heard keep working."""
-    from engine.input.hub import MAX_SOURCES
+    from services.input.hub import MAX_SOURCES
 
     with input_engine(osc_scene(), tmp_path) as engine:
         client = SimpleUDPClient("127.0.0.1", port_of(engine))

@@ -14,10 +14,12 @@ import pytest
 from input_helpers import input_engine
 from pythonosc.udp_client import SimpleUDPClient
 
+from app.cli import main
 from components import Physical, Transform
 from engine import Phase, system
-from engine.cli import main
-from engine.input import (
+from engine.physics.commands import ApplyImpulse
+from engine.scene.inputs import InputSpec, WheelSpec
+from services.input import (
     DeviceLost,
     InputHub,
     InputRecorder,
@@ -28,10 +30,8 @@ from engine.input import (
     WheelCount,
     read_recording,
 )
-from engine.input.osc import OscDevice
-from engine.input.record import FrameInput, RecordWriter
-from engine.physics.commands import ApplyImpulse
-from engine.scene.inputs import InputSpec, WheelSpec
+from services.input.osc import OscDevice
+from services.input.record import FrameInput, RecordWriter
 from systems import load_plugin
 
 SCENE = """
@@ -228,7 +228,7 @@ def test_past_the_end_of_a_replay_wheels_come_to_rest_and_sources_are_lost(tmp_p
 
 
 def test_a_scenes_fingerprint_ignores_comments_but_not_what_it_says() -> None:
-    from engine.input.record import scene_fingerprint
+    from services.input.record import scene_fingerprint
 
     scene = 'Object { ID "a" Position [0 0 1] }\nFile "x//y"\n'
     same = scene_fingerprint({"main.scene": scene})

@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from engine.cli import main
-from engine.input.config import parse_input_option
+from app.cli import main
 from engine.scene import SceneError, spec_from_text
 from engine.scene.inputs import IDENTITY_AXES
+from services.input.config import parse_input_option
 
 
 def test_input_blocks_become_specs(tmp_path: Path):

@@ -11,9 +11,9 @@ from pathlib import Path
 import pytest
 from input_helpers import input_engine, run_until
 
-from engine.input import DeviceError, InputHub, InputState, serial_line
-from engine.input.device import BadMessage
-from engine.input.serial_line import LineFormat, SerialDevice
+from services.input import DeviceError, InputHub, InputState, serial_line
+from services.input.device import BadMessage
+from services.input.serial_line import LineFormat, SerialDevice
 
 
 @pytest.fixture

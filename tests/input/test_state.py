@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from engine.input import (
+from engine.scene.inputs import ButtonSpec, InputSpec, TrackerSpec, WheelSpec
+from services.input import (
     Axis,
     Button,
     DeviceFound,
@@ -19,8 +20,7 @@ from engine.input import (
     WheelCount,
     parse_binding,
 )
-from engine.input.record import FrameInput
-from engine.scene.inputs import ButtonSpec, InputSpec, TrackerSpec, WheelSpec
+from services.input.record import FrameInput
 
 
 def test_every_input_name_reads_its_value():
@@ -52,7 +52,7 @@ def test_every_input_name_reads_its_value():
     assert state.read(read["wheel:left"]) == 0.0  # no count for most of a second: standing
 
 
-# (wheel:bob/left and button:alice/glove/index name a network user's sources: engine.net)
+# (wheel:bob/left and button:alice/glove/index name a network user's sources: services.net)
 @pytest.mark.parametrize("name", ["tracker:", "wheel:a/", "axis:x", "button:a//c", "mouse:x",
                                   "key:", "axis:/x", "tracker:/hand"])
 def test_malformed_input_names_are_refused_with_the_forms_allowed(name: str):

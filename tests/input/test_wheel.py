@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from engine.input import WheelRate
+from services.input import WheelRate
 
 
 @pytest.mark.parametrize("interval", [0.001, 0.004, 1 / 90, 0.02])

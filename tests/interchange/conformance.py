@@ -93,9 +93,9 @@ def shape_bounds(shape: Shape, position: np.ndarray, orientation: np.ndarray
 
 def world_of(model: Path, folder: Path, backend: str | None = None) -> tuple[Any, Any]:
     """An engine with ``model`` imported as a scene's Model block imports it; the scene."""
+    from app.scene_loading import load_content_scene
     from engine.app import EngineConfig
     from engine.content import resolve
-    from engine.scene_loading import load_content_scene
     from systems import create_engine
 
     folder.mkdir(parents=True, exist_ok=True)

@@ -1,4 +1,4 @@
-"""The sample models, written once per test session by tools/interchange_samples.py."""
+"""The sample models, written once per test session by app/bench/interchange_samples.py."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from tools import interchange_samples
+from app.bench import interchange_samples
 
 
 @pytest.fixture(scope="session")

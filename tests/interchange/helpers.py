@@ -1,4 +1,4 @@
-"""Running imported models: sample files made by tools/interchange_samples.py, imported as
+"""Running imported models: sample files made by app/bench/interchange_samples.py, imported as
 ``colosseum import`` does, built and stepped on a real backend."""
 
 from __future__ import annotations
@@ -8,10 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
+from app.scene_loading import import_path
 from components import Transform
 from engine.app import Engine, EngineConfig
 from engine.scene import SceneSpec, instantiate, load_spec
-from engine.scene_loading import import_path
 from systems import create_engine
 
 

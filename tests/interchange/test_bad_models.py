@@ -10,14 +10,14 @@ from typing import Any
 
 import pytest
 
+from app.bench.interchange_samples import GltfBuilder, box_mesh, collada
+from app.scene_loading import import_path
 from components import Physical
 from engine.assets import AssetError, Assets
 from engine.interchange import import_model
 from engine.interchange.gltf_physics import KHR, KHR_SHAPES
 from engine.scene import load_spec
-from engine.scene_loading import import_path
 from tests.interchange.helpers import import_scene
-from tools.interchange_samples import GltfBuilder, box_mesh, collada
 
 
 def two_boxes(folder: Path, name: str = "boxes.gltf") -> tuple[GltfBuilder, Path]:
@@ -191,7 +191,7 @@ def test_a_body_at_a_position_that_is_no_number_is_told_not_raised(tmp_path):
 # -- Collada ----------------------------------------------------------------------------
 
 def collada_with(folder: Path, old: str, new: str) -> Path:
-    """:func:`tools.interchange_samples.collada`'s file with ``old`` replaced by ``new``."""
+    """:func:`app.bench.interchange_samples.collada`'s file with ``old`` replaced by ``new``."""
     path = collada(folder / "physics.dae")
     text = path.read_text()
     assert old in text

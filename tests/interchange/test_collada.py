@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
+from app.bench import interchange_samples as samples_
 from components import Physical, Visual
 from engine.rotation import quat_to_euler
 from engine.scene import load_spec
 from tests.interchange.helpers import Run, import_scene
-from tools import interchange_samples as samples_
 
 pytest.importorskip("engine.physics.ode3d")
 

@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from app.cli import main
+from app.scene_loading import export_path
 from components import Physical, Transform, Trigger
 from engine.assets.gltf import GltfDocument
-from engine.cli import main
-from engine.interchange.export import export_gltf, volume
 from engine.rotation import quat_to_matrix
 from engine.scene import load_spec
-from engine.scene_loading import export_path
+from services.export import export_gltf, volume
 from tests.interchange.helpers import Run, import_scene
 
 pytest.importorskip("engine.physics.ode3d")

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from components import Physical, Transform
-from engine.interchange.export import export_gltf
+from services.export import export_gltf
 from tests.interchange import gltf_schema
 from tests.interchange.conformance import ROOT, SHARED
 
@@ -27,8 +27,8 @@ FILES = [SHARED / "khr" / name for name in (
 
 def load(scene_dir: Path, model: Path | None = None):
     """The spec of ``scene_dir``'s scene (made to import ``model`` when given)."""
+    from app.scene_loading import load_content_scene
     from engine.content import resolve
-    from engine.scene_loading import load_content_scene
 
     allow = []
     if model is not None:
@@ -86,7 +86,7 @@ def test_a_file_exported_and_imported_again_is_the_same_world(model: Path, tmp_p
 def test_the_demo_exported_by_the_command_line_validates(tmp_path: Path) -> None:
     """``colosseum export content/demo`` (the issue's example): its mesh colliders name a
     node holding the mesh (the schema allows ``shape`` or ``node``, not ``mesh``)."""
-    from engine.cli import main
+    from app.cli import main
 
     if not gltf_schema.available():
         pytest.skip("the schemas are not here")
@@ -104,8 +104,8 @@ def test_avatars_are_exported_with_skins_clips_and_capsules(tmp_path: Path) -> N
     """content/avatars: each avatar's model goes into the file whole (skinned meshes,
     skeleton, clips), and its Capsule as a kinematic capsule collider; the file validates
     and the engine's own skinned-model reader reads every skin and clip back."""
+    from app.cli import main
     from engine.assets.skinned import load_skinned
-    from engine.cli import main
 
     out = tmp_path / "avatars.glb"
     assert main(["export", str(ROOT / "content" / "avatars"), "-o", str(out)]) == 0

@@ -59,7 +59,7 @@ def test_a_mistake_in_extras_names_the_model_node_line_and_column(models):
 
 
 def test_extras_naming_an_undeclared_material_declare_it(models):
-    from tools.interchange_samples import GltfBuilder, box_mesh
+    from app.bench.interchange_samples import GltfBuilder, box_mesh
 
     b = GltfBuilder()
     b.node("Stone", (0, 0, 1), mesh=b.mesh(*box_mesh((1, 1, 1)), "StoneMesh"),

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from app.bench import interchange_samples as samples_
 from components import Joint, Physical, Trigger, Visual
 from engine.assets import Assets
 from engine.assets.gltf import GltfDocument
@@ -17,7 +18,6 @@ from engine.rotation import quat_to_matrix
 from engine.scene import load_spec
 from systems.triggers import TriggerEvent
 from tests.interchange.helpers import Run, import_scene
-from tools import interchange_samples as samples_
 
 pytest.importorskip("engine.physics.ode3d")
 

@@ -54,8 +54,8 @@ Object {{
 def test_a_zero_moment_locks_its_axis(tmp_path: Path, inertia: str, free: int | None) -> None:
     """A body of Inertia with zeros, pushed by a torque about every axis: it turns about
     the axes of finite moments only (to 0.01 degrees), as fast as their moment says."""
+    from app.scene_loading import content_engine
     from engine.physics.commands import ApplyTorque
-    from engine.scene_loading import content_engine
 
     (tmp_path / "main.scene").write_text(SPIN.format(inertia=inertia))
     engine = content_engine(tmp_path)
@@ -100,9 +100,9 @@ Object {{
 def test_gravity_factor_scales_gravity(tmp_path: Path, backend: str, factor: float) -> None:
     """A ball falls (or rises) 1 s at the factor times g: z = 10 - factor g t^2 / 2."""
     pytest.importorskip("engine.physics.ode3d" if backend == "ode" else "pymunk")
+    from app.scene_loading import load_content_scene
     from engine.app import EngineConfig
     from engine.content import resolve
-    from engine.scene_loading import load_content_scene
     from systems import create_engine
 
     (tmp_path / "main.scene").write_text(FALL.format(factor=factor))
@@ -166,10 +166,10 @@ def test_an_align_joint_holds_the_turn_and_leaves_the_fall(tmp_path: Path, backe
     """KHR joints that lock the angular axes only (Robot_skinned has two) are Align joints:
     a torque about every axis turns the body not at all, gravity moves it freely."""
     pytest.importorskip("engine.physics.ode3d" if backend == "ode" else "pymunk")
+    from app.scene_loading import load_content_scene
     from engine.app import EngineConfig
     from engine.content import resolve
     from engine.physics.commands import ApplyTorque
-    from engine.scene_loading import load_content_scene
     from systems import create_engine
 
     (tmp_path / "main.scene").write_text(ALIGN.format())

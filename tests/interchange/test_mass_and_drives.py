@@ -9,13 +9,13 @@ import math
 import numpy as np
 import pytest
 
+from app.bench import interchange_samples as samples_
 from components import Joint, Physical
 from engine.assets import Assets
 from engine.interchange import import_model
 from engine.rotation import quat_to_matrix
 from engine.scene import load_spec
 from tests.interchange.helpers import Run, import_scene
-from tools import interchange_samples as samples_
 
 pytest.importorskip("engine.physics.ode3d")
 

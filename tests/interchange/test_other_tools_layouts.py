@@ -1,4 +1,4 @@
-"""Files laid out as other tools write them, written by tools/interchange_samples.py (no
+"""Files laid out as other tools write them, written by app/bench/interchange_samples.py (no
 file another tool wrote is shipped): OMI physics as Godot 4.4 exports it, Collada physics
 as Blender 2.42's exporter, ColladaMaya and Bullet's ColladaConverter write it. The scene
 has what each file declares, counted from the file, and the bodies move as it means."""
@@ -11,6 +11,7 @@ from xml.etree import ElementTree
 import numpy as np
 import pytest
 
+from app.bench import interchange_samples as samples_
 from components import Joint, Physical, Trigger
 from engine.assets import Assets
 from engine.assets.gltf import GltfDocument
@@ -18,7 +19,6 @@ from engine.interchange import import_model
 from engine.rotation import quat_to_matrix
 from engine.scene import load_spec
 from tests.interchange.helpers import Run, import_scene
-from tools import interchange_samples as samples_
 
 pytest.importorskip("engine.physics.ode3d")
 

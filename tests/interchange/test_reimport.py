@@ -6,9 +6,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from app.bench import interchange_samples as samples_
+from app.scene_loading import import_path
 from engine.scene import check, load_scene
-from engine.scene_loading import import_path
-from tools import interchange_samples as samples_
 
 KHR = samples_.KHR
 

@@ -11,11 +11,11 @@ from pathlib import Path
 
 import pytest
 
+from app.bench import interchange_samples as samples_
+from app.cli import main
+from app.scene_loading import SceneWatcher, import_path
 from components import Physical
-from engine.cli import main
 from engine.scene import load_spec
-from engine.scene_loading import SceneWatcher, import_path
-from tools import interchange_samples as samples_
 
 pytest.importorskip("engine.physics.ode3d")
 

@@ -40,7 +40,7 @@ def raw_control(port: int) -> Iterator[Any]:
 
 def hello(user: str, content: str) -> bytes:
     """The hello a node opens with, as ``user`` holding ``content`` (its fingerprint)."""
-    from engine.net import protocol
+    from services.net import protocol
 
     return protocol.encode({"type": "hello", "v": protocol.VERSION, "user": user,
                             "content": content})
@@ -70,7 +70,7 @@ class Processes:
         log = self.folder / f"{name}.log"
         out = log.open("w")
         proc = subprocess.Popen(["timeout", "-s", "KILL", str(int(PROCESS_LIMIT)),
-                                 sys.executable, "-m", "engine.cli", *map(str, args)],
+                                 sys.executable, "-m", "app.cli", *map(str, args)],
                                 cwd=ROOT, stdout=out, stderr=subprocess.STDOUT,
                                 env={**os.environ, "PYTHONUNBUFFERED": "1"},
                                 start_new_session=True)
@@ -163,8 +163,8 @@ class LocalServer:
     """``colosseum serve`` in this process, stepped by the test (its state inspectable)."""
 
     def __init__(self, port: int, *flags: Any, content: Path = MULTIUSER) -> None:
-        from engine.cli import build_parser
-        from engine.cli_net import serving_engine
+        from app.cli import build_parser
+        from app.cli_net import serving_engine
 
         args = build_parser().parse_args([str(a) for a in serve_args(port, *flags,
                                                                      content=content)])

@@ -14,11 +14,11 @@ import pytest
 from engine.animation import Palettes
 from engine.animation.skinning import skin
 from engine.assets.skinned import load_skinned
-from engine.net.bones import palette_matrices, palette_poses
-from engine.net.client import NetClient
-from engine.net.codec import POSITION_STEP, ROTATION_SCALE
-from engine.net.protocol import content_fingerprint
 from engine.rotation import slerp
+from services.net.bones import palette_matrices, palette_poses
+from services.net.client import NetClient
+from services.net.codec import POSITION_STEP, ROTATION_SCALE
+from services.net.protocol import content_fingerprint
 from tests.avatars.avatar_helpers import GROUND, MODELS, content
 from tests.net.net_helpers import free_port, join_args, processes, serve_args, stats
 
@@ -97,8 +97,8 @@ def _content(root: Path) -> Path:
 
 def _node(port: int, folder: Path, user: str, *flags: Any) -> tuple[Any, Any, NetClient]:
     """A node engine in this process (as ``colosseum join`` builds it), joined."""
-    from engine.cli import build_parser
-    from engine.cli_net import node_engine
+    from app.cli import build_parser
+    from app.cli_net import node_engine
 
     args = build_parser().parse_args([str(a) for a in join_args(port, user, *flags,
                                                                 path=folder)])
@@ -201,7 +201,7 @@ def test_nodes_draw_the_skeleton_the_server_animates(tmp_path: Path) -> None:
 
 
 def test_bone_ids_sort_after_every_body() -> None:
-    from engine.net.bones import BONE_FLAG, MAX_AVATAR_NET, bone_ids
+    from services.net.bones import BONE_FLAG, MAX_AVATAR_NET, bone_ids
 
     ids = bone_ids(np.array([1, MAX_AVATAR_NET - 1]), np.array([3, 1024]))
     assert ids.min() >= BONE_FLAG and (np.diff(ids.astype(np.int64)) > 0).all()

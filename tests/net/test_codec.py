@@ -6,8 +6,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from engine.net.codec import POSITION_STEP, ROTATION_SCALE, CodecError, Gap, PoseCoder, PoseDecoder
 from engine.rotation import quat_multiply
+from services.net.codec import (
+    POSITION_STEP,
+    ROTATION_SCALE,
+    CodecError,
+    Gap,
+    PoseCoder,
+    PoseDecoder,
+)
 
 
 def tumbling(n: int, frames: int, seed: int = 0) -> list[np.ndarray]:

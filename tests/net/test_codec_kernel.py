@@ -1,4 +1,4 @@
-"""The compiled codec passes (engine/net/_codec.pyx) against the wire format written in
+"""The compiled codec passes (services/net/_codec.pyx) against the wire format written in
 numpy: the same bytes, the same copies of the poses to the bit, on both ends, whatever
 the bodies do (rest, tumble, jump further than a change holds, turn into NaN)."""
 
@@ -9,9 +9,9 @@ import zlib
 import numpy as np
 import pytest
 
-from engine.net import _codec
-from engine.net.codec import POSITION_STEP, ROTATION_SCALE, CodecError, PoseCoder, PoseDecoder
 from engine.rotation import quat_multiply
+from services.net import _codec
+from services.net.codec import POSITION_STEP, ROTATION_SCALE, CodecError, PoseCoder, PoseDecoder
 from tests.net.test_codec import tumbling
 
 CLIP = 2 ** 30

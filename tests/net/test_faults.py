@@ -15,9 +15,9 @@ import zmq
 from pythonosc.udp_client import SimpleUDPClient
 
 from engine.events import CustomEvent
-from engine.input import InputState
-from engine.net import protocol
 from engine.scene import SceneIds
+from services.input import InputState
+from services.net import protocol
 from systems.scripting import ScriptingSystem
 from tests.net.net_helpers import (
     free_port,
@@ -182,7 +182,7 @@ def test_a_node_building_its_scene_is_not_let_go() -> None:
     """A node is silent from its hello until its first frame (a large scene built, a
     renderer started): the stroke simulator took over 2 s under load, and the server let
     it go and made it rejoin. Until its first message JOIN_GRACE holds, then --timeout."""
-    from engine.net.server import JOIN_GRACE, NetServer
+    from services.net.server import JOIN_GRACE, NetServer
 
     now = [0.0]
     port = free_port()

@@ -24,7 +24,7 @@ from tests.net.net_helpers import (
 
 
 def colosseum(*args: object, timeout: float = 30) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "engine.cli", *map(str, args)], cwd=ROOT,
+    return subprocess.run([sys.executable, "-m", "app.cli", *map(str, args)], cwd=ROOT,
                           capture_output=True, text=True, timeout=timeout)
 
 
@@ -121,9 +121,9 @@ def test_serve_binds_loopback_unless_told_and_warns_off_it_without_a_key(
     """The default --bind is loopback; another address without --key is warned about
     before anything is bound. (The address off loopback here is one no interface has, so
     the bind fails: no socket leaves 127.0.0.1.)"""
-    from engine.cli import build_parser
-    from engine.cli_net import serving_engine
-    from engine.net.protocol import is_loopback
+    from app.cli import build_parser
+    from app.cli_net import serving_engine
+    from services.net.protocol import is_loopback
 
     parser = build_parser()
     assert is_loopback(parser.parse_args(["serve", str(MULTIUSER)]).bind)

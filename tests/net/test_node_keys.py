@@ -8,12 +8,12 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from engine.cli import build_parser
-from engine.cli_net import node_engine
+from app.cli import build_parser
+from app.cli_net import node_engine
 from engine.events import CustomEvent
-from engine.input.desktop import WindowDevice
-from engine.net.client import NetClient
-from engine.net.protocol import content_fingerprint
+from services.input.desktop import WindowDevice
+from services.net.client import NetClient
+from services.net.protocol import content_fingerprint
 from tests.net.net_helpers import free_port, local_server
 
 SCENE = """World { Gravity [0 0 0] TimeStep 1/60 }

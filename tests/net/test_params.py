@@ -44,13 +44,13 @@ def test_a_variable_sharing_its_line_is_refused(tmp_path: Path) -> None:
 
 def test_run_param_reaches_the_simulation(tmp_path: Path) -> None:
     out = tmp_path / "state.scene"
-    done = subprocess.run([sys.executable, "-m", "engine.cli", "run", MULTIUSER, "--frames",
+    done = subprocess.run([sys.executable, "-m", "app.cli", "run", MULTIUSER, "--frames",
                            "1", "--fast", "--param", "crate_mass=60", "--save-state", out],
                           cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     assert "crate_mass 60" in out.read_text()
     assert object_block(out.read_text(), "crate")["Position"][2] == pytest.approx(0.75, abs=0.01)
-    bad = subprocess.run([sys.executable, "-m", "engine.cli", "run", MULTIUSER, "--frames",
+    bad = subprocess.run([sys.executable, "-m", "app.cli", "run", MULTIUSER, "--frames",
                           "1", "--param", "crate_mas=60"], cwd=ROOT, capture_output=True,
                          text=True, timeout=60)
     assert bad.returncode == 1 and "did you mean 'crate_mass'" in bad.stderr, bad.stderr

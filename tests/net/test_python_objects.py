@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.net.codec import POSITION_STEP
+from services.net.codec import POSITION_STEP
 from tests.net.net_helpers import (
     free_port,
     join_args,

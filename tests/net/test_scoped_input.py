@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-from engine.input import InputHub, parse_binding
-from engine.input.events import Button, TrackerPose
 from engine.scene.inputs import ButtonSpec, InputSpec, TrackerSpec
+from services.input import InputHub, parse_binding
+from services.input.events import Button, TrackerPose
 
 
 def test_a_users_tracker_is_calibrated_as_the_scene_says_for_its_own_name() -> None:

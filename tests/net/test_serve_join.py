@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from pythonosc.udp_client import SimpleUDPClient
 
-from engine.net.codec import POSITION_STEP
+from services.net.codec import POSITION_STEP
 from tests.net.net_helpers import (
     ROOT,
     free_port,

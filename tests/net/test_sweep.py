@@ -50,7 +50,7 @@ def content(tmp_path: Path, crash_seed: int | None = None) -> Path:
 
 
 def colosseum(*args: object, timeout: float = 180) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "engine.cli", *map(str, args)], cwd=ROOT,
+    return subprocess.run([sys.executable, "-m", "app.cli", *map(str, args)], cwd=ROOT,
                           capture_output=True, text=True, timeout=timeout)
 
 

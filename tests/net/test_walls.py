@@ -12,9 +12,9 @@ import pytest
 from PIL import Image
 from pythonosc.udp_client import SimpleUDPClient
 
-from engine.net.server import NetServer, Peer
-from engine.render.math3d import off_axis, perspective, project
 from engine.scene import SceneIds
+from services.net.server import NetServer, Peer
+from services.render.math3d import off_axis, perspective, project
 from tests.net.net_helpers import free_port, join_args, local_server, processes, stats
 
 FRONT = (np.array([-2.0, 2, 0]), np.array([2.0, 2, 0]), np.array([-2.0, 2, 3]))

@@ -14,8 +14,8 @@ import pytest
 from pythonosc.udp_client import SimpleUDPClient
 
 from components import Transform
-from engine.input import InputState
 from engine.scene import SceneIds
+from services.input import InputState
 from tests.net.net_helpers import free_port, join_args, local_server, processes
 from tests.stroke.chair_helpers import CONTENT, COUNTS_PER_TURN, chair_scene, ground_flat
 

@@ -1,5 +1,5 @@
 """Issue 22's goals at default settings, on both backends: the reference cases of
-``colosseum bench accuracy`` (tools/bench_accuracy.py: each case's scene and the theory
+``colosseum bench accuracy`` (app/bench/accuracy.py: each case's scene and the theory
 it is held to are there, worked out from physics) within their goals at the default
 step; and what the solver settings are for: restitution that does not depend on the
 step or the mass, stacks that stand at a coarse step, settings checked where written.
@@ -17,10 +17,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from app.bench import accuracy as bench
 from engine.physics.backend import WorldSettings
 from engine.physics.pymunk2d import resting
 from engine.scene import check
-from tools import bench_accuracy as bench
 
 BACKENDS = ("ode", "pymunk")
 CASES = {c.name: c for c in bench.cases()}
@@ -125,7 +125,7 @@ def test_solver_settings_are_checked_where_they_are_written(tmp_path: Path) -> N
 
 def test_the_bench_reports_each_case_beside_mujoco_or_the_goal() -> None:
     """``colosseum bench accuracy``'s rows and figures, for one case (quick: two steps)."""
-    from tools.bench import FIGURES
+    from app.bench import FIGURES
 
     rows = bench.run_bench(quick=True, only="friction slide")
     assert [(r["dt"], r["backend"]) for r in rows] == [

@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tools.bench_readback import EcsReadback, pose_table
+from app.bench.readback import EcsReadback, pose_table
 
 pytest.importorskip("engine.physics.ode3d")
-bench = pytest.importorskip("tools.bench_physics")
+bench = pytest.importorskip("app.bench.physics")
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler")
 

@@ -29,8 +29,8 @@ ROBOT = SHARED / "khr" / "Robot_skinned"
 
 def hull_shapes(folder: Path) -> list[tuple[str, Shape]]:
     """(object ID, shape) of every hull collider of the scene in ``folder``."""
+    from app.scene_loading import content_engine
     from components import Name
-    from engine.scene_loading import content_engine
 
     engine = content_engine(folder)
     try:
@@ -72,7 +72,7 @@ def test_the_robots_hulls_are_what_ode_checks_for(robot: Path) -> None:
 
 def test_the_robot_runs_without_printing_to_stdout(robot: Path,
                                                    capfd: pytest.CaptureFixture[str]) -> None:
-    from engine.scene_loading import content_engine
+    from app.scene_loading import content_engine
 
     capfd.readouterr()
     engine = content_engine(robot)

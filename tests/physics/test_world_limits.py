@@ -130,7 +130,7 @@ def test_spawned_objects_are_held_to_the_running_worlds_extent(tmp_path: Path) -
     """A snippet has no World of its own: the running scene's Extent (here 1e7 m, ten
     times the default) decides what it may place."""
     from engine.scene import instantiate, load_spec
-    from engine.scripting.runtime import ScriptRuntime
+    from services.scripting.runtime import ScriptRuntime
     from systems.scripting import ScriptingPlugin
 
     (tmp_path / "scripts").mkdir()

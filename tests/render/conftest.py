@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from render_helpers import CONTENT, H, W
 
-from engine.render import CameraView, HeadlessTarget, LightInfo, Renderer
+from services.render import CameraView, HeadlessTarget, LightInfo, Renderer
 
 
 @pytest.fixture(scope="session")

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from components import Shape, Visual
-from engine.render import Renderer
-from engine.render.math3d import project
+from services.render import Renderer
+from services.render.math3d import project
 
 CONTENT = Path(__file__).parent / "content"
 W, H = 160, 120

@@ -12,7 +12,7 @@ from render_helpers import floor
 
 from components import Shape, Visual
 from engine.anomalies import ANOMALIES, Anomalies, check_value
-from engine.render import CameraView, LightInfo
+from services.render import CameraView, LightInfo
 
 W, H = 240, 180
 LUMA = np.array([0.2126, 0.7152, 0.0722])

@@ -17,8 +17,8 @@ from pythonosc.osc_packet import OscPacket
 from engine.anomalies import Anomalies
 from engine.app import EngineConfig
 from engine.events import AnomalySwitched
-from engine.input import Button, InputHub, Key
 from engine.scene import instantiate, spec_from_text
+from services.input import Button, InputHub, Key
 from systems import create_engine
 from systems.render import RenderSystem
 

@@ -15,8 +15,8 @@ from components import Shape, Visual
 from engine.assets import Assets
 from engine.assets.generated import DARK, LIGHT, MARKER_BALL
 from engine.assets.loaders import MODEL_EXTENSIONS
-from engine.render import CameraView
-from engine.render.materials import CHECKER_A
+from services.render import CameraView
+from services.render.materials import CHECKER_A
 
 CENTRE = (0.0, 0.0, 0.5)
 

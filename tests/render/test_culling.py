@@ -7,10 +7,10 @@ import numpy as np
 from render_helpers import H, W, floor
 
 from components import Shape, Visual
-from engine.render import CameraView, LightInfo, math3d, meshes
-from engine.render.culling import frustum_planes, in_frustum, lod_levels, pixels_per_unit
-from engine.render.lights import shadow_matrix
-from engine.render.shadows import ShadowMap
+from services.render import CameraView, LightInfo, math3d, meshes
+from services.render.culling import frustum_planes, in_frustum, lod_levels, pixels_per_unit
+from services.render.lights import shadow_matrix
+from services.render.shadows import ShadowMap
 
 
 def _ring(renderer, count: int = 24) -> None:

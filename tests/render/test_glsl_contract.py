@@ -11,9 +11,9 @@ import numpy as np
 from render_helpers import pixel_at
 
 from components import Shape, Visual
-from engine.render import glsl
-from engine.render.lights import LightInfo
-from engine.render.shaders import (
+from services.render import glsl
+from services.render.lights import LightInfo
+from services.render.shaders import (
     FragmentShader,
     ShaderLibrary,
     ShaderProgram,

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from engine.scaffold import scaffold
+from app.scaffold import scaffold
 
 
 def test_headless_screenshot_draws_only_the_final_frame(tmp_path: Path):
@@ -18,7 +18,7 @@ def test_headless_screenshot_draws_only_the_final_frame(tmp_path: Path):
     shot, stats, frames = tmp_path / "shot.png", tmp_path / "stats.json", tmp_path / "frames"
     frames.mkdir()
     result = subprocess.run(
-        [sys.executable, "-m", "engine.cli", "run", str(sim), "--headless", "--frames", "60",
+        [sys.executable, "-m", "app.cli", "run", str(sim), "--headless", "--frames", "60",
          "--fast", "--size", "160x120", "--screenshot", str(shot), "--stats", str(stats),
          "--record-frames", str(frames), "--record-every", "20"],
         capture_output=True, text=True, timeout=120)

@@ -8,7 +8,7 @@ import numpy as np
 
 from engine.physics.backend import BodyState
 from engine.physics.driver import Snapshot
-from engine.render.interpolate import PoseInterpolator, interpolate_states
+from services.render.interpolate import PoseInterpolator, interpolate_states
 
 
 def _state(keys, xs, angles) -> BodyState:

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
+from app.scene_loading import load_content_scene
 from engine import EngineConfig
 from engine.content import resolve
-from engine.scene_loading import load_content_scene
 from systems import create_engine
 from systems.render import RenderSystem
 

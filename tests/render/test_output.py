@@ -7,8 +7,8 @@ from PIL import Image
 from render_helpers import H, W, floor, pixel_at
 
 from components import Shape, Visual
-from engine.render import LightInfo
-from engine.render.hud import hud_line
+from services.render import LightInfo
+from services.render.hud import hud_line
 
 
 def test_screenshot_is_a_readable_png_of_the_frame(make_renderer, tmp_path):

@@ -6,7 +6,7 @@ import numpy as np
 from render_helpers import pixel_at
 
 from components import Shape, Visual
-from engine.render import CameraView
+from services.render import CameraView
 
 RED = (1.0, 0.1, 0.1)
 

@@ -7,7 +7,7 @@ import pytest
 from render_helpers import H, W, floor, pixel_at
 
 from components import Shape, Visual
-from engine.render import PostPass
+from services.render import PostPass
 
 SPOT = (0.0, 0.0, 0.5)
 
@@ -23,7 +23,7 @@ def _spot_scene(make_renderer, passes):
 
 
 def _xy(r, point):
-    from engine.render.math3d import project
+    from services.render.math3d import project
 
     eye = r.camera.eyes(W, H)[0]
     x, y, _ = project(np.asarray(point, float), eye.view, eye.proj, W, H)

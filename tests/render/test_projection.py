@@ -6,8 +6,8 @@ import numpy as np
 from render_helpers import H, W, floor, pixel_at
 
 from components import Shape, Visual
-from engine.render import CameraView
-from engine.render.math3d import camera_view, perspective, project
+from services.render import CameraView
+from services.render.math3d import camera_view, perspective, project
 
 
 def test_object_colour_appears_at_its_projection(make_renderer):

@@ -12,8 +12,8 @@ import pytest
 from PIL import Image
 from test_anomalies import scene, with_anomaly
 
-from engine.cli import main
-from engine.scaffold import scaffold
+from app.cli import main
+from app.scaffold import scaffold
 
 W, H = 240, 180
 
@@ -74,7 +74,7 @@ def test_the_cli_draws_at_the_render_scale_asked_and_refuses_one_out_of_range(
     for scale in ("1", "0.5"):
         shot = tmp_path / f"shot {scale}.png"
         result = subprocess.run(
-            [sys.executable, "-m", "engine.cli", "run", str(sim), "--headless", "--frames",
+            [sys.executable, "-m", "app.cli", "run", str(sim), "--headless", "--frames",
              "3", "--fast", "--size", "160x120", "--render-scale", scale, "--screenshot",
              str(shot)], capture_output=True, text=True, timeout=120)
         assert result.returncode == 0, result.stderr

@@ -8,10 +8,10 @@ from render_helpers import CONTENT, H, W
 
 from components import Camera, Shape, Transform, Visual
 from engine.app import Engine, EngineConfig
-from engine.render.math3d import look_at_orientation
 from engine.scene.factory import instantiate
 from engine.scene.loader import spec_from_text
 from engine.services import SwapGate
+from services.render.math3d import look_at_orientation
 from systems.render import RenderOptions, RenderPlugin, RenderSystem
 
 LISTING_3 = """

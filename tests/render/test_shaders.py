@@ -9,7 +9,7 @@ import pytest
 from render_helpers import pixel_at
 
 from components import Shape, Visual
-from engine.render import (
+from services.render import (
     FragmentShader,
     ShaderLibrary,
     ShaderProgram,
@@ -17,7 +17,7 @@ from engine.render import (
     Uniform,
     VertexShader,
 )
-from engine.render.shaders import parse_driver_log
+from services.render.shaders import parse_driver_log
 
 CENTRE = (0.0, 0.0, 0.6)
 
@@ -138,7 +138,7 @@ def test_simple_shader_with_an_mvp_uniform_draws_each_object(make_renderer, tmp_
 
 @pytest.mark.parametrize("header", ["", "#version 120\n", "#version 330\nout vec4 c;\n"])
 def test_error_line_numbers_are_the_authors_lines(gl_ctx, tmp_path, header):
-    from engine.render.shaders import ShaderError, compile_program
+    from services.render.shaders import ShaderError, compile_program
 
     body = "void main() {\n    bogus_call();\n}\n"
     source = header + "// comment\n" + body

@@ -5,7 +5,7 @@ from __future__ import annotations
 from render_helpers import floor, pixel_at
 
 from components import Shape, Visual
-from engine.render import LightInfo
+from services.render import LightInfo
 
 UNDER = (0.0, 0.0, 0.0)  # floor point straight below the box (the light shines down)
 

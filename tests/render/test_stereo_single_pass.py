@@ -9,9 +9,9 @@ import numpy as np
 from render_helpers import H, W, floor
 
 from components import Shape, Visual
-from engine.render import CameraView, math3d
-from engine.render.camera import HeadsetEye
-from engine.xr.projection import Fov, fov_projection
+from services.render import CameraView, math3d
+from services.render.camera import HeadsetEye
+from services.xr.projection import Fov, fov_projection
 
 
 def _scene(renderer) -> None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from components import Shape, Visual
-from engine.render import Renderer, create_target, has_display
+from services.render import Renderer, create_target, has_display
 
 pytestmark = pytest.mark.skipif(not has_display(), reason="no display (try xvfb-run)")
 

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from engine.scaffold import scaffold
+from app.scaffold import scaffold
 
 pytestmark = pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="xvfb-run not installed")
 
@@ -22,7 +22,7 @@ def test_run_opens_a_window_when_a_display_exists(tmp_path: Path):
     shot = tmp_path / "shot.png"
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     result = subprocess.run(
-        ["xvfb-run", "-a", "-s", "-screen 0 800x600x24", sys.executable, "-m", "engine.cli",
+        ["xvfb-run", "-a", "-s", "-screen 0 800x600x24", sys.executable, "-m", "app.cli",
          "run", str(sim), "--frames", "30", "--fast", "--size", "320x240",
          "--screenshot", str(shot)],
         capture_output=True, text=True, timeout=120, env=env)

@@ -7,7 +7,7 @@ import stat
 
 import pytest
 
-from engine.cli import main
+from app.cli import main
 
 BROKEN = 'Object {\n  ID "a"\n  Radius 0.5\n}\nObject { ID "a" }\n'
 TIDY = """\

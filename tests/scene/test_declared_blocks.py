@@ -20,7 +20,7 @@ POOL = ROOT / "content" / "pool"
 
 
 def colosseum(*args: object, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "engine.cli", *map(str, args)],
+    return subprocess.run([sys.executable, "-m", "app.cli", *map(str, args)],
                           capture_output=True, text=True, timeout=120, cwd=cwd or ROOT)
 
 

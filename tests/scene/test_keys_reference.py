@@ -37,7 +37,7 @@ def test_every_key_has_a_meaning_and_an_example_that_parses() -> None:
 @pytest.mark.parametrize(("asked", "block"), [("camera", "Camera"), ("VisualAttributes", "Visual"),
                                              ("uniform", "Uniform")])
 def test_keys_prints_a_block_by_its_name_or_the_key_that_opens_it(asked: str, block: str) -> None:
-    result = subprocess.run([sys.executable, "-m", "engine.cli", "keys", asked],
+    result = subprocess.run([sys.executable, "-m", "app.cli", "keys", asked],
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 0
     assert find_block(asked) == block and result.stdout == block_text(block) + "\n"
@@ -46,10 +46,10 @@ def test_keys_prints_a_block_by_its_name_or_the_key_that_opens_it(asked: str, bl
 
 
 def test_keys_without_a_block_lists_them_and_a_wrong_one_is_a_usage_error() -> None:
-    listing = subprocess.run([sys.executable, "-m", "engine.cli", "keys"], capture_output=True,
+    listing = subprocess.run([sys.executable, "-m", "app.cli", "keys"], capture_output=True,
                              text=True, timeout=60)
     assert [line.split()[0] for line in listing.stdout.splitlines()[:len(blocks())]] == \
         blocks()
-    wrong = subprocess.run([sys.executable, "-m", "engine.cli", "keys", "Objekt"],
+    wrong = subprocess.run([sys.executable, "-m", "app.cli", "keys", "Objekt"],
                            capture_output=True, text=True, timeout=60)
     assert wrong.returncode == 2 and "did you mean 'Object'?" in wrong.stderr

@@ -15,18 +15,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from components import Name, Physical, Transform
-from engine.app import Engine
-from engine.content import DEMO, REPO_ROOT, resolve
-from engine.realtime import advance
-from engine.scene import load_scene
-from engine.scene_loading import (
+from app.scene_loading import (
     SceneLoadError,
     check_path,
     content_engine,
     load_content_scene,
     save_state,
 )
+from components import Name, Physical, Transform
+from engine.app import Engine
+from engine.content import DEMO, REPO_ROOT, resolve
+from engine.realtime import advance
+from engine.scene import load_scene
 
 pytest.importorskip("engine.physics.ode3d")
 

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import pytest
 
+from app.scene_loading import check_path
 from engine.scene import load_scene
-from engine.scene_loading import check_path
 
 pytest.importorskip("engine.physics.ode3d")
 
@@ -60,7 +60,7 @@ end
 
 
 def colosseum(*args: object) -> subprocess.CompletedProcess[str]:
-    result = subprocess.run([sys.executable, "-m", "engine.cli", *map(str, args)],
+    result = subprocess.run([sys.executable, "-m", "app.cli", *map(str, args)],
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     return result

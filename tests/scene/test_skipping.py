@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
+from app.scene_loading import SceneLoadError, load_content_scene
 from engine.content import resolve
-from engine.scene_loading import SceneLoadError, load_content_scene
 
 
 def _folder(tmp_path: Path) -> Path:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.scripting.runtime import ScriptLimits, ScriptRuntime
+from services.scripting.runtime import ScriptLimits, ScriptRuntime
 
 #: Small enough that a runaway loop is stopped in a few milliseconds.
 TEST_LIMITS = ScriptLimits(instructions=200_000, memory=48 * 1024 * 1024, max_failures=3)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from engine.app import Engine, EngineConfig
 from engine.scene import instantiate, load_spec
-from engine.scripting.runtime import ScriptLimits, ScriptRuntime
+from services.scripting.runtime import ScriptLimits, ScriptRuntime
 from systems import RegistryPlugin, load_plugin
 from systems.controllers import ControllersPlugin
 from systems.scripting import ScriptingPlugin

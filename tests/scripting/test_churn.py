@@ -12,12 +12,12 @@ from pathlib import Path
 
 import pytest
 
+from app.bench.scripting import churn_round, churn_world
 from components import Name, Script, Transform
 from engine.app import Engine, EngineConfig
 from engine.scene import SceneIds, instantiate, spec_from_text
 from systems import RegistryPlugin, load_plugin
 from systems.scripting import ScriptingPlugin
-from tools.bench_scripting import churn_round, churn_world
 
 #: Bytes the process may grow by per churned object (the issue's bound).
 MAX_BYTES_PER_OBJECT = 30
@@ -105,7 +105,7 @@ def test_contacts_told_after_their_boxes_were_deleted_leave_nothing_in_lua(tmp_p
     stretches of 400 frames, a leak grows it in each, while tables reaching a loaded
     machine's working size (more steps a frame, more contacts a callback) grow it in
     some and then stop."""
-    from engine.scripting.runtime import ScriptRuntime
+    from services.scripting.runtime import ScriptRuntime
 
     config = EngineConfig(backend="ode", fast=True, content_dir=tmp_path, mode="threaded")
     engine = Engine(config, plugins=[RegistryPlugin(), load_plugin("physics"),
@@ -153,7 +153,7 @@ end
     owner = engine.spawn(Name("owner"), Transform(), Script(source=script))
     try:
         engine.run(frames=10)
-        from engine.scripting.runtime import ScriptRuntime
+        from services.scripting.runtime import ScriptRuntime
 
         env = next(s for s in engine.resource(ScriptRuntime).scripts if s.entity == owner).env
         assert env.found is None  # deleted: find no longer sees it

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.cli import main
+from app.cli import main
 from engine.confine import OUTSIDE
 from engine.scene import check
 from engine.scene.schema import ASSET_T, SCHEMAS

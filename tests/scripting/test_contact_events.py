@@ -16,7 +16,7 @@ from engine.app import EngineConfig
 from engine.events import ContactBegan, ContactEnded, Contacts
 from engine.physics.commands import SetVelocity
 from engine.scene import instantiate, spec_from_text
-from engine.scripting.runtime import ScriptRuntime
+from services.scripting.runtime import ScriptRuntime
 from systems import create_engine
 from systems.contacts import pair_keys, split
 

@@ -1,4 +1,4 @@
-"""The Lua API reference (docs/LUA.md, made from engine/scripting/api.py's declarations)
+"""The Lua API reference (docs/LUA.md, made from services/scripting/api.py's declarations)
 lists exactly what the sandbox exposes to a script (issue 34)."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from tools.reference import documented_lua_api, live_lua_api, lua_markdown
+from app.reference import documented_lua_api, live_lua_api, lua_markdown
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -23,7 +23,7 @@ def test_the_declarations_name_every_function_the_sandbox_exposes_and_no_other()
 
 def test_the_declared_callbacks_are_the_ones_the_engine_calls() -> None:
     called = set()
-    for folder in ("engine", "systems"):
+    for folder in ("engine", "services", "systems"):
         for path in (ROOT / folder).rglob("*.py"):
             called |= set(re.findall(r'"(on[A-Z][A-Za-z]+)"', path.read_text(encoding="utf-8")))
     assert documented_lua_api()["callbacks"] == called

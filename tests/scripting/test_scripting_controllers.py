@@ -10,8 +10,8 @@ from script_helpers import backends, scripted_engine, write_content
 
 from components import Controller, Joint, Name, Transform
 from engine.events import KeyEvent
-from engine.input import InputHub
-from engine.input.events import Axis, WheelCount
+from services.input import InputHub
+from services.input.events import Axis, WheelCount
 
 WHEEL = """
 Object { ID "wheel" Position [0 0 1]

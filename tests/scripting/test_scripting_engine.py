@@ -207,7 +207,7 @@ def test_collision_filter_only_reaches_involved_scripts(tmp_path: Path) -> None:
 
 def test_input_timer_and_custom_events_reach_scripts(tmp_path: Path) -> None:
     from engine.events import CustomEvent, TimerEvent
-    from engine.input.events import Axis, Button, TrackerPose
+    from services.input.events import Axis, Button, TrackerPose
 
     script = """
 seen = {}

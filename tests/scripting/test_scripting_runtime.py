@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.scripting.runtime import ScriptLoadError, ScriptRuntime
+from services.scripting.runtime import ScriptLoadError, ScriptRuntime
 
 
 def test_error_names_file_and_line_with_traceback(runtime: ScriptRuntime) -> None:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRuntime
+from services.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRuntime
 
 
 def run_once(runtime: ScriptRuntime, body: str, name: str = "scripts/evil.lua"):
@@ -150,7 +150,7 @@ BOMBS = {  # body, what stops it
 
 @pytest.mark.parametrize(("body", "stopper"), BOMBS.values(), ids=BOMBS.keys())
 def test_memory_bomb_is_stopped(content: Path, body: str, stopper: str) -> None:
-    from engine.scripting.runtime import ScriptLimits
+    from services.scripting.runtime import ScriptLimits
 
     runtime = ScriptRuntime(ScriptLimits(instructions=10_000_000, memory=24 * 1024 * 1024),
                             content / "scripts")

@@ -12,9 +12,9 @@ import numpy as np
 from components import Name, Physical, Transform
 from engine import EngineConfig, Phase, system
 from engine.content import REPO_ROOT
-from engine.input import InputHub
-from engine.input.events import WheelCount
 from engine.scene import instantiate, spec_from_text
+from services.input import InputHub
+from services.input.events import WheelCount
 from systems import create_engine
 
 CONTENT = REPO_ROOT / "content" / "stroke"

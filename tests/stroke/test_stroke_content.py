@@ -14,17 +14,17 @@ import pytest
 from chair_helpers import CONTENT
 from PIL import Image
 
+from app.cli import main
+from app.scene_loading import load_content_scene
 from components import Joint, Name, Physical, Transform, Wheelchair
 from engine import EngineConfig, Phase, system
-from engine.cli import main
 from engine.content import load_systems, resolve
 from engine.events import CustomEvent
-from engine.input import InputHub, Key
-from engine.input.desktop import WindowDevice
-from engine.input.events import WheelCount
 from engine.rotation import quat_to_matrix
 from engine.scene import check
-from engine.scene_loading import load_content_scene
+from services.input import InputHub, Key
+from services.input.desktop import WindowDevice
+from services.input.events import WheelCount
 from systems import create_engine
 from systems.hands import Hands
 from systems.input import Outputs
@@ -336,7 +336,7 @@ def test_cutlery_plates_and_the_broom_sound_when_they_hit_the_floor(tmp_path):
     """Dropped from half a metre onto the kitchen floor, the fork clinks, the plate knocks
     as ceramic, the broom brushes: each its material's contact sound. (A 40 g fork
     falling less than about 16 cm stays silent: the filter's threshold is an impulse,
-    0.1 N·s, engine.audio.contacts.)"""
+    0.1 N·s, services.audio.contacts.)"""
     from systems.sound import SoundSystem
 
     with session_engine(CONTENT, tmp_path) as engine:

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 from chair_helpers import PARTS, ChairRun, G, chair_scene, ground_flat, ground_ramp
 
+from app.scene_loading import content_engine
 from components import Wheelchair
 from components.wheelchair import NavigationMode
 from engine import Phase, system
 from engine.events import CustomEvent
 from engine.rotation import quat_to_matrix
 from engine.scene import check, write_state
-from engine.scene_loading import content_engine
 from systems.input import Outputs
 from tools.stroke_scene import CHASSIS, TRACK, WHEEL_DIAMETER
 

@@ -16,10 +16,10 @@ import pytest
 
 from components import Transform
 from engine import Phase, system
-from engine.input.hub import InputHub
-from engine.xr.display import XrDisplay, input_events
-from engine.xr.projection import XrOrigin
-from engine.xr.session import InputSample
+from services.input.hub import InputHub
+from services.xr.display import XrDisplay, input_events
+from services.xr.projection import XrOrigin
+from services.xr.session import InputSample
 from systems.xr import HapticSystem
 from tests.hands.hand_helpers import Rig, waypoints
 

@@ -22,7 +22,7 @@ def colosseum(*args: object, runtime: str | None = "/nonexistent/runtime.json",
     env.pop("XR_RUNTIME_JSON", None)
     if runtime is not None:
         env["XR_RUNTIME_JSON"] = runtime
-    return subprocess.run([sys.executable, "-m", "engine.cli", *map(str, args)], env=env,
+    return subprocess.run([sys.executable, "-m", "app.cli", *map(str, args)], env=env,
                           capture_output=True, text=True, cwd=cwd or ROOT, timeout=120)
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from engine.input.calibration import openxr_to_engine
+from services.input.calibration import openxr_to_engine
 
 ROOT = Path(__file__).resolve().parents[2]
 RUNTIME = os.environ.get("XR_RUNTIME_JSON")
@@ -24,9 +24,9 @@ pytestmark = pytest.mark.skipif(
 
 
 def _engine(folder: Path, frames: int):
+    from app.scene_loading import load_content_scene
     from engine.app import EngineConfig
     from engine.content import resolve
-    from engine.scene_loading import load_content_scene
     from systems import create_engine
 
     scene = load_content_scene(resolve(folder))
@@ -58,7 +58,7 @@ def _scene(tmp_path: Path) -> Path:
 def test_hands_in_the_headset_reaches_focused_submits_and_ends_cleanly(tmp_path: Path):
     stats = tmp_path / "stats.json"
     result = subprocess.run(
-        [sys.executable, "-m", "engine.cli", "run", ROOT / "content" / "hands", "--xr",
+        [sys.executable, "-m", "app.cli", "run", ROOT / "content" / "hands", "--xr",
          "--seconds", "10", "--headless", "--hud", "--stats", stats],
         capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert result.returncode == 0, result.stderr[-3000:]
@@ -78,7 +78,7 @@ def test_hands_in_the_headset_reaches_focused_submits_and_ends_cleanly(tmp_path:
 
 
 def test_what_reaches_the_runtime_is_what_the_engine_drew_per_eye(tmp_path: Path):
-    from engine.xr.display import XrDisplay
+    from services.xr.display import XrDisplay
 
     engine = _engine(_scene(tmp_path), 0)
     display = engine.plugins["xr"].display
@@ -138,8 +138,8 @@ import json, sys
 from pathlib import Path
 from engine.app import EngineConfig
 from engine.content import resolve
-from engine.input.state import InputState
-from engine.scene_loading import load_content_scene
+from services.input.state import InputState
+from app.scene_loading import load_content_scene
 from engine.services import HeadsetControl
 from systems import create_engine
 
@@ -201,7 +201,7 @@ def test_a_runtime_killed_mid_run_is_one_message_and_a_clean_exit(tmp_path: Path
             time.sleep(0.1)
         stats, state = tmp_path / "stats.json", tmp_path / "state.scene"
         run = subprocess.Popen(
-            [sys.executable, "-m", "engine.cli", "run", ROOT / "content" / "hands", "--xr",
+            [sys.executable, "-m", "app.cli", "run", ROOT / "content" / "hands", "--xr",
              "--seconds", "60", "--headless", "--stats", stats, "--save-state", state],
             env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
         time.sleep(6)
@@ -223,9 +223,9 @@ def test_a_runtime_killed_mid_run_is_one_message_and_a_clean_exit(tmp_path: Path
 
 def test_the_stroke_simulator_in_the_headset_takes_each_eyes_left_field(tmp_path: Path):
     """Left hemianopia in the headset: each eye loses its own left half of the view."""
+    from app.scene_loading import load_content_scene
     from engine.app import EngineConfig
     from engine.content import resolve
-    from engine.scene_loading import load_content_scene
     from systems import create_engine
 
     folder = ROOT / "content" / "stroke"

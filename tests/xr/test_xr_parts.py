@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 
 from components.display import HEADSET_ACTIONS, HEADSET_PROFILES
-from engine.input.calibration import openxr_to_engine
 from engine.rotation import quat_to_matrix
-from engine.xr.bindings import ACTION_NAMES, PROFILE_PATHS, PROFILES, Rebinding, suggestions
-from engine.xr.formats import FormatError, choose_color_format, choose_depth_format
-from engine.xr.lifecycle import Action, SessionState, replay
-from engine.xr.projection import Fov, XrOrigin, fov_projection, yaw_of
-from engine.xr.timing import FrameCounts, StepPlanner
+from services.input.calibration import openxr_to_engine
+from services.xr.bindings import ACTION_NAMES, PROFILE_PATHS, PROFILES, Rebinding, suggestions
+from services.xr.formats import FormatError, choose_color_format, choose_depth_format
+from services.xr.lifecycle import Action, SessionState, replay
+from services.xr.projection import Fov, XrOrigin, fov_projection, yaw_of
+from services.xr.timing import FrameCounts, StepPlanner
 
 S = SessionState
 

@@ -5,10 +5,13 @@
 Only what runs per step or per body is here, in C: the near callback that filters
 pairs and makes contact joints, the step itself (collision and QuickStep with the
 GIL released), contact impulses from joint feedback, the non-finite and runaway
-check, the six-DOF drives, batch state reads and writes. Policy lives in Python:
-auto-sleep is :mod:`engine.physics.sleep`, whose per-step pass (``sleep.h``, over the
-rule's own arrays, bound by ``World.bind_sleep``) the step runs in C with the GIL
-released, with ODE's own auto-disable off.
+check, the six-DOF drives, batch state reads and writes. The step's policy is C too,
+in ``stepper.h`` (shared with the plain-C benchmark, app/bench/bench_ode.c): which
+islands are solved exactly, the resting bodies' warm start, each contact's softness.
+Auto-sleep's rule is :mod:`engine.physics.sleep`, whose per-step pass (``sleep.h``,
+over the rule's own arrays, bound by ``World.bind_sleep``) the step runs in C with the
+GIL released, with ODE's own auto-disable off. The typed layer (``engine.physics.ode3d``)
+checks arguments and turns scene settings into these calls.
 
 One extension built from one file per concept, included here in dependency order
 (one module, so the per-step paths inline across concepts and there is one copy of
