@@ -2,7 +2,9 @@
 
 The headset becomes the tracker ``hmd`` (bind it to a camera with ``Tracker { ID "hmd"
 Camera "eye" }``), the controllers' grip poses ``hand_l``/``hand_r``, their select
-buttons ``Button(hand_l, "select")``. Poses are read through a headless session
+buttons ``Button(hand_l, "select")``; tracked hands (``XR_EXT_hand_tracking``, where the
+runtime's system has them) the HandJoints ``hand_l``/``hand_r``
+(:mod:`engine.input.openxr_hands`). Poses are read through a headless session
 (``XR_MND_headless``: no frames are submitted to the headset; drawing into it is not
 this device's job) and converted from OpenXR's frame (y up, looking along -z) to the
 engine's (z up, looking along +y) by :func:`engine.input.calibration.openxr_to_engine`.
@@ -19,7 +21,8 @@ from typing import Any
 
 from engine.input.calibration import openxr_to_engine
 from engine.input.device import MONOTONIC, Clock, DeviceError, QueuedDevice
-from engine.input.events import Button, TrackerPose
+from engine.input.events import Button, HandJoints, TrackerPose
+from engine.input.openxr_hands import HAND_TRACKING, OpenXRHands, hand_event
 
 HEADLESS = "XR_MND_headless"
 HANDS = (("hand_l", "/user/hand/left"), ("hand_r", "/user/hand/right"))
@@ -73,6 +76,8 @@ class OpenXRDevice(QueuedDevice):
         self._xr: Any = None
         self._handles: dict[str, Any] = {}
         self._running = False
+        self._hands: OpenXRHands | None = None
+        self._last_hands: dict[str, HandJoints] = {}
         super().__init__(name)
 
     def _open(self) -> None:
@@ -86,22 +91,25 @@ class OpenXRDevice(QueuedDevice):
         if HEADLESS not in extensions:
             raise DeviceError(f"{self.describe_name()}: the OpenXR runtime lacks {HEADLESS}, "
                               "which reading poses without drawing into the headset needs")
+        enabled = {HEADLESS, *({HAND_TRACKING} & extensions)}
         try:
-            self._create_session(xr)
+            self._create_session(xr, enabled)
         except xr.exception.FormFactorUnavailableError as exc:
             raise DeviceError(f"{self.describe_name()}: no headset is connected to the OpenXR "
                               "runtime") from exc
         except xr.exception.XrException as exc:
             raise DeviceError(f"{self.describe_name()}: {exc}") from exc
 
-    def _create_session(self, xr: Any) -> None:
+    def _create_session(self, xr: Any, enabled: set[str]) -> None:
         h = self._handles
         h["instance"] = instance = xr.create_instance(xr.InstanceCreateInfo(
-            enabled_extension_names=[HEADLESS]))
+            enabled_extension_names=sorted(enabled)))
         system = xr.get_system(instance, xr.SystemGetInfo(
             form_factor=xr.FormFactor.HEAD_MOUNTED_DISPLAY))
         h["session"] = session = xr.create_session(instance, xr.SessionCreateInfo(
             system_id=system))
+        self._hands = OpenXRHands.create(xr, instance, system, session, enabled,
+                                         self.describe_name())
         h["stage"] = xr.create_reference_space(session, xr.ReferenceSpaceCreateInfo(
             reference_space_type=xr.ReferenceSpaceType.STAGE))
         h["hmd"] = xr.create_reference_space(session, xr.ReferenceSpaceCreateInfo(
@@ -150,6 +158,7 @@ class OpenXRDevice(QueuedDevice):
             if button is not None:
                 h["pressed"][i] = button.pressed
                 self.push(button)
+        self._locate_hands(frame.predicted_display_time, now)
         xr.end_frame(session, xr.FrameEndInfo(
             display_time=frame.predicted_display_time,
             environment_blend_mode=xr.EnvironmentBlendMode.OPAQUE, layers=[]))
@@ -179,8 +188,21 @@ class OpenXRDevice(QueuedDevice):
         if pose is not None:
             self.push(pose)
 
+    def _locate_hands(self, when: Any, now: float) -> None:
+        """Each tracked hand's joints at display time ``when``, in the stage space."""
+        if self._hands is None:
+            return
+        for name, raw in self._hands.locate(self._handles["stage"], when).items():
+            hand = hand_event(name, raw, now, self._last_hands.get(name))
+            if hand is not None:
+                self._last_hands[name] = hand
+                self.push(hand)
+
     def _close(self) -> None:
         xr, h = self._xr, self._handles
+        if self._hands is not None:
+            self._hands.destroy()
+            self._hands = None
         if "session" in h:
             xr.destroy_session(h["session"])
         if "instance" in h:
