@@ -17,6 +17,7 @@ from __future__ import annotations
 import ctypes
 import logging
 import os
+import time
 from typing import Any
 
 from engine.input.calibration import openxr_to_engine
@@ -25,6 +26,9 @@ from engine.input.events import Button, HandJoints, TrackerPose
 from engine.input.openxr_hands import HAND_TRACKING, OpenXRHands, hand_event
 
 HEADLESS = "XR_MND_headless"
+TIMESPEC = "XR_KHR_convert_timespec_time"
+#: Seconds between two samples of a headless session without a frame loop (90 Hz).
+HEADLESS_PERIOD = 1.0 / 90.0
 HANDS = (("hand_l", "/user/hand/left"), ("hand_r", "/user/hand/right"))
 PROFILE = "/interaction_profiles/khr/simple_controller"
 NO_RUNTIME = ("no OpenXR runtime found: install one (Monado, SteamVR, or your headset's) "
@@ -77,6 +81,7 @@ class OpenXRDevice(QueuedDevice):
         self._handles: dict[str, Any] = {}
         self._running = False
         self._hands: OpenXRHands | None = None
+        self._enabled: set[str] = set()
         self._last_hands: dict[str, HandJoints] = {}
         super().__init__(name)
 
@@ -91,7 +96,7 @@ class OpenXRDevice(QueuedDevice):
         if HEADLESS not in extensions:
             raise DeviceError(f"{self.describe_name()}: the OpenXR runtime lacks {HEADLESS}, "
                               "which reading poses without drawing into the headset needs")
-        enabled = {HEADLESS, *({HAND_TRACKING} & extensions)}
+        enabled = self._enabled = {HEADLESS, *({HAND_TRACKING, TIMESPEC} & extensions)}
         try:
             self._create_session(xr, enabled)
         except xr.exception.FormFactorUnavailableError as exc:
@@ -145,23 +150,50 @@ class OpenXRDevice(QueuedDevice):
             return
         session = h["session"]
         frame = xr.wait_frame(session)
-        xr.begin_frame(session)
+        when = int(frame.predicted_display_time)
+        # A headless session may have no frame loop (Monado's: xrWaitFrame returns at once
+        # with no display time, and xrBeginFrame refuses): poses are then read at the
+        # runtime's "now", HEADLESS_PERIOD apart
+        framed = when > 0
+        if framed:
+            xr.begin_frame(session)
+        else:
+            when = self._runtime_now(xr)
         now = self.clock()
+        if when > 0:
+            self._sample(xr, when, now)
+        if framed:
+            xr.end_frame(session, xr.FrameEndInfo(
+                display_time=when, environment_blend_mode=xr.EnvironmentBlendMode.OPAQUE,
+                layers=[]))
+        else:
+            self._stop.wait(HEADLESS_PERIOD)
+
+    def _sample(self, xr: Any, when: int, now: float) -> None:
+        """The head, the controllers, their select buttons and the hands at ``when``."""
+        h = self._handles
+        session = h["session"]
         xr.sync_actions(session, xr.ActionsSyncInfo(
             active_action_sets=[xr.ActiveActionSet(h["actions"], xr.NULL_PATH)]))
-        self._locate(xr, "hmd", h["hmd"], frame.predicted_display_time, now)
+        self._locate(xr, "hmd", h["hmd"], when, now)
         for i, (name, _) in enumerate(HANDS):
-            self._locate(xr, name, h["grips"][i], frame.predicted_display_time, now)
+            self._locate(xr, name, h["grips"][i], when, now)
             state = xr.get_action_state_boolean(session, xr.ActionStateGetInfo(
                 action=h["select"], subaction_path=h["paths"][i]))
             button = select_change(name, state, h["pressed"][i], now)
             if button is not None:
                 h["pressed"][i] = button.pressed
                 self.push(button)
-        self._locate_hands(frame.predicted_display_time, now)
-        xr.end_frame(session, xr.FrameEndInfo(
-            display_time=frame.predicted_display_time,
-            environment_blend_mode=xr.EnvironmentBlendMode.OPAQUE, layers=[]))
+        self._locate_hands(when, now)
+
+    def _runtime_now(self, xr: Any) -> int:
+        """The runtime's clock now (ns; XR_KHR_convert_timespec_time), 0 without it."""
+        if TIMESPEC not in self._enabled:
+            return 0
+        t = time.clock_gettime_ns(time.CLOCK_MONOTONIC)
+        spec = xr.timespec(t // 1_000_000_000, t % 1_000_000_000)
+        now = xr.convert_timespec_time_to_time_khr(self._handles["instance"], spec)
+        return int(getattr(now, "value", now))
 
     def _handle_events(self, xr: Any) -> None:
         h = self._handles
