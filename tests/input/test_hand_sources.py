@@ -135,3 +135,42 @@ def test_an_lsl_hand_stream_reaches_the_state_table(tmp_path: Path):
         np.testing.assert_array_equal(got.positions, hand.positions)  # doubles: exact
         np.testing.assert_array_equal(got.radii, hand.radii)
         np.testing.assert_allclose(got.orientations, hand.orientations, atol=1e-15)
+
+
+def test_osc_hands_recorded_live_replay_to_the_same_joints(tmp_path: Path):
+    """InputRecorder and InputReplayer carry hands: a live OSC session (filtered, offset)
+    replayed with the port taken (the device never opens) gives the same joints."""
+    import socket
+
+    from engine.input import InputRecorder, InputReplayer
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    scene = (f'Input {{ Device {{ Kind "osc" Port {port} }}\n'
+             '  Tracker { ID "glove_r" Filter "oneeuro" Offset [0 0 0.3] } }')
+    path = tmp_path / "hands.input"
+
+    def run(live: bool, system: object) -> list:
+        seen = []
+        with input_engine(scene, tmp_path) as engine:
+            engine.add_system(system)
+            engine.start()
+            client = SimpleUDPClient("127.0.0.1", port)
+            for frame in range(40):
+                if live and frame < 30:
+                    curls = {f: frame / 30 for f in GESTURES["fist"]}
+                    hand = pose_hand("glove_r", (0.1, 0.3 + 0.01 * frame, 1.0),
+                                     (1.0, 0.0, 0.0, 0.0), curls)
+                    client.send_message("/colosseum/hand/glove_r", flat(hand))
+                    time.sleep(0.005)
+                engine.step()
+                seen.append(engine.resource(InputState).hand("glove_r"))
+        return seen
+
+    live = run(True, InputRecorder(path))
+    assert sum(h is not None for h in live) > 10
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as blocker:
+        blocker.bind(("127.0.0.1", port))
+        replayed = run(False, InputReplayer(path))
+    assert replayed == live
