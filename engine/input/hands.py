@@ -5,7 +5,7 @@ tracker is (no second block to learn): ``Offset``, ``Rotation``, ``Scale`` and `
 move every joint; ``Scale`` scales the radii too; ``Filter "oneeuro"`` smooths every
 joint's position and orientation with its own one-euro filters (``MinCutoff``, ``Beta``).
 
-Mirroring — an ``Axes`` map with one (or three) negated axes, ``"-x y z"`` — turns a
+Mirroring — an ``Axes`` map that reflects (``"-x y z"``, or a swap such as ``"y x z"``) — turns a
 left hand into a right one (mirror therapy: the tracked left hand drives the virtual
 right one). A mirrored joint frame would be left-handed; it is kept proper in the
 convention of :mod:`engine.input.hand_pose` (local +x along the bone and +z out of the
