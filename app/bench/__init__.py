@@ -119,9 +119,13 @@ def _accuracy_figures(rows: list[dict[str, Any]]) -> list[Figure]:
 def _input_figures(rows: list[dict[str, Any]]) -> list[Figure]:
     ours = next(r for r in rows if r["path"].startswith("osc -> InputState"))
     ref = next(r for r in rows if "reference" in r["path"])
+    hands = [Figure("hand (26 joints, one-euro) through the hub", r["us/hand"],
+                    r["26 poses us"], "us/hand",
+                    "its 26 joints as 26 tracker poses through the same hub")
+             for r in rows if "us/hand" in r]
     return [Figure("CPU per OSC event, to InputState", ours["cpu us/event"],
                    ref["cpu us/event"], "us/event",
-                   "python-osc's own server on the same stream")]
+                   "python-osc's own server on the same stream"), *hands]
 
 
 def _net_figures(rows: list[dict[str, Any]]) -> list[Figure]:

@@ -22,7 +22,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
-from services.input.events import AnyInput, TrackerPose
+from services.input.events import HAND_JOINTS, AnyInput, HandJoints, TrackerPose
 
 log = logging.getLogger("colosseum.input")
 
@@ -279,3 +279,59 @@ def whole_count(value: float, what: str) -> int:
         raise BadMessage(f"{what}: count {value:g} is not a whole number")
     return int(value)
 
+
+
+#: Numbers per joint in a flat hand message (OSC, LSL): x y z qw qx qy qz radius.
+JOINT_VALUES = 8
+#: Numbers in a flat hand message: 26 joints of JOINT_VALUES.
+HAND_VALUES = len(HAND_JOINTS) * JOINT_VALUES
+
+
+def _unit(device: str, what: str, q: Sequence[float]) -> tuple[float, float, float, float]:
+    """``q`` normalised as :func:`make_pose` does (BadMessage when far from unit length)."""
+    qw, qx, qy, qz = (float(v) for v in q)
+    norm = math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
+    if not abs(norm - 1.0) <= QUAT_TOLERANCE:  # NaN fails too
+        raise BadMessage(f"hand {device!r}: {what} quaternion length {norm:.4g} is not 1")
+    if abs(norm - 1.0) > 1e-12:  # so normalising twice (a replay) changes no bit
+        qw, qx, qy, qz = qw / norm, qx / norm, qy / norm, qz / norm
+    return (qw, qx, qy, qz)
+
+
+def make_hand(device: str, positions: Sequence[Sequence[float]],
+              orientations: Sequence[Sequence[float]], radii: Sequence[float],
+              valid: Sequence[bool], timestamp: float) -> HandJoints:
+    """A HandJoints of 26 joints, each checked as a tracker's pose is (finite, within
+    ±MAX_COORDINATE, a quaternion of unit length, normalised) and a radius from 0 to
+    MAX_COORDINATE; BadMessage names the hand and the first joint that is wrong."""
+    for what, items, size in (("positions", positions, 3), ("orientations", orientations, 4)):
+        if len(items) != len(HAND_JOINTS) or any(len(v) != size for v in items):
+            raise BadMessage(f"hand {device!r}: {len(HAND_JOINTS)} {what} of {size} numbers "
+                             "each needed")
+    if len(radii) != len(HAND_JOINTS) or len(valid) != len(HAND_JOINTS):
+        raise BadMessage(f"hand {device!r}: {len(HAND_JOINTS)} radii and validity flags needed")
+    out_p, out_q = [], []
+    for joint, p, q, r in zip(HAND_JOINTS, positions, orientations, radii, strict=True):
+        x, y, z = (float(v) for v in p)
+        if not all(abs(v) <= MAX_COORDINATE for v in (x, y, z)):  # NaN fails too
+            raise BadMessage(f"hand {device!r}: {joint} position {(x, y, z)} is not finite "
+                             f"or beyond ±{MAX_COORDINATE:g}")
+        if not 0.0 <= float(r) <= MAX_COORDINATE:
+            raise BadMessage(f"hand {device!r}: {joint} radius {float(r)!r} is not from 0 "
+                             f"to {MAX_COORDINATE:g}")
+        out_p.append((x, y, z))
+        out_q.append(_unit(device, joint, q))
+    return HandJoints(device, tuple(out_p), tuple(out_q), tuple(float(r) for r in radii),
+                      tuple(bool(v) for v in valid), timestamp)
+
+
+def hand_from_values(device: str, values: Sequence[float], timestamp: float) -> HandJoints:
+    """The hand of a flat message, 26 × (x y z qw qx qy qz radius) finite numbers (every
+    joint valid); BadMessage says what is wrong."""
+    count = HAND_VALUES
+    if len(values) != count:
+        raise BadMessage(f"hand {device!r} takes {count} numbers (26 joints x "
+                         f"x y z qw qx qy qz radius), got {len(values)}")
+    joints = [values[i:i + JOINT_VALUES] for i in range(0, count, JOINT_VALUES)]
+    return make_hand(device, [j[0:3] for j in joints], [j[3:7] for j in joints],
+                     [j[7] for j in joints], (True,) * len(HAND_JOINTS), timestamp)

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from services.input.events import FINGERS, HAND_JOINTS, HandJoints, Quat, Vec3
 from engine.rotation import matrices_to_quats, quat_to_matrix
+from services.input.events import FINGERS, HAND_JOINTS, HandJoints, Quat, Vec3
 
 #: The largest flexion of each finger's three joints (radians): MCP, PIP, DIP; the
 #: thumb's CMC, MCP, IP. A curl of 1 bends every joint to these.

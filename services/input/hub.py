@@ -42,6 +42,7 @@ from services.input.events import (
     WheelCount,
 )
 from services.input.filters import OneEuro, OneEuroRotation, Velocity, predict
+from services.input.hands import HandPipeline, finite, hand_problem
 from services.input.record import FrameInput, Recording, RecordWriter
 from services.input.state import InputState, TrackerState, WheelState
 from services.input.wheel import WheelRate
@@ -103,6 +104,7 @@ class InputHub:
         self._tracker_specs = {t.id: t for t in spec.trackers}
         self._wheel_specs = {w.id: w for w in spec.wheels}
         self._pipelines: dict[str, TrackerPipeline] = {}
+        self._hand_pipelines: dict[str, HandPipeline] = {}
         self._posed: dict[str, TrackerPose] = {}  # this frame's newest pose per tracker
         #: transport name -> seconds of silence before its sources are lost
         self._timeouts = {d.name: (timeouts or {}).get(d.name, spec.lost_after)
@@ -234,19 +236,20 @@ class InputHub:
         self._replay_ended = True
         log.info("the recorded input ended at frame %d: no input from here on", last)
         state = self.state
-        sources = sorted((state.trackers.keys() | state.wheels.keys()) - state.lost)
+        sources = sorted((state.trackers.keys() | state.wheels.keys() | state.hands.keys())
+                         - state.lost)
         return FrameInput(clock, [DeviceLost(source, clock) for source in sources])
 
     def _wanted(self, event: AnyInput, transport: str) -> bool:
-        """Drop poses of a tracker bound to another device (``Tracker { Device }``)."""
-        if isinstance(event, TrackerPose):
+        """Drop poses (and hands) of a tracker bound to another device (``Tracker { Device }``)."""
+        if isinstance(event, (TrackerPose, HandJoints)):
             spec = self._tracker_specs.get(event.device)
             return spec is None or not spec.device or spec.device == transport
         return True
 
     def _admit(self, event: AnyInput, transport: str) -> bool:
         """False for an input name past the first MAX_SOURCES (told as a bad message)."""
-        if isinstance(event, (TrackerPose, WheelCount)):
+        if isinstance(event, (TrackerPose, WheelCount, HandJoints)):
             name: str | tuple[str, str] = event.device
         elif isinstance(event, (Button, Axis)):
             name = (event.device, event.name)
@@ -346,8 +349,7 @@ class InputHub:
             state.pointers[event.device] = (event.x, event.y)
             return event
         if isinstance(event, HandJoints):
-            state.hands[event.device] = event
-            return event
+            return self._apply_hand(event)
         tracked = isinstance(event, DeviceFound)
         if tracked:
             state.lost.discard(event.device)
@@ -357,6 +359,26 @@ class InputHub:
         if tracker is not None:
             tracker.tracked = tracked
         return event
+
+    def _apply_hand(self, event: HandJoints) -> HandJoints | None:
+        """A hand calibrated and filtered into the state table; None (told) when it is
+        malformed or its calibration took it past float range."""
+        problem = hand_problem(event)
+        if problem is not None:
+            self._complain(event.device, problem, event)
+            return None
+        pipeline = self._hand_pipelines.get(event.device)
+        if pipeline is None:
+            pipeline = self._hand_pipelines[event.device] = HandPipeline(
+                _scoped(self._tracker_specs, event.device))
+        hand = pipeline(event)
+        if not finite(hand):
+            self._complain(event.device, "a hand's calibrated or filtered joints are not "
+                                         "finite (check the Tracker's Scale and Offset)", event)
+            self._hand_pipelines.pop(event.device)  # its filters start afresh
+            return None
+        self.state.hands[event.device] = hand
+        return hand
 
     def _complain(self, source: str, problem: str, event: AnyInput) -> None:
         complaints = self._complaints.get(source)

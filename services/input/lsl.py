@@ -8,6 +8,9 @@ the stream's type:
 - ``Mocap`` or ``Pose`` with 7 channels ``x y z qw qx qy qz``: a TrackerPose named
   after the stream;
 - ``Wheel`` or ``Counter`` with 1 channel: a WheelCount named after the stream;
+- ``Hand`` with 208 channels, 26 joints × ``x y z qw qx qy qz radius`` in the engine's
+  frame (:data:`~services.input.events.HAND_JOINTS` order): a HandJoints named after the
+  stream;
 - ``Buttons``: one channel per button (0/1, labelled in the stream's
   ``channels/channel/label`` description, else numbered); a Button on each change;
 - anything else: an Axis per channel.
@@ -34,6 +37,7 @@ from services.input.device import (
     DeviceError,
     QueuedDevice,
     button_state,
+    hand_from_values,
     make_pose,
     numbers,
     whole_count,
@@ -58,6 +62,7 @@ MAX_AHEAD = 1.0
 MAX_AGE = 360.0
 POSE_TYPES = ("mocap", "pose")
 WHEEL_TYPES = ("wheel", "counter")
+HAND_TYPES = ("hand", "handjoints")
 
 _config_lock = threading.Lock()
 _configured_scope: list[str] = []
@@ -198,6 +203,8 @@ class _StreamReader:
             if len(values) != 7:
                 raise BadMessage(f"pose stream {source!r} needs 7 channels x y z qw qx qy qz")
             device.push(make_pose(source, values, timestamp))
+        elif self.kind in HAND_TYPES:
+            device.push(hand_from_values(source, values, timestamp))
         elif self.kind in WHEEL_TYPES:
             device.push(WheelCount(source, whole_count(values[0], source), timestamp))
         elif self.kind == "buttons":

@@ -2,7 +2,9 @@
 
 The headset becomes the tracker ``hmd`` (bind it to a camera with ``Tracker { ID "hmd"
 Camera "eye" }``), the controllers' grip poses ``hand_l``/``hand_r``, their select
-buttons ``Button(hand_l, "select")``. Poses are read through a headless session
+buttons ``Button(hand_l, "select")``; tracked hands (``XR_EXT_hand_tracking``, where the
+runtime's system has them) the HandJoints ``hand_l``/``hand_r``
+(:mod:`services.input.openxr_hands`). Poses are read through a headless session
 (``XR_MND_headless``: no frames are submitted to the headset; drawing into it is not
 this device's job) and converted from OpenXR's frame (y up, looking along -z) to the
 engine's (z up, looking along +y) by :func:`services.input.calibration.openxr_to_engine`.
@@ -15,13 +17,18 @@ from __future__ import annotations
 import ctypes
 import logging
 import os
+import time
 from typing import Any
 
 from services.input.calibration import openxr_to_engine
 from services.input.device import MONOTONIC, Clock, DeviceError, QueuedDevice
-from services.input.events import Button, TrackerPose
+from services.input.events import Button, HandJoints, TrackerPose
+from services.input.openxr_hands import HAND_TRACKING, OpenXRHands, hand_event
 
 HEADLESS = "XR_MND_headless"
+TIMESPEC = "XR_KHR_convert_timespec_time"
+#: Seconds between two samples of a headless session without a frame loop (90 Hz).
+HEADLESS_PERIOD = 1.0 / 90.0
 HANDS = (("hand_l", "/user/hand/left"), ("hand_r", "/user/hand/right"))
 PROFILE = "/interaction_profiles/khr/simple_controller"
 NO_RUNTIME = ("no OpenXR runtime found: install one (Monado, SteamVR, or your headset's) "
@@ -73,6 +80,9 @@ class OpenXRDevice(QueuedDevice):
         self._xr: Any = None
         self._handles: dict[str, Any] = {}
         self._running = False
+        self._hands: OpenXRHands | None = None
+        self._enabled: set[str] = set()
+        self._last_hands: dict[str, HandJoints] = {}
         super().__init__(name)
 
     def _open(self) -> None:
@@ -86,22 +96,25 @@ class OpenXRDevice(QueuedDevice):
         if HEADLESS not in extensions:
             raise DeviceError(f"{self.describe_name()}: the OpenXR runtime lacks {HEADLESS}, "
                               "which reading poses without drawing into the headset needs")
+        enabled = self._enabled = {HEADLESS, *({HAND_TRACKING, TIMESPEC} & extensions)}
         try:
-            self._create_session(xr)
+            self._create_session(xr, enabled)
         except xr.exception.FormFactorUnavailableError as exc:
             raise DeviceError(f"{self.describe_name()}: no headset is connected to the OpenXR "
                               "runtime") from exc
         except xr.exception.XrException as exc:
             raise DeviceError(f"{self.describe_name()}: {exc}") from exc
 
-    def _create_session(self, xr: Any) -> None:
+    def _create_session(self, xr: Any, enabled: set[str]) -> None:
         h = self._handles
         h["instance"] = instance = xr.create_instance(xr.InstanceCreateInfo(
-            enabled_extension_names=[HEADLESS]))
+            enabled_extension_names=sorted(enabled)))
         system = xr.get_system(instance, xr.SystemGetInfo(
             form_factor=xr.FormFactor.HEAD_MOUNTED_DISPLAY))
         h["session"] = session = xr.create_session(instance, xr.SessionCreateInfo(
             system_id=system))
+        self._hands = OpenXRHands.create(xr, instance, system, session, enabled,
+                                         self.describe_name())
         h["stage"] = xr.create_reference_space(session, xr.ReferenceSpaceCreateInfo(
             reference_space_type=xr.ReferenceSpaceType.STAGE))
         h["hmd"] = xr.create_reference_space(session, xr.ReferenceSpaceCreateInfo(
@@ -137,22 +150,50 @@ class OpenXRDevice(QueuedDevice):
             return
         session = h["session"]
         frame = xr.wait_frame(session)
-        xr.begin_frame(session)
+        when = int(frame.predicted_display_time)
+        # A headless session may have no frame loop (Monado's: xrWaitFrame returns at once
+        # with no display time, and xrBeginFrame refuses): poses are then read at the
+        # runtime's "now", HEADLESS_PERIOD apart
+        framed = when > 0
+        if framed:
+            xr.begin_frame(session)
+        else:
+            when = self._runtime_now(xr)
         now = self.clock()
+        if when > 0:
+            self._sample(xr, when, now)
+        if framed:
+            xr.end_frame(session, xr.FrameEndInfo(
+                display_time=when, environment_blend_mode=xr.EnvironmentBlendMode.OPAQUE,
+                layers=[]))
+        else:
+            self._stop.wait(HEADLESS_PERIOD)
+
+    def _sample(self, xr: Any, when: int, now: float) -> None:
+        """The head, the controllers, their select buttons and the hands at ``when``."""
+        h = self._handles
+        session = h["session"]
         xr.sync_actions(session, xr.ActionsSyncInfo(
             active_action_sets=[xr.ActiveActionSet(h["actions"], xr.NULL_PATH)]))
-        self._locate(xr, "hmd", h["hmd"], frame.predicted_display_time, now)
+        self._locate(xr, "hmd", h["hmd"], when, now)
         for i, (name, _) in enumerate(HANDS):
-            self._locate(xr, name, h["grips"][i], frame.predicted_display_time, now)
+            self._locate(xr, name, h["grips"][i], when, now)
             state = xr.get_action_state_boolean(session, xr.ActionStateGetInfo(
                 action=h["select"], subaction_path=h["paths"][i]))
             button = select_change(name, state, h["pressed"][i], now)
             if button is not None:
                 h["pressed"][i] = button.pressed
                 self.push(button)
-        xr.end_frame(session, xr.FrameEndInfo(
-            display_time=frame.predicted_display_time,
-            environment_blend_mode=xr.EnvironmentBlendMode.OPAQUE, layers=[]))
+        self._locate_hands(when, now)
+
+    def _runtime_now(self, xr: Any) -> int:
+        """The runtime's clock now (ns; XR_KHR_convert_timespec_time), 0 without it."""
+        if TIMESPEC not in self._enabled:
+            return 0
+        t = time.clock_gettime_ns(time.CLOCK_MONOTONIC)
+        spec = xr.timespec(t // 1_000_000_000, t % 1_000_000_000)
+        now = xr.convert_timespec_time_to_time_khr(self._handles["instance"], spec)
+        return int(getattr(now, "value", now))
 
     def _handle_events(self, xr: Any) -> None:
         h = self._handles
@@ -179,8 +220,21 @@ class OpenXRDevice(QueuedDevice):
         if pose is not None:
             self.push(pose)
 
+    def _locate_hands(self, when: Any, now: float) -> None:
+        """Each tracked hand's joints at display time ``when``, in the stage space."""
+        if self._hands is None:
+            return
+        for name, raw in self._hands.locate(self._handles["stage"], when).items():
+            hand = hand_event(name, raw, now, self._last_hands.get(name))
+            if hand is not None:
+                self._last_hands[name] = hand
+                self.push(hand)
+
     def _close(self) -> None:
         xr, h = self._xr, self._handles
+        if self._hands is not None:
+            self._hands.destroy()
+            self._hands = None
         if "session" in h:
             xr.destroy_session(h["session"])
         if "instance" in h:

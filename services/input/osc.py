@@ -6,6 +6,7 @@ Address space (one message each; bundles are unpacked)::
     /colosseum/button/<device>/<name>  0|1
     /colosseum/axis/<device>/<name>    value
     /colosseum/wheel/<name>            count                            cumulative encoder count
+    /colosseum/hand/<name>             26 x (x y z qw qx qy qz radius)  a hand's joints, m
 
 Phone apps, motion-capture bridges, Unity/Godot and Max/MSP can all send these. Packets
 python-osc cannot parse, unknown addresses, wrong argument counts, NaN/inf and
@@ -27,6 +28,7 @@ from pythonosc.osc_message import OscMessage
 from pythonosc.osc_packet import OscPacket
 
 from services.input.device import (
+    HAND_VALUES,
     MONOTONIC,
     REPORT_EVERY,
     BadMessage,
@@ -34,6 +36,7 @@ from services.input.device import (
     DeviceError,
     QueuedDevice,
     button_state,
+    hand_from_values,
     make_pose,
     numbers,
     whole_count,
@@ -86,6 +89,9 @@ def osc_event(address: str, args: list[object], timestamp: float) -> AnyInput:
             v = numbers(args, 10, address)
             return make_pose(names[0], v[:7], timestamp, v[7:])
         return make_pose(names[0], numbers(args, 7, address), timestamp)
+    if kind == "hand" and len(names) == 1 and names[0]:
+        return hand_from_values(names[0], numbers(args, HAND_VALUES, f"{address} (26 joints x "
+                                                   "x y z qw qx qy qz radius)"), timestamp)
     if kind == "wheel" and len(names) == 1 and names[0]:
         return WheelCount(names[0], whole_count(numbers(args, 1, address)[0], address),
                           timestamp)
@@ -95,7 +101,7 @@ def osc_event(address: str, args: list[object], timestamp: float) -> AnyInput:
             return Button(names[0], names[1], button_state(value, address), timestamp)
         return Axis(names[0], names[1], value, timestamp)
     raise BadMessage(f"unknown address {address!r} (expected {PREFIX}tracker/NAME, "
-                     f"wheel/NAME, button/DEVICE/NAME or axis/DEVICE/NAME)")
+                     f"wheel/NAME, hand/NAME, button/DEVICE/NAME or axis/DEVICE/NAME)")
 
 
 class OscDevice(QueuedDevice):

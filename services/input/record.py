@@ -29,12 +29,14 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import IO, Any
 
-from services.input.device import make_pose, numbers
+from services.input.device import make_hand, make_pose, numbers
 from services.input.events import (
+    HAND_JOINTS,
     TAGS,
     AnyInput,
     Axis,
     Button,
+    HandJoints,
     KeyEvent,
     Pointer,
     TrackerPose,
@@ -106,7 +108,7 @@ def event_record(frame: int, event: AnyInput) -> dict[str, Any]:
     record: dict[str, Any] = {"frame": frame, "type": TAGS[type(event)]}
     for f in fields(event):  # type: ignore[arg-type]
         value = getattr(event, f.name)
-        record[f.name] = list(value) if isinstance(value, tuple) else value
+        record[f.name] = _plain(value)
     return record
 
 
@@ -141,6 +143,8 @@ def event_from_record(record: dict[str, Any]) -> AnyInput:
     elif cls is KeyEvent:
         event = KeyEvent(_text(record.pop("key"), "key"), _flag(record.pop("pressed")), device,
                          timestamp)
+    elif cls is HandJoints:
+        event = _hand(device, record, timestamp)
     elif cls is Pointer:
         x, y, scroll = numbers([record.pop("x"), record.pop("y"), record.pop("scroll", 0.0)], 3,
                                "pointer")
@@ -150,6 +154,23 @@ def event_from_record(record: dict[str, Any]) -> AnyInput:
     if record:
         raise ValueError(f"unexpected field(s): {', '.join(record)}")
     return event
+
+
+def _plain(value: object) -> object:
+    """Tuples (a hand's tuples of tuples too) as JSON lists."""
+    return [_plain(v) for v in value] if isinstance(value, tuple) else value
+
+
+def _hand(device: str, record: dict[str, Any], timestamp: float) -> HandJoints:
+    """A ``hand`` line's 26 joints, checked as an OSC or LSL hand is."""
+    joints = len(HAND_JOINTS)
+    positions = [numbers(_list(p, 3), 3, "a joint's position")
+                 for p in _list(record.pop("positions"), joints)]
+    orientations = [numbers(_list(q, 4), 4, "a joint's orientation")
+                    for q in _list(record.pop("orientations"), joints)]
+    radii = numbers(_list(record.pop("radii"), joints), joints, "radii")
+    valid = [_flag(v, "valid") for v in _list(record.pop("valid"), joints)]
+    return make_hand(device, positions, orientations, radii, valid, timestamp)  # BadMessage
 
 
 def _list(value: object, length: int) -> list[Any]:
@@ -164,9 +185,9 @@ def _text(value: object, what: str) -> str:
     return value
 
 
-def _flag(value: object) -> bool:
+def _flag(value: object, what: str = "pressed") -> bool:
     if not isinstance(value, bool):
-        raise ValueError(f"pressed must be true or false, got {value!r}")
+        raise ValueError(f"{what} must be true or false, got {value!r}")
     return value
 
 

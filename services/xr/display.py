@@ -22,7 +22,8 @@ from typing import Any
 import numpy as np
 
 from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS
-from services.input.events import AnyInput, Axis, Button, TrackerPose
+from services.input.events import AnyInput, Axis, Button, HandJoints, TrackerPose
+from services.input.openxr_hands import hand_event
 from services.render.camera import CameraView, HeadsetEye
 from services.render.context import has_display, libgl
 from services.xr.lifecycle import Action
@@ -160,15 +161,23 @@ class XrTarget:
 
 
 def input_events(sample: InputSample, origin: XrOrigin, pressed: dict[tuple[str, str], bool],
-                 axes: dict[tuple[str, str], float], now: float) -> list[AnyInput]:
-    """What the controllers said as the engine's input events: every pose placed in the
-    world by ``origin``; a button or a value only when it changed since the last sample
-    (``pressed`` and ``axes`` keep the last, and are updated)."""
+                 axes: dict[tuple[str, str], float], now: float,
+                 hands: dict[str, HandJoints] | None = None) -> list[AnyInput]:
+    """What the controllers said as the engine's input events: every pose (and tracked
+    hand joint) placed in the world by ``origin``; a button or a value only when it changed
+    since the last sample (``pressed`` and ``axes`` keep the last, and are updated, as
+    ``hands`` keeps each hand's last joints)."""
     events: list[AnyInput] = []
     for name, (p, q) in sample.poses.items():
         position, orientation = origin.place_xr(p, q)
         events.append(TrackerPose(name, tuple(position.tolist()), tuple(orientation.tolist()),
                                   None, now))
+    last = {} if hands is None else hands
+    for name, raw in sample.hands.items():
+        hand = hand_event(name, raw, now, last.get(name), origin.place_joints)
+        if hand is not None:
+            last[name] = hand
+            events.append(hand)
     for key, down in sample.buttons.items():
         if pressed.get(key, False) != down:
             pressed[key] = down
@@ -226,6 +235,7 @@ class XrDisplay:
         self.captured: np.ndarray | None = None
         self._pressed: dict[tuple[str, str], bool] = {}
         self._axes: dict[tuple[str, str], float] = {}
+        self._hands: dict[str, HandJoints] = {}
 
     @property
     def lifecycle(self) -> Any:
@@ -336,7 +346,7 @@ class XrDisplay:
             return []
         if head is not None:
             sample.poses["hmd"] = head
-        return input_events(sample, self.origin, self._pressed, self._axes, now)
+        return input_events(sample, self.origin, self._pressed, self._axes, now, self._hands)
 
     # -- drawing ---------------------------------------------------------------------
     def camera(self, base: CameraView, carried: bool = False) -> CameraView:

@@ -91,6 +91,13 @@ class XrOrigin:
         world = self.position + quat_to_matrix(turn) @ np.asarray(position, np.float64)
         return world, quat_multiply(turn, np.asarray(orientation, np.float64))
 
+    def place_joints(self, positions: np.ndarray, frames: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (n, 3) and rotation matrices (n, 3, 3) of the space (engine axes) in
+        the world: a tracked hand's joints, all at once."""
+        turn = quat_to_matrix(yaw_quat(self.yaw))
+        return self.position + positions @ turn.T, turn @ frames
+
     def place_xr(self, position: tuple[float, float, float],
                  orientation: tuple[float, float, float, float]
                  ) -> tuple[np.ndarray, np.ndarray]:

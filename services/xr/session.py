@@ -18,6 +18,7 @@ from typing import Any
 
 from services.input.device import DeviceError
 from services.input.openxr import NO_RUNTIME, POSE_VALID, load_openxr
+from services.input.openxr_hands import HAND_TRACKING, OpenXRHands, RawHand
 from services.xr.bindings import (
     ACTIONS,
     AXIS_NAMES,
@@ -98,6 +99,8 @@ class InputSample:
         field(default_factory=dict)
     buttons: dict[tuple[str, str], bool] = field(default_factory=dict)
     axes: dict[tuple[str, str], float] = field(default_factory=dict)
+    #: Each tracked hand's 26 joints (``hand_l``, ``hand_r``), as the runtime located them.
+    hands: dict[str, RawHand] = field(default_factory=dict)
 
 
 def _name(value: Any) -> str:
@@ -123,6 +126,7 @@ class XrSession:
         self._images: dict[str, list[int]] = {}
         self._frame: Any = None
         self._haptic_told = False
+        self._hands: OpenXRHands | None = None
 
     @property
     def errors(self) -> tuple[type[BaseException], ...]:
@@ -154,7 +158,7 @@ class XrSession:
         if missing:
             raise XrError(f"the OpenXR runtime lacks {', '.join(missing)}, which drawing "
                           f"into the headset with OpenGL ({binding.upper()}) needs")
-        wanted = [DEPTH, TIMESPEC, REFRESH, LOCAL_FLOOR, *profile_extensions()]
+        wanted = [DEPTH, TIMESPEC, REFRESH, LOCAL_FLOOR, HAND_TRACKING, *profile_extensions()]
         self.extensions = {*needed, *(e for e in wanted if e in offered)}
         try:
             self._create(binding)
@@ -199,6 +203,8 @@ class XrSession:
         self._swapchains(session)
         self._actions(instance, session)
         self._refresh(session)
+        self._hands = OpenXRHands.create(xr, instance, system, session, self.extensions,
+                                         "the headset")
         log.info("OpenXR: %s, %s, %dx%d per eye, %s, %s space", self.runtime,
                  self.system_name, *self.eye_size, self.color_format.name
                  if self.color_format else "?", self.reference)
@@ -418,6 +424,8 @@ class XrSession:
             if state.is_active:
                 sample.axes[(source, "thumbstick_x")] = float(state.current_state.x)
                 sample.axes[(source, "thumbstick_y")] = float(state.current_state.y)
+        if self._hands is not None:
+            sample.hands = self._hands.locate(h["space"], when)
         return sample
 
     def locate_views(self, when: int) -> list[LocatedView]:
@@ -571,6 +579,12 @@ class XrSession:
         xr, h = self._xr, self._h
         if xr is None:
             return
+        if self._hands is not None:
+            try:
+                self._hands.destroy()
+            except xr.exception.XrException as exc:
+                log.debug("destroying the hand trackers: %s", exc)
+            self._hands = None
         for name in ("hud", "depth", "color"):
             if name in h:
                 xr.destroy_swapchain(h.pop(name))

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from engine.rotation import quat_to_matrix
 from services.input.events import FINGERS, HAND_JOINTS
 from services.input.hand_pose import GESTURES, MAX_FLEXION, curl, flexion, pose_hand
-from engine.rotation import quat_to_matrix
 
 TURNED = (0.8535534, 0.1464466, 0.3535534, 0.3535534)  # an arbitrary wrist orientation
 
