@@ -14,6 +14,7 @@ from engine.app import Engine, EngineConfig
 from engine.input import InputState
 from engine.input.events import HAND_JOINTS
 from engine.input.hand_pose import GESTURES, pose_hand
+from engine.rotation import quat_to_matrix
 from engine.scene.factory import instantiate
 from engine.scene.loader import spec_from_text
 from systems.hand_ghost import BONES, GHOST_AFTER, GhostFingerSystem, bone_capsules
@@ -101,7 +102,6 @@ def test_the_ghost_follows_the_tracked_joints_and_hides_while_untracked(scene):
         t = engine.world.component_for_entity(bone, Transform)
         np.testing.assert_allclose(t.position, centres[i], atol=1e-12)
         axis = np.array([0.0, 0.0, 1.0])
-        from engine.rotation import quat_to_matrix
         a, b = (np.array(joints.positions[j]) for j in BONES[i][1:])
         np.testing.assert_allclose(quat_to_matrix(t.orientation) @ axis * sizes[i][1],
                                    b - a, atol=1e-9)
