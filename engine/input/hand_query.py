@@ -82,14 +82,9 @@ def in_frame(hand: HandJoints, position: np.ndarray, orientation: np.ndarray) ->
     the world."""
     rot = quat_to_matrix(np.asarray(orientation, dtype=float))
     p = np.asarray(hand.positions, dtype=float) @ rot.T + np.asarray(position, dtype=float)
-    q = matrices_to_quats(rot @ quat_to_matrix_many(np.asarray(hand.orientations, float)))
+    q = matrices_to_quats(rot @ quat_to_matrix(np.asarray(hand.orientations, dtype=float)))
     return replace(hand, positions=tuple(map(tuple, p.tolist())),
                    orientations=tuple(map(tuple, q.tolist())))
-
-
-def quat_to_matrix_many(quats: np.ndarray) -> np.ndarray:
-    """Rotation matrices (n, 3, 3) of quaternions (n, 4) ``(w, x, y, z)``."""
-    return np.stack([quat_to_matrix(q) for q in quats])
 
 
 def tracked_hand(world: World, entity: int, state: InputState) -> HandJoints | None:
