@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -45,6 +45,7 @@ from engine.input.events import (
     WheelCount,
 )
 from engine.input.hand_pose import GESTURES, local_hand, pose_hand
+from engine.input.hand_query import in_frame
 from engine.rotation import quat_multiply, quat_to_matrix
 from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS
 
@@ -173,6 +174,7 @@ class DesktopDevice:
         self.blends = [ShapeBlend(), ShapeBlend()]
         self.poses: list[tuple[tuple[float, ...], tuple[float, ...]] | None] = [None, None]
         self._shown: list[tuple[Any, ...] | None] = [None, None]
+        self._shaped: list[HandJoints | None] = [None, None]  # the shape shown, unplaced
 
     def open(self) -> None:
         self.window.open()
@@ -211,12 +213,14 @@ class DesktopDevice:
                 continue
             self.blends[i].toward("pinch" if self.pinching[i] else self.shape[i])
             curls = self.blends[i].curls()
-            shown = (pose, tuple(curls.values()))
-            if shown == self._shown[i]:
+            shape = tuple(curls.values())
+            if (pose, shape) == self._shown[i]:
                 continue
-            self._shown[i] = shown
+            if self._shown[i] is None or self._shown[i][1] != shape:  # type: ignore[index]
+                self._shaped[i] = shaped_hand(HANDS[i], curls, left=i == 0)
+            self._shown[i] = (pose, shape)
             out.append(emulated_hand(HANDS[i], pose[0], pose[1], curls, left=i == 0,
-                                     timestamp=now))
+                                     timestamp=now, shaped=self._shaped[i]))
         return out
 
     def _emulate(self, event: AnyInput) -> AnyInput | None:
@@ -260,11 +264,21 @@ class DesktopDevice:
         return out
 
 
+
 def emulated_hand(device: str, position: Sequence[float], view: Sequence[float],
-                  curls: dict[str, float], *, left: bool, timestamp: float) -> HandJoints:
+                  curls: dict[str, float], *, left: bool, timestamp: float,
+                  shaped: HandJoints | None = None) -> HandJoints:
     """The 26 joints of an emulated hand whose tracker is at ``position`` turned as the
-    view ``view`` (w, x, y, z): palm joint at the tracker, fingers forward, back up."""
+    view ``view`` (w, x, y, z): palm joint at the tracker, fingers forward, back up.
+    ``shaped``: :func:`shaped_hand` of these curls, made once for any number of poses."""
+    local = shaped_hand(device, curls, left=left) if shaped is None else shaped
     orientation = quat_multiply(np.asarray(view, dtype=float), HAND_IN_VIEW)
+    return replace(in_frame(local, np.asarray(position, dtype=float), orientation),
+                   device=device, timestamp=timestamp)
+
+
+def shaped_hand(device: str, curls: dict[str, float], *, left: bool) -> HandJoints:
+    """A hand of these curls in its own frame, moved so that its palm joint is at the
+    origin (what :func:`emulated_hand` turns and places)."""
     palm = _PALM * (1.0, -1.0, 1.0) if left else _PALM
-    wrist = np.asarray(position, dtype=float) - quat_to_matrix(orientation) @ palm
-    return pose_hand(device, wrist, orientation, curls, left=left, timestamp=timestamp)
+    return pose_hand(device, -palm, (1.0, 0.0, 0.0, 0.0), curls, left=left)

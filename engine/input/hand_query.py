@@ -25,7 +25,7 @@ from components import Hand, Transform
 from engine.input.events import FINGERS, HAND_JOINTS, HandJoints
 from engine.input.hand_pose import curl
 from engine.input.state import InputState
-from engine.rotation import matrices_to_quats, quat_to_matrix
+from engine.rotation import quat_multiply, quat_to_matrix
 
 if TYPE_CHECKING:
     from engine.world import World
@@ -82,7 +82,8 @@ def in_frame(hand: HandJoints, position: np.ndarray, orientation: np.ndarray) ->
     the world."""
     rot = quat_to_matrix(np.asarray(orientation, dtype=float))
     p = np.asarray(hand.positions, dtype=float) @ rot.T + np.asarray(position, dtype=float)
-    q = matrices_to_quats(rot @ quat_to_matrix(np.asarray(hand.orientations, dtype=float)))
+    q = quat_multiply(np.asarray(orientation, dtype=float),
+                      np.asarray(hand.orientations, dtype=float))
     return replace(hand, positions=tuple(map(tuple, p.tolist())),
                    orientations=tuple(map(tuple, q.tolist())))
 
