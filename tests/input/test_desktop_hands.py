@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from input_helpers import input_engine
 
-from engine.input import InputState
+from engine.input import InputHub, InputState
 from engine.input.desktop import BLEND, SHAPE_KEYS, DesktopDevice, WindowDevice
 from engine.input.events import FINGERS, HAND_JOINTS, HandJoints
 from engine.input.hand_pose import GESTURES, curl
@@ -134,6 +134,7 @@ def test_the_input_state_holds_each_hands_joints_every_frame(tmp_path: Path):
     scene = 'Camera { Position [0 -5 1.5] LookAt [0 0 1.5] }\nInput { Device { Kind "desktop" } }\n'
     with input_engine(scene, tmp_path) as engine:
         engine.step()
+        engine.resource(InputHub).clock = lambda: engine.time  # blends in simulated time
         window = engine.resource(WindowDevice)
         state = engine.resource(InputState)
         assert state.hand("hand_r") is None
