@@ -161,3 +161,24 @@ def test_grasp_and_release_name_the_fingers_that_hold(tmp_path: Path):
         assert list(env.heard.values()) == ["grasp table thumb,index,palm",
                                             "release table thumb,index,palm"]
         assert list(env.during.values()) == ["thumb", "index", "palm"]
+
+
+def test_the_desktop_keys_shape_the_hand_a_script_reads(tmp_path: Path):
+    """No hardware: the desktop device's mouse places the hand, V makes a fist, and the
+    hand's script reads the fist's curls and its index tip in the world."""
+    from engine.input.desktop import WindowDevice
+
+    _scripts(tmp_path, READER)
+    scene = ('Camera { Position [0 -1 1.2] LookAt [0 0 1.0] }\n'
+             'Input { Device { Kind "desktop" } }\n' + SCENE)
+    with Rig(scene, tmp_path) as rig:
+        window = rig.engine.resource(WindowDevice)
+        window.pointer(0.5, 0.5)
+        window.key("v", True)
+        rig.run(0.3)
+        env = rig.engine.resource(ScriptRuntime).scripts[0].env
+        assert dict(env.curls) == pytest.approx(GESTURES["fist"], abs=2e-3)
+        joints = rig.engine.resource(InputState).hand("hand_r")
+        assert joints is not None
+        np.testing.assert_allclose(list(env.tip.values())[:3],
+                                   joints.positions[HAND_JOINTS.index("index_tip")], atol=1e-12)
