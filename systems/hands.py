@@ -71,6 +71,7 @@ from engine.rotation import quat_multiply, quat_to_matrix
 from engine.services import HandControl
 from engine.system import Phase, PluginName, System
 from services.input import InputState
+from systems.hand_ghost import GhostFingerSystem
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -702,3 +703,4 @@ class HandsPlugin:
         engine.insert_resource(hands, as_type=HandControl)
         engine.add_system(HandDriveSystem(hands))
         engine.add_system(HandContactSystem(hands))
+        engine.add_system(GhostFingerSystem(SEE_THROUGH_ALPHA))  # a blocked finger's look

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from components import Name, Script, Transform
+from components import HandState, Name, Script, Transform
 from components.script import SavedScript
 from engine.events import (
     ContactBegan,
@@ -44,6 +44,7 @@ from services.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRunt
 
 if TYPE_CHECKING:
     from engine.app import Engine
+    from engine.world import World
 
 log = logging.getLogger("colosseum.script")
 
@@ -85,6 +86,10 @@ class ScriptingSystem(System):
         #: This frame's newest pose per tracker: scripts hear each tracker once a frame.
         self._poses: dict[str, TrackerPose] = {}
         self._exists: Callable[[int], bool] = lambda entity: True
+        #: (hand, object) -> the fingers its grasp was told with: onRelease names them
+        #: (by then the hand's grip has opened).
+        self._grips: dict[tuple[int, int], tuple[str, ...]] = {}
+        self._world: World | None = None
 
     # -- setup ------------------------------------------------------------------
     def setup(self, engine: Engine) -> None:
@@ -101,6 +106,7 @@ class ScriptingSystem(System):
         engine.insert_resource(self, as_type=ScriptStates)
         world = engine.world
         self._exists = world.entity_exists
+        self._world = world
         world.on_add(Script, lambda e, c: self._pending.append((e, c)))
         world.on_remove(Script, lambda e, c: self._unload(e))
         for entity, script in world.get_component(Script):
@@ -110,9 +116,10 @@ class ScriptingSystem(System):
         events.subscribe(ContactBegan, lambda ev: self._on_touch(
             "onCollisionBegin", ev.a, ev.b, (ev.impulse,)))
         events.subscribe(ContactEnded, lambda ev: self._on_touch("onCollisionEnd", ev.a, ev.b, ()))
-        for kind, callback in ((HandTouched, "onTouch"), (HandGrasped, "onGrasp"),
-                               (HandReleased, "onRelease")):
-            events.subscribe(kind, lambda ev, c=callback: self._on_hand(c, ev.hand, ev.object))
+        events.subscribe(HandTouched, lambda ev: self._on_hand("onTouch", ev.hand, ev.object))
+        events.subscribe(HandGrasped, lambda ev: self._on_grip("onGrasp", ev.hand, ev.object))
+        events.subscribe(HandReleased, lambda ev: self._on_grip("onRelease", ev.hand,
+                                                                ev.object))
         events.subscribe(KeyEvent, lambda ev: runtime.broadcast("onKey", ev.key, ev.pressed))
         events.subscribe(Button, lambda ev: runtime.broadcast("onButton", ev.device, ev.name,
                                                              ev.pressed))
@@ -319,15 +326,35 @@ class ScriptingSystem(System):
         for name, pose in poses.items():
             runtime.broadcast("onTracker", name, *pose.position, *pose.orientation)
 
-    def _on_hand(self, callback: str, hand: int, obj: int) -> None:
-        """``callback(hand, object)`` for the hand's scripts, the object's and the scene's."""
+    def _on_hand(self, callback: str, hand: int, obj: int,
+                 fingers: tuple[str, ...] | None = None) -> None:
+        """``callback(hand, object)`` for the hand's scripts, the object's and the scene's;
+        ``callback(hand, object, fingers)`` (a table of finger names) when given."""
         runtime = self.runtime
         if runtime is None:
             return
         for script in (*self._by_entity.get(hand, ()), *self._by_entity.get(obj, ()),
                        *self._scene):
-            runtime.call_objects(script, callback, (hand, obj))
+            if fingers is None:
+                runtime.call_objects(script, callback, (hand, obj))
+            else:  # a table each: a script changing its copy changes no other's
+                runtime.call_objects(script, callback, (hand, obj),
+                                     runtime.lua.table_from(list(fingers)))
         self._forget_gone((hand, obj))
+
+    def _on_grip(self, callback: str, hand: int, obj: int) -> None:
+        """onGrasp and onRelease with the fingers that hold (HandState.grip, thumb first,
+        "palm" included; empty for a palm-only hand): a release names those its grasp
+        was told with, or the grip of the moment if the grasp came before this plugin."""
+        world = self._world
+        state = world.try_component(hand, HandState) \
+            if world is not None and self._exists(hand) else None
+        grip = tuple(state.grip) if state is not None else ()
+        if callback == "onGrasp":
+            self._grips[(hand, obj)] = grip
+        else:
+            grip = self._grips.pop((hand, obj), grip)
+        self._on_hand(callback, hand, obj, grip)
 
     def _on_touch(self, callback: str, a: int, b: int, extra: tuple[float, ...]) -> None:
         """A pair began or stopped touching: each side's object scripts hear the other

@@ -20,7 +20,12 @@ Objects (``obj:method(...)``)::
     obj:setGain(gain)               volume of its sound, now and for later plays
     hand:getHandState() -> "neutral" | "contact" | "grasp"   (a virtual hand's mode; also
     hand.state)   hand:getHeld() -> {obj, ...} (also hand.held)   hand:grasp(obj)
-    hand:release()
+    hand:release()  hand:getGrip() -> {"thumb", "index", ...} the fingers holding (also
+    hand.grip; "palm" too; empty for a palm-only hand)
+    hand:joint(name) -> x, y, z, qw, qx, qy, qz, radius, valid   a tracked joint of the
+                                    hand's input hand in the world ("index_tip", "palm",
+                                    ...: services.input.events.HAND_JOINTS), nil before seen
+    hand:curl(finger) -> 0..1       how bent the tracked finger is ("thumb" to "little")
 
 Avatars (``Avatar`` blocks; the avatars plugin)::
 
@@ -82,9 +87,10 @@ asleep on each other still touch; see :mod:`systems.contacts`);
 controller's trigger), ``onTracker(name, x, y, z, qw, qx, qy, qz)`` (once a frame
 per tracker that moved, calibrated), ``onInput(device, value)``
 (``axis:DEVICE/NAME`` values and ``wheel:NAME`` counts), ``onDeviceLost(name)`` /
-``onDeviceFound(name)``, ``onTouch(hand, object)`` / ``onGrasp(hand, object)`` /
-``onRelease(hand, object)`` (a virtual hand's, told to the hand's scripts, the object's
-and the scene's), ``onTimer(name)`` (engine TimerEvents),
+``onDeviceFound(name)``, ``onTouch(hand, object)`` / ``onGrasp(hand, object, fingers)``
+/ ``onRelease(hand, object, fingers)`` (a virtual hand's, told to the hand's scripts, the
+object's and the scene's; ``fingers``: the fingers that hold it, a table as
+``hand:getGrip()``), ``onTimer(name)`` (engine TimerEvents),
 ``onAnimationEnd(clip)`` (an avatar's scripts; scene scripts ``onAnimationEnd(avatar,
 clip)``), ``onReload()``
 (after the file changed and was re-run in the script's environment: write ``count =
@@ -121,7 +127,7 @@ from collections import OrderedDict
 from collections.abc import Callable, Iterator, Mapping
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from components import Camera, Hand, Joint, Name, Physical, Sound, Transform
+from components import Camera, Hand, HandState, Joint, Name, Physical, Sound, Transform
 from components.joint import SCENE_JOINT_TYPES, JointKind, Spring
 from engine.anomalies import Anomalies
 from engine.messages import MessageLog
@@ -136,6 +142,9 @@ from engine.services import (
     SoundControl,
 )
 from engine.system import PluginName
+from services.input.events import HandJoints
+from services.input.hand_query import finger_curl, finger_named, joint_index, tracked_hand
+from services.input.hand_query import joint as hand_joint
 from services.input.state import InputState
 from services.scripting.runtime import ScriptRuntime, to_python
 
@@ -280,7 +289,11 @@ function Object.getHeld(h)
   return out
 end
 function Object.grasp(h, other) P.hand_grasp(oid("grasp", h), oid("grasp", other, h)) end
+function Object.getGrip(h) return P.hand_grip(oid("getGrip", h)) end
 K.Fields.state, K.Fields.held = Object.getHandState, Object.getHeld  -- hand.state, hand.held
+K.Fields.grip = Object.getGrip  -- hand.grip
+function Object.joint(h, name) return P.hand_joint(oid("joint", h), name) end
+function Object.curl(h, finger) return P.hand_curl(oid("curl", h), finger) end
 for i = 1, #P.avatar_methods do  -- avatar:play("Run", {fade=0.3}), avatar:blend{...}, ...
   local method = P.avatar_methods[i]
   Object[method] = function(h, ...)
@@ -486,6 +499,8 @@ class ScriptAPI:
             "set_gain": self.set_gain, "hand_state": self.hand_state,
             "hand_held": self.hand_held, "hand_grasp": self.hand_grasp,
             "hand_release": self.hand_release, "is_hand": self.is_hand,
+            "hand_grip": self.hand_grip, "hand_joint": self.hand_joint,
+            "hand_curl": self.hand_curl,
             "set_camera": self.set_camera, "request_plugin": self.request_plugin,
             "time": self.time, "measure": self.measure, "tracker": self.tracker,
             "wheel": self.wheel,
@@ -792,6 +807,46 @@ class ScriptAPI:
 
     def hand_release(self, entity: int) -> None:
         self._hand_call("release", entity, lambda h: h.release(entity))
+
+    def _hand(self, what: str, entity: int) -> Hand:
+        hand = self.engine.world.try_component(self._entity(entity, what), Hand)
+        if hand is None:
+            raise ScriptAPIError(f"{what}: {self._called(entity)} is not a hand")
+        return hand
+
+    def hand_grip(self, entity: int) -> Any:
+        """The fingers holding what the hand holds (HandState.grip), a Lua table."""
+        assert self.runtime is not None
+        self._hand("getGrip", entity)
+        state = self.engine.world.try_component(entity, HandState)
+        return self.runtime.lua.table_from(list(state.grip) if state is not None else [])
+
+    def _tracked(self, what: str, entity: int) -> HandJoints | None:
+        self._hand(what, entity)
+        inputs = self._inputs()
+        return None if inputs is None else tracked_hand(self.engine.world, entity, inputs)
+
+    def hand_joint(self, entity: int, name: Any) -> tuple[Any, ...] | None:
+        """Tracked joint ``name`` of the hand in the world: position, orientation, radius,
+        valid; None before its input hand was seen (or while it is lost)."""
+        try:
+            joint_index(name)
+        except ValueError as exc:
+            raise ScriptAPIError(f"joint ({self._called(entity)}): {exc}") from None
+        joints = self._tracked("joint", entity)
+        if joints is None:
+            return None
+        pose = hand_joint(joints, name)
+        return (*pose.position.tolist(), *pose.orientation.tolist(), pose.radius, pose.valid)
+
+    def hand_curl(self, entity: int, finger: Any) -> float | None:
+        """How bent tracked finger ``finger`` is (0..1); None before the hand was seen."""
+        try:
+            finger_named(finger)
+        except ValueError as exc:
+            raise ScriptAPIError(f"curl ({self._called(entity)}): {exc}") from None
+        joints = self._tracked("curl", entity)
+        return None if joints is None else finger_curl(joints, finger)
 
     # -- input ------------------------------------------------------------------
     def _inputs(self) -> InputState | None:
