@@ -39,6 +39,7 @@ BENCHMARKS: dict[str, str] = {
     "accuracy": "tools.bench_accuracy:run_bench",
     "stroke": "tools.bench_stroke:run_bench",
     "experiment": "tools.bench_experiment:run_bench",
+    "startup": "tools.bench_startup:run_bench",
 }
 
 
@@ -194,6 +195,9 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
                                        r["without ms"], "ms/frame",
                                        "the same frames without a trial")
                                 for r in rows if r["case"] == "summary"],
+    "startup": lambda rows: [Figure(r["command"], r["ours s"], r["reference s"], "s",
+                                    f"a bare python importing {r['reference: bare imports of']}")
+                             for r in rows],
 }
 
 

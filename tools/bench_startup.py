@@ -1,0 +1,163 @@
+"""``colosseum bench startup``: how long a command takes from the shell to its end, beside
+a bare Python program that imports exactly the libraries that command needs.
+
+Rows: ``check`` and ``run --frames 1 --headless`` of the demo scene (models, Lua, sound)
+and of a plain scene (boxes on a ground: no model, no script, no sound), and ``keys``.
+Each command and its reference run as fresh processes, alternately, ``repeats`` times;
+the table shows the median wall seconds of each, the median of the per-pair ratios and
+the ratios' spread (lowest-highest). Goals: ``check`` and ``keys`` under 0.5 s of wall
+time on a plain scene; elsewhere (the demo's check loads its model, and so trimesh) within
+1.2x of the bare imports.
+
+Byte-code is cached as on any installed machine (one untimed run of each first, into a
+cache folder of the benchmark's own), whatever ``PYTHONDONTWRITEBYTECODE`` says.
+Third-party modules a command loaded beyond its reference are named in the row: a library
+loaded before the scene asks for it shows there.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+CHECK_GOAL_S = 0.5
+RUN_GOAL_RATIO = 1.2
+
+#: A scene without models, scripts or sound: what any run needs and no more.
+PLAIN_SCENE = """World { Gravity [0 0 -9.81] TimeStep 0.01 }
+Object { ID "ground" Dynamic 0
+  VisualAttributes { Geometry { Primitive "plane" } }
+  PhysicalAttributes { Geometry { Primitive "plane" } } }
+Object { ID "box" Position [0 0 1] Size [1 1 1]
+  VisualAttributes { Geometry { Primitive "box" } Color [0.7 0.5 0.3] }
+  PhysicalAttributes { Mass 1 Geometry { Primitive "box" } } }
+"""
+
+#: What every scene needs: arrays, the ECS, the scene's physics library (libode).
+CORE = ("numpy",)
+RUN_CORE = (*CORE, "esper", "ctypes:ode")
+#: What the demo's blocks add: models (trimesh), a Lua script, a shader drawn headless.
+DEMO_CHECK = (*CORE, "trimesh", "soundfile")
+DEMO_RUN = (*RUN_CORE, "trimesh", "soundfile", "lupa.lua54", "moderngl")
+
+#: Loads libode as the engine's extension does, without the extension's Python side.
+_IMPORT_ODE = ("import ctypes, ctypes.util\n"
+               "ctypes.CDLL(ctypes.util.find_library('ode') or 'libode.so.8')\n")
+
+#: Prints the third-party top-level modules loaded, when the process ends.
+_REPORT_MODULES = ("import atexit, json, sys\n"
+                   "atexit.register(lambda: print('\\nMODULES ' + json.dumps(sorted("
+                   "{m.split('.')[0] for m in sys.modules} - set(sys.stdlib_module_names))),"
+                   " file=sys.stderr))\n")
+
+
+@dataclass(frozen=True, slots=True)
+class Case:
+    """One command line of ``colosseum`` and the libraries its bare reference imports."""
+
+    name: str
+    argv: tuple[str, ...]
+    needs: tuple[str, ...]
+    goal: str  # "s": under CHECK_GOAL_S seconds; "x": within RUN_GOAL_RATIO of the reference
+
+    def reference_code(self) -> str:
+        """The bare program: the imports alone."""
+        lines = [_IMPORT_ODE if n == "ctypes:ode" else f"import {n}\n" for n in self.needs]
+        return "".join(lines) or "pass\n"
+
+
+def cases(plain: Path) -> list[Case]:
+    demo = str(ROOT / "content" / "demo")
+    frame = ("--frames", "1", "--headless", "--fast")
+    return [Case("keys", ("keys",), CORE, "s"),
+            Case("check, plain scene", ("check", str(plain)), CORE, "s"),
+            Case("check, demo", ("check", demo), DEMO_CHECK, "x"),
+            Case("run to first frame, plain scene", ("run", str(plain), *frame), RUN_CORE,
+                 "x"),
+            Case("run to first frame, demo", ("run", demo, *frame), DEMO_RUN, "x")]
+
+
+def run_bench(quick: bool = False, repeats: int = 7) -> list[dict[str, Any]]:
+    """Every case, ours and its reference alternating, ``repeats`` pairs each."""
+    repeats = 3 if quick else repeats
+    with tempfile.TemporaryDirectory(prefix="colosseum-startup-") as tmp:
+        folder = Path(tmp)
+        (folder / "plain").mkdir()
+        (folder / "plain" / "main.scene").write_text(PLAIN_SCENE, encoding="utf-8")
+        env = _environment(folder / "pycache")
+        rows = []
+        for case in cases(folder / "plain"):
+            ours_cmd = [sys.executable, "-m", "engine.cli", *case.argv]
+            ref_cmd = [sys.executable, "-c", case.reference_code()]
+            extra = _extra_modules(case, env, folder)  # also warms the byte-code cache
+            _timed(ref_cmd, env, folder)
+            pairs = [(_timed(ours_cmd, env, folder), _timed(ref_cmd, env, folder))
+                     for _ in range(repeats)]
+            rows.append(_row(case, pairs, extra))
+    return rows
+
+
+def _environment(pycache: Path) -> dict[str, str]:
+    """This checkout's code first, byte-code cached in ``pycache``, no colour or pager."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
+    env["PYTHONPYCACHEPREFIX"] = str(pycache)
+    return env
+
+
+def _timed(cmd: list[str], env: dict[str, str], cwd: Path) -> float:
+    """Wall seconds of one process from start to exit; it must succeed."""
+    t0 = time.perf_counter()
+    done = subprocess.run(cmd, env=env, cwd=cwd, capture_output=True, text=True, timeout=120,
+                          check=False)
+    elapsed = time.perf_counter() - t0
+    if done.returncode != 0:
+        raise RuntimeError(f"bench startup: {' '.join(cmd[2:])!r} failed "
+                           f"({done.returncode}): {done.stderr.strip()[-400:]}")
+    return elapsed
+
+
+def _extra_modules(case: Case, env: dict[str, str], cwd: Path) -> list[str]:
+    """Third-party top-level modules the command loaded that its reference did not."""
+    def loaded(code: str) -> set[str]:
+        done = subprocess.run([sys.executable, "-c", _REPORT_MODULES + code], env=env,
+                              cwd=cwd, capture_output=True, text=True, timeout=120,
+                              check=False)
+        line = next((s for s in done.stderr.splitlines() if s.startswith("MODULES ")), None)
+        if done.returncode != 0 or line is None:
+            raise RuntimeError(f"bench startup: {case.name} failed: {done.stderr[-400:]}")
+        return {m for m in json.loads(line[8:]) if not m.startswith("_")}
+
+    ours = loaded(f"import sys\nfrom engine.cli import main\nsys.exit(main({list(case.argv)!r}))")
+    ours -= {"engine", "components", "systems", "tools"}
+    ours = {m for m in ours if not m.startswith("colosseum_content_")}  # the folder's code
+    return sorted(ours - loaded(case.reference_code()))
+
+
+def _row(case: Case, pairs: list[tuple[float, float]], extra: list[str]) -> dict[str, Any]:
+    ours = statistics.median(p[0] for p in pairs)
+    ratios = sorted(o / r for o, r in pairs)
+    ratio = statistics.median(ratios)
+    row: dict[str, Any] = {
+        "command": case.name, "reference: bare imports of": ", ".join(
+            "libode" if n == "ctypes:ode" else n for n in case.needs),
+        "ours s": ours, "reference s": statistics.median(p[1] for p in pairs),
+        "ratio": ratio, "ratio spread": f"{ratios[0]:.2f}-{ratios[-1]:.2f}",
+        "runs": len(pairs)}
+    if case.goal == "s":
+        row["goal"] = f"< {CHECK_GOAL_S:g} s"
+        row["ok"] = "yes" if ours < CHECK_GOAL_S else "NO"
+    else:
+        row["goal"] = f"<= {RUN_GOAL_RATIO:g}x"
+        row["ok"] = "yes" if ratio <= RUN_GOAL_RATIO else "NO"
+    row["loaded beyond the reference"] = ", ".join(extra) or "-"
+    return row
