@@ -13,7 +13,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from engine.input.config import input_option
 from engine.memory import keep_freed_memory
 from engine.net.protocol import BARRIER_WAIT
 from engine.physics.backend import BackendName
@@ -30,6 +29,13 @@ def _positive(kind: type) -> Any:
         return value
 
     return parse
+
+
+def input_option(text: str) -> Any:
+    """``--input KIND[:ARG]`` as a device spec (the input package loaded when it is given)."""
+    from engine.input.config import input_option as parse
+
+    return parse(text)
 
 
 def render_scale_option(text: str) -> float:

@@ -23,7 +23,6 @@ from collections.abc import Iterable
 
 from engine.input.desktop import DesktopDevice, WindowDevice
 from engine.input.device import MONOTONIC, Clock, DeviceError, InputDevice
-from engine.input.osc import OscDevice
 from engine.scene.inputs import DeviceSpec
 from engine.scene.schema import INPUT_KINDS
 
@@ -84,6 +83,8 @@ def make_device(spec: DeviceSpec, window: WindowDevice, clock: Clock = MONOTONIC
                 ) -> InputDevice:
     """The device a spec describes (its transport is claimed later, by ``open``)."""
     if spec.kind == "osc":
+        from engine.input.osc import OscDevice  # python-osc: loaded for an OSC device only
+
         return OscDevice(spec.id, spec.port, spec.address, clock)
     if spec.kind == "serial":
         from engine.input.serial_line import SerialDevice
