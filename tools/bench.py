@@ -211,15 +211,30 @@ def print_table(rows: list[dict[str, Any]]) -> None:
 
 
 def kinds(rows: list[dict[str, Any]]) -> list[tuple[str, list[dict[str, Any]]]]:
-    """Rows grouped by their ``kind`` where they name one, else by their set of columns;
-    groups and rows in the order they came."""
-    groups: dict[Any, tuple[str, list[dict[str, Any]]]] = {}
+    """Rows grouped by their ``kind`` where they name one; a row without one joins the
+    first untitled group led by the same column whose columns it mostly shares (at least
+    half of the two together), else starts its own. Groups and rows keep their order."""
+    groups: list[tuple[str, list[dict[str, Any]], dict[str, None]]] = []
     for row in rows:
         kind = row.get("kind")
-        key = ("kind", kind) if kind is not None else ("columns", frozenset(row))
-        groups.setdefault(key, (str(kind or ""), []))[1].append(
-            {k: v for k, v in row.items() if k != "kind"})
-    return list(groups.values())
+        row = {k: v for k, v in row.items() if k != "kind"}
+        group = next((g for g in groups if _same_kind(g, kind, row)), None)
+        if group is None:
+            group = (str(kind or ""), [], {})
+            groups.append(group)
+        group[1].append(row)
+        group[2].update(dict.fromkeys(row))
+    return [(title, members) for title, members, _ in groups]
+
+
+def _same_kind(group: tuple[str, list[dict[str, Any]], dict[str, None]], kind: Any,
+               row: dict[str, Any]) -> bool:
+    title, _, columns = group
+    if kind is not None or title:
+        return title == str(kind or "")
+    shared = len(columns.keys() & row.keys())
+    return (next(iter(columns)) == next(iter(row), None)
+            and 2 * shared >= len(columns.keys() | row.keys()))
 
 
 def _print_one_table(rows: list[dict[str, Any]]) -> None:
