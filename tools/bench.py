@@ -195,7 +195,8 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
                                        r["without ms"], "ms/frame",
                                        "the same frames without a trial")
                                 for r in rows if r["case"] == "summary"],
-    "startup": lambda rows: [Figure(r["command"], r["ours s"], r["reference s"], "s",
+    "startup": lambda rows: [Figure(r["command"], r["ours cpu s"], r["reference cpu s"],
+                                    "cpu s",
                                     f"a bare python importing {r['reference: bare imports of']}")
                              for r in rows],
 }
