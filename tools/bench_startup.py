@@ -140,7 +140,8 @@ def _extra_modules(case: Case, env: dict[str, str], cwd: Path) -> list[str]:
         line = next((s for s in done.stderr.splitlines() if s.startswith("MODULES ")), None)
         if done.returncode != 0 or line is None:
             raise RuntimeError(f"bench startup: {case.name} failed: {done.stderr[-400:]}")
-        return {m for m in json.loads(line[8:]) if not m.startswith("_")}
+        return {m for m in json.loads(line[8:])  # cython_runtime: made by any Cython module
+                if not m.startswith("_") and m != "cython_runtime"}
 
     ours = loaded(f"import sys\nfrom engine.cli import main\nsys.exit(main({list(case.argv)!r}))")
     ours -= {"engine", "components", "systems", "tools"}
