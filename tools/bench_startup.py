@@ -56,6 +56,9 @@ DEMO_RUN = (*RUN_CORE, "trimesh", "soundfile", "lupa.lua54", "moderngl")
 _IMPORT_ODE = ("import ctypes, ctypes.util\n"
                "ctypes.CDLL(ctypes.util.find_library('ode') or 'libode.so.8')\n")
 
+#: What the installed ``colosseum`` script runs.
+ENTRY_POINT = "import sys\nfrom engine.cli import main\nsys.exit(main())"
+
 #: Prints the third-party top-level modules loaded, when the process ends.
 _REPORT_MODULES = ("import atexit, json, sys\n"
                    "atexit.register(lambda: print('\\nMODULES ' + json.dumps(sorted("
@@ -99,7 +102,7 @@ def run_bench(quick: bool = False, repeats: int = 7) -> list[dict[str, Any]]:
         env = _environment(folder / "pycache")
         rows = []
         for case in cases(folder / "plain"):
-            ours_cmd = [sys.executable, "-m", "engine.cli", *case.argv]
+            ours_cmd = [sys.executable, "-c", ENTRY_POINT, *case.argv]
             ref_cmd = [sys.executable, "-c", case.reference_code()]
             extra = _extra_modules(case, env, folder)  # also warms the byte-code cache
             _timed(ref_cmd, env, folder)
@@ -110,7 +113,7 @@ def run_bench(quick: bool = False, repeats: int = 7) -> list[dict[str, Any]]:
 
 
 def _environment(pycache: Path) -> dict[str, str]:
-    """This checkout's code first, byte-code cached in ``pycache``, no colour or pager."""
+    """This checkout's code first, byte-code cached in ``pycache``."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
     env["PYTHONPYCACHEPREFIX"] = str(pycache)
@@ -126,7 +129,8 @@ def _timed(cmd: list[str], env: dict[str, str], cwd: Path) -> tuple[float, float
     elapsed = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if done.returncode != 0:
-        raise RuntimeError(f"bench startup: {' '.join(cmd[2:])!r} failed "
+        shown = " ".join(cmd[3:]) or cmd[2]  # colosseum's arguments, else the bare program
+        raise RuntimeError(f"bench startup: {shown!r} failed "
                            f"({done.returncode}): {done.stderr.strip()[-400:]}")
     return elapsed, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
