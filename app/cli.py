@@ -16,7 +16,6 @@ from typing import Any
 from app.runner import execute_run, fail, prepare_run
 from engine.memory import keep_freed_memory
 from engine.physics.backend import BackendName
-from services.input.config import input_option
 from services.net.protocol import BARRIER_WAIT
 
 log = logging.getLogger("colosseum")
@@ -30,6 +29,13 @@ def _positive(kind: type) -> Any:
         return value
 
     return parse
+
+
+def input_option(text: str) -> Any:
+    """``--input KIND[:ARG]`` as a device spec (the input package loaded when it is given)."""
+    from services.input.config import input_option as parse
+
+    return parse(text)
 
 
 def render_scale_option(text: str) -> float:
@@ -307,7 +313,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("what", nargs="?", default="scheduler",
                        help="scheduler, physics, scene, scripting, sound, render, input, "
                             "contacts, avatars, import, hands, net, sweep, accuracy, stroke, "
-                            "experiment")
+                            "experiment, startup")
     bench.add_argument("--backend", default=None, help="physics benchmark backend (ode, pymunk)")
     bench.add_argument("--quick", action="store_true", help="fewer sizes and steps")
     bench.add_argument("--stereo", action="store_true",

@@ -79,6 +79,23 @@ class Tick:
         return self.dt / self.substeps
 
 
+def _linear_percentile(values: np.ndarray, q: float) -> float:
+    """``np.percentile`` (its linear method) by a sort: the first np.percentile of a process
+    imports numpy.ma, tens of milliseconds a one-frame run would spend on its statistics.
+
+    >>> data = np.array([3.0, 1.0, 4.0, 1.0, 5.0])
+    >>> [_linear_percentile(data, q) == float(np.percentile(data, q)) for q in (0, 37.5, 99, 100)]
+    [True, True, True, True]
+    """
+    ordered = np.sort(values)
+    rank = q / 100.0 * (len(ordered) - 1)
+    below = min(int(rank), len(ordered) - 1)
+    a, b = float(ordered[below]), float(ordered[min(below + 1, len(ordered) - 1)])
+    share = rank - below
+    # numpy's lerp: from the nearer end, so 100 % gives the largest value to the bit
+    return b - (b - a) * (1.0 - share) if share >= 0.5 else a + (b - a) * share
+
+
 class CostLog:
     """Costs (s) with a cheap mean and percentiles, in memory that does not grow.
 
@@ -124,7 +141,7 @@ class CostLog:
         if not self.count:
             return 0.0
         if self._bins is None:
-            return float(np.percentile(self._data[: self.count], q))
+            return _linear_percentile(self._data[: self.count], q)
         rank = q / 100.0 * (self.count - 1)
         cumulative = np.cumsum(self._bins)
         i = int(np.searchsorted(cumulative, rank, "right"))

@@ -168,6 +168,13 @@ def time_sleep_rule(n: int, calls: int = 2000, islands: bool = False) -> float:
     return (time.perf_counter() - t0) / calls * 1e6
 
 
+#: The two tables' titles: what a row measures, its units and its reference.
+STEP_KIND = ("one step, wall ms/step (the fastest of the repeats); reference: the same world "
+             "in plain C (libode; C+fb: also reading every pose back)")
+READBACK_KIND = ("readback of every body into the ECS pose table, us/call (median), and the "
+                 "sleep rule's cost per step beside the plain-C step")
+
+
 def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
               backend: str = "ode", quick: bool = False, repeats: int = 3) -> list[dict]:
     """Measure every N with sleeping off and on; returns one row per (N, sleeping)."""
@@ -197,7 +204,9 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
                     ms, ours_z, ours_asleep = time_ours(n, steps, sleep, sync=False)
                     raw_ms = min(raw_ms, ms)
                     sync_ms = min(sync_ms, time_ours(n, steps, sleep, sync=True)[0])
-                row: dict[str, Any] = {"N": n, "sleeping": "on" if sleep else "off", "C ms": c_ms,
+                row: dict[str, Any] = {
+                       "kind": STEP_KIND, "N": n, "sleeping": "on" if sleep else "off",
+                       "C ms": c_ms,
                        "C+fb ms": fb_ms, "ours ms": raw_ms, "ours+sync ms": sync_ms,
                        "ratio": raw_ms / c_ms, "ratio+sync": sync_ms / c_ms,
                        "ratio+sync vs C+fb": sync_ms / fb_ms,
@@ -206,13 +215,12 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
                        "asleep ours": ours_asleep}
                 print_row(row)
                 rows.append(row)
-    print("\nreadback of every body into the ECS pose table, µs per call (median); "
-          "the sleep rule's cost per step beside the plain-C step")
+    print(f"\n{READBACK_KIND}")
     for n in ns:
         backend = build_ours(n, False)
         for _ in range(steps):
             backend.step(DT)
-        row = time_readback(backend, 500 if quick else 4000)
+        row = {"kind": READBACK_KIND, **time_readback(backend, 500 if quick else 4000)}
         backend.close()
         c_ms = next(r["C ms"] for r in rows if r.get("N") == n and r.get("sleeping") == "off")
         rule_us = time_sleep_rule(n, 200 if quick else 2000)

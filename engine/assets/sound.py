@@ -20,7 +20,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import soundfile as sf
 
 #: Sample rates a sound may have: outside these a header is broken, not unusual audio.
 MIN_SAMPLE_RATE = 1_000
@@ -93,6 +92,8 @@ def _check_riff(path: Path) -> None:
 
 def probe(path: str | Path) -> SoundInfo:
     """Read a file's header, raising :class:`AudioFileError` that names the file."""
+    import soundfile as sf  # libsndfile: loaded when a scene has a sound
+
     p = Path(path)
     if not p.is_file():
         raise AudioFileError(p, "file not found")
@@ -127,6 +128,8 @@ def _reason(exc: BaseException) -> str:
 
 def load_clip(path: str | Path, mono: bool) -> Clip:
     """Decode a whole file to int16 (mono when ``mono``)."""
+    import soundfile as sf
+
     info = probe(path)
     try:
         data, rate = sf.read(info.path, dtype="float32", always_2d=True)
@@ -148,9 +151,12 @@ class StreamReader:
         self.info = info
         self.mono = mono
         self.loop = loop
+        import soundfile as sf
+
+        self._errors = (sf.LibsndfileError, RuntimeError, OSError)
         try:
             self._file = sf.SoundFile(info.path)
-        except (sf.LibsndfileError, RuntimeError, OSError) as exc:
+        except self._errors as exc:
             raise AudioFileError(info.path, _reason(exc)) from exc
         self.finished = False
 
@@ -173,7 +179,7 @@ class StreamReader:
                         self._file.seek(0)
                     else:
                         self.finished = True
-        except (sf.LibsndfileError, RuntimeError, OSError) as exc:
+        except self._errors as exc:
             self.finished = True
             raise AudioFileError(self.info.path, _reason(exc)) from exc
         if not parts:

@@ -21,7 +21,6 @@ import json
 import os
 import time
 from dataclasses import asdict
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -38,6 +37,9 @@ class SessionError(Exception):
 
 
 def engine_version() -> str:
+    """The installed package's version (importlib.metadata loaded here, not at start-up)."""
+    from importlib import metadata
+
     try:
         return metadata.version("colosseum")
     except metadata.PackageNotFoundError:

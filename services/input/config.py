@@ -25,7 +25,6 @@ from engine.scene.inputs import DeviceSpec
 from engine.scene.schema import INPUT_KINDS
 from services.input.desktop import DesktopDevice, WindowDevice
 from services.input.device import MONOTONIC, Clock, DeviceError, InputDevice
-from services.input.osc import OscDevice
 
 USAGE = ("--input osc:PORT, osc:ADDRESS:PORT, serial:PATH[@BAUD], lsl:STREAM[,STREAM...], "
          "desktop or openxr")
@@ -84,6 +83,8 @@ def make_device(spec: DeviceSpec, window: WindowDevice, clock: Clock = MONOTONIC
                 ) -> InputDevice:
     """The device a spec describes (its transport is claimed later, by ``open``)."""
     if spec.kind == "osc":
+        from services.input.osc import OscDevice  # python-osc: loaded for an OSC device only
+
         return OscDevice(spec.id, spec.port, spec.address, clock)
     if spec.kind == "serial":
         from services.input.serial_line import SerialDevice

@@ -19,8 +19,6 @@ import logging
 from collections.abc import Sequence
 from typing import Any, Protocol
 
-from pythonosc.udp_client import SimpleUDPClient
-
 from services.input.device import DeviceError
 from services.input.lsl import load_pylsl
 
@@ -49,6 +47,8 @@ class OscOutput:
     """Values and markers as OSC messages to one UDP address."""
 
     def __init__(self, address: str, port: int) -> None:
+        from pythonosc.udp_client import SimpleUDPClient  # loaded for an OSC output only
+
         self.target = f"{address}:{port}"
         self._client = SimpleUDPClient(address, port)
         self._failed = False

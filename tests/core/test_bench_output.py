@@ -101,3 +101,39 @@ def test_the_help_names_every_benchmark() -> None:
     assert shown.returncode == 0
     listed = set(re.findall(r"[a-z]+", " ".join(shown.stdout.split())))
     assert set(BENCHMARKS) <= listed, set(BENCHMARKS) - listed
+
+
+def test_a_table_per_kind_of_row_with_no_blank_column(capsys: pytest.CaptureFixture[str]
+                                                       ) -> None:
+    """Rows of two kinds print as two tables, each with only its own columns, under its
+    title; rows without a kind are grouped by their columns."""
+    from app.bench import kinds, print_table
+
+    step = "one step, ms/step; reference: plain C"
+    rows = [{"kind": step, "N": 100, "ours ms": 1.5, "C ms": 1.25},
+            {"N": 100, "readback us": 3.0},
+            {"kind": step, "N": 500, "ours ms": 7.5, "C ms": 6.0},
+            {"N": 500, "readback us": 9.0}]
+    assert [(kind, [r["N"] for r in group]) for kind, group in kinds(rows)] == [
+        (step, [100, 500]), ("", [100, 500])]
+    print_table(rows)
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[1] == step and "kind" not in lines[2]
+    assert lines[2].split() == ["N", "ours", "ms", "C", "ms"]
+    assert lines[4].split() == ["100", "1.5", "1.25"]  # no blank cells to skip
+    blank = lines.index("", 2)
+    assert lines[blank + 1].split() == ["N", "readback", "us"]
+    assert lines[blank + 3].split() == ["100", "3"] and len(lines) == blank + 5
+
+
+def test_bench_physics_prints_its_step_and_readback_tables_apart() -> None:
+    """No column of one table is blank in the other's rows (they were one table)."""
+    from app.bench import kinds
+    from app.bench.physics import READBACK_KIND, STEP_KIND
+
+    rows = measure("physics", quick=True)
+    grouped = dict(kinds(rows))
+    assert list(grouped) == [STEP_KIND, READBACK_KIND]
+    for group in grouped.values():
+        assert all(set(row) == set(group[0]) for row in group)
+    assert "ms/step" in STEP_KIND and "plain C" in STEP_KIND

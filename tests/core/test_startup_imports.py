@@ -1,0 +1,82 @@
+"""Start-up loads only what a scene uses: ``colosseum check`` and ``keys`` import no heavy
+library, and a run of a scene without models, shaders, sound or devices imports none of
+theirs. Each case runs in a fresh interpreter and reads its ``sys.modules`` at the end, so
+an eager import added back anywhere on the path fails here."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+#: Loaded only by a scene (or a command) that uses them.
+HEAVY = ("trimesh", "scipy", "moderngl", "lupa", "openal", "matplotlib", "zmq", "dask",
+         "pythonosc", "soundfile", "PIL", "pymunk", "pylsl", "serial")
+#: A scene with boxes and a ground: no model, script, sound, shader or device.
+PLAIN = """World { Gravity [0 0 -9.81] }
+Object { ID "ground" Dynamic 0 VisualAttributes { Geometry { Primitive "plane" } }
+  PhysicalAttributes { Geometry { Primitive "plane" } } }
+Object { ID "box" Position [0 0 1]
+  VisualAttributes { Geometry { Primitive "box" } }
+  PhysicalAttributes { Mass 1 Geometry { Primitive "box" } } }
+"""
+
+
+def loaded_by(code: str, cwd: Path) -> set[str]:
+    """Top-level modules in ``sys.modules`` after ``code`` ran in a fresh interpreter."""
+    probe = (f"{code}\nimport json, sys\n"
+             "print(json.dumps(sorted({m.split('.')[0] for m in sys.modules})))")
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    done = subprocess.run([sys.executable, "-c", probe], cwd=cwd, env=env, capture_output=True,
+                          text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    return set(json.loads(done.stdout.splitlines()[-1]))
+
+
+def cli(*argv: str) -> str:
+    """Code running ``colosseum ARGV`` in-process, failing on a non-zero exit."""
+    return f"from app.cli import main\nassert main({list(argv)!r}) == 0"
+
+
+@pytest.fixture
+def plain(tmp_path: Path) -> Path:
+    (tmp_path / "plain").mkdir()
+    (tmp_path / "plain" / "main.scene").write_text(PLAIN, encoding="utf-8")
+    return tmp_path / "plain"
+
+
+def test_importing_the_cli_loads_no_heavy_library_nor_the_runtime(tmp_path: Path) -> None:
+    loaded = loaded_by("import app.cli\nimport sys\n"
+                       "assert 'engine.app' not in sys.modules, 'the runtime was imported'\n"
+                       "assert 'engine.scene.factory' not in sys.modules", tmp_path)
+    assert loaded.isdisjoint(HEAVY), sorted(loaded & set(HEAVY))
+    assert "esper" not in loaded
+
+
+@pytest.mark.parametrize("command", ["check", "keys"])
+def test_check_and_keys_load_no_heavy_library(command: str, plain: Path) -> None:
+    argv = ("check", str(plain)) if command == "check" else ("keys", "Object")
+    loaded = loaded_by(cli(*argv), plain.parent)
+    assert loaded.isdisjoint(HEAVY), sorted(loaded & set(HEAVY))
+    assert "esper" not in loaded  # reading a scene needs no ECS world
+
+
+def test_a_run_of_a_plain_scene_loads_none_of_what_it_does_not_use(plain: Path) -> None:
+    loaded = loaded_by(cli("run", str(plain), "--frames", "1", "--headless", "--fast"),
+                       plain.parent)
+    unused = set(HEAVY) - {"lupa"}  # the scripting plugin starts Lua for every scene
+    assert loaded.isdisjoint(unused), sorted(loaded & unused)
+    assert "esper" in loaded and "numpy" in loaded  # it did run
+
+
+def test_a_scene_with_a_model_loads_the_model_library(plain: Path) -> None:
+    """The other side: what the demo uses is loaded when it is used."""
+    demo = ROOT / "content" / "demo"
+    loaded = loaded_by(cli("check", str(demo)), plain.parent)
+    assert {"trimesh", "soundfile"} <= loaded
