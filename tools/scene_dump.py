@@ -4,7 +4,8 @@ scene format's code (``python -m tools.scene_dump`` writes the golden dumps).
 Every scene file in ``content/`` and ``tests/`` and a few saved states are built into
 a :class:`~engine.scene.SceneSpec`; the dump lists its entities (each component's type
 and field values), joints, materials, world settings, inputs, anomalies and experiment,
-floats rounded, mappings sorted, places and caches left out. A change that claims to
+entities by ID and their components by type, floats rounded, mappings sorted,
+places and caches left out. A change that claims to
 load "the scene files and saved states of today unchanged" must leave every dump equal
 to the one committed under ``tests/scene/data/golden/`` (``tests/scene/test_golden.py``).
 """
@@ -102,7 +103,17 @@ def dump(path: Path) -> Any:
     except SceneError as exc:
         first = exc.diagnostics[0]
         return {"error": f"{Path(first.path).name}:{first.line}: {first.message}"}
-    return canonical(spec)
+    return _sorted(canonical(spec))
+
+
+def _sorted(world: dict[str, Any]) -> dict[str, Any]:
+    """Entities by ID and each one's components by type: an entity's components are a
+    set (the ECS keeps them by type), and which of two top-level blocks is made first
+    changes entity numbers, not the world."""
+    for entity in world["entities"]:
+        entity["components"].sort(key=lambda c: c["type"])
+    world["entities"].sort(key=lambda e: (e["id"], json.dumps(e, sort_keys=True)))
+    return world
 
 
 def golden_name(path: Path) -> str:
