@@ -51,7 +51,6 @@ from components import (
     Trigger,
     UserOwned,
     Visual,
-    Wheelchair,
 )
 from components.avatar import (
     SavedAvatar,
@@ -64,7 +63,6 @@ from components.avatar import (
 from components.display import HEADSET_ACTIONS, HEADSET_PROFILES
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, SPRING_KINDS, JointKind, Spring
 from components.script import SavedScript, ScriptHandler, ScriptTimer
-from components.wheelchair import NavigationMode
 from engine.anomalies import AnomalySpec
 from engine.assets import AssetError, Assets, nodes_name
 from engine.assets.geometry import convex_hull
@@ -415,6 +413,27 @@ def build_specs(db: SceneDB, content_dir: str | Path | None = None,
     return spec
 
 
+class _Context:
+    """What a declared block's build function may ask (components.blocks.BuildContext)."""
+
+    __slots__ = ("builder", "reader", "loc", "owner", "place", "has_body")
+
+    def __init__(self, builder: _Builder, reader: _Reader, loc: Loc, owner: str, place: str,
+                 has_body: bool) -> None:
+        self.builder, self.reader, self.loc = builder, reader, loc
+        self.owner, self.place, self.has_body = owner, place, has_body
+
+    def error(self, key: str | None, message: str) -> None:
+        written = None if key is None else self.reader.value(key)
+        self.builder.report.error(self.loc if written is None else written.loc, message)
+
+    def given(self, key: str) -> bool:
+        return self.reader.has(key)
+
+    def sound_file(self, key: str, outcome: str) -> str | None:
+        return self.builder.sound_file(self.reader, key, outcome)
+
+
 class _Builder:
     def __init__(self, folder: Path, report: Reporter, assets: Assets):
         self.folder = folder
@@ -583,45 +602,56 @@ class _Builder:
                                phys_blk is not None or bare)
         if not r("Graspable"):
             comps.append(Graspable(False))
-        if r.has("Wheelchair"):
-            chair_blk = r.value("Wheelchair")
-            comps += self.wheelchair(_Reader(chair_blk.data, "Wheelchair"), oid, chair_blk.loc,
-                                     phys_blk is not None or bare)
         if r.has("User"):
             comps.append(UserOwned(r("User")))
         if r.has("Controller"):
             comps.append(_controller(_Reader(r.value("Controller").data, "Controller")))
-        comps += self.declared_blocks(r, "Object")
+        comps += self.declared_blocks(r, "Object", oid, phys_blk is not None or bare)
         return EntitySpec(oid, comps, blk.loc)
 
-    def declared_blocks(self, r: _Reader | _Index, place: str) -> list[Any]:
+    def declared_blocks(self, r: _Reader | _Index, place: str, owner: str,
+                        has_body: bool) -> list[Any]:
         """The components of the blocks features declared for ``place`` (engine.scene.
-        blocks), a content folder's own among them."""
-        made = (self.declared(block, blk) for block in blocks.BLOCKS.values()
-                if place in block.inside for blk in r.blocks(block.name))
-        return [component for component in made if component is not None]
+        blocks: the engine's own and a content folder's), on the entity of ``owner``."""
+        made: list[Any] = []
+        for block in blocks.BLOCKS.values():
+            if place in block.inside:
+                for blk in r.blocks(block.name):
+                    made += self.declared(block, blk, owner, place, has_body) or []
+        return made
 
-    def declared(self, block: blocks.BlockType, blk: Block) -> Any:
-        """One declared block's component; None (told at the line) when a value is out of
-        its key's range: the block is left out."""
+    def declared(self, block: blocks.BlockType, blk: Block, owner: str, place: str,
+                 has_body: bool) -> list[Any] | None:
+        """One declared block's components, and those of the blocks declared inside it;
+        None (told at the line) when a value is out of its key's range or its build
+        leaves it out."""
         r = _Reader(blk, block.name)
         values = {k: r(k) for k in block.keys}
         problems = block.problems(values)
         for k, message in problems:
             self.report.error(r.value(k).loc, f"{block.name}: {message}")
-        return None if problems else block.build(values)
+        if problems:
+            return None
+        if block.hook is None:
+            made: list[Any] | None = [block.build(values)]
+        else:
+            made = block.hook(values, _Context(self, r, blk.loc, owner, place, has_body))
+        if made is None:
+            return None
+        return made + self.declared_blocks(r, block.name, owner, has_body)
 
     def declared_entities(self, root: _Index, spec: SceneSpec) -> None:
-        """Top-level declared blocks: an entity each, named by its ID."""
+        """Top-level declared blocks: an entity each, named by its ID (one its build
+        leaves out keeps its place, skipped)."""
         for block in blocks.BLOCKS.values():
             if "Scene" not in block.inside:
                 continue
             for i, blk in enumerate(root.blocks(block.name)):
-                component = self.declared(block, blk)
                 bid = _Reader(blk, block.name)("ID") or f"{block.name.lower()}{i}"
-                parts = [Name(bid)] + ([component] if component is not None else [])
-                spec.entities.append(EntitySpec(bid, parts, blk.loc,
-                                                skipped=component is None))
+                made = self.declared(block, blk, bid, "Scene", False)
+                skipped = made is None or (not made and block.hook is not None)
+                parts = [] if skipped and block.hook is not None else [Name(bid), *(made or [])]
+                spec.entities.append(EntitySpec(bid, parts, blk.loc, skipped=skipped))
 
     def visual_geometry(self, vis: _Reader, size: Any
                         ) -> tuple[list[Shape], str | None, tuple[float, float, float]]:
@@ -669,30 +699,6 @@ class _Builder:
                     contact_model=models["ContactModel"], grasp_model=models["GraspModel"],
                     holding=tuple(h("Holding") or ()))
         return [hand, HandState()]
-
-    def wheelchair(self, w: _Reader, oid: str, loc: Loc, has_body: bool) -> list[Any]:
-        """A wheelchair's chassis: a body, and settings that must be positive."""
-        if not has_body:
-            self.report.error(loc, f"object '{oid}' has a Wheelchair but no "
-                                   "PhysicalAttributes: the chassis is a body the wheels "
-                                   "are jointed to")
-            return []
-        keys = ("WheelRadius", "MaxSpeed", "MaxTorque", "RimInertia", "MaxPush")
-        for key in keys:
-            if not w(key) > 0 or not math.isfinite(w(key)):
-                self.report.error(w.value(key).loc, f"{key} must be positive, got {w(key)}")
-        wheels, axles = w("Wheels"), w("Axles")
-        mode = NavigationMode.FEEDBACK if w("Feedback") else NavigationMode.VELOCITY
-        lag, measured = w("Lag") or (0.0, 0.0), w("Measured") or (0.0, 0.0)
-        pending = w("Pending") or (0.0, 0.0)
-        return [Wheelchair(mode=mode, wheels=(wheels[0], wheels[1]),
-                           axles=(axles[0], axles[1]), wheel_radius=float(w("WheelRadius")),
-                           max_speed=float(w("MaxSpeed")), max_torque=float(w("MaxTorque")),
-                           rim_inertia=float(w("RimInertia")), max_push=float(w("MaxPush")),
-                           lag=(float(lag[0]), float(lag[1])),
-                           measured=(float(measured[0]), float(measured[1])),
-                           pending=(float(pending[0]), float(pending[1])),
-                           still=max(float(w("Still")), 0.0))]
 
     def check_hand_inputs(self, inputs: InputSpec) -> None:
         """A hand's tracker and glove must be ones the scene declares (or the desktop

@@ -171,9 +171,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                    "tracker's pose with bounded force, grasping on a glove's button",
                    struct="Hand"),
         "Graspable": _f(BOOL_T, 1, "0: hands cannot hold it (dynamic bodies can by default)"),
-        "Wheelchair": _f(STRUCT_T, None, "makes the object a wheelchair's chassis: input "
-                         "wheel counters drive its rear axle joints (the wheelchair plugin)",
-                         struct="Wheelchair"),
         "User": _f(STRING_T, None, "the user (colosseum join --user NAME) it stands for — an "
                    "avatar, a wheelchair, hands: a server takes it out of the world "
                    "--leave-after s after that user's node leaves, unless the user comes "
@@ -570,44 +567,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Variable": _f(STRING_T, None, "a scene variable the intensity sets"),
         "Anomaly": _f(STRING_T, None, "an anomaly switched on at the intensity"),
         "Param": _f(STRING_T, None, "the Anomaly's parameter the intensity sets"),
-    },
-    "Wheelchair": {
-        "Feedback": _f(BOOL_T, 0, "0: velocity mode (the paper's): the wheels turn only as "
-                       "the real ones do and the chair never rolls by itself; 1: feedback "
-                       "mode: a change of the real wheel's speed pushes the free simulated "
-                       "wheel, gravity and walls act, and each wheel's speed and push are "
-                       "published (Output values wheelchair:ID/left/speed, "
-                       "wheelchair:ID/left/torque, and right)"),
-        "Wheels": _f(STRINGVECTOR_T, ("left", "right"), "the input wheel counters (Input { "
-                     "Wheel { ID } }, or the desktop device's left and right) of the left "
-                     "and right rear wheel", lengths=(2,)),
-        "Axles": _f(STRINGVECTOR_T, ("axle_l", "axle_r"), "the left and right rear wheels' "
-                    "hinge joints, their axes pointing so that turning forward is a "
-                    "positive rate", ref="Joint", lengths=(2,)),
-        "WheelRadius": _f(FLOAT_T, 0.305, "m, the rear wheels' radius (rim speed = rate * "
-                          "radius)"),
-        "MaxSpeed": _f(FLOAT_T, 3.0, "m/s at the rim: faster wheel input is clamped (told "
-                       "once)"),
-        "MaxTorque": _f(FLOAT_T, 30.0, "N*m each velocity-mode motor turns and holds its "
-                        "wheel with (a user's arm: 2 m/s^2 for a 90 kg chair, enough to hold "
-                        "it on a 1:12 ramp)"),
-        "RimInertia": _f(FLOAT_T, 4.29, "kg*m^2, the real wheel's moment of inertia: its "
-                         "measured change of speed times this is the push in feedback mode "
-                         "(a rig that feels like the chair: its rolling inertia (M + sum "
-                         "I/r^2) r^2 shared by two wheels; 4.29 for 90 kg on 0.305 m "
-                         "wheels)"),
-        "MaxPush": _f(FLOAT_T, 30.0, "N*m, the largest torque a push applies in feedback "
-                      "mode; a harder push (a key pressed) is spread over the next frames"),
-        "Lag": _f(VECTOR_T, None, "rad each simulated wheel [left right] was behind its real "
-                  "one, which velocity mode makes up (written by --save-state)", lengths=(2,)),
-        "Measured": _f(VECTOR_T, None, "rad/s the real wheels [left right] turned at in the "
-                       "last frame, which feedback mode's pushes are changes of (written by "
-                       "--save-state)", lengths=(2,)),
-        "Pending": _f(VECTOR_T, None, "N*m*s of pushes [left right] beyond MaxPush, still "
-                      "to be applied (written by --save-state)", lengths=(2,)),
-        "Still": _f(FLOAT_T, 0.0, "s the chair has stood still in velocity mode with its real "
-                    "wheels still; at the world's SleepTime it sleeps (written by "
-                    "--save-state)"),
     },
     "ScriptState": {
         "Owner": _f(STRING_T, None, "the object whose script this is, or the scene script's "
