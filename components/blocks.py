@@ -25,7 +25,8 @@ KINDS = ("int", "float", "bool", "string", "asset", "vec3", "vector", "stringvec
 class Key:
     """One key of a block: its scene name, type, default and meaning.
 
-    ``unit`` is written before the meaning (``"m/s, the rim's top speed"``); ``low`` and
+    ``unit`` is written before the meaning (``"m/s, the rim's top speed"``; alone where
+    the unit says it all); ``low`` and
     ``high`` bound a number (told at its line, as ``check`` tells every mistake);
     ``example`` is the value text ``colosseum keys`` shows where the default says too
     little. ``lengths``, ``allowed``, ``ref`` and ``struct`` are the schema's: how many
@@ -51,7 +52,9 @@ class Key:
     @property
     def meaning(self) -> str:
         """The documented meaning, its unit first."""
-        return f"{self.unit}, {self.doc}" if self.unit else self.doc
+        if not self.unit:
+            return self.doc
+        return f"{self.unit}, {self.doc}" if self.doc else self.unit
 
 
 class BuildContext(Protocol):

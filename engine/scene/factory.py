@@ -46,7 +46,6 @@ from components import (
     Physical,
     Script,
     Shape,
-    Sound,
     Transform,
     Trigger,
     UserOwned,
@@ -591,10 +590,6 @@ class _Builder:
                                "RestSteps", "RestSlid", "RestForce", "RestPreloaded"))):
                 self.sleep[oid] = self.sleep_spec(r)
         self.own_poses[oid] = (position, quat)
-        if r.has("Sound"):
-            sr = _Reader(r.value("Sound").data, "Sound")
-            if self.sound_file(sr, "File", f"object '{oid}' has no sound") is not None:
-                comps.append(_sound(sr, oid))
         if r.has("Script"):
             comps.append(Script(file=r("Script"), saved=self.script_states.pop(oid, None)))
         if hand_blk is not None:
@@ -1391,15 +1386,6 @@ class _Builder:
                           cutoff=float(r("Cutoff")), shadows=bool(r("Shadows")))
             spec.entities.append(EntitySpec(lid, [Name(lid), Transform(r("Position")), light],
                                             b.loc))
-        for i, b in enumerate(root.blocks("Sound")):
-            r = _Reader(b, "Sound")
-            sid = r("ID") or f"sound{i}"
-            if self.sound_file(r, "File", f"sound '{sid}' is left out") is None:
-                spec.entities.append(EntitySpec(sid, [], b.loc, skipped=True))
-                continue
-            # without a Position it is music or ambience: played at the listener, stereo kept
-            placed = [Transform(r("Position"))] if r.has("Position") else []
-            spec.entities.append(EntitySpec(sid, [Name(sid), *placed, _sound(r, sid)], b.loc))
         for i, b in enumerate(root.blocks("Controller")):
             r = _Reader(b, "Controller")
             cid = r("ID") or f"controller{i}"
@@ -1557,14 +1543,6 @@ def _primitive(gr: _Reader, size: Any) -> Shape:
     offset = _floats(gr("Offset")) if gr.has("Offset") else _ORIGIN
     rotation = euler_to_quat(gr("Orientation")) if gr.has("Orientation") else _IDENTITY
     return Shape(kind, dims, offset, rotation)
-
-
-def _sound(r: _Reader, owner: str) -> Sound:
-    return Sound(file=r("File"), loop=bool(r("Loop")), gain=float(r("Gain")),
-                 pitch=float(r("Pitch")), ref_distance=float(r("RefDistance")),
-                 rolloff=float(r("Rolloff")), max_distance=float(r("MaxDistance")),
-                 auto_play=bool(r("AutoPlay")), priority=int(r("Priority")),
-                 id=r("ID") or owner)
 
 
 def _controller(r: _Reader) -> Controller:

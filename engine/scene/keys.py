@@ -55,7 +55,6 @@ _EXAMPLES: dict[tuple[str, str], str] = {
     ("ShaderProgram", "FragmentShader"): '"toon_fragment"',
     ("ShaderState", "ID"): '"toon"', ("ShaderState", "ShaderProgram"): '"toon"',
     ("Uniform", "ID"): '"DiffuseColor"', ("Uniform", "Value"): "[0 0.25 1]",
-    ("Sound", "ID"): '"hum"', ("Sound", "File"): '"sounds/motor_hum.ogg"',
     ("Camera", "ID"): '"main"', ("Camera", "Follow"): '"ball"',
     ("Light", "ID"): '"sun"', ("Controller", "ID"): '"throttle"',
     ("Controller", "Input"): '"key:Up/Down"', ("Controller", "Target"): '"motor:pivot"',
