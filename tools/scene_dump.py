@@ -103,7 +103,29 @@ def dump(path: Path) -> Any:
     except SceneError as exc:
         first = exc.diagnostics[0]
         return {"error": f"{Path(first.path).name}:{first.line}: {first.message}"}
-    return _sorted(canonical(spec))
+    return _sorted(_linked(canonical(spec)))
+
+
+#: A spec's references from one entity's component to another object, by ID, set when
+#: the scene is instantiated: (spec field, component type, component field).
+_REFERENCES = (("camera_follow", "Camera", "follow"), ("display_heads", "Display", "head"),
+               ("hand_frames", "Hand", "frame"))
+
+
+def _linked(world: dict[str, Any]) -> dict[str, Any]:
+    """Each reference written into the field it sets (``"@ID"``), as instantiate will: the
+    world holds the link, wherever the spec keeps it until then (a table of its own, or
+    the generic ``links`` of declared blocks)."""
+    found = [(source, kind, name, target) for field, kind, name in _REFERENCES
+             for source, target in world.pop(field, {}).items()]
+    found += [(link["entity"], link["component"], link["field"], link["target"])
+              for link in world.pop("links", [])]
+    by_id = {e["id"]: e for e in world["entities"]}
+    for source, kind, name, target in found:
+        for component in by_id[source]["components"] if source in by_id else ():
+            if component["type"] == kind:
+                component[name] = f"@{target}"
+    return world
 
 
 def _sorted(world: dict[str, Any]) -> dict[str, Any]:
