@@ -73,6 +73,20 @@ class BuildContext(Protocol):
     def given(self, key: str) -> bool:
         """Whether the author wrote ``key`` (not only its default)."""
 
+    def inner(self, key: str) -> list[tuple[Mapping[str, Any], BuildContext]]:
+        """The blocks written inside this one as ``key``: each one's values (defaults
+        filled in) and a context telling at its lines."""
+
+    def link(self, component: Any, field: str, target: str) -> None:
+        """Set ``component.field`` to the entity of object ``target`` once the scene's
+        entities exist (a reference by ID; nothing is set if that object is left out)."""
+
+    def made(self, kind: type) -> bool:
+        """Whether an entity made before this block has a component of type ``kind``."""
+
+    def suggest(self, name: str, choices: Any) -> str:
+        """`` (did you mean 'X'?)`` for the closest of ``choices``; empty if none is."""
+
     def sound_file(self, key: str, outcome: str) -> str | None:
         """``key``'s sound file if it can be played; else None, and ``outcome`` (what is
         left out) told as a problem at its line."""
@@ -103,6 +117,7 @@ class BlockDeclaration:
     repeat: bool = False
     saves: type | None = None
     save: Save | None = None
+    unnamed: str = ""
 
 
 #: Every declaration made so far, by block name (engine.scene.blocks registers each).

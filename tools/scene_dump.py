@@ -54,6 +54,8 @@ def canonical(value: Any, root: Path = ROOT) -> Any:
         return _number(float(value))
     if isinstance(value, np.ndarray | np.generic):
         return canonical(value.tolist(), root)
+    if isinstance(value, type):
+        return value.__name__
     if isinstance(value, Path):
         return _path(value, root)
     if isinstance(value, dict):

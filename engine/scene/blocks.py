@@ -87,6 +87,8 @@ class BlockType:
     saver: Save | None = None
     #: The module that declared it (a content folder's are left out of the engine's docs).
     module: str = ""
+    #: The ID of a top-level one written without one ("": its name and place, sound0).
+    unnamed: str = ""
 
     def build(self, values: Mapping[str, Any]) -> Any:
         """The component from checked values (scene keys)."""
@@ -205,7 +207,8 @@ def register_declared(declared: BlockDeclaration) -> BlockType:
     doc = declared.doc
     docs = {p: doc if isinstance(doc, str) else doc[p] for p in declared.inside}
     block = BlockType(name, declared.saves, tuple(declared.inside), docs[declared.inside[0]],
-                      keys, declared.build, declared.save, declared.build.__module__)
+                      keys, declared.build, declared.save, declared.build.__module__,
+                      declared.unnamed)
     _enter(block, fields, docs, declared.repeat)
     return block
 

@@ -33,11 +33,9 @@ from components import (
     Camera,
     ClipSpec,
     Controller,
-    Display,
     Graspable,
     Hand,
     HandState,
-    Headset,
     Hold,
     Joint,
     Light,
@@ -59,7 +57,7 @@ from components.avatar import (
     SavedLayer,
     SavedRequest,
 )
-from components.display import HEADSET_ACTIONS, HEADSET_PROFILES
+from components.display import binding_problem as display_binding_problem
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, SPRING_KINDS, JointKind, Spring
 from components.script import SavedScript, ScriptHandler, ScriptTimer
 from engine.anomalies import AnomalySpec
@@ -168,14 +166,18 @@ class PostPassSpec:
 def binding_problem(action: str, profile: str, path: str) -> str | None:
     """What is wrong with a headset's ``Bind`` (None: nothing): the scene's check, and
     the OpenXR display's (engine.xr.bindings.Rebinding)."""
-    if action not in HEADSET_ACTIONS:
-        return f"unknown action {action!r}{suggest(action, HEADSET_ACTIONS)} " \
-               f"(actions: {', '.join(HEADSET_ACTIONS)})"
-    if profile not in HEADSET_PROFILES:
-        return f"unknown interaction profile {profile!r}{suggest(profile, HEADSET_PROFILES)}"
-    if not path.startswith(("/user/hand/left/", "/user/hand/right/")):
-        return f"the path {path!r} must start with /user/hand/left/ or /user/hand/right/"
-    return None
+    return display_binding_problem(action, profile, path, suggest)
+
+
+@dataclass(frozen=True, slots=True)
+class Link:
+    """A reference by ID a declared block made (components.blocks.BuildContext.link): once
+    the entities exist, ``component`` of ``entity``'s gets ``field`` = ``target``'s."""
+
+    entity: str
+    component: type
+    field: str
+    target: str
 
 
 @dataclass(slots=True)
@@ -195,7 +197,8 @@ class SceneSpec:
     #: The scene's random generator when a saved state was written (see random_state).
     random_state: dict[str, object] | None = None
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
-    display_heads: dict[str, str] = field(default_factory=dict)  # display ID -> object ID
+    #: References by ID that declared blocks made, set once the entities exist.
+    links: list[Link] = field(default_factory=list)
     #: Hand object ID -> the object its tracker is calibrated relative to.
     hand_frames: dict[str, str] = field(default_factory=dict)
     #: Object ID -> sleep-rule state a saved state carries (see :class:`SleepState`).
@@ -301,11 +304,12 @@ class _Reader(dict):
     ``r("Key")`` is the value (or default); ``r.has("Key")`` whether the author wrote it.
     """
 
-    __slots__ = ("entries", "block", "has", "value")
+    __slots__ = ("entries", "block", "has", "value", "block_name")
     __call__ = dict.__getitem__
 
     def __init__(self, block: Block | None, schema: str):
         dict.__init__(self, _DEFAULTS[schema])
+        self.block_name = schema
         entries = [] if block is None else block.entries
         last = self._read(entries)
         if INCLUDE in last:  # read again with the included files' entries spliced in
@@ -429,6 +433,22 @@ class _Context:
     def given(self, key: str) -> bool:
         return self.reader.has(key)
 
+    def inner(self, key: str) -> list[tuple[Mapping[str, Any], _Context]]:
+        struct = sc.SCHEMAS[self.reader.block_name][key].struct
+        assert struct is not None, f"{key} opens no block"
+        return [(r, _Context(self.builder, r, b.loc, self.owner, self.place, self.has_body))
+                for b in self.reader.blocks(key) for r in [_Reader(b, struct)]]
+
+    def link(self, component: Any, field: str, target: str) -> None:
+        self.builder.spec.links.append(Link(self.owner, type(component), field, target))
+
+    def made(self, kind: type) -> bool:
+        return any(isinstance(c, kind) for e in self.builder.spec.entities
+                   for c in e.components)
+
+    def suggest(self, name: str, choices: Any) -> str:
+        return suggest(name, choices)
+
     def sound_file(self, key: str, outcome: str) -> str | None:
         return self.builder.sound_file(self.reader, key, outcome)
 
@@ -456,11 +476,13 @@ class _Builder:
         self.script_blocks: dict[str, Block] = {}
         #: Points of the file must lie within +-extent (m) on every axis.
         self.extent: float | None = None
+        #: What is built so far (declared blocks' links and headset check read it).
+        self.spec = SceneSpec()
         #: Avatar ID -> the AvatarState block it resumes from (a loaded saved state).
         self.avatar_states: dict[str, Block] = {}
 
     def build(self, db: SceneDB) -> SceneSpec:
-        spec = SceneSpec()
+        spec = self.spec = SceneSpec()
         root = _Index(db.root)
         if self.extent is None:
             self.extent = self.world_extent(root)
@@ -642,7 +664,8 @@ class _Builder:
             if "Scene" not in block.inside:
                 continue
             for i, blk in enumerate(root.blocks(block.name)):
-                bid = _Reader(blk, block.name)("ID") or f"{block.name.lower()}{i}"
+                bid = _Reader(blk, block.name)("ID") or block.unnamed or \
+                    f"{block.name.lower()}{i}"
                 made = self.declared(block, blk, bid, "Scene", False)
                 skipped = made is None or (not made and block.hook is not None)
                 parts = [] if skipped and block.hook is not None else [Name(bid), *(made or [])]
@@ -1363,21 +1386,6 @@ class _Builder:
         for b in root.blocks("Measure"):
             r = _Reader(b, "Measure")
             spec.measures.append(MeasureSpec(r("ID"), r("Object"), r("Value")))
-        for b in root.blocks("Display"):
-            r = _Reader(b, "Display")
-            if r("Kind") == "openxr":
-                self.headset(spec, r, b)
-                continue
-            if not r("ID"):
-                self.report.error(b.loc, "a screen Display needs an ID (the name "
-                                  "colosseum join --display gives); it is left out")
-                continue
-            display = Display(_floats(r("LowerLeft")), _floats(r("LowerRight")),
-                              _floats(r("UpperLeft")), None, r("Tracker"), _floats(r("Eye")),
-                              float(r("Near")), float(r("Far")))
-            if r.has("Head"):
-                spec.display_heads[r("ID")] = r("Head")
-            spec.entities.append(EntitySpec(r("ID"), [Name(r("ID")), display], b.loc))
         for i, b in enumerate(root.blocks("Light")):
             r = _Reader(b, "Light")
             lid = r("ID") or f"light{i}"
@@ -1403,35 +1411,6 @@ class _Builder:
                 self.problems.append(Diagnostic(
                     block.loc.path, block.loc.line, block.loc.col, WARNING,
                     f"ScriptState for {owner!r}, which runs no script here; ignored"))
-
-    def headset(self, spec: SceneSpec, r: _Reader, b: Any) -> None:
-        """``Display { Kind "openxr" }``: the headset, as a Headset component (one)."""
-        if any(isinstance(c, Headset) for e in spec.entities for c in e.components):
-            self.report.error(b.loc, "a second headset Display: a run draws into one headset; "
-                              "this one is left out")
-            return
-        scale = float(r("RenderScale"))
-        if not 0.25 <= scale <= 2.0:
-            self.report.error(r.value("RenderScale").loc,
-                              f"RenderScale must be 0.25 to 2, got {scale:g}")
-            scale = min(max(scale, 0.25), 2.0)
-        bindings = []
-        for bind in b.blocks("Bind"):
-            rb = _Reader(bind, "Bind")
-            problem = binding_problem(rb("Action"), rb("Profile"), rb("Path"))
-            if problem is not None:
-                self.report.error(bind.loc, f"Bind: {problem}; this binding is left out")
-                continue
-            bindings.append((rb("Action"), rb("Profile"), rb("Path")))
-        headset = Headset(
-            space=r("Space"), when_hidden=r("WhenHidden"), mirror=r("Mirror"),
-            fallback=r("Fallback"), refresh_rate=float(r("RefreshRate")), render_scale=scale,
-            depth=bool(r("Depth")), recenter_key=str(r("RecenterKey")).lower(),
-            haptic_grasp=min(max(float(r("HapticGrasp")), 0.0), 1.0),
-            haptic_touch=min(max(float(r("HapticTouch")), 0.0), 1.0),
-            haptic_impulse=max(float(r("HapticImpulse")), 0.0), bindings=tuple(bindings))
-        hid = r("ID") or "headset"
-        spec.entities.append(EntitySpec(hid, [Name(hid), headset], b.loc))
 
     def camera_view(self, r: _Reader, cid: str, blk: Block) -> None:
         """Warn about a camera with no well-defined view direction (the picture and the
@@ -1567,9 +1546,10 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     for cam_id, target in spec.camera_follow.items():
         cam = engine.world.component_for_entity(ids[cam_id], Camera)
         cam.follow = ids[target]
-    for display_id, head in spec.display_heads.items():
-        if head in ids:
-            engine.world.component_for_entity(ids[display_id], Display).head = ids[head]
+    for link in spec.links:
+        if link.entity in ids and link.target in ids:
+            setattr(engine.world.component_for_entity(ids[link.entity], link.component),
+                    link.field, ids[link.target])
     for hand_id, frame in spec.hand_frames.items():
         if hand_id in ids and frame in ids:
             engine.world.component_for_entity(ids[hand_id], Hand).frame = ids[frame]

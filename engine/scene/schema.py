@@ -106,9 +106,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Light": _f(STRUCT_T, None, "a light source", repeat=True, struct="Light"),
         "Measure": _f(STRUCT_T, None, "a value the run reports at its end (--stats "
                       "measures, colosseum sweep's table)", repeat=True, struct="Measure"),
-        "Display": _f(STRUCT_T, None, "a screen of a wall or CAVE, drawn off-axis from the "
-                      "viewer's head (colosseum join --display ID)", repeat=True,
-                      struct="Display"),
         "Script": _f(ASSET_T, doc="a Lua script run for the whole scene", repeat=True),
         "Controller": _f(STRUCT_T, None,
                          "an input bound to a motor, force or kinematic target", repeat=True,
@@ -357,59 +354,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Object": _f(REF_T, None, "the object measured", ref="Object", required=True),
         "Value": _f(ENUM_T, "z", "x, y, z (m), vx, vy, vz (m/s) or speed (m/s) at the end "
                     "of the run", allowed=QUANTITIES),
-    },
-    "Display": {
-        "ID": _id("display (a screen's is required)"),
-        "Kind": _f(ENUM_T, "screen", "screen: a flat screen of a wall or CAVE (the keys "
-                   "below up to Far); openxr: the headset, through the active OpenXR runtime "
-                   "(the keys from Space on)", allowed=("screen", "openxr")),
-        "LowerLeft": _f(VEC3_T, (-1.0, 0.0, 0.0), "m, world frame: the screen's lower left "
-                        "corner"),
-        "LowerRight": _f(VEC3_T, (1.0, 0.0, 0.0), "m, world frame: its lower right corner"),
-        "UpperLeft": _f(VEC3_T, (-1.0, 0.0, 1.5), "m, world frame: its upper left corner"),
-        "Head": _f(REF_T, None, "object whose position is the viewer's eye (one a head "
-                   "tracker moves on the server: Tracker { ID \"USER/head\" Object ... })",
-                   ref="Object"),
-        "Tracker": _f(STRING_T, None, "a tracker of this node's own input whose position is "
-                      "the eye (when there is no Head)"),
-        "Eye": _f(VEC3_T, (0.0, -2.0, 0.75), "m, world frame: the eye while no head is tracked"),
-        "Near": _f(FLOAT_T, 0.05, "m, nearest distance drawn"),
-        "Far": _f(FLOAT_T, 500.0, "m, farthest distance drawn"),
-        "Space": _f(ENUM_T, "stage", "openxr: the tracking space (stage: the floor at z = 0; "
-                    "local_floor, then local, where the runtime has no stage)",
-                    allowed=("stage", "local_floor", "local")),
-        "WhenHidden": _f(ENUM_T, "run", "openxr: a headset taken off pauses the simulation "
-                         "(pause) or not (run)", allowed=("run", "pause")),
-        "Mirror": _f(ENUM_T, "none", "openxr: a window for the experimenter showing the left "
-                     "eye or both (needs a display)", allowed=("none", "left", "both")),
-        "Fallback": _f(ENUM_T, "none", "openxr: when no headset can be used, run in the "
-                       "window (window) or end with the message (none)",
-                       allowed=("none", "window")),
-        "RefreshRate": _f(FLOAT_T, 0.0, "Hz, openxr: the display's rate where the runtime can "
-                          "set it (0: the runtime's)"),
-        "RenderScale": _f(FLOAT_T, 1.0, "openxr: the share of the runtime's recommended "
-                          "resolution per eye each axis is drawn at (0.25 to 2)"),
-        "Depth": _f(BOOL_T, 1, "openxr: hand the runtime the depth of each eye (for its "
-                    "reprojection), where it takes it"),
-        "RecenterKey": _f(STRING_T, "f8", "openxr: the key that moves the player over the "
-                          "camera, facing its way (Lua: recenter())"),
-        "HapticGrasp": _f(FLOAT_T, 0.6, "openxr: amplitude 0..1 of the pulse a grasp gives "
-                          "the holding controller (0: none)"),
-        "HapticTouch": _f(FLOAT_T, 0.25, "openxr: amplitude 0..1 of the pulse when a hand "
-                          "starts touching something it could grasp (0: none)"),
-        "HapticImpulse": _f(FLOAT_T, 0.5, "1/(N s), openxr: a hand's contact pulses with "
-                            "amplitude impulse times this (capped at 1; 0: none)"),
-        "Bind": _f(STRUCT_T, None, "openxr: bind an action to another input of a "
-                   "controller", repeat=True, struct="Bind"),
-    },
-    "Bind": {
-        "Action": _f(STRING_T, None, "the action: grip, aim, trigger, trigger_value, squeeze, "
-                     "squeeze_value, thumbstick, thumbstick_click, a, b, x, y, menu, select, "
-                     "haptic", required=True),
-        "Profile": _f(STRING_T, None, "the interaction profile, e.g. oculus/touch_controller",
-                      required=True),
-        "Path": _f(STRING_T, None, "the input, e.g. /user/hand/right/input/trigger/value",
-                   required=True),
     },
     "Light": {
         "ID": _id("light"),
