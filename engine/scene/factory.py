@@ -32,13 +32,11 @@ from components import (
     Avatar,
     Camera,
     ClipSpec,
-    Controller,
     Graspable,
     Hand,
     HandState,
     Hold,
     Joint,
-    Light,
     MaterialProps,
     Name,
     Physical,
@@ -621,8 +619,6 @@ class _Builder:
             comps.append(Graspable(False))
         if r.has("User"):
             comps.append(UserOwned(r("User")))
-        if r.has("Controller"):
-            comps.append(_controller(_Reader(r.value("Controller").data, "Controller")))
         comps += self.declared_blocks(r, "Object", oid, phys_blk is not None or bare)
         return EntitySpec(oid, comps, blk.loc)
 
@@ -1386,18 +1382,6 @@ class _Builder:
         for b in root.blocks("Measure"):
             r = _Reader(b, "Measure")
             spec.measures.append(MeasureSpec(r("ID"), r("Object"), r("Value")))
-        for i, b in enumerate(root.blocks("Light")):
-            r = _Reader(b, "Light")
-            lid = r("ID") or f"light{i}"
-            light = Light(kind=r("Type"), color=_floats(r("Color")),
-                          intensity=float(r("Intensity")), direction=_floats(r("Direction")),
-                          cutoff=float(r("Cutoff")), shadows=bool(r("Shadows")))
-            spec.entities.append(EntitySpec(lid, [Name(lid), Transform(r("Position")), light],
-                                            b.loc))
-        for i, b in enumerate(root.blocks("Controller")):
-            r = _Reader(b, "Controller")
-            cid = r("ID") or f"controller{i}"
-            spec.entities.append(EntitySpec(cid, [Name(cid), _controller(r)], b.loc))
         for i, e in enumerate(root.get_all("Script")):
             sid = f"script{i}"
             script = Script(file=e.value.data, saved=self.script_states.pop(sid, None))
@@ -1522,13 +1506,6 @@ def _primitive(gr: _Reader, size: Any) -> Shape:
     offset = _floats(gr("Offset")) if gr.has("Offset") else _ORIGIN
     rotation = euler_to_quat(gr("Orientation")) if gr.has("Orientation") else _IDENTITY
     return Shape(kind, dims, offset, rotation)
-
-
-def _controller(r: _Reader) -> Controller:
-    low, high = r("Low"), r("High")
-    return Controller(input=r("Input"), target=r("Target"), gain=float(r("Gain")),
-                      low=float("-inf") if low is None else float(low),
-                      high=float("inf") if high is None else float(high))
 
 
 def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[str, int]:

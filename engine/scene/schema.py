@@ -75,7 +75,6 @@ PRIMITIVES = (ShapeKind.SPHERE, ShapeKind.BOX, ShapeKind.CAPSULE, ShapeKind.CYLI
               ShapeKind.PLANE)
 PARSE_METHODS = ("TriangleMesh", "ConvexHull", "Box", "Sphere")
 JOINT_TYPES = tuple(SCENE_JOINT_TYPES)
-LIGHT_TYPES = ("directional", "point", "spot")
 BACKENDS = tuple(BackendName)
 INPUT_KINDS = ("osc", "lsl", "serial", "openxr", "desktop")
 OUTPUT_KINDS = ("osc", "lsl")
@@ -103,13 +102,9 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Camera": _f(STRUCT_T, None,
                      "a viewpoint (the first active one is drawn and heard from)", repeat=True,
                      struct="Camera"),
-        "Light": _f(STRUCT_T, None, "a light source", repeat=True, struct="Light"),
         "Measure": _f(STRUCT_T, None, "a value the run reports at its end (--stats "
                       "measures, colosseum sweep's table)", repeat=True, struct="Measure"),
         "Script": _f(ASSET_T, doc="a Lua script run for the whole scene", repeat=True),
-        "Controller": _f(STRUCT_T, None,
-                         "an input bound to a motor, force or kinematic target", repeat=True,
-                         struct="Controller"),
         "World": _f(STRUCT_T, doc="dynamics settings", struct="World"),
         "Avatar": _f(STRUCT_T, doc="a skinned, animated figure (glTF)", repeat=True,
                      struct="Avatar"),
@@ -169,7 +164,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                    "avatar, a wheelchair, hands: a server takes it out of the world "
                    "--leave-after s after that user's node leaves, unless the user comes "
                    "back"),
-        "Controller": _f(STRUCT_T, doc="input bound to this object", struct="Controller"),
         "UserData": _f(ANY_T, None, "free-form data for custom systems", repeat=True),
         # The sleep rule's state (engine.physics.sleep; written by --save-state so a
         # loaded state falls asleep when the uninterrupted run would).
@@ -354,27 +348,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Object": _f(REF_T, None, "the object measured", ref="Object", required=True),
         "Value": _f(ENUM_T, "z", "x, y, z (m), vx, vy, vz (m/s) or speed (m/s) at the end "
                     "of the run", allowed=QUANTITIES),
-    },
-    "Light": {
-        "ID": _id("light"),
-        "Type": _f(ENUM_T, "directional", "directional, point or spot", allowed=LIGHT_TYPES),
-        "Position": _f(VEC3_T, (0.0, 0.0, 10.0), "m, world frame (point and spot lights)"),
-        "Direction": _f(VEC3_T, (0.3, 0.5, -1.0), "world frame (directional and spot lights)"),
-        "Color": _f(VEC3_T, (1.0, 1.0, 1.0), "RGB, 0..1"),
-        "Intensity": _f(FLOAT_T, 1.0, "colour multiplier"),
-        "Cutoff": _f(FLOAT_T, 30.0, "spot cone half-angle, degrees"),
-        "Shadows": _f(BOOL_T, 1, "1: casts shadows (one light does)"),
-    },
-    "Controller": {
-        "ID": _id("controller"),
-        "Input": _f(STRING_T, None, '"key:A", "key:Up/Down", "axis:DEVICE/NAME", '
-                    '"button:DEVICE/NAME", "button:ID", "tracker:NAME" or "wheel:NAME" (rad/s)',
-                    required=True),
-        "Target": _f(STRING_T, None, '"motor:JOINT", "force:OBJECT" or "kinematic:OBJECT"',
-                     required=True),
-        "Gain": _f(FLOAT_T, 1.0, "target value per unit of input"),
-        "Low": _f(FLOAT_T, None, "lower bound of the target value"),
-        "High": _f(FLOAT_T, None, "upper bound of the target value"),
     },
     "Hand": {
         "Tracker": _f(STRING_T, None, "the input tracker whose pose the hand follows "
