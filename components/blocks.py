@@ -73,6 +73,30 @@ class BuildContext(Protocol):
     def given(self, key: str) -> bool:
         """Whether the author wrote ``key`` (not only its default)."""
 
+    def warning(self, key: str | None, message: str) -> None:
+        """A warning at ``key``'s line (None: the block's own line)."""
+
+    def beside(self, key: str) -> tuple[Mapping[str, Any], BuildContext] | None:
+        """The block ``key`` written beside this one in the same object (its values and a
+        context telling at its lines); None where there is none."""
+
+    def component(self, kind: type) -> Any:
+        """The object's component of type ``kind`` made so far (its body: Physical), or
+        None; a block may adjust it."""
+
+    def check_mass(self, key: str) -> None:
+        """Tell a mass or density at ``key`` that is not positive, or past what any body
+        may have."""
+
+    def input_name(self, key: str, kind: str, who: str) -> None:
+        """``key`` names an input ``kind`` ("tracker" or "glove"): once the scene's Input
+        is read, a name it does not declare is told (an error where it declares some, a
+        warning where the name must come from a device); ``who`` starts the message."""
+
+    def model_file(self, key: str) -> str | None:
+        """``key``'s model file if it can be read; else None, told as a problem (the object
+        keeps its own look)."""
+
     def inner(self, key: str) -> list[tuple[Mapping[str, Any], BuildContext]]:
         """The blocks written inside this one as ``key``: each one's values (defaults
         filled in) and a context telling at its lines."""

@@ -33,8 +33,6 @@ from components import (
     Camera,
     ClipSpec,
     Graspable,
-    Hand,
-    HandState,
     Hold,
     Joint,
     MaterialProps,
@@ -56,6 +54,7 @@ from components.avatar import (
     SavedRequest,
 )
 from components.display import binding_problem as display_binding_problem
+from components.hand import HAND_SIZE
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, SPRING_KINDS, JointKind, Spring
 from components.script import SavedScript, ScriptHandler, ScriptTimer
 from engine.anomalies import AnomalySpec
@@ -105,8 +104,6 @@ if TYPE_CHECKING:
     from engine.app import Engine
 
 #: A virtual hand's body when the author gives none: a palm-sized box (m) of 0.45 kg.
-HAND_SIZE = (0.09, 0.18, 0.03)
-HAND_MASS = 0.45
 #: Shared defaults (tuples: immutable, so every shape and pose may hold the same one).
 _ORIGIN = (0.0, 0.0, 0.0)
 _IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -197,8 +194,6 @@ class SceneSpec:
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
     #: References by ID that declared blocks made, set once the entities exist.
     links: list[Link] = field(default_factory=list)
-    #: Hand object ID -> the object its tracker is calibrated relative to.
-    hand_frames: dict[str, str] = field(default_factory=dict)
     #: Object ID -> sleep-rule state a saved state carries (see :class:`SleepState`).
     sleep: dict[str, SleepState] = field(default_factory=dict)
     content_dir: Path | None = None
@@ -415,18 +410,32 @@ def build_specs(db: SceneDB, content_dir: str | Path | None = None,
 
 
 class _Context:
-    """What a declared block's build function may ask (components.blocks.BuildContext)."""
+    """What a declared block's build function may ask (components.blocks.BuildContext):
+    its block's values, the object it stands in (``outer``, its components ``made``)."""
 
-    __slots__ = ("builder", "reader", "loc", "owner", "place", "has_body")
+    __slots__ = ("builder", "reader", "loc", "owner", "place", "has_body", "outer", "parts")
 
     def __init__(self, builder: _Builder, reader: _Reader, loc: Loc, owner: str, place: str,
-                 has_body: bool) -> None:
+                 has_body: bool, outer: _Reader | None = None,
+                 parts: list[Any] | None = None) -> None:
         self.builder, self.reader, self.loc = builder, reader, loc
         self.owner, self.place, self.has_body = owner, place, has_body
+        self.outer, self.parts = outer, parts if parts is not None else []
+
+    def at(self, reader: _Reader, loc: Loc) -> _Context:
+        """The same object's context for another block (told at its lines)."""
+        return _Context(self.builder, reader, loc, self.owner, self.place, self.has_body,
+                        self.outer, self.parts)
+
+    def _loc(self, key: str | None) -> Loc:
+        written = None if key is None else self.reader.value(key)
+        return self.loc if written is None else written.loc
 
     def error(self, key: str | None, message: str) -> None:
-        written = None if key is None else self.reader.value(key)
-        self.builder.report.error(self.loc if written is None else written.loc, message)
+        self.builder.report.error(self._loc(key), message)
+
+    def warning(self, key: str | None, message: str) -> None:
+        self.builder.report.warning(self._loc(key), message)
 
     def given(self, key: str) -> bool:
         return self.reader.has(key)
@@ -434,8 +443,32 @@ class _Context:
     def inner(self, key: str) -> list[tuple[Mapping[str, Any], _Context]]:
         struct = sc.SCHEMAS[self.reader.block_name][key].struct
         assert struct is not None, f"{key} opens no block"
-        return [(r, _Context(self.builder, r, b.loc, self.owner, self.place, self.has_body))
-                for b in self.reader.blocks(key) for r in [_Reader(b, struct)]]
+        return [(r, self.at(r, b.loc)) for b in self.reader.blocks(key)
+                for r in [_Reader(b, struct)]]
+
+    def beside(self, key: str) -> tuple[Mapping[str, Any], _Context] | None:
+        written = None if self.outer is None else self.outer.value(key)
+        if written is None or written.kind != STRUCTURE:
+            return None
+        struct = sc.SCHEMAS[self.outer.block_name][key].struct  # type: ignore[union-attr]
+        r = _Reader(written.data, struct or key)
+        return r, self.at(r, written.loc)
+
+    def component(self, kind: type) -> Any:
+        return next((c for c in self.parts if isinstance(c, kind)), None)
+
+    def check_mass(self, key: str) -> None:
+        written = self.reader.value(key)
+        if written is not None:
+            self.builder.limited(written, key, MAX_MASS if key == "Mass" else MAX_DENSITY,
+                                 "kg" if key == "Mass" else "kg/m³")
+
+    def input_name(self, key: str, kind: str, who: str) -> None:
+        if self.reader(key):
+            self.builder.input_names.append((who, kind, self.reader(key), self._loc(key)))
+
+    def model_file(self, key: str) -> str | None:
+        return self.builder.model(self.reader, key)
 
     def link(self, component: Any, field: str, target: str) -> None:
         self.builder.spec.links.append(Link(self.owner, type(component), field, target))
@@ -467,8 +500,9 @@ class _Builder:
         self.physical_ids: set[str] = set()
         self.static_ids: set[str] = set()  # bodies that never move (a joint sees no body)
         self.sleep: dict[str, SleepState] = {}
-        self.hand_frames: dict[str, str] = {}
-        self.hand_inputs: list[tuple[str, _Reader]] = []  # what each hand's Hand names
+        #: Inputs blocks name (who, "tracker" or "glove", the name, where), checked
+        #: against the scene's Input once it is read.
+        self.input_names: list[tuple[str, str, str, Loc]] = []
         #: Owner -> the saved state its script resumes from, and the block that said so.
         self.script_states: dict[str, SavedScript] = {}
         self.script_blocks: dict[str, Block] = {}
@@ -509,14 +543,13 @@ class _Builder:
             if js is not None:
                 spec.joints.append(js)
         spec.sleep = self.sleep
-        spec.hand_frames = self.hand_frames
         self.shaders(root, spec)
         self.world(root, spec)
         self.scene_entities(root, spec)
         spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
         spec.anomalies = read_anomalies(root.blocks, self.report, self.problems)
         spec.experiment = read_experiment(db.root, self.report, spec.anomalies, self.folder)
-        self.check_hand_inputs(spec.input)
+        self.check_input_names(spec.input)
         for i, blk in enumerate(root.blocks("Avatar")):
             spec.entities.append(self.avatar(blk, i))
         self.unclaimed_script_states()
@@ -579,8 +612,7 @@ class _Builder:
             map(math.radians, r("AngularVelocity"))) if r.has("AngularVelocity") else _ORIGIN
         comps: list[Any] = [Name(oid), Transform(position, quat, r("Velocity"), angular)]
         size = r("Size")
-        hand_blk = r.value("Hand")
-        if hand_blk is not None and size is None:
+        if r.has("Hand") and size is None:  # a hand's body is a hand-sized box
             size = HAND_SIZE
         vis_blk, phys_blk = r.value("VisualAttributes"), r.value("PhysicalAttributes")
         bare = vis_blk is None and phys_blk is None
@@ -598,8 +630,6 @@ class _Builder:
                 shadowed=bool(vis("Shadowed")), visible=bool(vis("Visible"))))
         if phys_blk is not None or bare:
             body = self.physical(r, phys, size, visual_shapes, model, scale, position, quat)
-            if hand_blk is not None:
-                self.hand_body(body, phys, _Reader(hand_blk.data, "Hand"), oid)
             comps.append(body)
             if phys("Trigger"):
                 comps.append(Trigger(mask=int(phys("Mask"))))
@@ -612,29 +642,30 @@ class _Builder:
         self.own_poses[oid] = (position, quat)
         if r.has("Script"):
             comps.append(Script(file=r("Script"), saved=self.script_states.pop(oid, None)))
-        if hand_blk is not None:
-            comps += self.hand(_Reader(hand_blk.data, "Hand"), oid, hand_blk.loc,
-                               phys_blk is not None or bare)
         if not r("Graspable"):
             comps.append(Graspable(False))
         if r.has("User"):
             comps.append(UserOwned(r("User")))
-        comps += self.declared_blocks(r, "Object", oid, phys_blk is not None or bare)
+        comps += self.declared_blocks(r, "Object", oid, phys_blk is not None or bare, comps)
         return EntitySpec(oid, comps, blk.loc)
 
     def declared_blocks(self, r: _Reader | _Index, place: str, owner: str,
-                        has_body: bool) -> list[Any]:
+                        has_body: bool, parts: list[Any] | None = None) -> list[Any]:
         """The components of the blocks features declared for ``place`` (engine.scene.
-        blocks: the engine's own and a content folder's), on the entity of ``owner``."""
+        blocks: the engine's own and a content folder's), on the entity of ``owner``
+        (whose components so far are ``parts``)."""
         made: list[Any] = []
+        outer = r if isinstance(r, _Reader) and place == "Object" else None
         for block in blocks.BLOCKS.values():
             if place in block.inside:
                 for blk in r.blocks(block.name):
-                    made += self.declared(block, blk, owner, place, has_body) or []
+                    made += self.declared(block, blk, owner, place, has_body, outer,
+                                          parts) or []
         return made
 
     def declared(self, block: blocks.BlockType, blk: Block, owner: str, place: str,
-                 has_body: bool) -> list[Any] | None:
+                 has_body: bool, outer: _Reader | None = None,
+                 parts: list[Any] | None = None) -> list[Any] | None:
         """One declared block's components, and those of the blocks declared inside it;
         None (told at the line) when a value is out of its key's range or its build
         leaves it out."""
@@ -648,10 +679,11 @@ class _Builder:
         if block.hook is None:
             made: list[Any] | None = [block.build(values)]
         else:
-            made = block.hook(values, _Context(self, r, blk.loc, owner, place, has_body))
+            made = block.hook(values, _Context(self, r, blk.loc, owner, place, has_body,
+                                               outer, parts))
         if made is None:
             return None
-        return made + self.declared_blocks(r, block.name, owner, has_body)
+        return made + self.declared_blocks(r, block.name, owner, has_body, parts)
 
     def declared_entities(self, root: _Index, spec: SceneSpec) -> None:
         """Top-level declared blocks: an entity each, named by its ID (one its build
@@ -683,59 +715,26 @@ class _Builder:
                 shapes.append(_primitive(gr, size))
         return shapes, model, scale
 
-    def hand(self, h: _Reader, oid: str, loc: Loc, has_body: bool) -> list[Any]:
-        """A Hand and its standing; a hand needs a body (an Object without one is told)."""
-        if not has_body:
-            self.report.error(loc, f"object '{oid}' has a Hand but no PhysicalAttributes: a "
-                                   "virtual hand is a body (leave both Visual- and "
-                                   "PhysicalAttributes out for the default hand box)")
-            return []
-        # the drive's bounds and response reach the backend: refused here, at their line
-        for key, least in (("MaxForce", 0.0), ("MaxTorque", 0.0), ("TimeConstant", 0.0),
-                           ("MaxSpeed", None), ("MaxSpin", None), ("DeviationDistance", None),
-                           ("BreakForce", None)):
-            value = h(key)
-            if value is not None and not (value > 0 or value == least):
-                self.report.error(h.value(key).loc, f"hand '{oid}': {key} must be "
-                                  f"{'positive' if least is None else '>= 0'}, got {value:g}")
-        if h.has("Frame"):
-            self.hand_frames[oid] = h("Frame")
-        self.hand_inputs.append((oid, h))
-        models = {key: self.model(h, key) for key in ("NeutralModel", "ContactModel",
-                                                      "GraspModel")}
-        hand = Hand(tracker=h("Tracker"), glove=h("Glove"), button=h("Button"),
-                    max_force=float(h("MaxForce")), max_torque=float(h("MaxTorque")),
-                    time_constant=float(h("TimeConstant")), max_speed=float(h("MaxSpeed")),
-                    max_spin=math.radians(float(h("MaxSpin"))),
-                    deviation_distance=float(h("DeviationDistance")),
-                    break_force=_opt(h("BreakForce")), marker=bool(h("Marker")),
-                    neutral_model=models["NeutralModel"],
-                    contact_model=models["ContactModel"], grasp_model=models["GraspModel"],
-                    holding=tuple(h("Holding") or ()))
-        return [hand, HandState()]
-
-    def check_hand_inputs(self, inputs: InputSpec) -> None:
-        """A hand's tracker and glove must be ones the scene declares (or the desktop
-        device's); with none declared, names from a device that sends them (OSC, LSL) are
-        expected, and a name nothing declares is told as a warning."""
-        trackers = {t.id for t in inputs.trackers}
-        gloves = {b.device for b in inputs.buttons}
-        for oid, h in self.hand_inputs:
-            for key, declared, desktop in (("Tracker", trackers, DESKTOP_TRACKERS),
-                                           ("Glove", gloves, DESKTOP_GLOVES)):
-                name = h(key)
-                if not name or name in declared or name in desktop:
-                    continue
-                known = ", ".join(sorted({*declared, *desktop}))
-                what = "tracker" if key == "Tracker" else "glove"
-                hint = suggest(name, sorted({*declared, *desktop}))
-                if declared:
-                    self.report.error(h.value(key).loc, f"hand '{oid}': no {what} {name!r} "
-                                      f"in this scene's Input (known: {known}){hint}")
-                else:
-                    self.report.warning(h.value(key).loc, f"hand '{oid}': {what} {name!r} is "
-                                        f"declared nowhere; it must come from a device that "
-                                        f"sends it (known here: {known}){hint}")
+    def check_input_names(self, inputs: InputSpec) -> None:
+        """Trackers and gloves blocks name (a hand's) must be ones the scene declares (or
+        the desktop device's); with none declared, names from a device that sends them
+        (OSC, LSL) are expected, and a name nothing declares is told as a warning."""
+        declared = {"tracker": {t.id for t in inputs.trackers},
+                    "glove": {b.device for b in inputs.buttons}}
+        desktop = {"tracker": DESKTOP_TRACKERS, "glove": DESKTOP_GLOVES}
+        for who, what, name, loc in self.input_names:
+            known_here = {*declared[what], *desktop[what]}
+            if name in known_here:
+                continue
+            known = ", ".join(sorted(known_here))
+            hint = suggest(name, sorted(known_here))
+            if declared[what]:
+                self.report.error(loc, f"{who}: no {what} {name!r} in this scene's Input "
+                                  f"(known: {known}){hint}")
+            else:
+                self.report.warning(loc, f"{who}: {what} {name!r} is declared nowhere; it "
+                                    f"must come from a device that sends it (known here: "
+                                    f"{known}){hint}")
 
     def limited(self, value: Value, key: str, most: float, unit: str) -> None:
         """Report a Mass or Density not positive, or past what any body may have."""
@@ -744,28 +743,6 @@ class _Builder:
         elif value.data > most:
             self.report.error(value.loc, f"{key} {value.data:g} {unit} is past the most a "
                                          f"body may have ({most:g} {unit})")
-
-    def hand_body(self, body: Physical, phys: _Reader, h: _Reader, oid: str) -> None:
-        """A hand floats (its drive holds it up) and never sleeps; it weighs a hand's
-        0.45 kg unless the author gave it a mass: the Hand's ``Mass``, or its
-        PhysicalAttributes' Mass or Density (one of them; both is an error)."""
-        if phys.has("Gravity") and phys("Gravity"):
-            self.report.warning(phys.value("Gravity").loc, f"object '{oid}' is a hand: hands "
-                                "float, so Gravity 1 is ignored")
-        body.gravity = False
-        body.can_sleep = False
-        own = next((key for key in ("Mass", "Density") if phys.has(key)), None)
-        mass = h.value("Mass")
-        if mass is None:
-            if own is None:
-                body.mass = HAND_MASS
-        elif own is not None:
-            self.report.error(mass.loc, f"hand '{oid}': Mass {mass.data:g} kg here and "
-                              f"{own} {phys(own):g} in its PhysicalAttributes: give the "
-                              "hand's weight once")
-        else:
-            self.limited(mass, "Mass", MAX_MASS, "kg")
-            body.mass = float(mass.data)
 
     def physical(self, r: _Reader, phys: _Reader, size: Any, visual_shapes: list[Shape],
                  model: str | None, scale: tuple[float, ...], position: tuple[float, ...],
@@ -1527,9 +1504,6 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
         if link.entity in ids and link.target in ids:
             setattr(engine.world.component_for_entity(ids[link.entity], link.component),
                     link.field, ids[link.target])
-    for hand_id, frame in spec.hand_frames.items():
-        if hand_id in ids and frame in ids:
-            engine.world.component_for_entity(ids[hand_id], Hand).frame = ids[frame]
     joints: dict[str, int] = {}
     for js in spec.joints:
         if js.skipped:

@@ -56,7 +56,7 @@ _EXAMPLES: dict[tuple[str, str], str] = {
     ("ShaderState", "ID"): '"toon"', ("ShaderState", "ShaderProgram"): '"toon"',
     ("Uniform", "ID"): '"DiffuseColor"', ("Uniform", "Value"): "[0 0.25 1]",
     ("Camera", "ID"): '"main"', ("Camera", "Follow"): '"ball"',
-    ("Hand", "Tracker"): '"glove"', ("World", "SolverSeed"): "2767133776",
+    ("World", "SolverSeed"): "2767133776",
     ("World", "Time"): "2.0",
     ("ScriptState", "Owner"): '"ball"', ("ScriptState", "Globals"): '"{score = 3}"',
     ("ScriptState", "Locals"): '"{bounces = 2}"',

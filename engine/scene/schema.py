@@ -156,9 +156,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                                  "its body and collision shapes (no block: not simulated)",
                                  struct="Physical"),
         "Script": _f(ASSET_T, doc="Lua script attached to this object"),
-        "Hand": _f(STRUCT_T, None, "makes the object a virtual hand: a body driven toward a "
-                   "tracker's pose with bounded force, grasping on a glove's button",
-                   struct="Hand"),
         "Graspable": _f(BOOL_T, 1, "0: hands cannot hold it (dynamic bodies can by default)"),
         "User": _f(STRING_T, None, "the user (colosseum join --user NAME) it stands for — an "
                    "avatar, a wheelchair, hands: a server takes it out of the world "
@@ -348,41 +345,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Object": _f(REF_T, None, "the object measured", ref="Object", required=True),
         "Value": _f(ENUM_T, "z", "x, y, z (m), vx, vy, vz (m/s) or speed (m/s) at the end "
                     "of the run", allowed=QUANTITIES),
-    },
-    "Hand": {
-        "Tracker": _f(STRING_T, None, "the input tracker whose pose the hand follows "
-                      "(Input { Tracker { ID } }, or hand_l/hand_r of the desktop device)",
-                      required=True),
-        "Glove": _f(STRING_T, "", "the input device whose Button holds what the hand touches "
-                    "(glove_l/glove_r: the desktop device's mouse button)"),
-        "Button": _f(STRING_T, "pinch", "the glove's button that grasps while down"),
-        "Mass": _f(FLOAT_T, None, "kg the hand's body weighs (default 0.45; give it here or "
-                   "as PhysicalAttributes' Mass or Density, not both)"),
-        "MaxForce": _f(FLOAT_T, 300.0, "N the drive may push with: a heavier load lags, a "
-                       "wall stops the hand"),
-        "MaxTorque": _f(FLOAT_T, 30.0, "N*m the drive may turn with"),
-        "TimeConstant": _f(FLOAT_T, 0.0, "s the hand's distance to its tracker closes with; "
-                           "0: max(2 TimeStep, 0.03 s)"),
-        "MaxSpeed": _f(FLOAT_T, 10.0, "m/s the drive's correction is capped at (a tracker's "
-                       "own speed comes on top)"),
-        "MaxSpin": _f(FLOAT_T, 1146.0, "deg/s the drive's turning correction is capped at "
-                      "(20 rad/s)"),
-        "DeviationDistance": _f(FLOAT_T, 0.3, "m (D): farther from its tracker the hand passes "
-                                "through things and snaps back; it collides again under "
-                                "0.1 D, and is drawn see-through, on top, from 0.1 D to 0.7 D"),
-        "BreakForce": _f(FLOAT_T, None, "N a grip carries before it lets go: the pull "
-                         "toward the hand and any shear beyond what pressing the object "
-                         "against the palm holds (none: never)"),
-        "Marker": _f(BOOL_T, 1, "show a ball where the real hand (the tracker) is"),
-        "NeutralModel": _f(ASSET_T, None, "model drawn while the hand touches nothing it "
-                           "could grasp (a relaxed hand); default: the object's own look"),
-        "ContactModel": _f(ASSET_T, None, "model drawn while the hand touches something it "
-                           "could grasp (an open hand); default: the object's own look"),
-        "GraspModel": _f(ASSET_T, None, "model drawn while it holds something (a closed hand)"),
-        "Frame": _f(REF_T, None, "the object the tracker is calibrated relative to (a "
-                    "wheelchair): the hand follows it", ref="Object"),
-        "Holding": _f(STRINGVECTOR_T, None, "objects held when this state was saved (written "
-                      "by --save-state; they are held again on load)"),
     },
     "Session": {
         "Folder": _f(STRING_T, "", "the folder session logs go to, relative to the working "
