@@ -155,8 +155,9 @@ def register(name: str, component: type, inside: tuple[str, ...] = ("Object",),
     if not inside or any(p not in PLACES for p in inside):
         raise BlockError(f"block {name!r}: inside must name some of {', '.join(PLACES)}")
     known = BLOCKS.get(name)
-    if (known is None and name in sc.SCHEMAS) or (
-            known is not None and known.component.__qualname__ != component.__qualname__):
+    if (known is None and name in sc.SCHEMAS) or (known is not None and (
+            known.component is None or known.hook is not None
+            or known.component.__qualname__ != component.__qualname__)):
         raise BlockError(f"block {name!r} exists already; choose another name")
     fields, keys = _schema(name, component)
     block = BlockType(name, component, tuple(inside), doc or name, keys,
