@@ -152,7 +152,7 @@ def save_states() -> None:
     sessions = tempfile.mkdtemp(prefix="colosseum-golden-")
     for name in SAVED:
         out = STATES / f"{name}.scene"
-        subprocess.run([sys.executable, "-m", "engine.cli", "run", str(ROOT / "content" / name),
+        subprocess.run([sys.executable, "-m", _cli(), "run", str(ROOT / "content" / name),
                         "--headless", "--fast", "--frames", str(FRAMES), "--sound", "null",
                         "--no-xr", "--seed", "1", "--sessions", sessions,
                         "--save-state", str(out)],
@@ -160,6 +160,11 @@ def save_states() -> None:
         # the comments name the folder it was saved from: kept relative, as the data is
         out.write_text(out.read_text(encoding="utf-8").replace(f"{ROOT}/", ""),
                        encoding="utf-8")
+
+
+def _cli() -> str:
+    """The module ``colosseum`` runs (the application package's, where it has moved)."""
+    return "app.cli" if (ROOT / "app" / "cli.py").is_file() else "engine.cli"
 
 
 def main(argv: list[str]) -> int:
