@@ -4,8 +4,8 @@ scene format's code (``python -m tools.scene_dump`` writes the golden dumps).
 Every scene file in ``content/`` and ``tests/`` and a few saved states are built into
 a :class:`~engine.scene.SceneSpec`; the dump lists its entities (each component's type
 and field values), joints, materials, world settings, inputs, anomalies and experiment,
-entities by ID and their components by type, floats rounded, mappings sorted,
-places and caches left out. A change that claims to
+entities by ID and their components by type, fields at their defaults left out, floats
+rounded, mappings sorted, places and caches left out. A change that claims to
 load "the scene files and saved states of today unchanged" must leave every dump equal
 to the one committed under ``tests/scene/data/golden/`` (``tests/scene/test_golden.py``).
 """
@@ -66,7 +66,28 @@ def canonical(value: Any, root: Path = ROOT) -> Any:
         return [canonical(v, root) for v in value]
     return {"type": type(value).__name__, **{
         name: canonical(getattr(value, name), root) for name in _fields(value)
-        if name not in _SKIP}}
+        if name not in _SKIP and not _default(value, name)}}
+
+
+def _default(value: Any, name: str) -> bool:
+    """Whether dataclass field ``name`` holds its default: left out of the dump, so a
+    field a component gains (with a default that changes nothing) leaves dumps alone."""
+    if not dataclasses.is_dataclass(value):
+        return False
+    f = next(f for f in dataclasses.fields(value) if f.name == name)
+    if f.default is not dataclasses.MISSING:
+        default = f.default
+    elif f.default_factory is not dataclasses.MISSING:
+        default = f.default_factory()
+    else:
+        return False
+    mine = getattr(value, name)
+    if isinstance(mine, np.ndarray) or isinstance(default, np.ndarray):
+        return False
+    try:
+        return type(mine) is type(default) and bool(mine == default)
+    except (TypeError, ValueError):
+        return False
 
 
 def _key(item: tuple[Any, Any]) -> str:
@@ -122,9 +143,9 @@ def _linked(world: dict[str, Any]) -> dict[str, Any]:
              for source, target in world.pop(field, {}).items()]
     found += [(link["entity"], link["component"], link["field"], link["target"])
               for link in world.pop("links", [])]
-    by_id = {e["id"]: e for e in world["entities"]}
+    by_id = {e["id"]: e for e in world.get("entities", [])}
     for source, kind, name, target in found:
-        for component in by_id[source]["components"] if source in by_id else ():
+        for component in by_id[source].get("components", []) if source in by_id else ():
             if component["type"] == kind:
                 component[name] = f"@{target}"
     return world
@@ -134,9 +155,10 @@ def _sorted(world: dict[str, Any]) -> dict[str, Any]:
     """Entities by ID and each one's components by type: an entity's components are a
     set (the ECS keeps them by type), and which of two top-level blocks is made first
     changes entity numbers, not the world."""
-    for entity in world["entities"]:
-        entity["components"].sort(key=lambda c: c["type"])
-    world["entities"].sort(key=lambda e: (e["id"], json.dumps(e, sort_keys=True)))
+    entities = world.get("entities", [])
+    for entity in entities:
+        entity.get("components", []).sort(key=lambda c: c["type"])
+    entities.sort(key=lambda e: (e["id"], json.dumps(e, sort_keys=True)))
     return world
 
 
