@@ -16,6 +16,13 @@ object; ``colosseum check`` tells a wrong key or value at its line, with a did-y
 back. A content folder declares its blocks in ``systems/*.py``, which is imported before
 its scene is read. ``inside=("Scene",)`` makes a top-level block (``ID`` names its
 entity) instead.
+
+The engine's own blocks are declared the same way, as data beside their component
+(:class:`components.blocks.BlockDeclaration`: typed keys with units, ranges and examples,
+a *build* function from the checked values to components, a *save* function back), and
+registered here when the components are imported; they may also stand inside another
+block. Either kind is one :class:`BlockType`, which the schema check, the factory, the
+key reference (``colosseum keys``, docs/KEYS.md) and ``--save-state`` go through.
 """
 
 from __future__ import annotations
@@ -26,10 +33,13 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, NamedTuple, TypeVar, get_type_hints
 
+import components  # noqa: F401  (every component module declares its block on import)
 import engine.scene.schema as sc
+from components.blocks import DECLARED, BlockDeclaration, Build, Save, on_declare
 
 T = TypeVar("T")
-#: Where a block may stand: inside an ``Object``, or at the top of a scene.
+#: Where a content folder's block may stand: inside an ``Object``, or at the top of a
+#: scene (the engine's own may also stand inside another block).
 PLACES = ("Object", "Scene")
 #: Python types of a component's fields -> the scene's types.
 _TYPES: dict[Any, str] = {float: sc.FLOAT_T, int: sc.INT_T, bool: sc.BOOL_T,
@@ -60,22 +70,36 @@ class BlockKey(NamedTuple):
 
 @dataclass(frozen=True, slots=True)
 class BlockType:
-    """A registered block: its schema name, where it stands, the component it builds."""
+    """A registered block: its schema name, where it stands, the component it builds.
+
+    A content folder's block builds its one dataclass field by field; an engine block
+    (declared with :class:`components.blocks.BlockDeclaration`) has its own ``hook``
+    (values, context -> components) and ``saver`` (component -> keys), and ``component``
+    is the type its saver writes back (None: nothing is written back)."""
 
     name: str
-    component: type
+    component: type | None
     inside: tuple[str, ...]
     doc: str
     #: scene key -> its field
     keys: Mapping[str, BlockKey]
+    hook: Build | None = None
+    saver: Save | None = None
+    #: The module that declared it (a content folder's are left out of the engine's docs).
+    module: str = ""
+    #: The ID of a top-level one written without one ("": its name and place, sound0).
+    unnamed: str = ""
 
     def build(self, values: Mapping[str, Any]) -> Any:
         """The component from checked values (scene keys)."""
+        assert self.component is not None
         return self.component(**{key.field: _python(values[k], key.hint)
                                  for k, key in self.keys.items() if k in values})
 
     def save(self, component: Any) -> dict[str, Any]:
         """The component's values as scene keys (what a saved state writes)."""
+        if self.saver is not None:
+            return self.saver(component)
         return {k: getattr(component, key.field) for k, key in self.keys.items()}
 
     def problems(self, values: Mapping[str, Any]) -> list[tuple[str, str]]:
@@ -131,20 +155,71 @@ def register(name: str, component: type, inside: tuple[str, ...] = ("Object",),
     if not inside or any(p not in PLACES for p in inside):
         raise BlockError(f"block {name!r}: inside must name some of {', '.join(PLACES)}")
     known = BLOCKS.get(name)
-    if (known is None and name in sc.SCHEMAS) or (
-            known is not None and known.component.__qualname__ != component.__qualname__):
+    if (known is None and name in sc.SCHEMAS) or (known is not None and (
+            known.component is None or known.hook is not None
+            or known.component.__qualname__ != component.__qualname__)):
         raise BlockError(f"block {name!r} exists already; choose another name")
     fields, keys = _schema(name, component)
-    block = BlockType(name, component, tuple(inside), doc or name, keys)
-    BLOCKS[name] = block
-    sc.SCHEMAS[name] = fields
-    for place in inside:
-        sc.SCHEMAS[place][name] = sc.Field(sc.STRUCT_T, None, block.doc, struct=name,
-                                           repeat=place == "Scene")
-    for listener in _LISTENERS:
-        for changed in (name, *inside):
-            listener(changed)
+    block = BlockType(name, component, tuple(inside), doc or name, keys,
+                      module=component.__module__)
+    _enter(block, fields, {place: block.doc for place in inside}, repeat=False)
     return block
+
+
+def _enter(block: BlockType, fields: dict[str, sc.Field], docs: Mapping[str, str],
+           repeat: bool) -> None:
+    """Make ``block`` known: its schema, a key in each place it stands, the listeners."""
+    BLOCKS[block.name] = block
+    sc.SCHEMAS[block.name] = fields
+    for place in block.inside:
+        sc.SCHEMAS[place][block.name] = sc.Field(sc.STRUCT_T, None, docs[place],
+                                                 struct=block.name,
+                                                 repeat=repeat or place == "Scene")
+    for listener in _LISTENERS:
+        for changed in (block.name, *block.inside):
+            listener(changed)
+
+
+def register_declared(declared: BlockDeclaration) -> BlockType:
+    """Register an engine block declared beside its component (components.blocks)."""
+    name = declared.name
+    if not _NAME.match(name):
+        raise BlockError(f"block {name!r}: a block's name is a word in CamelCase")
+    places = [p for p in declared.inside if p not in sc.SCHEMAS]
+    if not declared.inside or places:
+        raise BlockError(f"block {name!r}: it cannot stand inside {places or 'nothing'}: "
+                         "a place is Scene, Object or a block known already")
+    known = BLOCKS.get(name)
+    if (known is None and name in sc.SCHEMAS) or (
+            known is not None and known.module != declared.build.__module__):
+        raise BlockError(f"block {name!r} exists already; choose another name")
+    fields: dict[str, sc.Field] = {}
+    keys: dict[str, BlockKey] = {}
+    for k in declared.keys:
+        if k.kind not in _KINDS:
+            raise BlockError(f"block {name!r}: key {k.name!r} has no type {k.kind!r}")
+        fields[k.name] = sc.Field(_KINDS[k.kind], k.default, k.meaning, k.repeat, k.required,
+                                  k.allowed, k.ref, k.struct, k.lengths)
+        keys[k.name] = BlockKey(k.name, KeyInfo(k.meaning, k.low, k.high), None)
+        if k.example is not None:
+            EXAMPLES[(name, k.name)] = k.example
+    if "Scene" in declared.inside and "ID" not in fields:  # an entity's name
+        fields["ID"] = sc.Field(sc.STRING_T, "", f"name of this {name}")
+    doc = declared.doc
+    docs = {p: doc if isinstance(doc, str) else doc[p] for p in declared.inside}
+    block = BlockType(name, declared.saves, tuple(declared.inside), docs[declared.inside[0]],
+                      keys, declared.build, declared.save, declared.build.__module__,
+                      declared.unnamed)
+    _enter(block, fields, docs, declared.repeat)
+    return block
+
+
+#: A declaration's key types -> the schema's (the same names).
+_KINDS = {t: t for t in (sc.INT_T, sc.FLOAT_T, sc.BOOL_T, sc.STRING_T, sc.ASSET_T, sc.VEC3_T,
+                         sc.VECTOR_T, sc.STRINGVECTOR_T, sc.STRUCT_T, sc.ENUM_T, sc.REF_T,
+                         sc.NUMBER_OR_VECTOR_T, sc.ANY_T)}
+#: (block, key) -> the example value text a declaration gives (colosseum keys shows it).
+EXAMPLES: dict[tuple[str, str], str] = {}
 
 
 def _schema(name: str, component: type) -> tuple[dict[str, sc.Field], dict[str, BlockKey]]:
@@ -190,13 +265,15 @@ def _python(value: Any, hint: Any) -> Any:
 def unregister(name: str) -> None:
     """Take block ``name`` out again (a test's own block)."""
     block = BLOCKS.pop(name, None)
+    DECLARED.pop(name, None)
     if block is None:
         return
     sc.SCHEMAS.pop(name, None)
     for place in block.inside:
-        sc.SCHEMAS[place].pop(name, None)
-        for listener in _LISTENERS:
-            listener(place)
+        if place in sc.SCHEMAS:
+            sc.SCHEMAS[place].pop(name, None)
+            for listener in _LISTENERS:
+                listener(place)
 
 
 def from_content(name: str) -> bool:
@@ -205,7 +282,7 @@ def from_content(name: str) -> bool:
     from engine.content import CONTENT_MODULES
 
     block = BLOCKS.get(name)
-    return block is not None and block.component.__module__.startswith(CONTENT_MODULES)
+    return block is not None and block.module.startswith(CONTENT_MODULES)
 
 
 def on_register(listener: Callable[[str], None]) -> None:
@@ -219,3 +296,11 @@ def of_component(component: Any) -> BlockType | None:
         if type(component) is block.component:
             return block
     return None
+
+
+def builtin(block: BlockType) -> bool:
+    """Whether ``block`` is one of the engine's own (declared beside its component)."""
+    return block.hook is not None
+
+
+on_declare(register_declared)

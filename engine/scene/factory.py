@@ -32,26 +32,18 @@ from components import (
     Avatar,
     Camera,
     ClipSpec,
-    Controller,
-    Display,
     Graspable,
-    Hand,
-    HandState,
-    Headset,
     Hold,
     Joint,
-    Light,
     MaterialProps,
     Name,
     Physical,
     Script,
     Shape,
-    Sound,
     Transform,
     Trigger,
     UserOwned,
     Visual,
-    Wheelchair,
 )
 from components.avatar import (
     SavedAvatar,
@@ -61,10 +53,10 @@ from components.avatar import (
     SavedLayer,
     SavedRequest,
 )
-from components.display import HEADSET_ACTIONS, HEADSET_PROFILES
+from components.display import binding_problem as display_binding_problem
+from components.hand import HAND_SIZE
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, SPRING_KINDS, JointKind, Spring
 from components.script import SavedScript, ScriptHandler, ScriptTimer
-from components.wheelchair import NavigationMode
 from engine.anomalies import AnomalySpec
 from engine.assets import AssetError, Assets, nodes_name
 from engine.assets.geometry import convex_hull
@@ -112,8 +104,6 @@ if TYPE_CHECKING:
     from engine.app import Engine
 
 #: A virtual hand's body when the author gives none: a palm-sized box (m) of 0.45 kg.
-HAND_SIZE = (0.09, 0.18, 0.03)
-HAND_MASS = 0.45
 #: Shared defaults (tuples: immutable, so every shape and pose may hold the same one).
 _ORIGIN = (0.0, 0.0, 0.0)
 _IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -171,14 +161,18 @@ class PostPassSpec:
 def binding_problem(action: str, profile: str, path: str) -> str | None:
     """What is wrong with a headset's ``Bind`` (None: nothing): the scene's check, and
     the OpenXR display's (engine.xr.bindings.Rebinding)."""
-    if action not in HEADSET_ACTIONS:
-        return f"unknown action {action!r}{suggest(action, HEADSET_ACTIONS)} " \
-               f"(actions: {', '.join(HEADSET_ACTIONS)})"
-    if profile not in HEADSET_PROFILES:
-        return f"unknown interaction profile {profile!r}{suggest(profile, HEADSET_PROFILES)}"
-    if not path.startswith(("/user/hand/left/", "/user/hand/right/")):
-        return f"the path {path!r} must start with /user/hand/left/ or /user/hand/right/"
-    return None
+    return display_binding_problem(action, profile, path, suggest)
+
+
+@dataclass(frozen=True, slots=True)
+class Link:
+    """A reference by ID a declared block made (components.blocks.BuildContext.link): once
+    the entities exist, ``component`` of ``entity``'s gets ``field`` = ``target``'s."""
+
+    entity: str
+    component: type
+    field: str
+    target: str
 
 
 @dataclass(slots=True)
@@ -198,9 +192,8 @@ class SceneSpec:
     #: The scene's random generator when a saved state was written (see random_state).
     random_state: dict[str, object] | None = None
     camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
-    display_heads: dict[str, str] = field(default_factory=dict)  # display ID -> object ID
-    #: Hand object ID -> the object its tracker is calibrated relative to.
-    hand_frames: dict[str, str] = field(default_factory=dict)
+    #: References by ID that declared blocks made, set once the entities exist.
+    links: list[Link] = field(default_factory=list)
     #: Object ID -> sleep-rule state a saved state carries (see :class:`SleepState`).
     sleep: dict[str, SleepState] = field(default_factory=dict)
     content_dir: Path | None = None
@@ -304,11 +297,12 @@ class _Reader(dict):
     ``r("Key")`` is the value (or default); ``r.has("Key")`` whether the author wrote it.
     """
 
-    __slots__ = ("entries", "block", "has", "value")
+    __slots__ = ("entries", "block", "has", "value", "block_name")
     __call__ = dict.__getitem__
 
     def __init__(self, block: Block | None, schema: str):
         dict.__init__(self, _DEFAULTS[schema])
+        self.block_name = schema
         entries = [] if block is None else block.entries
         last = self._read(entries)
         if INCLUDE in last:  # read again with the included files' entries spliced in
@@ -415,6 +409,81 @@ def build_specs(db: SceneDB, content_dir: str | Path | None = None,
     return spec
 
 
+class _Context:
+    """What a declared block's build function may ask (components.blocks.BuildContext):
+    its block's values, the object it stands in (``outer``, its components ``made``)."""
+
+    __slots__ = ("builder", "reader", "loc", "owner", "place", "has_body", "outer", "parts")
+
+    def __init__(self, builder: _Builder, reader: _Reader, loc: Loc, owner: str, place: str,
+                 has_body: bool, outer: _Reader | None = None,
+                 parts: list[Any] | None = None) -> None:
+        self.builder, self.reader, self.loc = builder, reader, loc
+        self.owner, self.place, self.has_body = owner, place, has_body
+        self.outer, self.parts = outer, parts if parts is not None else []
+
+    def at(self, reader: _Reader, loc: Loc) -> _Context:
+        """The same object's context for another block (told at its lines)."""
+        return _Context(self.builder, reader, loc, self.owner, self.place, self.has_body,
+                        self.outer, self.parts)
+
+    def _loc(self, key: str | None) -> Loc:
+        written = None if key is None else self.reader.value(key)
+        return self.loc if written is None else written.loc
+
+    def error(self, key: str | None, message: str) -> None:
+        self.builder.report.error(self._loc(key), message)
+
+    def warning(self, key: str | None, message: str) -> None:
+        self.builder.report.warning(self._loc(key), message)
+
+    def given(self, key: str) -> bool:
+        return self.reader.has(key)
+
+    def inner(self, key: str) -> list[tuple[Mapping[str, Any], _Context]]:
+        struct = sc.SCHEMAS[self.reader.block_name][key].struct
+        assert struct is not None, f"{key} opens no block"
+        return [(r, self.at(r, b.loc)) for b in self.reader.blocks(key)
+                for r in [_Reader(b, struct)]]
+
+    def beside(self, key: str) -> tuple[Mapping[str, Any], _Context] | None:
+        written = None if self.outer is None else self.outer.value(key)
+        if written is None or written.kind != STRUCTURE:
+            return None
+        struct = sc.SCHEMAS[self.outer.block_name][key].struct  # type: ignore[union-attr]
+        r = _Reader(written.data, struct or key)
+        return r, self.at(r, written.loc)
+
+    def component(self, kind: type) -> Any:
+        return next((c for c in self.parts if isinstance(c, kind)), None)
+
+    def check_mass(self, key: str) -> None:
+        written = self.reader.value(key)
+        if written is not None:
+            self.builder.limited(written, key, MAX_MASS if key == "Mass" else MAX_DENSITY,
+                                 "kg" if key == "Mass" else "kg/m³")
+
+    def input_name(self, key: str, kind: str, who: str) -> None:
+        if self.reader(key):
+            self.builder.input_names.append((who, kind, self.reader(key), self._loc(key)))
+
+    def model_file(self, key: str) -> str | None:
+        return self.builder.model(self.reader, key)
+
+    def link(self, component: Any, field: str, target: str) -> None:
+        self.builder.spec.links.append(Link(self.owner, type(component), field, target))
+
+    def made(self, kind: type) -> bool:
+        return any(isinstance(c, kind) for e in self.builder.spec.entities
+                   for c in e.components)
+
+    def suggest(self, name: str, choices: Any) -> str:
+        return suggest(name, choices)
+
+    def sound_file(self, key: str, outcome: str) -> str | None:
+        return self.builder.sound_file(self.reader, key, outcome)
+
+
 class _Builder:
     def __init__(self, folder: Path, report: Reporter, assets: Assets):
         self.folder = folder
@@ -431,18 +500,21 @@ class _Builder:
         self.physical_ids: set[str] = set()
         self.static_ids: set[str] = set()  # bodies that never move (a joint sees no body)
         self.sleep: dict[str, SleepState] = {}
-        self.hand_frames: dict[str, str] = {}
-        self.hand_inputs: list[tuple[str, _Reader]] = []  # what each hand's Hand names
+        #: Inputs blocks name (who, "tracker" or "glove", the name, where), checked
+        #: against the scene's Input once it is read.
+        self.input_names: list[tuple[str, str, str, Loc]] = []
         #: Owner -> the saved state its script resumes from, and the block that said so.
         self.script_states: dict[str, SavedScript] = {}
         self.script_blocks: dict[str, Block] = {}
         #: Points of the file must lie within +-extent (m) on every axis.
         self.extent: float | None = None
+        #: What is built so far (declared blocks' links and headset check read it).
+        self.spec = SceneSpec()
         #: Avatar ID -> the AvatarState block it resumes from (a loaded saved state).
         self.avatar_states: dict[str, Block] = {}
 
     def build(self, db: SceneDB) -> SceneSpec:
-        spec = SceneSpec()
+        spec = self.spec = SceneSpec()
         root = _Index(db.root)
         if self.extent is None:
             self.extent = self.world_extent(root)
@@ -471,14 +543,13 @@ class _Builder:
             if js is not None:
                 spec.joints.append(js)
         spec.sleep = self.sleep
-        spec.hand_frames = self.hand_frames
         self.shaders(root, spec)
         self.world(root, spec)
         self.scene_entities(root, spec)
         spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
         spec.anomalies = read_anomalies(root.blocks, self.report, self.problems)
         spec.experiment = read_experiment(db.root, self.report, spec.anomalies, self.folder)
-        self.check_hand_inputs(spec.input)
+        self.check_input_names(spec.input)
         for i, blk in enumerate(root.blocks("Avatar")):
             spec.entities.append(self.avatar(blk, i))
         self.unclaimed_script_states()
@@ -541,8 +612,7 @@ class _Builder:
             map(math.radians, r("AngularVelocity"))) if r.has("AngularVelocity") else _ORIGIN
         comps: list[Any] = [Name(oid), Transform(position, quat, r("Velocity"), angular)]
         size = r("Size")
-        hand_blk = r.value("Hand")
-        if hand_blk is not None and size is None:
+        if r.has("Hand") and size is None:  # a hand's body is a hand-sized box
             size = HAND_SIZE
         vis_blk, phys_blk = r.value("VisualAttributes"), r.value("PhysicalAttributes")
         bare = vis_blk is None and phys_blk is None
@@ -560,8 +630,6 @@ class _Builder:
                 shadowed=bool(vis("Shadowed")), visible=bool(vis("Visible"))))
         if phys_blk is not None or bare:
             body = self.physical(r, phys, size, visual_shapes, model, scale, position, quat)
-            if hand_blk is not None:
-                self.hand_body(body, phys, _Reader(hand_blk.data, "Hand"), oid)
             comps.append(body)
             if phys("Trigger"):
                 comps.append(Trigger(mask=int(phys("Mask"))))
@@ -572,56 +640,64 @@ class _Builder:
                                "RestSteps", "RestSlid", "RestForce", "RestPreloaded"))):
                 self.sleep[oid] = self.sleep_spec(r)
         self.own_poses[oid] = (position, quat)
-        if r.has("Sound"):
-            sr = _Reader(r.value("Sound").data, "Sound")
-            if self.sound_file(sr, "File", f"object '{oid}' has no sound") is not None:
-                comps.append(_sound(sr, oid))
         if r.has("Script"):
             comps.append(Script(file=r("Script"), saved=self.script_states.pop(oid, None)))
-        if hand_blk is not None:
-            comps += self.hand(_Reader(hand_blk.data, "Hand"), oid, hand_blk.loc,
-                               phys_blk is not None or bare)
         if not r("Graspable"):
             comps.append(Graspable(False))
-        if r.has("Wheelchair"):
-            chair_blk = r.value("Wheelchair")
-            comps += self.wheelchair(_Reader(chair_blk.data, "Wheelchair"), oid, chair_blk.loc,
-                                     phys_blk is not None or bare)
         if r.has("User"):
             comps.append(UserOwned(r("User")))
-        if r.has("Controller"):
-            comps.append(_controller(_Reader(r.value("Controller").data, "Controller")))
-        comps += self.declared_blocks(r, "Object")
+        comps += self.declared_blocks(r, "Object", oid, phys_blk is not None or bare, comps)
         return EntitySpec(oid, comps, blk.loc)
 
-    def declared_blocks(self, r: _Reader | _Index, place: str) -> list[Any]:
+    def declared_blocks(self, r: _Reader | _Index, place: str, owner: str,
+                        has_body: bool, parts: list[Any] | None = None) -> list[Any]:
         """The components of the blocks features declared for ``place`` (engine.scene.
-        blocks), a content folder's own among them."""
-        made = (self.declared(block, blk) for block in blocks.BLOCKS.values()
-                if place in block.inside for blk in r.blocks(block.name))
-        return [component for component in made if component is not None]
+        blocks: the engine's own and a content folder's), on the entity of ``owner``
+        (whose components so far are ``parts``)."""
+        made: list[Any] = []
+        outer = r if isinstance(r, _Reader) and place == "Object" else None
+        for block in blocks.BLOCKS.values():
+            if place in block.inside:
+                for blk in r.blocks(block.name):
+                    made += self.declared(block, blk, owner, place, has_body, outer,
+                                          parts) or []
+        return made
 
-    def declared(self, block: blocks.BlockType, blk: Block) -> Any:
-        """One declared block's component; None (told at the line) when a value is out of
-        its key's range: the block is left out."""
+    def declared(self, block: blocks.BlockType, blk: Block, owner: str, place: str,
+                 has_body: bool, outer: _Reader | None = None,
+                 parts: list[Any] | None = None) -> list[Any] | None:
+        """One declared block's components, and those of the blocks declared inside it;
+        None (told at the line) when a value is out of its key's range or its build
+        leaves it out."""
         r = _Reader(blk, block.name)
         values = {k: r(k) for k in block.keys}
         problems = block.problems(values)
         for k, message in problems:
             self.report.error(r.value(k).loc, f"{block.name}: {message}")
-        return None if problems else block.build(values)
+        if problems:
+            return None
+        if block.hook is None:
+            made: list[Any] | None = [block.build(values)]
+        else:
+            made = block.hook(values, _Context(self, r, blk.loc, owner, place, has_body,
+                                               outer, parts))
+        if made is None:
+            return None
+        return made + self.declared_blocks(r, block.name, owner, has_body, parts)
 
     def declared_entities(self, root: _Index, spec: SceneSpec) -> None:
-        """Top-level declared blocks: an entity each, named by its ID."""
+        """Top-level declared blocks: an entity each, named by its ID (one its build
+        leaves out keeps its place, skipped)."""
         for block in blocks.BLOCKS.values():
             if "Scene" not in block.inside:
                 continue
             for i, blk in enumerate(root.blocks(block.name)):
-                component = self.declared(block, blk)
-                bid = _Reader(blk, block.name)("ID") or f"{block.name.lower()}{i}"
-                parts = [Name(bid)] + ([component] if component is not None else [])
-                spec.entities.append(EntitySpec(bid, parts, blk.loc,
-                                                skipped=component is None))
+                bid = _Reader(blk, block.name)("ID") or block.unnamed or \
+                    f"{block.name.lower()}{i}"
+                made = self.declared(block, blk, bid, "Scene", False)
+                skipped = made is None or (not made and block.hook is not None)
+                parts = [] if skipped and block.hook is not None else [Name(bid), *(made or [])]
+                spec.entities.append(EntitySpec(bid, parts, blk.loc, skipped=skipped))
 
     def visual_geometry(self, vis: _Reader, size: Any
                         ) -> tuple[list[Shape], str | None, tuple[float, float, float]]:
@@ -639,83 +715,26 @@ class _Builder:
                 shapes.append(_primitive(gr, size))
         return shapes, model, scale
 
-    def hand(self, h: _Reader, oid: str, loc: Loc, has_body: bool) -> list[Any]:
-        """A Hand and its standing; a hand needs a body (an Object without one is told)."""
-        if not has_body:
-            self.report.error(loc, f"object '{oid}' has a Hand but no PhysicalAttributes: a "
-                                   "virtual hand is a body (leave both Visual- and "
-                                   "PhysicalAttributes out for the default hand box)")
-            return []
-        # the drive's bounds and response reach the backend: refused here, at their line
-        for key, least in (("MaxForce", 0.0), ("MaxTorque", 0.0), ("TimeConstant", 0.0),
-                           ("MaxSpeed", None), ("MaxSpin", None), ("DeviationDistance", None),
-                           ("BreakForce", None)):
-            value = h(key)
-            if value is not None and not (value > 0 or value == least):
-                self.report.error(h.value(key).loc, f"hand '{oid}': {key} must be "
-                                  f"{'positive' if least is None else '>= 0'}, got {value:g}")
-        if h.has("Frame"):
-            self.hand_frames[oid] = h("Frame")
-        self.hand_inputs.append((oid, h))
-        models = {key: self.model(h, key) for key in ("NeutralModel", "ContactModel",
-                                                      "GraspModel")}
-        hand = Hand(tracker=h("Tracker"), glove=h("Glove"), button=h("Button"),
-                    max_force=float(h("MaxForce")), max_torque=float(h("MaxTorque")),
-                    time_constant=float(h("TimeConstant")), max_speed=float(h("MaxSpeed")),
-                    max_spin=math.radians(float(h("MaxSpin"))),
-                    deviation_distance=float(h("DeviationDistance")),
-                    break_force=_opt(h("BreakForce")), marker=bool(h("Marker")),
-                    neutral_model=models["NeutralModel"],
-                    contact_model=models["ContactModel"], grasp_model=models["GraspModel"],
-                    holding=tuple(h("Holding") or ()))
-        return [hand, HandState()]
-
-    def wheelchair(self, w: _Reader, oid: str, loc: Loc, has_body: bool) -> list[Any]:
-        """A wheelchair's chassis: a body, and settings that must be positive."""
-        if not has_body:
-            self.report.error(loc, f"object '{oid}' has a Wheelchair but no "
-                                   "PhysicalAttributes: the chassis is a body the wheels "
-                                   "are jointed to")
-            return []
-        keys = ("WheelRadius", "MaxSpeed", "MaxTorque", "RimInertia", "MaxPush")
-        for key in keys:
-            if not w(key) > 0 or not math.isfinite(w(key)):
-                self.report.error(w.value(key).loc, f"{key} must be positive, got {w(key)}")
-        wheels, axles = w("Wheels"), w("Axles")
-        mode = NavigationMode.FEEDBACK if w("Feedback") else NavigationMode.VELOCITY
-        lag, measured = w("Lag") or (0.0, 0.0), w("Measured") or (0.0, 0.0)
-        pending = w("Pending") or (0.0, 0.0)
-        return [Wheelchair(mode=mode, wheels=(wheels[0], wheels[1]),
-                           axles=(axles[0], axles[1]), wheel_radius=float(w("WheelRadius")),
-                           max_speed=float(w("MaxSpeed")), max_torque=float(w("MaxTorque")),
-                           rim_inertia=float(w("RimInertia")), max_push=float(w("MaxPush")),
-                           lag=(float(lag[0]), float(lag[1])),
-                           measured=(float(measured[0]), float(measured[1])),
-                           pending=(float(pending[0]), float(pending[1])),
-                           still=max(float(w("Still")), 0.0))]
-
-    def check_hand_inputs(self, inputs: InputSpec) -> None:
-        """A hand's tracker and glove must be ones the scene declares (or the desktop
-        device's); with none declared, names from a device that sends them (OSC, LSL) are
-        expected, and a name nothing declares is told as a warning."""
-        trackers = {t.id for t in inputs.trackers}
-        gloves = {b.device for b in inputs.buttons}
-        for oid, h in self.hand_inputs:
-            for key, declared, desktop in (("Tracker", trackers, DESKTOP_TRACKERS),
-                                           ("Glove", gloves, DESKTOP_GLOVES)):
-                name = h(key)
-                if not name or name in declared or name in desktop:
-                    continue
-                known = ", ".join(sorted({*declared, *desktop}))
-                what = "tracker" if key == "Tracker" else "glove"
-                hint = suggest(name, sorted({*declared, *desktop}))
-                if declared:
-                    self.report.error(h.value(key).loc, f"hand '{oid}': no {what} {name!r} "
-                                      f"in this scene's Input (known: {known}){hint}")
-                else:
-                    self.report.warning(h.value(key).loc, f"hand '{oid}': {what} {name!r} is "
-                                        f"declared nowhere; it must come from a device that "
-                                        f"sends it (known here: {known}){hint}")
+    def check_input_names(self, inputs: InputSpec) -> None:
+        """Trackers and gloves blocks name (a hand's) must be ones the scene declares (or
+        the desktop device's); with none declared, names from a device that sends them
+        (OSC, LSL) are expected, and a name nothing declares is told as a warning."""
+        declared = {"tracker": {t.id for t in inputs.trackers},
+                    "glove": {b.device for b in inputs.buttons}}
+        desktop = {"tracker": DESKTOP_TRACKERS, "glove": DESKTOP_GLOVES}
+        for who, what, name, loc in self.input_names:
+            known_here = {*declared[what], *desktop[what]}
+            if name in known_here:
+                continue
+            known = ", ".join(sorted(known_here))
+            hint = suggest(name, sorted(known_here))
+            if declared[what]:
+                self.report.error(loc, f"{who}: no {what} {name!r} in this scene's Input "
+                                  f"(known: {known}){hint}")
+            else:
+                self.report.warning(loc, f"{who}: {what} {name!r} is declared nowhere; it "
+                                    f"must come from a device that sends it (known here: "
+                                    f"{known}){hint}")
 
     def limited(self, value: Value, key: str, most: float, unit: str) -> None:
         """Report a Mass or Density not positive, or past what any body may have."""
@@ -724,28 +743,6 @@ class _Builder:
         elif value.data > most:
             self.report.error(value.loc, f"{key} {value.data:g} {unit} is past the most a "
                                          f"body may have ({most:g} {unit})")
-
-    def hand_body(self, body: Physical, phys: _Reader, h: _Reader, oid: str) -> None:
-        """A hand floats (its drive holds it up) and never sleeps; it weighs a hand's
-        0.45 kg unless the author gave it a mass: the Hand's ``Mass``, or its
-        PhysicalAttributes' Mass or Density (one of them; both is an error)."""
-        if phys.has("Gravity") and phys("Gravity"):
-            self.report.warning(phys.value("Gravity").loc, f"object '{oid}' is a hand: hands "
-                                "float, so Gravity 1 is ignored")
-        body.gravity = False
-        body.can_sleep = False
-        own = next((key for key in ("Mass", "Density") if phys.has(key)), None)
-        mass = h.value("Mass")
-        if mass is None:
-            if own is None:
-                body.mass = HAND_MASS
-        elif own is not None:
-            self.report.error(mass.loc, f"hand '{oid}': Mass {mass.data:g} kg here and "
-                              f"{own} {phys(own):g} in its PhysicalAttributes: give the "
-                              "hand's weight once")
-        else:
-            self.limited(mass, "Mass", MAX_MASS, "kg")
-            body.mass = float(mass.data)
 
     def physical(self, r: _Reader, phys: _Reader, size: Any, visual_shapes: list[Shape],
                  model: str | None, scale: tuple[float, ...], position: tuple[float, ...],
@@ -1362,42 +1359,6 @@ class _Builder:
         for b in root.blocks("Measure"):
             r = _Reader(b, "Measure")
             spec.measures.append(MeasureSpec(r("ID"), r("Object"), r("Value")))
-        for b in root.blocks("Display"):
-            r = _Reader(b, "Display")
-            if r("Kind") == "openxr":
-                self.headset(spec, r, b)
-                continue
-            if not r("ID"):
-                self.report.error(b.loc, "a screen Display needs an ID (the name "
-                                  "colosseum join --display gives); it is left out")
-                continue
-            display = Display(_floats(r("LowerLeft")), _floats(r("LowerRight")),
-                              _floats(r("UpperLeft")), None, r("Tracker"), _floats(r("Eye")),
-                              float(r("Near")), float(r("Far")))
-            if r.has("Head"):
-                spec.display_heads[r("ID")] = r("Head")
-            spec.entities.append(EntitySpec(r("ID"), [Name(r("ID")), display], b.loc))
-        for i, b in enumerate(root.blocks("Light")):
-            r = _Reader(b, "Light")
-            lid = r("ID") or f"light{i}"
-            light = Light(kind=r("Type"), color=_floats(r("Color")),
-                          intensity=float(r("Intensity")), direction=_floats(r("Direction")),
-                          cutoff=float(r("Cutoff")), shadows=bool(r("Shadows")))
-            spec.entities.append(EntitySpec(lid, [Name(lid), Transform(r("Position")), light],
-                                            b.loc))
-        for i, b in enumerate(root.blocks("Sound")):
-            r = _Reader(b, "Sound")
-            sid = r("ID") or f"sound{i}"
-            if self.sound_file(r, "File", f"sound '{sid}' is left out") is None:
-                spec.entities.append(EntitySpec(sid, [], b.loc, skipped=True))
-                continue
-            # without a Position it is music or ambience: played at the listener, stereo kept
-            placed = [Transform(r("Position"))] if r.has("Position") else []
-            spec.entities.append(EntitySpec(sid, [Name(sid), *placed, _sound(r, sid)], b.loc))
-        for i, b in enumerate(root.blocks("Controller")):
-            r = _Reader(b, "Controller")
-            cid = r("ID") or f"controller{i}"
-            spec.entities.append(EntitySpec(cid, [Name(cid), _controller(r)], b.loc))
         for i, e in enumerate(root.get_all("Script")):
             sid = f"script{i}"
             script = Script(file=e.value.data, saved=self.script_states.pop(sid, None))
@@ -1411,35 +1372,6 @@ class _Builder:
                 self.problems.append(Diagnostic(
                     block.loc.path, block.loc.line, block.loc.col, WARNING,
                     f"ScriptState for {owner!r}, which runs no script here; ignored"))
-
-    def headset(self, spec: SceneSpec, r: _Reader, b: Any) -> None:
-        """``Display { Kind "openxr" }``: the headset, as a Headset component (one)."""
-        if any(isinstance(c, Headset) for e in spec.entities for c in e.components):
-            self.report.error(b.loc, "a second headset Display: a run draws into one headset; "
-                              "this one is left out")
-            return
-        scale = float(r("RenderScale"))
-        if not 0.25 <= scale <= 2.0:
-            self.report.error(r.value("RenderScale").loc,
-                              f"RenderScale must be 0.25 to 2, got {scale:g}")
-            scale = min(max(scale, 0.25), 2.0)
-        bindings = []
-        for bind in b.blocks("Bind"):
-            rb = _Reader(bind, "Bind")
-            problem = binding_problem(rb("Action"), rb("Profile"), rb("Path"))
-            if problem is not None:
-                self.report.error(bind.loc, f"Bind: {problem}; this binding is left out")
-                continue
-            bindings.append((rb("Action"), rb("Profile"), rb("Path")))
-        headset = Headset(
-            space=r("Space"), when_hidden=r("WhenHidden"), mirror=r("Mirror"),
-            fallback=r("Fallback"), refresh_rate=float(r("RefreshRate")), render_scale=scale,
-            depth=bool(r("Depth")), recenter_key=str(r("RecenterKey")).lower(),
-            haptic_grasp=min(max(float(r("HapticGrasp")), 0.0), 1.0),
-            haptic_touch=min(max(float(r("HapticTouch")), 0.0), 1.0),
-            haptic_impulse=max(float(r("HapticImpulse")), 0.0), bindings=tuple(bindings))
-        hid = r("ID") or "headset"
-        spec.entities.append(EntitySpec(hid, [Name(hid), headset], b.loc))
 
     def camera_view(self, r: _Reader, cid: str, blk: Block) -> None:
         """Warn about a camera with no well-defined view direction (the picture and the
@@ -1553,21 +1485,6 @@ def _primitive(gr: _Reader, size: Any) -> Shape:
     return Shape(kind, dims, offset, rotation)
 
 
-def _sound(r: _Reader, owner: str) -> Sound:
-    return Sound(file=r("File"), loop=bool(r("Loop")), gain=float(r("Gain")),
-                 pitch=float(r("Pitch")), ref_distance=float(r("RefDistance")),
-                 rolloff=float(r("Rolloff")), max_distance=float(r("MaxDistance")),
-                 auto_play=bool(r("AutoPlay")), priority=int(r("Priority")),
-                 id=r("ID") or owner)
-
-
-def _controller(r: _Reader) -> Controller:
-    low, high = r("Low"), r("High")
-    return Controller(input=r("Input"), target=r("Target"), gain=float(r("Gain")),
-                      low=float("-inf") if low is None else float(low),
-                      high=float("inf") if high is None else float(high))
-
-
 def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[str, int]:
     """Create the spec's entities and joints; returns object ID -> entity id.
 
@@ -1583,12 +1500,10 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     for cam_id, target in spec.camera_follow.items():
         cam = engine.world.component_for_entity(ids[cam_id], Camera)
         cam.follow = ids[target]
-    for display_id, head in spec.display_heads.items():
-        if head in ids:
-            engine.world.component_for_entity(ids[display_id], Display).head = ids[head]
-    for hand_id, frame in spec.hand_frames.items():
-        if hand_id in ids and frame in ids:
-            engine.world.component_for_entity(ids[hand_id], Hand).frame = ids[frame]
+    for link in spec.links:
+        if link.entity in ids and link.target in ids:
+            setattr(engine.world.component_for_entity(ids[link.entity], link.component),
+                    link.field, ids[link.target])
     joints: dict[str, int] = {}
     for js in spec.joints:
         if js.skipped:

@@ -16,7 +16,7 @@ import difflib
 from typing import Any
 
 import engine.scene.schema as sc
-from engine.scene.blocks import from_content
+from engine.scene.blocks import EXAMPLES, from_content
 
 _TYPES = {
     sc.INT_T: "INT", sc.FLOAT_T: "FLOAT", sc.BOOL_T: "INT 0/1", sc.STRING_T: "STRING",
@@ -55,12 +55,8 @@ _EXAMPLES: dict[tuple[str, str], str] = {
     ("ShaderProgram", "FragmentShader"): '"toon_fragment"',
     ("ShaderState", "ID"): '"toon"', ("ShaderState", "ShaderProgram"): '"toon"',
     ("Uniform", "ID"): '"DiffuseColor"', ("Uniform", "Value"): "[0 0.25 1]",
-    ("Sound", "ID"): '"hum"', ("Sound", "File"): '"sounds/motor_hum.ogg"',
     ("Camera", "ID"): '"main"', ("Camera", "Follow"): '"ball"',
-    ("Light", "ID"): '"sun"', ("Controller", "ID"): '"throttle"',
-    ("Controller", "Input"): '"key:Up/Down"', ("Controller", "Target"): '"motor:pivot"',
-    ("Controller", "Low"): "-90", ("Controller", "High"): "90",
-    ("Hand", "Tracker"): '"glove"', ("World", "SolverSeed"): "2767133776",
+    ("World", "SolverSeed"): "2767133776",
     ("World", "Time"): "2.0",
     ("ScriptState", "Owner"): '"ball"', ("ScriptState", "Globals"): '"{score = 3}"',
     ("ScriptState", "Locals"): '"{bounces = 2}"',
@@ -93,8 +89,6 @@ _EXAMPLES: dict[tuple[str, str], str] = {
     ("BoneDrive", "Quaternion"): "[1 0 0 0]",
     ("Session", "Folder"): '"sessions"', ("Session", "Name"): '"stroke"',
     ("Session", "Chair"): '"wheelchair"', ("Session", "Ground"): '["floor" "ramp"]',
-    ("Wheelchair", "Lag"): "[0.0012 -0.0004]", ("Wheelchair", "Measured"): "[2.1 2.05]",
-    ("Wheelchair", "Pending"): "[0.6 0.6]", ("Wheelchair", "Still"): "0.3",
     ("Experiment", "ID"): '"reach"', ("Experiment", "Track"): '["wheelchair" "hand_r"]',
     ("ExperimentFactor", "ID"): '"blur"', ("ExperimentFactor", "Levels"): "[0 0.3 0.6]",
     ("ExperimentFactor", "Variable"): '"blur_level"', ("ExperimentFactor", "Anomaly"): '"blur"',
@@ -140,7 +134,7 @@ def default_text(field: sc.Field) -> str:
 
 def example(block: str, key: str, field: sc.Field) -> str:
     """A line of scene text using the key."""
-    given = _EXAMPLES.get((block, key))
+    given = _EXAMPLES.get((block, key), EXAMPLES.get((block, key)))
     if given is not None:
         return f"{key} {given}"
     if field.type == sc.STRUCT_T:
@@ -220,7 +214,8 @@ def block_text(block: str) -> str:
 def reference_markdown() -> str:
     """docs/KEYS.md: every block, every key."""
     out = ["# Scene keys", "",
-           "<!-- generated from engine/scene/schema.py by `python -m tools.docs`; "
+           "<!-- generated from engine/scene/schema.py and the blocks features declare "
+           "(engine.scene.blocks) by `python -m tools.docs`; "
            "tests/scene/test_keys_reference.py keeps it equal -->", "",
            "Every key a scene file may hold, block by block: its type, its default (a key "
            "left out takes it), what it means and an example. Units: metres, kilograms, "

@@ -21,6 +21,7 @@ from __future__ import annotations
 from components import Shape, Sound, Transform, UserOwned, Visual
 from engine.assets.service import split_nodes
 from engine.rotation import quat_to_euler
+from engine.scene.blocks import BLOCKS
 from engine.scene.db import FLOAT, INT, STRING, STRINGVECTOR, STRUCTURE, VECTOR, Block, Entry, Value
 from engine.scene.diagnostics import Loc
 
@@ -93,13 +94,19 @@ def _visual(visual: Visual) -> Value:
 
 
 def _sound(sound: Sound) -> Value:
-    return _struct([("File", _string(sound.file)), ("Loop", _flag(sound.loop)),
-                    ("Gain", _number(sound.gain)), ("Pitch", _number(sound.pitch)),
-                    ("RefDistance", _number(sound.ref_distance)),
-                    ("Rolloff", _number(sound.rolloff)),
-                    ("MaxDistance", _number(sound.max_distance)),
-                    ("AutoPlay", _flag(sound.auto_play)),
-                    ("Priority", Value(INT, int(sound.priority), _HERE))])
+    """The Sound block, as its declaration writes it back (components.sound)."""
+    return _struct([(k, _plain(v)) for k, v in BLOCKS["Sound"].save(sound).items()])
+
+
+def _plain(value: object) -> Value:
+    """A declaration's saved value (a flag, a whole number, a number, text) as scene text."""
+    if isinstance(value, bool):
+        return _flag(value)
+    if isinstance(value, int):
+        return Value(INT, value, _HERE)
+    if isinstance(value, str):
+        return _string(value)
+    return _number(value)  # type: ignore[arg-type]
 
 
 def object_block(name: str, transform: Transform, visual: Visual | None = None,

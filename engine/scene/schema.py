@@ -75,7 +75,6 @@ PRIMITIVES = (ShapeKind.SPHERE, ShapeKind.BOX, ShapeKind.CAPSULE, ShapeKind.CYLI
               ShapeKind.PLANE)
 PARSE_METHODS = ("TriangleMesh", "ConvexHull", "Box", "Sphere")
 JOINT_TYPES = tuple(SCENE_JOINT_TYPES)
-LIGHT_TYPES = ("directional", "point", "spot")
 BACKENDS = tuple(BackendName)
 INPUT_KINDS = ("osc", "lsl", "serial", "openxr", "desktop")
 OUTPUT_KINDS = ("osc", "lsl")
@@ -100,21 +99,12 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "ShaderState": _f(STRUCT_T, None,
                           "a program and values for its uniforms; objects draw with it",
                           repeat=True, struct="ShaderState"),
-        "Sound": _f(STRUCT_T, doc="a sound not attached to an object", repeat=True,
-                    struct="Sound"),
         "Camera": _f(STRUCT_T, None,
                      "a viewpoint (the first active one is drawn and heard from)", repeat=True,
                      struct="Camera"),
-        "Light": _f(STRUCT_T, None, "a light source", repeat=True, struct="Light"),
         "Measure": _f(STRUCT_T, None, "a value the run reports at its end (--stats "
                       "measures, colosseum sweep's table)", repeat=True, struct="Measure"),
-        "Display": _f(STRUCT_T, None, "a screen of a wall or CAVE, drawn off-axis from the "
-                      "viewer's head (colosseum join --display ID)", repeat=True,
-                      struct="Display"),
         "Script": _f(ASSET_T, doc="a Lua script run for the whole scene", repeat=True),
-        "Controller": _f(STRUCT_T, None,
-                         "an input bound to a motor, force or kinematic target", repeat=True,
-                         struct="Controller"),
         "World": _f(STRUCT_T, doc="dynamics settings", struct="World"),
         "Avatar": _f(STRUCT_T, doc="a skinned, animated figure (glTF)", repeat=True,
                      struct="Avatar"),
@@ -165,20 +155,12 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "PhysicalAttributes": _f(STRUCT_T, None,
                                  "its body and collision shapes (no block: not simulated)",
                                  struct="Physical"),
-        "Sound": _f(STRUCT_T, doc="sound source on this object", struct="Sound"),
         "Script": _f(ASSET_T, doc="Lua script attached to this object"),
-        "Hand": _f(STRUCT_T, None, "makes the object a virtual hand: a body driven toward a "
-                   "tracker's pose with bounded force, grasping on a glove's button",
-                   struct="Hand"),
         "Graspable": _f(BOOL_T, 1, "0: hands cannot hold it (dynamic bodies can by default)"),
-        "Wheelchair": _f(STRUCT_T, None, "makes the object a wheelchair's chassis: input "
-                         "wheel counters drive its rear axle joints (the wheelchair plugin)",
-                         struct="Wheelchair"),
         "User": _f(STRING_T, None, "the user (colosseum join --user NAME) it stands for — an "
                    "avatar, a wheelchair, hands: a server takes it out of the world "
                    "--leave-after s after that user's node leaves, unless the user comes "
                    "back"),
-        "Controller": _f(STRUCT_T, doc="input bound to this object", struct="Controller"),
         "UserData": _f(ANY_T, None, "free-form data for custom systems", repeat=True),
         # The sleep rule's state (engine.physics.sleep; written by --save-state so a
         # loaded state falls asleep when the uninterrupted run would).
@@ -345,20 +327,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Value": _f(NUMBER_OR_VECTOR_T, None,
                     "a number, or up to 4 numbers (vec2..vec4)", required=True),
     },
-    "Sound": {
-        "ID": _id("sound"),
-        "File": _f(ASSET_T, None, ".wav or .ogg", required=True),
-        "Position": _f(VEC3_T, (0.0, 0.0, 0.0),
-                       "m (scene sounds only; without it the sound plays at the listener)"),
-        "Loop": _f(BOOL_T, 0, "1 repeats the sound"),
-        "Gain": _f(FLOAT_T, 1.0, "volume factor, 1 as recorded"),
-        "Pitch": _f(FLOAT_T, 1.0, "playback speed factor"),
-        "RefDistance": _f(FLOAT_T, 1.0, "m"),
-        "Rolloff": _f(FLOAT_T, 1.0, "how fast it fades with distance"),
-        "MaxDistance": _f(FLOAT_T, 1000.0, "m"),
-        "AutoPlay": _f(BOOL_T, 0, "1 starts it when the scene starts"),
-        "Priority": _f(INT_T, 0, "higher keeps its voice when sources run out"),
-    },
     "Camera": {
         "ID": _id("camera"),
         "Position": _f(VEC3_T, (0.0, -5.0, 2.0), "m, world frame (with Follow, see Offset)"),
@@ -377,115 +345,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Object": _f(REF_T, None, "the object measured", ref="Object", required=True),
         "Value": _f(ENUM_T, "z", "x, y, z (m), vx, vy, vz (m/s) or speed (m/s) at the end "
                     "of the run", allowed=QUANTITIES),
-    },
-    "Display": {
-        "ID": _id("display (a screen's is required)"),
-        "Kind": _f(ENUM_T, "screen", "screen: a flat screen of a wall or CAVE (the keys "
-                   "below up to Far); openxr: the headset, through the active OpenXR runtime "
-                   "(the keys from Space on)", allowed=("screen", "openxr")),
-        "LowerLeft": _f(VEC3_T, (-1.0, 0.0, 0.0), "m, world frame: the screen's lower left "
-                        "corner"),
-        "LowerRight": _f(VEC3_T, (1.0, 0.0, 0.0), "m, world frame: its lower right corner"),
-        "UpperLeft": _f(VEC3_T, (-1.0, 0.0, 1.5), "m, world frame: its upper left corner"),
-        "Head": _f(REF_T, None, "object whose position is the viewer's eye (one a head "
-                   "tracker moves on the server: Tracker { ID \"USER/head\" Object ... })",
-                   ref="Object"),
-        "Tracker": _f(STRING_T, None, "a tracker of this node's own input whose position is "
-                      "the eye (when there is no Head)"),
-        "Eye": _f(VEC3_T, (0.0, -2.0, 0.75), "m, world frame: the eye while no head is tracked"),
-        "Near": _f(FLOAT_T, 0.05, "m, nearest distance drawn"),
-        "Far": _f(FLOAT_T, 500.0, "m, farthest distance drawn"),
-        "Space": _f(ENUM_T, "stage", "openxr: the tracking space (stage: the floor at z = 0; "
-                    "local_floor, then local, where the runtime has no stage)",
-                    allowed=("stage", "local_floor", "local")),
-        "WhenHidden": _f(ENUM_T, "run", "openxr: a headset taken off pauses the simulation "
-                         "(pause) or not (run)", allowed=("run", "pause")),
-        "Mirror": _f(ENUM_T, "none", "openxr: a window for the experimenter showing the left "
-                     "eye or both (needs a display)", allowed=("none", "left", "both")),
-        "Fallback": _f(ENUM_T, "none", "openxr: when no headset can be used, run in the "
-                       "window (window) or end with the message (none)",
-                       allowed=("none", "window")),
-        "RefreshRate": _f(FLOAT_T, 0.0, "Hz, openxr: the display's rate where the runtime can "
-                          "set it (0: the runtime's)"),
-        "RenderScale": _f(FLOAT_T, 1.0, "openxr: the share of the runtime's recommended "
-                          "resolution per eye each axis is drawn at (0.25 to 2)"),
-        "Depth": _f(BOOL_T, 1, "openxr: hand the runtime the depth of each eye (for its "
-                    "reprojection), where it takes it"),
-        "RecenterKey": _f(STRING_T, "f8", "openxr: the key that moves the player over the "
-                          "camera, facing its way (Lua: recenter())"),
-        "HapticGrasp": _f(FLOAT_T, 0.6, "openxr: amplitude 0..1 of the pulse a grasp gives "
-                          "the holding controller (0: none)"),
-        "HapticTouch": _f(FLOAT_T, 0.25, "openxr: amplitude 0..1 of the pulse when a hand "
-                          "starts touching something it could grasp (0: none)"),
-        "HapticImpulse": _f(FLOAT_T, 0.5, "1/(N s), openxr: a hand's contact pulses with "
-                            "amplitude impulse times this (capped at 1; 0: none)"),
-        "Bind": _f(STRUCT_T, None, "openxr: bind an action to another input of a "
-                   "controller", repeat=True, struct="Bind"),
-    },
-    "Bind": {
-        "Action": _f(STRING_T, None, "the action: grip, aim, trigger, trigger_value, squeeze, "
-                     "squeeze_value, thumbstick, thumbstick_click, a, b, x, y, menu, select, "
-                     "haptic", required=True),
-        "Profile": _f(STRING_T, None, "the interaction profile, e.g. oculus/touch_controller",
-                      required=True),
-        "Path": _f(STRING_T, None, "the input, e.g. /user/hand/right/input/trigger/value",
-                   required=True),
-    },
-    "Light": {
-        "ID": _id("light"),
-        "Type": _f(ENUM_T, "directional", "directional, point or spot", allowed=LIGHT_TYPES),
-        "Position": _f(VEC3_T, (0.0, 0.0, 10.0), "m, world frame (point and spot lights)"),
-        "Direction": _f(VEC3_T, (0.3, 0.5, -1.0), "world frame (directional and spot lights)"),
-        "Color": _f(VEC3_T, (1.0, 1.0, 1.0), "RGB, 0..1"),
-        "Intensity": _f(FLOAT_T, 1.0, "colour multiplier"),
-        "Cutoff": _f(FLOAT_T, 30.0, "spot cone half-angle, degrees"),
-        "Shadows": _f(BOOL_T, 1, "1: casts shadows (one light does)"),
-    },
-    "Controller": {
-        "ID": _id("controller"),
-        "Input": _f(STRING_T, None, '"key:A", "key:Up/Down", "axis:DEVICE/NAME", '
-                    '"button:DEVICE/NAME", "button:ID", "tracker:NAME" or "wheel:NAME" (rad/s)',
-                    required=True),
-        "Target": _f(STRING_T, None, '"motor:JOINT", "force:OBJECT" or "kinematic:OBJECT"',
-                     required=True),
-        "Gain": _f(FLOAT_T, 1.0, "target value per unit of input"),
-        "Low": _f(FLOAT_T, None, "lower bound of the target value"),
-        "High": _f(FLOAT_T, None, "upper bound of the target value"),
-    },
-    "Hand": {
-        "Tracker": _f(STRING_T, None, "the input tracker whose pose the hand follows "
-                      "(Input { Tracker { ID } }, or hand_l/hand_r of the desktop device)",
-                      required=True),
-        "Glove": _f(STRING_T, "", "the input device whose Button holds what the hand touches "
-                    "(glove_l/glove_r: the desktop device's mouse button)"),
-        "Button": _f(STRING_T, "pinch", "the glove's button that grasps while down"),
-        "Mass": _f(FLOAT_T, None, "kg the hand's body weighs (default 0.45; give it here or "
-                   "as PhysicalAttributes' Mass or Density, not both)"),
-        "MaxForce": _f(FLOAT_T, 300.0, "N the drive may push with: a heavier load lags, a "
-                       "wall stops the hand"),
-        "MaxTorque": _f(FLOAT_T, 30.0, "N*m the drive may turn with"),
-        "TimeConstant": _f(FLOAT_T, 0.0, "s the hand's distance to its tracker closes with; "
-                           "0: max(2 TimeStep, 0.03 s)"),
-        "MaxSpeed": _f(FLOAT_T, 10.0, "m/s the drive's correction is capped at (a tracker's "
-                       "own speed comes on top)"),
-        "MaxSpin": _f(FLOAT_T, 1146.0, "deg/s the drive's turning correction is capped at "
-                      "(20 rad/s)"),
-        "DeviationDistance": _f(FLOAT_T, 0.3, "m (D): farther from its tracker the hand passes "
-                                "through things and snaps back; it collides again under "
-                                "0.1 D, and is drawn see-through, on top, from 0.1 D to 0.7 D"),
-        "BreakForce": _f(FLOAT_T, None, "N a grip carries before it lets go: the pull "
-                         "toward the hand and any shear beyond what pressing the object "
-                         "against the palm holds (none: never)"),
-        "Marker": _f(BOOL_T, 1, "show a ball where the real hand (the tracker) is"),
-        "NeutralModel": _f(ASSET_T, None, "model drawn while the hand touches nothing it "
-                           "could grasp (a relaxed hand); default: the object's own look"),
-        "ContactModel": _f(ASSET_T, None, "model drawn while the hand touches something it "
-                           "could grasp (an open hand); default: the object's own look"),
-        "GraspModel": _f(ASSET_T, None, "model drawn while it holds something (a closed hand)"),
-        "Frame": _f(REF_T, None, "the object the tracker is calibrated relative to (a "
-                    "wheelchair): the hand follows it", ref="Object"),
-        "Holding": _f(STRINGVECTOR_T, None, "objects held when this state was saved (written "
-                      "by --save-state; they are held again on load)"),
     },
     "Session": {
         "Folder": _f(STRING_T, "", "the folder session logs go to, relative to the working "
@@ -570,44 +429,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Variable": _f(STRING_T, None, "a scene variable the intensity sets"),
         "Anomaly": _f(STRING_T, None, "an anomaly switched on at the intensity"),
         "Param": _f(STRING_T, None, "the Anomaly's parameter the intensity sets"),
-    },
-    "Wheelchair": {
-        "Feedback": _f(BOOL_T, 0, "0: velocity mode (the paper's): the wheels turn only as "
-                       "the real ones do and the chair never rolls by itself; 1: feedback "
-                       "mode: a change of the real wheel's speed pushes the free simulated "
-                       "wheel, gravity and walls act, and each wheel's speed and push are "
-                       "published (Output values wheelchair:ID/left/speed, "
-                       "wheelchair:ID/left/torque, and right)"),
-        "Wheels": _f(STRINGVECTOR_T, ("left", "right"), "the input wheel counters (Input { "
-                     "Wheel { ID } }, or the desktop device's left and right) of the left "
-                     "and right rear wheel", lengths=(2,)),
-        "Axles": _f(STRINGVECTOR_T, ("axle_l", "axle_r"), "the left and right rear wheels' "
-                    "hinge joints, their axes pointing so that turning forward is a "
-                    "positive rate", ref="Joint", lengths=(2,)),
-        "WheelRadius": _f(FLOAT_T, 0.305, "m, the rear wheels' radius (rim speed = rate * "
-                          "radius)"),
-        "MaxSpeed": _f(FLOAT_T, 3.0, "m/s at the rim: faster wheel input is clamped (told "
-                       "once)"),
-        "MaxTorque": _f(FLOAT_T, 30.0, "N*m each velocity-mode motor turns and holds its "
-                        "wheel with (a user's arm: 2 m/s^2 for a 90 kg chair, enough to hold "
-                        "it on a 1:12 ramp)"),
-        "RimInertia": _f(FLOAT_T, 4.29, "kg*m^2, the real wheel's moment of inertia: its "
-                         "measured change of speed times this is the push in feedback mode "
-                         "(a rig that feels like the chair: its rolling inertia (M + sum "
-                         "I/r^2) r^2 shared by two wheels; 4.29 for 90 kg on 0.305 m "
-                         "wheels)"),
-        "MaxPush": _f(FLOAT_T, 30.0, "N*m, the largest torque a push applies in feedback "
-                      "mode; a harder push (a key pressed) is spread over the next frames"),
-        "Lag": _f(VECTOR_T, None, "rad each simulated wheel [left right] was behind its real "
-                  "one, which velocity mode makes up (written by --save-state)", lengths=(2,)),
-        "Measured": _f(VECTOR_T, None, "rad/s the real wheels [left right] turned at in the "
-                       "last frame, which feedback mode's pushes are changes of (written by "
-                       "--save-state)", lengths=(2,)),
-        "Pending": _f(VECTOR_T, None, "N*m*s of pushes [left right] beyond MaxPush, still "
-                      "to be applied (written by --save-state)", lengths=(2,)),
-        "Still": _f(FLOAT_T, 0.0, "s the chair has stood still in velocity mode with its real "
-                    "wheels still; at the world's SleepTime it sleeps (written by "
-                    "--save-state)"),
     },
     "ScriptState": {
         "Owner": _f(STRING_T, None, "the object whose script this is, or the scene script's "

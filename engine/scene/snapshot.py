@@ -40,10 +40,9 @@ import numpy as np
 import engine.scene.blocks as blocks
 import engine.scene.random_state as random_state
 import engine.scene.schema as sc
-from components import HandState, Joint, Name, Transform, Wheelchair
+from components import HandState, Joint, Name, Transform
 from components.avatar import SavedAvatar
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, Spring
-from components.wheelchair import NavigationMode
 from engine.anomalies import ANOMALIES, Anomalies
 from engine.assets.generated import is_generated
 from engine.physics.backend import (
@@ -494,18 +493,6 @@ def _holding(world: World, hands: dict[int, Block], names: dict[int, str]) -> No
                                               _HERE))
 
 
-def _wheelchair(blk: Block, chair: Wheelchair) -> None:
-    """A wheelchair's mode now and its plugin's memory (the servo's lag, the last rates)."""
-    entry = blk.value("Wheelchair")
-    if entry is None or entry.kind != STRUCTURE:
-        return
-    _set(entry.data, "Feedback", _flag(chair.mode == NavigationMode.FEEDBACK))
-    _set(entry.data, "Lag", _vec(chair.lag))
-    _set(entry.data, "Measured", _vec(chair.measured))
-    _set(entry.data, "Pending", _vec(chair.pending))
-    _set(entry.data, "Still", _number(chair.still))
-
-
 def _anomalies(engine: Engine, root: Block) -> None:
     """Each visual anomaly as the run left it: switched and set (one a script declared gets
     a block of its own; a ramp in progress is saved as where it is going)."""
@@ -539,14 +526,50 @@ def _taken(ids: SceneIds) -> set[str]:
     return {es.id for es in ids.spec.entities} | {js.id for js in ids.spec.joints}
 
 
-def _declared(world: World, entity: int, blk: Block) -> None:
-    """The components of declared blocks (engine.scene.blocks) as they are now."""
+def _declared(world: World, entity: int, blk: Block, own: str | None = None) -> None:
+    """The components of declared blocks (engine.scene.blocks) as they are now: an engine
+    block's save sets its keys on the block written, wherever it stands (the entity's own
+    top-level block ``own``, or inside another; the rest stay as the author wrote them);
+    a content folder's block is written whole."""
     for component in world.components_for_entity(entity):
         block = blocks.of_component(component)
         if block is None:
             continue
         entries = [(k, _literal_value(v)) for k, v in block.save(component).items()]
-        _set(blk, block.name, _block(block.name, entries).value)
+        written = blk if block.name == own else (
+            _written(blk, block.name) if blocks.builtin(block) else None)
+        if written is not None:
+            for k, v in entries:
+                _set(written, k, v)
+        else:
+            _set(blk, block.name, _block(block.name, entries).value)
+
+
+def _written(blk: Block, name: str) -> Block | None:
+    """Block ``name`` as written in ``blk``, or in a declared block inside it."""
+    entry = blk.value(name)
+    if entry is not None and entry.kind == STRUCTURE:
+        return entry.data
+    for e in blk.entries:
+        if e.key in blocks.BLOCKS and e.value.kind == STRUCTURE:
+            found = _written(e.value.data, name)
+            if found is not None:
+                return found
+    return None
+
+
+def _declared_entities(world: World, ids: SceneIds, root: Block) -> None:
+    """Top-level declared blocks (an entity each, named by ID or place) as they are now."""
+    for name, block in blocks.BLOCKS.items():
+        if "Scene" not in block.inside:
+            continue
+        written = [e for e in root.entries if e.key == name and e.value.kind == STRUCTURE]
+        for i, entry in enumerate(written):
+            given = entry.value.data.value("ID")
+            bid = str(given.data) if given is not None and given.data else f"{name.lower()}{i}"
+            eid = ids.entities.get(bid)
+            if eid is not None and world.entity_exists(eid):
+                _declared(world, eid, entry.value.data, name)
 
 
 def _literal_value(value: Any) -> Value:
@@ -611,9 +634,6 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
         _write_body(blk, exact.get(eid, t), None if sleep is None else sleep.get(eid))
         if world.has_component(eid, HandState):
             hands[eid] = blk
-        chair = world.try_component(eid, Wheelchair)
-        if chair is not None:
-            _wheelchair(blk, chair)
         _declared(world, eid, blk)
     joints = [e for e in root.entries if e.key == "Joint"]
     for js, entry in zip(spec.joints, joints, strict=False):
@@ -632,6 +652,7 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
         else:
             spawns.snippet(rec)
     avatars.update(spawns.avatars)
+    _declared_entities(world, ids, root)
     _drop_follows(root, set(names.values()))
     _holding(world, hands, names)
     _avatar_states(engine, root, avatars, names)

@@ -1,0 +1,164 @@
+"""How a feature declares its scene block beside its component, as plain data.
+
+A :class:`BlockDeclaration` names the block, where it may stand (``"Scene"``: the top
+level, an entity of its own; ``"Object"``: on an object; or inside another block), its
+keys (:class:`Key`: type, default, unit, range, example) and two plain functions: *build*
+(the checked values -> the components) and *save* (a live component -> the values a
+saved state writes back). The scene format (:mod:`engine.scene.blocks`) turns every
+declaration into its schema, its checks, ``colosseum keys`` and KEYS.md, building and
+``--save-state``; the declaration lives in the component's own module, which is why this
+vocabulary sits in the components layer: declaring a block imports nothing of the engine.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+#: The key types a declaration may use (the names engine.scene.schema gives them).
+KINDS = ("int", "float", "bool", "string", "asset", "vec3", "vector", "stringvector",
+         "struct", "enum", "ref", "number_or_vector", "any")
+
+
+@dataclass(frozen=True, slots=True)
+class Key:
+    """One key of a block: its scene name, type, default and meaning.
+
+    ``unit`` is written before the meaning (``"m/s, the rim's top speed"``; alone where
+    the unit says it all); ``low`` and
+    ``high`` bound a number (told at its line, as ``check`` tells every mistake);
+    ``example`` is the value text ``colosseum keys`` shows where the default says too
+    little. ``lengths``, ``allowed``, ``ref`` and ``struct`` are the schema's: how many
+    numbers a vector holds, an enum's choices, the kind a reference names, the block a
+    structure opens.
+    """
+
+    name: str
+    kind: str
+    default: Any = None
+    doc: str = ""
+    unit: str = ""
+    example: str | None = None
+    low: float | None = None
+    high: float | None = None
+    required: bool = False
+    repeat: bool = False
+    lengths: tuple[int, ...] = ()
+    allowed: tuple[str, ...] = ()
+    ref: str | None = None
+    struct: str | None = None
+
+    @property
+    def meaning(self) -> str:
+        """The documented meaning, its unit first."""
+        if not self.unit:
+            return self.doc
+        return f"{self.unit}, {self.doc}" if self.doc else self.unit
+
+
+class BuildContext(Protocol):
+    """What a block's *build* function may ask of the scene being built."""
+
+    #: The ID of the object the block stands in (or, at the top level, the block's own).
+    owner: str
+    #: Where the block stands: ``"Scene"``, ``"Object"`` or the block it is inside.
+    place: str
+    #: Whether the object it stands in has a body (PhysicalAttributes, or neither block).
+    has_body: bool
+
+    def error(self, key: str | None, message: str) -> None:
+        """An error at ``key``'s line (None: the block's own line); the scene fails."""
+
+    def given(self, key: str) -> bool:
+        """Whether the author wrote ``key`` (not only its default)."""
+
+    def warning(self, key: str | None, message: str) -> None:
+        """A warning at ``key``'s line (None: the block's own line)."""
+
+    def beside(self, key: str) -> tuple[Mapping[str, Any], BuildContext] | None:
+        """The block ``key`` written beside this one in the same object (its values and a
+        context telling at its lines); None where there is none."""
+
+    def component(self, kind: type) -> Any:
+        """The object's component of type ``kind`` made so far (its body: Physical), or
+        None; a block may adjust it."""
+
+    def check_mass(self, key: str) -> None:
+        """Tell a mass or density at ``key`` that is not positive, or past what any body
+        may have."""
+
+    def input_name(self, key: str, kind: str, who: str) -> None:
+        """``key`` names an input ``kind`` ("tracker" or "glove"): once the scene's Input
+        is read, a name it does not declare is told (an error where it declares some, a
+        warning where the name must come from a device); ``who`` starts the message."""
+
+    def model_file(self, key: str) -> str | None:
+        """``key``'s model file if it can be read; else None, told as a problem (the object
+        keeps its own look)."""
+
+    def inner(self, key: str) -> list[tuple[Mapping[str, Any], BuildContext]]:
+        """The blocks written inside this one as ``key``: each one's values (defaults
+        filled in) and a context telling at its lines."""
+
+    def link(self, component: Any, field: str, target: str) -> None:
+        """Set ``component.field`` to the entity of object ``target`` once the scene's
+        entities exist (a reference by ID; nothing is set if that object is left out)."""
+
+    def made(self, kind: type) -> bool:
+        """Whether an entity made before this block has a component of type ``kind``."""
+
+    def suggest(self, name: str, choices: Any) -> str:
+        """`` (did you mean 'X'?)`` for the closest of ``choices``; empty if none is."""
+
+    def sound_file(self, key: str, outcome: str) -> str | None:
+        """``key``'s sound file if it can be played; else None, and ``outcome`` (what is
+        left out) told as a problem at its line."""
+
+
+#: values (every key, defaults filled in), context -> the components; None leaves the
+#: block out (a top-level one keeps its place as a skipped entity).
+Build = Callable[[Mapping[str, Any], BuildContext], "list[Any] | None"]
+#: a live component -> the keys a saved state sets on its block (values as Python data).
+Save = Callable[[Any], dict[str, Any]]
+
+
+@dataclass(frozen=True, slots=True)
+class BlockDeclaration:
+    """A scene block a feature declares (see the module's docstring).
+
+    ``doc`` is what the block is (its key's meaning where it stands; a mapping, place ->
+    text, where it means something else in each place); ``repeat`` whether
+    an object (or its parent block) may hold several (at the top level every block
+    repeats); ``saves`` the component type whose live values ``save`` writes back.
+    """
+
+    name: str
+    keys: tuple[Key, ...]
+    build: Build
+    doc: str | Mapping[str, str] = ""
+    inside: tuple[str, ...] = ("Object",)
+    repeat: bool = False
+    saves: type | None = None
+    save: Save | None = None
+    unnamed: str = ""
+
+
+#: Every declaration made so far, by block name (engine.scene.blocks registers each).
+DECLARED: dict[str, BlockDeclaration] = {}
+_LISTENERS: list[Callable[[BlockDeclaration], None]] = []
+
+
+def declare(block: BlockDeclaration) -> BlockDeclaration:
+    """Declare ``block`` (a component module does so when it is imported)."""
+    DECLARED[block.name] = block
+    for listener in _LISTENERS:
+        listener(block)
+    return block
+
+
+def on_declare(listener: Callable[[BlockDeclaration], None]) -> None:
+    """Call ``listener`` with every declaration, those made already first."""
+    _LISTENERS.append(listener)
+    for block in list(DECLARED.values()):
+        listener(block)
