@@ -51,7 +51,8 @@ def extensions() -> list[Extension]:
     scan = Extension("engine.scene._scan", ["engine/scene/_scan.pyx"],
                      extra_compile_args=["-O3"])
     rows = Extension("engine.physics.pymunk2d._rows", ["engine/physics/pymunk2d/_rows.pyx"],
-                     include_dirs=[numpy.get_include()],
+                     include_dirs=[numpy.get_include(), "engine/physics"],  # policy.h
+                     depends=["engine/physics/policy.h"],
                      extra_compile_args=["-O3", "-ffp-contract=off"],  # no fused a*b+c
                      define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION"),
                                     ("_GNU_SOURCE", None)])  # sincos

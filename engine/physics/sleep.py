@@ -221,20 +221,29 @@ class SleepRule:
         self.started[rows] = False
 
     def update(self, dt: float, woken: np.ndarray | None,
-               edges: Callable[[], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+               edges: Callable[[], np.ndarray] | None = None,
+               islands: Callable[[], np.ndarray] | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
         """Advance the state by a step of ``dt``; the rows to put to sleep now, and every
         row's island label when some were (rows of one island share a label).
 
         ``woken``: a bool mask of rows explicitly woken since the last update (or None).
-        ``edges``: called only when some body is ready, (M, 2) row pairs of the step's
-        contacts and joints (-1: not a body of ours).
+        Called only when some body is ready, one of: ``islands``, each row's island
+        label (rows tied by the step's contacts and joints through movable rows), as a
+        backend finds them itself; or ``edges``, (M, 2) row pairs of the step's contacts
+        and joints (-1: not a body of ours), made into islands here.
         """
         n = len(self.timer)
         if not self._pass.advance(dt, math.exp(-dt / SMOOTHING), self.time,
                                   None if woken is None else woken.view(np.uint8)):
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
         ready = self.timer >= self.time
-        labels = self._islands(edges)
+        if islands is not None:
+            labels = islands()
+        elif edges is not None:
+            labels = self._islands(edges)
+        else:
+            raise ValueError("SleepRule.update needs the islands or the edges")
         blocked = self.movable & self.awake & ~ready  # awake and not ready: keeps it awake
         held = np.zeros(n, bool)
         held[labels[blocked]] = True

@@ -21,7 +21,6 @@ import pymunk.batch
 
 from engine.physics.backend import CONTACT_DTYPE
 from engine.physics.pymunk2d import _rows
-from engine.physics.pymunk2d.resting import RestingSupport
 
 _ID = pymunk.batch.BodyFields.BODY_ID
 _FORCE = pymunk.batch.BodyFields.FORCE
@@ -154,10 +153,16 @@ class SpaceReader:
         """A read's centre-of-mass velocities as the sleep rule keeps them, (6, n)."""
         self._rows.motion(raw, self.gather, velocity)
 
-    def _read_arbiters(self) -> tuple[np.ndarray, np.ndarray]:
-        """The space's arbiters, read once per step: chipmunk changes them between steps
-        only as bodies fall asleep (their arbiters leave its cache) or wake, which the
-        order pymunk lists the bodies in tells (a read of the ids alone)."""
+    @property
+    def rows(self) -> _rows.Rows:
+        """The compiled rows (ids to rows) this reader was planned with."""
+        return self._rows
+
+    def arbiters(self) -> tuple[np.ndarray, np.ndarray]:
+        """The space's arbiters (ints, floats; ``_rows.ARBITER_INTS``/``ARBITER_FLOATS``
+        per arbiter), read once per step: chipmunk changes them between steps only as
+        bodies fall asleep (their arbiters leave its cache) or wake, which the order
+        pymunk lists the bodies in tells (a read of the ids alone)."""
         ids = self._buffers.forces
         ids.clear()
         pymunk.batch.get_space_bodies(self._space, _ID, ids)
@@ -178,37 +183,13 @@ class SpaceReader:
         """One CONTACT_DTYPE row per touching shape pair, sorted by keys then place, and
         each one's rows (a, b; -1: the keyless world), (m, 2) (see
         :meth:`_rows.Rows.contacts`)."""
-        return self._rows.contacts(*self._read_arbiters())
+        return self._rows.contacts(*self.arbiters())
 
-    def support(self, resting: RestingSupport, mu: np.ndarray, dt: float,
-                down: np.ndarray) -> None:
-        """What every row's contacts did this step, into ``resting`` (see
-        :meth:`_rows.Rows.support`)."""
-        self._rows.support(*self._read_arbiters(), mu, dt, float(down[0]), float(down[1]),
-                           resting.force, resting.friction, resting.grip, resting.points,
-                           resting.tilted)
-
-    def islands(self, moving: np.ndarray) -> np.ndarray:
-        """Each row's island label: rows tied by the step's contacts between ``moving``
-        rows share one (see :meth:`_rows.Rows.islands`)."""
+    def islands(self, movable: np.ndarray, joints: np.ndarray) -> np.ndarray:
+        """Each row's island label: rows tied by the step's contacts between ``movable``
+        rows, or by ``joints`` ((m, 2) rows; -1: the world) (see
+        :meth:`_rows.Rows.islands`)."""
         labels = np.empty(len(self.gather), np.intp)
-        self._rows.islands(self._read_arbiters()[0], moving.view(np.uint8), labels)
+        self._rows.islands(self.arbiters()[0], movable.view(np.uint8), labels,
+                           np.ascontiguousarray(joints, np.int64))
         return labels
-
-    def preload(self, rows: np.ndarray, share: np.ndarray, mass: np.ndarray,
-                gravity: tuple[float, float], g: float, applied: np.ndarray,
-                lifted: np.ndarray) -> np.ndarray | None:
-        """Give the awake ones of ``rows`` ``share`` of their weight (``mass`` per row)
-        upward on top of what forces they have, in one batch write where no body sleeps;
-        the share each got into ``applied``, the force (N) into ``lifted``. Returns None
-        when done, or the new forces (pymunk's list) for the caller to set one by one
-        where bodies sleep (a batch write would wake them)."""
-        forces, awake, asleep = self.forces()
-        out = self.force_rows()
-        if not _rows.preload(forces, self.gather, rows, share, mass, awake.view(np.uint8),
-                             gravity[0], gravity[1], g, out, applied, lifted):
-            return None
-        if asleep:
-            return out
-        self.set_forces(out)
-        return None
