@@ -13,7 +13,7 @@ A :class:`Rows` is planned for a fixed list of bodies, identified by their pymun
 """
 
 cimport numpy as cnp
-from libc.math cimport atan2, exp, fabs, hypot, isfinite, sqrt
+from libc.math cimport INFINITY, atan2, exp, fabs, hypot, isfinite, sqrt
 from libc.stdint cimport int8_t, int64_t, uint64_t
 from libc.stdlib cimport free, malloc, realloc
 from libc.string cimport memcpy
@@ -215,10 +215,12 @@ cdef class Rows:
         return others
 
     def table(self, const double[:, ::1] raw, const Py_ssize_t[::1] gather,
-              double[:, ::1] out, double[:, ::1] keep) -> bool:
+              double[:, ::1] out, double[:, ::1] keep, double extent=INFINITY,
+              double max_speed=INFINITY) -> bool:
         """Rows of ``raw`` (pymunk's list: x, z, θ, vx, vz, ω) into state rows in ``out``
         (BodyState's layout), and as they are into ``keep`` (n, 6) in row order; whether
-        all of them were finite.
+        all of them were finite, inside ``extent`` (|x|, |z|) and under ``max_speed``
+        (|vx|, |vz|, |ω|).
 
         The turn θ about pymunk's axis is a quaternion about −Y (pymunk turns X toward Z;
         a right-handed turn about +Y turns Z toward X), the rest tilt after it; the
@@ -229,13 +231,15 @@ cdef class Rows:
         cdef const double *r
         cdef const double *g
         cdef double *row
-        cdef double c, s, ox, oz, total = 0.0
+        cdef double c, s, ox, oz, total = 0.0, far = 0.0, fast = 0.0
         with nogil:
             for i in range(self.n):
                 p = &raw[gather[i], 0]
                 row = &out[i, 0]
                 memcpy(&keep[i, 0], p, 6 * sizeof(double))
                 total += p[0] + p[1] + p[2] + p[3] + p[4] + p[5]
+                far = max(far, max(fabs(p[0]), fabs(p[1])))
+                fast = max(fast, max(fabs(p[3]), max(fabs(p[4]), fabs(p[5]))))
                 row[0] = p[0]
                 row[1] = self.y[i]
                 row[2] = p[1]
@@ -265,7 +269,7 @@ cdef class Rows:
                 row[10] = 0.0
                 row[11] = -p[5]
                 row[12] = 0.0
-        return bool(isfinite(total))
+        return bool(isfinite(total)) and not (far > extent or fast > max_speed)
 
     def motion(self, const double[:, ::1] raw, const Py_ssize_t[::1] gather,
                double[:, ::1] velocity) -> None:

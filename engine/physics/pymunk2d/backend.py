@@ -277,7 +277,7 @@ class PymunkBackend:
         if not self._rest_rows:
             self._rest_bodies()
         reader = self._reader
-        resting.after(reader.rows, reader.arbiters(), raw, reader.gather, awake, dt,
+        resting.after(reader.rows, reader.arbiters(ordered=True), raw, reader.gather, awake, dt,
                       self._gravity)
 
     def _rest_bodies(self) -> None:
@@ -845,7 +845,7 @@ class PymunkBackend:
         keep = self._read_rows
         if len(keep) != n:
             keep = self._read_rows = np.empty((n, 6))
-        if not reader.table(raw, out, keep) or self._escaped(keep):
+        if not reader.table(raw, out, keep, self._extent, MAX_SPEED):  # gone, or escaped
             self._reset_broken(keep)
             raw, _ = reader.read()
             reader.table(raw, out, keep)
@@ -853,12 +853,6 @@ class PymunkBackend:
         self._read_rows, last = self._last_good[1], keep
         self._last_good = (self._keys, last)
         return self._keys
-
-    def _escaped(self, planar: np.ndarray) -> bool:
-        """Whether a body of a finite read left the world or ran away (``planar``: a row
-        per body, (x, z, θ, vx, vz, ω))."""
-        return bool(len(planar)) and (float(np.abs(planar[:, :2]).max()) > self._extent
-                                      or float(np.abs(planar[:, 3:]).max()) > MAX_SPEED)
 
     def _reset_broken(self, planar: np.ndarray) -> None:
         """Put bodies gone non-finite, runaway or out of the world back at their last good

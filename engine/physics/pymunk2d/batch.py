@@ -15,6 +15,8 @@ a new one when bodies come or go).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pymunk
 import pymunk.batch
@@ -24,6 +26,7 @@ from engine.physics.pymunk2d import _rows
 
 _ID = pymunk.batch.BodyFields.BODY_ID
 _FORCE = pymunk.batch.BodyFields.FORCE
+_ID_FORCE = _ID | _FORCE
 _BODY = (pymunk.batch.BodyFields.BODY_ID | pymunk.batch.BodyFields.POSITION
          | pymunk.batch.BodyFields.ANGLE | pymunk.batch.BodyFields.VELOCITY
          | pymunk.batch.BodyFields.ANGULAR_VELOCITY)
@@ -77,6 +80,7 @@ class SpaceReader:
         # and the space's own
         self._static_ids = np.sort(np.append(ids[static], space.static_body.id))
         self._order = np.zeros(0, np.int64)
+        self._order_bytes = b"-"  # never a read: the first read plans the order
         self.gather = np.zeros(len(bodies), np.intp)  # row -> place in pymunk's list
         self._awake = np.zeros(len(bodies), bool)
 
@@ -96,10 +100,12 @@ class SpaceReader:
         self._awake = gather < first
         self._sleepers = len(ids) - first - len(self._static_ids)
         self._order = ids.copy()
+        self._order_bytes = ids.tobytes()
 
-    def _check_order(self, ids: np.ndarray) -> None:
-        if not np.array_equal(ids, self._order):
-            self._plan_order(ids)
+    def _check_order(self, ids: bytes) -> None:
+        """``ids``: pymunk's list of body ids as read (bytes, compared in one memcmp)."""
+        if ids != self._order_bytes:
+            self._plan_order(np.frombuffer(ids, np.int64))
 
     def read(self) -> tuple[np.ndarray, np.ndarray]:
         """Every body's (x, z, θ, vx, vz, ω) as pymunk has them (velocity of the centre of
@@ -108,7 +114,7 @@ class SpaceReader:
         buffer = self._buffer
         buffer.clear()
         pymunk.batch.get_space_bodies(self._space, _BODY, buffer)
-        self._check_order(np.frombuffer(buffer.int_buf(), np.int64))
+        self._check_order(buffer.int_buf()[:])
         return np.frombuffer(buffer.float_buf(), np.float64).reshape(-1, 6), self._awake
 
     def forces(self) -> tuple[np.ndarray, np.ndarray, bool]:
@@ -117,8 +123,8 @@ class SpaceReader:
         body sleeps."""
         buffer = self._buffers.forces
         buffer.clear()
-        pymunk.batch.get_space_bodies(self._space, _ID | _FORCE, buffer)
-        self._check_order(np.frombuffer(buffer.int_buf(), np.int64))
+        pymunk.batch.get_space_bodies(self._space, _ID_FORCE, buffer)
+        self._check_order(buffer.int_buf()[:])
         return (np.frombuffer(buffer.float_buf(), np.float64).reshape(-1, 2), self._awake,
                 self._sleepers > 0)
 
@@ -144,10 +150,12 @@ class SpaceReader:
         """The space was stepped: its arbiters are new."""
         self._arbiter_read = None
 
-    def table(self, raw: np.ndarray, out: np.ndarray, keep: np.ndarray) -> bool:
+    def table(self, raw: np.ndarray, out: np.ndarray, keep: np.ndarray,
+              extent: float = math.inf, max_speed: float = math.inf) -> bool:
         """A read as state rows (BodyState's layout) in ``out[:n]``, and in row order as
-        it is in ``keep`` (n, 6); whether all finite."""
-        return self._rows.table(raw, self.gather, out, keep)
+        it is in ``keep`` (n, 6); whether all finite, inside ``extent`` and under
+        ``max_speed``."""
+        return self._rows.table(raw, self.gather, out, keep, extent, max_speed)
 
     def motion(self, raw: np.ndarray, velocity: np.ndarray) -> None:
         """A read's centre-of-mass velocities as the sleep rule keeps them, (6, n)."""
@@ -158,15 +166,17 @@ class SpaceReader:
         """The compiled rows (ids to rows) this reader was planned with."""
         return self._rows
 
-    def arbiters(self) -> tuple[np.ndarray, np.ndarray]:
+    def arbiters(self, ordered: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """The space's arbiters (ints, floats; ``_rows.ARBITER_INTS``/``ARBITER_FLOATS``
         per arbiter), read once per step: chipmunk changes them between steps only as
         bodies fall asleep (their arbiters leave its cache) or wake, which the order
-        pymunk lists the bodies in tells (a read of the ids alone)."""
-        ids = self._buffers.forces
-        ids.clear()
-        pymunk.batch.get_space_bodies(self._space, _ID, ids)
-        self._check_order(np.frombuffer(ids.int_buf(), np.int64))
+        pymunk lists the bodies in tells (a read of the ids alone; ``ordered``: the caller
+        has just read the bodies, which checked it)."""
+        if not ordered:
+            ids = self._buffers.forces
+            ids.clear()
+            pymunk.batch.get_space_bodies(self._space, _ID, ids)
+            self._check_order(ids.int_buf()[:])
         read = self._arbiter_read
         if read is not None and read[2] is self._order:
             return read[0], read[1]
