@@ -23,9 +23,13 @@ Whatever the plane cannot represent is reported once per object on the logger
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from types import FunctionType
+from typing import Any
 
 import numpy as np
 import pymunk
@@ -105,6 +109,9 @@ class PymunkBackend:
     def __init__(self) -> None:
         self._step_dt = 0.0  # the last step's, for contact impulses (carried_down)
         self._gravity = (0.0, 0.0)  # the space's, as configured (x, z)
+        #: the step's body read, while nothing has changed the space since (a state read
+        #: right after the step takes it instead of reading again); None: read afresh
+        self._step_read: np.ndarray | None = None
         self._space = pymunk.Space()
         self._space.collision_slop = COLLISION_SLOP
         # joints asked for their force -> that force on body_a after the last step
@@ -229,12 +236,13 @@ class PymunkBackend:
         if self._aims:
             self._arrive(dt)
         self._contacts = None
+        self._step_read = None
         if self._resting.beta > 0.0 or self._sleep_on:
-            raw, awake = reader.read()  # one read for both rules
+            raw, awake = reader.read()  # one read for both rules and the state read
             if self._resting.beta > 0.0:
                 self._rest(dt, raw, awake)
-            if self._sleep_on:
-                self._apply_sleep(dt, raw, awake)
+            if not (self._sleep_on and self._apply_sleep(dt, raw, awake)):
+                self._step_read = raw  # none fell asleep: the read is the space as it is
         if not self._sleep_on:
             self._woken.clear()  # the wakes were for the resting rule alone
 
@@ -577,9 +585,10 @@ class PymunkBackend:
             _stop(rec.body)
             rec.body.sleep()
 
-    def _apply_sleep(self, dt: float, raw: np.ndarray, awake: np.ndarray) -> None:
+    def _apply_sleep(self, dt: float, raw: np.ndarray, awake: np.ndarray) -> bool:
         """The sleep rule after a step (``raw``: the step's body read): quiet islands go
-        to sleep, each as one chipmunk group (woken together), at rest."""
+        to sleep, each as one chipmunk group (woken together), at rest. Whether some
+        did."""
         reader = self._reader
         rule = self._rule
         reader.motion(raw, rule.velocity)
@@ -592,7 +601,7 @@ class PymunkBackend:
             self._woken.clear()
         rows, labels = rule.update(dt, woken, islands=self._islands)
         if not len(rows):
-            return
+            return False
         asleep = rule.movable & ~awake
         for label in np.unique(labels[rows]).tolist():
             group = [self._records[i].body for i in rows[labels[rows] == label].tolist()]
@@ -605,6 +614,7 @@ class PymunkBackend:
                     root = body
                 else:
                     body.sleep_with_group(root)
+        return True
 
     def _islands(self) -> np.ndarray:
         """Each row's island for the sleep rule: rows tied by the step's contacts and the
@@ -841,12 +851,15 @@ class PymunkBackend:
         if out.shape[0] < n or out.shape[1:] != (13,) or out.dtype != np.float64:
             raise ValueError(f"read_state_into needs a float64 array of at least ({n}, 13), "
                              f"got {out.dtype} {out.shape}")
-        raw, _ = reader.read()
+        raw = self._step_read
+        if raw is None:
+            raw, _ = reader.read()
         keep = self._read_rows
         if len(keep) != n:
             keep = self._read_rows = np.empty((n, 6))
         if not reader.table(raw, out, keep, self._extent, MAX_SPEED):  # gone, or escaped
             self._reset_broken(keep)
+            self._step_read = None
             raw, _ = reader.read()
             reader.table(raw, out, keep)
         # this read is the last good one now: swap buffers rather than copy
@@ -1102,3 +1115,26 @@ def _wake_others(arbiter: pymunk.Arbiter, body: pymunk.Body) -> None:
         if other is not body and other.body_type == pymunk.Body.DYNAMIC:
             other.activate()
 
+
+
+#: The backend's methods that change nothing in the space: every other public method
+#: may (a pose, a velocity, a wake, a body or joint come or gone...) and so drops the
+#: step's body read (``PymunkBackend._step_read``) before it runs.
+_READS_ONLY = frozenset({
+    "step", "read_state", "read_state_into", "body_count", "is_sleeping", "keys",
+    "sleep_states", "joint_state", "joint_force", "has_joint", "take_faults", "contacts",
+    "overlapping", "raycast", "name"})
+
+
+def _dropping_the_step_read(method: Callable[..., Any]) -> Callable[..., Any]:
+    @functools.wraps(method)
+    def run(self: PymunkBackend, *args: Any, **kwargs: Any) -> Any:
+        self._step_read = None
+        return method(self, *args, **kwargs)
+    return run
+
+
+for _name, _method in list(vars(PymunkBackend).items()):
+    if not _name.startswith("_") and _name not in _READS_ONLY and isinstance(_method,
+                                                                             FunctionType):
+        setattr(PymunkBackend, _name, _dropping_the_step_read(_method))

@@ -5,16 +5,18 @@ stack of ten crates rocking 2 to 4 cm at 100 Hz and toppling at 50 Hz. As on ODE
 body at rest on its contacts gets ``warm_start`` of its weight as an upward force
 before the step, so the solver finds only the rest of every contact force (for a body
 at rest the contacts' whole force is its weight: normal and friction scale alike, and
-the motion is the same whenever the solver converges). The rules are stepper.h's, with
-its constants: at rest means held up by the contacts (REST_SUPPORT of the weight) for
+the motion is the same whenever the solver converges). The rules and their constants are
+written once for both backends, in C (engine/physics/policy.h's rp_stand, which ODE's
+step calls too): at rest means held up by the contacts (REST_SUPPORT of the weight) for
 two steps, not pushed sideways (the force averaged over REST_SMOOTHING seconds, against
 REST_GRIP of the friction), friction short of its bound (REST_SLIDING), moving slower
 than REST_SLIP, resting on a face (two contact points in the plane) or on level ground
 only, with no joint and touching no kinematic body, in an island (bodies touching) with
 no jointed, weightless or pushed body: each preloaded weight must reach the ground through
 contacts (a platform a force holds up or a wheelchair's seat would take the preload of
-what rests on it instead). What the contacts did is read from
-pymunk's arbiters in one batch (``_rows.Rows.support``).
+what rests on it instead). What the contacts did is read from pymunk's arbiters in one
+batch and everything after the step is one compiled pass (``_rows.Resting.after``), as
+is the preload before it (``_rows.Resting.preload``): no Python per body.
 """
 
 from __future__ import annotations
@@ -27,12 +29,6 @@ from engine.physics.pymunk2d import _rows
 #: at once would come on top of them for a step and pop a stack apart. It is ramped in by
 #: this share of its full size a step, and out by twice that.
 RAMP = 0.1
-#: stepper.h's constants (tests/physics/test_accuracy.py checks they agree).
-REST_SLIP = 0.05
-REST_SUPPORT = 0.5
-REST_GRIP = 0.5
-REST_SLIDING = 0.95
-REST_SMOOTHING = 0.2
 
 
 class RestingSupport:
