@@ -44,7 +44,8 @@ def extensions() -> list[Extension]:
         libraries=["ode"],
         library_dirs=[a[2:] for a in pkg_config("--libs") if a.startswith("-L")],
         define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION")],
-        depends=["engine/physics/ode3d/stepper.h", "engine/physics/sleep.h"],
+        depends=["engine/physics/ode3d/stepper.h", "engine/physics/sleep.h",
+                 "engine/physics/policy.h"],
     )
     sleep = Extension("engine.physics._sleep", ["engine/physics/_sleep.pyx"],
                       extra_compile_args=["-O3"], depends=["engine/physics/sleep.h"])
