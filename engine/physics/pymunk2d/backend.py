@@ -263,7 +263,12 @@ class PymunkBackend:
                 self._preloaded = False
             return
         self._preloaded = True
-        forces, awake, asleep = reader.forces()
+        if self._step_read is not None and not self._driven:
+            # nothing has touched the space since the last step, which zeroed every
+            # dynamic body's force, and no joint drives a body: no force to read
+            forces, awake, asleep = reader.known_forces()
+        else:
+            forces, awake, asleep = reader.forces()
         out = reader.force_rows()
         if not resting.preload(forces, reader.gather, awake, out, self._gravity):
             return

@@ -83,6 +83,7 @@ class SpaceReader:
         self._order_bytes = b"-"  # never a read: the first read plans the order
         self.gather = np.zeros(len(bodies), np.intp)  # row -> place in pymunk's list
         self._awake = np.zeros(len(bodies), bool)
+        self._zeros = np.zeros((0, 2))  # no force on any body, in pymunk's list
 
     def _plan_order(self, ids: np.ndarray) -> None:
         """pymunk listed the bodies in a new order: where each row is, and who sleeps."""
@@ -127,6 +128,15 @@ class SpaceReader:
         self._check_order(buffer.int_buf()[:])
         return (np.frombuffer(buffer.float_buf(), np.float64).reshape(-1, 2), self._awake,
                 self._sleepers > 0)
+
+    def known_forces(self) -> tuple[np.ndarray, np.ndarray, bool]:
+        """As :meth:`forces`, without a read, for a space whose bodies are listed as at
+        the last read and have no force (pymunk zeroes each dynamic body's force as it
+        steps it, and a static or kinematic body's force moves nothing)."""
+        zeros = self._zeros
+        if len(zeros) != len(self._order):
+            zeros = self._zeros = np.zeros((len(self._order), 2))
+        return zeros, self._awake, self._sleepers > 0
 
     def force_rows(self) -> np.ndarray:
         """An array (pymunk's list: a row per body, x and z) for :meth:`set_forces`."""
