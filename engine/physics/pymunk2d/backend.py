@@ -16,6 +16,15 @@ and wakes a sleeping group that an awake body touches, but only the rule puts bo
 sleep: each island as one chipmunk group, so they wake together. The rule reads the
 state through ``batch`` (pymunk's public ``pymunk.batch``), which also tells who sleeps.
 
+Cost: a step is the space's own step plus a fixed handful of batch calls and compiled
+passes, no Python per body: before it, every force read (skipped while nothing touched
+the space since the last step), the preload added and every force written; after it, one
+body read and one arbiter read shared by the resting warm start (one pass,
+``_rows.Resting.after``) and the sleep rule (``sleep.h``'s pass; islands, when some body
+is ready, by a union-find over the arbiters and joints), and that body read is also what a
+state read right after the step returns (any public method that may change the space
+drops it first).
+
 Whatever the plane cannot represent is reported once per object on the logger
 ``colosseum.physics.pymunk`` with the approximation used, never raised. Bad calls
 (unknown keys, unknown body or joint kinds) raise KeyError or ValueError naming them.
