@@ -143,17 +143,19 @@ def bench_one(n: int, steps: int, sleeping: bool = False, rule: bool = False,
     same = bool(np.array_equal(raw_xz, state.position[order][:, ::2]))
     contacts = len(ours.contacts())
     ours.close()
+    return {"n": n, "steps": blocks * BLOCK, "sleeping": sleeping, "rule": rule or sleeping,
+            "clock": "thread CPU time" if cpu else "wall", **_summary(times),
+            "contacts": contacts, "same_trajectory": same}
+
+
+def _summary(times: np.ndarray) -> dict[str, float]:
+    """ms per step from blocks of (raw, our step, our sync, our contacts) ns: medians,
+    means, and ratios as the median of each block's own ratio (raw and ours ran back to
+    back: robust to the other work a shared machine does in between)."""
     med = np.median(times, axis=0) * 1e-6 / BLOCK
     mean = times.mean(axis=0) * 1e-6 / BLOCK
-    # each block's own ratio (raw and ours ran back to back), then the median of those:
-    # robust to the other work that a shared machine does in between
     raw = times[:, 0].astype(np.float64)
     return {
-        "n": n,
-        "steps": blocks * BLOCK,
-        "sleeping": sleeping,
-        "rule": rule or sleeping,
-        "clock": "thread CPU time" if cpu else "wall",
         "raw_ms": float(med[0]),
         "step_ms": float(med[1]),
         "sync_ms": float(med[2]),
@@ -164,8 +166,6 @@ def bench_one(n: int, steps: int, sleeping: bool = False, rule: bool = False,
         "ratio_of_means": float((mean[1] + mean[2]) / mean[0]),
         "raw_mean_ms": float(mean[0]),
         "ours_mean_ms": float(mean[1] + mean[2]),
-        "contacts": contacts,
-        "same_trajectory": same,
     }
 
 
