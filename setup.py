@@ -44,14 +44,16 @@ def extensions() -> list[Extension]:
         libraries=["ode"],
         library_dirs=[a[2:] for a in pkg_config("--libs") if a.startswith("-L")],
         define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION")],
-        depends=["engine/physics/ode3d/stepper.h", "engine/physics/sleep.h"],
+        depends=["engine/physics/ode3d/stepper.h", "engine/physics/sleep.h",
+                 "engine/physics/policy.h"],
     )
     sleep = Extension("engine.physics._sleep", ["engine/physics/_sleep.pyx"],
                       extra_compile_args=["-O3"], depends=["engine/physics/sleep.h"])
     scan = Extension("engine.scene._scan", ["engine/scene/_scan.pyx"],
                      extra_compile_args=["-O3"])
     rows = Extension("engine.physics.pymunk2d._rows", ["engine/physics/pymunk2d/_rows.pyx"],
-                     include_dirs=[numpy.get_include()],
+                     include_dirs=[numpy.get_include(), "engine/physics"],  # policy.h
+                     depends=["engine/physics/policy.h"],
                      extra_compile_args=["-O3", "-ffp-contract=off"],  # no fused a*b+c
                      define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION"),
                                     ("_GNU_SOURCE", None)])  # sincos

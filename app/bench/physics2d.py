@@ -16,7 +16,12 @@ means are in the returned dicts). Then the readback alone, old path beside new
 by chipmunk's own rule after ``SLEEP_TIME`` and ours by the engine's sleep rule, so
 the two no longer follow the same trajectories.
 
-Run: ``python app/bench/physics2d.py [--n 100 500 2000] [--steps S] [--sleeping]``.
+``--rule`` runs the engine's sleep rule in ours alone (chipmunk's sleeping off in the
+raw space): in this scene at 1/60 s its columns keep rocking and never sleep, so that
+ratio is what the rule costs on top of the warm start.
+
+Run: ``python -m app.bench.physics2d [--n 100 500 2000] [--steps S] [--sleeping|--rule]
+[--cpu-time]``.
 """
 
 from __future__ import annotations
@@ -94,12 +99,17 @@ def build_ours(n: int, sleeping: bool = False) -> PymunkBackend:
     return backend
 
 
-def bench_one(n: int, steps: int, sleeping: bool = False) -> dict:
-    """Alternate raw and backend blocks of steps; ms per step (medians, and means)."""
-    raw, ours = build_raw(n, sleeping), build_ours(n, sleeping)
+def bench_one(n: int, steps: int, sleeping: bool = False, rule: bool = False,
+              cpu: bool = False) -> dict:
+    """Alternate raw and backend blocks of steps; ms per step (medians, and means).
+    ``rule``: ours runs the sleep rule (as by default) while the raw space does not sleep:
+    the rule's cost in a scene it does not put to sleep. ``cpu``: time by the thread's
+    CPU time instead of the wall clock (on a machine shared by more processes than it has
+    cores the wall clock counts the time others ran; the CPU time does not)."""
+    raw, ours = build_raw(n, sleeping), build_ours(n, sleeping or rule)
     # the ECS pose table (entity = body key, as in the engine); no body comes or goes here
     readback = EcsReadback(ours, pose_table(ours.keys()))
-    clock = time.perf_counter_ns
+    clock = time.thread_time_ns if cpu else time.perf_counter_ns
     blocks = max(1, steps // BLOCK)
     # per block of BLOCK steps, in ns: raw, our step, our sync, our contacts
     times = np.zeros((blocks, 4), np.int64)
@@ -133,15 +143,19 @@ def bench_one(n: int, steps: int, sleeping: bool = False) -> dict:
     same = bool(np.array_equal(raw_xz, state.position[order][:, ::2]))
     contacts = len(ours.contacts())
     ours.close()
+    return {"n": n, "steps": blocks * BLOCK, "sleeping": sleeping, "rule": rule or sleeping,
+            "clock": "thread CPU time" if cpu else "wall", **_summary(times),
+            "contacts": contacts, "same_trajectory": same}
+
+
+def _summary(times: np.ndarray) -> dict[str, float]:
+    """ms per step from blocks of (raw, our step, our sync, our contacts) ns: medians,
+    means, and ratios as the median of each block's own ratio (raw and ours ran back to
+    back: robust to the other work a shared machine does in between)."""
     med = np.median(times, axis=0) * 1e-6 / BLOCK
     mean = times.mean(axis=0) * 1e-6 / BLOCK
-    # each block's own ratio (raw and ours ran back to back), then the median of those:
-    # robust to the other work that a shared machine does in between
     raw = times[:, 0].astype(np.float64)
     return {
-        "n": n,
-        "steps": blocks * BLOCK,
-        "sleeping": sleeping,
         "raw_ms": float(med[0]),
         "step_ms": float(med[1]),
         "sync_ms": float(med[2]),
@@ -152,22 +166,21 @@ def bench_one(n: int, steps: int, sleeping: bool = False) -> dict:
         "ratio_of_means": float((mean[1] + mean[2]) / mean[0]),
         "raw_mean_ms": float(mean[0]),
         "ours_mean_ms": float(mean[1] + mean[2]),
-        "contacts": contacts,
-        "same_trajectory": same,
     }
 
 
 def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
-              sleeping: bool = False) -> list[dict]:
+              sleeping: bool = False, rule: bool = False, cpu: bool = False) -> list[dict]:
     """Run the benchmark for each N and print the table; returns one dict per N."""
     rows = []
-    print(f"boxes in 2D, dt 1/60 s, {ITERATIONS} iterations, sleeping "
-          f"{'on' if sleeping else 'off'}; median ms per step")
+    what = ("on in both" if sleeping else "rule on in ours, off in raw" if rule else "off")
+    print(f"boxes in 2D, dt 1/60 s, {ITERATIONS} iterations, warm start on in ours, "
+          f"sleeping {what}; median ms per step ({'thread CPU time' if cpu else 'wall'})")
     print(f"{'N':>6} {'raw':>8} {'ours':>8} {'=step':>8} {'+sync':>7} {'ratio':>7} "
           f"{'contacts':>9} {'ratio+c':>8} {'same':>5}")
     for n in ns:
         r = bench_one(n, steps if steps is not None else max(150, 150_000 // max(n, 1)),
-                      sleeping)
+                      sleeping, rule, cpu)
         rows.append(r)
         print(f"{r['n']:>6} {r['raw_ms']:>8.3f} {r['ours_ms']:>8.3f} {r['step_ms']:>8.3f} "
               f"{r['sync_ms']:>7.3f} {r['ratio']:>6.3f}x {r['contacts_ms']:>9.3f} "
@@ -190,8 +203,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--n", type=int, nargs="+", default=[100, 500, 2000])
     parser.add_argument("--steps", type=int, default=None, help="steps per N (default: auto)")
     parser.add_argument("--sleeping", action="store_true", help="auto-sleep on in both")
+    parser.add_argument("--rule", action="store_true",
+                        help="the sleep rule on in ours (raw: chipmunk sleeping off)")
+    parser.add_argument("--cpu-time", action="store_true",
+                        help="time by the thread's CPU time (a machine shared by many)")
     args = parser.parse_args(argv)
-    run_bench(tuple(args.n), args.steps, args.sleeping)
+    run_bench(tuple(args.n), args.steps, args.sleeping, args.rule, args.cpu_time)
     return 0
 
 

@@ -16,3 +16,5 @@ cdef extern from "sleep.h" nogil:
         const double* bounds
         Py_ssize_t n
     bint sr_advance(SrRule*, double dt, double keep, double time, const uint8_t* woken)
+    Py_ssize_t sr_settle(SrRule*, double time, const int* label, uint8_t* held,
+                         Py_ssize_t* rows)

@@ -199,7 +199,7 @@ class SleepRule:
         """The compiled pass over the current arrays (they are written in place from then
         on, so the pass is made again only when they are replaced)."""
         self.generation += 1
-        return _sleep.Pass(*self.arrays()[:7], self._bounds)
+        return _sleep.Pass(*self.arrays()[:7], self._bounds, self.movable.view(np.uint8))
 
     def arrays(self) -> tuple[np.ndarray, ...]:
         """The arrays a compiled pass works on in place, as ``sleep.h``'s SrRule holds
@@ -221,26 +221,30 @@ class SleepRule:
         self.started[rows] = False
 
     def update(self, dt: float, woken: np.ndarray | None,
-               edges: Callable[[], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+               edges: Callable[[], np.ndarray] | None = None,
+               islands: Callable[[], np.ndarray] | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
         """Advance the state by a step of ``dt``; the rows to put to sleep now, and every
         row's island label when some were (rows of one island share a label).
 
         ``woken``: a bool mask of rows explicitly woken since the last update (or None).
-        ``edges``: called only when some body is ready, (M, 2) row pairs of the step's
-        contacts and joints (-1: not a body of ours).
+        Called only when some body is ready, one of: ``islands``, each row's island
+        label (rows tied by the step's contacts and joints through movable rows), as a
+        backend finds them itself; or ``edges``, (M, 2) row pairs of the step's contacts
+        and joints (-1: not a body of ours), made into islands here.
         """
-        n = len(self.timer)
         if not self._pass.advance(dt, math.exp(-dt / SMOOTHING), self.time,
                                   None if woken is None else woken.view(np.uint8)):
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        ready = self.timer >= self.time
-        labels = self._islands(edges)
-        blocked = self.movable & self.awake & ~ready  # awake and not ready: keeps it awake
-        held = np.zeros(n, bool)
-        held[labels[blocked]] = True
-        rows = np.flatnonzero(ready & ~held[labels])
-        self.forget(rows)
-        self.awake[rows] = False
+        if islands is not None:
+            labels = islands()
+        elif edges is not None:
+            labels = self._islands(edges)
+        else:
+            raise ValueError("SleepRule.update needs the islands or the edges")
+        # the islands' say, sleep.h's sr_settle (as ODE's step runs it): an awake movable
+        # row that is not ready keeps its island awake; the others' ready rows sleep
+        rows = self._pass.settle(self.time, np.ascontiguousarray(labels, np.intc))
         return rows, labels
 
     def _islands(self, edges: Callable[[], np.ndarray]) -> np.ndarray:

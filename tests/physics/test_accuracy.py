@@ -19,7 +19,6 @@ import pytest
 
 from app.bench import accuracy as bench
 from engine.physics.backend import WorldSettings
-from engine.physics.pymunk2d import resting
 from engine.scene import check
 
 BACKENDS = ("ode", "pymunk")
@@ -97,12 +96,22 @@ def test_joint_islands_are_solved_exactly_and_contact_islands_iteratively() -> N
     assert abs(exact) < 0.05 < 1.0 < quick
 
 
-def test_the_planar_resting_rule_has_the_ode_step_s_constants() -> None:
-    """pymunk's resting warm start is stepper.h's, in numpy: the same constants."""
-    header = (Path(__file__).parents[2] / "engine/physics/ode3d/stepper.h").read_text()
-    for name in ("REST_SLIP", "REST_SUPPORT", "REST_GRIP", "REST_SLIDING", "REST_SMOOTHING"):
-        (value,) = re.findall(rf"#define {name} ([0-9.e-]+)", header)
-        assert float(value) == getattr(resting, name), name
+def test_both_backends_take_the_resting_rules_from_one_header() -> None:
+    """The resting warm start is written once (engine/physics/policy.h): the ODE step and
+    pymunk's compiled pass both include it, and neither defines a rule's constant of its
+    own."""
+    physics = Path(__file__).parents[2] / "engine/physics"
+    policy = (physics / "policy.h").read_text()
+    names = ("REST_SLIP", "REST_SUPPORT", "REST_GRIP", "REST_SLIDING", "REST_SMOOTHING")
+    for name in names:
+        assert len(re.findall(rf"#define {name} ", policy)) == 1, name
+    stepper = (physics / "ode3d/stepper.h").read_text()
+    rows = (physics / "pymunk2d/_rows.pyx").read_text()
+    assert '#include "../policy.h"' in stepper and "rp_stand(" in stepper
+    assert 'cdef extern from "policy.h"' in rows and "rp_stand(" in rows
+    for text in (stepper, rows, (physics / "pymunk2d/resting.py").read_text()):
+        for name in names:
+            assert not re.search(rf"(#define {name}\b|^{name} = )", text, re.M), name
 
 
 def test_solver_settings_are_checked_where_they_are_written(tmp_path: Path) -> None:

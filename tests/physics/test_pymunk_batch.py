@@ -248,3 +248,40 @@ def test_write_state_warns_as_one_by_one_and_applies_nothing_of_a_bad_row(kit,
                                               np.array([[0.0, 1.0, 0.0]]), np.zeros((1, 3))))
     assert "body 7: new orientation tilts differently out of the X–Z plane" in caplog.text
     assert "body 7: velocity out of the X–Z plane; only its in-plane part" in caplog.text
+
+
+def _same_partition(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two labelings group the rows alike (the labels' values aside)."""
+    return bool(np.array_equal(a[:, None] == a[None, :], b[:, None] == b[None, :]))
+
+
+def test_the_sleep_rule_s_islands_from_the_arbiters_are_the_contacts_and_joints_own(kit):
+    """The union-find over pymunk's arbiters and the joints (the sleep rule's islands on
+    pymunk, in C) groups the rows as the rule's own islands from the contact records and
+    joint pairs do: piles apart, a kinematic body tying what it touches, a jointed pair
+    apart from the floor, a static body tying nothing."""
+    backend = PymunkBackend()
+    backend.configure(WorldSettings(auto_sleep=False))
+    kit.add(backend, 0, kit.ground_plane(), (0.0, 0.0, 0.0))
+    key = 1
+    for x in (0.0, 3.0, 6.0):  # three piles of three crates
+        for level in range(3):
+            kit.add(backend, key, kit.box((0.5, 0.5, 0.5)), (x, 0.0, 0.25 + 0.5 * level))
+            key += 1
+    kit.add(backend, 20, kit.box((0.5, 0.5, 0.5), kind="kinematic"), (1.5, 0.0, 0.25))
+    kit.add(backend, 21, kit.box((0.4, 0.4, 0.4)), (1.1, 0.0, 0.2))  # against the kinematic
+    kit.add(backend, 22, kit.sphere(0.2), (10.0, 0.0, 3.0))  # a pendulum pair, in the air
+    kit.add(backend, 23, kit.sphere(0.2), (11.0, 0.0, 3.0))
+    backend.add_joint(30, kit.hinge(22, (10.0, 0.0, 4.0)))
+    backend.add_joint(31, kit.hinge(22, (10.5, 0.0, 3.0), 23))
+    for _ in range(30):
+        backend.step(0.01)
+    rule = backend._rule
+    ours = backend._islands()
+    edges = np.concatenate([backend._contact_pairs(), backend._joint_pairs])
+    theirs = rule._islands(lambda: edges)
+    assert _same_partition(ours, theirs)
+    rows = {k: int(rule.rows(np.array([k]))[0]) for k in (1, 2, 4, 20, 21, 22, 23)}
+    assert ours[rows[1]] == ours[rows[2]] != ours[rows[4]]  # a pile; piles apart
+    assert ours[rows[20]] == ours[rows[21]]  # the kinematic ties what it touches
+    assert ours[rows[22]] == ours[rows[23]] != ours[rows[1]]

@@ -274,6 +274,44 @@ def test_the_compiled_step_is_the_numpy_formulation_to_the_bit(seed: int) -> Non
     assert rules[0].started.any() and (rules[0].timer > 0).any()  # the tests had work
 
 
+def _numpy_settle(rule: SleepRule, labels: np.ndarray) -> np.ndarray:
+    """The islands' say as SleepRule.update wrote it in numpy before it ran sleep.h's
+    sr_settle (which ODE's step runs too): the oracle the compiled one must match."""
+    ready = rule.timer >= rule.time
+    blocked = rule.movable & rule.awake & ~ready  # awake and not ready: keeps it awake
+    held = np.zeros(len(ready), bool)
+    held[labels[blocked]] = True
+    rows = np.flatnonzero(ready & ~held[labels])
+    rule.forget(rows)
+    rule.awake[rows] = False
+    return rows
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_islands_say_is_the_numpy_formulation(seed: int) -> None:
+    """Random islands of ready, unready, asleep and immovable rows: the same rows sleep
+    and every state array ends the same through both."""
+    rng = np.random.default_rng(seed)
+    n = 200
+    rules = [_rule(n), _rule(n)]
+    labels = rng.integers(0, 40, n)  # 40 islands, labels in [0, n)
+    movable = rng.random(n) < 0.9
+    awake = rng.random(n) < 0.9
+    timer = np.where(rng.random(n) < 0.8, 0.6, 0.1) * SLEEP_TIME / 0.5
+    for rule in rules:
+        rule.layout(rule.keys, movable, np.ones(n, bool))
+        rule.awake[:] = awake
+        rule.timer[:] = timer
+        rule.smoothing[:] = 1.0
+        rule.started[:] = True
+    compiled = rules[0]._pass.settle(rules[0].time, labels.astype(np.intc))
+    oracle = _numpy_settle(rules[1], labels)
+    assert compiled.tolist() == oracle.tolist() and 0 < len(oracle) < n
+    for name in ("smoothed", "smoothing", "timer", "started", "awake"):
+        np.testing.assert_array_equal(getattr(rules[0], name), getattr(rules[1], name),
+                                      err_msg=name)
+
+
 @pytest.mark.parametrize("ramp, sleeps", [(0.0, True), (0.02, False)])
 def test_a_slow_body_that_is_being_accelerated_stays_awake(ramp: float, sleeps: bool) -> None:
     """Slow all along (under SleepLinear for the whole second), but speeding up at

@@ -61,25 +61,8 @@
 
 #include <ode/ode.h>
 
+#include "../policy.h" /* the resting rules and their constants, shared with pymunk */
 #include "../sleep.h"
-
-/* Contacts sliding faster than this (m/s) are not at rest. */
-#define REST_SLIP 0.05
-/* A body is held up when its contacts push it up with at least this share of its
- * weight (of the solver's share of it, when preloaded). */
-#define REST_SUPPORT 0.5
-/* Sideways force a resting body's contacts may hold it with (what pushes it or pulls it
- * along), as a share of what their friction can give: to stay at rest (preloaded); times
- * (1 - beta) to come to rest (the preload leaves it that). */
-#define REST_GRIP 0.5
-/* Contact normals at least this close to the vertical (cosine) are level. */
-#define REST_LEVEL (1.0 - 1e-9)
-/* A body whose contacts' friction reached this share of what they can give is sliding
- * (or about to): not at rest. */
-#define REST_SLIDING 0.95
-/* Seconds over which a body's contact force is averaged before the sideways part is
- * judged: a stack's solver noise pushes its crates back and forth, a lean does not. */
-#define REST_SMOOTHING 0.2
 
 typedef struct {
     double beta;      /* share of a resting body's weight preloaded; 0: off */
@@ -567,7 +550,9 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
     for (i = 0; i < n; i++) {
         dBodyID b = cs_body_at(bodies, stride, i);
         CsBody *st = &s->bodies[i];
-        double up, side[3], weight, share, grip, keep = exp(-dt / REST_SMOOTHING);
+        double up, keep = exp(-dt / REST_SMOOTHING);
+        RpStep step;
+        uint8_t slid;
         dMass m;
         if (b == NULL || dBodyIsKinematic(b)) continue;
         if (!dBodyIsEnabled(b)) {  /* asleep: it starts afresh when woken */
@@ -575,30 +560,17 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
             continue;
         }
         dBodyGetMass(b, &m);
-        weight = m.mass * g;
-        share = st->preloaded ? 1.0 - cfg->beta : 1.0;  /* of its weight the solver holds */
-        up = -(st->solved[0] * down[0] + st->solved[1] * down[1] + st->solved[2] * down[2]);
-        for (k = 0; k < 3; k++)  /* the whole force, as the solver found (1 - beta) of it */
-            st->held[k] = keep * st->held[k] + (1.0 - keep) * st->solved[k] / share;
-        {
-            double held_up = -(st->held[0] * down[0] + st->held[1] * down[1] +
-                               st->held[2] * down[2]);
-            for (k = 0; k < 3; k++) side[k] = st->held[k] + held_up * down[k];
-            /* one that slid while preloaded comes back only when the preload cannot make
-             * it slide again: held sideways by less than (1 - beta) of the grip */
-            grip = REST_GRIP * (st->slid ? 1.0 - cfg->beta : 1.0) * st->mu * held_up;
-        }
-        if (st->preloaded && st->friction >= REST_SLIDING * st->grip) st->slid = 1;
-        if (side[0] * side[0] + side[1] * side[1] + side[2] * side[2] > grip * grip) {
-            st->resting = 0;
-        } else {
-            st->slid = 0;
-            if (weight > 0.0 && up >= REST_SUPPORT * share * weight &&
-                st->friction < REST_SLIDING * st->grip)
-                st->resting = st->resting < 2 ? st->resting + 1 : 2;
-            else
-                st->resting = 0;
-        }
+        step.solved = st->solved;
+        step.mu = st->mu;
+        step.friction = st->friction;
+        step.grip = st->grip;
+        step.weight = m.mass * g;
+        step.share = st->preloaded ? 1.0 - cfg->beta : 1.0; /* of its weight the solver held */
+        step.preloaded = st->preloaded;
+        slid = (uint8_t)st->slid;
+        st->resting = rp_count(st->resting,
+                               rp_stand(&step, st->held, &slid, down, 3, keep, cfg->beta, &up));
+        st->slid = slid;
     }
     return status;
 }

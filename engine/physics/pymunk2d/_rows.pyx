@@ -13,7 +13,7 @@ A :class:`Rows` is planned for a fixed list of bodies, identified by their pymun
 """
 
 cimport numpy as cnp
-from libc.math cimport atan2, fabs, hypot, isfinite, sqrt
+from libc.math cimport INFINITY, atan2, exp, fabs, hypot, isfinite, sqrt
 from libc.stdint cimport int8_t, int64_t, uint64_t
 from libc.stdlib cimport free, malloc, realloc
 from libc.string cimport memcpy
@@ -38,6 +38,11 @@ RETILT = 1
 OFF_PLANE = 2
 #: How far (any component) a row's tilt may be from its body's rest tilt.
 TILT_TOLERANCE = 1e-6
+
+cdef enum:  # the same counts, for code without the GIL
+    _BF = 6
+    _AI = 3
+    _AF = 14
 
 
 cdef struct Contact:
@@ -210,10 +215,12 @@ cdef class Rows:
         return others
 
     def table(self, const double[:, ::1] raw, const Py_ssize_t[::1] gather,
-              double[:, ::1] out, double[:, ::1] keep) -> bool:
+              double[:, ::1] out, double[:, ::1] keep, double extent=INFINITY,
+              double max_speed=INFINITY) -> bool:
         """Rows of ``raw`` (pymunk's list: x, z, θ, vx, vz, ω) into state rows in ``out``
         (BodyState's layout), and as they are into ``keep`` (n, 6) in row order; whether
-        all of them were finite.
+        all of them were finite, inside ``extent`` (|x|, |z|) and under ``max_speed``
+        (|vx|, |vz|, |ω|).
 
         The turn θ about pymunk's axis is a quaternion about −Y (pymunk turns X toward Z;
         a right-handed turn about +Y turns Z toward X), the rest tilt after it; the
@@ -224,13 +231,15 @@ cdef class Rows:
         cdef const double *r
         cdef const double *g
         cdef double *row
-        cdef double c, s, ox, oz, total = 0.0
+        cdef double c, s, ox, oz, total = 0.0, far = 0.0, fast = 0.0
         with nogil:
             for i in range(self.n):
                 p = &raw[gather[i], 0]
                 row = &out[i, 0]
                 memcpy(&keep[i, 0], p, 6 * sizeof(double))
                 total += p[0] + p[1] + p[2] + p[3] + p[4] + p[5]
+                far = max(far, max(fabs(p[0]), fabs(p[1])))
+                fast = max(fast, max(fabs(p[3]), max(fabs(p[4]), fabs(p[5]))))
                 row[0] = p[0]
                 row[1] = self.y[i]
                 row[2] = p[1]
@@ -260,7 +269,7 @@ cdef class Rows:
                 row[10] = 0.0
                 row[11] = -p[5]
                 row[12] = 0.0
-        return bool(isfinite(total))
+        return bool(isfinite(total)) and not (far > extent or fast > max_speed)
 
     def motion(self, const double[:, ::1] raw, const Py_ssize_t[::1] gather,
                double[:, ::1] velocity) -> None:
@@ -349,84 +358,33 @@ cdef class Rows:
                             <int64_t *>cnp.PyArray_DATA(pairs))
         return out, pairs
 
-    def support(self, const int64_t[:, ::1] ints, const double[:, ::1] floats,
-                const double[::1] mu, double dt, double down_x, double down_z,
-                double[:, ::1] force, double[::1] friction, double[::1] grip,
-                int64_t[::1] points, unsigned char[::1] tilted) -> None:
-        """What each row's contacts did this step, for the resting warm start (see the
-        backend's RestingSupport): their net force on it (x, z; N) into ``force``, the
-        friction they made and the most they could (``mu`` per row; a pair's is the
-        geometric mean) summed into ``friction`` and ``grip``, its contact points, and
-        whether one of its contact normals is off the vertical (``down``). Every output is
-        overwritten."""
-        cdef Py_ssize_t m = ints.shape[0], i, r, k
-        cdef Py_ssize_t ends[2]
-        cdef double sign[2]
-        cdef double jx, jz, nx, nz, along, slide, pair_mu
-        cdef const double *f
-        cdef int n_points
-        cdef bint off
-        with nogil:
-            for r in range(self.n):
-                force[r, 0] = 0.0
-                force[r, 1] = 0.0
-                friction[r] = 0.0
-                grip[r] = 0.0
-                points[r] = 0
-                tilted[r] = 0
-            for i in range(m):
-                n_points = <int>ints[i, 2]
-                if n_points <= 0:
-                    continue
-                ends[0] = self.row(<uint64_t>ints[i, 0])
-                ends[1] = self.row(<uint64_t>ints[i, 1])
-                f = &floats[i, 0]
-                # pymunk's total impulse is what its body a received (b the opposite)
-                jx, jz, nx, nz = f[0] / dt, f[1] / dt, f[2], f[3]
-                along = jx * nx + jz * nz
-                slide = sqrt(max(jx * jx + jz * jz - along * along, 0.0))
-                off = fabs(nx * down_x + nz * down_z) < 1.0 - 1e-9
-                pair_mu = 1.0
-                sign[0] = 1.0
-                sign[1] = -1.0
-                for k in range(2):
-                    r = ends[k]
-                    pair_mu = pair_mu * (sqrt(mu[r]) if r < self.n else 1.0)
-                for k in range(2):
-                    r = ends[k]
-                    if r >= self.n:
-                        continue
-                    force[r, 0] += sign[k] * jx
-                    force[r, 1] += sign[k] * jz
-                    friction[r] += slide
-                    grip[r] += pair_mu * fabs(along)
-                    points[r] += n_points
-                    tilted[r] |= off
-
     def islands(self, const int64_t[:, ::1] ints, const unsigned char[::1] moving,
-                Py_ssize_t[::1] labels) -> None:
+                Py_ssize_t[::1] labels, const int64_t[:, ::1] joints) -> None:
         """Each row's island (``labels``: rows of one island share one): rows tied by
-        touching arbiters between ``moving`` rows, through a union-find over the
-        arbiters (static geometry, and any row not moving, ties nothing together)."""
-        cdef Py_ssize_t m = ints.shape[0], i, r, ra, rb
-        if moving.shape[0] != self.n or labels.shape[0] != self.n or (m and ints.shape[1] < 3):
+        touching arbiters between ``moving`` rows, or by ``joints`` ((m, 2) rows; -1:
+        the world, which ties nothing), through a union-find (static geometry, and any
+        row not moving, ties nothing together)."""
+        cdef Py_ssize_t m = ints.shape[0], i, ra, rb
+        if (moving.shape[0] != self.n or labels.shape[0] != self.n
+                or (m and ints.shape[1] != _AI)
+                or (joints.shape[0] and joints.shape[1] != 2)):
             raise ValueError("islands: arrays do not match the rows")
         with nogil:
-            for r in range(self.n):
-                labels[r] = r
-            for i in range(m):
-                if ints[i, 2] <= 0:
+            _islands(self, &ints[0, 0] if m else NULL, m, &moving[0] if self.n else NULL,
+                     &labels[0] if self.n else NULL, False)
+            for i in range(joints.shape[0]):
+                ra = joints[i, 0]
+                rb = joints[i, 1]
+                if ra < 0 or rb < 0 or ra >= self.n or rb >= self.n:
                     continue
-                ra = self.row(<uint64_t>ints[i, 0])
-                rb = self.row(<uint64_t>ints[i, 1])
-                if ra >= self.n or rb >= self.n or not moving[ra] or not moving[rb]:
+                if not moving[ra] or not moving[rb]:
                     continue
                 ra = _root(&labels[0], ra)
                 rb = _root(&labels[0], rb)
                 if ra != rb:
                     labels[max(ra, rb)] = min(ra, rb)
-            for r in range(self.n):
-                labels[r] = _root(&labels[0], r)
+            for i in range(self.n):
+                labels[i] = _root(&labels[0], i)
 
     cdef void _sort_into(self, Py_ssize_t used, Contact *out, int64_t *pairs) noexcept nogil:
         """The scratch's ``used`` records into ``out`` in (key a, key b, place) order, and
@@ -543,149 +501,6 @@ def planar_poses(const double[:, ::1] table, const double[:, ::1] rest,
     return flagged
 
 
-def preload(const double[:, ::1] forces, const Py_ssize_t[::1] gather,
-            const Py_ssize_t[::1] rows, const double[::1] share, const double[::1] mass,
-            const unsigned char[::1] awake, double gx, double gz, double g,
-            double[:, ::1] out, double[::1] applied, double[::1] lifted) -> int:
-    """The forces with the resting preloads added: ``forces`` (pymunk's list, as read)
-    into ``out``, and each awake one of ``rows`` (row ``r`` at ``gather[r]``) given
-    ``share[r]`` of its weight upward (``mass`` kg under gravity (gx, gz), of size
-    ``g``); the share each got into ``applied`` and the upward force (N) into
-    ``lifted`` (both zero elsewhere, as given). How many rows were preloaded.
-
-    The arithmetic is the backend's one-by-one loop's (body.force − m·gravity with
-    m = share · mass), so either gives the same forces to the bit."""
-    cdef Py_ssize_t i, r, p, count = 0
-    cdef double m
-    if out.shape[0] != forces.shape[0] or forces.shape[1] != 2 or out.shape[1] != 2 or not (
-            gather.shape[0] == share.shape[0] == mass.shape[0] == awake.shape[0]
-            == applied.shape[0] == lifted.shape[0]):
-        raise ValueError("preload: arrays do not match")
-    with nogil:
-        for i in range(forces.shape[0]):
-            out[i, 0] = forces[i, 0]
-            out[i, 1] = forces[i, 1]
-        for i in range(rows.shape[0]):
-            r = rows[i]
-            if not awake[r]:  # asleep: left as it is (a force would wake it)
-                continue
-            p = gather[r]
-            m = share[r] * mass[r]
-            out[p, 0] = forces[p, 0] - m * gx
-            out[p, 1] = forces[p, 1] - m * gz
-            applied[r] = share[r]
-            lifted[r] = m * g
-            count += 1
-    return count
-
-
-def rest_standing(const double[:, ::1] force, const double[::1] friction,
-                  const double[::1] grip, const int64_t[::1] points,
-                  const unsigned char[::1] tilted, const double[::1] applied,
-                  const double[::1] weight, const double[::1] mu,
-                  const unsigned char[::1] awake, const unsigned char[::1] unrest,
-                  const double[:, ::1] raw, const Py_ssize_t[::1] gather,
-                  double[:, ::1] held, int8_t[::1] steps, unsigned char[::1] slid,
-                  unsigned char[::1] kept, unsigned char[::1] chosen, double down_x,
-                  double down_z, double keep, double loose, double support,
-                  double stay_support, double grip_share, double sliding_share,
-                  double slip, double kept_slip) -> int:
-    """RestingSupport's update and the first half of its choice, one pass per row
-    (see resting.py for the rules): the standing after a step (``held``, ``steps``,
-    ``slid``, ``kept``, in place) and the rows that may be preloaded, islands aside
-    (``chosen``); how many those are.
-
-    ``keep`` is the smoothing's share kept per step, ``loose`` (1 − warm start) the
-    grip left to a body that slid while preloaded, ``support``/``stay_support`` the
-    shares of its weight that hold a body up to enter/stay, ``grip_share`` and
-    ``sliding_share`` REST_GRIP and REST_SLIDING, ``slip``/``kept_slip`` the speeds
-    under which a body may enter/stay; ``raw`` the read (pymunk's list, row r at
-    ``gather[r]``). Each number is worked out in the operations and order of the
-    numpy formulation this replaced, the dot products with ``down`` as a plain sum of
-    two products (numpy's matmul, in BLAS, may fuse them: the same to the bit while
-    gravity is vertical, within an ulp otherwise)."""
-    cdef Py_ssize_t n = force.shape[0], i
-    cdef double share, up, h0, h1, held_up, s0, s1, limit, speed, fresh = 1.0 - keep
-    cdef bint pushed, sliding, rests, stays, was_applied
-    cdef int count = 0
-    if not (force.shape[1] == 2 and held.shape[1] == 2 and raw.shape[1] == 6
-            and friction.shape[0] == grip.shape[0] == points.shape[0] == tilted.shape[0]
-            == applied.shape[0] == weight.shape[0] == mu.shape[0] == awake.shape[0]
-            == unrest.shape[0] == gather.shape[0] == held.shape[0] == steps.shape[0]
-            == slid.shape[0] == kept.shape[0] == chosen.shape[0] == n):
-        raise ValueError("rest_standing: arrays do not match the rows")
-    with nogil:
-        for i in range(n):
-            share = 1.0 - applied[i]
-            up = -(force[i, 0] * down_x + force[i, 1] * down_z)
-            h0 = held[i, 0] * keep
-            h1 = held[i, 1] * keep
-            h0 = h0 + fresh * force[i, 0] / share
-            h1 = h1 + fresh * force[i, 1] / share
-            held[i, 0] = h0
-            held[i, 1] = h1
-            held_up = -(h0 * down_x + h1 * down_z)
-            s0 = h0 + held_up * down_x
-            s1 = h1 + held_up * down_z
-            limit = grip_share * (loose if slid[i] else 1.0) * mu[i] * held_up
-            pushed = s0 * s0 + s1 * s1 > limit * limit
-            sliding = friction[i] >= sliding_share * grip[i]
-            was_applied = applied[i] > 0
-            slid[i] = (slid[i] or (was_applied and sliding)) and pushed
-            rests = (weight[i] > 0 and awake[i] and not pushed
-                     and up >= support * share * weight[i] and not sliding)
-            steps[i] = (steps[i] + 1 if steps[i] < 2 else 2) if rests else 0
-            stays = weight[i] > 0 and awake[i] and up >= stay_support * share * weight[i]
-            kept[i] = was_applied and stays
-            speed = hypot(raw[gather[i], 3], raw[gather[i], 4])
-            chosen[i] = ((steps[i] >= 2 or kept[i]) and speed < (kept_slip if kept[i]
-                                                                 else slip)
-                         and not unrest[i] and (points[i] >= 2 or tilted[i] == 0))
-            count += chosen[i]
-    return count
-
-
-def rest_ramp(const int64_t[::1] points, const unsigned char[::1] chosen, labels,
-              const unsigned char[::1] moving, const unsigned char[::1] unrest,
-              const double[::1] weight, double[::1] ramp, double up, double down) -> None:
-    """Each row's preload ramp for the next step (in place): up by ``up`` where chosen,
-    down by ``down`` elsewhere, within [0, 1]; off at once where no contact is left or
-    its island (``labels``, or None: not found, nothing is blocked) holds a moving row
-    that is unrest or weightless."""
-    cdef Py_ssize_t n = ramp.shape[0], i
-    cdef Py_ssize_t[::1] label
-    cdef unsigned char *blocked = NULL
-    cdef double v
-    cdef bint off
-    if not (points.shape[0] == chosen.shape[0] == moving.shape[0] == unrest.shape[0]
-            == weight.shape[0] == n):
-        raise ValueError("rest_ramp: arrays do not match the rows")
-    if labels is not None:
-        label = labels
-        if label.shape[0] != n:
-            raise ValueError("rest_ramp: labels do not match the rows")
-        blocked = <unsigned char *>malloc(max(n, 1))
-        if blocked == NULL:
-            raise MemoryError("out of memory for the resting islands")
-    try:
-        with nogil:
-            if blocked != NULL:
-                for i in range(n):
-                    blocked[i] = 0
-                for i in range(n):
-                    if moving[i] and points[i] > 0 and (unrest[i] or weight[i] <= 0):
-                        blocked[label[i]] = 1
-            for i in range(n):
-                off = points[i] <= 0 or (blocked != NULL and blocked[label[i]])
-                if off:
-                    ramp[i] = 0.0
-                else:
-                    v = ramp[i] + (up if chosen[i] else down)
-                    ramp[i] = 1.0 if v > 1.0 else (0.0 if v < 0.0 else v)
-    finally:
-        free(blocked)
-
-
 def carried_down(const int64_t[::1] rows_a, const int64_t[::1] rows_b,
                  const double[:] impulse, const double[::1] normal_up,
                  const double[::1] load, int rounds) -> cnp.ndarray:
@@ -759,3 +574,272 @@ def carried_down(const int64_t[::1] rows_a, const int64_t[::1] rows_b,
         free(total)
         free(carried)
         free(more)
+
+
+cdef extern from "policy.h" nogil:
+    ctypedef struct RpStep:
+        const double *solved
+        double mu
+        double friction
+        double grip
+        double weight
+        double share
+        int preloaded
+    int rp_stand(const RpStep *s, double *held, unsigned char *slid, const double *down,
+                 int dim, double keep, double beta, double *lifts)
+    int rp_count(int steps, int rests)
+    void rp_ramp(Py_ssize_t n, const int64_t *points, const unsigned char *chosen,
+                 const Py_ssize_t *label, const unsigned char *moving,
+                 const unsigned char *unrest, const double *weight, double *ramp,
+                 double up, double down, unsigned char *blocked)
+    double REST_SUPPORT, REST_SLIP, REST_SMOOTHING
+
+
+cdef inline void *_data(cnp.ndarray a, object dtype, Py_ssize_t size, str name) except NULL:
+    """``a``'s data, after checking it is a contiguous array of ``size`` ``dtype`` items."""
+    if (a.dtype != dtype or not cnp.PyArray_IS_C_CONTIGUOUS(a)
+            or cnp.PyArray_SIZE(a) != size):
+        raise ValueError(f"{name}: expected {size} contiguous {np.dtype(dtype).name}, got "
+                         f"{a.dtype} {np.shape(a)}")
+    return cnp.PyArray_DATA(a)
+
+
+cdef class Resting:
+    """The resting warm start's per-row arrays (resting.RestingSupport's own, written in
+    place), bound once per layout of rows, and its two passes per step: the preload
+    before the step (:meth:`preload`) and everything after it (:meth:`after`: what each
+    row's contacts did, its standing by policy.h's rp_stand, the rows chosen, their
+    islands and the ramps), each one call over pymunk.batch's buffers."""
+
+    cdef Py_ssize_t n
+    cdef object _keep  # the arrays behind the pointers
+    cdef double *mu
+    cdef double *mass
+    cdef unsigned char *jointed
+    cdef unsigned char *kinematic
+    cdef unsigned char *dynamic
+    cdef double *held
+    cdef int8_t *steps
+    cdef unsigned char *slid
+    cdef unsigned char *kept
+    cdef double *ramp
+    cdef double *applied
+    cdef double *lifted
+    cdef double *force
+    cdef double *friction
+    cdef double *grip
+    cdef int64_t *points
+    cdef unsigned char *tilted
+    cdef unsigned char *chosen
+    cdef unsigned char *unrest
+    cdef unsigned char *moving
+    cdef unsigned char *blocked
+    cdef Py_ssize_t *labels
+    cdef public bint found  # labels hold this step's islands
+
+    def __init__(self, dict arrays) -> None:
+        n = self.n = len(arrays["ramp"])
+        self._keep = arrays
+        f8, u1, i8, ip = np.float64, np.uint8, np.int64, np.intp
+        self.mu = <double *>_data(arrays["mu"], f8, n, "mu")
+        self.mass = <double *>_data(arrays["mass"], f8, n, "mass")
+        self.jointed = <unsigned char *>_data(arrays["jointed"], u1, n, "jointed")
+        self.kinematic = <unsigned char *>_data(arrays["kinematic"], u1, n, "kinematic")
+        self.dynamic = <unsigned char *>_data(arrays["dynamic"], u1, n, "dynamic")
+        self.held = <double *>_data(arrays["held"], f8, 2 * n, "held")
+        self.steps = <int8_t *>_data(arrays["steps"], np.int8, n, "steps")
+        self.slid = <unsigned char *>_data(arrays["slid"], u1, n, "slid")
+        self.kept = <unsigned char *>_data(arrays["kept"], u1, n, "kept")
+        self.ramp = <double *>_data(arrays["ramp"], f8, n, "ramp")
+        self.applied = <double *>_data(arrays["applied"], f8, n, "applied")
+        self.lifted = <double *>_data(arrays["lifted"], f8, n, "lifted")
+        self.force = <double *>_data(arrays["force"], f8, 2 * n, "force")
+        self.friction = <double *>_data(arrays["friction"], f8, n, "friction")
+        self.grip = <double *>_data(arrays["grip"], f8, n, "grip")
+        self.points = <int64_t *>_data(arrays["points"], i8, n, "points")
+        self.tilted = <unsigned char *>_data(arrays["tilted"], u1, n, "tilted")
+        self.chosen = <unsigned char *>_data(arrays["chosen"], u1, n, "chosen")
+        self.unrest = <unsigned char *>_data(arrays["unrest"], u1, n, "unrest")
+        self.moving = <unsigned char *>_data(arrays["moving"], u1, n, "moving")
+        self.blocked = <unsigned char *>_data(arrays["blocked"], u1, n, "blocked")
+        self.labels = <Py_ssize_t *>_data(arrays["labels"], ip, n, "labels")
+        self.found = False
+
+    def preload(self, cnp.ndarray forces, cnp.ndarray gather, cnp.ndarray awake,
+                cnp.ndarray out, double beta, double gx, double gz) -> int:
+        """The forces before a step (``forces``, pymunk's list: x, z per body, as read)
+        into ``out``, each awake row whose ramp is on given ``beta`` × ramp of its weight
+        upward; the share each row got into ``applied`` and the upward force (N) into
+        ``lifted`` (0 elsewhere). How many rows were preloaded (0: ``out`` need not be
+        written back). The arithmetic is body.force − m·gravity with m = share · mass,
+        as a one-by-one loop would set it."""
+        cdef Py_ssize_t i, r, p, m = cnp.PyArray_SIZE(forces) // 2, count = 0
+        cdef double *f = <double *>_data(forces, np.float64, 2 * m, "forces")
+        cdef double *o = <double *>_data(out, np.float64, 2 * m, "out")
+        cdef Py_ssize_t *g = <Py_ssize_t *>_data(gather, np.intp, self.n, "gather")
+        cdef unsigned char *a = <unsigned char *>_data(awake, np.uint8, self.n, "awake")
+        cdef double share, mass, lift = sqrt(gx * gx + gz * gz)
+        with nogil:
+            memcpy(o, f, 2 * m * sizeof(double))
+            for r in range(self.n):
+                self.applied[r] = 0.0
+                self.lifted[r] = 0.0
+                if not (self.ramp[r] > 0.0) or not a[r]:  # asleep: a force would wake it
+                    continue
+                p = g[r]
+                share = beta * self.ramp[r]
+                mass = share * self.mass[r]
+                o[2 * p] = f[2 * p] - mass * gx
+                o[2 * p + 1] = f[2 * p + 1] - mass * gz
+                self.applied[r] = share
+                self.lifted[r] = mass * lift
+                count += 1
+        return count
+
+    def after(self, Rows rows, cnp.ndarray ints, cnp.ndarray floats, cnp.ndarray raw,
+              cnp.ndarray gather, cnp.ndarray awake, double dt, double gx, double gz,
+              double beta, double ramp_up) -> int:
+        """Everything the resting warm start does after a step: what each row's contacts
+        did (the step's arbiters ``ints``/``floats``), each row's standing (policy.h's
+        rp_stand), the rows that may be preloaded (at rest two steps, or preloaded and
+        still held up; slower than REST_SLIP, four times that to stay; on a face or on
+        level ground; not jointed or touching a kinematic body), the islands when some
+        are, and every row's ramp (up by ``ramp_up`` where chosen, down by twice that
+        elsewhere). ``raw``: the step's body read (row r at ``gather[r]``), ``awake`` per
+        row. How many rows have their ramp on for the next step."""
+        cdef Py_ssize_t m = cnp.PyArray_DIM(ints, 0) if cnp.PyArray_NDIM(ints) else 0
+        cdef Py_ssize_t nb = cnp.PyArray_SIZE(raw) // _BF, i, r, on = 0
+        cdef int64_t *arb = <int64_t *>_data(ints, np.int64, _AI * m, "ints")
+        cdef double *fl = <double *>_data(floats, np.float64, _AF * m, "floats")
+        cdef double *body = <double *>_data(raw, np.float64, _BF * nb, "raw")
+        cdef Py_ssize_t *g = <Py_ssize_t *>_data(gather, np.intp, self.n, "gather")
+        cdef unsigned char *a = <unsigned char *>_data(awake, np.uint8, self.n, "awake")
+        cdef double g_size = sqrt(gx * gx + gz * gz), down[2]
+        cdef double keep = exp(-dt / REST_SMOOTHING)
+        cdef int chosen = 0
+        if rows.n != self.n:
+            raise ValueError("Resting.after: the rows were planned for other bodies")
+        if g_size == 0.0:
+            return 0
+        down[0] = gx / g_size
+        down[1] = gz / g_size
+        with nogil:
+            self._support(rows, arb, fl, m, dt, down)
+            chosen = self._stand(body, g, a, down, keep, beta, g_size)
+            self.found = chosen > 0
+            if self.found:
+                _islands(rows, arb, m, self.moving, self.labels)
+            rp_ramp(self.n, self.points, self.chosen, self.labels if self.found else NULL,
+                    self.moving, self.unrest, self.mass, self.ramp, ramp_up,
+                    -2.0 * ramp_up, self.blocked)
+            for r in range(self.n):
+                on += self.ramp[r] > 0.0
+        return on
+
+    cdef void _support(self, Rows rows, const int64_t *arb, const double *fl, Py_ssize_t m,
+                       double dt, const double *down) noexcept nogil:
+        """What each row's contacts did this step: their net force on it (x, z; N), the
+        friction they made and the most they could (a pair's μ is the geometric mean),
+        its contact points, whether a normal is off the vertical; and which rows touch a
+        kinematic body (unrest, as are the jointed)."""
+        cdef Py_ssize_t i, r, k, n = self.n
+        cdef Py_ssize_t ends[2]
+        cdef double sign[2]
+        cdef double jx, jz, nx, nz, along, slide, pair_mu
+        cdef const double *f
+        cdef int n_points
+        cdef bint off
+        sign[0] = 1.0
+        sign[1] = -1.0
+        for r in range(n):
+            self.force[2 * r] = 0.0
+            self.force[2 * r + 1] = 0.0
+            self.friction[r] = 0.0
+            self.grip[r] = 0.0
+            self.points[r] = 0
+            self.tilted[r] = 0
+            self.unrest[r] = self.jointed[r]
+        for i in range(m):
+            n_points = <int>arb[_AI * i + 2]
+            if n_points <= 0:
+                continue
+            ends[0] = rows.row(<uint64_t>arb[_AI * i])
+            ends[1] = rows.row(<uint64_t>arb[_AI * i + 1])
+            f = &fl[_AF * i]
+            # pymunk's total impulse is what its body a received (b the opposite)
+            jx, jz, nx, nz = f[0] / dt, f[1] / dt, f[2], f[3]
+            along = jx * nx + jz * nz
+            slide = sqrt(max(jx * jx + jz * jz - along * along, 0.0))
+            off = fabs(nx * down[0] + nz * down[1]) < 1.0 - 1e-9
+            pair_mu = 1.0
+            for k in range(2):
+                r = ends[k]
+                pair_mu = pair_mu * (sqrt(self.mu[r]) if r < n else 1.0)
+            for k in range(2):
+                r = ends[k]
+                if r >= n:
+                    continue
+                self.force[2 * r] += sign[k] * jx
+                self.force[2 * r + 1] += sign[k] * jz
+                self.friction[r] += slide
+                self.grip[r] += pair_mu * fabs(along)
+                self.points[r] += n_points
+                self.tilted[r] |= off
+                if ends[1 - k] < n and self.kinematic[ends[1 - k]]:
+                    self.unrest[r] = 1
+
+    cdef int _stand(self, const double *body, const Py_ssize_t *g, const unsigned char *a,
+                    const double *down, double keep, double beta,
+                    double g_size) noexcept nogil:
+        """Each row's standing (rp_stand) and whether it is chosen; how many are."""
+        cdef Py_ssize_t i
+        cdef RpStep s
+        cdef double up, speed
+        cdef const double *p
+        cdef int rests, stays, count = 0
+        for i in range(self.n):
+            s.solved = &self.force[2 * i]
+            s.mu = self.mu[i]
+            s.friction = self.friction[i]
+            s.grip = self.grip[i]
+            # asleep: neither rests nor stays (its contacts hold nothing this step)
+            s.weight = self.mass[i] * g_size if a[i] else 0.0
+            s.share = 1.0 - self.applied[i]
+            s.preloaded = self.applied[i] > 0.0
+            rests = rp_stand(&s, &self.held[2 * i], &self.slid[i], down, 2, keep, beta, &up)
+            self.steps[i] = rp_count(self.steps[i], rests)
+            stays = s.weight > 0.0 and up >= 0.5 * REST_SUPPORT * s.share * s.weight
+            self.kept[i] = s.preloaded and stays
+            p = &body[_BF * g[i]]
+            speed = hypot(p[3], p[4])
+            self.chosen[i] = ((self.steps[i] >= 2 or self.kept[i])
+                              and speed < (4.0 * REST_SLIP if self.kept[i] else REST_SLIP)
+                              and not self.unrest[i]
+                              and (self.points[i] >= 2 or self.tilted[i] == 0))
+            self.moving[i] = self.dynamic[i] and a[i]
+            count += self.chosen[i]
+        return count
+
+
+cdef void _islands(Rows rows, const int64_t *arb, Py_ssize_t m, const unsigned char *moving,
+                   Py_ssize_t *labels, bint flat=True) noexcept nogil:
+    """Each row's island: rows tied by touching arbiters between ``moving`` rows (a
+    union-find; static geometry and rows not moving tie nothing together). ``flat``:
+    every label its root (otherwise the caller ties more and flattens)."""
+    cdef Py_ssize_t i, r, ra, rb, n = rows.n
+    for r in range(n):
+        labels[r] = r
+    for i in range(m):
+        if arb[_AI * i + 2] <= 0:
+            continue
+        ra = rows.row(<uint64_t>arb[_AI * i])
+        rb = rows.row(<uint64_t>arb[_AI * i + 1])
+        if ra >= n or rb >= n or not moving[ra] or not moving[rb]:
+            continue
+        ra = _root(labels, ra)
+        rb = _root(labels, rb)
+        if ra != rb:
+            labels[max(ra, rb)] = min(ra, rb)
+    if flat:
+        for r in range(n):
+            labels[r] = _root(labels, r)

@@ -16,6 +16,15 @@ and wakes a sleeping group that an awake body touches, but only the rule puts bo
 sleep: each island as one chipmunk group, so they wake together. The rule reads the
 state through ``batch`` (pymunk's public ``pymunk.batch``), which also tells who sleeps.
 
+Cost: a step is the space's own step plus a fixed handful of batch calls and compiled
+passes, no Python per body: before it, every force read (skipped while nothing touched
+the space since the last step), the preload added and every force written; after it, one
+body read and one arbiter read shared by the resting warm start (one pass,
+``_rows.Resting.after``) and the sleep rule (``sleep.h``'s pass; islands, when some body
+is ready, by a union-find over the arbiters and joints), and that body read is also what a
+state read right after the step returns (any public method that may change the space
+drops it first).
+
 Whatever the plane cannot represent is reported once per object on the logger
 ``colosseum.physics.pymunk`` with the approximation used, never raised. Bad calls
 (unknown keys, unknown body or joint kinds) raise KeyError or ValueError naming them.
@@ -23,9 +32,13 @@ Whatever the plane cannot represent is reported once per object on the logger
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from types import FunctionType
+from typing import Any
 
 import numpy as np
 import pymunk
@@ -104,7 +117,10 @@ class PymunkBackend:
 
     def __init__(self) -> None:
         self._step_dt = 0.0  # the last step's, for contact impulses (carried_down)
-        self._preload_force = np.zeros(0)  # each row's preload in the last step (N, upward)
+        self._gravity = (0.0, 0.0)  # the space's, as configured (x, z)
+        #: the step's body read, while nothing has changed the space since (a state read
+        #: right after the step takes it instead of reading again); None: read afresh
+        self._step_read: np.ndarray | None = None
         self._space = pymunk.Space()
         self._space.collision_slop = COLLISION_SLOP
         # joints asked for their force -> that force on body_a after the last step
@@ -134,14 +150,13 @@ class PymunkBackend:
         self._buffers = Buffers()  # every reader's: pymunk never frees a batch buffer
         self._sleep_on = True
         self._resting = RestingSupport(0, WorldSettings().warm_start)
-        self._preload = np.zeros(0, np.intp)  # rows that get their weight's share next step
+        self._preloaded = False  # some row got a preload in the step just taken
         self._rule = SleepRule()
         self._woken: set[int] = set()  # keys woken explicitly since the rule last looked
-        self._joint_pairs: np.ndarray | None = None  # (M, 2) body keys of the joints
-        #: per row, for the resting rule: friction, dynamic, mass under gravity, jointed,
-        #: and the kinematic rows with shapes (None: to be gathered again)
-        self._rest_rows: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                               list[int]] | None = None
+        self._joint_pairs: np.ndarray | None = None  # (M, 2) rows the joints tie (-1: none)
+        #: the resting rule has each row's friction, mass under gravity, joints and kind
+        #: (False: to be gathered again)
+        self._rest_rows = False
         self._driven: dict[int, JointRecord] = {}  # sliders and springs: forces each step
         self._aims: dict[int, _Aim] = {}  # kinematic bodies on their way to a target
         #: The last read that was all finite: keys, and each row's (x, z, θ, vx, vz, ω).
@@ -167,7 +182,7 @@ class PymunkBackend:
         gx, _, gz = settings.gravity
         if settings.gravity[1] != 0.0:
             self._warn("world", "gravity", "gravity's Y component dropped (not in the X–Z plane)")
-        space.gravity = (float(gx), float(gz))
+        space.gravity = self._gravity = (float(gx), float(gz))
         space.iterations = max(1, int(settings.iterations))
         if not 0.0 <= settings.warm_start < 1.0:
             raise ValueError(f"warm start must be in [0, 1), got {settings.warm_start}")
@@ -219,96 +234,90 @@ class PymunkBackend:
         if self._aims:
             self._lead_aims(dt)
         self._step_dt = dt
-        applied = self._preload_weights()
+        self._preload_weights()
         # after the preload: it is an outside force to a joint's momentum balance
         strained = self._strain_before(dt) if self._strained else None
         self._space.step(dt)
-        self._reader.new_step()
+        reader = self._reader
+        reader.new_step()
         if strained:
             self._strain_after(strained, dt)
         if self._aims:
             self._arrive(dt)
         self._contacts = None
-        if self._resting.beta > 0.0:
-            self._rest(dt, applied)
-        if self._sleep_on:
-            self._apply_sleep(dt)
-        else:
+        self._step_read = None
+        if self._resting.beta > 0.0 or self._sleep_on:
+            raw, awake = reader.read()  # one read for both rules and the state read
+            if self._resting.beta > 0.0:
+                self._rest(dt, raw, awake)
+            if not (self._sleep_on and self._apply_sleep(dt, raw, awake)):
+                self._step_read = raw  # none fell asleep: the read is the space as it is
+        if not self._sleep_on:
             self._woken.clear()  # the wakes were for the resting rule alone
 
-    def _preload_weights(self) -> np.ndarray:
-        """Give the rows the resting rule chose their weight's share (an upward force
-        for this step, on top of the forces they have); the share each row got.
+    def _preload_weights(self) -> None:
+        """Give the rows whose ramp is on their weight's share (an upward force for this
+        step, on top of the forces they have).
 
         Every body's force is read and written in one batch each (a C pass in between,
-        :meth:`SpaceReader.preload`); where some body sleeps, which a batch write would
+        :meth:`RestingSupport.preload`); where some body sleeps, which a batch write would
         wake, the preloaded ones are set one by one instead."""
         reader = self._space_reader()
-        applied = np.zeros(len(self._records))
-        self._preload_force = np.zeros(len(self._records))  # N, upward
-        if self._woken and len(self._preload):  # moved, pushed or woken by hand: not at rest
-            self._resting.forget(self._rule.rows(np.fromiter(self._woken, np.int64)))
-            self._preload = self._preload[self._resting.ramp[self._preload] > 0]
-        if not len(self._preload):
-            return applied
-        gx, gz = self._space.gravity
-        share = self._resting.beta * self._resting.ramp
-        forces = reader.preload(self._preload, share, self._masses, (gx, gz), math.hypot(gx, gz),
-                                applied, self._preload_force)
-        if forces is not None:
-            records, gather = self._records, reader.gather
-            for row in np.flatnonzero(applied).tolist():
-                _SET_FORCE(records[row].body, forces[gather[row]].tolist())
-        return applied
+        resting = self._resting
+        if self._woken and resting.on:  # moved, pushed or woken by hand: not at rest
+            resting.forget(self._rule.rows(np.fromiter(self._woken, np.int64)))
+        if not resting.on or resting.beta <= 0.0:
+            if self._preloaded:
+                resting.no_preload()
+                self._preloaded = False
+            return
+        self._preloaded = True
+        if self._step_read is not None and not self._driven:
+            # nothing has touched the space since the last step, which zeroed every
+            # dynamic body's force, and no joint drives a body: no force to read
+            forces, awake, asleep = reader.known_forces()
+        else:
+            forces, awake, asleep = reader.forces()
+        out = reader.force_rows()
+        if not resting.preload(forces, reader.gather, awake, out, self._gravity):
+            return
+        if not asleep:
+            reader.set_forces(out)
+            return
+        records, gather = self._records, reader.gather
+        for row in np.flatnonzero(resting.applied).tolist():
+            _SET_FORCE(records[row].body, out[gather[row]].tolist())
 
-    def _rest(self, dt: float, applied: np.ndarray) -> None:
-        """The resting rule after a step: what the contacts did, each row's standing, and
-        the rows to preload before the next step."""
-        reader = self._space_reader()
+    def _rest(self, dt: float, raw: np.ndarray, awake: np.ndarray) -> None:
+        """The resting rule after a step (``raw``: the step's body read): what the
+        contacts did, each row's standing, and the rows to preload before the next step,
+        in one compiled pass."""
         resting = self._resting
         if len(resting.steps) != len(self._records):
             resting.follow(np.full(len(self._records), -1))
-        gx, gz = self._space.gravity
-        g = math.hypot(gx, gz)
-        if g == 0.0:
-            self._preload = np.zeros(0, np.intp)
-            return
-        down = np.array([gx / g, gz / g])
-        resting.applied = applied
-        raw, awake = reader.read()
-        mu, weight, unrest, dynamic = self._rest_bodies(g)
-        reader.support(resting, mu, dt, down)
-        chosen = resting.update(dt, down, weight, mu, awake, unrest, raw, reader.gather)
-        self._preload = np.flatnonzero(resting.eligible(chosen, dynamic & awake, unrest,
-                                                        weight, reader.islands))
+            self._rest_rows = False
+        if not self._rest_rows:
+            self._rest_bodies()
+        reader = self._reader
+        resting.after(reader.rows, reader.arbiters(ordered=True), raw, reader.gather, awake, dt,
+                      self._gravity)
 
-    def _rest_bodies(self, g: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Per row: friction coefficient, weight (0: not dynamic or gravity off), whether
-        the rule leaves it alone (jointed, or touching a kinematic body) and whether it is
-        dynamic."""
-        if self._rest_rows is None:  # what stays as it is while no body or joint comes or goes
-            recs = self._records
-            n = len(recs)
-            dynamic = np.fromiter((r.body.body_type == pymunk.Body.DYNAMIC for r in recs), bool,
-                                  n)
-            self._rest_rows = (
-                np.fromiter((r.physical.material.friction for r in recs), float, n), dynamic,
-                np.fromiter((r.body.mass if d and r.physical.gravity else 0.0
-                             for r, d in zip(recs, dynamic.tolist(), strict=True)), float, n),
-                np.fromiter((bool(r.joints) for r in recs), bool, n),
-                # (a kinematic body without shapes, a hand's control body, touches nothing)
-                [i for i, r in enumerate(recs)
-                 if r.body.body_type == pymunk.Body.KINEMATIC and r.physical.shapes])
-        mu, dynamic, mass, jointed, kinematic = self._rest_rows
-        weight = mass * g
-        unrest = jointed.copy()
-        if kinematic:
-            pairs = self._contact_pairs()
-            rows_a, rows_b = pairs[:, 0], pairs[:, 1]
-            hit = np.isin(rows_a, kinematic) | np.isin(rows_b, kinematic)
-            unrest[rows_a[hit & (rows_a >= 0)]] = True
-            unrest[rows_b[hit & (rows_b >= 0)]] = True
-        return mu, weight, unrest, dynamic
+    def _rest_bodies(self) -> None:
+        """Per row, for the resting rule: friction coefficient, mass under gravity (0: not
+        dynamic or gravity off), jointed, a kinematic body with shapes (what it touches is
+        not at rest; a hand's control body has none and touches nothing), dynamic."""
+        recs = self._records
+        n = len(recs)
+        dynamic = np.fromiter((r.body.body_type == pymunk.Body.DYNAMIC for r in recs), bool, n)
+        self._resting.bodies(
+            np.fromiter((r.physical.material.friction for r in recs), float, n),
+            np.fromiter((r.body.mass if d and r.physical.gravity else 0.0
+                         for r, d in zip(recs, dynamic.tolist(), strict=True)), float, n),
+            np.fromiter((bool(r.joints) for r in recs), bool, n),
+            np.fromiter((r.body.body_type == pymunk.Body.KINEMATIC and bool(r.physical.shapes)
+                         for r in recs), bool, n),
+            dynamic)
+        self._rest_rows = True
 
     def _strain_before(self, dt: float) -> list[tuple[int, pymunk.Body, float, pymunk.Vec2d]]:
         """For each measured joint, its moving body and the velocity the step would give
@@ -590,12 +599,12 @@ class PymunkBackend:
             _stop(rec.body)
             rec.body.sleep()
 
-    def _apply_sleep(self, dt: float) -> None:
-        """The sleep rule after a step: quiet islands go to sleep, each as one chipmunk
-        group (woken together), at rest."""
-        reader = self._space_reader()
+    def _apply_sleep(self, dt: float, raw: np.ndarray, awake: np.ndarray) -> bool:
+        """The sleep rule after a step (``raw``: the step's body read): quiet islands go
+        to sleep, each as one chipmunk group (woken together), at rest. Whether some
+        did."""
+        reader = self._reader
         rule = self._rule
-        raw, awake = reader.read()
         reader.motion(raw, rule.velocity)
         rule.awake[:] = awake
         woken = None
@@ -604,9 +613,9 @@ class PymunkBackend:
             rows = rule.rows(np.fromiter(self._woken, np.int64, len(self._woken)))
             woken[rows[rows >= 0]] = True
             self._woken.clear()
-        rows, labels = rule.update(dt, woken, self._touching)
+        rows, labels = rule.update(dt, woken, islands=self._islands)
         if not len(rows):
-            return
+            return False
         asleep = rule.movable & ~awake
         for label in np.unique(labels[rows]).tolist():
             group = [self._records[i].body for i in rows[labels[rows] == label].tolist()]
@@ -619,15 +628,17 @@ class PymunkBackend:
                     root = body
                 else:
                     body.sleep_with_group(root)
+        return True
 
-    def _touching(self) -> np.ndarray:
-        """Row pairs the step's contacts and the joints tie together (the rule's islands)."""
+    def _islands(self) -> np.ndarray:
+        """Each row's island for the sleep rule: rows tied by the step's contacts and the
+        joints through moving bodies (a union-find over the arbiters, in C)."""
         if self._joint_pairs is None:
-            self._joint_pairs = np.array(
+            pairs = np.array(
                 [(rec.spec.body_a, -1 if rec.spec.body_b is None else rec.spec.body_b)
                  for rec in self._joints.values()], np.int64).reshape(-1, 2)
-        joints = self._rule.rows(self._joint_pairs.ravel()).reshape(-1, 2)
-        return np.concatenate([self._contact_pairs(), joints])
+            self._joint_pairs = self._rule.rows(pairs.ravel()).reshape(-1, 2)
+        return self._reader.islands(self._rule.movable, self._joint_pairs)
 
     def sleep_states(self) -> dict[int, SleepState]:
         """Every body asleep or in a quiet stretch (see :mod:`engine.physics.sleep`)."""
@@ -715,7 +726,7 @@ class PymunkBackend:
                 body.angle, body.position = angle, position
         self._space.add(*rec.constraints)
         self._joints[key] = rec
-        self._joint_pairs = self._rest_rows = None
+        self._joint_pairs, self._rest_rows = None, False
         if joint.kind == JointKind.SLIDER or joint.spring is not None:
             self._driven[key] = rec
         a.joints.add(key)
@@ -729,7 +740,7 @@ class PymunkBackend:
             raise KeyError(f"no joint with key {key}") from None
         self._driven.pop(int(key), None)
         self._space.remove(*rec.constraints)
-        self._joint_pairs = self._rest_rows = None
+        self._joint_pairs, self._rest_rows = None, False
         self._wake_joint(rec)
         for body_key in (rec.spec.body_a, rec.spec.body_b):
             if body_key is not None and body_key in self._bodies:
@@ -815,8 +826,8 @@ class PymunkBackend:
             self._resting.follow(old_rows)
         else:
             self._resting.follow(np.full(n, -1))
-        self._preload = np.zeros(0, np.intp)
-        self._rest_rows = None
+        self._rest_rows = False
+        self._joint_pairs = None
         self._records = recs
         self._keys = np.fromiter((r.key for r in recs), np.int64, n)
         self._keys.setflags(write=False)  # every state read hands out this same array
@@ -854,24 +865,21 @@ class PymunkBackend:
         if out.shape[0] < n or out.shape[1:] != (13,) or out.dtype != np.float64:
             raise ValueError(f"read_state_into needs a float64 array of at least ({n}, 13), "
                              f"got {out.dtype} {out.shape}")
-        raw, _ = reader.read()
+        raw = self._step_read
+        if raw is None:
+            raw, _ = reader.read()
         keep = self._read_rows
         if len(keep) != n:
             keep = self._read_rows = np.empty((n, 6))
-        if not reader.table(raw, out, keep) or self._escaped(keep):
+        if not reader.table(raw, out, keep, self._extent, MAX_SPEED):  # gone, or escaped
             self._reset_broken(keep)
+            self._step_read = None
             raw, _ = reader.read()
             reader.table(raw, out, keep)
         # this read is the last good one now: swap buffers rather than copy
         self._read_rows, last = self._last_good[1], keep
         self._last_good = (self._keys, last)
         return self._keys
-
-    def _escaped(self, planar: np.ndarray) -> bool:
-        """Whether a body of a finite read left the world or ran away (``planar``: a row
-        per body, (x, z, θ, vx, vz, ω))."""
-        return bool(len(planar)) and (float(np.abs(planar[:, :2]).max()) > self._extent
-                                      or float(np.abs(planar[:, 3:]).max()) > MAX_SPEED)
 
     def _reset_broken(self, planar: np.ndarray) -> None:
         """Put bodies gone non-finite, runaway or out of the world back at their last good
@@ -970,10 +978,11 @@ class PymunkBackend:
             c, pairs = self._space_reader().contacts()
             gx, gz = self._space.gravity
             g = math.hypot(gx, gz)
-            if self._preload_force.any() and len(c) and g > 0.0:
+            lifted = self._resting.lifted
+            if self._preloaded and len(c) and g > 0.0 and len(lifted) == len(self._records):
                 up = np.array([-gx / g, 0.0, -gz / g])
                 c["impulse"] = carried_down(pairs[:, 0], pairs[:, 1], c["impulse"],
-                                            c["normal"] @ up, self._preload_force * self._step_dt)
+                                            c["normal"] @ up, lifted * self._step_dt)
             self._contacts, self._contacts_rows = c, pairs
         return self._contacts
 
@@ -1120,3 +1129,26 @@ def _wake_others(arbiter: pymunk.Arbiter, body: pymunk.Body) -> None:
         if other is not body and other.body_type == pymunk.Body.DYNAMIC:
             other.activate()
 
+
+
+#: The backend's methods that change nothing in the space: every other public method
+#: may (a pose, a velocity, a wake, a body or joint come or gone...) and so drops the
+#: step's body read (``PymunkBackend._step_read``) before it runs.
+_READS_ONLY = frozenset({
+    "step", "read_state", "read_state_into", "body_count", "is_sleeping", "keys",
+    "sleep_states", "joint_state", "joint_force", "has_joint", "take_faults", "contacts",
+    "overlapping", "raycast", "name"})
+
+
+def _dropping_the_step_read(method: Callable[..., Any]) -> Callable[..., Any]:
+    @functools.wraps(method)
+    def run(self: PymunkBackend, *args: Any, **kwargs: Any) -> Any:
+        self._step_read = None
+        return method(self, *args, **kwargs)
+    return run
+
+
+for _name, _method in list(vars(PymunkBackend).items()):
+    if not _name.startswith("_") and _name not in _READS_ONLY and isinstance(_method,
+                                                                             FunctionType):
+        setattr(PymunkBackend, _name, _dropping_the_step_read(_method))

@@ -15,16 +15,18 @@ a new one when bodies come or go).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pymunk
 import pymunk.batch
 
 from engine.physics.backend import CONTACT_DTYPE
 from engine.physics.pymunk2d import _rows
-from engine.physics.pymunk2d.resting import RestingSupport
 
 _ID = pymunk.batch.BodyFields.BODY_ID
 _FORCE = pymunk.batch.BodyFields.FORCE
+_ID_FORCE = _ID | _FORCE
 _BODY = (pymunk.batch.BodyFields.BODY_ID | pymunk.batch.BodyFields.POSITION
          | pymunk.batch.BodyFields.ANGLE | pymunk.batch.BodyFields.VELOCITY
          | pymunk.batch.BodyFields.ANGULAR_VELOCITY)
@@ -78,8 +80,10 @@ class SpaceReader:
         # and the space's own
         self._static_ids = np.sort(np.append(ids[static], space.static_body.id))
         self._order = np.zeros(0, np.int64)
+        self._order_bytes = b"-"  # never a read: the first read plans the order
         self.gather = np.zeros(len(bodies), np.intp)  # row -> place in pymunk's list
         self._awake = np.zeros(len(bodies), bool)
+        self._zeros = np.zeros((0, 2))  # no force on any body, in pymunk's list
 
     def _plan_order(self, ids: np.ndarray) -> None:
         """pymunk listed the bodies in a new order: where each row is, and who sleeps."""
@@ -97,10 +101,12 @@ class SpaceReader:
         self._awake = gather < first
         self._sleepers = len(ids) - first - len(self._static_ids)
         self._order = ids.copy()
+        self._order_bytes = ids.tobytes()
 
-    def _check_order(self, ids: np.ndarray) -> None:
-        if not np.array_equal(ids, self._order):
-            self._plan_order(ids)
+    def _check_order(self, ids: bytes) -> None:
+        """``ids``: pymunk's list of body ids as read (bytes, compared in one memcmp)."""
+        if ids != self._order_bytes:
+            self._plan_order(np.frombuffer(ids, np.int64))
 
     def read(self) -> tuple[np.ndarray, np.ndarray]:
         """Every body's (x, z, θ, vx, vz, ω) as pymunk has them (velocity of the centre of
@@ -109,7 +115,7 @@ class SpaceReader:
         buffer = self._buffer
         buffer.clear()
         pymunk.batch.get_space_bodies(self._space, _BODY, buffer)
-        self._check_order(np.frombuffer(buffer.int_buf(), np.int64))
+        self._check_order(buffer.int_buf()[:])
         return np.frombuffer(buffer.float_buf(), np.float64).reshape(-1, 6), self._awake
 
     def forces(self) -> tuple[np.ndarray, np.ndarray, bool]:
@@ -118,10 +124,19 @@ class SpaceReader:
         body sleeps."""
         buffer = self._buffers.forces
         buffer.clear()
-        pymunk.batch.get_space_bodies(self._space, _ID | _FORCE, buffer)
-        self._check_order(np.frombuffer(buffer.int_buf(), np.int64))
+        pymunk.batch.get_space_bodies(self._space, _ID_FORCE, buffer)
+        self._check_order(buffer.int_buf()[:])
         return (np.frombuffer(buffer.float_buf(), np.float64).reshape(-1, 2), self._awake,
                 self._sleepers > 0)
+
+    def known_forces(self) -> tuple[np.ndarray, np.ndarray, bool]:
+        """As :meth:`forces`, without a read, for a space whose bodies are listed as at
+        the last read and have no force (pymunk zeroes each dynamic body's force as it
+        steps it, and a static or kinematic body's force moves nothing)."""
+        zeros = self._zeros
+        if len(zeros) != len(self._order):
+            zeros = self._zeros = np.zeros((len(self._order), 2))
+        return zeros, self._awake, self._sleepers > 0
 
     def force_rows(self) -> np.ndarray:
         """An array (pymunk's list: a row per body, x and z) for :meth:`set_forces`."""
@@ -145,23 +160,33 @@ class SpaceReader:
         """The space was stepped: its arbiters are new."""
         self._arbiter_read = None
 
-    def table(self, raw: np.ndarray, out: np.ndarray, keep: np.ndarray) -> bool:
+    def table(self, raw: np.ndarray, out: np.ndarray, keep: np.ndarray,
+              extent: float = math.inf, max_speed: float = math.inf) -> bool:
         """A read as state rows (BodyState's layout) in ``out[:n]``, and in row order as
-        it is in ``keep`` (n, 6); whether all finite."""
-        return self._rows.table(raw, self.gather, out, keep)
+        it is in ``keep`` (n, 6); whether all finite, inside ``extent`` and under
+        ``max_speed``."""
+        return self._rows.table(raw, self.gather, out, keep, extent, max_speed)
 
     def motion(self, raw: np.ndarray, velocity: np.ndarray) -> None:
         """A read's centre-of-mass velocities as the sleep rule keeps them, (6, n)."""
         self._rows.motion(raw, self.gather, velocity)
 
-    def _read_arbiters(self) -> tuple[np.ndarray, np.ndarray]:
-        """The space's arbiters, read once per step: chipmunk changes them between steps
-        only as bodies fall asleep (their arbiters leave its cache) or wake, which the
-        order pymunk lists the bodies in tells (a read of the ids alone)."""
-        ids = self._buffers.forces
-        ids.clear()
-        pymunk.batch.get_space_bodies(self._space, _ID, ids)
-        self._check_order(np.frombuffer(ids.int_buf(), np.int64))
+    @property
+    def rows(self) -> _rows.Rows:
+        """The compiled rows (ids to rows) this reader was planned with."""
+        return self._rows
+
+    def arbiters(self, ordered: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """The space's arbiters (ints, floats; ``_rows.ARBITER_INTS``/``ARBITER_FLOATS``
+        per arbiter), read once per step: chipmunk changes them between steps only as
+        bodies fall asleep (their arbiters leave its cache) or wake, which the order
+        pymunk lists the bodies in tells (a read of the ids alone; ``ordered``: the caller
+        has just read the bodies, which checked it)."""
+        if not ordered:
+            ids = self._buffers.forces
+            ids.clear()
+            pymunk.batch.get_space_bodies(self._space, _ID, ids)
+            self._check_order(ids.int_buf()[:])
         read = self._arbiter_read
         if read is not None and read[2] is self._order:
             return read[0], read[1]
@@ -178,37 +203,13 @@ class SpaceReader:
         """One CONTACT_DTYPE row per touching shape pair, sorted by keys then place, and
         each one's rows (a, b; -1: the keyless world), (m, 2) (see
         :meth:`_rows.Rows.contacts`)."""
-        return self._rows.contacts(*self._read_arbiters())
+        return self._rows.contacts(*self.arbiters())
 
-    def support(self, resting: RestingSupport, mu: np.ndarray, dt: float,
-                down: np.ndarray) -> None:
-        """What every row's contacts did this step, into ``resting`` (see
-        :meth:`_rows.Rows.support`)."""
-        self._rows.support(*self._read_arbiters(), mu, dt, float(down[0]), float(down[1]),
-                           resting.force, resting.friction, resting.grip, resting.points,
-                           resting.tilted)
-
-    def islands(self, moving: np.ndarray) -> np.ndarray:
-        """Each row's island label: rows tied by the step's contacts between ``moving``
-        rows share one (see :meth:`_rows.Rows.islands`)."""
+    def islands(self, movable: np.ndarray, joints: np.ndarray) -> np.ndarray:
+        """Each row's island label: rows tied by the step's contacts between ``movable``
+        rows, or by ``joints`` ((m, 2) rows; -1: the world) (see
+        :meth:`_rows.Rows.islands`)."""
         labels = np.empty(len(self.gather), np.intp)
-        self._rows.islands(self._read_arbiters()[0], moving.view(np.uint8), labels)
+        self._rows.islands(self.arbiters()[0], movable.view(np.uint8), labels,
+                           np.ascontiguousarray(joints, np.int64))
         return labels
-
-    def preload(self, rows: np.ndarray, share: np.ndarray, mass: np.ndarray,
-                gravity: tuple[float, float], g: float, applied: np.ndarray,
-                lifted: np.ndarray) -> np.ndarray | None:
-        """Give the awake ones of ``rows`` ``share`` of their weight (``mass`` per row)
-        upward on top of what forces they have, in one batch write where no body sleeps;
-        the share each got into ``applied``, the force (N) into ``lifted``. Returns None
-        when done, or the new forces (pymunk's list) for the caller to set one by one
-        where bodies sleep (a batch write would wake them)."""
-        forces, awake, asleep = self.forces()
-        out = self.force_rows()
-        if not _rows.preload(forces, self.gather, rows, share, mass, awake.view(np.uint8),
-                             gravity[0], gravity[1], g, out, applied, lifted):
-            return None
-        if asleep:
-            return out
-        self.set_forces(out)
-        return None
