@@ -139,6 +139,7 @@ def _drawn(name: str, size: Sequence[float], centre: Sequence[float]
                                                     (bottom + SHOULDERS) / 2)
 
 
+# Long: a sample file written as one document, in the file's order: data
 def wheelchair_scene() -> str:
     """The wheelchair, its user's eyes and hands, and its input wheels."""
     at = Placement()

@@ -366,6 +366,7 @@ LINK_RADIUS, LINK_HEIGHT = 0.05, 0.5
 LINK_TILT, LINK_START = -0.35, 0.6
 
 
+# Long: a sample file written as one document, in the file's order: data
 def godot_omi(path: Path) -> Path:
     """OMI physics as Godot 4.4 exports it (and OMI's drafts before September 2024 say):
     one root node (``GODOT_single_root``), bodies that give a motion type and no mass,
@@ -577,6 +578,7 @@ COLLADA_REST = {"Box": 0.25, "Ball": 0.25, "Pill": 0.2, "Can": 0.25, "Gem": 0.25
                 "Pebble": 0.4}
 
 
+# Long: a sample file written as one document, in the file's order: data
 def collada(path: Path, up: str = "Z_UP", meter: float = 1.0) -> Path:
     """A Collada 1.4 physics scene written ``up`` in units of ``meter``: a static plane, a
     static triangle-mesh slab, every analytic shape and a convex mesh falling on them, and
@@ -695,6 +697,7 @@ DAE_FLOOR_FRICTION, DAE_SLOW, DAE_GRIP = 1.0, 0.1, 0.5
 DAE_BOUNCY = 0.8
 
 
+# Long: a sample file written as one document, in the file's order: data
 def collada_springs(path: Path, up: str = "Z_UP", meter: float = 1.0) -> Path:
     """Collada ``<spring>``s and materials, written ``up`` in units of ``meter``: a cart on a
     rail 1 m above it (a rigid_constraint leaving linear X free within limits) with a
@@ -1002,6 +1005,7 @@ BOB_PIVOTS = {"BobA": (-3.0, 0.0, 3.0), "BobB": (-5.0, 0.0, 3.0)}
 BOB_REACH, BOB_SWING = 0.5, 40.0
 
 
+# Long: a sample file written as one document, in the file's order: data
 def bullet_collada(path: Path) -> Path:
     """Collada physics laid out as Bullet 2.6x's ColladaConverter writes it: Y up, no
     ``<unit>``, the physics scenes first, one physics model whose rigid bodies carry a sid

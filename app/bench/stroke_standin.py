@@ -95,6 +95,7 @@ def _shelf_unit(w: _Writer, x0: float, y: float, width: float, shelves: int,
             w.thing(kind, (x, y - 0.15, z + 0.015 + h / 2), size)
 
 
+# Long: a sample file written as one document, in the file's order: data
 def standin_scene(rng: np.random.Generator | None = None) -> tuple[str, int, int]:
     """The stand-in's main.scene text; returns (text, objects, dynamic bodies)."""
     w = _Writer(rng or np.random.default_rng(16))

@@ -122,10 +122,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                     "materials join the scene", repeat=True, struct="Model"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
         "PostPass": _f(STRUCT_T, doc="a full-screen pass over the drawn frame (your GLSL "
-                       "fragment shader; engine.render.postprocess)", repeat=True,
+                       "fragment shader; services.render.postprocess)", repeat=True,
                        struct="PostPass"),
         "Input": _f(STRUCT_T, doc="input devices and how their trackers, wheels and buttons "
-                    "are calibrated (engine.input)", repeat=True, struct="Input"),
+                    "are calibrated (services.input)", repeat=True, struct="Input"),
         "Output": _f(STRUCT_T, doc="engine values published every frame over OSC or LSL",
                      repeat=True, struct="Output"),
         "Session": _f(STRUCT_T, None, "a session log: one JSON-lines file per run with the "
@@ -752,7 +752,7 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                          lengths=(4,)),
     },
     "World": {
-        "Gravity": _f(VEC3_T, (0.0, 0.0, -9.81), "m/s^2"),
+        "Gravity": _f(VEC3_T, _WORLD.gravity, "m/s^2"),
         "TimeStep": _f(FLOAT_T, TIME_STEP, "s, fixed dynamics step (more than 0, at most 1; "
                        "past 0.05 contacts and joints lose accuracy)"),
         "Extent": _f(FLOAT_T, WORLD_EXTENT, "m: bodies stay within this distance of the "
@@ -776,9 +776,9 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                         "are solved exactly (ODE dWorldStep): accurate pendulums and "
                         "mechanisms, at a cost that grows with the cube of the rows; 0: all "
                         "by the iterative solver"),
-        "ERP": _f(FLOAT_T, 0.2, "error reduction per step"),
-        "CFM": _f(FLOAT_T, 1e-5, "constraint force mixing"),
-        "MaxContacts": _f(INT_T, 4, "per pair of geometries"),
+        "ERP": _f(FLOAT_T, _WORLD.erp, "error reduction per step"),
+        "CFM": _f(FLOAT_T, _WORLD.cfm, "constraint force mixing"),
+        "MaxContacts": _f(INT_T, _WORLD.max_contacts, "per pair of geometries"),
         "AutoSleep": _f(BOOL_T, 1, "bodies that rest fall asleep (stop being simulated) "
                         "until something wakes them; see engine.physics.sleep"),
         "SleepTime": _f(FLOAT_T, SLEEP_TIME, "s a body must stay quiet (slow and not "
@@ -792,7 +792,7 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "RandomState": _f(STRING_T, None, "the scene's random generator (randInterval and "
                           "randNormal in text scripts spawn) when this state was saved"),
     },
-    # -- input devices and bindings (engine.input; address space in docs/input-format.md) --
+    # -- input devices and bindings (services.input; address space in docs/input-format.md) --
     "Input": {
         "Device": _f(STRUCT_T, doc="a device to open", repeat=True, struct="InputDevice"),
         "Tracker": _f(STRUCT_T, doc="calibration and filtering of one 6-DOF tracker",

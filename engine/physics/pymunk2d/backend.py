@@ -162,15 +162,14 @@ class PymunkBackend:
     # -- world -------------------------------------------------------------
     def configure(self, settings: WorldSettings) -> None:
         """Gravity, solver iterations, error correction, sleeping and material pairs."""
+        settings.check()  # the one range of each setting (WORLD_RANGES)
         space = self._space
         self._extent = float(settings.extent)
         gx, _, gz = settings.gravity
         if settings.gravity[1] != 0.0:
             self._warn("world", "gravity", "gravity's Y component dropped (not in the X–Z plane)")
         space.gravity = (float(gx), float(gz))
-        space.iterations = max(1, int(settings.iterations))
-        if not 0.0 <= settings.warm_start < 1.0:
-            raise ValueError(f"warm start must be in [0, 1), got {settings.warm_start}")
+        space.iterations = int(settings.iterations)
         self._resting.beta = float(settings.warm_start)
         # ODE's ERP is the share of penetration fixed per step at 60 Hz; pymunk's bias is
         # the share left after one second.
