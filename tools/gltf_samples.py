@@ -152,7 +152,6 @@ def _quat_z(deg: np.ndarray) -> np.ndarray:
 
 
 # -- the two-bone bar ------------------------------------------------------------------
-# Long: a sample file written as one document, in the file's order: data
 def two_bone(path: Path, interpolation: str = "LINEAR", influences: int = 4,
              weight_scale: float = 1.0, times_out_of_order: bool = False,
              missing_buffer: bool = False, skinned: bool = True) -> Path:
@@ -164,6 +163,29 @@ def two_bone(path: Path, interpolation: str = "LINEAR", influences: int = 4,
     w = _Writer()
     g = w.gltf
     g.asset = gl.Asset(version="2.0", generator="colosseum tools/gltf_samples.py")
+    attributes, indices = _bar_mesh(w, influences, weight_scale, skinned)
+    g.meshes = [gl.Mesh(name="bar", primitives=[gl.Primitive(
+        attributes=gl.Attributes(**attributes), indices=indices)])]
+    g.nodes = [gl.Node(name="bar", mesh=0, skin=0 if skinned else None),
+               gl.Node(name="root", children=[2]),
+               gl.Node(name="tip", translation=[0.0, 1.0, 0.0])]
+    g.scenes = [gl.Scene(nodes=[0, 1])]
+    g.scene = 0
+    if skinned:
+        ibm = np.stack([np.eye(4), np.eye(4)])
+        ibm[1, 1, 3] = -1.0  # inverse of the tip's bind translation (0, 1, 0)
+        g.skins = [gl.Skin(joints=[1, 2], inverseBindMatrices=w.accessor(
+            ibm.transpose(0, 2, 1).reshape(2, 16)))]
+    g.animations = _bar_clips(w, interpolation, times_out_of_order)
+    if missing_buffer:
+        return w.save(path.with_suffix(".gltf"), write_bin=False)
+    return w.save(path)
+
+
+def _bar_mesh(w: _Writer, influences: int, weight_scale: float,
+              skinned: bool) -> tuple[dict[str, int], int]:
+    """:func:`two_bone`'s bar: rings of 4 at y = 0 .. 2, their attributes' accessors and
+    the triangles' (made in this order: the file's accessors are numbered by it)."""
     ys = np.array([0.0, 0.5, 1.0, 1.5, 2.0])
     ring = np.array([[0.1, 0.0], [0.0, 0.1], [-0.1, 0.0], [0.0, -0.1]])
     vertices = np.array([[x, y, z] for y in ys for x, z in ring])
@@ -189,19 +211,12 @@ def two_bone(path: Path, interpolation: str = "LINEAR", influences: int = 4,
             attributes["WEIGHTS_0"] = w.accessor(np.tile(FIVE_INFLUENCES[:4], (n, 1)))
             attributes["JOINTS_1"] = w.accessor(np.tile([1, 0, 0, 0], (n, 1)), USHORT)
             attributes["WEIGHTS_1"] = w.accessor(extra)
-    indices = w.accessor(np.array(faces).reshape(-1), USHORT, target=34963)
-    g.meshes = [gl.Mesh(name="bar", primitives=[gl.Primitive(
-        attributes=gl.Attributes(**attributes), indices=indices)])]
-    g.nodes = [gl.Node(name="bar", mesh=0, skin=0 if skinned else None),
-               gl.Node(name="root", children=[2]),
-               gl.Node(name="tip", translation=[0.0, 1.0, 0.0])]
-    g.scenes = [gl.Scene(nodes=[0, 1])]
-    g.scene = 0
-    if skinned:
-        ibm = np.stack([np.eye(4), np.eye(4)])
-        ibm[1, 1, 3] = -1.0  # inverse of the tip's bind translation (0, 1, 0)
-        g.skins = [gl.Skin(joints=[1, 2], inverseBindMatrices=w.accessor(
-            ibm.transpose(0, 2, 1).reshape(2, 16)))]
+    return attributes, w.accessor(np.array(faces).reshape(-1), USHORT, target=34963)
+
+
+def _bar_clips(w: _Writer, interpolation: str, times_out_of_order: bool) -> list[Any]:
+    """:func:`two_bone`'s clips: Bend (the tip about Z, 0 to 90 degrees in 1 s) and Lift
+    (the root up 1 m in 2 s)."""
     bend_times = np.array([0.0, 0.5, 1.0])
     if times_out_of_order:
         bend_times = np.array([0.0, 1.0, 0.5])
@@ -212,7 +227,7 @@ def two_bone(path: Path, interpolation: str = "LINEAR", influences: int = 4,
     else:
         bend_values = _quat_z(np.array([0.0, 45.0, 90.0]))
     lift = [w.accessor(np.array([0.0, 2.0])), w.accessor(np.array([[0, 0, 0], [0, 1.0, 0]]))]
-    g.animations = [
+    return [
         gl.Animation(name="Bend", samplers=[gl.AnimationSampler(
             input=w.accessor(bend_times, minmax=True), output=w.accessor(bend_values),
             interpolation=interpolation)],
@@ -222,9 +237,6 @@ def two_bone(path: Path, interpolation: str = "LINEAR", influences: int = 4,
             input=lift[0], output=lift[1], interpolation="LINEAR")],
             channels=[gl.AnimationChannel(sampler=0, target=gl.AnimationChannelTarget(
                 node=1, path="translation"))])]
-    if missing_buffer:
-        return w.save(path.with_suffix(".gltf"), write_bin=False)
-    return w.save(path)
 
 
 def strip(path: Path) -> Path:

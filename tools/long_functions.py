@@ -23,7 +23,6 @@ ROOT = Path(__file__).resolve().parent.parent
 FOLDERS = ("components", "engine", "services", "systems", "app", "tools")
 LIMIT = 60
 
-_SAMPLE = "a sample file written as one document, in the file's order: data"
 _REGISTRY = "being rewritten onto the block registry (issue 32, part 1: another engineer)"
 _POLICY = "the stepping policy written once over both backends (issue 32: another engineer)"
 
@@ -42,13 +41,6 @@ ALLOWED: dict[str, str] = {
         "ODE's per-pair callback in the GIL-free step: filter, collide, contact",
     "engine/physics/ode3d/_world.pxi::World.step":
         "the step as one sequence, the GIL released once around it",
-    "app/bench/interchange_samples.py::collada": _SAMPLE,
-    "app/bench/interchange_samples.py::collada_springs": _SAMPLE,
-    "app/bench/interchange_samples.py::godot_omi": _SAMPLE,
-    "app/bench/interchange_samples.py::bullet_collada": _SAMPLE,
-    "app/bench/stroke_standin.py::standin_scene": _SAMPLE,
-    "tools/stroke_scene.py::wheelchair_scene": _SAMPLE,
-    "tools/gltf_samples.py::two_bone": _SAMPLE,
     "engine/scene/factory.py::_Builder.avatar": _REGISTRY,
     "engine/scene/factory.py::_Builder.joint": _REGISTRY,
     "engine/scene/factory.py::_Builder.object_components": _REGISTRY,
