@@ -24,6 +24,7 @@ from typing import Any
 from components.joint import SCENE_JOINT_TYPES
 from components.shape import ShapeKind
 from engine.anomalies import ANOMALIES, COMMON_DOCS, EYES, ONSET_DEFAULT
+from engine.experiments.design import END_ON, RESETS, Design
 from engine.experiments.ordering import ORDERS as EXPERIMENT_ORDERS
 from engine.measures import QUANTITIES
 from engine.physics.backend import WORLD_EXTENT, BackendName, WorldSettings
@@ -32,6 +33,8 @@ from engine.realtime import TIME_STEP
 
 #: The solver settings' defaults, defined once (engine.physics.backend.WorldSettings).
 _WORLD = WorldSettings()
+#: An Experiment block's defaults are the design's (engine.experiments.design).
+_DESIGN = Design("")
 
 # Field types.
 INT_T = "int"
@@ -510,27 +513,31 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                      struct="ExperimentFactor"),
         "Staircase": _f(STRUCT_T, None, "an adaptive procedure: one block of trials after "
                         "the factorial ones", repeat=True, struct="Staircase"),
-        "Order": _f(ENUM_T, "random", "the order of the within cells: random (a seed per "
+        "Order": _f(ENUM_T, _DESIGN.order, "the order of the within cells: random (a seed per "
                     "participant and block), latin (a Latin square's row by participant "
                     "number), balanced (a balanced Latin square's), fixed (as declared)",
                     allowed=EXPERIMENT_ORDERS),
-        "Blocks": _f(INT_T, 1, "blocks; each holds every cell Repeats times"),
-        "Repeats": _f(INT_T, 1, "trials per cell in each block"),
-        "Practice": _f(INT_T, 0, "practice trials before the first block (block 0, marked)"),
-        "Timeout": _f(FLOAT_T, 60.0, "s of simulated time after which a trial ends with "
+        "Blocks": _f(INT_T, _DESIGN.blocks, "blocks; each holds every cell Repeats times"),
+        "Repeats": _f(INT_T, _DESIGN.repeats, "trials per cell in each block"),
+        "Practice": _f(INT_T, _DESIGN.practice, "practice trials before the first block "
+                       "(block 0, marked)"),
+        "Timeout": _f(FLOAT_T, _DESIGN.timeout, "s of simulated time after which a trial "
+                      "ends with "
                       "outcome \"timeout\""),
-        "Reset": _f(ENUM_T, "trial", "trial: every trial starts from a freshly built world; "
-                    "never: one world runs through the session", allowed=("trial", "never")),
-        "EndOn": _f(ENUM_T, "finish", "what ends a trial besides the timeout: finish "
+        "Reset": _f(ENUM_T, _DESIGN.reset, "trial: every trial starts from a freshly built "
+                    "world; never: one world runs through the session", allowed=RESETS),
+        "EndOn": _f(ENUM_T, _DESIGN.end_on, "what ends a trial besides the timeout: finish "
                     "(trial:finish(outcome)) or response (also the first trial:respond)",
-                    allowed=("finish", "response")),
-        "Seed": _f(INT_T, 0, "the design's seed: random orders come from it and the "
+                    allowed=END_ON),
+        "Seed": _f(INT_T, _DESIGN.seed, "the design's seed: random orders come from it and the "
                    "participant number"),
         "Track": _f(STRINGVECTOR_T, None, "objects whose poses are logged each trial "
                     "(tracking/trial-NNN.csv)", ref="Object"),
-        "TrackCamera": _f(BOOL_T, 0, "1: log the active camera (the head) too"),
-        "TrackRate": _f(FLOAT_T, 30.0, "Hz of the tracking log (0: every frame)"),
-        "Break": _f(FLOAT_T, 0.0, "s of pause between blocks (none with --fast)"),
+        "TrackCamera": _f(BOOL_T, int(_DESIGN.track_camera), "1: log the active camera (the "
+                          "head) too"),
+        "TrackRate": _f(FLOAT_T, _DESIGN.track_rate, "Hz of the tracking log (0: every "
+                        "frame)"),
+        "Break": _f(FLOAT_T, _DESIGN.pause, "s of pause between blocks (none with --fast)"),
     },
     "ExperimentFactor": {
         "ID": Field(STRING_T, None, "the factor's name (a trials.csv column; Lua "
