@@ -14,11 +14,14 @@ from pathlib import Path
 from typing import Any
 
 from app.runner import execute_run, fail, prepare_run
+from engine.app import EngineConfig
 from engine.memory import keep_freed_memory
 from engine.physics.backend import BackendName
 from services.net.protocol import BARRIER_WAIT
 
 log = logging.getLogger("colosseum")
+#: The engine's own defaults: a flag not given leaves the setting where EngineConfig has it.
+_ENGINE = EngineConfig()
 
 
 def _positive(kind: type) -> Any:
@@ -56,97 +59,97 @@ def param_option(text: str) -> tuple[str, str]:
     return key.strip(), value.strip()
 
 
-def _run_flag_table() -> dict[str, tuple[tuple[str, ...], dict[str, Any]]]:
-    """``run``'s flags by name (serve and join take those that make sense for them)."""
-    return {
-        "seconds": (("--seconds",), {"type": _positive(float),
-                                     "help": "simulated seconds to run"}),
-        "frames": (("--frames",), {"type": _positive(int), "help": "frames to run"}),
-        "headless": (("--headless",), {"action": "store_true",
-                                       "help": "no window (automatic without a display)"}),
-        "backend": (("--backend",), {"choices": list(BackendName), "default": None,
-                                     "help": "dynamics backend (default: the scene's, else "
-                                             "ode)"}),
-        "mode": (("--mode",), {"choices": ["serial", "threaded"], "default": "serial",
-                               "help": "serial: everything on the main thread; threaded: "
-                                       "physics on its own"}),
-        "fast": (("--fast",), {"action": "store_true",
-                               "help": "run as fast as possible, not in real time"}),
-        "seed": (("--seed",), {"type": int, "default": 0,
-                               "help": "seed for the scene's random functions"}),
-        "dt": (("--dt",), {"type": _positive(float), "default": None,
-                           "help": "physics time step (s)"}),
-        "substeps": (("--substeps",), {"type": _positive(int), "default": 1,
-                                       "help": "physics steps per frame"}),
-        "early": (("--early",), {"choices": ["sleep", "substep"], "default": "sleep",
-                                 "help": "when a step finishes early: sleep, or take smaller "
-                                         "substeps"}),
-        "late": (("--late",), {"choices": ["slowmo", "grow"], "default": "slowmo",
-                               "help": "when steps run late: slow motion, or grow the step "
-                                       "(bounded)"}),
-        "max_dt": (("--max-dt",), {"type": _positive(float), "default": 1.0 / 20.0,
-                                   "help": "upper bound for --late grow (s)"}),
-        "sound": (("--sound",), {"default": "null",
-                                 "help": "audio backend: openal, wave:FILE or null"}),
-        "screenshot": (("--screenshot",), {"type": Path,
-                                           "help": "write the last frame to FILE.png"}),
-        "record_frames": (("--record-frames",), {"type": Path,
-                                                 "help": "write every Nth frame into DIR"}),
-        "record_every": (("--record-every",), {"type": _positive(int), "default": 1,
-                                               "help": "N for --record-frames"}),
-        "interpolate": (("--interpolate",), {"action": "store_true",
-                                             "help": "threaded mode: interpolate poses between "
-                                                     "physics states when drawing"}),
-        "hud": (("--hud",), {"action": "store_true",
-                             "help": "show the HUD line (fps, physics ms, rtf)"}),
-        "size": (("--size",), {"default": "640x480", "help": "window/render size WxH"}),
-        "render_scale": (("--render-scale",), {
-            "type": render_scale_option, "default": 1.0, "metavar": "S",
-            "help": "draw the 3D view at S times the window's resolution (0.25 to 1) and "
-                    "scale it up: frame rate for sharpness on a software rasteriser "
-                    "(default 1: full resolution)"}),
-        "stereo": (("--stereo",), {"choices": ["mono", "sbs"], "default": None,
-                                   "help": "sbs: two eyes side by side (HMDs, 3D displays), "
-                                           "with the camera's EyeSeparation or 0.064 m; "
-                                           "mono: one view even for a stereo camera "
-                                           "(default: as the camera says)"}),
-        "xr": (("--xr",), {"action": argparse.BooleanOptionalAction, "default": None,
-                           "help": "draw into a headset through the active OpenXR runtime "
-                                   "(--no-xr: not even when the scene's Display asks for it; "
-                                   "see docs/headset.md)"}),
-        "xr_mirror": (("--xr-mirror",), {"choices": ["none", "left", "both"], "default": None,
-                                         "help": "with --xr: a window showing the left eye "
-                                                 "or both (default: as the scene says; none)"}),
-        "xr_fallback": (("--xr-fallback",), {"action": "store_true",
-                                             "help": "with --xr: when no headset can be used, "
-                                                     "run in the window instead of ending"}),
-        "save_state": (("--save-state",), {"type": Path,
-                                           "help": "write the final state as a scene file"}),
-        "stats": (("--stats",), {"type": Path, "help": "write run statistics as JSON"}),
-        "record": (("--record",), {"type": Path,
-                                   "help": "record input events to FILE (JSON lines)"}),
-        "replay": (("--replay",), {"type": Path,
-                                   "help": "replay input events recorded with --record"}),
-        "input": (("--input",), {"action": "append", "default": [], "type": input_option,
-                                 "metavar": "KIND[:ARG]",
-                                 "help": "open an input device: osc:PORT, serial:PATH[@BAUD], "
-                                         "lsl:STREAM[,...], desktop or openxr (repeatable)"}),
-        "allow_path": (("--allow-path",), {"action": "append", "default": [], "type": Path,
-                                           "metavar": "DIR",
-                                           "help": "let the scene and its scripts name files "
-                                                   "in DIR too (by default only the content "
-                                                   "folder; repeatable)"}),
-        "sessions": (("--sessions",), {"type": Path, "metavar": "DIR",
-                                       "help": "where a scene's session log goes (a Session "
-                                               "block; default: sessions/ here)"}),
-        "progress": (("--progress",), {"action": "store_true",
-                                       "help": "print a status line every second, also into "
-                                               "a log or pipe (on a terminal: a progress bar "
-                                               "when the run has --frames or --seconds)"}),
-    }
+#: ``run``'s flags by name (serve and join take those that make sense for them): data,
+#: read by add_run_flags (argparse copies an ``append`` default before adding to it).
+RUN_FLAG_TABLE: dict[str, tuple[tuple[str, ...], dict[str, Any]]] = {
+    "seconds": (("--seconds",), {"type": _positive(float),
+                                 "help": "simulated seconds to run"}),
+    "frames": (("--frames",), {"type": _positive(int), "help": "frames to run"}),
+    "headless": (("--headless",), {"action": "store_true",
+                                   "help": "no window (automatic without a display)"}),
+    "backend": (("--backend",), {"choices": list(BackendName), "default": None,
+                                 "help": "dynamics backend (default: the scene's, else "
+                                         "ode)"}),
+    "mode": (("--mode",), {"choices": ["serial", "threaded"], "default": _ENGINE.mode,
+                           "help": "serial: everything on the main thread; threaded: "
+                                   "physics on its own"}),
+    "fast": (("--fast",), {"action": "store_true",
+                           "help": "run as fast as possible, not in real time"}),
+    "seed": (("--seed",), {"type": int, "default": _ENGINE.seed,
+                           "help": "seed for the scene's random functions"}),
+    "dt": (("--dt",), {"type": _positive(float), "default": None,
+                       "help": "physics time step (s)"}),
+    "substeps": (("--substeps",), {"type": _positive(int), "default": _ENGINE.substeps,
+                                   "help": "physics steps per frame"}),
+    "early": (("--early",), {"choices": ["sleep", "substep"], "default": _ENGINE.early,
+                             "help": "when a step finishes early: sleep, or take smaller "
+                                     "substeps"}),
+    "late": (("--late",), {"choices": ["slowmo", "grow"], "default": _ENGINE.late,
+                           "help": "when steps run late: slow motion, or grow the step "
+                                   "(bounded)"}),
+    "max_dt": (("--max-dt",), {"type": _positive(float), "default": _ENGINE.max_dt,
+                               "help": "upper bound for --late grow (s)"}),
+    "sound": (("--sound",), {"default": _ENGINE.sound,
+                             "help": "audio backend: openal, wave:FILE or null"}),
+    "screenshot": (("--screenshot",), {"type": Path,
+                                       "help": "write the last frame to FILE.png"}),
+    "record_frames": (("--record-frames",), {"type": Path,
+                                             "help": "write every Nth frame into DIR"}),
+    "record_every": (("--record-every",), {"type": _positive(int), "default": 1,
+                                           "help": "N for --record-frames"}),
+    "interpolate": (("--interpolate",), {"action": "store_true",
+                                         "help": "threaded mode: interpolate poses between "
+                                                 "physics states when drawing"}),
+    "hud": (("--hud",), {"action": "store_true",
+                         "help": "show the HUD line (fps, physics ms, rtf)"}),
+    "size": (("--size",), {"default": "640x480", "help": "window/render size WxH"}),
+    "render_scale": (("--render-scale",), {
+        "type": render_scale_option, "default": 1.0, "metavar": "S",
+        "help": "draw the 3D view at S times the window's resolution (0.25 to 1) and "
+                "scale it up: frame rate for sharpness on a software rasteriser "
+                "(default 1: full resolution)"}),
+    "stereo": (("--stereo",), {"choices": ["mono", "sbs"], "default": None,
+                               "help": "sbs: two eyes side by side (HMDs, 3D displays), "
+                                       "with the camera's EyeSeparation or 0.064 m; "
+                                       "mono: one view even for a stereo camera "
+                                       "(default: as the camera says)"}),
+    "xr": (("--xr",), {"action": argparse.BooleanOptionalAction, "default": None,
+                       "help": "draw into a headset through the active OpenXR runtime "
+                               "(--no-xr: not even when the scene's Display asks for it; "
+                               "see docs/headset.md)"}),
+    "xr_mirror": (("--xr-mirror",), {"choices": ["none", "left", "both"], "default": None,
+                                     "help": "with --xr: a window showing the left eye "
+                                             "or both (default: as the scene says; none)"}),
+    "xr_fallback": (("--xr-fallback",), {"action": "store_true",
+                                         "help": "with --xr: when no headset can be used, "
+                                                 "run in the window instead of ending"}),
+    "save_state": (("--save-state",), {"type": Path,
+                                       "help": "write the final state as a scene file"}),
+    "stats": (("--stats",), {"type": Path, "help": "write run statistics as JSON"}),
+    "record": (("--record",), {"type": Path,
+                               "help": "record input events to FILE (JSON lines)"}),
+    "replay": (("--replay",), {"type": Path,
+                               "help": "replay input events recorded with --record"}),
+    "input": (("--input",), {"action": "append", "default": [], "type": input_option,
+                             "metavar": "KIND[:ARG]",
+                             "help": "open an input device: osc:PORT, serial:PATH[@BAUD], "
+                                     "lsl:STREAM[,...], desktop or openxr (repeatable)"}),
+    "allow_path": (("--allow-path",), {"action": "append", "default": [], "type": Path,
+                                       "metavar": "DIR",
+                                       "help": "let the scene and its scripts name files "
+                                               "in DIR too (by default only the content "
+                                               "folder; repeatable)"}),
+    "sessions": (("--sessions",), {"type": Path, "metavar": "DIR",
+                                   "help": "where a scene's session log goes (a Session "
+                                           "block; default: sessions/ here)"}),
+    "progress": (("--progress",), {"action": "store_true",
+                                   "help": "print a status line every second, also into "
+                                           "a log or pipe (on a terminal: a progress bar "
+                                           "when the run has --frames or --seconds)"}),
+}
 
 
-RUN_FLAGS = tuple(_run_flag_table())
+RUN_FLAGS = tuple(RUN_FLAG_TABLE)
 #: What makes sense on a server (it draws nothing) and on a node (it steps no physics).
 SERVE_FLAGS = tuple(f for f in RUN_FLAGS if f not in (
     "screenshot", "record_frames", "record_every", "interpolate", "hud", "size",
@@ -157,10 +160,9 @@ JOIN_FLAGS = ("seconds", "frames", "headless", "sound", "screenshot", "record_fr
 
 
 def add_run_flags(parser: argparse.ArgumentParser, names: tuple[str, ...]) -> None:
-    table = _run_flag_table()
     limit = parser.add_mutually_exclusive_group()
     for name in names:
-        flags, options = table[name]
+        flags, options = RUN_FLAG_TABLE[name]
         (limit if name in ("seconds", "frames") else parser).add_argument(*flags, **options)
 
 
@@ -171,12 +173,25 @@ def add_param_flag(parser: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``colosseum`` command: one helper per group of sub-commands."""
     parser = argparse.ArgumentParser(prog="colosseum", description=__doc__.splitlines()[0])
     parser.add_argument("--log-level", default="info",
                         choices=["debug", "info", "warning", "error"],
                         help="how much to log (default: info)")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    _add_run(sub)
+    _add_serve_and_join(sub)
+    _add_sweep_and_score(sub)
+    from app.experiments.cli import add_parser as add_experiment_parser
 
+    add_experiment_parser(sub, add_run_flags, add_param_flag)
+    _add_files(sub)
+    _add_bench(sub)
+    return parser
+
+
+def _add_run(sub: Any) -> None:
+    """``run``."""
     run = sub.add_parser("run", help="run a content folder (default: the bundled demo)")
     run.add_argument("path", nargs="?", help="content folder or .scene file")
     add_run_flags(run, RUN_FLAGS)
@@ -185,6 +200,9 @@ def build_parser() -> argparse.ArgumentParser:
                           "sound it uses changes on disk")
     add_param_flag(run)
 
+
+def _add_serve_and_join(sub: Any) -> None:
+    """``serve`` and ``join``: a server and the nodes that follow it."""
     serve = sub.add_parser("serve", help="run the authoritative simulation headless and "
                            "publish it to nodes that join (colosseum join)")
     serve.add_argument("path", nargs="?", help="content folder or .scene file")
@@ -225,6 +243,9 @@ def build_parser() -> argparse.ArgumentParser:
                       help="seconds without frames before the server counts as gone")
     add_run_flags(join, JOIN_FLAGS)
 
+
+def _add_sweep_and_score(sub: Any) -> None:
+    """``sweep`` (many runs on Dask) and ``score`` (a recorded session scored again)."""
     sweep = sub.add_parser("sweep", help="run a content folder many times over parameters "
                            "and seeds on Dask; one results table and a plot")
     sweep.add_argument("path", help="content folder or .scene file")
@@ -264,10 +285,10 @@ def build_parser() -> argparse.ArgumentParser:
                        help="where the session log goes (default: sessions/ here)")
     score.add_argument("--json", action="store_true", help="the summary as JSON")
 
-    from app.experiments.cli import add_parser as add_experiment_parser
 
-    add_experiment_parser(sub, add_run_flags, add_param_flag)
-
+def _add_files(sub: Any) -> None:
+    """The commands over files: ``keygen``, ``check``, ``fmt``, ``import``, ``export``,
+    ``keys``, ``new``."""
     keygen = sub.add_parser("keygen", help="make CURVE keys for serve --key and join --key")
     keygen.add_argument("folder", type=Path)
     keygen.add_argument("--user", action="append", default=[], help="a user (repeatable)")
@@ -309,6 +330,9 @@ def build_parser() -> argparse.ArgumentParser:
     new = sub.add_parser("new", help="scaffold a content folder that runs")
     new.add_argument("name")
 
+
+def _add_bench(sub: Any) -> None:
+    """``bench``."""
     bench = sub.add_parser("bench", help="benchmarks, printed as tables")
     bench.add_argument("what", nargs="?", default="scheduler",
                        help="scheduler, physics, scene, scripting, sound, render, input, "
@@ -326,7 +350,6 @@ def build_parser() -> argparse.ArgumentParser:
                        help="the rows and figures as JSON: to FILE, or alone on stdout")
     bench.add_argument("--plot", type=Path, metavar="FILE.png",
                        help="our figures beside their references as a bar chart")
-    return parser
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from app.runner import execute_run, fail, outputs_problem, prepare_run
+from engine.realtime import TIME_STEP
 
 log = logging.getLogger("colosseum.net")
 
@@ -161,7 +162,7 @@ def node_engine(args: argparse.Namespace, client: Any, welcome: dict[str, Any],
                                      or os.environ.get("WAYLAND_DISPLAY"))
     config = EngineConfig(
         content_dir=folder, headless=headless, sound=args.sound,
-        dt=float(welcome.get("dt") or 1 / 60), world=spec.world, backend="none",
+        dt=float(welcome.get("dt") or TIME_STEP), world=spec.world, backend="none",
         options={"screenshot": args.screenshot, "record_frames": args.record_frames,
                  "record_every": args.record_every, "hud": args.hud, "size": args.size,
                  "input": args.input, "display": args.display, "stereo": args.stereo,

@@ -379,8 +379,7 @@ def import_path(model: Path, out: Path | None, force: bool = False) -> int:
 
     from engine.assets import AssetError, Assets
     from engine.interchange import FORMATS, import_model
-    from engine.interchange.merge import BASE_SUFFIX, merge
-    from engine.scene import SceneError, parse_file, parse_text, render_all, write
+    from engine.scene import SceneError, render_all, write
 
     if not model.is_file():
         print(f"colosseum: error: {model}: no such file", file=sys.stderr)
@@ -391,23 +390,10 @@ def import_path(model: Path, out: Path | None, force: bool = False) -> int:
         return 2
     folder = Path.cwd() if out is None else out.parent.resolve()
     if out is not None:
-        try:  # `import MODEL -o my_sim/main.scene` makes the content folder my_sim
-            folder.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            print(f"colosseum: error: {out}: cannot make folder {out.parent} "
-                  f"({exc.strerror or exc})", file=sys.stderr)
-            return 2
-        base_path = out.with_name(out.name + BASE_SUFFIX)
-        if out.exists() and not force and not base_path.is_file():
-            print(f"colosseum: error: {out} exists and no import wrote it (there is no "
-                  f"{base_path.name}); nothing is overwritten: give --force to replace it "
-                  f"(a .bak is kept)", file=sys.stderr)
-            return 1
-        try:  # a model outside the scene's folder is copied in beside it (confinement)
-            model = bring_in(model, folder, replace=force or base_path.is_file())
-        except OSError as exc:
-            print(f"colosseum: error: {exc}", file=sys.stderr)
-            return 1
+        placed = _import_target(model, out, folder, force)
+        if isinstance(placed, int):
+            return placed
+        model = placed
     file_ref = Path(os.path.relpath(model.resolve(), folder)).as_posix()
     try:
         imported = import_model(file_ref, file_ref, Assets(folder), root=folder, header=True)
@@ -424,6 +410,41 @@ def import_path(model: Path, out: Path | None, force: bool = False) -> int:
     if out is None:
         sys.stdout.write(text)
         return failed
+    return _write_import(model, out, text, force) or failed
+
+
+def _import_target(model: Path, out: Path, folder: Path, force: bool) -> Path | int:
+    """Make ``out``'s folder and bring the model into it (confinement); an exit code when
+    that fails or ``out`` is not an import's to replace."""
+    from engine.interchange.merge import BASE_SUFFIX
+
+    try:  # `import MODEL -o my_sim/main.scene` makes the content folder my_sim
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        print(f"colosseum: error: {out}: cannot make folder {out.parent} "
+              f"({exc.strerror or exc})", file=sys.stderr)
+        return 2
+    base_path = out.with_name(out.name + BASE_SUFFIX)
+    if out.exists() and not force and not base_path.is_file():
+        print(f"colosseum: error: {out} exists and no import wrote it (there is no "
+              f"{base_path.name}); nothing is overwritten: give --force to replace it "
+              f"(a .bak is kept)", file=sys.stderr)
+        return 1
+    try:  # a model outside the scene's folder is copied in beside it (confinement)
+        return bring_in(model, folder, replace=force or base_path.is_file())
+    except OSError as exc:
+        print(f"colosseum: error: {exc}", file=sys.stderr)
+        return 1
+
+
+def _write_import(model: Path, out: Path, text: str, force: bool) -> int:
+    """Write the import to ``out``, merged with the author's edits since the last import
+    (its base beside it), the former file kept as ``.bak``; 1 when they do not parse."""
+    from engine.interchange.merge import BASE_SUFFIX, merge
+    from engine.scene import SceneError, parse_file, parse_text, write
+
+    base_path = out.with_name(out.name + BASE_SUFFIX)
+    text_out = text
     if out.exists() and not force:
         try:
             result = merge(parse_file(base_path), parse_file(out), parse_text(text, str(out)))
@@ -432,20 +453,17 @@ def import_path(model: Path, out: Path | None, force: bool = False) -> int:
             print(f"colosseum: error: {out} (or {base_path.name}) does not parse; nothing is "
                   f"overwritten", file=sys.stderr)
             return 1
-        merged = write(result.db)
+        text_out = write(result.db)
         for note in result.kept:
             print(f"{out}: kept: {note}", file=sys.stderr)
         print(f"{out}: {result.added} added, {result.updated} updated, {result.removed} "
               f"removed from {model.name}", file=sys.stderr)
-        text_out = merged
-    else:
-        text_out = text
     original = out.read_text(encoding="utf-8") if out.exists() else None
     if original is not None and original != text_out:
         out.with_name(out.name + ".bak").write_text(original, encoding="utf-8")
     write_atomic(out, text_out)
     write_atomic(base_path, text)
-    return failed
+    return 0
 
 
 def model_files(model: Path) -> list[Path]:

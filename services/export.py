@@ -58,6 +58,93 @@ def gltf_rotation(q: Sequence[float]) -> list[float]:
     return [gx, gy, gz, w]
 
 
+
+class _Shift:
+    """Moves a merged file's indices past what the document already held (``base``:
+    how many of each kind it had)."""
+
+    def __init__(self, base: dict[str, int]) -> None:
+        self.base = base
+
+    def __call__(self, item: dict[str, Any], key: str, kind: str) -> None:
+        if key in item:
+            item[key] += self.base[kind]
+
+
+def _carry_looks(doc: dict[str, Any], d: dict[str, Any], shift: _Shift) -> None:
+    """A merged file's accessors, embedded images, samplers, textures and materials."""
+    for acc in doc.get("accessors", []):
+        acc = json.loads(json.dumps(acc))
+        shift(acc, "bufferView", "bufferViews")
+        for part in ("indices", "values"):
+            if part in acc.get("sparse", {}):
+                shift(acc["sparse"][part], "bufferView", "bufferViews")
+        d["accessors"].append(acc)
+    for image in doc.get("images", []):
+        image = dict(image)
+        if "uri" in image and not str(image["uri"]).startswith("data:"):
+            continue  # an external image is not carried (the model keeps its colours)
+        shift(image, "bufferView", "bufferViews")
+        d["images"].append(image)
+    d["samplers"] += doc.get("samplers", [])
+    for texture in doc.get("textures", []):
+        texture = dict(texture)
+        shift(texture, "source", "images")
+        shift(texture, "sampler", "samplers")
+        d["textures"].append(texture)
+    for material in doc.get("materials", []):
+        material = json.loads(json.dumps(material))
+        for holder in (material, material.get("pbrMetallicRoughness", {})):
+            for key, info in holder.items():
+                if key.endswith("Texture") and isinstance(info, dict):
+                    shift(info, "index", "textures")
+        material.pop("extensions", None)
+        d["materials"].append(material)
+
+
+def _carry_meshes(doc: dict[str, Any], d: dict[str, Any], shift: _Shift) -> None:
+    accessors = shift.base["accessors"]
+    for mesh in doc.get("meshes", []):
+        mesh = json.loads(json.dumps(mesh))
+        for prim in mesh.get("primitives", []):
+            prim["attributes"] = {k: v + accessors for k, v in prim["attributes"].items()}
+            shift(prim, "indices", "accessors")
+            shift(prim, "material", "materials")
+            prim["targets"] = [{k: v + accessors for k, v in t.items()}
+                               for t in prim.get("targets", [])] or None
+            if prim["targets"] is None:
+                del prim["targets"]
+            prim.pop("extensions", None)
+        d["meshes"].append(mesh)
+
+
+def _carry_nodes(doc: dict[str, Any], d: dict[str, Any], shift: _Shift) -> None:
+    """A merged file's nodes (without cameras or extensions), skins and animations."""
+    nodes = shift.base["nodes"]
+    for node in doc.get("nodes", []):
+        node = json.loads(json.dumps(node))
+        shift(node, "mesh", "meshes")
+        shift(node, "skin", "skins")
+        node.pop("camera", None)
+        node.pop("extensions", None)
+        if "children" in node:
+            node["children"] = [c + nodes for c in node["children"]]
+        d["nodes"].append(node)
+    for skin in doc.get("skins", []):
+        skin = dict(skin)
+        skin["joints"] = [j + nodes for j in skin["joints"]]
+        shift(skin, "skeleton", "nodes")
+        shift(skin, "inverseBindMatrices", "accessors")
+        d["skins"].append(skin)
+    for animation in doc.get("animations", []):
+        animation = json.loads(json.dumps(animation))
+        for channel in animation["channels"]:
+            shift(channel["target"], "node", "nodes")
+        for sampler in animation["samplers"]:
+            sampler["input"] += shift.base["accessors"]
+            sampler["output"] += shift.base["accessors"]
+        d["animations"].append(animation)
+
 class GltfWriter:
     """A glTF document built node by node; written as .glb, or .gltf with a data URI."""
 
@@ -166,74 +253,10 @@ class GltfWriter:
             view["byteOffset"] = starts[view.get("buffer", 0)] + view.get("byteOffset", 0)
             view["buffer"] = 0
             d["bufferViews"].append(view)
-
-        def shift(item: dict[str, Any], key: str, kind: str) -> None:
-            if key in item:
-                item[key] += base[kind]
-
-        for acc in doc.get("accessors", []):
-            acc = json.loads(json.dumps(acc))
-            shift(acc, "bufferView", "bufferViews")
-            for part in ("indices", "values"):
-                if part in acc.get("sparse", {}):
-                    shift(acc["sparse"][part], "bufferView", "bufferViews")
-            d["accessors"].append(acc)
-        for image in doc.get("images", []):
-            image = dict(image)
-            if "uri" in image and not str(image["uri"]).startswith("data:"):
-                continue  # an external image is not carried (the model keeps its colours)
-            shift(image, "bufferView", "bufferViews")
-            d["images"].append(image)
-        d["samplers"] += doc.get("samplers", [])
-        for texture in doc.get("textures", []):
-            texture = dict(texture)
-            shift(texture, "source", "images")
-            shift(texture, "sampler", "samplers")
-            d["textures"].append(texture)
-        for material in doc.get("materials", []):
-            material = json.loads(json.dumps(material))
-            for holder in (material, material.get("pbrMetallicRoughness", {})):
-                for key, info in holder.items():
-                    if key.endswith("Texture") and isinstance(info, dict):
-                        shift(info, "index", "textures")
-            material.pop("extensions", None)
-            d["materials"].append(material)
-        for mesh in doc.get("meshes", []):
-            mesh = json.loads(json.dumps(mesh))
-            for prim in mesh.get("primitives", []):
-                prim["attributes"] = {k: v + base["accessors"]
-                                      for k, v in prim["attributes"].items()}
-                shift(prim, "indices", "accessors")
-                shift(prim, "material", "materials")
-                prim["targets"] = [{k: v + base["accessors"] for k, v in t.items()}
-                                   for t in prim.get("targets", [])] or None
-                if prim["targets"] is None:
-                    del prim["targets"]
-                prim.pop("extensions", None)
-            d["meshes"].append(mesh)
-        for node in doc.get("nodes", []):
-            node = json.loads(json.dumps(node))
-            shift(node, "mesh", "meshes")
-            shift(node, "skin", "skins")
-            node.pop("camera", None)
-            node.pop("extensions", None)
-            if "children" in node:
-                node["children"] = [c + base["nodes"] for c in node["children"]]
-            d["nodes"].append(node)
-        for skin in doc.get("skins", []):
-            skin = dict(skin)
-            skin["joints"] = [j + base["nodes"] for j in skin["joints"]]
-            shift(skin, "skeleton", "nodes")
-            shift(skin, "inverseBindMatrices", "accessors")
-            d["skins"].append(skin)
-        for animation in doc.get("animations", []):
-            animation = json.loads(json.dumps(animation))
-            for channel in animation["channels"]:
-                shift(channel["target"], "node", "nodes")
-            for sampler in animation["samplers"]:
-                sampler["input"] += base["accessors"]
-                sampler["output"] += base["accessors"]
-            d["animations"].append(animation)
+        shift = _Shift(base)
+        _carry_looks(doc, d, shift)
+        _carry_meshes(doc, d, shift)
+        _carry_nodes(doc, d, shift)
         scene = (doc.get("scenes") or [{}])[doc.get("scene", 0)]
         roots = [r + base["nodes"] for r in scene.get("nodes", [])]
         holder = self.node(f"{d['nodes'][parent].get('name', 'model')}.model", parent=parent,

@@ -669,19 +669,38 @@ class AvatarSystem(System):
     def script_call(self, entity: int, method: str, args: list[Any]) -> Any:
         """Lua's ``avatar:method(...)`` (see :data:`engine.services.AVATAR_METHODS`)."""
         self._figure(entity)
-        mixer = self.mixer
         if method not in AVATAR_METHODS:
             raise ValueError(f"unknown avatar method {method!r}")
         first = args[0] if args else None
-        opts = args[1] if len(args) > 1 and method in ("play", "queue", "blend") else {}
-        if not isinstance(opts, dict):
-            raise ValueError(f"options are a table {{fade=s, speed=x, loop=bool}}, got {opts!r}")
-        unknown = set(opts) - {"fade", "speed", "loop"}
-        if unknown:
-            raise ValueError(f"unknown option {sorted(unknown)[0]!r} (fade, speed, loop)")
-        if not isinstance(opts.get("loop", True), bool):
-            raise ValueError(f"loop must be true or false, got {opts['loop']!r}")
-        timing = {k: opts[k] for k in ("fade", "speed", "loop") if k in opts}
+        if method in ("play", "queue", "blend", "stopAnimation", "animation"):
+            return self._clip_call(entity, method, first, args)
+        if method == "clips":
+            return list(self.figures[entity].model.clip_names)
+        if method == "setPath":
+            if not isinstance(first, list):
+                raise ValueError("expected a list of points {{x, y, z}, ...}")
+            self.set_path(entity, first, bool(args[1]) if len(args) > 1 else True)
+        elif method == "hold":
+            self.hold(entity, _object_id(first), str(args[1]) if len(args) > 1 else "",
+                      *self._hold_options(args[2] if len(args) > 2 else {}))
+        elif method == "release":
+            self.release(entity, _object_id(first))
+        elif method == "driveBone":
+            if len(args) < 3:
+                raise ValueError("expected (bone, {x, y, z}, {w, x, y, z})")
+            self.drive_bone(entity, str(first), args[1], args[2])
+        elif method == "releaseBone":
+            self.release_bone(entity, str(first))
+        elif method == "bonePose":
+            position, orientation = self.bone_pose(entity, str(first))
+            return (*position.tolist(), *orientation.tolist())
+        return None
+
+    def _clip_call(self, entity: int, method: str, first: Any, args: list[Any]) -> Any:
+        """The clip methods: play, queue, blend, stopAnimation and animation."""
+        mixer = self.mixer
+        timing = _timing(args[1] if len(args) > 1 and method in ("play", "queue", "blend")
+                         else {})
         if method in ("play", "queue"):
             if not isinstance(first, str | dict):
                 raise ValueError(f"expected a clip name, got {first!r}")
@@ -700,32 +719,12 @@ class AvatarSystem(System):
                                      or not 0.0 <= fade < 1e6):
                 raise ValueError(f"fade must be a number >= 0, got {fade!r}")
             mixer.stop(entity, fade)
-        elif method == "animation":
+        else:  # animation
             playing = mixer.playing(entity)
             if not playing:
                 return None
             name, time, _ = max(playing, key=lambda p: p[2])
             return name, time
-        elif method == "clips":
-            return list(self.figures[entity].model.clip_names)
-        elif method == "setPath":
-            if not isinstance(first, list):
-                raise ValueError("expected a list of points {{x, y, z}, ...}")
-            self.set_path(entity, first, bool(args[1]) if len(args) > 1 else True)
-        elif method == "hold":
-            self.hold(entity, _object_id(first), str(args[1]) if len(args) > 1 else "",
-                      *self._hold_options(args[2] if len(args) > 2 else {}))
-        elif method == "release":
-            self.release(entity, _object_id(first))
-        elif method == "driveBone":
-            if len(args) < 3:
-                raise ValueError("expected (bone, {x, y, z}, {w, x, y, z})")
-            self.drive_bone(entity, str(first), args[1], args[2])
-        elif method == "releaseBone":
-            self.release_bone(entity, str(first))
-        elif method == "bonePose":
-            position, orientation = self.bone_pose(entity, str(first))
-            return (*position.tolist(), *orientation.tolist())
         return None
 
     @staticmethod
@@ -766,6 +765,18 @@ def _floats(values: Any) -> Any:
     """A vector as a tuple of plain floats (what a saved state holds)."""
     return tuple(float(x) for x in values)
 
+
+
+def _timing(opts: Any) -> dict[str, Any]:
+    """A clip call's options table {fade=s, speed=x, loop=bool}, checked."""
+    if not isinstance(opts, dict):
+        raise ValueError(f"options are a table {{fade=s, speed=x, loop=bool}}, got {opts!r}")
+    unknown = set(opts) - {"fade", "speed", "loop"}
+    if unknown:
+        raise ValueError(f"unknown option {sorted(unknown)[0]!r} (fade, speed, loop)")
+    if not isinstance(opts.get("loop", True), bool):
+        raise ValueError(f"loop must be true or false, got {opts['loop']!r}")
+    return {k: opts[k] for k in ("fade", "speed", "loop") if k in opts}
 
 def _object_id(value: Any) -> int:
     """An object's entity id as a script passed it (a handle arrives as its id); -1 for

@@ -46,7 +46,7 @@ from engine.animation import Palettes
 from engine.anomalies import ANOMALIES, Anomalies
 from engine.events import AnomalySwitched, Contacts, CustomEvent, Despawned, Spawned
 from engine.messages import MessageLog
-from engine.realtime import CostLog
+from engine.realtime import TIME_STEP, CostLog
 from engine.scene import SceneIds
 from engine.scene.factory import SceneSpec, SpawnRecord
 from engine.services import ShaderControl, SoundControl, SwapGate, UniformValue
@@ -610,7 +610,7 @@ class FollowSystem(System):
         #: or two for its release to arrive.
         self.barrier_wait = float(welcome.get("barrier_wait", protocol.BARRIER_WAIT)) + 0.25
         self.decoder = PoseDecoder()
-        self.follower = Follower(delay=1.5 * float(welcome.get("dt") or 1 / 60))
+        self.follower = Follower(delay=1.5 * float(welcome.get("dt") or TIME_STEP))
         self.entity_of: dict[int, int] = {}
         self.shown_frame = -1
         #: The server frames a display drew, newest last (the frame lock's record).

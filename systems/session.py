@@ -64,16 +64,20 @@ FORMAT, VERSION = "colosseum-session", 1
 FLUSH_EVERY = 1.0
 
 
+#: The Session block's keys: their defaults are the settings' (one place, the schema).
+_KEYS = SCHEMAS["Session"]
+
+
 @dataclass(frozen=True, slots=True)
 class SessionSettings:
     """A scene's ``Session`` block."""
 
-    folder: str = ""
-    name: str = ""
-    chair: str | None = None
-    pose_rate: float = 10.0
-    ground: tuple[str, ...] = ("floor",)
-    end_run: bool = True
+    folder: str = _KEYS["Folder"].default
+    name: str = _KEYS["Name"].default
+    chair: str | None = _KEYS["Chair"].default
+    pose_rate: float = float(_KEYS["PoseRate"].default)
+    ground: tuple[str, ...] = tuple(_KEYS["Ground"].default)
+    end_run: bool = bool(_KEYS["EndRun"].default)
 
 
 def scene_settings(engine: Engine) -> SessionSettings | None:

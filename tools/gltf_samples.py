@@ -29,6 +29,7 @@ import math
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pygltflib as gl
@@ -162,6 +163,29 @@ def two_bone(path: Path, interpolation: str = "LINEAR", influences: int = 4,
     w = _Writer()
     g = w.gltf
     g.asset = gl.Asset(version="2.0", generator="colosseum tools/gltf_samples.py")
+    attributes, indices = _bar_mesh(w, influences, weight_scale, skinned)
+    g.meshes = [gl.Mesh(name="bar", primitives=[gl.Primitive(
+        attributes=gl.Attributes(**attributes), indices=indices)])]
+    g.nodes = [gl.Node(name="bar", mesh=0, skin=0 if skinned else None),
+               gl.Node(name="root", children=[2]),
+               gl.Node(name="tip", translation=[0.0, 1.0, 0.0])]
+    g.scenes = [gl.Scene(nodes=[0, 1])]
+    g.scene = 0
+    if skinned:
+        ibm = np.stack([np.eye(4), np.eye(4)])
+        ibm[1, 1, 3] = -1.0  # inverse of the tip's bind translation (0, 1, 0)
+        g.skins = [gl.Skin(joints=[1, 2], inverseBindMatrices=w.accessor(
+            ibm.transpose(0, 2, 1).reshape(2, 16)))]
+    g.animations = _bar_clips(w, interpolation, times_out_of_order)
+    if missing_buffer:
+        return w.save(path.with_suffix(".gltf"), write_bin=False)
+    return w.save(path)
+
+
+def _bar_mesh(w: _Writer, influences: int, weight_scale: float,
+              skinned: bool) -> tuple[dict[str, int], int]:
+    """:func:`two_bone`'s bar: rings of 4 at y = 0 .. 2, their attributes' accessors and
+    the triangles' (made in this order: the file's accessors are numbered by it)."""
     ys = np.array([0.0, 0.5, 1.0, 1.5, 2.0])
     ring = np.array([[0.1, 0.0], [0.0, 0.1], [-0.1, 0.0], [0.0, -0.1]])
     vertices = np.array([[x, y, z] for y in ys for x, z in ring])
@@ -187,19 +211,12 @@ def two_bone(path: Path, interpolation: str = "LINEAR", influences: int = 4,
             attributes["WEIGHTS_0"] = w.accessor(np.tile(FIVE_INFLUENCES[:4], (n, 1)))
             attributes["JOINTS_1"] = w.accessor(np.tile([1, 0, 0, 0], (n, 1)), USHORT)
             attributes["WEIGHTS_1"] = w.accessor(extra)
-    indices = w.accessor(np.array(faces).reshape(-1), USHORT, target=34963)
-    g.meshes = [gl.Mesh(name="bar", primitives=[gl.Primitive(
-        attributes=gl.Attributes(**attributes), indices=indices)])]
-    g.nodes = [gl.Node(name="bar", mesh=0, skin=0 if skinned else None),
-               gl.Node(name="root", children=[2]),
-               gl.Node(name="tip", translation=[0.0, 1.0, 0.0])]
-    g.scenes = [gl.Scene(nodes=[0, 1])]
-    g.scene = 0
-    if skinned:
-        ibm = np.stack([np.eye(4), np.eye(4)])
-        ibm[1, 1, 3] = -1.0  # inverse of the tip's bind translation (0, 1, 0)
-        g.skins = [gl.Skin(joints=[1, 2], inverseBindMatrices=w.accessor(
-            ibm.transpose(0, 2, 1).reshape(2, 16)))]
+    return attributes, w.accessor(np.array(faces).reshape(-1), USHORT, target=34963)
+
+
+def _bar_clips(w: _Writer, interpolation: str, times_out_of_order: bool) -> list[Any]:
+    """:func:`two_bone`'s clips: Bend (the tip about Z, 0 to 90 degrees in 1 s) and Lift
+    (the root up 1 m in 2 s)."""
     bend_times = np.array([0.0, 0.5, 1.0])
     if times_out_of_order:
         bend_times = np.array([0.0, 1.0, 0.5])
@@ -210,7 +227,7 @@ def two_bone(path: Path, interpolation: str = "LINEAR", influences: int = 4,
     else:
         bend_values = _quat_z(np.array([0.0, 45.0, 90.0]))
     lift = [w.accessor(np.array([0.0, 2.0])), w.accessor(np.array([[0, 0, 0], [0, 1.0, 0]]))]
-    g.animations = [
+    return [
         gl.Animation(name="Bend", samplers=[gl.AnimationSampler(
             input=w.accessor(bend_times, minmax=True), output=w.accessor(bend_values),
             interpolation=interpolation)],
@@ -220,9 +237,6 @@ def two_bone(path: Path, interpolation: str = "LINEAR", influences: int = 4,
             input=lift[0], output=lift[1], interpolation="LINEAR")],
             channels=[gl.AnimationChannel(sampler=0, target=gl.AnimationChannelTarget(
                 node=1, path="translation"))])]
-    if missing_buffer:
-        return w.save(path.with_suffix(".gltf"), write_bin=False)
-    return w.save(path)
 
 
 def strip(path: Path) -> Path:
@@ -600,26 +614,8 @@ def _chain(skeleton: Skeleton, points: tuple[ChainPoint, ...], band: tuple[float
     names = [name for name, _, _ in skeleton]
     at = np.array([bind[joint] + np.asarray(offset) for joint, offset, _ in points])
     drive = [names.index(joint) for joint, _, _ in points]
-    lengths = np.linalg.norm(np.diff(at, axis=0), axis=1)
-    along = np.diff(at, axis=0) / lengths[:, None]
-    travelled = np.concatenate([[0.0], np.cumsum(lengths)]) / lengths.sum()
     ref = np.array([0.0, 1.0, 0.0]) if facing == "up" else np.array([0.0, 0.0, 1.0])
-    rings = []  # centre, radius, direction, (joint, weight) x 2, fraction of the length
-    for k, length in enumerate(lengths):
-        steps = max(2, round(length / spacing))
-        last = k == len(lengths) - 1
-        for r in range(steps + (1 if last else 0)):
-            f = r / steps
-            d = along[k] + (along[k - 1] if f == 0 and k > 0 else 0)
-            own, other, w = drive[k], drive[k], 0.0
-            if f < 0.3 and k > 0 and drive[k - 1] != own:
-                other, w = drive[k - 1], 0.5 * (1 - f / 0.3)
-            elif f > 0.7 and drive[k + 1] != own:
-                other, w = drive[k + 1], 0.5 * (f - 0.7) / 0.3
-            rings.append((at[k] + f * (at[k + 1] - at[k]),
-                          points[k][2] + f * (points[k + 1][2] - points[k][2]),
-                          d / np.linalg.norm(d), own, other, w,
-                          travelled[k] + f * (travelled[k + 1] - travelled[k])))
+    rings = _rings(points, at, drive, spacing)
     columns = sides + 1
     verts, normals, uvs, joints, weights = [], [], [], [], []
     for centre, radius, d, own, other, w, s in rings:
@@ -655,6 +651,32 @@ def _chain(skeleton: Skeleton, points: tuple[ChainPoint, ...], band: tuple[float
             np.array(joints), np.array(weights))
 
 
+def _rings(points: tuple[ChainPoint, ...], at: np.ndarray, drive: list[int],
+           spacing: float) -> list[tuple[Any, ...]]:
+    """The tube's rings about ``spacing`` apart: centre, radius, direction, the joint it
+    follows and the one it blends with (and that one's weight), fraction of the length."""
+    lengths = np.linalg.norm(np.diff(at, axis=0), axis=1)
+    along = np.diff(at, axis=0) / lengths[:, None]
+    travelled = np.concatenate([[0.0], np.cumsum(lengths)]) / lengths.sum()
+    rings = []
+    for k, length in enumerate(lengths):
+        steps = max(2, round(length / spacing))
+        last = k == len(lengths) - 1
+        for r in range(steps + (1 if last else 0)):
+            f = r / steps
+            d = along[k] + (along[k - 1] if f == 0 and k > 0 else 0)
+            own, other, w = drive[k], drive[k], 0.0
+            if f < 0.3 and k > 0 and drive[k - 1] != own:
+                other, w = drive[k - 1], 0.5 * (1 - f / 0.3)
+            elif f > 0.7 and drive[k + 1] != own:
+                other, w = drive[k + 1], 0.5 * (f - 0.7) / 0.3
+            rings.append((at[k] + f * (at[k + 1] - at[k]),
+                          points[k][2] + f * (points[k + 1][2] - points[k][2]),
+                          d / np.linalg.norm(d), own, other, w,
+                          travelled[k] + f * (travelled[k + 1] - travelled[k])))
+    return rings
+
+
 def _fur() -> np.ndarray:
     """The hound's texture, :data:`_FUR_BANDS` from the top, with a little noise as fur."""
     band = FUR_SIZE // len(_FUR_BANDS)
@@ -676,48 +698,50 @@ def _fur() -> np.ndarray:
     return rgba
 
 
+def _gait(period: float, phases: dict[str, float], swing: float, flex: float,
+          bob: float, bobs: int, back: float, sway: float, tail: tuple[float, float],
+          ears: float, keys: int = 17) -> list[ChannelKeys]:
+    """A gait cycle of the hound in place: each leg swinging at its phase of the cycle,
+    the back flexing and swaying, the tail wagging, the ears held."""
+    pelvis = np.array(HOUND[1][2])
+    t = np.linspace(0.0, period, keys)
+    cycle = 2 * math.pi * t / period
+    hips = pelvis + np.outer(-bob * (1 + np.cos(bobs * cycle)) / 2, (0.0, 1.0, 0.0))
+    out: list[ChannelKeys] = [("pelvis", "translation", t, hips, "LINEAR")]
+    for leg, phase in phases.items():
+        front, side = leg.split(".")
+        ph = cycle - 2 * math.pi * phase
+        lift = np.maximum(0.0, np.cos(ph))  # while the leg swings forward
+        upper, lower, foot, toe = (("upper_arm", "forearm", "front_foot", "front_toe")
+                                   if front == "fore" else
+                                   ("thigh", "shin", "hind_foot", "hind_toe"))
+        bends = ((upper, -swing * np.sin(ph)), (lower, flex * lift),
+                 (foot, (0.5 if front == "fore" else -0.9) * flex * lift),
+                 (toe, 0.4 * flex * lift))
+        out += [(f"{joint}.{side}", "rotation", t, _quat_x(deg), "LINEAR")
+                for joint, deg in bends]
+    for spine in ("spine1", "spine2", "spine3"):
+        out.append((spine, "rotation", t, _quat_mul(_quat_y(sway * np.sin(cycle)),
+                                                    _quat_x(back * np.sin(cycle))), "LINEAR"))
+    out.append(("neck1", "rotation", t, _quat_x(-back * np.sin(cycle) + 2 * np.sin(2 * cycle)),
+                "LINEAR"))
+    lift_deg, wag = tail
+    for k, joint in enumerate(("tail1", "tail2", "tail3", "tail4")):
+        out.append((joint, "rotation", t, _quat_mul(_quat_y(wag * np.sin(cycle - 0.6 * k)),
+                                                    _quat_x(lift_deg / (k + 1) + 0 * t)),
+                    "LINEAR"))
+    if ears:
+        out += [(f"ear.{side}", "rotation", t, _quat_x(ears + 0 * t), "LINEAR")
+                for side in "LR"]
+    return out
+
+
 def _hound_clips() -> dict[str, list[ChannelKeys]]:
     """Survey (4 s: the head turns left and right, the tail wags, the chest breathes by
     scale, the ears twitch in STEP keys), Walk (0.8 s, the legs one after another: left
     hind, left fore, right hind, right fore) and Run (0.45 s, a gallop: the hind legs
     together then the fore, the back flexing), all in place (a scene gives their
     GroundSpeed)."""
-    pelvis = np.array(HOUND[1][2])
-
-    def gait(period: float, phases: dict[str, float], swing: float, flex: float,
-             bob: float, bobs: int, back: float, sway: float, tail: tuple[float, float],
-             ears: float, keys: int = 17) -> list[ChannelKeys]:
-        t = np.linspace(0.0, period, keys)
-        cycle = 2 * math.pi * t / period
-        hips = pelvis + np.outer(-bob * (1 + np.cos(bobs * cycle)) / 2, (0.0, 1.0, 0.0))
-        out: list[ChannelKeys] = [("pelvis", "translation", t, hips, "LINEAR")]
-        for leg, phase in phases.items():
-            front, side = leg.split(".")
-            ph = cycle - 2 * math.pi * phase
-            lift = np.maximum(0.0, np.cos(ph))  # while the leg swings forward
-            upper, lower, foot, toe = (("upper_arm", "forearm", "front_foot", "front_toe")
-                                       if front == "fore" else
-                                       ("thigh", "shin", "hind_foot", "hind_toe"))
-            bends = ((upper, -swing * np.sin(ph)), (lower, flex * lift),
-                     (foot, (0.5 if front == "fore" else -0.9) * flex * lift),
-                     (toe, 0.4 * flex * lift))
-            out += [(f"{joint}.{side}", "rotation", t, _quat_x(deg), "LINEAR")
-                    for joint, deg in bends]
-        for spine in ("spine1", "spine2", "spine3"):
-            out.append((spine, "rotation", t, _quat_mul(_quat_y(sway * np.sin(cycle)),
-                                                        _quat_x(back * np.sin(cycle))), "LINEAR"))
-        out.append(("neck1", "rotation", t, _quat_x(-back * np.sin(cycle) + 2 * np.sin(2 * cycle)),
-                    "LINEAR"))
-        lift_deg, wag = tail
-        for k, joint in enumerate(("tail1", "tail2", "tail3", "tail4")):
-            out.append((joint, "rotation", t, _quat_mul(_quat_y(wag * np.sin(cycle - 0.6 * k)),
-                                                        _quat_x(lift_deg / (k + 1) + 0 * t)),
-                        "LINEAR"))
-        if ears:
-            out += [(f"ear.{side}", "rotation", t, _quat_x(ears + 0 * t), "LINEAR")
-                    for side in "LR"]
-        return out
-
     t = np.linspace(0.0, 4.0, 41)
     look = np.sin(2 * math.pi * t / 4.0)
     wag = 2 * math.pi * t / 0.8
@@ -734,10 +758,10 @@ def _hound_clips() -> dict[str, list[ChannelKeys]]:
                ("ear.R", "rotation", twitch, _quat_z(np.array([0.0, 0, 20, 20, 0, 0])), "STEP")]
     return {
         "Survey": survey,
-        "Walk": gait(0.8, {"hind.L": 0.0, "fore.L": 0.25, "hind.R": 0.5, "fore.R": 0.75},
+        "Walk": _gait(0.8, {"hind.L": 0.0, "fore.L": 0.25, "hind.R": 0.5, "fore.R": 0.75},
                      swing=22.0, flex=40.0, bob=1.0, bobs=2, back=0.0, sway=3.0,
                      tail=(20.0, 8.0), ears=0.0),
-        "Run": gait(0.45, {"hind.L": 0.0, "hind.R": 0.1, "fore.L": 0.5, "fore.R": 0.6},
+        "Run": _gait(0.45, {"hind.L": 0.0, "hind.R": 0.1, "fore.L": 0.5, "fore.R": 0.6},
                     swing=40.0, flex=70.0, bob=4.0, bobs=1, back=8.0, sway=0.0,
                     tail=(5.0, 4.0), ears=-30.0)}
 

@@ -143,10 +143,6 @@ def wheelchair_scene() -> str:
     """The wheelchair, its user's eyes and hands, and its input wheels."""
     at = Placement()
     body = f"Category {CHAIR} Mask {EVERYTHING & ~CHAIR & ~CRUMB}"
-
-    def placed(oid: str, local: Sequence[float]) -> str:
-        return f'Object {{ ID "{oid}" Position {at.point(local)}\n  Orientation {at.ORIENTATION}'
-
     out = [HEADER, """// A manual wheelchair with its seated user (paper section 5.5), placed where
 // the including file says: define, before `Include "wheelchair.scene"`,
 //   chair_x chair_y chair_z   the floor under the middle of the rear axle (m)
@@ -157,11 +153,28 @@ def wheelchair_scene() -> str:
 // wheelchair plugin); each caster swivels on a vertical hinge and rolls on a horizontal
 // one. Trackers of the hands are calibrated relative to the chair (Hand Frame).
 """, Placement.variables(), MATERIALS, "\n"]
+    out += _chassis(at, body) + _casters(at, body) + _user(at)
+    out.append("""
+// The counters on the real chair's rear wheels (1024 counts a turn, a 16-bit counter).
+Input { Wheel { ID "left" CountsPerTurn 1024 Wrap 65536 }
+        Wheel { ID "right" CountsPerTurn 1024 Wrap 65536 } }
+""")
+    return "".join(out)
+
+
+def _placed(at: Placement, oid: str, local: Sequence[float]) -> str:
+    """An Object's opening: its ID and its pose on the placed chair."""
+    return f'Object {{ ID "{oid}" Position {at.point(local)}\n  Orientation {at.ORIENTATION}'
+
+
+def _chassis(at: Placement, body: str) -> list[str]:
+    """The chassis with its frame (the Wheelchair block) and the rear wheels on motorized hinges."""
+    out: list[str] = []
     shapes = "\n    ".join(box(size, centre) for _, size, centre in CHASSIS)
     frame = "\n    ".join(box(size, centre) for size, centre in FRAME)
     drawn = "\n    ".join(box(*_drawn(name, size, centre)) for name, size, centre in CHASSIS)
     r = WHEEL_DIAMETER / 2
-    out.append(f"""{placed("wheelchair", (0, 0, 0))}
+    out.append(f"""{_placed(at, "wheelchair", (0, 0, 0))}
   VisualAttributes {{ Color [0.25 0.3 0.38]
     {drawn}
     {frame} }}
@@ -174,7 +187,7 @@ def wheelchair_scene() -> str:
     wheel = box((WHEEL_DIAMETER, WHEEL_WIDTH), (0, 0, 0), "cylinder", "[0 90 0]")
     for side, sign in (("l", -1.0), ("r", 1.0)):
         centre = (sign * TRACK / 2, 0.0, r)
-        out.append(f"""{placed(f"wheel_{side}", centre)}
+        out.append(f"""{_placed(at, f"wheel_{side}", centre)}
   VisualAttributes {{ Geometry {{ File "models/wheel.obj" }} Color [0.15 0.15 0.16] }}
   PhysicalAttributes {{ Mass {num(WHEEL_MASS)} Material "rubber" {body}
     {wheel} }} }}
@@ -182,6 +195,12 @@ Joint {{ ID "axle_{side}" Type "MotorizedHinge" Bodies ["wheel_{side}" "wheelcha
   Anchor {at.point(centre)}
   Axis {at.axis((-1, 0, 0))} MotorMaxForce {num(MAX_TORQUE)} }}
 """)
+    return out
+
+
+def _casters(at: Placement, body: str) -> list[str]:
+    """Each caster: a fork swivelling on a vertical hinge, a wheel rolling on a horizontal one."""
+    out: list[str] = []
     rc = CASTER_DIAMETER / 2
     caster = box((CASTER_DIAMETER, CASTER_WIDTH), (0, 0, 0), "cylinder", "[0 90 0]")
     for side, sign in (("l", -1.0), ("r", 1.0)):
@@ -191,13 +210,13 @@ Joint {{ ID "axle_{side}" Type "MotorizedHinge" Bodies ["wheel_{side}" "wheelcha
         fork = (x, CASTER_Y + CASTER_TRAIL / 2, (SWIVEL_Z + rc) / 2)
         fork_size = (0.05, CASTER_TRAIL + 0.02, SWIVEL_Z - rc)
         blade = (0.012, fork_size[1], fork_size[2])
-        out.append(f"""{placed(f"fork_{side}", fork)}
+        out.append(f"""{_placed(at, f"fork_{side}", fork)}
   VisualAttributes {{ Color [0.6 0.6 0.62]
     {box(blade, (0.03, 0, 0))}
     {box(blade, (-0.03, 0, 0))} }}
   PhysicalAttributes {{ Mass {num(FORK_MASS)} Material "chair" {body}
     {box(fork_size, (0, 0, 0))} }} }}
-{placed(f"caster_{side}", hub)}
+{_placed(at, f"caster_{side}", hub)}
   VisualAttributes {{ Color [0.12 0.12 0.12] {caster} }}
   PhysicalAttributes {{ Mass {num(CASTER_MASS)} Material "rubber" {body}
     {caster} }} }}
@@ -208,6 +227,12 @@ Joint {{ ID "caster_axle_{side}" Type "Hinge" Bodies ["caster_{side}" "fork_{sid
   Anchor {at.point(hub)}
   Axis {at.axis((-1, 0, 0))} }}
 """)
+    return out
+
+
+def _user(at: Placement) -> list[str]:
+    """The user's eyes (a camera riding on the chair) and hands."""
+    out: list[str] = []
     eyes = " ".join(map(num, EYES))
     out.append(f"""
 // The user's eyes: a camera riding on the chair.
@@ -218,7 +243,7 @@ Camera {{ ID "eyes" Follow "wheelchair" Offset [{eyes}] LookAt [0 1.3 0.8]
 // collide with the chair and its user. The desktop device drives them with the mouse.
 """)
     for name, (tracker, glove, local) in HANDS.items():
-        out.append(f"""{placed(name, local)}
+        out.append(f"""{_placed(at, name, local)}
   VisualAttributes {{ Geometry {{ Primitive "box" Size [0.09 0.18 0.03] }}
     Color [0.93 0.76 0.64] }}
   PhysicalAttributes {{ Material "skin" Category 1 Mask {EVERYTHING & ~CHAIR}
@@ -226,12 +251,7 @@ Camera {{ ID "eyes" Follow "wheelchair" Offset [{eyes}] LookAt [0 1.3 0.8]
   Hand {{ Tracker "{tracker}" Glove "{glove}" DeviationDistance 0.3 BreakForce 60
     Frame "wheelchair" }} }}
 """)
-    out.append("""
-// The counters on the real chair's rear wheels (1024 counts a turn, a 16-bit counter).
-Input { Wheel { ID "left" CountsPerTurn 1024 Wrap 65536 }
-        Wheel { ID "right" CountsPerTurn 1024 Wrap 65536 } }
-""")
-    return "".join(out)
+    return out
 
 
 # -- the apartment -------------------------------------------------------------------

@@ -128,6 +128,14 @@ def _row(path: str, sent: int, latencies: np.ndarray, delivered: int,
     return row
 
 
+#: The engine run's scene: an OSC device, a tracked marker, a paddle a controller drives.
+_SCENE = ('Input { Device { Kind "osc" Port 0 } Tracker { ID "hand_r" Object "marker" } }\n'
+          'Object { ID "marker" VisualAttributes { Geometry { Primitive "sphere" } } }\n'
+          'Object { ID "paddle" Kinematic 1 PhysicalAttributes { Gravity 0 '
+          'Geometry { Primitive "box" Size [0.1 0.1 0.1] } } }\n'
+          'Controller { Input "tracker:hand_l" Target "kinematic:paddle" }\n')
+
+
 def _engine_run(seconds: float, folder: Path) -> list[dict[str, Any]]:
     from components import Transform
     from engine import Engine, EngineConfig, Phase, system
@@ -138,11 +146,6 @@ def _engine_run(seconds: float, folder: Path) -> list[dict[str, Any]]:
     from systems.dynamics import DynamicsPlugin
     from systems.input import InputPlugin, InputSystem
 
-    scene = ('Input { Device { Kind "osc" Port 0 } Tracker { ID "hand_r" Object "marker" } }\n'
-             'Object { ID "marker" VisualAttributes { Geometry { Primitive "sphere" } } }\n'
-             'Object { ID "paddle" Kinematic 1 PhysicalAttributes { Gravity 0 '
-             'Geometry { Primitive "box" Size [0.1 0.1 0.1] } } }\n'
-             'Controller { Input "tracker:hand_l" Target "kinematic:paddle" }\n')
     got: dict[str, list[float]] = {name: [] for name in (*TRACKERS, *GLOVES)}
     stamped: dict[str, list[float]] = {name: [] for name in (*TRACKERS, *GLOVES)}
     seen_in_transform: list[tuple[float, float]] = []  # (tick in the Transform, time seen)
@@ -155,7 +158,7 @@ def _engine_run(seconds: float, folder: Path) -> list[dict[str, Any]]:
 
     cfg = EngineConfig(backend="ballistic", dt=1.0 / FRAME_HZ, fast=False, debug=False)
     with Engine(cfg, plugins=[InputPlugin(), DynamicsPlugin(), ControllersPlugin()]) as engine:
-        ids = instantiate(engine, spec_from_text(scene, folder))
+        ids = instantiate(engine, spec_from_text(_SCENE, folder))
         marker, paddle = ids["marker"], ids["paddle"]
 
         @system(Phase.FIXED, before=("DynamicsSystem",))
@@ -177,17 +180,8 @@ def _engine_run(seconds: float, folder: Path) -> list[dict[str, Any]]:
         engine.start()
         hub = engine.resource(InputHub)
         hub.start()
-        input_system = next(s for s in engine.systems[Phase.INPUT]
-                            if isinstance(s, InputSystem))
-        main_cpu = [0.0]
-        original_run = input_system.run
-
-        def timed_run(eng: Any, dt: float) -> None:
-            t0 = time.thread_time()
-            original_run(eng, dt)
-            main_cpu[0] += time.thread_time() - t0
-
-        input_system.run = timed_run  # type: ignore[method-assign]
+        main_cpu = _timed(next(s for s in engine.systems[Phase.INPUT]
+                               if isinstance(s, InputSystem)))
         engine.events.subscribe(TrackerPose, on_event)
         engine.events.subscribe(Button, on_event)
         device = next(d for d in hub.devices if isinstance(d, OscDevice))
@@ -199,8 +193,33 @@ def _engine_run(seconds: float, folder: Path) -> list[dict[str, Any]]:
         sender.join()
         engine.run(frames=5)  # whatever is still on its way
         io_cpu = thread_cpu(io_thread) - io_before
+    return _engine_rows(sender, got, stamped, seen_in_transform, stepped, reached,
+                        io_cpu + main_cpu[0])
+
+
+def _timed(system: Any) -> list[float]:
+    """Wrap ``system.run`` to add the main thread's CPU seconds in it to the one-element
+    list returned."""
+    spent = [0.0]
+    original_run = system.run
+
+    def timed_run(eng: Any, dt: float) -> None:
+        t0 = time.thread_time()
+        original_run(eng, dt)
+        spent[0] += time.thread_time() - t0
+
+    system.run = timed_run
+    return spent
+
+
+def _engine_rows(sender: Any, got: dict[str, list[float]], stamped: dict[str, list[float]],
+                 seen_in_transform: list[tuple[float, float]],
+                 stepped: list[tuple[float, float]], reached: list[bool],
+                 cpu_s: float) -> list[dict[str, Any]]:
+    """The engine run's rows: latency from the sender to the device thread, the state
+    table, the bound Transform and the physics step."""
     delivered = sum(len(v) for v in got.values())
-    cpu_us = (io_cpu + main_cpu[0]) / max(delivered, 1) * 1e6
+    cpu_us = cpu_s / max(delivered, 1) * 1e6
     ticks = sender.sent["hand_r"]
     first_seen: dict[int, float] = {}
     for tick, when in seen_in_transform:

@@ -379,23 +379,43 @@ def godot_omi(path: Path) -> Path:
     bare node between, and a kinematic body and a trigger with the shape on their own
     node."""
     b = GltfBuilder()
-    shapes_: list[dict[str, Any]] = []
+    o = _OmiShapes(b)
+    root = b.node("Rope")
+    _godot_rope(o, root)
+    _godot_layouts(o, root)
+    b.doc.setdefault("extensions", {})[OMI_SHAPE] = {"shapes": o.shapes}
+    b.use(OMI_SHAPE, "GODOT_single_root")
+    return b.write(path)
 
-    def shape(kind: str, **params: Any) -> int:
-        shapes_.append({"type": kind, kind: params})
-        return len(shapes_) - 1
 
-    def collider(owner: int, name: str, index: int, turn: Sequence[float] | None,
+class _OmiShapes:
+    """OMI shapes of a file being built, and colliders on child nodes that use them."""
+
+    def __init__(self, b: GltfBuilder) -> None:
+        self.b = b
+        self.shapes: list[dict[str, Any]] = []
+
+    def shape(self, kind: str, **params: Any) -> int:
+        self.shapes.append({"type": kind, kind: params})
+        return len(self.shapes) - 1
+
+    def collider(self, owner: int, name: str, index: int, turn: Sequence[float] | None,
                  drawn: Sequence[float], key: str = "collider") -> int:
+        """A child node of ``owner`` turned by ``turn`` holding the shape, the drawn mesh
+        below it."""
+        b = self.b
         node = b.node(name, parent=owner, rotation=turn, ext={OMI_BODY: {key: {"shape": index}}})
         b.node(f"{name}Mesh", parent=node, mesh=b.mesh(*box_mesh(drawn), f"{name}Mesh"))
         return node
 
-    root = b.node("Rope")
+
+def _godot_rope(o: _OmiShapes, root: int) -> None:
+    """:func:`godot_omi`'s floor and the rope's two links welded together."""
+    b = o.b
     floor = b.node("Floor", (0, 0, -0.1), parent=root,
                    ext={OMI_BODY: {"motion": {"type": "static"}}})
-    collider(floor, "FloorShape", shape("box", size=[4, 0.2, 4]), None, (4, 0.2, 4))
-    link = shape("capsule", radius=LINK_RADIUS, height=LINK_HEIGHT)
+    o.collider(floor, "FloorShape", o.shape("box", size=[4, 0.2, 4]), None, (4, 0.2, 4))
+    link = o.shape("capsule", radius=LINK_RADIUS, height=LINK_HEIGHT)
     along_x = _quat_about((0, 0, 1), math.pi / 2)  # a capsule's axis is its node's +Y
     drawn = (2 * LINK_RADIUS, LINK_HEIGHT, 2 * LINK_RADIUS)
     half = LINK_HEIGHT / 2
@@ -406,36 +426,38 @@ def godot_omi(path: Path) -> Path:
     second = (weld_at[0] + half, 0.0, weld_at[2])
     link_a = b.node("LinkA", first, parent=root, rotation=_quat_about((0, 0, 1), LINK_TILT),
                     ext={OMI_BODY: {"motion": {"type": "dynamic"}}})
-    collider(link_a, "LinkAShape", link, along_x, drawn)
+    o.collider(link_a, "LinkAShape", link, along_x, drawn)
     link_b = b.node("LinkB", second, parent=root,
                     ext={OMI_BODY: {"motion": {"type": "dynamic"}}})
-    collider(link_b, "LinkBShape", link, along_x, drawn)
+    o.collider(link_b, "LinkBShape", link, along_x, drawn)
     weld = b.top(OMI_JOINT, "physicsJoints", {"limits": [
         {"linearAxes": [0, 1, 2], "angularAxes": [0, 1, 2], "min": 0.0, "max": 0.0}]})
     attachment = b.node("LinkBWeldFrame", (-half, 0, 0), parent=link_b)
     b.node("Weld", (half, 0, 0), parent=link_a, rotation=_quat_about((0, 0, 1), -LINK_TILT),
            ext={OMI_JOINT: {"connectedNode": attachment, "joint": weld}})
 
+
+def _godot_layouts(o: _OmiShapes, root: int) -> None:
+    """:func:`godot_omi`'s other layouts: a compound trigger, shapes under a bare node
+    between, shapes on their body's own node."""
+    b = o.b
     gate = b.node("Gate", (4, 3, 1), parent=root)
-    parts = [b.node(name, at, parent=gate, ext={OMI_BODY: {"trigger": {"shape": shape(
+    parts = [b.node(name, at, parent=gate, ext={OMI_BODY: {"trigger": {"shape": o.shape(
         "box", size=list(size))}}}) for name, at, size in (
         ("GateFoot", (0.5, 0, 0), (2, 0.5, 0.5)), ("GateStem", (0, 0, 1), (0.5, 2, 0.5)))]
     b.doc["nodes"][gate]["extensions"] = {OMI_BODY: {"trigger": {"nodes": parts}}}
-    b.node("GateBell", (0, -2, 0), parent=gate, ext={OMI_BODY: {"trigger": {"shape": shape(
+    b.node("GateBell", (0, -2, 0), parent=gate, ext={OMI_BODY: {"trigger": {"shape": o.shape(
         "sphere", radius=0.3)}}})
-    cube = shape("box", size=[0.5, 0.5, 0.5])
+    cube = o.shape("box", size=[0.5, 0.5, 0.5])
     for n, (name, part) in enumerate((("Lift", {"motion": {"type": "kinematic"}}),
                                       ("Sensor", {"trigger": {}}))):
         owner = b.node(name, (6 + 2 * n, 3, 1), parent=root, ext={OMI_BODY: part})
         between = b.node(f"{name}Pivot", (0, 0, 0.5), parent=owner)
-        collider(between, f"{name}Shape", cube, None, (0.5, 0.5, 0.5),
+        o.collider(between, f"{name}Shape", cube, None, (0.5, 0.5, 0.5),
                  "collider" if "motion" in part else "trigger")
     b.node("Pusher", (6, 5, 1), parent=root, ext={OMI_BODY: {
         "motion": {"type": "kinematic"}, "collider": {"shape": cube}}})
     b.node("Beam", (8, 5, 1), parent=root, ext={OMI_BODY: {"trigger": {"shape": cube}}})
-    b.doc.setdefault("extensions", {})[OMI_SHAPE] = {"shapes": shapes_}
-    b.use(OMI_SHAPE, "GODOT_single_root")
-    return b.write(path)
 
 
 #: :func:`blender`'s values: the floor's X scale, the kinematic body's velocity (m/s), the
@@ -583,47 +605,29 @@ def collada(path: Path, up: str = "Z_UP", meter: float = 1.0) -> Path:
     a door hinged to a static post with limits, a start spin and a ``<spring>`` that pulls
     with nothing (stiffness and damping 0; :func:`collada_springs` has springs that pull):
     10 rigid bodies, 1 constraint."""
-    axes = _FILE_AXES[up]
-
-    def pos(p: Sequence[float]) -> str:
-        return " ".join(f"{x:.9g}" for x in axes @ np.asarray(p, np.float64) / meter)
-
-    def size(p: Sequence[float]) -> str:
-        return " ".join(f"{x:.9g}" for x in np.abs(axes @ np.asarray(p, np.float64)) / meter)
-
-    def rotate(axis: Sequence[float], degrees: float) -> str:
-        return f"<rotate>{pos(axis)} {degrees}</rotate>"
-
-    def along(direction: Sequence[float]) -> str:
-        """The rotate turning the file's local Y (a cylinder's axis) onto ``direction``."""
-        d = axes @ np.asarray(direction, np.float64)
-        y = np.array([0.0, 1.0, 0.0])
-        axis = np.cross(y, d)
-        if np.linalg.norm(axis) < 1e-9:
-            return ""
-        angle = math.degrees(math.acos(float(np.clip(y @ d, -1, 1))))
-        return f"<rotate>{' '.join(f'{x:.9g}' for x in axis)} {angle:.9g}</rotate>"
-
-    bodies = [  # node, position, (rigid body shapes), dynamic, extra technique_common
-        ("Ground", (0, 0, 0), f"<shape><plane><equation>{pos((0, 0, 1))} 0</equation></plane>"
+    f = _DaeAxes(_FILE_AXES[up], meter)
+    axes = f.axes
+    # node, position, (rigid body shapes), dynamic, extra technique_common
+    bodies = [
+        ("Ground", (0, 0, 0), f"<shape><plane><equation>{f.pos((0, 0, 1))} 0</equation></plane>"
                               "</shape>", False, ""),
         ("Slab", (4, 0, 0.1), '<shape><instance_geometry url="#slab"/></shape>', False, ""),
-        ("Box", (-4, 0, 1), f"<shape><box><half_extents>{size((0.25, 0.25, 0.25))}"
+        ("Box", (-4, 0, 1), f"<shape><box><half_extents>{f.size((0.25, 0.25, 0.25))}"
                             "</half_extents></box></shape>", True, "<mass>2</mass>"),
         ("Ball", (-3, 0, 1), f"<shape><sphere><radius>{0.25 / meter}</radius></sphere></shape>",
          True, ""),
         ("Pill", (-2, 0, 1), f"<shape><capsule><height>{0.6 / meter}</height><radius>"
-                             f"{0.2 / meter} {0.2 / meter}</radius></capsule>{along((1, 0, 0))}"
+                             f"{0.2 / meter} {0.2 / meter}</radius></capsule>{f.along((1, 0, 0))}"
                              "</shape>", True, ""),
         ("Can", (-1, 0, 1), f"<shape><cylinder><height>{0.5 / meter}</height><radius>"
-                            f"{0.3 / meter} {0.3 / meter}</radius></cylinder>{along((0, 0, 1))}"
+                            f"{0.3 / meter} {0.3 / meter}</radius></cylinder>{f.along((0, 0, 1))}"
                             "</shape>", True, ""),
         ("Gem", (0, 0, 1), '<shape><instance_geometry url="#gem"/></shape>', True, ""),
         ("Pebble", (4, 0, 2), f"<shape><sphere><radius>{0.2 / meter}</radius></sphere>"
                               "</shape>", True, ""),
-        ("Post", (8, 0, 1.5), f"<shape><box><half_extents>{size((0.05, 0.05, 0.5))}"
+        ("Post", (8, 0, 1.5), f"<shape><box><half_extents>{f.size((0.05, 0.05, 0.5))}"
                               "</half_extents></box></shape>", False, ""),
-        ("Door", (8.5, 0, 1.5), f"<shape><box><half_extents>{size((0.4, 0.05, 0.5))}"
+        ("Door", (8.5, 0, 1.5), f"<shape><box><half_extents>{f.size((0.4, 0.05, 0.5))}"
                                 "</half_extents></box></shape>", True, ""),
     ]
     def geometry(gid: str, vertices: np.ndarray, faces: np.ndarray) -> str:
@@ -632,7 +636,7 @@ def collada(path: Path, up: str = "Z_UP", meter: float = 1.0) -> Path:
     geometries = [geometry("cube", *box_mesh((0.5, 0.5, 0.5))),
                   geometry("slab", *box_mesh((1, 1, 0.2))),
                   '<geometry id="gem"><convex_mesh convex_hull_of="#cube"/></geometry>']
-    nodes = "".join(f'<node id="{n}" name="{n}"><translate>{pos(p)}</translate>'
+    nodes = "".join(f'<node id="{n}" name="{n}"><translate>{f.pos(p)}</translate>'
                     f'<instance_geometry url="#{"slab" if n == "Slab" else "cube"}"/>'
                     + (f'<extra><technique profile="colosseum">{BOX_EXTRAS}</technique></extra>'
                        if n == "Box" else "") + "</node>" for n, p, *_ in bodies)
@@ -641,23 +645,62 @@ def collada(path: Path, up: str = "Z_UP", meter: float = 1.0) -> Path:
         f'{"true" if dyn else "false"}</dynamic>{extra}<instance_physics_material '
         f'url="#{"rubber" if n == "Ball" else "stone"}"/>{shape}</technique_common>'
         f'</rigid_body>' for n, _, shape, dyn, extra in bodies)
-    hinge = (f'<rigid_constraint sid="hinge" name="DoorHinge"><ref_attachment '
-             f'rigid_body="Post-rb"><translate>{pos((0.05, 0, 0))}</translate>'
-             f'</ref_attachment><attachment rigid_body="Door-rb"><translate>'
-             f'{pos((-0.45, 0, 0))}</translate></attachment><technique_common>'
-             f'<enabled>true</enabled><interpenetrate>true</interpenetrate><limits>'
-             f'<swing_cone_and_twist><min>{_limits(axes, (0, 0, DOOR_LOW))}</min>'
-             f'<max>{_limits(axes, (0, 0, DOOR_HIGH))}</max></swing_cone_and_twist>'
-             f'<linear><min>0 0 0</min><max>0 0 0</max></linear></limits><spring><angular>'
-             f'<stiffness>0</stiffness><damping>0</damping><target_value>{DOOR_HIGH}'
-             f'</target_value></angular></spring></technique_common></rigid_constraint>')
+    hinge = _door_hinge(f)
     instances = "".join(
         f'<instance_rigid_body body="{n}-rb" target="#{n}">' +
         (f'<technique_common><angular_velocity>{_limits(axes, (0, 0, DOOR_SPIN))}'
          f'</angular_velocity>'
          f'</technique_common>' if n == "Door" else "") + "</instance_rigid_body>"
         for n, *_ in bodies)
-    text = f"""<?xml version="1.0" encoding="utf-8"?>
+    path.write_text(_collada_text(up, meter, geometries, nodes, rigid, hinge, instances,
+                                  f.pos((0, 0, -9.81))))
+    return path
+
+
+def _door_hinge(f: _DaeAxes) -> str:
+    """:func:`collada`'s door hinge: limits, and a spring that pulls with nothing."""
+    axes = f.axes
+    return (f'<rigid_constraint sid="hinge" name="DoorHinge"><ref_attachment '
+             f'rigid_body="Post-rb"><translate>{f.pos((0.05, 0, 0))}</translate>'
+             f'</ref_attachment><attachment rigid_body="Door-rb"><translate>'
+             f'{f.pos((-0.45, 0, 0))}</translate></attachment><technique_common>'
+             f'<enabled>true</enabled><interpenetrate>true</interpenetrate><limits>'
+             f'<swing_cone_and_twist><min>{_limits(axes, (0, 0, DOOR_LOW))}</min>'
+             f'<max>{_limits(axes, (0, 0, DOOR_HIGH))}</max></swing_cone_and_twist>'
+             f'<linear><min>0 0 0</min><max>0 0 0</max></linear></limits><spring><angular>'
+             f'<stiffness>0</stiffness><damping>0</damping><target_value>{DOOR_HIGH}'
+             f'</target_value></angular></spring></technique_common></rigid_constraint>')
+
+
+class _DaeAxes:
+    """Engine positions, sizes and directions written on a Collada file's axes
+    (``axes``: engine to file) in its unit (``meter``)."""
+
+    def __init__(self, axes: np.ndarray, meter: float) -> None:
+        self.axes, self.meter = axes, meter
+
+    def pos(self, p: Sequence[float]) -> str:
+        return " ".join(f"{x:.9g}" for x in self.axes @ np.asarray(p, np.float64) / self.meter)
+
+    def size(self, p: Sequence[float]) -> str:
+        return " ".join(f"{x:.9g}" for x in np.abs(self.axes @ np.asarray(p, np.float64))
+                        / self.meter)
+
+    def along(self, direction: Sequence[float]) -> str:
+        """The rotate turning the file's local Y (a cylinder's axis) onto ``direction``."""
+        d = self.axes @ np.asarray(direction, np.float64)
+        y = np.array([0.0, 1.0, 0.0])
+        axis = np.cross(y, d)
+        if np.linalg.norm(axis) < 1e-9:
+            return ""
+        angle = math.degrees(math.acos(float(np.clip(y @ d, -1, 1))))
+        return f"<rotate>{' '.join(f'{x:.9g}' for x in axis)} {angle:.9g}</rotate>"
+
+
+def _collada_text(up: str, meter: float, geometries: list[str], nodes: str, rigid: str,
+                  hinge: str, instances: str, gravity: str) -> str:
+    """:func:`collada`'s document around its parts."""
+    return f"""<?xml version="1.0" encoding="utf-8"?>
 <COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
 <asset><unit meter="{meter}" name="unit"/><up_axis>{up}</up_axis></asset>
 <library_geometries>{"".join(geometries)}</library_geometries>
@@ -675,14 +718,12 @@ def collada(path: Path, up: str = "Z_UP", meter: float = 1.0) -> Path:
 <library_physics_scenes><physics_scene id="PhysicsScene">
 <instance_physics_model url="#Physics">{instances}
 <instance_rigid_constraint constraint="hinge"/></instance_physics_model>
-<technique_common><gravity>{pos((0, 0, -9.81))}</gravity><time_step>0.01</time_step>
+<technique_common><gravity>{gravity}</gravity><time_step>0.01</time_step>
 </technique_common></physics_scene></library_physics_scenes>
 <scene><instance_physics_scene url="#PhysicsScene"/><instance_visual_scene url="#Scene"/>
 </scene>
 </COLLADA>
 """
-    path.write_text(text)
-    return path
 
 
 #: :func:`collada_springs`' cart (kg; spring N/m, m from where it starts) and flap (a rod
@@ -704,14 +745,7 @@ def collada_springs(path: Path, up: str = "Z_UP", meter: float = 1.0) -> Path:
     rule for two materials: the importer's, the average) and a ball of restitution 0.8
     dropped beside one of 0, each apart in X (the 2D backend's plane): 9 rigid bodies, 2
     constraints."""
-    axes = _FILE_AXES[up]
-
-    def pos(p: Sequence[float]) -> str:
-        return _numbers(axes @ np.asarray(p, np.float64) / meter)
-
-    def half(p: Sequence[float]) -> str:
-        return _numbers(np.abs(axes @ np.asarray(p, np.float64)) / meter)
-
+    f = _DaeAxes(_FILE_AXES[up], meter)
     bodies = [  # node, position, shape, mass (None: static), material, velocity
         ("Rail", (0, 0, 6), (0.05, 0.05, 0.05), None, "steel", None),
         ("Cart", (0, 0, 5), (0.1, 0.1, 0.1), CART_MASS, "steel", None),
@@ -721,36 +755,9 @@ def collada_springs(path: Path, up: str = "Z_UP", meter: float = 1.0) -> Path:
     shapes = "".join(
         f'<rigid_body sid="{n}-rb" name="{n}"><technique_common><dynamic>'
         f'{"false" if m is None else "true"}</dynamic>{"" if m is None else f"<mass>{m}</mass>"}'
-        f'<instance_physics_material url="#{mat}"/><shape><box><half_extents>{half(h)}'
+        f'<instance_physics_material url="#{mat}"/><shape><box><half_extents>{f.size(h)}'
         f'</half_extents></box></shape></technique_common></rigid_body>'
         for n, _, h, m, mat, _ in bodies)
-    free = "<min>0 0 0</min><max>0 0 0</max>"
-
-    def constraint(name: str, ref: str, att: str, at: Sequence[float], linear: str,
-                   angular: str, spring: str) -> str:
-        return (f'<rigid_constraint sid="{name}" name="{name}"><ref_attachment rigid_body='
-                f'"{ref}-rb"><translate>{pos(at)}</translate></ref_attachment><attachment '
-                f'rigid_body="{att}-rb"><translate>{pos((0, 0, 0))}</translate></attachment>'
-                f'<technique_common><limits><swing_cone_and_twist>{angular}'
-                f'</swing_cone_and_twist><linear>{linear}</linear></limits><spring>{spring}'
-                f'</spring></technique_common></rigid_constraint>')
-
-    flap_at = (-FLAP_LENGTH / 2, 0, 0)  # the flap's end, in the flap
-    cart = constraint(
-        "CartRail", "Rail", "Cart", (0, 0, -1),
-        f"<min>{_numbers(axes @ np.array([-1.0, 0, 0]) / meter)}</min>"
-        f"<max>{_numbers(axes @ np.array([1.0, 0, 0]) / meter)}</max>", free,
-        f"<linear><stiffness>{CART_STIFFNESS * meter:.9g}</stiffness><damping>0</damping>"
-        f"<target_value>{CART_TARGET / meter:.9g}</target_value></linear>")
-    flap = (f'<rigid_constraint sid="FlapHinge" name="FlapHinge"><ref_attachment rigid_body='
-            f'"Hook-rb"><translate>{pos((0, 0, -1))}</translate></ref_attachment><attachment '
-            f'rigid_body="Flap-rb"><translate>{pos(flap_at)}</translate></attachment>'
-            f'<technique_common><limits><swing_cone_and_twist><min>'
-            f'{_limits(axes, (0, 0, -90))}</min><max>{_limits(axes, (0, 0, 90))}</max>'
-            f'</swing_cone_and_twist><linear>{free}</linear></limits><spring><angular>'
-            f'<stiffness>{FLAP_STIFFNESS}</stiffness><damping>0</damping><target_value>'
-            f'{FLAP_TARGET}</target_value></angular></spring></technique_common>'
-            f'</rigid_constraint>')
     floor = [  # node, position, half extents, mass, material, velocity (m/s, engine axes)
         ("Floor", (0, 10, -0.5), (20, 5, 0.5), None, "floor", None),
         ("Slow", (-10, 8, 0.25), (0.25, 0.25, 0.25), 1.0, "slow", (3.0, 0, 0)),
@@ -762,45 +769,77 @@ def collada_springs(path: Path, up: str = "Z_UP", meter: float = 1.0) -> Path:
         f'{"false" if m is None else "true"}</dynamic>{"" if m is None else f"<mass>{m}</mass>"}'
         f'<instance_physics_material url="#{mat}"/><shape>'
         + (f"<sphere><radius>{h[0] / meter:.9g}</radius></sphere>" if n in ("Bouncy", "Dead")
-           else f"<box><half_extents>{half(h)}</half_extents></box>")
+           else f"<box><half_extents>{f.size(h)}</half_extents></box>")
         + "</shape></technique_common></rigid_body>" for n, _, h, m, mat, _ in floor)
-
-    def instances(group: list[tuple[Any, ...]]) -> str:
-        return "".join(
-            f'<instance_rigid_body body="{n}-rb" target="#{n}">'
-            + ("" if v is None else f"<technique_common><velocity>{pos(v)}</velocity>"
-                                    f"</technique_common>") + "</instance_rigid_body>"
-            for n, _, _, _, _, v in group)
-
-    def material(mid: str, friction: float, bounce: float) -> str:
-        return (f'<physics_material id="{mid}"><technique_common><dynamic_friction>{friction}'
-                f'</dynamic_friction><restitution>{bounce}</restitution><static_friction>'
-                f'{friction}</static_friction></technique_common></physics_material>')
-
-    nodes = "".join(f'<node id="{n}" name="{n}"><translate>{pos(p)}</translate></node>'
+    nodes = "".join(f'<node id="{n}" name="{n}"><translate>{f.pos(p)}</translate></node>'
                     for n, p, *_ in bodies + floor)
     path.write_text(f"""<?xml version="1.0" encoding="utf-8"?>
 <COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
 <asset><unit meter="{meter}" name="unit"/><up_axis>{up}</up_axis></asset>
 <library_visual_scenes><visual_scene id="Scene">{nodes}</visual_scene></library_visual_scenes>
-<library_physics_materials>{material("steel", 0.5, 0)}
-{material("floor", DAE_FLOOR_FRICTION, 0)}{material("slow", DAE_SLOW, 0)}
-{material("grip", DAE_GRIP, 0)}{material("bouncy", 0.5, DAE_BOUNCY)}
+<library_physics_materials>{_dae_material("steel", 0.5, 0)}
+{_dae_material("floor", DAE_FLOOR_FRICTION, 0)}{_dae_material("slow", DAE_SLOW, 0)}
+{_dae_material("grip", DAE_GRIP, 0)}{_dae_material("bouncy", 0.5, DAE_BOUNCY)}
 </library_physics_materials>
-<library_physics_models><physics_model id="Springs">{shapes}{cart}{flap}</physics_model>
+<library_physics_models><physics_model id="Springs">{shapes}{_spring_constraints(f)}\
+</physics_model>
 <physics_model id="Surfaces">{drop}</physics_model></library_physics_models>
 <library_physics_scenes><physics_scene id="PhysicsScene">
-<instance_physics_model url="#Springs">{instances(bodies)}
+<instance_physics_model url="#Springs">{_velocities(f, bodies)}
 <instance_rigid_constraint constraint="CartRail"/><instance_rigid_constraint
  constraint="FlapHinge"/></instance_physics_model>
-<instance_physics_model url="#Surfaces">{instances(floor)}</instance_physics_model>
-<technique_common><gravity>{pos((0, 0, -9.81))}</gravity></technique_common>
+<instance_physics_model url="#Surfaces">{_velocities(f, floor)}</instance_physics_model>
+<technique_common><gravity>{f.pos((0, 0, -9.81))}</gravity></technique_common>
 </physics_scene></library_physics_scenes>
 <scene><instance_physics_scene url="#PhysicsScene"/><instance_visual_scene url="#Scene"/>
 </scene>
 </COLLADA>
 """)
     return path
+
+
+def _spring_constraints(f: _DaeAxes) -> str:
+    """:func:`collada_springs`' two constraints: the cart's linear spring along its rail
+    and the flap's angular spring about its hinge."""
+    axes, meter = f.axes, f.meter
+    free = "<min>0 0 0</min><max>0 0 0</max>"
+    cart = (f'<rigid_constraint sid="CartRail" name="CartRail"><ref_attachment rigid_body='
+            f'"Rail-rb"><translate>{f.pos((0, 0, -1))}</translate></ref_attachment><attachment '
+            f'rigid_body="Cart-rb"><translate>{f.pos((0, 0, 0))}</translate></attachment>'
+            f'<technique_common><limits><swing_cone_and_twist>{free}'
+            f'</swing_cone_and_twist><linear>'
+            f"<min>{_numbers(axes @ np.array([-1.0, 0, 0]) / meter)}</min>"
+            f"<max>{_numbers(axes @ np.array([1.0, 0, 0]) / meter)}</max>"
+            f'</linear></limits><spring>'
+            f"<linear><stiffness>{CART_STIFFNESS * meter:.9g}</stiffness><damping>0</damping>"
+            f"<target_value>{CART_TARGET / meter:.9g}</target_value></linear>"
+            f'</spring></technique_common></rigid_constraint>')
+    flap_at = (-FLAP_LENGTH / 2, 0, 0)  # the flap's end, in the flap
+    flap = (f'<rigid_constraint sid="FlapHinge" name="FlapHinge"><ref_attachment rigid_body='
+            f'"Hook-rb"><translate>{f.pos((0, 0, -1))}</translate></ref_attachment><attachment '
+            f'rigid_body="Flap-rb"><translate>{f.pos(flap_at)}</translate></attachment>'
+            f'<technique_common><limits><swing_cone_and_twist><min>'
+            f'{_limits(axes, (0, 0, -90))}</min><max>{_limits(axes, (0, 0, 90))}</max>'
+            f'</swing_cone_and_twist><linear>{free}</linear></limits><spring><angular>'
+            f'<stiffness>{FLAP_STIFFNESS}</stiffness><damping>0</damping><target_value>'
+            f'{FLAP_TARGET}</target_value></angular></spring></technique_common>'
+            f'</rigid_constraint>')
+    return cart + flap
+
+
+def _velocities(f: _DaeAxes, group: list[tuple[Any, ...]]) -> str:
+    """Instances of a group's rigid bodies, with the start velocity of those that have one."""
+    return "".join(
+        f'<instance_rigid_body body="{n}-rb" target="#{n}">'
+        + ("" if v is None else f"<technique_common><velocity>{f.pos(v)}</velocity>"
+                                f"</technique_common>") + "</instance_rigid_body>"
+        for n, _, _, _, _, v in group)
+
+
+def _dae_material(mid: str, friction: float, bounce: float) -> str:
+    return (f'<physics_material id="{mid}"><technique_common><dynamic_friction>{friction}'
+            f'</dynamic_friction><restitution>{bounce}</restitution><static_friction>'
+            f'{friction}</static_friction></technique_common></physics_material>')
 
 
 def _limits(axes: np.ndarray, engine_degrees: Sequence[float]) -> str:
@@ -1002,6 +1041,21 @@ BOB_PIVOTS = {"BobA": (-3.0, 0.0, 3.0), "BobB": (-5.0, 0.0, 3.0)}
 BOB_REACH, BOB_SWING = 0.5, 40.0
 
 
+def _bullet_bodies(axes: np.ndarray) -> list[tuple[Any, ...]]:
+    """:func:`bullet_collada`'s bodies: name, position (engine axes), turn about the
+    file's Z, shape, mass, and the principal moments Bullet works out and writes."""
+    swing = math.radians(BOB_SWING)  # about the file's Z: the bob's centre out and down
+    reach = np.array([BOB_REACH * math.sin(swing), -BOB_REACH * math.cos(swing), 0.0])
+    return [
+        ("Ground", (0, 0, -0.5), 0, "<box><half_extents>5 0.5 5</half_extents></box>", 0,
+         0.0),
+        ("Crate", (0, 0, 2), 0, '<instance_geometry url="#Crate-Geometry"/>', 5, 5 / 6),
+        ("Ball", (2, 0, 3), 0, "<sphere><radius>0.5</radius></sphere>", 5, 0.5),
+        *((n, tuple(axes.T @ (axes @ np.asarray(p) + reach)), BOB_SWING,
+           "<box><half_extents>0.15 0.15 0.15</half_extents></box>", 1, 0.015)
+          for n, p in BOB_PIVOTS.items())]
+
+
 def bullet_collada(path: Path) -> Path:
     """Collada physics laid out as Bullet 2.6x's ColladaConverter writes it: Y up, no
     ``<unit>``, the physics scenes first, one physics model whose rigid bodies carry a sid
@@ -1016,17 +1070,7 @@ def bullet_collada(path: Path) -> Path:
     def at(p: Sequence[float]) -> str:
         return _numbers(axes @ np.asarray(p, np.float64))
 
-    swing = math.radians(BOB_SWING)  # about the file's Z: the bob's centre out and down
-    reach = np.array([BOB_REACH * math.sin(swing), -BOB_REACH * math.cos(swing), 0.0])
-    bodies = [  # name, position (engine axes), turn about the file's Z, shape, mass,
-        # and the principal moments Bullet works out from the shape and writes
-        ("Ground", (0, 0, -0.5), 0, "<box><half_extents>5 0.5 5</half_extents></box>", 0,
-         0.0),
-        ("Crate", (0, 0, 2), 0, '<instance_geometry url="#Crate-Geometry"/>', 5, 5 / 6),
-        ("Ball", (2, 0, 3), 0, "<sphere><radius>0.5</radius></sphere>", 5, 0.5),
-        *((n, tuple(axes.T @ (axes @ np.asarray(p) + reach)), BOB_SWING,
-           "<box><half_extents>0.15 0.15 0.15</half_extents></box>", 1, 0.015)
-          for n, p in BOB_PIVOTS.items())]
+    bodies = _bullet_bodies(axes)
     hold = "".join(
         f'<rigid_constraint sid="Constraint-0" name="Constraint-0"><attachment '
         f'rigid_body="{n}-RigidBody"><translate>0 {BOB_REACH} 0</translate><rotate>0 1 0 90'

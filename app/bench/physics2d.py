@@ -32,6 +32,7 @@ import math
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pymunk
@@ -124,19 +125,7 @@ def bench_one(n: int, steps: int, sleeping: bool = False, rule: bool = False,
             ours.contacts()
             times[i, 1:] += t2 - t1, t3 - t2, clock() - t3
 
-    gc.disable()
-    try:
-        for i in range(blocks):
-            if i % 2:  # alternate who goes first, so neither always finds a cold cache
-                ours_block(i)
-            t0 = clock()
-            for _ in range(BLOCK):
-                raw.step(DT)
-            times[i, 0] = clock() - t0
-            if not i % 2:
-                ours_block(i)
-    finally:
-        gc.enable()
+    _interleaved(blocks, raw, ours_block, times)
     raw_xz = np.array([b.position for b in raw.bodies if b.body_type == pymunk.Body.DYNAMIC])
     state = ours.read_state()
     order = np.argsort(state.keys)[:n]  # keys 0..n-1 in build order, then the ground
@@ -167,6 +156,26 @@ def _summary(times: np.ndarray) -> dict[str, float]:
         "raw_mean_ms": float(mean[0]),
         "ours_mean_ms": float(mean[1] + mean[2]),
     }
+
+
+def _interleaved(blocks: int, raw: pymunk.Space, ours_block: Any,
+                 times: np.ndarray) -> None:
+    """Blocks of raw steps and of ours, back to back, garbage collection off; who goes
+    first alternates, so neither always finds a cold cache."""
+    clock = time.perf_counter_ns
+    gc.disable()
+    try:
+        for i in range(blocks):
+            if i % 2:
+                ours_block(i)
+            t0 = clock()
+            for _ in range(BLOCK):
+                raw.step(DT)
+            times[i, 0] = clock() - t0
+            if not i % 2:
+                ours_block(i)
+    finally:
+        gc.enable()
 
 
 def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,

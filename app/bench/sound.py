@@ -71,15 +71,7 @@ def _bench(folder: Path, backend: str | None, quick: bool) -> list[dict[str, Any
                          Physical(gravity=False), Sound(file=str(hum), loop=True, auto_play=True))
         system = engine.resource(SoundSystem)
         manager = engine.resource(SoundManager)
-        costs: list[float] = []
-        run = system.run
-
-        def timed(eng: Any, dt: float) -> None:
-            t0 = time.perf_counter()
-            run(eng, dt)
-            costs.append(time.perf_counter() - t0)
-
-        system.run = timed  # type: ignore[method-assign]
+        costs = _costs(system)
         engine.run(frames=10)  # warm up: sources started, caches built
         costs.clear()
         raw = _RawFrame(manager) if manager.backend.name != "null" else None
@@ -97,33 +89,53 @@ def _bench(folder: Path, backend: str | None, quick: bool) -> list[dict[str, Any
                      "ratio": None if raw_ms is None else frame_ms / raw_ms,
                      "target_ms": 0.5})
 
-        # The burst path: every source busy with loops, so each request is decided
-        # (queued, then dropped at its deadline) rather than played.
-        n = 5_000 if quick else 50_000
-        positions = rng.uniform(-5, 5, (n, 3))
-        t0 = time.perf_counter()
-        for i in range(n):
-            manager.play(knock, position=positions[i], priority=-1)
-            if i % 50 == 49:
-                manager.update()
-        busy = time.perf_counter() - t0
-        rows.append({"case": "requests, pool saturated", "backend": rows[0]["backend"],
-                     "requests_per_s": n / busy, "us_per_request": busy / n * 1e6})
-    # Free sources: every request starts a source (configure, attach, play).
+        rows.append(_burst(manager, knock, rng, rows[0]["backend"], quick))
     with create_engine(cfg) as engine:
         engine.add_plugin(SoundPlugin(pool_size=SOURCES))
-        manager = engine.resource(SoundManager)
-        n = 2_000 if quick else 10_000
-        positions = rng.uniform(-5, 5, (n, 3))
-        t0 = time.perf_counter()
-        for i in range(n):
-            voice = manager.play(knock, position=positions[i])
-            manager.stop(voice)
-        busy = time.perf_counter() - t0
-        rows.append({"case": "requests, free source (start+stop)",
-                     "backend": rows[0]["backend"], "requests_per_s": n / busy,
-                     "us_per_request": busy / n * 1e6})
+        rows.append(_free(engine.resource(SoundManager), knock, rng, rows[0]["backend"], quick))
     return rows
+
+
+def _costs(system: Any) -> list[float]:
+    """Wrap ``system.run`` to append each call's wall seconds to the list returned."""
+    costs: list[float] = []
+    run = system.run
+
+    def timed(eng: Any, dt: float) -> None:
+        t0 = time.perf_counter()
+        run(eng, dt)
+        costs.append(time.perf_counter() - t0)
+
+    system.run = timed
+    return costs
+
+
+def _burst(manager: Any, knock: Path, rng: Any, backend: str, quick: bool) -> dict[str, Any]:
+    """The burst path: every source busy with loops, so each request is decided (queued,
+    then dropped at its deadline) rather than played."""
+    n = 5_000 if quick else 50_000
+    positions = rng.uniform(-5, 5, (n, 3))
+    t0 = time.perf_counter()
+    for i in range(n):
+        manager.play(knock, position=positions[i], priority=-1)
+        if i % 50 == 49:
+            manager.update()
+    busy = time.perf_counter() - t0
+    return {"case": "requests, pool saturated", "backend": backend,
+            "requests_per_s": n / busy, "us_per_request": busy / n * 1e6}
+
+
+def _free(manager: Any, knock: Path, rng: Any, backend: str, quick: bool) -> dict[str, Any]:
+    """Free sources: every request starts a source (configure, attach, play)."""
+    n = 2_000 if quick else 10_000
+    positions = rng.uniform(-5, 5, (n, 3))
+    t0 = time.perf_counter()
+    for i in range(n):
+        voice = manager.play(knock, position=positions[i])
+        manager.stop(voice)
+    busy = time.perf_counter() - t0
+    return {"case": "requests, free source (start+stop)", "backend": backend,
+            "requests_per_s": n / busy, "us_per_request": busy / n * 1e6}
 
 
 class _RawFrame:

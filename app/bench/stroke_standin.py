@@ -96,7 +96,8 @@ def _shelf_unit(w: _Writer, x0: float, y: float, width: float, shelves: int,
 
 
 def standin_scene(rng: np.random.Generator | None = None) -> tuple[str, int, int]:
-    """The stand-in's main.scene text; returns (text, objects, dynamic bodies)."""
+    """The stand-in's main.scene text; returns (text, objects, dynamic bodies). The rooms
+    are written in this order (the random generator's draws follow it)."""
     w = _Writer(rng or np.random.default_rng(16))
     wall = "[0.88 0.86 0.8]"
     # rooms: a 10 x 8 m flat, the viewer in the hall at y = -3.2 looking toward +Y
@@ -111,51 +112,10 @@ def standin_scene(rng: np.random.Generator | None = None) -> tuple[str, int, int
         for j in range(12):
             w.thing("box", (-4.75 + 0.5 * i, -1.75 + 0.5 * j, 0.005), (0.49, 0.49, 0.01),
                     colour=w.colour(0.5, 0.7))
-    # living room (x < 0.5): three bookshelves, a sofa, pictures
-    for k in range(3):
-        _shelf_unit(w, -4.7 + 1.5 * k, 3.85, 1.4, 5, 22, ("box",))
-    for k in range(4):
-        w.solid((-4 + k * 0.6, 1.2, 0.25), (0.6, 0.9, 0.5), "[0.3 0.35 0.5]")
-    for i in range(30):
-        w.thing("box", (-4.95 + 0.01, -1.5 + 0.18 * i, 1.6 + 0.3 * (i % 3)), (0.02, 0.14, 0.2))
-    # kitchen (x > 0.5): a counter with drawers, wall shelves of jars, cups and bottles
-    w.solid((2.75, 3.65, 0.45), (4.4, 0.6, 0.9), "[0.75 0.75 0.72]")
-    for i in range(11):
-        w.thing("box", (0.75 + 0.4 * i, 3.34, 0.6), (0.36, 0.02, 0.18), colour="[0.6 0.6 0.58]")
-    for k in range(3):
-        _shelf_unit(w, 0.7 + 1.45 * k, 3.95, 1.4, 4, 24, ("cylinder", "capsule", "sphere"))
-    # a dining table with four chairs in the kitchen, laid for breakfast (dynamic things)
-    w.solid((2.5, 1.0, 0.73), (1.4, 0.9, 0.04), "[0.6 0.42 0.26]")
-    for dx, dy in ((-0.6, -0.4), (0.6, -0.4), (-0.6, 0.4), (0.6, 0.4)):
-        w.solid((2.5 + dx, 1.0 + dy, 0.36), (0.05, 0.05, 0.71), "[0.5 0.35 0.2]")
-    for dx in (-0.45, 0.45):
-        for dy in (-0.75, 0.75):
-            w.solid((2.5 + dx, 1.0 + dy, 0.45), (0.42, 0.42, 0.04), "[0.5 0.35 0.2]")
-            w.solid((2.5 + dx, 1.0 + dy * 1.27, 0.7), (0.42, 0.04, 0.5), "[0.5 0.35 0.2]")
-    for i in range(8):  # cups, plates, bowls and cutlery on the table
-        x, y = 2.0 + 0.15 * i, 0.75 + 0.5 * (i % 2)
-        w.thing("cylinder", (x, y, 0.8), (0.08, 0.1), mass=0.3)
-        w.thing("cylinder", (x, y + 0.12, 0.76), (0.22, 0.015), mass=0.4)
-        w.thing("sphere", (x + 0.05, y - 0.12, 0.82), (0.07,), mass=0.1)
-        w.thing("box", (x - 0.06, y + 0.1, 0.76), (0.015, 0.18, 0.004), mass=0.04)
-        w.thing("box", (x + 0.06, y + 0.1, 0.76), (0.015, 0.18, 0.004), mass=0.04)
-    for i in range(2):  # cereal packages
-        w.thing("box", (2.9 + 0.15 * i, 1.3, 0.91), (0.07, 0.19, 0.3), mass=0.5)
-    # crumbs on the kitchen floor and table: small bodies that settle and sleep
-    for _ in range(260):
-        x, y = w.rng.uniform(1.0, 4.5), w.rng.uniform(-1.5, 2.5)
-        d = w.rng.uniform(0.006, 0.015)
-        sphere = w.rng.random() < 0.5
-        w.thing("sphere" if sphere else "box", (x, y, 0.02 + d + w.rng.uniform(0, 0.2)),
-                (d,) if sphere else (d, d, d), colour="[0.8 0.65 0.35]", mass=2e-4)
-    # plants by the windows: pots and leaves
-    for k in range(6):
-        px, py = -4.5 + 1.6 * k, -1.7
-        w.thing("cylinder", (px, py, 0.2), (0.3, 0.4), colour="[0.6 0.3 0.2]")
-        for _ in range(70):
-            a, r, h = w.rng.uniform(0, 2 * np.pi), w.rng.uniform(0, 0.25), w.rng.uniform(0.45, 1.3)
-            w.thing("sphere", (px + r * np.cos(a), py + r * np.sin(a), h),
-                    (w.rng.uniform(0.05, 0.12),), colour=w.colour(0.1, 0.6))
+    _living_room(w)
+    _kitchen(w)
+    _breakfast(w)
+    _crumbs_and_plants(w)
     # the hall behind the viewer: a shoe rack and boxes (out of view)
     w.solid((0, -4.05, 1.3), (10, 0.1, 2.6), wall)
     for i in range(600):
@@ -176,6 +136,64 @@ def standin_scene(rng: np.random.Generator | None = None) -> tuple[str, int, int
         'Script "scripts/look_around.lua"',
     ]
     return "\n".join(header + w.lines) + "\n", w.count + 1, w.dynamic
+
+
+def _living_room(w: _Writer) -> None:
+    """x < 0.5: three bookshelves, a sofa, pictures."""
+    for k in range(3):
+        _shelf_unit(w, -4.7 + 1.5 * k, 3.85, 1.4, 5, 22, ("box",))
+    for k in range(4):
+        w.solid((-4 + k * 0.6, 1.2, 0.25), (0.6, 0.9, 0.5), "[0.3 0.35 0.5]")
+    for i in range(30):
+        w.thing("box", (-4.95 + 0.01, -1.5 + 0.18 * i, 1.6 + 0.3 * (i % 3)), (0.02, 0.14, 0.2))
+
+
+def _kitchen(w: _Writer) -> None:
+    """x > 0.5: a counter with drawers, wall shelves of jars, cups and bottles."""
+    w.solid((2.75, 3.65, 0.45), (4.4, 0.6, 0.9), "[0.75 0.75 0.72]")
+    for i in range(11):
+        w.thing("box", (0.75 + 0.4 * i, 3.34, 0.6), (0.36, 0.02, 0.18), colour="[0.6 0.6 0.58]")
+    for k in range(3):
+        _shelf_unit(w, 0.7 + 1.45 * k, 3.95, 1.4, 4, 24, ("cylinder", "capsule", "sphere"))
+
+
+def _breakfast(w: _Writer) -> None:
+    """A dining table with four chairs in the kitchen, laid for breakfast (dynamic)."""
+    w.solid((2.5, 1.0, 0.73), (1.4, 0.9, 0.04), "[0.6 0.42 0.26]")
+    for dx, dy in ((-0.6, -0.4), (0.6, -0.4), (-0.6, 0.4), (0.6, 0.4)):
+        w.solid((2.5 + dx, 1.0 + dy, 0.36), (0.05, 0.05, 0.71), "[0.5 0.35 0.2]")
+    for dx in (-0.45, 0.45):
+        for dy in (-0.75, 0.75):
+            w.solid((2.5 + dx, 1.0 + dy, 0.45), (0.42, 0.42, 0.04), "[0.5 0.35 0.2]")
+            w.solid((2.5 + dx, 1.0 + dy * 1.27, 0.7), (0.42, 0.04, 0.5), "[0.5 0.35 0.2]")
+    for i in range(8):  # cups, plates, bowls and cutlery on the table
+        x, y = 2.0 + 0.15 * i, 0.75 + 0.5 * (i % 2)
+        w.thing("cylinder", (x, y, 0.8), (0.08, 0.1), mass=0.3)
+        w.thing("cylinder", (x, y + 0.12, 0.76), (0.22, 0.015), mass=0.4)
+        w.thing("sphere", (x + 0.05, y - 0.12, 0.82), (0.07,), mass=0.1)
+        w.thing("box", (x - 0.06, y + 0.1, 0.76), (0.015, 0.18, 0.004), mass=0.04)
+        w.thing("box", (x + 0.06, y + 0.1, 0.76), (0.015, 0.18, 0.004), mass=0.04)
+    for i in range(2):  # cereal packages
+        w.thing("box", (2.9 + 0.15 * i, 1.3, 0.91), (0.07, 0.19, 0.3), mass=0.5)
+
+
+def _crumbs_and_plants(w: _Writer) -> None:
+    """Crumbs that settle and sleep, and plants by the windows."""
+    # crumbs on the kitchen floor and table: small bodies that settle and sleep
+    for _ in range(260):
+        x, y = w.rng.uniform(1.0, 4.5), w.rng.uniform(-1.5, 2.5)
+        d = w.rng.uniform(0.006, 0.015)
+        sphere = w.rng.random() < 0.5
+        w.thing("sphere" if sphere else "box", (x, y, 0.02 + d + w.rng.uniform(0, 0.2)),
+                (d,) if sphere else (d, d, d), colour="[0.8 0.65 0.35]", mass=2e-4)
+    # plants by the windows: pots and leaves
+    for k in range(6):
+        px, py = -4.5 + 1.6 * k, -1.7
+        w.thing("cylinder", (px, py, 0.2), (0.3, 0.4), colour="[0.6 0.3 0.2]")
+        for _ in range(70):
+            a, r, h = w.rng.uniform(0, 2 * np.pi), w.rng.uniform(0, 0.25), w.rng.uniform(0.45, 1.3)
+            w.thing("sphere", (px + r * np.cos(a), py + r * np.sin(a), h),
+                    (w.rng.uniform(0.05, 0.12),), colour=w.colour(0.1, 0.6))
 
 
 def write_standin(folder: Path) -> Path:

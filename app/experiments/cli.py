@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from app.runner import fail, prepare_run
+from engine.app import EngineConfig
 from engine.experiments.design import Design, TrialPlan, plan, staircase_trial
 from engine.experiments.ordering import rng_for
 from engine.experiments.session import SessionError, SessionFiles, read_rows
@@ -202,12 +203,11 @@ def run(args: argparse.Namespace) -> int:
 
 def _run_trials(args: argparse.Namespace, content: Any, design: Design,
                 files: SessionFiles) -> int:
-    from services.input import InputRecorder
-    from systems.experiments import ExperimentPlugin, TrialRunner
+    from systems.experiments import TrialRunner
 
     answers: dict[str, list[bool]] = {}
     runner = TrialRunner(design, args.participant)
-    engine = scene = None
+    engine = None
     last_block = int(files.rows[-1]["block"]) if files.rows else None
     count = 0
     try:
@@ -224,19 +224,9 @@ def _run_trials(args: argparse.Namespace, content: Any, design: Design,
             for suffix in (".bin", ".times.bin"):
                 stale.with_suffix(suffix).unlink(missing_ok=True)
             if engine is None or design.reset == "trial":
-                seed = trial_seed(args.seed, args.participant, trial.index)
-                built = _engine(args, design, trial, seed, files.folder / "logs")
-                if isinstance(built, int):
-                    return built
-                scene, engine = built
-                engine.add_plugin(ExperimentPlugin(runner))
-                record = files.trial_file("input", trial.index) if design.reset == "trial" \
-                    else files.folder / "input" / f"from-trial-{trial.index:03d}.input"
-                engine.add_system(InputRecorder(record))
-                from engine.content import load_systems
-
-                load_systems(engine, content.folder)
-                scene.instantiate(engine)
+                engine = _trial_engine(args, content, design, trial, files, runner)
+                if isinstance(engine, int):
+                    return engine
             runner.begin(trial, files.trial_file("tracking", trial.index))
             engine.run(until=lambda e: runner.ended)
             if not runner.ended:
@@ -245,19 +235,13 @@ def _run_trials(args: argparse.Namespace, content: Any, design: Design,
                 print(f"colosseum: stopped in trial {trial.index}; it has no row. "
                       f"--resume runs it again", file=sys.stderr)
                 return 1
-            result = runner.result
-            assert result is not None
-            files.write_row(trial, result.start, result.end, result.wall, result.lsl_start,
-                            result.lsl_end, result.outcome, result.responses, result.measures)
+            _keep_result(runner, design, trial, files, answers)
             count += 1
-            if trial.staircase is not None:
-                spec = next(s for s in design.staircases if s.id == trial.staircase)
-                answers[spec.id].append(_truthy(result.responses.get(spec.response)))
             if design.reset == "trial":
                 engine.close()
                 engine = None
     finally:
-        if engine is not None:
+        if engine is not None and not isinstance(engine, int):
             engine.close()
     summary = _summary(design, files.rows)
     files.finish(summary)
@@ -266,6 +250,40 @@ def _run_trials(args: argparse.Namespace, content: Any, design: Design,
     for sid, value in summary.get("thresholds", {}).items():
         print(f"colosseum: staircase {sid}: threshold {value:.4g}", file=sys.stderr)
     return 0
+
+
+def _trial_engine(args: argparse.Namespace, content: Any, design: Design, trial: TrialPlan,
+                  files: SessionFiles, runner: Any) -> Any:
+    """The engine a trial runs in (or, Reset "never", every trial from this one), its
+    input recorded; an exit code when the scene cannot be built."""
+    from engine.content import load_systems
+    from services.input import InputRecorder
+    from systems.experiments import ExperimentPlugin
+
+    seed = trial_seed(args.seed, args.participant, trial.index)
+    built = _engine(args, design, trial, seed, files.folder / "logs")
+    if isinstance(built, int):
+        return built
+    scene, engine = built
+    engine.add_plugin(ExperimentPlugin(runner))
+    record = files.trial_file("input", trial.index) if design.reset == "trial" \
+        else files.folder / "input" / f"from-trial-{trial.index:03d}.input"
+    engine.add_system(InputRecorder(record))
+    load_systems(engine, content.folder)
+    scene.instantiate(engine)
+    return engine
+
+
+def _keep_result(runner: Any, design: Design, trial: TrialPlan, files: SessionFiles,
+                 answers: dict[str, list[bool]]) -> None:
+    """The finished trial's row, and its answer to the staircase it served."""
+    result = runner.result
+    assert result is not None
+    files.write_row(trial, result.start, result.end, result.wall, result.lsl_start,
+                    result.lsl_end, result.outcome, result.responses, result.measures)
+    if trial.staircase is not None:
+        spec = next(s for s in design.staircases if s.id == trial.staircase)
+        answers[spec.id].append(_truthy(result.responses.get(spec.response)))
 
 
 def _summary(design: Design, rows: list[dict[str, str]]) -> dict[str, Any]:
@@ -281,6 +299,7 @@ def _summary(design: Design, rows: list[dict[str, str]]) -> dict[str, Any]:
 def replay(args: argparse.Namespace) -> int:
     """Play trial N back from its recording: the same condition, seed and input; prints
     the outcome and end time beside the row's."""
+    from engine.content import load_systems
     from services.input import InputReplayer
     from systems.experiments import ExperimentPlugin, TrialRunner
 
@@ -290,32 +309,11 @@ def replay(args: argparse.Namespace) -> int:
         return found
     content, design = found
     folder = args.sessions / design.id / str(args.participant)
-    path = folder / "trials.csv"
-    if not path.is_file():
-        return fail(f"{path}: no such session", 1)
-    rows = [r for r in read_rows(path) if r["trial"] == str(args.trial)]
-    if not rows:
-        return fail(f"{path}: no trial {args.trial} (it has not finished)", 1)
-    row = rows[0]
-    recording = folder / "input" / f"trial-{args.trial:03d}.input"
-    if not recording.is_file():
-        return fail(f"{recording}: no recording of trial {args.trial} (a Reset \"never\" "
-                    "session records its run as a whole)", 1)
-    import json
-
-    meta = json.loads((folder / "session.json").read_text(encoding="utf-8"))
-    known = [f.id for f in design.factors] + [s.id for s in design.staircases]
-    condition = {k: row[k] for k in known if row.get(k)}
-    stair = next((s.id for s in design.staircases if row.get(s.id)), None)
-    trial = TrialPlan(int(row["trial"]), int(row["block"]), int(row["block_trial"]),
-                      condition, row["practice"] == "1", None, stair)
-    for name, default in (("mode", "serial"), ("backend", None), ("dt", None),
-                          ("substeps", 1), ("early", "sleep"), ("late", "slowmo"),
-                          ("max_dt", 1.0 / 20.0), ("input", []), ("allow_path", []),
-                          ("progress", False)):
-        setattr(args, name, getattr(args, name, default))
+    recorded = _recorded_trial(args, design, folder)
+    if isinstance(recorded, int):
+        return recorded
+    row, trial, recording, seed = recorded
     args.replay = recording
-    seed = trial_seed(int(meta.get("run_seed", 0)), args.participant, trial.index)
     out = folder / "replay"
     out.mkdir(exist_ok=True)
     built = _engine(args, design, trial, seed, out / "logs")
@@ -325,8 +323,6 @@ def replay(args: argparse.Namespace) -> int:
     runner = TrialRunner(design, args.participant)
     engine.add_plugin(ExperimentPlugin(runner))
     engine.add_system(InputReplayer(recording))
-    from engine.content import load_systems
-
     try:
         load_systems(engine, content.folder)
         scene.instantiate(engine)
@@ -342,3 +338,37 @@ def replay(args: argparse.Namespace) -> int:
           f"(recorded: {row['outcome']} at {row['end_s']} s){'' if same else ' - differs'}")
     print(f"tracking: {out / f'trial-{trial.index:03d}.csv'}")
     return 0 if same else 1
+
+
+def _recorded_trial(args: argparse.Namespace, design: Design,
+                    folder: Path) -> tuple[dict[str, str], TrialPlan, Path, int] | int:
+    """Trial N's row, its plan, its input recording and its seed, as the session ran it
+    (``args`` given the run flags replay does not take, at the engine's defaults); an
+    exit code when the session, the row or the recording is missing."""
+    import json
+
+    path = folder / "trials.csv"
+    if not path.is_file():
+        return fail(f"{path}: no such session", 1)
+    rows = [r for r in read_rows(path) if r["trial"] == str(args.trial)]
+    if not rows:
+        return fail(f"{path}: no trial {args.trial} (it has not finished)", 1)
+    row = rows[0]
+    recording = folder / "input" / f"trial-{args.trial:03d}.input"
+    if not recording.is_file():
+        return fail(f"{recording}: no recording of trial {args.trial} (a Reset \"never\" "
+                    "session records its run as a whole)", 1)
+    meta = json.loads((folder / "session.json").read_text(encoding="utf-8"))
+    known = [f.id for f in design.factors] + [s.id for s in design.staircases]
+    condition = {k: row[k] for k in known if row.get(k)}
+    stair = next((s.id for s in design.staircases if row.get(s.id)), None)
+    trial = TrialPlan(int(row["trial"]), int(row["block"]), int(row["block_trial"]),
+                      condition, row["practice"] == "1", None, stair)
+    config = EngineConfig()
+    for name, default in (("mode", config.mode), ("backend", None), ("dt", None),
+                          ("substeps", config.substeps), ("early", config.early),
+                          ("late", config.late), ("max_dt", config.max_dt), ("input", []),
+                          ("allow_path", []), ("progress", False)):
+        setattr(args, name, getattr(args, name, default))
+    seed = trial_seed(int(meta.get("run_seed", 0)), args.participant, trial.index)
+    return row, trial, recording, seed

@@ -180,6 +180,8 @@ def _label(factors: list[str], trial: dict[str, Any]) -> str:
 
 def plots(out: Path, factors: list[str], trials: list[dict[str, Any]],
           plan: list[Any] | None = None) -> list[Path]:
+    """The report's figures: task times per condition, each tracked path from above with
+    where it went, and where the head looked."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -189,19 +191,7 @@ def plots(out: Path, factors: list[str], trials: list[dict[str, Any]],
     real = [t for t in trials if t["practice"] != "1"]
     labels = sorted({_label(factors, t) for t in real})
     if labels:
-        fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(labels)), 4))
-        data = [[float(t["end_s"]) - float(t["start_s"]) for t in real
-                 if _label(factors, t) == label] for label in labels]
-        ax.boxplot(data)
-        ax.set_xticks(range(1, len(labels) + 1), labels, rotation=30, ha="right")
-        for i, ys in enumerate(data, start=1):
-            ax.plot([i] * len(ys), ys, "o", alpha=0.4, color="tab:blue")
-        ax.set_ylabel("task time (s)")
-        ax.set_title("task times per condition")
-        fig.tight_layout()
-        fig.savefig(out / "times.png", dpi=100)
-        plt.close(fig)
-        made.append(out / "times.png")
+        made.append(_times_plot(out, factors, real, labels, plt))
     paths: dict[str, list[tuple[str, Any]]] = defaultdict(list)
     for t in real:
         track = Path(t["_session"]) / "tracking" / f"trial-{int(t['trial']):03d}.csv"
@@ -210,42 +200,66 @@ def plots(out: Path, factors: list[str], trials: list[dict[str, Any]],
                 paths[name].append((_label(factors, t), samples))
     names = sorted(paths)[:MAX_PANELS]
     if names:
-        import numpy as np
-
-        colours = {label: plt.cm.tab10(i % 10) for i, label in enumerate(labels)}
-        fig, axes = plt.subplots(1, len(names), figsize=(5 * len(names), 5), squeeze=False)
-        heat, haxes = plt.subplots(1, len(names), figsize=(5 * len(names), 4.5),
-                                   squeeze=False)
-        for ax, hax, name in zip(axes[0], haxes[0], names, strict=True):
-            _draw_plan(ax, plan or [])
-            seen = set()
-            for label, samples in paths[name]:
-                colour = colours.get(label, "grey")
-                ax.plot(samples[:, 2], samples[:, 3], color=colour, alpha=0.6,
-                        label=None if label in seen else label)
-                ax.plot(samples[:1, 2], samples[:1, 3], "o", color=colour, ms=3)  # start
-                seen.add(label)
-            ax.set_title(f"{name} from above")
-            ax.set_xlabel("x (m)")
-            ax.set_ylabel("y (m)")
-            ax.set_aspect("equal", adjustable="datalim")
-            ax.legend(fontsize="small")
-            xy = np.concatenate([s[:, 2:4] for _, s in paths[name]])
-            counts = hax.hist2d(xy[:, 0], xy[:, 1], bins=40, cmap="magma")[3]
-            heat.colorbar(counts, ax=hax, label="samples")
-            hax.set_title(f"where {name} went")
-            hax.set_xlabel("x (m)")
-            hax.set_ylabel("y (m)")
-        fig.tight_layout()
-        fig.savefig(out / "trajectories.png", dpi=100)
-        heat.tight_layout()
-        heat.savefig(out / "heatmap.png", dpi=100)
-        plt.close(fig)
-        plt.close(heat)
-        made += [out / "trajectories.png", out / "heatmap.png"]
+        made += _path_plots(out, names, paths, labels, plan or [], plt)
     if paths.get("head"):
         made.append(_gaze_plot(out, [s for _, s in paths["head"]], plt))
     return made
+
+
+def _times_plot(out: Path, factors: list[str], real: list[dict[str, Any]],
+                labels: list[str], plt: Any) -> Path:
+    """``times.png``: the task times of each condition, a box and its points."""
+    fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(labels)), 4))
+    data = [[float(t["end_s"]) - float(t["start_s"]) for t in real
+             if _label(factors, t) == label] for label in labels]
+    ax.boxplot(data)
+    ax.set_xticks(range(1, len(labels) + 1), labels, rotation=30, ha="right")
+    for i, ys in enumerate(data, start=1):
+        ax.plot([i] * len(ys), ys, "o", alpha=0.4, color="tab:blue")
+    ax.set_ylabel("task time (s)")
+    ax.set_title("task times per condition")
+    fig.tight_layout()
+    fig.savefig(out / "times.png", dpi=100)
+    plt.close(fig)
+    return out / "times.png"
+
+
+def _path_plots(out: Path, names: list[str], paths: dict[str, list[tuple[str, Any]]],
+                labels: list[str], plan: list[Any], plt: Any) -> list[Path]:
+    """``trajectories.png`` (each tracked thing's paths from above, coloured by condition)
+    and ``heatmap.png`` (where it went), a panel per tracked thing."""
+    import numpy as np
+
+    colours = {label: plt.cm.tab10(i % 10) for i, label in enumerate(labels)}
+    fig, axes = plt.subplots(1, len(names), figsize=(5 * len(names), 5), squeeze=False)
+    heat, haxes = plt.subplots(1, len(names), figsize=(5 * len(names), 4.5), squeeze=False)
+    for ax, hax, name in zip(axes[0], haxes[0], names, strict=True):
+        _draw_plan(ax, plan)
+        seen = set()
+        for label, samples in paths[name]:
+            colour = colours.get(label, "grey")
+            ax.plot(samples[:, 2], samples[:, 3], color=colour, alpha=0.6,
+                    label=None if label in seen else label)
+            ax.plot(samples[:1, 2], samples[:1, 3], "o", color=colour, ms=3)  # start
+            seen.add(label)
+        ax.set_title(f"{name} from above")
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.legend(fontsize="small")
+        xy = np.concatenate([s[:, 2:4] for _, s in paths[name]])
+        counts = hax.hist2d(xy[:, 0], xy[:, 1], bins=40, cmap="magma")[3]
+        heat.colorbar(counts, ax=hax, label="samples")
+        hax.set_title(f"where {name} went")
+        hax.set_xlabel("x (m)")
+        hax.set_ylabel("y (m)")
+    fig.tight_layout()
+    fig.savefig(out / "trajectories.png", dpi=100)
+    heat.tight_layout()
+    heat.savefig(out / "heatmap.png", dpi=100)
+    plt.close(fig)
+    plt.close(heat)
+    return [out / "trajectories.png", out / "heatmap.png"]
 
 
 def _gaze_plot(out: Path, samples: list[Any], plt: Any) -> Path:

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -514,13 +515,25 @@ class _Plan:
                 [np.searchsorted(animated[x], r) for x, r in zip(a, row, strict=True)],
                 np.int64).reshape(-1)
 
-        # queries grouped by how they are interpolated (lerp, slerp, cubic): each group a
-        # slice, so its rows are views, not copies
+        self._queries(lib, q_track, q_layer, slot(q_layer, q_row))
+        # root motion taken off, per layer whose clip travels
+        moving = np.array([i for i, c in enumerate(clips) if np.any(c.travel_local)], np.int64)
+        self.rm_layer = moving
+        self.rm_dst = slot(moving, np.array([clips[i].root_node * 3 for i in moving], np.int64))
+        self.rm_local = np.array([clips[i].travel_local for i in moving]).reshape(-1, 3)
+        self.rm_duration = np.array([clips[i].duration for i in moving], np.float64)
+        self._rounds(len(animators), layer_size, avatar_start, animated)
+
+    def _queries(self, lib: Any, q_track: np.ndarray, q_layer: np.ndarray,
+                 q_dst: np.ndarray) -> None:
+        """The sampling queries (a track of a layer's clip, and where its value goes),
+        grouped by how they are interpolated (lerp, slerp, cubic): each group a slice, so
+        its rows are views, not copies."""
         path, interp = lib.track_path[q_track], lib.track_interp[q_track]
         plain = interp != CUBIC
         groups = (plain & (path != ROTATION), plain & (path == ROTATION), ~plain)
         by_kind = np.concatenate([np.flatnonzero(g) for g in groups])
-        q_track, q_layer, q_row = q_track[by_kind], q_layer[by_kind], q_row[by_kind]
+        q_track, q_layer, q_dst = q_track[by_kind], q_layer[by_kind], q_dst[by_kind]
         path, interp = path[by_kind], interp[by_kind]
         bounds = np.cumsum([0] + [int(g.sum()) for g in groups])
         self.q_lin, self.q_rot, self.q_cubic = (
@@ -532,17 +545,16 @@ class _Plan:
         self.q_lo = lib.track_lo[q_track]
         self.q_hi = lib.track_hi[q_track]
         self.q_end = lib.track_start[q_track] + lib.track_count[q_track] - 1
-        self.q_dst = slot(q_layer, q_row)
+        self.q_dst = q_dst
         self.q_step = np.flatnonzero(interp == STEP)
         self.q_cubic_rot = path[self.q_cubic] == ROTATION
-        # root motion taken off, per layer whose clip travels
-        moving = np.array([i for i, c in enumerate(clips) if np.any(c.travel_local)], np.int64)
-        self.rm_layer = moving
-        self.rm_dst = slot(moving, np.array([clips[i].root_node * 3 for i in moving], np.int64))
-        self.rm_local = np.array([clips[i].travel_local for i in moving]).reshape(-1, 3)
-        self.rm_duration = np.array([clips[i].duration for i in moving], np.float64)
-        # blending rounds: the k-th layer of every avatar with at least k, its animated rows
-        counts = np.bincount(layer_avatar, minlength=len(animators))
+
+    def _rounds(self, avatars: int, layer_size: np.ndarray, avatar_start: np.ndarray,
+                animated: list[np.ndarray]) -> None:
+        """Blending rounds: the k-th layer of every avatar with at least k, its animated
+        rows (translations and scales lerped, rotations slerped)."""
+        layer_avatar = self.layer_avatar
+        counts = np.bincount(layer_avatar, minlength=avatars)
         self.first_layer = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
         layer_seq = np.arange(len(layer_avatar)) - self.first_layer[layer_avatar]
         self.rounds = []
@@ -586,66 +598,74 @@ class _Plan:
             np.concatenate(ibms) if ibms else np.zeros((0, 4, 4)), np.float64)
 
     def evaluate(self, mixer: Mixer) -> np.ndarray:
-        lib = mixer.library
+        """Every node's model-frame matrix: the layers sampled at their times, blended
+        per avatar onto its rest pose, composed down the hierarchy."""
         t = mixer.layers
         rows = self.layer_rows
         layer_time = mixer.groups.phase[t.group[rows]] * t.duration[rows]
         pose = self.layer_rest.copy()
         if len(self.q_layer):
-            tq = np.clip(layer_time[self.q_layer], self.q_first, self.q_last)
-            i = np.searchsorted(lib.key_search, self.q_base + tq, side="right") - 1
-            i = np.clip(i, self.q_lo, self.q_hi)
-            i1 = np.minimum(i + 1, self.q_end)
-            k0, k1 = lib.key_time[i], lib.key_time[i1]
-            span = k1 - k0
-            alpha = np.clip(np.divide(tq - k0, span, out=np.zeros_like(span), where=span > 0),
-                            0.0, 1.0)
-            alpha[self.q_step] = np.floor(alpha[self.q_step])
-            v0, v1 = lib.key_value[i], lib.key_value[i1]
-            out = np.empty_like(v0)
-            lin = self.q_lin
-            out[lin] = v0[lin] + alpha[lin, None] * (v1[lin] - v0[lin])
-            rot = self.q_rot
-            if rot.stop > rot.start:  # slerp between keys: angles worked out when packed
-                k, a = i[rot], alpha[rot]
-                theta, inv, near = lib.key_theta[k], lib.key_inv_sin[k], lib.key_near[k]
-                w0 = np.where(near, 1.0 - a, np.sin((1.0 - a) * theta) * inv)
-                w1 = np.where(near, a, np.sin(a * theta) * inv) * lib.key_sign[k]
-                # unit keys (as the reader leaves them) slerp to unit quaternions
-                out[rot] = w0[:, None] * v0[rot] + w1[:, None] * v1[rot]
-            c = self.q_cubic
-            if c.stop > c.start:
-                s = span[c, None]
-                value = hermite(v0[c], lib.key_out[i[c]] * s, v1[c], lib.key_in[i1[c]] * s,
-                                alpha[c])
-                value[self.q_cubic_rot] = quat_normalize(value[self.q_cubic_rot])
-                out[c] = value
-            pose[self.q_dst] = out
+            pose[self.q_dst] = self._sample(mixer.library, layer_time)
         if len(self.rm_layer):
             frac = layer_time[self.rm_layer] / self.rm_duration
             pose[self.rm_dst, :3] -= frac[:, None] * self.rm_local
-        # blend each avatar's layers onto its rest pose, animated rows only
         sparse = self.sparse_rest.copy()
         if len(rows):
-            w = t.weight[rows]
-            running = np.maximum(0.0, 1.0 - np.bincount(self.layer_avatar, w,
-                                                        len(mixer.animators)))
-            for dst, src, ts_dst, ts_src, ts_which, r_dst, r_src, r_which, layers in \
-                    self.rounds:
-                owners = self.layer_avatar[layers]
-                running[owners] += w[layers]
-                f_layer = np.divide(w[layers], running[owners], out=np.zeros(len(layers)),
-                                    where=running[owners] > 0)
-                if np.all(f_layer == 1.0):  # the usual first round: nothing to mix with
-                    sparse[dst] = pose[src]
-                    continue
-                factor = np.zeros(len(rows))
-                factor[layers] = f_layer
-                sparse[ts_dst] += factor[ts_which][:, None] * (pose[ts_src] - sparse[ts_dst])
-                sparse[r_dst] = fast_slerp(sparse[r_dst], pose[r_src], factor[r_which])
+            self._blend(t.weight[rows], len(mixer.animators), pose, sparse)
         full = self.avatar_rest.copy()
         full[self.sparse_full] = sparse
         return self._hierarchy(full)
+
+    def _sample(self, lib: Any, layer_time: np.ndarray) -> np.ndarray:
+        """Each query's value at its layer's time: lerp, slerp (angles worked out when the
+        library was packed) or cubic Hermite between the keys around it."""
+        tq = np.clip(layer_time[self.q_layer], self.q_first, self.q_last)
+        i = np.searchsorted(lib.key_search, self.q_base + tq, side="right") - 1
+        i = np.clip(i, self.q_lo, self.q_hi)
+        i1 = np.minimum(i + 1, self.q_end)
+        k0, k1 = lib.key_time[i], lib.key_time[i1]
+        span = k1 - k0
+        alpha = np.clip(np.divide(tq - k0, span, out=np.zeros_like(span), where=span > 0),
+                        0.0, 1.0)
+        alpha[self.q_step] = np.floor(alpha[self.q_step])
+        v0, v1 = lib.key_value[i], lib.key_value[i1]
+        out = np.empty_like(v0)
+        lin = self.q_lin
+        out[lin] = v0[lin] + alpha[lin, None] * (v1[lin] - v0[lin])
+        rot = self.q_rot
+        if rot.stop > rot.start:
+            k, a = i[rot], alpha[rot]
+            theta, inv, near = lib.key_theta[k], lib.key_inv_sin[k], lib.key_near[k]
+            w0 = np.where(near, 1.0 - a, np.sin((1.0 - a) * theta) * inv)
+            w1 = np.where(near, a, np.sin(a * theta) * inv) * lib.key_sign[k]
+            # unit keys (as the reader leaves them) slerp to unit quaternions
+            out[rot] = w0[:, None] * v0[rot] + w1[:, None] * v1[rot]
+        c = self.q_cubic
+        if c.stop > c.start:
+            s = span[c, None]
+            value = hermite(v0[c], lib.key_out[i[c]] * s, v1[c], lib.key_in[i1[c]] * s,
+                            alpha[c])
+            value[self.q_cubic_rot] = quat_normalize(value[self.q_cubic_rot])
+            out[c] = value
+        return out
+
+    def _blend(self, w: np.ndarray, avatars: int, pose: np.ndarray,
+               sparse: np.ndarray) -> None:
+        """Blend each avatar's layers (weights ``w``) onto its rest pose in ``sparse``,
+        animated rows only, round by round."""
+        running = np.maximum(0.0, 1.0 - np.bincount(self.layer_avatar, w, avatars))
+        for dst, src, ts_dst, ts_src, ts_which, r_dst, r_src, r_which, layers in self.rounds:
+            owners = self.layer_avatar[layers]
+            running[owners] += w[layers]
+            f_layer = np.divide(w[layers], running[owners], out=np.zeros(len(layers)),
+                                where=running[owners] > 0)
+            if np.all(f_layer == 1.0):  # the usual first round: nothing to mix with
+                sparse[dst] = pose[src]
+                continue
+            factor = np.zeros(len(w))
+            factor[layers] = f_layer
+            sparse[ts_dst] += factor[ts_which][:, None] * (pose[ts_src] - sparse[ts_dst])
+            sparse[r_dst] = fast_slerp(sparse[r_dst], pose[r_src], factor[r_which])
 
     def _hierarchy(self, pose: np.ndarray) -> np.ndarray:
         """Model-frame matrices of every node, composed down the tree (parents first)."""

@@ -27,6 +27,9 @@ from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME, SleepS
 #: past integer range (about 4.5e15 m); a thousand kilometres is far beyond any scene
 #: and keeps positions exact to a nanometre.
 WORLD_EXTENT = 1e6
+#: The largest World Extent (m): ODE's hash space needs every bounding box within about
+#: 4.5e15 m, and past 1e12 m doubles no longer place a body to the millimetre.
+MAX_EXTENT = 1e12
 #: Speed (m/s) and spin (rad/s) past which a body counts as runaway: one step further
 #: and its numbers overflow.
 MAX_SPEED = 1e5
@@ -238,6 +241,69 @@ class WorldSettings:
     @property
     def limits(self) -> Limits:
         return Limits(extent=self.extent)
+
+    def problems(self) -> list[tuple[str, str]]:
+        """(field, message) for each setting outside its range in :data:`WORLD_RANGES`:
+        every backend refuses such settings, and the scene reports them at their key."""
+        found = []
+        for name, allowed in WORLD_RANGES.items():
+            value = getattr(self, name)
+            if value not in allowed:
+                found.append((name, f"{name} must be {allowed.text()}, got {value:g}"))
+        return found
+
+    def check(self) -> None:
+        """Raise ValueError naming every setting outside its range."""
+        problems = self.problems()
+        if problems:
+            raise ValueError("; ".join(message for _, message in problems))
+
+
+@dataclass(frozen=True, slots=True)
+class Range:
+    """The values one setting may take: from ``low`` to ``high`` (None: no bound), an end
+    left out when ``open``; never NaN nor infinite."""
+
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    high_open: bool = False
+
+    def __contains__(self, value: float) -> bool:
+        v = float(value)
+        if not math.isfinite(v):
+            return False
+        if self.low is not None and (v < self.low or (self.low_open and v == self.low)):
+            return False
+        return self.high is None or (v < self.high or (not self.high_open and v == self.high))
+
+    def text(self) -> str:
+        """The range in words: ``from 0 to 0.99``, ``at least 1``, ``more than 0``."""
+        low = None if self.low is None else \
+            f"{'more than' if self.low_open else 'at least'} {self.low:g}"
+        high = None if self.high is None else \
+            f"{'less than' if self.high_open else 'at most'} {self.high:g}"
+        if low and high and not self.low_open and not self.high_open:
+            return f"from {self.low:g} to {self.high:g}"
+        return " and ".join(t for t in (low, high) if t) or "a number"
+
+
+#: The one range of each bounded world setting (its one default is WorldSettings'); the
+#: scene checks its World keys against these and every backend's configure refuses what
+#: lies outside. Sleep limits are in the settings' units (s, m/s, rad/s).
+WORLD_RANGES: dict[str, Range] = {
+    "erp": Range(0.0, 1.0),
+    "cfm": Range(0.0),
+    "iterations": Range(1),
+    "max_contacts": Range(1),
+    "warm_start": Range(0.0, 0.99),
+    "contact_softness": Range(0.0),
+    "exact_rows": Range(0),
+    "sleep_time": Range(0.0, low_open=True),
+    "sleep_linear": Range(0.0, low_open=True),
+    "sleep_angular": Range(0.0, low_open=True),
+    "extent": Range(0.0, MAX_EXTENT, low_open=True),
+}
 
 
 @runtime_checkable

@@ -277,6 +277,7 @@ cdef Py_ssize_t _operand_end(str text, Py_ssize_t i, Py_ssize_t n, bint *num, bi
     return _number_end(text, i, n, flt)
 
 
+# Long: a vector literal in one C loop, its cursor in C locals as scan_plain's
 cdef object _vector(list scopes, str text, Py_ssize_t n, Py_ssize_t pos, object loc,
                     object path, Py_ssize_t line, Py_ssize_t line_start, bint signs,
                     Py_ssize_t *end, Py_ssize_t *used):
@@ -442,6 +443,7 @@ cdef object _strings(str text, Py_ssize_t n, Py_ssize_t i, object loc, object pa
     return _value(STRINGVECTOR, items, loc)
 
 
+# Long: the scanner's pass over plain entries: its cursor stays in C locals
 def scan_plain(p, cur, Py_ssize_t pos, Py_ssize_t count, list entries, dict scope,
                list stack, Py_ssize_t ended):
     """Plain entries from ``pos`` into ``entries``, until one is not plain.

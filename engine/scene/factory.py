@@ -66,9 +66,11 @@ from engine.measures import MeasureSpec
 from engine.memory import paused_gc
 from engine.physics.backend import (
     MAX_DENSITY,
+    MAX_EXTENT,
     MAX_MASS,
     MAX_SPEED,
     WORLD_EXTENT,
+    WORLD_RANGES,
     BackendName,
     MaterialPair,
     SleepState,
@@ -76,7 +78,6 @@ from engine.physics.backend import (
     metres,
 )
 from engine.physics.commands import HINGE2_BODIES, TWO_AXES, SetSleepState, parallel
-from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
 from engine.realtime import STEP_RANGE, STEP_WARNING, TIME_STEP
 from engine.rotation import UNIT_ROUNDING, euler_to_quat, rotate, view_problem
 from engine.scene.anomalies import read_anomalies
@@ -286,9 +287,6 @@ _DEFAULTS = {name: {k: f.default for k, f in fields.items()}
 blocks.on_register(lambda name: _DEFAULTS.__setitem__(
     name, {k: f.default for k, f in sc.SCHEMAS[name].items()}))
 
-#: The largest World Extent (m): ODE's hash space needs every bounding box within about
-#: 4.5e15 m, and past 1e12 m doubles no longer place a body to the millimetre.
-MAX_EXTENT = 1e12
 
 
 class _Reader(dict):
@@ -1278,42 +1276,17 @@ class _Builder:
         blk = root.value("World")
         w = _Reader(blk.data if blk else None, "World")
         self.time_step(w)
-        for key in ("Iterations", "MaxContacts"):
-            if w(key) < 1:
-                self.report.error(w.value(key).loc, f"{key} must be at least 1, got {w(key)}")
         pairs = []
         for b in root.blocks("MaterialPair"):
             p = _Reader(b, "MaterialPair")
             pairs.append(MaterialPair(str(p("Material1")), str(p("Material2")),
                                       _opt(p("Friction")), _opt(p("Bounce")),
                                       _opt(p("Softness")), bool(p("Collide"))))
-        for key in ("SleepTime", "SleepLinear", "SleepAngular"):
-            if not (w(key) > 0 and math.isfinite(w(key))):
-                self.report.error(w.value(key).loc, f"{key} must be a positive number")
-        defaults = WorldSettings()
-        warm, soft, rows = (float(w("WarmStart")), float(w("ContactSoftness")),
-                            int(w("ExactRows")))
-        if not 0.0 <= warm <= 0.99:
-            self.report.error(w.value("WarmStart").loc, "WarmStart must be from 0 to 0.99")
-            warm = defaults.warm_start
-        if not (soft >= 0.0 and math.isfinite(soft)):
-            self.report.error(w.value("ContactSoftness").loc,
-                              "ContactSoftness must be a number >= 0")
-            soft = defaults.contact_softness
-        if rows < 0:
-            self.report.error(w.value("ExactRows").loc, "ExactRows must be >= 0 (0: none)")
-            rows = defaults.exact_rows
-        spec.world = WorldSettings(gravity=_floats(w("Gravity")), erp=float(w("ERP")),
-                                   cfm=float(w("CFM")), iterations=int(w("Iterations")),
-                                   max_contacts=int(w("MaxContacts")),
-                                   warm_start=warm, contact_softness=soft, exact_rows=rows,
+        checked = self.world_numbers(w)
+        spec.world = WorldSettings(gravity=_floats(w("Gravity")),
                                    auto_sleep=bool(w("AutoSleep")),
-                                   sleep_time=_positive(w("SleepTime"), SLEEP_TIME),
-                                   sleep_linear=_positive(w("SleepLinear"), SLEEP_LINEAR),
-                                   sleep_angular=math.radians(_positive(
-                                       w("SleepAngular"), math.degrees(SLEEP_ANGULAR))),
                                    material_pairs=pairs, solver_seed=w("SolverSeed"),
-                                   extent=self.extent or WORLD_EXTENT)
+                                   extent=self.extent or WORLD_EXTENT, **checked)
         spec.material_pairs = pairs
         spec.time_step = float(w("TimeStep"))
         spec.backend = w("Dynamics")
@@ -1323,6 +1296,23 @@ class _Builder:
                 spec.random_state = random_state.parse(str(w("RandomState")))
             except ValueError as exc:
                 self.report.error(w.value("RandomState").loc, str(exc))
+
+    def world_numbers(self, w: _Reader) -> dict[str, Any]:
+        """The World block's bounded settings, each checked against its one range
+        (:data:`WORLD_RANGES`); a refused one reported at its key and left at its default."""
+        defaults = WorldSettings()
+        checked: dict[str, Any] = {}
+        for key, name in _WORLD_KEYS.items():
+            value, allowed = w(key), WORLD_RANGES[name]
+            if name == "sleep_angular":  # the file's is in deg/s
+                value = math.radians(value)
+            if value not in allowed:
+                shown = math.degrees(value) if name == "sleep_angular" else value
+                self.report.error(w.value(key).loc, f"{key} must be {allowed.text()}, got "
+                                                    f"{shown:g}")
+                value = getattr(defaults, name)
+            checked[name] = type(getattr(defaults, name))(value)
+        return checked
 
     def time_step(self, w: _Reader) -> None:
         """TimeStep within :data:`STEP_RANGE` (an error), up to :data:`STEP_WARNING` (else
@@ -1413,9 +1403,12 @@ _AXES_NEEDED = {
 }
 
 
-def _positive(value: float, default: float) -> float:
-    """A setting that must be positive, or its default where the file's was refused."""
-    return float(value) if value > 0 and math.isfinite(value) else default
+#: The World block's bounded keys and the WorldSettings field each sets.
+_WORLD_KEYS = {"ERP": "erp", "CFM": "cfm", "Iterations": "iterations",
+               "MaxContacts": "max_contacts", "WarmStart": "warm_start",
+               "ContactSoftness": "contact_softness", "ExactRows": "exact_rows",
+               "SleepTime": "sleep_time", "SleepLinear": "sleep_linear",
+               "SleepAngular": "sleep_angular"}
 
 
 def _opt(v: Any) -> float | None:

@@ -193,6 +193,7 @@ class Lexer:
             del tokens[:-1]
             comments.clear()
 
+    # Long: dispatch on the next character, once a token: no call per branch
     def next_token(self) -> Token:
         """Scan the next token (EOF at the end or past the limit) and append it."""
         tokens = self.tokens

@@ -180,6 +180,7 @@ class Parser:
         return root
 
     # -- blocks ------------------------------------------------------------
+    # Long: the token loop of a block: comments, blank lines, last entry shared
     def _block(self, cur: _FileCursor, block: Block, opener: Token | None,
                prev: Entry | None = None, prev_line: int | None = None) -> None:
         """Entries up to the block's ``}`` (or the file's end); ``prev`` and ``prev_line``

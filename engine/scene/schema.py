@@ -24,6 +24,7 @@ from typing import Any
 from components.joint import SCENE_JOINT_TYPES
 from components.shape import ShapeKind
 from engine.anomalies import ANOMALIES, COMMON_DOCS, EYES, ONSET_DEFAULT
+from engine.experiments.design import END_ON, RESETS, Design
 from engine.experiments.ordering import ORDERS as EXPERIMENT_ORDERS
 from engine.measures import QUANTITIES
 from engine.physics.backend import WORLD_EXTENT, BackendName, WorldSettings
@@ -32,6 +33,8 @@ from engine.realtime import TIME_STEP
 
 #: The solver settings' defaults, defined once (engine.physics.backend.WorldSettings).
 _WORLD = WorldSettings()
+#: An Experiment block's defaults are the design's (engine.experiments.design).
+_DESIGN = Design("")
 
 # Field types.
 INT_T = "int"
@@ -112,10 +115,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                     "materials join the scene", repeat=True, struct="Model"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
         "PostPass": _f(STRUCT_T, doc="a full-screen pass over the drawn frame (your GLSL "
-                       "fragment shader; engine.render.postprocess)", repeat=True,
+                       "fragment shader; services.render.postprocess)", repeat=True,
                        struct="PostPass"),
         "Input": _f(STRUCT_T, doc="input devices and how their trackers, wheels and buttons "
-                    "are calibrated (engine.input)", repeat=True, struct="Input"),
+                    "are calibrated (services.input)", repeat=True, struct="Input"),
         "Output": _f(STRUCT_T, doc="engine values published every frame over OSC or LSL",
                      repeat=True, struct="Output"),
         "Session": _f(STRUCT_T, None, "a session log: one JSON-lines file per run with the "
@@ -369,27 +372,31 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                      struct="ExperimentFactor"),
         "Staircase": _f(STRUCT_T, None, "an adaptive procedure: one block of trials after "
                         "the factorial ones", repeat=True, struct="Staircase"),
-        "Order": _f(ENUM_T, "random", "the order of the within cells: random (a seed per "
+        "Order": _f(ENUM_T, _DESIGN.order, "the order of the within cells: random (a seed per "
                     "participant and block), latin (a Latin square's row by participant "
                     "number), balanced (a balanced Latin square's), fixed (as declared)",
                     allowed=EXPERIMENT_ORDERS),
-        "Blocks": _f(INT_T, 1, "blocks; each holds every cell Repeats times"),
-        "Repeats": _f(INT_T, 1, "trials per cell in each block"),
-        "Practice": _f(INT_T, 0, "practice trials before the first block (block 0, marked)"),
-        "Timeout": _f(FLOAT_T, 60.0, "s of simulated time after which a trial ends with "
+        "Blocks": _f(INT_T, _DESIGN.blocks, "blocks; each holds every cell Repeats times"),
+        "Repeats": _f(INT_T, _DESIGN.repeats, "trials per cell in each block"),
+        "Practice": _f(INT_T, _DESIGN.practice, "practice trials before the first block "
+                       "(block 0, marked)"),
+        "Timeout": _f(FLOAT_T, _DESIGN.timeout, "s of simulated time after which a trial "
+                      "ends with "
                       "outcome \"timeout\""),
-        "Reset": _f(ENUM_T, "trial", "trial: every trial starts from a freshly built world; "
-                    "never: one world runs through the session", allowed=("trial", "never")),
-        "EndOn": _f(ENUM_T, "finish", "what ends a trial besides the timeout: finish "
+        "Reset": _f(ENUM_T, _DESIGN.reset, "trial: every trial starts from a freshly built "
+                    "world; never: one world runs through the session", allowed=RESETS),
+        "EndOn": _f(ENUM_T, _DESIGN.end_on, "what ends a trial besides the timeout: finish "
                     "(trial:finish(outcome)) or response (also the first trial:respond)",
-                    allowed=("finish", "response")),
-        "Seed": _f(INT_T, 0, "the design's seed: random orders come from it and the "
+                    allowed=END_ON),
+        "Seed": _f(INT_T, _DESIGN.seed, "the design's seed: random orders come from it and the "
                    "participant number"),
         "Track": _f(STRINGVECTOR_T, None, "objects whose poses are logged each trial "
                     "(tracking/trial-NNN.csv)", ref="Object"),
-        "TrackCamera": _f(BOOL_T, 0, "1: log the active camera (the head) too"),
-        "TrackRate": _f(FLOAT_T, 30.0, "Hz of the tracking log (0: every frame)"),
-        "Break": _f(FLOAT_T, 0.0, "s of pause between blocks (none with --fast)"),
+        "TrackCamera": _f(BOOL_T, int(_DESIGN.track_camera), "1: log the active camera (the "
+                          "head) too"),
+        "TrackRate": _f(FLOAT_T, _DESIGN.track_rate, "Hz of the tracking log (0: every "
+                        "frame)"),
+        "Break": _f(FLOAT_T, _DESIGN.pause, "s of pause between blocks (none with --fast)"),
     },
     "ExperimentFactor": {
         "ID": Field(STRING_T, None, "the factor's name (a trials.csv column; Lua "
@@ -573,7 +580,7 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                          lengths=(4,)),
     },
     "World": {
-        "Gravity": _f(VEC3_T, (0.0, 0.0, -9.81), "m/s^2"),
+        "Gravity": _f(VEC3_T, _WORLD.gravity, "m/s^2"),
         "TimeStep": _f(FLOAT_T, TIME_STEP, "s, fixed dynamics step (more than 0, at most 1; "
                        "past 0.05 contacts and joints lose accuracy)"),
         "Extent": _f(FLOAT_T, WORLD_EXTENT, "m: bodies stay within this distance of the "
@@ -597,9 +604,9 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                         "are solved exactly (ODE dWorldStep): accurate pendulums and "
                         "mechanisms, at a cost that grows with the cube of the rows; 0: all "
                         "by the iterative solver"),
-        "ERP": _f(FLOAT_T, 0.2, "error reduction per step"),
-        "CFM": _f(FLOAT_T, 1e-5, "constraint force mixing"),
-        "MaxContacts": _f(INT_T, 4, "per pair of geometries"),
+        "ERP": _f(FLOAT_T, _WORLD.erp, "error reduction per step"),
+        "CFM": _f(FLOAT_T, _WORLD.cfm, "constraint force mixing"),
+        "MaxContacts": _f(INT_T, _WORLD.max_contacts, "per pair of geometries"),
         "AutoSleep": _f(BOOL_T, 1, "bodies that rest fall asleep (stop being simulated) "
                         "until something wakes them; see engine.physics.sleep"),
         "SleepTime": _f(FLOAT_T, SLEEP_TIME, "s a body must stay quiet (slow and not "
@@ -613,7 +620,7 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "RandomState": _f(STRING_T, None, "the scene's random generator (randInterval and "
                           "randNormal in text scripts spawn) when this state was saved"),
     },
-    # -- input devices and bindings (engine.input; address space in docs/input-format.md) --
+    # -- input devices and bindings (services.input; address space in docs/input-format.md) --
     "Input": {
         "Device": _f(STRUCT_T, doc="a device to open", repeat=True, struct="InputDevice"),
         "Tracker": _f(STRUCT_T, doc="calibration and filtering of one 6-DOF tracker",

@@ -300,24 +300,7 @@ class InputHub:
         """The processed event, after updating the state table; None when it is dropped."""
         state = self.state
         if isinstance(event, TrackerPose):
-            pipeline = self._pipelines.get(event.device)
-            if pipeline is None:
-                pipeline = self._pipelines[event.device] = TrackerPipeline(
-                    _scoped(self._tracker_specs, event.device))
-                state.trackers.setdefault(event.device, TrackerState())
-            pose = pipeline(event)
-            if not all(map(math.isfinite, (*pose.position, *pose.orientation,
-                                           *(pose.velocity or ())))):
-                # the scene's Scale, Offset or Predict took a sane sample past float range:
-                # drop it, and start the filters afresh rather than keep an inf in them
-                self._complain(event.device, "calibrated, filtered or predicted pose is not "
-                                             "finite (check the Tracker's Scale, Offset and "
-                                             "Predict)", event)
-                self._pipelines[event.device] = TrackerPipeline(
-                    _scoped(self._tracker_specs, event.device))
-                return None
-            self._posed[event.device] = pose
-            return pose
+            return self._apply_pose(event)
         if isinstance(event, WheelCount):
             wheel = state.wheels.get(event.device)
             if wheel is None:
@@ -379,6 +362,27 @@ class InputHub:
             return None
         self.state.hands[event.device] = hand
         return hand
+
+    def _apply_pose(self, event: TrackerPose) -> TrackerPose | None:
+        """The pose calibrated, filtered and predicted by its tracker's pipeline."""
+        pipeline = self._pipelines.get(event.device)
+        if pipeline is None:
+            pipeline = self._pipelines[event.device] = TrackerPipeline(
+                _scoped(self._tracker_specs, event.device))
+            self.state.trackers.setdefault(event.device, TrackerState())
+        pose = pipeline(event)
+        if not all(map(math.isfinite, (*pose.position, *pose.orientation,
+                                       *(pose.velocity or ())))):
+            # the scene's Scale, Offset or Predict took a sane sample past float range:
+            # drop it, and start the filters afresh rather than keep an inf in them
+            self._complain(event.device, "calibrated, filtered or predicted pose is not "
+                                         "finite (check the Tracker's Scale, Offset and "
+                                         "Predict)", event)
+            self._pipelines[event.device] = TrackerPipeline(
+                _scoped(self._tracker_specs, event.device))
+            return None
+        self._posed[event.device] = pose
+        return pose
 
     def _complain(self, source: str, problem: str, event: AnyInput) -> None:
         complaints = self._complaints.get(source)

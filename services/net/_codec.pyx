@@ -150,6 +150,50 @@ def encode_changes(const uint32_t[::1] ids, const double[:, ::1] poses,
     return m
 
 
+cdef bint _find_held(const uint32_t* rows, Py_ssize_t m, const uint32_t[::1] held,
+                     uint32_t[::1] ids, Py_ssize_t* where) noexcept nogil:
+    """Each row's body (its ID a running sum of the rows' first words) into ``ids`` and
+    its place among ``held`` into ``where``; False when one is not held. Both are
+    sorted: one walk finds every row."""
+    cdef Py_ssize_t n = held.shape[0], j = 0, k
+    cdef uint32_t total = 0
+    for k in range(m):
+        total = total + rows[k * 7]
+        ids[k] = total
+        while j < n and held[j] < total:
+            j += 1
+        if j == n or held[j] != total:
+            return False
+        where[k] = j
+        j += 1
+    return True
+
+
+cdef void _apply_rows(const uint32_t* rows, const Py_ssize_t* where, Py_ssize_t m,
+                      double[:, ::1] poses, int32_t[:, ::1] last,
+                      double[:, ::1] moved) noexcept nogil:
+    """Each named body's change (zigzag-decoded, added to its last change) applied to
+    its pose, copied into ``moved``; a body not named has no change this time."""
+    cdef Py_ssize_t n = poses.shape[0], j, k = 0
+    cdef int c
+    cdef uint32_t z
+    cdef int32_t change[6]
+    for j in range(n):
+        if k < m and where[k] == j:
+            for c in range(6):
+                z = rows[k * 7 + 1 + c]
+                change[c] = <int32_t>(((z >> 1) ^ (<uint32_t>0 - (z & 1)))
+                                      + <uint32_t>last[j, c])
+                last[j, c] = change[c]
+            _apply(&poses[j, 0], change)
+            for c in range(7):
+                moved[k, c] = poses[j, c]
+            k += 1
+        else:
+            for c in range(6):
+                last[j, c] = 0
+
+
 def decode_changes(const uint8_t[::1] body, const uint32_t[::1] held, double[:, ::1] poses,
                    int32_t[:, ::1] last, uint32_t[::1] ids, double[:, ::1] moved) -> bool:
     """A change message's ``body`` (``ROW * m`` bytes, m = ``len(ids)``) applied to the
@@ -157,10 +201,8 @@ def decode_changes(const uint8_t[::1] body, const uint32_t[::1] held, double[:, 
     ``moved`` (m, 7) become the bodies it names and their poses now, ``last`` (n, 6)
     each body's change. False, and nothing changed, when it names a body not held (or
     one twice)."""
-    cdef Py_ssize_t m = ids.shape[0], n = held.shape[0], i, j, k
+    cdef Py_ssize_t m = ids.shape[0], n = held.shape[0], j
     cdef int c
-    cdef uint32_t total = 0, z
-    cdef int32_t change[6]
     cdef uint32_t* rows
     cdef Py_ssize_t* where
     cdef bint known = True
@@ -182,33 +224,9 @@ def decode_changes(const uint8_t[::1] body, const uint32_t[::1] held, double[:, 
         raise MemoryError()
     with nogil:
         _from_planes(&body[0], rows, m)
-        j = 0
-        for k in range(m):  # both sorted: one walk finds every row
-            total = total + rows[k * 7]
-            ids[k] = total
-            while j < n and held[j] < total:
-                j += 1
-            if j == n or held[j] != total:
-                known = False
-                break
-            where[k] = j
-            j += 1
+        known = _find_held(rows, m, held, ids, where)
         if known:
-            k = 0
-            for j in range(n):
-                if k < m and where[k] == j:
-                    for c in range(6):
-                        z = rows[k * 7 + 1 + c]
-                        change[c] = <int32_t>(((z >> 1) ^ (<uint32_t>0 - (z & 1)))
-                                              + <uint32_t>last[j, c])
-                        last[j, c] = change[c]
-                    _apply(&poses[j, 0], change)
-                    for c in range(7):
-                        moved[k, c] = poses[j, c]
-                    k += 1
-                else:
-                    for c in range(6):
-                        last[j, c] = 0
+            _apply_rows(rows, where, m, poses, last, moved)
     free(rows)
     free(where)
     return known

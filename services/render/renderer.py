@@ -167,6 +167,18 @@ class FrameStats:
     present_ms: float = 0.0
 
 
+@dataclass(frozen=True, slots=True)
+class _Frame:
+    """What every pass of one frame draws with: the eyes, the lights and the shadow."""
+
+    eyes: list[Any]
+    lights: list[Any]
+    shadow_index: int
+    light_vp: Any
+    single: bool  # both eyes in one instanced pass
+    world: Any
+
+
 class Renderer:
     """Draws objects into a render target (see :mod:`services.render.context`)."""
 
@@ -191,6 +203,35 @@ class Renderer:
         self._lit_programs: dict[tuple[tuple[int, ...], int, bool], Any] = {}
         self._depth = self.ctx.program(vertex_shader=glsl.DEPTH_VERTEX,
                                        fragment_shader=glsl.DEPTH_FRAGMENT)
+        self._init_parts()
+        self._shadows = ShadowMap(self.ctx, shadow_size)
+        #: The visual anomalies to draw this frame, ramped (the render system sets them from
+        #: the run's engine.anomalies.Anomalies).
+        self.anomalies: list[ActiveAnomaly] = []
+        #: Leave out what no eye can see (False draws everything: the test's reference).
+        self.culling = True
+        #: Draw the two eyes of a stereo view in one pass (False: one pass an eye, the
+        #: benchmark's reference).
+        self.single_pass = True
+        #: Draw small-looking spheres, cylinders and capsules with fewer triangles.
+        self.lod = True
+        #: Wait for the GPU at the end of each stage, so FrameStats' stage times include
+        #: the GPU's work (the benchmark's breakdown; slower, as nothing overlaps).
+        self.profile = False
+        #: Called between a frame drawn and finished on the GPU (``ctx.finish()``) and its
+        #: swap: a swap barrier (None: swap at once, the GPU finishing on its own).
+        self.before_present: Callable[[], None] | None = None
+        self._init_targets()
+        self._texture_for(_WHITE)
+        self._skinning = Skinning(self.ctx)
+        self._skinned: dict[int, list[str]] = {}  # object -> the skin groups it is in
+        self._group_keys: dict[str, int] = {}  # skin group -> its internal object key
+        self._group_parts: dict[str, _Part] = {}  # skin group -> the part that draws it
+        self._part_mesh: list[str] = []
+        self._skinned_parts = np.zeros(0, np.int64)  # part indices drawing skin groups
+
+    def _init_parts(self) -> None:
+        """The objects' parts and their per-part tables (filled by _rebuild)."""
         self._meshes: dict[str, _GpuMesh] = {}
         self._textures: dict[str, Any] = {}
         self._objects: dict[int, list[_Part]] = {}
@@ -215,23 +256,9 @@ class Renderer:
         self._posed: _Posed | None = None  # the parts' world matrices as last worked out
         #: Each eye slot's last draws, with what they were made from (see _eye_runs).
         self._eye_cache: dict[int, tuple[tuple, int, list[_Run]]] = {}
-        self._shadows = ShadowMap(self.ctx, shadow_size)
-        #: The visual anomalies to draw this frame, ramped (the render system sets them from
-        #: the run's engine.anomalies.Anomalies).
-        self.anomalies: list[ActiveAnomaly] = []
-        #: Leave out what no eye can see (False draws everything: the test's reference).
-        self.culling = True
-        #: Draw the two eyes of a stereo view in one pass (False: one pass an eye, the
-        #: benchmark's reference).
-        self.single_pass = True
-        #: Draw small-looking spheres, cylinders and capsules with fewer triangles.
-        self.lod = True
-        #: Wait for the GPU at the end of each stage, so FrameStats' stage times include
-        #: the GPU's work (the benchmark's breakdown; slower, as nothing overlaps).
-        self.profile = False
-        #: Called between a frame drawn and finished on the GPU (``ctx.finish()``) and its
-        #: swap: a swap barrier (None: swap at once, the GPU finishing on its own).
-        self.before_present: Callable[[], None] | None = None
+
+    def _init_targets(self) -> None:
+        """The offscreen targets, made when a frame first needs them."""
         self._scene_size: tuple[int, int] | None = None
         self._scene_tex: Any = None
         self._scene_depth: Any = None
@@ -239,13 +266,6 @@ class Renderer:
         self._render_scale = 1.0
         self._scaled: tuple[Any, Any] | None = None  # the post chain's output when scaled
         self._upscale: tuple[Any, Any] | None = None  # program and vertex array
-        self._texture_for(_WHITE)
-        self._skinning = Skinning(self.ctx)
-        self._skinned: dict[int, list[str]] = {}  # object -> the skin groups it is in
-        self._group_keys: dict[str, int] = {}  # skin group -> its internal object key
-        self._group_parts: dict[str, _Part] = {}  # skin group -> the part that draws it
-        self._part_mesh: list[str] = []
-        self._skinned_parts = np.zeros(0, np.int64)  # part indices drawing skin groups
 
     @property
     def instancing(self) -> bool:
@@ -926,9 +946,26 @@ class Renderer:
         steps = self.post.steps(self.anomalies, [(eye_geometry(eye, size), eye.viewport)
                                                  for eye in screen_eyes], size)
         post = bool(steps)
-        if post or scaled:  # read as a texture; else the view goes straight to the target
+        fbo = self._begin_scene(size, post or scaled)
+        frame = _Frame(eyes, lights, shadow_index, light_vp, single, world)
+        self._draw_eyes(fbo, frame, runs)
+        mark = self._stage("draw_ms", mark)
+        if post:
+            self.post.run(steps, self._scene_tex, self._scene_depth, size, self.time,
+                          self._scaled_output(size)[1] if scaled else self.target.fbo)
+        if scaled:
+            self._scale_up(self._scaled_output(size)[0] if post else self._scene_tex, output)
+        mark = self._stage("post_ms", mark)
+        self._present(output, post or scaled)
+        end = self._stage("present_ms", mark)
+        self.stats.frame_ms = (end - start) * 1000.0
+
+    def _begin_scene(self, size: tuple[int, int], offscreen: bool) -> Any:
+        """The framebuffer the 3D view is drawn into, cleared: the target's own, or the
+        scene texture when post-processing or scaling reads it afterwards."""
+        if offscreen:
             self._ensure_scene_targets(size)
-        fbo = self._scene_fbo if post or scaled else self.target.fbo
+        fbo = self._scene_fbo if offscreen else self.target.fbo
         fbo.use()
         fbo.viewport = (0, 0, *size)
         driver = _time.thread_time()
@@ -936,9 +973,13 @@ class Renderer:
         self.stats.driver_ms += (_time.thread_time() - driver) * 1e3
         self.ctx.enable(self.ctx.DEPTH_TEST)
         self._shadows.texture.use(glsl.TEXTURE_UNITS["u_shadow_map"])
-        shadowing = shadow_index if light_vp is not None else -1
-        copies = 2 if single else 1  # instances a part is drawn as (one an eye, one pass)
-        if single:  # both eyes' viewports as one, each clipped at the middle
+        return fbo
+
+    def _draw_eyes(self, fbo: Any, frame: _Frame, runs: list[list[Any]]) -> None:
+        """Every eye's runs of batches: one pass for both eyes (their viewports as one,
+        each clipped at the middle) or one pass an eye."""
+        eyes, single = frame.eyes, frame.single
+        if single:
             x, y, w, h = eyes[0].viewport
             passes = [(_STEREO_SLOT, eyes[0], runs[0], (x, y, 2 * w, h))]
             self.ctx.enable_direct(_CLIP_DISTANCE0)
@@ -949,45 +990,50 @@ class Renderer:
             fbo.viewport = viewport
             configured: set[int] = set()
             for run in eye_runs:
-                batch = run.batch
-                if batch.key[3]:
-                    self._begin_overlay()
-                program = self._lit(lights, shadowing, batch.key[1] != _WHITE, single)
-                compiled = self.shaders.state(batch.key[2]) if batch.key[2] else None
-                if compiled is not None:
-                    program = compiled.program
-                    self.shaders.apply(compiled)
-                if program.glo not in configured:
-                    self._frame_uniforms(program, eye, lights, shadow_index, light_vp)
-                    if single:
-                        self._stereo_uniforms(program, eyes)
-                    configured.add(program.glo)
-                self._textures[batch.key[1]].use(glsl.TEXTURE_UNITS["u_texture"])
-                self._face_culling(batch)
-                vao = self._vao(batch, run.level, slot, program)
-                self.stats.instances += copies * len(run.parts)
-                if compiled is not None and compiled.per_object:
-                    self._draw_per_object(program, vao, eye, world[run.parts])
-                    continue
-                driver = _time.thread_time()
-                vao.render(instances=copies * len(run.parts))
-                self.stats.driver_ms += (_time.thread_time() - driver) * 1e3
-                self.stats.draw_calls += 1
+                self._draw_run(run, slot, eye, frame, configured)
             self.ctx.enable(self.ctx.DEPTH_TEST)
             self.ctx.disable(self.ctx.BLEND)
         if single:
             self.ctx.disable_direct(_CLIP_DISTANCE0)
         self.ctx.disable(self.ctx.CULL_FACE)
         self.stats.batches = len(self._batches)
-        mark = self._stage("draw_ms", mark)
-        if post:
-            self.post.run(steps, self._scene_tex, self._scene_depth, size, self.time,
-                          self._scaled_output(size)[1] if scaled else self.target.fbo)
-        if scaled:
-            self._scale_up(self._scaled_output(size)[0] if post else self._scene_tex, output)
-        mark = self._stage("post_ms", mark)
+
+    def _draw_run(self, run: Any, slot: int, eye: Any, frame: _Frame,
+                  configured: set[int]) -> None:
+        """One run of a batch's parts, instanced (once an eye in a single stereo pass);
+        a per-object shader draws them one at a time."""
+        batch = run.batch
+        if batch.key[3]:
+            self._begin_overlay()
+        shadowing = frame.shadow_index if frame.light_vp is not None else -1
+        program = self._lit(frame.lights, shadowing, batch.key[1] != _WHITE, frame.single)
+        compiled = self.shaders.state(batch.key[2]) if batch.key[2] else None
+        if compiled is not None:
+            program = compiled.program
+            self.shaders.apply(compiled)
+        if program.glo not in configured:
+            self._frame_uniforms(program, eye, frame.lights, frame.shadow_index,
+                                 frame.light_vp)
+            if frame.single:
+                self._stereo_uniforms(program, frame.eyes)
+            configured.add(program.glo)
+        self._textures[batch.key[1]].use(glsl.TEXTURE_UNITS["u_texture"])
+        self._face_culling(batch)
+        vao = self._vao(batch, run.level, slot, program)
+        copies = 2 if frame.single else 1  # instances a part is drawn as
+        self.stats.instances += copies * len(run.parts)
+        if compiled is not None and compiled.per_object:
+            self._draw_per_object(program, vao, eye, frame.world[run.parts])
+            return
+        driver = _time.thread_time()
+        vao.render(instances=copies * len(run.parts))
+        self.stats.driver_ms += (_time.thread_time() - driver) * 1e3
+        self.stats.draw_calls += 1
+
+    def _present(self, output: tuple[int, int], offscreen: bool) -> None:
+        """The HUD drawn over the frame (a headset's on its own layer), then shown."""
         if hasattr(self.target, "frame_depth"):  # a headset's: hands the depth on
-            self.target.frame_depth = self._scene_depth if post or scaled else None
+            self.target.frame_depth = self._scene_depth if offscreen else None
         hud_fbo = getattr(self.target, "hud_fbo", None)
         if hud_fbo is not None:  # a headset's HUD is its own (head-locked) layer
             hud_fbo.clear(0.0, 0.0, 0.0, 0.0)
@@ -998,8 +1044,6 @@ class Renderer:
             self.ctx.finish()
             self.before_present()
         self.target.present()
-        end = self._stage("present_ms", mark)
-        self.stats.frame_ms = (end - start) * 1000.0
 
     def _scaled_output(self, size: tuple[int, int]) -> tuple[Any, Any]:
         """Where the post chain ends when the view is drawn smaller: a texture of the

@@ -121,11 +121,13 @@ def test_solver_settings_are_checked_where_they_are_written(tmp_path: Path) -> N
         return [(d.line, d.col, d.message) for d in check(path) if d.is_error]
 
     assert errors("World {\n  WarmStart 1.5 }\n") == [
-        (2, 13, "WarmStart must be from 0 to 0.99")]
+        (2, 13, "WarmStart must be from 0 to 0.99, got 1.5")]
     assert errors("World {\n  ContactSoftness -1 }\n") == [
-        (2, 19, "ContactSoftness must be a number >= 0")]
+        (2, 19, "ContactSoftness must be at least 0, got -1")]
     assert errors("World {\n  ExactRows -2 }\n") == [
-        (2, 13, "ExactRows must be >= 0 (0: none)")]
+        (2, 13, "ExactRows must be at least 0, got -2")]
+    assert errors("World {\n  ERP 1.5 CFM -1 }\n") == [
+        (2, 7, "ERP must be from 0 to 1, got 1.5"), (2, 15, "CFM must be at least 0, got -1")]
     assert errors("World { WarmStart 0 ContactSoftness 0 ExactRows 0 }\n") == []
     defaults = WorldSettings()
     assert 0 < defaults.warm_start < 1 and defaults.exact_rows > 0

@@ -375,4 +375,4 @@ def test_sleep_keys_are_checked_where_they_are_written(tmp_path: Path) -> None:
     ((line, col, message),) = errors('Object { ID "a"\n  SleepVelocity [1 2 3] }\n')
     assert (line, col) == (2, 17) and "6 numbers" in message
     ((line, col, message),) = errors('World {\n  SleepTime 0 }\n')
-    assert (line, col, message) == (2, 13, "SleepTime must be a positive number")
+    assert (line, col, message) == (2, 13, "SleepTime must be more than 0, got 0")

@@ -139,6 +139,7 @@ cdef inline bint linked_to_static(Ctx* c, int64_t body, int64_t static) noexcept
     return False
 
 
+# Long: ODE's per-pair callback in the GIL-free step: filter, collide, contact
 cdef void near_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
     cdef Ctx* c = <Ctx*>data
     cdef GeomInfo* g1

@@ -84,6 +84,236 @@ cdef double min_inertia(dBodyID body) noexcept:
     return min(m.I[0], m.I[5], m.I[10])
 
 
+cdef class _JointBuild:
+    """What a joint kind's builder needs: ODE's bodies in attach order (``bb`` NULL: the
+    world), the anchor and axes in world coordinates; it sets ``sign`` where it attaches
+    them the other way round, and ``drive`` for the six-DOF drive."""
+    cdef dWorldID world
+    cdef dBodyID ba
+    cdef dBodyID bb
+    cdef dReal anchor[3]
+    cdef dReal a1[3]
+    cdef dReal a2[3]
+    cdef double com[3]       # ``ba``'s centre of mass in its entity frame (the drive's)
+    cdef double max_force
+    cdef double sign
+    cdef _Drive drive
+
+
+ctypedef dJointID (*JointBuilder)(_JointBuild b) except NULL
+
+#: One builder per joint kind, indexed by the kind (JOINT_HINGE ... JOINT_ALIGN): each
+#: creates its ODE joint(s) and attaches them; create_joint does what all kinds share.
+cdef JointBuilder JOINT_BUILDERS[10]
+
+
+cdef dJointID build_hinge(_JointBuild b) except NULL:
+    cdef dJointID j = dJointCreateHinge(b.world, NULL)
+    dJointAttach(j, b.ba, b.bb)
+    dJointSetHingeAnchor(j, b.anchor[0], b.anchor[1], b.anchor[2])
+    dJointSetHingeAxis(j, b.a1[0], b.a1[1], b.a1[2])
+    return j
+
+
+cdef dJointID build_ball(_JointBuild b) except NULL:
+    cdef dJointID j = dJointCreateBall(b.world, NULL)
+    dJointAttach(j, b.ba, b.bb)
+    dJointSetBallAnchor(j, b.anchor[0], b.anchor[1], b.anchor[2])
+    return j
+
+
+cdef dJointID build_slider(_JointBuild b) except NULL:
+    cdef dJointID j = dJointCreateSlider(b.world, NULL)
+    dJointAttach(j, b.ba, b.bb)
+    dJointSetSliderAxis(j, b.a1[0], b.a1[1], b.a1[2])
+    return j
+
+
+cdef dJointID build_universal(_JointBuild b) except NULL:
+    cdef dJointID j = dJointCreateUniversal(b.world, NULL)
+    dJointAttach(j, b.ba, b.bb)
+    dJointSetUniversalAnchor(j, b.anchor[0], b.anchor[1], b.anchor[2])
+    dJointSetUniversalAxis1(j, b.a1[0], b.a1[1], b.a1[2])
+    dJointSetUniversalAxis2(j, b.a2[0], b.a2[1], b.a2[2])
+    return j
+
+
+cdef dJointID build_hinge2(_JointBuild b) except NULL:
+    cdef dJointID j = dJointCreateHinge2(b.world, NULL)
+    # ODE's hinge2 turns axis 1 (steering) with body 1 and axis 2 (spin) with body 2:
+    # the chassis (body_b) goes first, the wheel (body_a) second.
+    if b.bb != NULL:
+        dJointAttach(j, b.bb, b.ba)
+        b.sign = -1.0
+    else:
+        dJointAttach(j, b.ba, NULL)
+    dJointSetHinge2Anchor(j, b.anchor[0], b.anchor[1], b.anchor[2])
+    dJointSetHinge2Axes(j, b.a1, b.a2)
+    return j
+
+
+cdef dJointID build_fixed(_JointBuild b) except NULL:
+    cdef dJointID j = dJointCreateFixed(b.world, NULL)
+    # ODE holds the offset between the bodies as a lever on its first body's turning; on
+    # a body that turns easily (a light hand gripping a 50 kg crate: 5000 times less
+    # inertia) QuickStep cannot converge and the joint stretches by many cm. The body
+    # harder to turn goes first (joint_force reads either).
+    if b.bb != NULL and min_inertia(b.bb) > min_inertia(b.ba):
+        dJointAttach(j, b.bb, b.ba)
+    else:
+        dJointAttach(j, b.ba, b.bb)
+    dJointSetFixed(j)
+    return j
+
+
+cdef dJointID build_align(_JointBuild b) except NULL:
+    # ODE's angular motor in Euler mode measures the three angles between the bodies
+    # from where they are now; stops at 0 on all three hold them there
+    cdef dJointID j = dJointCreateAMotor(b.world, NULL)
+    dJointAttach(j, b.ba, b.bb)
+    dJointSetAMotorMode(j, dAMotorEuler)
+    dJointSetAMotorAxis(j, 0, 1, 1.0, 0.0, 0.0)
+    dJointSetAMotorAxis(j, 2, 2 if b.bb != NULL else 0, 0.0, 0.0, 1.0)
+    for stop in (dParamLoStop, dParamHiStop, dParamLoStop2, dParamHiStop2,
+                 dParamLoStop3, dParamHiStop3):
+        dJointSetAMotorParam(j, stop, 0.0)
+    return j
+
+
+cdef dJointID angular_motor(dWorldID world, dBodyID ba, dBodyID bb, const dReal* axis):
+    """An angular motor of one axis (fixed in body 1), user mode."""
+    cdef dJointID j = dJointCreateAMotor(world, NULL)
+    dJointAttach(j, ba, bb)
+    dJointSetAMotorMode(j, dAMotorUser)
+    dJointSetAMotorNumAxes(j, 1)
+    dJointSetAMotorAxis(j, 0, 1, axis[0], axis[1], axis[2])
+    return j
+
+
+cdef dJointID linear_motor(dWorldID world, dBodyID ba, dBodyID bb, const dReal* axis):
+    """A linear motor of one axis (fixed in body 1)."""
+    cdef dJointID j = dJointCreateLMotor(world, NULL)
+    dJointAttach(j, ba, bb)
+    dJointSetLMotorNumAxes(j, 1)
+    dJointSetLMotorAxis(j, 0, 1, axis[0], axis[1], axis[2])
+    return j
+
+
+cdef dJointID build_amotor(_JointBuild b) except NULL:
+    return angular_motor(b.world, b.ba, b.bb, b.a1)
+
+
+cdef dJointID build_lmotor(_JointBuild b) except NULL:
+    return linear_motor(b.world, b.ba, b.bb, b.a1)
+
+
+cdef dJointID build_six_dof(_JointBuild b) except NULL:
+    """The drive: a linear and an angular motor of three world axes each, aimed at the
+    body's pose now; the joint it is known by is the linear motor."""
+    cdef _Drive d = _Drive()
+    cdef int k
+    d.body = b.ba
+    d.lmotor = dJointCreateLMotor(b.world, NULL)
+    dJointAttach(d.lmotor, b.ba, b.bb)
+    dJointSetLMotorNumAxes(d.lmotor, 3)
+    d.amotor = dJointCreateAMotor(b.world, NULL)
+    dJointAttach(d.amotor, b.ba, b.bb)
+    dJointSetAMotorMode(d.amotor, dAMotorUser)
+    dJointSetAMotorNumAxes(d.amotor, 3)
+    for k in range(3):
+        dJointSetLMotorAxis(d.lmotor, k, 0, k == 0, k == 1, k == 2)
+        dJointSetAMotorAxis(d.amotor, k, 0, k == 0, k == 1, k == 2)
+    memcpy(&d.target[0], dBodyGetPosition(b.ba), 3 * sizeof(double))
+    memcpy(&d.target[3], dBodyGetQuaternion(b.ba), 4 * sizeof(double))
+    d.max_force = b.max_force
+    d.max_torque = b.max_force
+    d.tau = 0.0
+    d.max_speed = MAX_SPEED
+    d.max_spin = MAX_SPEED
+    memcpy(d.com, b.com, 3 * sizeof(double))
+    d.other = b.bb
+    if b.bb != NULL:
+        relative_pose(b.bb, b.ba, d.rel)
+    b.drive = d
+    return d.lmotor
+
+
+JOINT_BUILDERS[JOINT_HINGE] = build_hinge
+JOINT_BUILDERS[JOINT_BALL] = build_ball
+JOINT_BUILDERS[JOINT_SLIDER] = build_slider
+JOINT_BUILDERS[JOINT_UNIVERSAL] = build_universal
+JOINT_BUILDERS[JOINT_HINGE2] = build_hinge2
+JOINT_BUILDERS[JOINT_FIXED] = build_fixed
+JOINT_BUILDERS[JOINT_AMOTOR] = build_amotor
+JOINT_BUILDERS[JOINT_LMOTOR] = build_lmotor
+JOINT_BUILDERS[JOINT_SIX_DOF] = build_six_dof
+JOINT_BUILDERS[JOINT_ALIGN] = build_align
+#: Kinds without an axis, limits or motor of their own.
+AXISLESS = (JOINT_BALL, JOINT_FIXED, JOINT_SIX_DOF, JOINT_ALIGN)
+
+
+cdef check_joint(World w, key, int kind, key_a, key_b, axis, axis2, spring):
+    """Refuse what ODE would abort the process on (see _errors.pxi), at the door."""
+    if key in w.joints:
+        raise ValueError(f"joint {key} already exists")
+    if not 0 <= kind < 10:
+        raise ValueError(f"unknown joint kind {kind}")
+    if spring is not None and kind not in (JOINT_HINGE, JOINT_SLIDER):
+        raise ValueError(f"joint {key}: only a hinge or a slider takes a spring")
+    if key_b is not None and key_b == key_a:
+        raise ValueError(f"joint {key}: a joint needs two different bodies")
+    if (kind not in AXISLESS and not any(axis)) or (
+            kind in (JOINT_UNIVERSAL, JOINT_HINGE2) and not any(axis2)):
+        raise ValueError(f"joint {key}: a zero axis")
+    if kind in (JOINT_UNIVERSAL, JOINT_HINGE2):  # ODE aborts on parallel hinge2 axes
+        u, v = [float(x) for x in axis], [float(x) for x in axis2]
+        cross = ((u[1] * v[2] - u[2] * v[1]) ** 2 + (u[2] * v[0] - u[0] * v[2]) ** 2
+                 + (u[0] * v[1] - u[1] * v[0]) ** 2)
+        if cross <= 1e-12 * sum(x * x for x in u) * sum(x * x for x in v):
+            raise ValueError(f"joint {key}: axis and axis2 must not be parallel")
+
+
+cdef _JointBuild joint_build(World w, key, int kind, int ia, int ib, anchor, axis, axis2,
+                             double max_force):
+    """The builder's input: a static first body swaps with the second (ODE attaches a
+    body to the world as body 1 with body 2 NULL)."""
+    cdef _JointBuild b = _JointBuild()
+    cdef int k
+    b.world = w.world
+    b.ba = w.slots[ia].body
+    b.bb = w.slots[ib].body if ib >= 0 else NULL
+    if b.ba == NULL and b.bb != NULL:
+        b.ba = b.bb
+        b.bb = NULL
+        ia = ib
+    if b.ba == NULL:
+        raise ValueError("a joint needs at least one non-static body")
+    if kind == JOINT_HINGE2 and b.bb == NULL:
+        raise ValueError(f"joint {key}: a hinge2 joint needs two bodies, neither static")
+    for k in range(3):
+        b.anchor[k] = anchor[k]
+        b.a1[k] = axis[k]
+        b.a2[k] = axis2[k]
+    memcpy(b.com, w.slots[ia].com, 3 * sizeof(double))
+    b.max_force = max_force
+    b.sign = 1.0
+    b.drive = None
+    return b
+
+
+cdef _Spring make_spring(_JointBuild b, int kind, spring):
+    """A hinge's or slider's spring: a motor along its axis, fixed in ODE's body 1 as the
+    joint's own axis is."""
+    cdef _Spring sp = _Spring()
+    sp.stiffness, sp.damping, sp.target, sp.max_force = spring
+    inverse_rotate(dBodyGetQuaternion(b.ba), b.a1, sp.axis)
+    if kind == JOINT_HINGE:
+        sp.motor = angular_motor(b.world, b.ba, b.bb, b.a1)
+    else:
+        sp.motor = linear_motor(b.world, b.ba, b.bb, b.a1)
+    return sp
+
+
 def create_joint(World w, key, int kind, key_a, key_b, anchor, axis, axis2, low, high,
                  double velocity, double max_force, ref_a=None, ref_b=None,
                  spring=None) -> None:
@@ -94,194 +324,67 @@ def create_joint(World w, key, int kind, key_a, key_b, anchor, axis, axis2, low,
     they were there, so a saved state re-creates it exactly. ``spring`` (stiffness,
     damping, target, max force; a hinge or slider) pulls its free axis to the target.
     """
-    cdef dBodyID ba = NULL
-    cdef dBodyID bb = NULL
     cdef dJointID j = NULL
-    cdef dReal a1[3]
-    cdef dReal a2[3]
-    cdef _JointRec rec
-    cdef _Drive d
     cdef _Spring sp = None
-    cdef double sign = 1.0
+    cdef _JointRec rec
     w.check()
-    if key in w.joints:
-        raise ValueError(f"joint {key} already exists")
-    if spring is not None and kind not in (JOINT_HINGE, JOINT_SLIDER):
-        raise ValueError(f"joint {key}: only a hinge or a slider takes a spring")
-    # ODE aborts the process on these (see _errors.pxi): refused at the door as well
-    if key_b is not None and key_b == key_a:
-        raise ValueError(f"joint {key}: a joint needs two different bodies")
-    if (kind not in (JOINT_BALL, JOINT_FIXED, JOINT_SIX_DOF, JOINT_ALIGN) and
-            not any(axis)) or (
-            kind in (JOINT_UNIVERSAL, JOINT_HINGE2) and not any(axis2)):
-        raise ValueError(f"joint {key}: a zero axis")
+    check_joint(w, key, kind, key_a, key_b, axis, axis2, spring)
     cdef int ia = w.slot(key_a)
     cdef int ib = -1 if key_b is None else w.slot(key_b)
-    cdef int ia0 = ia
-    cdef int ib0 = ib
-    ba = w.slots[ia].body
-    if ib >= 0:
-        bb = w.slots[ib].body
-    if ba == NULL and bb != NULL:
-        ba = bb
-        bb = NULL
-        ia = ib
-    if ba == NULL:
-        raise ValueError("a joint needs at least one non-static body")
-    if kind == JOINT_HINGE2 and bb == NULL:
-        raise ValueError(f"joint {key}: a hinge2 joint needs two bodies, neither static")
-    if kind in (JOINT_UNIVERSAL, JOINT_HINGE2):  # ODE aborts on parallel hinge2 axes
-        u, v = [float(x) for x in axis], [float(x) for x in axis2]
-        cross = ((u[1] * v[2] - u[2] * v[1]) ** 2 + (u[2] * v[0] - u[0] * v[2]) ** 2
-                 + (u[0] * v[1] - u[1] * v[0]) ** 2)
-        if cross <= 1e-12 * sum(x * x for x in u) * sum(x * x for x in v):
-            raise ValueError(f"joint {key}: axis and axis2 must not be parallel")
+    cdef _JointBuild b = joint_build(w, key, kind, ia, ib, anchor, axis, axis2, max_force)
     # ODE fixes the joint's body-frame anchors, axes and reference rotation from where
     # the bodies are now: make them where they were when the joint was first made.
     cdef double saved[14]
-    cdef int moved_a = 0
-    cdef int moved_b = 0
-    for ref in (ref_a, ref_b):
-        if ref is not None and len(ref) != 7:
-            raise ValueError(f"a reference pose is 7 numbers (x y z w x y z), got {ref!r}")
-    if ref_a is not None and w.slots[ia0].body != NULL:
-        moved_a = place(w, ia0, ref_a, saved)
-    if ref_b is not None and ib0 >= 0 and w.slots[ib0].body != NULL:
-        moved_b = place(w, ib0, ref_b, &saved[7])
+    cdef int moved = place_refs(w, ia, ib, ref_a, ref_b, saved)
     try:
-        for k in range(3):
-            a1[k] = axis[k]
-            a2[k] = axis2[k]
-        if kind == JOINT_HINGE:
-            j = dJointCreateHinge(w.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetHingeAnchor(j, anchor[0], anchor[1], anchor[2])
-            dJointSetHingeAxis(j, a1[0], a1[1], a1[2])
-        elif kind == JOINT_BALL:
-            j = dJointCreateBall(w.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetBallAnchor(j, anchor[0], anchor[1], anchor[2])
-        elif kind == JOINT_SLIDER:
-            j = dJointCreateSlider(w.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetSliderAxis(j, a1[0], a1[1], a1[2])
-        elif kind == JOINT_UNIVERSAL:
-            j = dJointCreateUniversal(w.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetUniversalAnchor(j, anchor[0], anchor[1], anchor[2])
-            dJointSetUniversalAxis1(j, a1[0], a1[1], a1[2])
-            dJointSetUniversalAxis2(j, a2[0], a2[1], a2[2])
-        elif kind == JOINT_HINGE2:
-            j = dJointCreateHinge2(w.world, NULL)
-            # ODE's hinge2 turns axis 1 (steering) with body 1 and axis 2 (spin) with
-            # body 2: the chassis (body_b) goes first, the wheel (body_a) second.
-            if bb != NULL:
-                dJointAttach(j, bb, ba)
-                sign = -1.0
-            else:
-                dJointAttach(j, ba, NULL)
-            dJointSetHinge2Anchor(j, anchor[0], anchor[1], anchor[2])
-            dJointSetHinge2Axes(j, a1, a2)
-        elif kind == JOINT_FIXED:
-            j = dJointCreateFixed(w.world, NULL)
-            # ODE holds the offset between the bodies as a lever on its first body's
-            # turning; on a body that turns easily (a light hand gripping a 50 kg crate:
-            # 5000 times less inertia) QuickStep cannot converge and the joint stretches
-            # by many cm. The body harder to turn goes first (joint_force reads either).
-            if bb != NULL and min_inertia(bb) > min_inertia(ba):
-                dJointAttach(j, bb, ba)
-            else:
-                dJointAttach(j, ba, bb)
-            dJointSetFixed(j)
-        elif kind == JOINT_ALIGN:
-            # ODE's angular motor in Euler mode measures the three angles between the
-            # bodies from where they are now; stops at 0 on all three hold them there
-            j = dJointCreateAMotor(w.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetAMotorMode(j, dAMotorEuler)
-            dJointSetAMotorAxis(j, 0, 1, 1.0, 0.0, 0.0)
-            dJointSetAMotorAxis(j, 2, 2 if bb != NULL else 0, 0.0, 0.0, 1.0)
-            for stop in (dParamLoStop, dParamHiStop, dParamLoStop2, dParamHiStop2,
-                         dParamLoStop3, dParamHiStop3):
-                dJointSetAMotorParam(j, stop, 0.0)
-        elif kind == JOINT_AMOTOR:
-            j = dJointCreateAMotor(w.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetAMotorMode(j, dAMotorUser)
-            dJointSetAMotorNumAxes(j, 1)
-            dJointSetAMotorAxis(j, 0, 1, a1[0], a1[1], a1[2])
-        elif kind == JOINT_LMOTOR:
-            j = dJointCreateLMotor(w.world, NULL)
-            dJointAttach(j, ba, bb)
-            dJointSetLMotorNumAxes(j, 1)
-            dJointSetLMotorAxis(j, 0, 1, a1[0], a1[1], a1[2])
-        elif kind == JOINT_SIX_DOF:
-            d = _Drive()
-            d.body = ba
-            d.lmotor = dJointCreateLMotor(w.world, NULL)
-            dJointAttach(d.lmotor, ba, bb)
-            dJointSetLMotorNumAxes(d.lmotor, 3)
-            d.amotor = dJointCreateAMotor(w.world, NULL)
-            dJointAttach(d.amotor, ba, bb)
-            dJointSetAMotorMode(d.amotor, dAMotorUser)
-            dJointSetAMotorNumAxes(d.amotor, 3)
-            for k in range(3):
-                dJointSetLMotorAxis(d.lmotor, k, 0, k == 0, k == 1, k == 2)
-                dJointSetAMotorAxis(d.amotor, k, 0, k == 0, k == 1, k == 2)
-            memcpy(&d.target[0], dBodyGetPosition(ba), 3 * sizeof(double))
-            memcpy(&d.target[3], dBodyGetQuaternion(ba), 4 * sizeof(double))
-            d.max_force = max_force
-            d.max_torque = max_force
-            d.tau = 0.0
-            d.max_speed = MAX_SPEED
-            d.max_spin = MAX_SPEED
-            memcpy(d.com, w.slots[ia].com, 3 * sizeof(double))
-            d.other = bb
-            if bb != NULL:
-                relative_pose(bb, ba, d.rel)
-            j = d.lmotor
-        else:
-            raise ValueError(f"unknown joint kind {kind}")
+        j = JOINT_BUILDERS[kind](b)
         if spring is not None:
-            sp = _Spring()
-            sp.stiffness, sp.damping, sp.target, sp.max_force = spring
-            inverse_rotate(dBodyGetQuaternion(ba), a1, sp.axis)
-            if kind == JOINT_HINGE:  # the hinge's axis, fixed in ODE's body 1 as the hinge's
-                sp.motor = dJointCreateAMotor(w.world, NULL)
-                dJointAttach(sp.motor, ba, bb)
-                dJointSetAMotorMode(sp.motor, dAMotorUser)
-                dJointSetAMotorNumAxes(sp.motor, 1)
-                dJointSetAMotorAxis(sp.motor, 0, 1, a1[0], a1[1], a1[2])
-            else:
-                sp.motor = dJointCreateLMotor(w.world, NULL)
-                dJointAttach(sp.motor, ba, bb)
-                dJointSetLMotorNumAxes(sp.motor, 1)
-                dJointSetLMotorAxis(sp.motor, 0, 1, a1[0], a1[1], a1[2])
+            sp = make_spring(b, kind, spring)
     finally:
-        if moved_a:
-            dBodySetPosition(w.slots[ia0].body, saved[0], saved[1], saved[2])
-            set_quaternion_exactly(w.slots[ia0].body, &saved[3])
-        if moved_b:
-            dBodySetPosition(w.slots[ib0].body, saved[7], saved[8], saved[9])
-            set_quaternion_exactly(w.slots[ib0].body, &saved[10])
+        restore_refs(w, ia, ib, moved, saved)
     rec = _JointRec()
     rec.joint = j
     rec.kind = kind
-    rec.sign = sign
+    rec.sign = b.sign
     rec.bodies = (key_a, key_b)
-    rec.drive = d if kind == JOINT_SIX_DOF else None
+    rec.drive = b.drive
     rec.spring = sp
     w.joints[key] = rec
     relink(w)
-    if sign < 0.0:
+    if b.sign < 0.0:
         low, high = (None if high is None else -high), (None if low is None else -low)
-    if kind not in (JOINT_BALL, JOINT_FIXED, JOINT_SIX_DOF, JOINT_ALIGN):
+    if kind not in AXISLESS:
         if low is not None:
             joint_param(rec, dParamLoStop, low)
         if high is not None:
             joint_param(rec, dParamHiStop, high)
         if max_force > 0.0:
             set_motor(w, key, velocity, max_force)
+
+
+cdef int place_refs(World w, int ia, int ib, ref_a, ref_b, double* saved) except -1:
+    """Put the bodies at their reference poses (:func:`place`); bit 1 set if body a moved
+    (its former pose in ``saved[0:7]``), bit 2 if body b did (``saved[7:14]``)."""
+    cdef int moved = 0
+    for ref in (ref_a, ref_b):
+        if ref is not None and len(ref) != 7:
+            raise ValueError(f"a reference pose is 7 numbers (x y z w x y z), got {ref!r}")
+    if ref_a is not None and w.slots[ia].body != NULL and place(w, ia, ref_a, saved):
+        moved |= 1
+    if (ref_b is not None and ib >= 0 and w.slots[ib].body != NULL
+            and place(w, ib, ref_b, &saved[7])):
+        moved |= 2
+    return moved
+
+
+cdef void restore_refs(World w, int ia, int ib, int moved, double* saved) noexcept:
+    """Put back what :func:`place_refs` moved, bit for bit."""
+    if moved & 1:
+        dBodySetPosition(w.slots[ia].body, saved[0], saved[1], saved[2])
+        set_quaternion_exactly(w.slots[ia].body, &saved[3])
+    if moved & 2:
+        dBodySetPosition(w.slots[ib].body, saved[7], saved[8], saved[9])
+        set_quaternion_exactly(w.slots[ib].body, &saved[10])
 
 
 cdef int place(World w, int i, ref, double* saved) except -1:

@@ -318,6 +318,7 @@ cdef class World:
         self.sleep_time, self.sleep_smoothing = time, smoothing_time
 
     # -- the step -------------------------------------------------------------------
+    # Long: the step as one sequence, the GIL released once around it
     def step(self, double dt, bint sleep=False) -> list:
         """Aim the drives, collide and step (stepper.h: exact islands, warm-started
         contacts) with the GIL released and ODE's failures guarded, then record the contact

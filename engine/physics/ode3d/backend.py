@@ -77,8 +77,7 @@ class OdeBackend:
     # -- world -------------------------------------------------------------
     def configure(self, settings: WorldSettings) -> None:
         """Apply gravity, ERP/CFM, iterations, contacts per pair, sleeping and material pairs."""
-        if settings.iterations < 1:
-            raise ValueError(f"iterations must be at least 1, got {settings.iterations}")
+        settings.check()  # the one range of each setting (WORLD_RANGES)
         self._rule.configure(settings.sleep_time, settings.sleep_linear,
                              settings.sleep_angular)
         self._settings = settings

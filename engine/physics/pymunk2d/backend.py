@@ -177,6 +177,7 @@ class PymunkBackend:
     # -- world -------------------------------------------------------------
     def configure(self, settings: WorldSettings) -> None:
         """Gravity, solver iterations, error correction, sleeping and material pairs."""
+        settings.check()  # the one range of each setting (WORLD_RANGES)
         space = self._space
         self._extent = float(settings.extent)
         gx, _, gz = settings.gravity

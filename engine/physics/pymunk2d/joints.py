@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pymunk
@@ -205,64 +206,90 @@ def _limits(rec: JointRecord, spec: Joint) -> None:
 
 
 def build_joint(spec: Joint, a: pymunk.Body, b: pymunk.Body, warn: Warn) -> JointRecord:
-    """Constraints for ``spec`` between ``a`` and ``b`` (b may be the space's static body)."""
+    """Constraints for ``spec`` between ``a`` and ``b`` (b may be the space's static body):
+    each kind's builder from :data:`_BUILDERS`."""
     kind = spec.kind
     rec = JointRecord(spec, a, b)
-    anchor = (float(spec.anchor[0]), float(spec.anchor[2]))
     rec.zero = b.angle - a.angle
-    if kind in PIVOTS:
-        if kind == JointKind.BALL:
-            warn("ball", "ball joint: out-of-plane rotation dropped; pivot about Y")
-        elif kind == JointKind.UNIVERSAL:
-            warn("universal", "universal joint: second axis dropped; pivot about Y")
-        elif kind == JointKind.HINGE2:
-            warn("hinge2", "hinge2: steering and suspension dropped; pivot about the axle")
-        axis = spec.axis2 if kind == JointKind.HINGE2 else spec.axis
-        rec.sign = _axis_sign(spec, axis, warn) if kind in ON_AXIS else 1.0
-        rec.constraints.append(pymunk.PivotJoint(a, b, anchor))
-        if kind != JointKind.HINGE2:  # a hinge2's limits are its steering's (dropped)
-            _limits(rec, spec)
-        if kind == JointKind.MOTORIZED_HINGE or spec.motor_max_force > 0.0:
-            motor = pymunk.SimpleMotor(a, b, -rec.sign * spec.motor_velocity)
-            motor.max_force = max(0.0, spec.motor_max_force)
-            rec.motor = motor
-            rec.constraints.append(motor)
-    elif kind == JointKind.SLIDER:
-        v = np.array([spec.axis[0], spec.axis[2]], dtype=np.float64)
-        n = float(np.linalg.norm(v))
-        if n < 1e-9:
-            raise ValueError(f"joint {spec.id or '?'}: slider axis {tuple(spec.axis)} "
-                             "has no component in the X–Z plane")
-        if abs(spec.axis[1]) > 1e-9:
-            warn("axis", f"slider axis {tuple(spec.axis)} leaves the X–Z plane; projected")
-        ax, az = v / n
-        rec.axis = (float(ax), float(az))
-        dp = a.position - b.position
-        rec.zero = dp.x * ax + dp.y * az
-        low = spec.low if spec.low is not None else -FREE_GROOVE
-        high = spec.high if spec.high is not None else FREE_GROOVE
-        pa = a.position
-        g1 = b.world_to_local((pa.x + low * ax, pa.y + low * az))
-        g2 = b.world_to_local((pa.x + high * ax, pa.y + high * az))
-        rec.constraints.append(pymunk.GrooveJoint(b, a, g1, g2, (0.0, 0.0)))
-        rec.constraints.append(pymunk.GearJoint(a, b, b.angle - a.angle, 1.0))
-        rec.slider_velocity = spec.motor_velocity
-        rec.slider_max_force = spec.motor_max_force
-    elif kind == JointKind.ALIGN:  # the angle between them held, nothing else
-        rec.constraints.append(pymunk.GearJoint(a, b, b.angle - a.angle, 1.0))
-    elif kind in (JointKind.FIXED, JointKind.SIX_DOF):
-        pivot = pymunk.PivotJoint(a, b, (0.0, 0.0), b.world_to_local(a.position))
-        gear = pymunk.GearJoint(a, b, b.angle - a.angle, 1.0)
-        if kind == JointKind.SIX_DOF:
-            limit = spec.motor_max_force if spec.motor_max_force > 0.0 else math.inf
-            for c in (pivot, gear):
-                c.max_force = limit
-                c.error_bias = SIX_DOF_ERROR_BIAS
-        rec.constraints += [pivot, gear]
-    else:
+    builder = next((f for kinds, f in _BUILDERS if kind in kinds), None)
+    if builder is None:
         what = "has no 2D form" if kind in JointKind.__members__.values() else "unknown kind"
         raise ValueError(f"joint {spec.id or '?'}: {what} {kind!r}; pymunk makes "
                          f"{', '.join(k for k in JointKind if k in SUPPORTED)}")
+    builder(rec, warn)
     for c in rec.constraints:
         c.collide_bodies = False
     return rec
+
+
+def _pivot(rec: JointRecord, warn: Warn) -> None:
+    """A pin about Y (what the plane keeps of a hinge, ball, universal or hinge2), its
+    limits and motor."""
+    spec, a, b, kind = rec.spec, rec.a, rec.b, rec.spec.kind
+    if kind == JointKind.BALL:
+        warn("ball", "ball joint: out-of-plane rotation dropped; pivot about Y")
+    elif kind == JointKind.UNIVERSAL:
+        warn("universal", "universal joint: second axis dropped; pivot about Y")
+    elif kind == JointKind.HINGE2:
+        warn("hinge2", "hinge2: steering and suspension dropped; pivot about the axle")
+    axis = spec.axis2 if kind == JointKind.HINGE2 else spec.axis
+    rec.sign = _axis_sign(spec, axis, warn) if kind in ON_AXIS else 1.0
+    rec.constraints.append(pymunk.PivotJoint(a, b, (float(spec.anchor[0]),
+                                                    float(spec.anchor[2]))))
+    if kind != JointKind.HINGE2:  # a hinge2's limits are its steering's (dropped)
+        _limits(rec, spec)
+    if kind == JointKind.MOTORIZED_HINGE or spec.motor_max_force > 0.0:
+        motor = pymunk.SimpleMotor(a, b, -rec.sign * spec.motor_velocity)
+        motor.max_force = max(0.0, spec.motor_max_force)
+        rec.motor = motor
+        rec.constraints.append(motor)
+
+
+def _slider(rec: JointRecord, warn: Warn) -> None:
+    """A groove along the axis projected on the plane, the angle held by a gear."""
+    spec, a, b = rec.spec, rec.a, rec.b
+    v = np.array([spec.axis[0], spec.axis[2]], dtype=np.float64)
+    n = float(np.linalg.norm(v))
+    if n < 1e-9:
+        raise ValueError(f"joint {spec.id or '?'}: slider axis {tuple(spec.axis)} "
+                         "has no component in the X–Z plane")
+    if abs(spec.axis[1]) > 1e-9:
+        warn("axis", f"slider axis {tuple(spec.axis)} leaves the X–Z plane; projected")
+    ax, az = v / n
+    rec.axis = (float(ax), float(az))
+    dp = a.position - b.position
+    rec.zero = dp.x * ax + dp.y * az
+    low = spec.low if spec.low is not None else -FREE_GROOVE
+    high = spec.high if spec.high is not None else FREE_GROOVE
+    pa = a.position
+    g1 = b.world_to_local((pa.x + low * ax, pa.y + low * az))
+    g2 = b.world_to_local((pa.x + high * ax, pa.y + high * az))
+    rec.constraints.append(pymunk.GrooveJoint(b, a, g1, g2, (0.0, 0.0)))
+    rec.constraints.append(pymunk.GearJoint(a, b, b.angle - a.angle, 1.0))
+    rec.slider_velocity = spec.motor_velocity
+    rec.slider_max_force = spec.motor_max_force
+
+
+def _align(rec: JointRecord, warn: Warn) -> None:
+    """The angle between them held, nothing else."""
+    rec.constraints.append(pymunk.GearJoint(rec.a, rec.b, rec.b.angle - rec.a.angle, 1.0))
+
+
+def _weld(rec: JointRecord, warn: Warn) -> None:
+    """Fixed (a pin where they are and the angle held), or the six-DOF drive: the same
+    pair with bounded force and the drive's error bias."""
+    spec, a, b = rec.spec, rec.a, rec.b
+    pivot = pymunk.PivotJoint(a, b, (0.0, 0.0), b.world_to_local(a.position))
+    gear = pymunk.GearJoint(a, b, b.angle - a.angle, 1.0)
+    if spec.kind == JointKind.SIX_DOF:
+        limit = spec.motor_max_force if spec.motor_max_force > 0.0 else math.inf
+        for c in (pivot, gear):
+            c.max_force = limit
+            c.error_bias = SIX_DOF_ERROR_BIAS
+    rec.constraints += [pivot, gear]
+
+
+#: One builder per group of joint kinds.
+_BUILDERS: tuple[tuple[Any, Callable[[JointRecord, Warn], None]], ...] = (
+    (PIVOTS, _pivot), ((JointKind.SLIDER,), _slider), ((JointKind.ALIGN,), _align),
+    ((JointKind.FIXED, JointKind.SIX_DOF), _weld))

@@ -64,75 +64,114 @@ def _poly(body: pymunk.Body, points: np.ndarray, depth: float) -> BuiltShape | N
     return BuiltShape(shape, shape.area * depth, pymunk.moment_for_poly(1.0, hull))
 
 
+@dataclass(frozen=True, slots=True)
+class _Placed:
+    """A shape spec turned into the body's frame: its rotation, offset (3D and in the X–Z
+    plane) and size."""
+
+    body: pymunk.Body
+    spec: Shape
+    rot: np.ndarray
+    off: np.ndarray
+    off2: tuple[float, float]
+    size: tuple[float, ...]
+    static: bool
+
+
 def build_shape(body: pymunk.Body, spec: Shape, rest: np.ndarray, static: bool,
                 warn: Warn) -> BuiltShape | None:
-    """One pymunk shape for ``spec``, or None (with a warning) when it has no silhouette."""
+    """One pymunk shape for ``spec``, or None (with a warning) when it has no silhouette:
+    each kind's builder from :data:`_BUILDERS`."""
     rot = quat_to_matrix(rest) @ quat_to_matrix(np.asarray(spec.rotation, dtype=np.float64))
     off = quat_to_matrix(rest) @ np.asarray(spec.offset, dtype=np.float64)
-    off2 = (float(off[0]), float(off[2]))
-    size = tuple(float(s) for s in spec.size)
-    kind = spec.kind
-    if kind == "sphere":
-        r = size[0]
-        return BuiltShape(pymunk.Circle(body, r, off2), 4.0 / 3.0 * math.pi * r**3,
-                          0.4 * r * r + off2[0] ** 2 + off2[1] ** 2)
-    if kind == "box":
-        sx, sy, sz = size if len(size) == 3 else (size[0],) * 3
-        corners = np.array([[x, y, z] for x in (-sx / 2, sx / 2) for y in (-sy / 2, sy / 2)
-                            for z in (-sz / 2, sz / 2)])
-        pts = (corners @ rot.T + off)[:, [0, 2]]
-        built = _poly(body, pts, 1.0)
-        if built is None:
-            warn("flat-box", "box has no extent in the X–Z plane; skipped")
-            return None
-        return BuiltShape(built.shape, sx * sy * sz, _yy(rot, _box_tensor(sx, sy, sz), off))
-    if kind in ("capsule", "cylinder"):
-        r, length = (size[0], size[1]) if len(size) >= 2 else (size[0], 2 * size[0])
-        axis = rot[:, 2]
-        along_y = abs(axis[1]) > 0.999
-        if kind == "capsule":
-            volume = math.pi * r * r * length + 4.0 / 3.0 * math.pi * r**3
-            tensor = _cylinder_tensor(r, length + 4.0 * r / 3.0)
-            if along_y:
-                shape: pymunk.Shape = pymunk.Circle(body, r, off2)
-            else:
-                half = axis * length / 2.0
-                shape = pymunk.Segment(body, (off[0] - half[0], off[2] - half[2]),
-                                       (off[0] + half[0], off[2] + half[2]), r)
-            return BuiltShape(shape, volume, _yy(rot, tensor, off))
-        volume = math.pi * r * r * length
-        tensor = _cylinder_tensor(r, length)
-        if along_y:
-            return BuiltShape(pymunk.Circle(body, r, off2), volume, _yy(rot, tensor, off))
-        if abs(axis[1]) > 1e-6:
-            warn("tilted-cylinder", "cylinder tilted out of the X–Z plane; "
-                 f"its silhouette is a {2 * CYLINDER_SAMPLES}-point polygon")
-        a = np.linspace(0.0, 2.0 * math.pi, CYLINDER_SAMPLES, endpoint=False)
-        ring = np.stack([r * np.cos(a), r * np.sin(a), np.zeros_like(a)], axis=1)
-        caps = np.concatenate([ring + [0, 0, length / 2], ring - [0, 0, length / 2]])
-        built = _poly(body, (caps @ rot.T + off)[:, [0, 2]], 1.0)
-        if built is None:
-            return None
-        return BuiltShape(built.shape, volume, _yy(rot, tensor, off))
-    if kind in ("mesh", "hull"):
-        if spec.vertices is None or len(spec.vertices) < 3:
-            warn(f"{kind}-no-vertices", f"{kind} shape has no vertices; skipped")
-            return None
-        verts = np.asarray(spec.vertices, dtype=np.float64).reshape(-1, 3) @ rot.T + off
-        if kind == "mesh":
-            warn("mesh-hull", "mesh collides as the convex hull of its X–Z projection")
-        depth = float(np.ptp(verts[:, 1])) or 1.0
-        built = _poly(body, verts[:, [0, 2]], depth)
-        if built is None:
-            warn(f"{kind}-flat", f"{kind} has no area in the X–Z plane; skipped")
-        return built
-    if kind == "plane":
-        if not static:
-            warn("dynamic-plane", "a plane can only be static; skipped on this body")
-            return None
-        return _plane(body, size, rot, off, warn)
-    warn(f"shape-{kind}", f"unknown shape kind {kind!r}; skipped")
-    return None
+    placed = _Placed(body, spec, rot, off, (float(off[0]), float(off[2])),
+                     tuple(float(s) for s in spec.size), static)
+    builder = _BUILDERS.get(spec.kind)
+    if builder is None:
+        warn(f"shape-{spec.kind}", f"unknown shape kind {spec.kind!r}; skipped")
+        return None
+    return builder(placed, warn)
+
+
+def _sphere(p: _Placed, warn: Warn) -> BuiltShape | None:
+    r = p.size[0]
+    return BuiltShape(pymunk.Circle(p.body, r, p.off2), 4.0 / 3.0 * math.pi * r**3,
+                      0.4 * r * r + p.off2[0] ** 2 + p.off2[1] ** 2)
+
+
+def _box(p: _Placed, warn: Warn) -> BuiltShape | None:
+    sx, sy, sz = p.size if len(p.size) == 3 else (p.size[0],) * 3
+    corners = np.array([[x, y, z] for x in (-sx / 2, sx / 2) for y in (-sy / 2, sy / 2)
+                        for z in (-sz / 2, sz / 2)])
+    built = _poly(p.body, (corners @ p.rot.T + p.off)[:, [0, 2]], 1.0)
+    if built is None:
+        warn("flat-box", "box has no extent in the X–Z plane; skipped")
+        return None
+    return BuiltShape(built.shape, sx * sy * sz, _yy(p.rot, _box_tensor(sx, sy, sz), p.off))
+
+
+def _round(p: _Placed) -> tuple[float, float, np.ndarray, bool]:
+    """A capsule's or cylinder's radius, length, axis, and whether it points along Y
+    (its silhouette a circle)."""
+    size = p.size
+    r, length = (size[0], size[1]) if len(size) >= 2 else (size[0], 2 * size[0])
+    axis = p.rot[:, 2]
+    return r, length, axis, abs(axis[1]) > 0.999
+
+
+def _capsule(p: _Placed, warn: Warn) -> BuiltShape | None:
+    r, length, axis, along_y = _round(p)
+    volume = math.pi * r * r * length + 4.0 / 3.0 * math.pi * r**3
+    tensor = _cylinder_tensor(r, length + 4.0 * r / 3.0)
+    if along_y:
+        shape: pymunk.Shape = pymunk.Circle(p.body, r, p.off2)
+    else:
+        half = axis * length / 2.0
+        off = p.off
+        shape = pymunk.Segment(p.body, (off[0] - half[0], off[2] - half[2]),
+                               (off[0] + half[0], off[2] + half[2]), r)
+    return BuiltShape(shape, volume, _yy(p.rot, tensor, p.off))
+
+
+def _cylinder(p: _Placed, warn: Warn) -> BuiltShape | None:
+    r, length, axis, along_y = _round(p)
+    volume = math.pi * r * r * length
+    tensor = _cylinder_tensor(r, length)
+    if along_y:
+        return BuiltShape(pymunk.Circle(p.body, r, p.off2), volume, _yy(p.rot, tensor, p.off))
+    if abs(axis[1]) > 1e-6:
+        warn("tilted-cylinder", "cylinder tilted out of the X–Z plane; "
+             f"its silhouette is a {2 * CYLINDER_SAMPLES}-point polygon")
+    a = np.linspace(0.0, 2.0 * math.pi, CYLINDER_SAMPLES, endpoint=False)
+    ring = np.stack([r * np.cos(a), r * np.sin(a), np.zeros_like(a)], axis=1)
+    caps = np.concatenate([ring + [0, 0, length / 2], ring - [0, 0, length / 2]])
+    built = _poly(p.body, (caps @ p.rot.T + p.off)[:, [0, 2]], 1.0)
+    if built is None:
+        return None
+    return BuiltShape(built.shape, volume, _yy(p.rot, tensor, p.off))
+
+
+def _vertices(p: _Placed, warn: Warn) -> BuiltShape | None:
+    """A mesh or hull: the convex hull of its X–Z projection, as deep as it is in Y."""
+    kind, spec = p.spec.kind, p.spec
+    if spec.vertices is None or len(spec.vertices) < 3:
+        warn(f"{kind}-no-vertices", f"{kind} shape has no vertices; skipped")
+        return None
+    verts = np.asarray(spec.vertices, dtype=np.float64).reshape(-1, 3) @ p.rot.T + p.off
+    if kind == "mesh":
+        warn("mesh-hull", "mesh collides as the convex hull of its X–Z projection")
+    depth = float(np.ptp(verts[:, 1])) or 1.0
+    built = _poly(p.body, verts[:, [0, 2]], depth)
+    if built is None:
+        warn(f"{kind}-flat", f"{kind} has no area in the X–Z plane; skipped")
+    return built
+
+
+def _static_plane(p: _Placed, warn: Warn) -> BuiltShape | None:
+    if not p.static:
+        warn("dynamic-plane", "a plane can only be static; skipped on this body")
+        return None
+    return _plane(p.body, p.size, p.rot, p.off, warn)
 
 
 def _plane(body: pymunk.Body, size: tuple[float, ...], rot: np.ndarray, off: np.ndarray,
@@ -160,3 +199,10 @@ def _plane(body: pymunk.Body, size: tuple[float, ...], rot: np.ndarray, off: np.
                     q0 + PLANE_HALF_LENGTH * t - PLANE_DEPTH * n2])
     shape = pymunk.Poly(body, [(float(x), float(z)) for x, z in pts])
     return BuiltShape(shape, 0.0, 0.0)
+
+
+#: One builder per shape kind (as the ODE binding's table).
+_BUILDERS: dict[str, Callable[[_Placed, Warn], BuiltShape | None]] = {
+    "sphere": _sphere, "box": _box, "capsule": _capsule, "cylinder": _cylinder,
+    "mesh": _vertices, "hull": _vertices, "plane": _static_plane,
+}
