@@ -114,6 +114,9 @@ if TYPE_CHECKING:
 #: A virtual hand's body when the author gives none: a palm-sized box (m) of 0.45 kg.
 HAND_SIZE = (0.09, 0.18, 0.03)
 HAND_MASS = 0.45
+#: A fingered hand's palm (``Hand { Fingers 1 }``): the box round the metacarpals (m;
+#: +x along the fingers), its fingers' phalanges being bodies of their own.
+PALM_SIZE = (0.075, 0.085, 0.028)
 #: Shared defaults (tuples: immutable, so every shape and pose may hold the same one).
 _ORIGIN = (0.0, 0.0, 0.0)
 _IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -543,7 +546,8 @@ class _Builder:
         size = r("Size")
         hand_blk = r.value("Hand")
         if hand_blk is not None and size is None:
-            size = HAND_SIZE
+            fingered = _Reader(hand_blk.data, "Hand")("Fingers")
+            size = PALM_SIZE if fingered else HAND_SIZE
         vis_blk, phys_blk = r.value("VisualAttributes"), r.value("PhysicalAttributes")
         bare = vis_blk is None and phys_blk is None
         vis = _Reader(vis_blk.data if vis_blk else None, "Visual")
@@ -667,7 +671,7 @@ class _Builder:
                     break_force=_opt(h("BreakForce")), marker=bool(h("Marker")),
                     neutral_model=models["NeutralModel"],
                     contact_model=models["ContactModel"], grasp_model=models["GraspModel"],
-                    holding=tuple(h("Holding") or ()))
+                    holding=tuple(h("Holding") or ()), fingers=bool(h("Fingers")))
         return [hand, HandState()]
 
     def wheelchair(self, w: _Reader, oid: str, loc: Loc, has_body: bool) -> list[Any]:
@@ -704,6 +708,8 @@ class _Builder:
             for key, declared, desktop in (("Tracker", trackers, DESKTOP_TRACKERS),
                                            ("Glove", gloves, DESKTOP_GLOVES)):
                 name = h(key)
+                if key == "Tracker" and h("Fingers"):
+                    continue  # an input hand (HandJoints), which no Input block declares
                 if not name or name in declared or name in desktop:
                     continue
                 known = ", ".join(sorted({*declared, *desktop}))

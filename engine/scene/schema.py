@@ -477,6 +477,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                          "toward the hand and any shear beyond what pressing the object "
                          "against the palm holds (none: never)"),
         "Marker": _f(BOOL_T, 1, "show a ball where the real hand (the tracker) is"),
+        "Fingers": _f(BOOL_T, 0, "1: the palm and each finger's phalanges are bodies driven "
+                      "toward the 26 tracked joints of input hand Tracker (ODE), and what "
+                      "the thumb and an opposing finger or the palm press is held; 0: the "
+                      "palm only (the paper's hand)"),
         "NeutralModel": _f(ASSET_T, None, "model drawn while the hand touches nothing it "
                            "could grasp (a relaxed hand); default: the object's own look"),
         "ContactModel": _f(ASSET_T, None, "model drawn while the hand touches something it "
