@@ -185,7 +185,9 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
         engine.physics.push(replace(drive, key=aim, max_force=BONE_FORCE,
                                     max_torque=BONE_TORQUE))
         parent = palm if i % 3 == 0 else bones[-1]
-        spread = quat_to_matrix(q[0])[:, 2]  # the palm's dorsal axis
+        # spread about the palm's dorsal axis (the thumb's CMC: about its own, the palm's
+        # being near its flexion axis)
+        spread = quat_to_matrix(quats[i] if finger == "thumb" else q[0])[:, 2]
         chain.append(_link(engine, label, bone, parent, p[start], quats[i], spread, finger,
                            i % 3))
         bones.append(bone)
