@@ -49,10 +49,15 @@ if TYPE_CHECKING:
 HAND_BIT = 1 << 30
 #: A phalanx's mass (kg): heavy enough beside a 0.45 kg palm and a 0.3 kg cup for the
 #: solver's 40 iterations, light enough that a finger stops on what it touches.
-BONE_MASS = 0.03
+BONE_MASS = 0.1
 #: Each phalanx's drive bounds (N, N·m): a finger of three presses with up to ~3× this.
 BONE_FORCE = 8.0
 BONE_TORQUE = 0.3
+#: The drive bounds while the hand holds something (N, N·m): the object is held by the
+#: palm's constraint, and fingers pressing it at full force through the loop palm –
+#: finger – object – palm sink into it (the solver converges slowly round a loop).
+HOLD_FORCE = 1.5
+HOLD_TORQUE = 0.06
 #: Skin: the bones' friction.
 SKIN = MaterialProps(name="skin", friction=1.0, density=1000.0)
 #: The anatomical limits (radians, flexion positive) of each finger's three joints, and
@@ -108,6 +113,7 @@ class Fingers:
     #: object -> the parts ("palm" or fingers) pressing it in the last step
     pressing: dict[int, tuple[str, ...]] = field(default_factory=dict)
     colliding: bool = True
+    holding: bool = False  # whether the drives have their holding bounds
 
     def entities(self) -> list[int]:
         return [*self.chain, *self.drives, *self.bones, *self.controls]
@@ -257,6 +263,16 @@ def push_controls(engine: Engine, rigs: list[tuple[Fingers, np.ndarray]]) -> Non
         return
     keys = [k for f, _ in rigs for k in f.controls]
     engine.physics.push(SetPoses(keys, np.vstack([rows for _, rows in rigs])))
+
+
+def hold(engine: Engine, fingers: Fingers, limits: SetDriveLimits, holding: bool) -> None:
+    """The bones' drives at their holding bounds while the hand holds something."""
+    if fingers.holding == holding:
+        return
+    fingers.holding = holding
+    force, torque = (HOLD_FORCE, HOLD_TORQUE) if holding else (BONE_FORCE, BONE_TORQUE)
+    for drive in fingers.drives:
+        engine.physics.push(replace(limits, key=drive, max_force=force, max_torque=torque))
 
 
 def set_colliding(engine: Engine, fingers: Fingers, enabled: bool) -> None:

@@ -325,6 +325,8 @@ class HandDriveSystem(System):
             rig.pressed = pressed
             if rig.fingers is not None and rig.fingers.grips:
                 self._open_grips(engine, rig)
+            if rig.fingers is not None and rig.limits is not None:
+                hand_fingers.hold(engine, rig.fingers, rig.limits, bool(rig.grasps))
             state.held = tuple(rig.grasps)
 
     def _open_grips(self, engine: Engine, rig: _Rig) -> None:
