@@ -103,6 +103,7 @@ class Fingers:
     drives: list[int]
     chain: list[int]
     lengths: np.ndarray  # each bone's length (m)
+    radii: np.ndarray  # each bone's capsule radius (m)
     finger_of: dict[int, str]  # bone entity -> its finger
     sample: tuple[float, np.ndarray, np.ndarray] | None = None  # t, positions, quats
     velocity: np.ndarray = field(default_factory=lambda: np.zeros((15, 6)))
@@ -171,11 +172,12 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
     p, q = world_joints(sample, frame)
     centres, quats, lengths = bone_poses(p, q)
     radii = np.asarray(sample.radii, dtype=float)
-    bones, controls, drives, chain = [], [], [], []
+    bones, controls, drives, chain, sizes = [], [], [], [], []
     finger_of: dict[int, str] = {}
     for i, (finger, start, end) in enumerate(BONES):
         label = f"{name} {HAND_JOINTS[start]}"
         radius = float(np.clip(min(radii[start], radii[end]) or 0.008, 0.004, 0.015))
+        sizes.append(radius)
         pose = Transform(centres[i].copy(), quats[i].copy())
         bone = engine.spawn(Name(label), pose, _bone_body(radius, float(lengths[i])),
                             Visual(shapes=[replace(_bone_body(radius, float(lengths[i]))
@@ -200,7 +202,7 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
         controls.append(control)
         drives.append(aim)
         finger_of[bone] = finger
-    return Fingers(bones, controls, drives, chain, lengths, finger_of)
+    return Fingers(bones, controls, drives, chain, lengths, np.array(sizes), finger_of)
 
 
 def _link(engine: Engine, label: str, bone: int, parent: int, anchor: np.ndarray,
@@ -255,6 +257,60 @@ def palm_pose(previous: tuple[float, np.ndarray, ...] | None, sample: HandJoints
     if now - sample.timestamp > stale_after:
         v = w = np.zeros(3)
     return sample.timestamp, p[0], q[0], v, w
+
+
+def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.ndarray,
+                rows: np.ndarray, dt: float) -> float:
+    """How much of this frame's way to its targets the hand may go (0 to 1) before one
+    of its bodies would pass through something: a ray per body that would move more
+    than half its thickness in the frame (a fast hand; 3 m/s is 25 mm a step, more than
+    a finger and a 5 mm plate), from where it is to where its target will be. Serial
+    physics answers at once; threaded physics a frame later, so this frame goes
+    unlimited."""
+    world = engine.world
+    palm_t = world.try_component(palm, Transform)
+    if palm_t is None:
+        return 1.0
+    bodies = [palm, *fingers.bones]
+    here = np.vstack([palm_t.position, *(world.component_for_entity(b, Transform).position
+                                         for b in fingers.bones)])
+    there = np.vstack([palm_target[:3] + palm_target[7:10] * dt,
+                       rows[:, :3] + rows[:, 7:10] * dt])
+    way = there - here
+    far = np.linalg.norm(way, axis=1)
+    thick = np.concatenate([[_palm_reach(world, palm, way[0], far[0])], fingers.radii])
+    fast = np.flatnonzero(far > 0.5 * thick)
+    if not len(fast):
+        return 1.0
+    mask = 0xFFFFFFFF & ~HAND_BIT
+    rays = [(bodies[i], here[i], way[i], far[i] + thick[i], thick[i], far[i]) for i in fast]
+    answer = engine.physics.request(lambda backend: [
+        (backend.raycast(o, d, reach, ignore=key, mask=mask), th, f)
+        for key, o, d, reach, th, f in rays])
+    if not answer.done() or answer.exception() is not None:
+        return 1.0
+    share = 1.0
+    for hit, th, f in answer.result():
+        if hit is not None:
+            share = min(share, max(hit.distance - th, 0.0) / f)
+    return share
+
+
+def _palm_reach(world: Any, palm: int, way: np.ndarray, far: float) -> float:
+    """How far the palm's box reaches from its centre along ``way``."""
+    body, t = world.try_component(palm, Physical), world.try_component(palm, Transform)
+    box = next((s for s in body.shapes if s.kind == "box"), None) if body else None
+    if box is None or t is None or far <= 0.0:
+        return 0.02
+    local = quat_to_matrix(t.orientation).T @ (way / far)
+    return float(np.abs(local) @ (np.asarray(box.size[:3]) / 2))
+
+
+def limit(rows: np.ndarray, here: np.ndarray, share: float) -> None:
+    """Targets moved only ``share`` of the way from where the bodies are, their
+    velocities scaled alike (rows: position, orientation, velocities)."""
+    rows[:, :3] = here + share * (rows[:, :3] - here)
+    rows[:, 7:] *= share
 
 
 def push_controls(engine: Engine, rigs: list[tuple[Fingers, np.ndarray]]) -> None:

@@ -311,7 +311,7 @@ class HandDriveSystem(System):
         found = dict(engine.world.get_components(Hand, HandState, Transform))
         driven = [(rig, found[rig.hand]) for rig in rigs.values() if rig.hand in found]
         poses = self._move_controls(engine, driven, inputs)
-        self._move_fingers(engine, driven, inputs, poses)
+        self._move_fingers(engine, driven, inputs, poses, dt)
         for (rig, (hand, state, t)), pose in zip(driven, poses, strict=True):
             self._drive(engine, rig, hand, state, t, pose, dt)
             pressed = inputs is not None and hand.glove != "" and inputs.button(hand.glove,
@@ -355,10 +355,12 @@ class HandDriveSystem(System):
 
     def _move_fingers(self, engine: Engine, driven: list[tuple[_Rig, Any]],
                       inputs: InputState | None,
-                      poses: list[tuple[np.ndarray, ...] | None]) -> None:
+                      poses: list[tuple[np.ndarray, ...] | None], dt: float) -> None:
         """Put every fingered hand's bone control bodies where its tracked bones are, in
         one command; a hand's bones are made at its first sample (sized from it), the palm
-        put at the tracked palm first. An untracked hand's bones hold still."""
+        put at the tracked palm first. An untracked hand's bones hold still. A hand that
+        would pass through something this frame goes only as far as it
+        (:func:`~systems.hand_fingers.sweep_share`), its palm too."""
         rows = []
         for (rig, (hand, _, _)), pose in zip(driven, poses, strict=True):
             if rig.limits is None:
@@ -376,8 +378,9 @@ class HandDriveSystem(System):
                 engine.physics.set_pose(rig.hand, pose[0], pose[1])
                 fingers = rig.fingers = hand_fingers.build(engine, rig.name, rig.hand, sample,
                                                            frame, rig.limits)
-            rows.append((fingers, hand_fingers.aim(fingers, sample, frame, inputs.now,
-                                                   STALE_AFTER)))
+            aims = hand_fingers.aim(fingers, sample, frame, inputs.now, STALE_AFTER)
+            self._sweep(engine, rig, fingers, np.concatenate(pose), aims, dt)
+            rows.append((fingers, aims))
             # each physical tip (where the last step left it) from its tracked one now
             tips = hand_fingers.tips_now(engine, fingers)
             found = engine.world.try_component(rig.hand, HandState)
@@ -385,6 +388,24 @@ class HandDriveSystem(System):
                 found.finger_deviation = tuple(
                     np.linalg.norm(tips - fingers.tips, axis=1).tolist())
         hand_fingers.push_controls(engine, rows)
+
+    @staticmethod
+    def _sweep(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers, palm: np.ndarray,
+               aims: np.ndarray, dt: float) -> None:
+        """A fast hand's targets, bones and palm, held short of what it would pass."""
+        if not fingers.colliding:
+            return
+        share = hand_fingers.sweep_share(engine, fingers, rig.hand, palm, aims, dt)
+        if share >= 1.0:
+            return
+        world = engine.world
+        here = np.vstack([world.component_for_entity(b, Transform).position
+                          for b in fingers.bones])
+        hand_fingers.limit(aims, here, share)
+        row = palm[None].copy()
+        hand_fingers.limit(row, world.component_for_entity(rig.hand, Transform).position,
+                           share)
+        engine.physics.push(SetPoses([rig.control], row))
 
     def _grasp(self, engine: Engine, rig: _Rig, obj: int) -> None:
         try:
