@@ -208,7 +208,10 @@ class Hands:
         kind = JointKind.BALL if others else JointKind.FIXED
         rig.grasps[obj] = self._joint(engine, rig, obj, kind)
         for other in others:  # a second grip: the first becomes a grip point too
-            if self._kind(world, other.grasps[obj]) == JointKind.FIXED:
+            # (a fingered hand's grip stays fixed: round the line between two grip points
+            # the object would swing as the fingers that held it open to hand it over)
+            if other.fingers is None and \
+                    self._kind(world, other.grasps[obj]) == JointKind.FIXED:
                 engine.despawn(other.grasps[obj])
                 other.grasps[obj] = self._joint(engine, other, obj, JointKind.BALL)
         _tell(engine, HandGrasped(rig.hand, obj), "grasp")

@@ -73,12 +73,13 @@ def pinch(device: str, centre: Sequence[float], across: Sequence[float], width: 
           grip: float, *, left: bool = False, timestamp: float = 0.0,
           spread: float | None = None) -> HandJoints:
     """The tracked hand pinching an object of ``width`` centred at ``centre``: its tips
-    ``grip`` apart (wider: open round it; narrower: pressing it), turned for
-    ``spread`` (the width its rotation is fitted at; default ``width``)."""
-    rot = _orientation(tuple(map(float, across)), float(width if spread is None else spread),
-                       left)
-    s = scale_for(grip)
-    thumb, index = _tips(s, left)
+    ``grip`` apart (wider: open round it; narrower: pressing it), the hand placed and
+    turned as for a pinch of ``spread`` (default ``width``) round the centre, so that
+    opening and closing moves the fingers, not the hand."""
+    fit = float(width if spread is None else spread)
+    rot = _orientation(tuple(map(float, across)), fit, left)
+    thumb, index = _tips(scale_for(fit), left)
     wrist = np.asarray(centre, dtype=float) - rot @ ((thumb + index) / 2)
+    s = scale_for(grip)
     quat = matrices_to_quats(rot[None])[0]
     return pose_hand(device, wrist, quat, curls(s), left=left, timestamp=timestamp)
