@@ -51,13 +51,16 @@ HAND_BIT = 1 << 30
 #: solver's 40 iterations, light enough that a finger stops on what it touches.
 BONE_MASS = 0.1
 #: Each phalanx's drive bounds (N, N·m): a finger of three presses with up to ~3× this.
+#: No torque: a bone's centre, its joint to the bone before it and that joint's one or
+#: two free axes fix its orientation, and a motor row bounded by 0 is no row at all
+#: (three fewer rows per bone for the solver).
 BONE_FORCE = 8.0
-BONE_TORQUE = 0.3
+BONE_TORQUE = 0.0
 #: The drive bounds while the hand holds something (N, N·m): the object is held by the
 #: palm's constraint, and fingers pressing it at full force through the loop palm –
 #: finger – object – palm sink into it (the solver converges slowly round a loop).
 HOLD_FORCE = 1.5
-HOLD_TORQUE = 0.06
+HOLD_TORQUE = 0.0
 #: Skin: the bones' friction.
 SKIN = MaterialProps(name="skin", friction=1.0, density=1000.0)
 #: The anatomical limits (radians, flexion positive) of each finger's three joints, and
@@ -267,6 +270,9 @@ def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.nda
     a finger and a 5 mm plate), from where it is to where its target will be. Serial
     physics answers at once; threaded physics a frame later, so this frame goes
     unlimited."""
+    speed = max(float(np.abs(rows[:, 7:10]).max()), float(np.abs(palm_target[7:10]).max()))
+    if 2.0 * speed * dt < 0.5 * float(fingers.radii.min()):
+        return 1.0  # slow (each axis's speed bounds the speed to within √3)
     world = engine.world
     palm_t = world.try_component(palm, Transform)
     if palm_t is None:
@@ -342,14 +348,12 @@ def set_colliding(engine: Engine, fingers: Fingers, enabled: bool) -> None:
 
 def tips_now(engine: Engine, fingers: Fingers) -> np.ndarray:
     """Where the physical fingertips are (5, 3): each distal bone's far end."""
-    out = np.zeros((5, 3))
     world = engine.world
-    for f in range(5):
-        i = 3 * f + 2
-        t = world.try_component(fingers.bones[i], Transform)
-        if t is not None:
-            out[f] = t.position + quat_to_matrix(t.orientation)[:, 0] * fingers.lengths[i] / 2
-    return out
+    distal = [world.component_for_entity(fingers.bones[3 * f + 2], Transform)
+              for f in range(5)]
+    p = np.array([t.position for t in distal])
+    along = quat_to_matrix(np.array([t.orientation for t in distal]))[:, :, 0]
+    return p + along * (fingers.lengths[2::3] / 2)[:, None]
 
 
 def presses(contacts: np.ndarray, owner: dict[int, str], elapsed: float

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -332,8 +333,11 @@ def swipe(folder: Path) -> dict[str, Any]:
 
 
 def _waving(name: str, i: int) -> Feed:
+    """A hand waving and curling; its samples kept (the cost rows time the hands, not
+    the making of their samples: the warm-up run makes them)."""
     from engine.input.hand_pose import pose_hand
 
+    @cache
     def feed(t: float) -> Any:
         c = 0.4 + 0.3 * np.sin(2.0 * t + i)
         at = (-0.6 + 0.4 * i + 0.1 * np.sin(3.0 * t + i), -0.3, 1.1 + 0.05 * np.sin(2 * t))
@@ -346,6 +350,7 @@ def _waving(name: str, i: int) -> Feed:
 def _as_tracker(feed: Feed, name: str) -> Feed:
     from engine.input.events import TrackerPose
 
+    @cache
     def pose(t: float) -> Any:
         h = feed(t)
         return TrackerPose(name, h.positions[0], h.orientations[0], (0.0, 0.0, 0.0), t)
