@@ -31,10 +31,12 @@ from typing import IO, Any
 
 from engine.input.device import make_pose, numbers
 from engine.input.events import (
+    HAND_JOINTS,
     TAGS,
     AnyInput,
     Axis,
     Button,
+    HandJoints,
     KeyEvent,
     Pointer,
     TrackerPose,
@@ -141,6 +143,8 @@ def event_from_record(record: dict[str, Any]) -> AnyInput:
     elif cls is KeyEvent:
         event = KeyEvent(_text(record.pop("key"), "key"), _flag(record.pop("pressed")), device,
                          timestamp)
+    elif cls is HandJoints:
+        event = _hand(device, record, timestamp)
     elif cls is Pointer:
         x, y, scroll = numbers([record.pop("x"), record.pop("y"), record.pop("scroll", 0.0)], 3,
                                "pointer")
@@ -150,6 +154,23 @@ def event_from_record(record: dict[str, Any]) -> AnyInput:
     if record:
         raise ValueError(f"unexpected field(s): {', '.join(record)}")
     return event
+
+
+def _hand(device: str, record: dict[str, Any], timestamp: float) -> HandJoints:
+    """A recorded hand: 26 positions, orientations (w, x, y, z), radii and validity
+    flags, each list checked as a device's message is."""
+    n = len(HAND_JOINTS)
+    positions = [numbers(_list(p, 3), 3, "joint position") for p in
+                 _list(record.pop("positions"), n)]
+    turns = [numbers(_list(q, 4), 4, "joint orientation") for q in
+             _list(record.pop("orientations"), n)]
+    radii = numbers(_list(record.pop("radii"), n), n, "joint radii")
+    valid = _list(record.pop("valid"), n)
+    if not all(isinstance(v, bool) for v in valid):
+        raise ValueError(f"valid must be {n} flags (true or false), got {valid!r}")
+    return HandJoints(device, tuple((p[0], p[1], p[2]) for p in positions),
+                      tuple((q[0], q[1], q[2], q[3]) for q in turns),
+                      tuple(radii), tuple(valid), timestamp)
 
 
 def _list(value: object, length: int) -> list[Any]:
