@@ -13,10 +13,12 @@ is (so its tracked velocity is fed forward and a blocked finger pushes with at m
 :data:`HAND_BIT` and none of them collides with another (a fist is no collision).
 
 Grasping by contact reads the step's contacts: an object is held when the thumb and an
-opposing finger or the palm press it (each at least :data:`PRESS_FORCE`) with forces that
-oppose — the line between the two presses lies inside both contacts' friction cones of
+opposing finger or the palm press it (each at least :data:`PRESS_FORCE`; the tracked grip
+:data:`CLOSING` narrower than the physical one round it) with forces that oppose
+— the line between the two presses lies inside both contacts' friction cones of
 :data:`GRIP_MU` — and let go when the tracked grip opens :data:`RELEASE_BAND` wider than it
-was when it took hold (the hysteresis: a grip does not flicker at its edge). Holding uses
+was when it took hold — as wide as the physical fingers round the object then — (the
+hysteresis: a grip does not flicker at its edge). Holding uses
 the palm-only hand's constraint (:meth:`systems.hands.Hands.attach`), so two hands and
 several users hold one object as before.
 """
@@ -75,7 +77,10 @@ SPREAD = 0.45
 #: was when it took hold the tracked grip opens before it lets go.
 PRESS_FORCE = 0.3
 GRIP_MU = 0.8
-RELEASE_BAND = 0.02
+RELEASE_BAND = 0.008
+#: How much narrower than the physical grip round an object the tracked one must be for
+#: the presses to take hold (m): a hand closing on it, not opening off it.
+CLOSING = 0.002
 #: The capsule of a bone lies along its body's +x (a capsule's own axis is local +z).
 ALONG_X = (math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0)
 BONE_COLOR = (0.85, 0.7, 0.6, 1.0)
@@ -263,13 +268,15 @@ def palm_pose(previous: tuple[float, np.ndarray, ...] | None, sample: HandJoints
 
 
 def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.ndarray,
-                rows: np.ndarray, dt: float) -> float:
+                rows: np.ndarray, dt: float, held: frozenset[int] = frozenset()) -> float:
     """How much of this frame's way to its targets the hand may go (0 to 1) before one
     of its bodies would pass through something: a ray per body that would move more
     than half its thickness in the frame (a fast hand; 3 m/s is 25 mm a step, more than
-    a finger and a 5 mm plate), from where it is to where its target will be. Serial
-    physics answers at once; threaded physics a frame later, so this frame goes
-    unlimited."""
+    a finger and a 5 mm plate), from where it is to where its target will be; a body
+    whose centre would go past the surface the ray meets goes only half its thickness
+    into it (its contacts take it from there; a hand pressing on something is not
+    held back). What the hand holds is no obstacle. Serial physics answers at once;
+    threaded physics a frame later, so this frame goes unlimited."""
     speed = max(float(np.abs(rows[:, 7:10]).max()), float(np.abs(palm_target[7:10]).max()))
     if 2.0 * speed * dt < 0.5 * float(fingers.radii.min()):
         return 1.0  # slow (each axis's speed bounds the speed to within √3)
@@ -297,8 +304,8 @@ def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.nda
         return 1.0
     share = 1.0
     for hit, th, f in answer.result():
-        if hit is not None:
-            share = min(share, max(hit.distance - th, 0.0) / f)
+        if hit is not None and hit.key not in held and f > hit.distance:
+            share = min(share, max(hit.distance - 0.5 * th, 0.0) / f)
     return share
 
 
@@ -408,10 +415,14 @@ def opposed(parts: dict[str, tuple[np.ndarray, np.ndarray, float]],
     return ("thumb", *holding) if holding else ()
 
 
-def aperture(fingers: Fingers, parts: tuple[str, ...]) -> float:
-    """How wide the tracked grip of ``parts`` is: the thumb tip's distance to the nearest
-    other tracked tip (or the palm joint) among them."""
-    thumb = fingers.tips[0]
-    spots = [fingers.palm if part == "palm" else fingers.tips[FINGERS.index(part)]
+def aperture(fingers: Fingers, parts: tuple[str, ...], tips: np.ndarray | None = None,
+             palm: np.ndarray | None = None) -> float:
+    """How wide the grip of ``parts`` is: the thumb tip's distance to the nearest other
+    tip (or the palm) among them; the tracked hand's, or that of ``tips`` and ``palm``
+    (the physical hand's)."""
+    tips = fingers.tips if tips is None else tips
+    palm = fingers.palm if palm is None else palm
+    thumb = tips[0]
+    spots = [palm if part == "palm" else tips[FINGERS.index(part)]
              for part in parts if part != "thumb"]
     return min((float(np.linalg.norm(s - thumb)) for s in spots), default=0.0)

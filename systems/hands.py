@@ -279,7 +279,7 @@ class HandDriveSystem(System):
 
     phase = Phase.PRE_PHYSICS
     reads = (Hand, HandState, Transform, Name, Physical, Graspable, Joint, Visual)
-    writes = (HandState, Visual, Name, Transform, Physical, Joint)
+    writes = (HandState, Visual, Name, Transform, Physical, Joint, Graspable)
 
     def __init__(self, hands: Hands) -> None:
         self.hands = hands
@@ -398,7 +398,8 @@ class HandDriveSystem(System):
         """A fast hand's targets, bones and palm, held short of what it would pass."""
         if not fingers.colliding:
             return
-        share = hand_fingers.sweep_share(engine, fingers, rig.hand, palm, aims, dt)
+        share = hand_fingers.sweep_share(engine, fingers, rig.hand, palm, aims, dt,
+                                         frozenset(rig.grasps))
         if share >= 1.0:
             return
         world = engine.world
@@ -747,12 +748,20 @@ class HandContactSystem(System):
                 grip = hand_fingers.opposed(parts)
                 if not grip or obj in rig.grasps or not _graspable(world, obj):
                     continue
+                # closing on it: the tracked grip narrower than the physical one round it
+                # (fingers opening off it still touch it; they do not take it again)
+                palm = world.component_for_entity(rig.hand, Transform).position
+                width = hand_fingers.aperture(fingers, grip,
+                                              hand_fingers.tips_now(engine, fingers), palm)
+                if hand_fingers.aperture(fingers, grip) > width - hand_fingers.CLOSING:
+                    continue
                 try:
                     self.hands.attach(engine, rig, obj)
                 except ValueError as exc:
                     self.hands.messages.warn(f"hand {rig.name!r}: {exc}")
                     continue
-                fingers.grips[obj] = (grip, hand_fingers.aperture(fingers, grip))
+                # the tracked grip lets go once it opens RELEASE_BAND wider than this
+                fingers.grips[obj] = (grip, width)
         parts = set()
         for obj in rig.grasps:
             parts.update(fingers.grips[obj][0] if obj in fingers.grips else

@@ -83,3 +83,13 @@ def pinch(device: str, centre: Sequence[float], across: Sequence[float], width: 
     s = scale_for(grip)
     quat = matrices_to_quats(rot[None])[0]
     return pose_hand(device, wrist, quat, curls(s), left=left, timestamp=timestamp)
+
+
+def grip_wrist(centre: Sequence[float], across: Sequence[float], width: float,
+               left: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """The wrist's position and orientation (w, x, y, z) of :func:`pinch` round an
+    object of ``width`` at ``centre`` (the same for any grip of it)."""
+    rot = _orientation(tuple(map(float, across)), float(width), left)
+    thumb, index = _tips(scale_for(width), left)
+    wrist = np.asarray(centre, dtype=float) - rot @ ((thumb + index) / 2)
+    return wrist, matrices_to_quats(rot[None])[0]
