@@ -232,14 +232,14 @@ def _link(engine: Engine, label: str, bone: int, parent: int, anchor: np.ndarray
 def aim(fingers: Fingers, sample: HandJoints, frame: Transform | None, now: float,
         stale_after: float) -> np.ndarray:
     """The control bodies' rows (15, 13: pose and velocities) for this sample: the
-    velocities from the sample before it (zero once the samples stop coming)."""
+    velocities from the sample before it (zero once the samples stop coming). A bone's
+    drive aims at a point (:data:`BONE_TORQUE` is 0), so its control body's turn is its
+    start joint's as tracked, and it does not spin."""
     p, q = world_joints(sample, frame)
-    centres, quats, _ = bone_poses(p, q)
+    centres, quats = (p[STARTS] + p[ENDS]) / 2, q[STARTS]
     previous = fingers.sample
     if previous is not None and sample.timestamp > previous[0]:
-        dt = sample.timestamp - previous[0]
-        fingers.velocity[:, :3] = (centres - previous[1]) / dt
-        fingers.velocity[:, 3:] = rotation_vector_between(previous[2], quats) / dt
+        fingers.velocity[:, :3] = (centres - previous[1]) / (sample.timestamp - previous[0])
     if previous is None or sample.timestamp > previous[0]:
         fingers.sample = (sample.timestamp, centres, quats)
     if now - sample.timestamp > stale_after:
