@@ -40,7 +40,7 @@ from engine.rotation import (
     matrices_to_quats,
     quat_multiply,
     quat_to_matrix,
-    rotation_vector_between,
+    rotation_vector,
 )
 
 if TYPE_CHECKING:
@@ -261,7 +261,7 @@ def palm_pose(previous: tuple[float, np.ndarray, ...] | None, sample: HandJoints
         t0, p0, q0, v, w = previous
         if sample.timestamp > t0:
             dt = sample.timestamp - t0
-            v, w = (p[0] - p0) / dt, rotation_vector_between(q0, q[0]) / dt
+            v, w = (p[0] - p0) / dt, np.asarray(rotation_vector(q0, q[0])) / dt
     if now - sample.timestamp > stale_after:
         v = w = np.zeros(3)
     return sample.timestamp, p[0], q[0], v, w
@@ -270,16 +270,17 @@ def palm_pose(previous: tuple[float, np.ndarray, ...] | None, sample: HandJoints
 def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.ndarray,
                 rows: np.ndarray, dt: float, held: frozenset[int] = frozenset()) -> float:
     """How much of this frame's way to its targets the hand may go (0 to 1) before one
-    of its bodies would pass through something: a ray per body that would move more
-    than half its thickness in the frame (a fast hand; 3 m/s is 25 mm a step, more than
+    of its bodies would pass through something: once the hand is fast enough for its
+    thinnest bone to move its thickness in a frame, a ray per body that would move more
+    than half its thickness (a fast hand; 3 m/s is 25 mm a step, more than
     a finger and a 5 mm plate), from where it is to where its target will be; a body
     whose centre would go past the surface the ray meets goes only half its thickness
     into it (its contacts take it from there; a hand pressing on something is not
     held back). What the hand holds is no obstacle. Serial physics answers at once;
     threaded physics a frame later, so this frame goes unlimited."""
     speed = max(float(np.abs(rows[:, 7:10]).max()), float(np.abs(palm_target[7:10]).max()))
-    if 2.0 * speed * dt < 0.5 * float(fingers.radii.min()):
-        return 1.0  # slow (each axis's speed bounds the speed to within √3)
+    if 1.8 * speed * dt < float(fingers.radii.min()):
+        return 1.0  # slow: no body moves its thickness (√3 times an axis's speed bounds it)
     world = engine.world
     palm_t = world.try_component(palm, Transform)
     if palm_t is None:

@@ -50,7 +50,7 @@ class Grip:
 
 
 #: What each hand takes and when (s): the scene's objects.
-RIGHT = [(1.0, Grip((0.35, -0.1, TOP + 0.05), 0.08)),  # the cup
+RIGHT = [(1.0, Grip((0.35, -0.1, TOP + 0.05), 0.07)),  # the cup
          (5.5, Grip((0.18, -0.1, TOP + 0.05), 0.02, (0.0, 1.0, 0.0), 0.025)),  # mug handle
          (10.0, Grip((-0.15, -0.1, TOP + 0.008), 0.012, (1.0, 0.0, 0.0))),  # the pen
          (14.5, Grip((-0.4, -0.1, TOP + 0.03), 0.06)),  # the ball
