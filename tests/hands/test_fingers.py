@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pytest
 
 from components import Hand, HandState, Physical, Transform
 from engine.events import Contacts, HandGrasped, HandReleased
@@ -230,3 +231,18 @@ def test_fingers_on_pymunk_are_told_and_the_hand_is_a_palm(tmp_path: Path, caplo
         assert engine.resource(Hands).rigs[ids["hand_r"]].fingers is None
     assert "Fingers 1 needs the ode backend" in caplog.text
 
+
+
+def test_a_recorded_hand_reads_back_the_same_and_a_short_one_is_refused():
+    import json
+
+    from engine.input.hand_pose import pose_hand
+    from engine.input.record import event_from_record, event_record
+
+    hand = pose_hand("right", (0.1, 0.2, 1.0), (1, 0, 0, 0), {"index": 0.5}, timestamp=1.5)
+    line = json.loads(json.dumps(event_record(3, hand)))
+    line.pop("frame")
+    assert event_from_record(dict(line)) == hand
+    line["radii"] = line["radii"][:25]
+    with pytest.raises(ValueError, match="a list of 26"):
+        event_from_record(line)
