@@ -85,6 +85,9 @@ class Graspable:
 #: hand's weight (kg).
 HAND_SIZE = (0.09, 0.18, 0.03)
 HAND_MASS = 0.45
+#: A fingered hand's palm (``Hand { Fingers 1 }``): the box round the metacarpals (m;
+#: +x along the fingers), its fingers' phalanges being bodies of their own.
+PALM_SIZE = (0.075, 0.085, 0.028)
 #: The drive's bounds and response reach the backend: each must be positive (or, with a
 #: least value of 0, at least that).
 _DRIVE = (("MaxForce", 0.0), ("MaxTorque", 0.0), ("TimeConstant", 0.0), ("MaxSpeed", None),
@@ -108,7 +111,8 @@ def build_hand(h: Mapping[str, Any], ctx: BuildContext) -> list[Any]:
         if value is not None and not (value > 0 or value == least):
             ctx.error(key, f"{who}: {key} must be "
                       f"{'positive' if least is None else '>= 0'}, got {value:g}")
-    ctx.input_name("Tracker", "tracker", who)
+    if not h["Fingers"]:  # a fingered hand's Tracker is an input hand (HandJoints),
+        ctx.input_name("Tracker", "tracker", who)  # which no Input block declares
     ctx.input_name("Glove", "glove", who)
     models = {key: ctx.model_file(key) for key in _MODELS}
     hand = Hand(tracker=h["Tracker"], glove=h["Glove"], button=h["Button"],
@@ -119,7 +123,7 @@ def build_hand(h: Mapping[str, Any], ctx: BuildContext) -> list[Any]:
                 break_force=None if h["BreakForce"] is None else float(h["BreakForce"]),
                 marker=bool(h["Marker"]), neutral_model=models["NeutralModel"],
                 contact_model=models["ContactModel"], grasp_model=models["GraspModel"],
-                holding=tuple(h["Holding"] or ()))
+                holding=tuple(h["Holding"] or ()), fingers=bool(h["Fingers"]))
     if ctx.given("Frame"):
         ctx.link(hand, "frame", h["Frame"])
     return [hand, HandState()]
@@ -175,6 +179,10 @@ HAND_BLOCK = declare(BlockDeclaration(
             "the hand and any shear beyond what pressing the object against the palm holds "
             "(none: never)", unit="N"),
         Key("Marker", "bool", 1, "show a ball where the real hand (the tracker) is"),
+        Key("Fingers", "bool", 0, "1: the palm and each finger's phalanges are bodies driven "
+            "toward the 26 tracked joints of input hand Tracker (ODE), and what the thumb and "
+            "an opposing finger or the palm press is held; 0: the palm only (the paper's "
+            "hand)"),
         Key("NeutralModel", "asset", None, "model drawn while the hand touches nothing it "
             "could grasp (a relaxed hand); default: the object's own look"),
         Key("ContactModel", "asset", None, "model drawn while the hand touches something it "

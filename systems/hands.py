@@ -71,6 +71,7 @@ from engine.rotation import quat_multiply, quat_to_matrix
 from engine.services import HandControl
 from engine.system import Phase, PluginName, System
 from services.input import InputState
+from systems import hand_fingers
 from systems.hand_ghost import GhostFingerSystem
 
 if TYPE_CHECKING:
@@ -133,6 +134,11 @@ class _Rig:
     shown: tuple[str, bool, bool] | None = None  # the mode, tracking and see-through drawn
     #: object -> the physics time the hand last touched it (kept TOUCH_HOLD seconds)
     touched_at: dict[int, float] = field(default_factory=dict)
+    #: A fingered hand: its drive's response (the bones take it), the palm's last tracked
+    #: pose and velocities (t, p, q, v, w), its bones once the first sample came
+    limits: SetDriveLimits | None = None
+    palm_sample: tuple[Any, ...] | None = None
+    fingers: hand_fingers.Fingers | None = None
     force_output: str = field(init=False)
     grasp_output: str = field(init=False)
 
@@ -203,7 +209,10 @@ class Hands:
         kind = JointKind.BALL if others else JointKind.FIXED
         rig.grasps[obj] = self._joint(engine, rig, obj, kind)
         for other in others:  # a second grip: the first becomes a grip point too
-            if self._kind(world, other.grasps[obj]) == JointKind.FIXED:
+            # (a fingered hand's grip stays fixed: round the line between two grip points
+            # the object would swing as the fingers that held it open to hand it over)
+            if other.fingers is None and \
+                    self._kind(world, other.grasps[obj]) == JointKind.FIXED:
                 engine.despawn(other.grasps[obj])
                 other.grasps[obj] = self._joint(engine, other, obj, JointKind.BALL)
         _tell(engine, HandGrasped(rig.hand, obj), "grasp")
@@ -240,6 +249,23 @@ def _name(world: Any, entity: int) -> str:
     return name.id if name is not None else f"entity {entity}"
 
 
+def _frame(engine: Engine, hand: Hand) -> Transform | None:
+    """The Transform of the object a hand's tracker is calibrated relative to, if any."""
+    return None if hand.frame is None else engine.world.try_component(hand.frame, Transform)
+
+
+def _carry(engine: Engine, hand: int, obj: int) -> None:
+    """Give a let-go object the hand's velocity where it is (what it had while held),
+    and no more: the fingers that opened round it do not throw it."""
+    world = engine.world
+    palm, t = world.try_component(hand, Transform), world.try_component(obj, Transform)
+    if palm is None or t is None:
+        return
+    spin = palm.angular_velocity
+    linear = palm.linear_velocity + np.cross(spin, t.position - palm.position)
+    engine.physics.push(SetVelocity(obj, tuple(linear.tolist()), tuple(spin.tolist())))
+
+
 def _tell(engine: Engine, event: HandGrasped | HandReleased, kind: str) -> None:
     """A grasp or release on the bus, and as a marker (``grasp HAND OBJECT``) on the
     scene's Output streams, so a recording of physiological signals lines up with it."""
@@ -254,7 +280,7 @@ class HandDriveSystem(System):
 
     phase = Phase.PRE_PHYSICS
     reads = (Hand, HandState, Transform, Name, Physical, Graspable, Joint, Visual)
-    writes = (HandState, Visual, Name, Transform, Physical, Joint)
+    writes = (HandState, Visual, Name, Transform, Physical, Joint, Graspable)
 
     def __init__(self, hands: Hands) -> None:
         self.hands = hands
@@ -289,6 +315,7 @@ class HandDriveSystem(System):
         found = dict(engine.world.get_components(Hand, HandState, Transform))
         driven = [(rig, found[rig.hand]) for rig in rigs.values() if rig.hand in found]
         poses = self._move_controls(engine, driven, inputs)
+        self._move_fingers(engine, driven, inputs, poses, dt)
         for (rig, (hand, state, t)), pose in zip(driven, poses, strict=True):
             self._drive(engine, rig, hand, state, t, pose, dt)
             pressed = inputs is not None and hand.glove != "" and inputs.button(hand.glove,
@@ -296,10 +323,94 @@ class HandDriveSystem(System):
             if pressed and not rig.pressed:
                 for obj in state.touching:
                     self._grasp(engine, rig, obj)
-            elif rig.pressed and not pressed:
-                self.hands.let_go(engine, rig)
+            elif rig.pressed and not pressed:  # what the fingers grip they hold on to
+                grips = {} if rig.fingers is None else rig.fingers.grips
+                self.hands.let_go(engine, rig, [o for o in rig.grasps if o not in grips])
             rig.pressed = pressed
+            if rig.fingers is not None and rig.fingers.grips:
+                self._open_grips(engine, rig)
+            if rig.fingers is not None and rig.limits is not None:
+                hand_fingers.hold(engine, rig.fingers, rig.limits, bool(rig.grasps))
             state.held = tuple(rig.grasps)
+
+    def _open_grips(self, engine: Engine, rig: _Rig) -> None:
+        """Let go of what the fingers gripped once the tracked grip opened
+        :data:`~systems.hand_fingers.RELEASE_BAND` wider than when it took hold; the object
+        keeps the hand's velocity where it is, nothing more."""
+        fingers = rig.fingers
+        assert fingers is not None
+        for obj, (parts, width) in list(fingers.grips.items()):
+            if obj not in rig.grasps:
+                del fingers.grips[obj]
+            elif hand_fingers.aperture(fingers, parts) > width + hand_fingers.RELEASE_BAND:
+                del fingers.grips[obj]
+                self.hands.let_go(engine, rig, [obj])
+                if not any(obj in r.grasps for r in self.hands.rigs.values()):
+                    _carry(engine, rig.hand, obj)
+
+    def _fingered(self, engine: Engine, name: str) -> bool:
+        """Whether this backend simulates a hand's fingers (told once if not)."""
+        backend = engine.physics.backend_name
+        if backend == "ode":
+            return True
+        self.hands.messages.warn(f"hand {name!r}: Fingers 1 needs the ode backend (this is "
+                                 f"{backend!r}); it is a palm only")
+        return False
+
+    def _move_fingers(self, engine: Engine, driven: list[tuple[_Rig, Any]],
+                      inputs: InputState | None,
+                      poses: list[tuple[np.ndarray, ...] | None], dt: float) -> None:
+        """Put every fingered hand's bone control bodies where its tracked bones are, in
+        one command; a hand's bones are made at its first sample (sized from it), the palm
+        put at the tracked palm first. An untracked hand's bones hold still. A hand that
+        would pass through something this frame goes only as far as it
+        (:func:`~systems.hand_fingers.sweep_share`), its palm too."""
+        rows = []
+        for (rig, (hand, _, _)), pose in zip(driven, poses, strict=True):
+            if rig.limits is None:
+                continue
+            sample = None if inputs is None or pose is None else inputs.hand(hand.tracker)
+            fingers = rig.fingers
+            if sample is None:
+                if fingers is not None and fingers.sample is not None and \
+                        fingers.velocity.any():
+                    fingers.velocity[:] = 0.0
+                    rows.append((fingers, np.hstack([*fingers.sample[1:], fingers.velocity])))
+                continue
+            frame = _frame(engine, hand)
+            if fingers is None:
+                engine.physics.set_pose(rig.hand, pose[0], pose[1])
+                fingers = rig.fingers = hand_fingers.build(engine, rig.name, rig.hand, sample,
+                                                           frame, rig.limits)
+            aims = hand_fingers.aim(fingers, sample, frame, inputs.now, STALE_AFTER)
+            self._sweep(engine, rig, fingers, np.concatenate(pose), aims, dt)
+            rows.append((fingers, aims))
+            # each physical tip (where the last step left it) from its tracked one now
+            tips = hand_fingers.tips_now(engine, fingers)
+            found = engine.world.try_component(rig.hand, HandState)
+            if found is not None:
+                found.finger_deviation = tuple(
+                    np.linalg.norm(tips - fingers.tips, axis=1).tolist())
+        hand_fingers.push_controls(engine, rows)
+
+    @staticmethod
+    def _sweep(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers, palm: np.ndarray,
+               aims: np.ndarray, dt: float) -> None:
+        """A fast hand's targets, bones and palm, held short of what it would pass."""
+        if not fingers.colliding:
+            return
+        share = hand_fingers.sweep_share(engine, fingers, rig.hand, palm, aims, dt,
+                                         frozenset(rig.grasps))
+        if share >= 1.0:
+            return
+        world = engine.world
+        here = np.vstack([world.component_for_entity(b, Transform).position
+                          for b in fingers.bones])
+        hand_fingers.limit(aims, here, share)
+        row = palm[None].copy()
+        hand_fingers.limit(row, world.component_for_entity(rig.hand, Transform).position,
+                           share)
+        engine.physics.push(SetPoses([rig.control], row))
 
     def _grasp(self, engine: Engine, rig: _Rig, obj: int) -> None:
         try:
@@ -328,6 +439,9 @@ class HandDriveSystem(System):
             except CommandError as exc:
                 self.hands.messages.error(f"hand {name!r}: {exc}; it is not driven")
                 continue
+            fingered = hand.fingers and self._fingered(engine, name)
+            if fingered:
+                hand_fingers.separate_palm(engine, entity)
             control = engine.spawn(
                 Name(f"{name} tracker"), Transform(t.position.copy(), t.orientation.copy()),
                 Physical(kind=BodyKind.KINEMATIC, mass=1.0, shapes=[], category=0, mask=0,
@@ -342,6 +456,7 @@ class HandDriveSystem(System):
             look = (None, (0.8, 0.8, 0.8, 1.0)) if visual is None else (
                 visual.model, tuple(visual.color))
             rig = _Rig(entity, name, control, drive, look)  # type: ignore[arg-type]
+            rig.limits = limits if fingered else None
             self.hands.rigs[entity] = rig
             for held in hand.holding:  # a saved state: hold again what was held
                 obj = next((e for e, n in world.get_component(Name) if n.id == held), None)
@@ -385,6 +500,9 @@ class HandDriveSystem(System):
         self.hands.let_go(engine, rig)
         engine.despawn(rig.drive)
         engine.despawn(rig.control)
+        if rig.fingers is not None:
+            for part in rig.fingers.entities():
+                engine.despawn(part)
 
     def _dropped(self, engine: Engine, entity: int) -> None:
         """A held object went away: its grips went with it (the backend removed them)."""
@@ -416,14 +534,28 @@ class HandDriveSystem(System):
                 frame.linear_velocity + np.cross(frame.angular_velocity, arm) + rot @ v,
                 frame.angular_velocity + rot @ w)
 
+    @staticmethod
+    def _pose_of(engine: Engine, rig: _Rig, hand: Hand, inputs: InputState
+                 ) -> tuple[np.ndarray, ...] | None:
+        """The pose the palm is driven toward: its tracker's, or a fingered hand's tracked
+        palm joint (velocities from its samples)."""
+        if rig.limits is None:
+            return HandDriveSystem._tracker_pose(engine, hand, inputs)
+        sample = inputs.hand(hand.tracker)
+        if sample is None:
+            return None
+        rig.palm_sample = hand_fingers.palm_pose(rig.palm_sample, sample, _frame(engine, hand),
+                                                 inputs.now, STALE_AFTER)
+        return rig.palm_sample[1:]
+
     def _move_controls(self, engine: Engine, driven: list[tuple[_Rig, Any]],
                        inputs: InputState | None) -> list[tuple[np.ndarray, ...] | None]:
         """Put every tracked hand's control body at its tracker's pose, with its
         velocities: one command for all of them (checked in one pass), before anything
         else of the frame, so a pose no body can take changes nothing else. Each hand's
         pose, or None where it is untracked or its pose was refused (told)."""
-        poses = [None if inputs is None else self._tracker_pose(engine, hand, inputs)
-                 for _, (hand, _, _) in driven]
+        poses = [None if inputs is None else self._pose_of(engine, rig, hand, inputs)
+                 for rig, (hand, _, _) in driven]
         tracked = [i for i, pose in enumerate(poses) if pose is not None]
         if not tracked:
             return poses
@@ -482,11 +614,16 @@ class HandDriveSystem(System):
             self.hands.let_go(engine, rig)
             physics.set_pose(rig.hand, position, orientation)
             physics.set_velocity(rig.hand, velocity, spin)
+            if rig.fingers is not None and rig.fingers.sample is not None:
+                for bone, c, q in zip(rig.fingers.bones, *rig.fingers.sample[1:], strict=True):
+                    physics.set_pose(bone, c, q)
         if state.colliding and d > limit:
             physics.push(SetCollisionEnabled(rig.hand, False))
             state.colliding = False
         elif not state.colliding and d < COLLIDE_AGAIN * limit:
             self._collide_again(engine, rig, state)
+        if rig.fingers is not None:
+            hand_fingers.set_colliding(engine, rig.fingers, state.colliding)
         self._look(engine, rig, hand, state)
 
     def _collide_again(self, engine: Engine, rig: _Rig, state: HandState) -> None:
@@ -562,7 +699,12 @@ class HandContactSystem(System):
         elapsed = snapshot.time - self._seen[1] if self._seen[0] >= 0 else dt
         if stepped:
             self._seen = (snapshot.step, snapshot.time)
-        touches = _hand_contacts(frames, rigs)
+        owners = {rig.hand: rig.hand for rig in rigs.values()}
+        for rig in rigs.values():
+            if rig.fingers is not None:
+                owners.update(dict.fromkeys(rig.fingers.bones, rig.hand))
+        contacts = _contact_batch(frames)
+        touches = _hand_contacts(contacts, owners)
         world = engine.world
         outputs = _outputs(engine)
         sent = frozenset() if outputs is None else outputs.sent  # what Output blocks name
@@ -578,6 +720,9 @@ class HandContactSystem(System):
                 state.contact_force = impulse / (elapsed if elapsed > 0 else dt)
                 if others or rig.touched_at:
                     self._touching(engine, rig, state, others, snapshot.time)
+            if rig.fingers is not None:
+                self._fingers(engine, rig, state, contacts if stepped else None,
+                              elapsed if elapsed > 0 else dt)
             state.held = tuple(rig.grasps)
             state.mode = HandMode.GRASP if rig.grasps else HandMode.CONTACT if \
                 state.touching else HandMode.NEUTRAL
@@ -587,6 +732,42 @@ class HandContactSystem(System):
                 outputs.set(rig.grasp_output, 1.0 if rig.grasps else 0.0)
             if hand.break_force is not None and rig.grasps:
                 self._strain(engine, rig, hand.break_force)
+
+    def _fingers(self, engine: Engine, rig: _Rig, state: HandState,
+                 contacts: np.ndarray | None, elapsed: float) -> None:
+        """A fingered hand after a step: what its thumb and an opposing finger or its palm
+        grip is held (:func:`~systems.hand_fingers.opposed`); which parts grip what it
+        holds."""
+        fingers = rig.fingers
+        assert fingers is not None
+        world = engine.world
+        if contacts is not None:
+            owner: dict[int, str] = {**fingers.finger_of, rig.hand: "palm"}
+            pressed = hand_fingers.presses(contacts, owner, elapsed) if len(contacts) else {}
+            fingers.pressing = {obj: tuple(parts) for obj, parts in pressed.items()}
+            for obj, parts in pressed.items():
+                grip = hand_fingers.opposed(parts)
+                if not grip or obj in rig.grasps or not _graspable(world, obj):
+                    continue
+                # closing on it: the tracked grip narrower than the physical one round it
+                # (fingers opening off it still touch it; they do not take it again)
+                palm = world.component_for_entity(rig.hand, Transform).position
+                width = hand_fingers.aperture(fingers, grip,
+                                              hand_fingers.tips_now(engine, fingers), palm)
+                if hand_fingers.aperture(fingers, grip) > width - hand_fingers.CLOSING:
+                    continue
+                try:
+                    self.hands.attach(engine, rig, obj)
+                except ValueError as exc:
+                    self.hands.messages.warn(f"hand {rig.name!r}: {exc}")
+                    continue
+                # the tracked grip lets go once it opens RELEASE_BAND wider than this
+                fingers.grips[obj] = (grip, width)
+        parts = set()
+        for obj in rig.grasps:
+            parts.update(fingers.grips[obj][0] if obj in fingers.grips else
+                         fingers.pressing.get(obj, ()))
+        state.grip = tuple(p for p in (*hand_fingers.FINGERS, "palm") if p in parts)
 
     @staticmethod
     def _touching(engine: Engine, rig: _Rig, state: HandState, others: list[int],
@@ -649,23 +830,31 @@ def _grip_load(on_object: np.ndarray, away: np.ndarray) -> float:
     return math.hypot(max(-along, 0.0), max(shear - GRIP_FRICTION * max(along, 0.0), 0.0))
 
 
-def _hand_contacts(frames: list[Contacts], rigs: dict[int, _Rig]
-                   ) -> dict[int, tuple[float, list[int]]]:
-    """Each hand in a contact this step: its contacts' summed impulse and what it touched.
-    Hands are a few entity ids among the step's contacts: a range test in numpy narrows
-    the contacts to those near the hands' ids, a set picks the hands' own."""
+def _contact_batch(frames: list[Contacts]) -> np.ndarray | None:
+    """The contacts of the steps since the last frame, in one array (None: none)."""
     batches = [c.batch for c in frames if len(c.batch)]
     if not batches:
+        return None
+    return np.concatenate(batches) if len(batches) > 1 else batches[0]
+
+
+def _hand_contacts(contacts: np.ndarray | None, owners: dict[int, int]
+                   ) -> dict[int, tuple[float, list[int]]]:
+    """Each hand in a contact this step: its contacts' summed impulse and what it touched
+    (``owners``: each palm and bone -> its hand). Hands are a few entity ids among the
+    step's contacts: a range test in numpy narrows the contacts to those near the hands'
+    ids, a set picks the hands' own."""
+    if contacts is None:
         return {}
-    contacts = np.concatenate(batches) if len(batches) > 1 else batches[0]
     a, b = contacts["a"], contacts["b"]
-    low, high = min(rigs), max(rigs)
+    low, high = min(owners), max(owners)
     rows = np.flatnonzero(((a >= low) & (a <= high)) | ((b >= low) & (b <= high)))
     out: dict[int, tuple[float, list[int]]] = {}
     impulses = contacts["impulse"][rows].tolist()
     for x, y, impulse in zip(a[rows].tolist(), b[rows].tolist(), impulses, strict=True):
-        for hand, other in ((x, y), (y, x)):
-            if hand in rigs:
+        for part, other in ((x, y), (y, x)):
+            hand = owners.get(part)
+            if hand is not None:
                 total, others = out.get(hand, (0.0, []))
                 others.append(other)
                 out[hand] = (total + impulse, others)

@@ -12,19 +12,21 @@ from engine.content import REPO_ROOT
 
 
 def record_session(folder: Path, out: Path, feeder: Callable[[Any, Any], Any],
-                   seconds: float, digits: int | None = None) -> Path:
+                   seconds: float, digits: int | None = None,
+                   scene_file: str = "main.scene") -> Path:
     """Run ``folder``'s scene unpaced with the input layer recording to ``out`` while the
     system ``feeder(engine, hub)`` returns injects input each frame (a scripted user).
     The devices' clock is the simulated time (to ``digits`` decimals: shorter numbers, a
     smaller file); the header names the scene relative to the repository, not by this
-    machine's path. The run ends at ``seconds`` or when the feeder asks it to quit."""
+    machine's path. The run ends at ``seconds`` or when the feeder asks it to quit.
+    ``scene_file``: which of the folder's scenes (a folder may hold several)."""
     from engine import EngineConfig
     from engine.scene import instantiate, load_spec
     from services.input import InputHub
     from services.input.replay import InputRecorder
     from systems import create_engine
 
-    scene = folder / "main.scene"
+    scene = folder / scene_file
     spec = load_spec(scene)
     config = EngineConfig(content_dir=folder, fast=True, dt=spec.time_step, debug=False,
                           world=spec.world)

@@ -16,6 +16,11 @@ Rows, each at 120 Hz physics (serial, unpaced), on ODE and on pymunk (``--backen
   discarded; then runs with and without hands alternate :data:`REPEATS` times and the
   medians are reported, so one disturbed run (a loaded machine) does not decide it.
   Goal: ≤ 20 µs.
+
+Beside them, on ODE, the fingered hand's rows (``Hand { Fingers 1 }``): fingertip
+tracking, penetration, held jitter, a 3 Hz shake, a hand-over, a 3 m/s swipe at a thin
+plate, its cost per hand per step beside the palm's, and two hands in a 90 Hz frame
+(:mod:`app.bench.fingers`). pymunk has no fingered hand (a palm there, told).
 """
 
 from __future__ import annotations
@@ -171,4 +176,8 @@ def run_bench(quick: bool = False, backend: str | None = None) -> list[dict[str,
         for name in BACKENDS if backend is None else (backend,):
             rows += [tracking(folder, name, seconds), held_cup(folder, name, 2.0),
                      cost(folder, name, 0.5 if quick else 3.0)]
+            if name == "ode":
+                from app.bench.fingers import run_rows
+
+                rows += run_rows(folder, quick)
     return rows

@@ -54,7 +54,7 @@ from components.avatar import (
     SavedRequest,
 )
 from components.display import binding_problem as display_binding_problem
-from components.hand import HAND_SIZE
+from components.hand import HAND_SIZE, PALM_SIZE
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, SPRING_KINDS, JointKind, Spring
 from components.script import SavedScript, ScriptHandler, ScriptTimer
 from engine.anomalies import AnomalySpec
@@ -328,6 +328,11 @@ class _Reader(dict):
 
 
 _VECTORS = (VECTOR, STRINGVECTOR)
+
+
+def _fingered(hand: Value) -> bool:
+    """Whether a ``Hand`` block asks for fingers (its palm is then smaller than a hand)."""
+    return any(e.key == "Fingers" and bool(e.value.data) for e in hand.data.entries)
 
 
 class _Index:
@@ -610,8 +615,9 @@ class _Builder:
             map(math.radians, r("AngularVelocity"))) if r.has("AngularVelocity") else _ORIGIN
         comps: list[Any] = [Name(oid), Transform(position, quat, r("Velocity"), angular)]
         size = r("Size")
-        if r.has("Hand") and size is None:  # a hand's body is a hand-sized box
-            size = HAND_SIZE
+        hand_blk = r.value("Hand")
+        if hand_blk is not None and size is None:  # a hand's body is a hand-sized box
+            size = PALM_SIZE if _fingered(hand_blk) else HAND_SIZE
         vis_blk, phys_blk = r.value("VisualAttributes"), r.value("PhysicalAttributes")
         bare = vis_blk is None and phys_blk is None
         vis = _Reader(vis_blk.data if vis_blk else None, "Visual")

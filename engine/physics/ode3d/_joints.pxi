@@ -133,8 +133,7 @@ cdef dJointID build_universal(_JointBuild b) except NULL:
     cdef dJointID j = dJointCreateUniversal(b.world, NULL)
     dJointAttach(j, b.ba, b.bb)
     dJointSetUniversalAnchor(j, b.anchor[0], b.anchor[1], b.anchor[2])
-    dJointSetUniversalAxis1(j, b.a1[0], b.a1[1], b.a1[2])
-    dJointSetUniversalAxis2(j, b.a2[0], b.a2[1], b.a2[2])
+    set_universal_axes(j, b.a1, b.a2)
     return j
 
 
@@ -416,6 +415,30 @@ cdef int place(World w, int i, ref, double* saved) except -1:
     dBodySetPosition(s.body, p[0], p[1], p[2])
     dBodySetQuaternion(s.body, q)
     return 1
+
+
+cdef void set_universal_axes(dJointID j, const dReal* a1, const dReal* a2):
+    """Both axes of a new universal joint, in an order no step of which makes an axis
+    parallel to the other one's current value (ODE works out the joint's rest turn at
+    each step, and says "zero length vector in dRFrom2Axes" when they are parallel: a
+    hand's flexion axis along ODE's default second axis did)."""
+    cdef dVector3 now
+    cdef double c[3]
+    dJointGetUniversalAxis1(j, now)
+    c[0] = a2[1] * now[2] - a2[2] * now[1]
+    c[1] = a2[2] * now[0] - a2[0] * now[2]
+    c[2] = a2[0] * now[1] - a2[1] * now[0]
+    if c[0] * c[0] + c[1] * c[1] + c[2] * c[2] > 1e-4:
+        dJointSetUniversalAxis2(j, a2[0], a2[1], a2[2])
+        dJointSetUniversalAxis1(j, a1[0], a1[1], a1[2])
+        return
+    # a2 lies along the current axis 1: first an axis 2 across both, then axis 1, then a2
+    c[0] = a1[1] * a2[2] - a1[2] * a2[1]
+    c[1] = a1[2] * a2[0] - a1[0] * a2[2]
+    c[2] = a1[0] * a2[1] - a1[1] * a2[0]
+    dJointSetUniversalAxis2(j, c[0], c[1], c[2])
+    dJointSetUniversalAxis1(j, a1[0], a1[1], a1[2])
+    dJointSetUniversalAxis2(j, a2[0], a2[1], a2[2])
 
 
 cdef void joint_param(_JointRec rec, int param, double value):

@@ -231,6 +231,7 @@ cdef extern from "ode/ode.h" nogil:
     void dJointSetUniversalAnchor(dJointID, dReal, dReal, dReal)
     void dJointSetUniversalAxis1(dJointID, dReal, dReal, dReal)
     void dJointSetUniversalAxis2(dJointID, dReal, dReal, dReal)
+    void dJointGetUniversalAxis1(dJointID, dVector3)
     void dJointSetUniversalParam(dJointID, int, dReal)
     dReal dJointGetUniversalAngle1(dJointID)
     dReal dJointGetUniversalAngle1Rate(dJointID)

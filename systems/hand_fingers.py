@@ -1,0 +1,429 @@
+"""The fingered hand's bones (``Hand { Fingers 1 }``): built, driven, and read back.
+
+A fingered hand is the palm-only hand (its body, its six-DOF drive toward a control body,
+the deviation rule of section 5.4) plus, for each finger, three phalanges: capsules sized
+from the tracked joints' radii and bone lengths (the thumb's metacarpal, proximal and
+distal; each other finger's proximal, intermediate and distal, its metacarpal being the
+palm). They are chained to the palm and to each other by joints with the anatomical
+limits — a universal joint (flexion and spread) at the MCP and the thumb's CMC, hinges
+at the PIP and DIP (the thumb's MCP and IP) — and each is driven toward its tracked pose
+by its own bounded six-DOF drive to a kinematic control body put where the tracked bone
+is (so its tracked velocity is fed forward and a blocked finger pushes with at most
+:data:`BONE_FORCE`, never through). The hand's bones share the collision bit
+:data:`HAND_BIT` and none of them collides with another (a fist is no collision).
+
+Grasping by contact reads the step's contacts: an object is held when the thumb and an
+opposing finger or the palm press it (each at least :data:`PRESS_FORCE`; the tracked grip
+:data:`CLOSING` narrower than the physical one round it) with forces that oppose
+— the line between the two presses lies inside both contacts' friction cones of
+:data:`GRIP_MU` — and let go when the tracked grip opens :data:`RELEASE_BAND` wider than it
+was when it took hold — as wide as the physical fingers round the object then — (the
+hysteresis: a grip does not flicker at its edge). Holding uses
+the palm-only hand's constraint (:meth:`systems.hands.Hands.attach`), so two hands and
+several users hold one object as before.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from components import Graspable, Joint, Name, Physical, Shape, Transform, Visual
+from components.joint import JointKind
+from components.physical import BodyKind, MaterialProps
+from engine.physics.commands import SetCollisionEnabled, SetDriveLimits, SetPoses
+from engine.rotation import (
+    matrices_to_quats,
+    quat_multiply,
+    quat_to_matrix,
+    rotation_vector,
+)
+from services.input.events import FINGERS, HAND_JOINTS, HandJoints
+
+if TYPE_CHECKING:
+    from engine.app import Engine
+
+#: The collision bit every fingered hand's palm and bones have, and none of them collides
+#: with (a hand's bones never touch each other; hands pass through hands).
+HAND_BIT = 1 << 30
+#: A phalanx's mass (kg): heavy enough beside a 0.45 kg palm and a 0.3 kg cup for the
+#: solver's 40 iterations, light enough that a finger stops on what it touches.
+BONE_MASS = 0.1
+#: Each phalanx's drive bounds (N, N·m): a finger of three presses with up to ~3× this.
+#: No torque: a bone's centre, its joint to the bone before it and that joint's one or
+#: two free axes fix its orientation, and a motor row bounded by 0 is no row at all
+#: (three fewer rows per bone for the solver).
+BONE_FORCE = 8.0
+BONE_TORQUE = 0.0
+#: The drive bounds while the hand holds something (N, N·m): the object is held by the
+#: palm's constraint, and fingers pressing it at full force through the loop palm –
+#: finger – object – palm sink into it (the solver converges slowly round a loop).
+HOLD_FORCE = 1.5
+HOLD_TORQUE = 0.0
+#: Skin: the bones' friction.
+SKIN = MaterialProps(name="skin", friction=1.0, density=1000.0)
+#: The anatomical limits (radians, flexion positive) of each finger's three joints, and
+#: of the spread (abduction) at its MCP or CMC.
+LIMITS: dict[str, tuple[tuple[float, float], ...]] = {
+    "thumb": ((-0.6, 1.2), (-0.3, 1.3), (-0.4, 1.6)),
+    **{f: ((-0.4, 1.75), (-0.1, 2.0), (-0.2, 1.5)) for f in FINGERS[1:]},
+}
+SPREAD = 0.45
+#: Grasping by contact: a press counts from this normal force (N); the friction
+#: coefficient whose cone the opposing presses must lie in; how much wider (m) than it
+#: was when it took hold the tracked grip opens before it lets go.
+PRESS_FORCE = 0.3
+GRIP_MU = 0.8
+RELEASE_BAND = 0.008
+#: How much narrower than the physical grip round an object the tracked one must be for
+#: the presses to take hold (m): a hand closing on it, not opening off it.
+CLOSING = 0.002
+#: The capsule of a bone lies along its body's +x (a capsule's own axis is local +z).
+ALONG_X = (math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0)
+BONE_COLOR = (0.85, 0.7, 0.6, 1.0)
+TIPS = tuple(HAND_JOINTS.index(f"{f}_tip") for f in FINGERS)
+
+
+def bone_layout() -> list[tuple[str, int, int]]:
+    """The 15 phalanges: (finger, joint at its start, joint at its end), base to tip."""
+    out = []
+    for finger in FINGERS:
+        first = HAND_JOINTS.index(f"{finger}_metacarpal")
+        start = first if finger == "thumb" else first + 1
+        out += [(finger, start + k, start + k + 1) for k in range(3)]
+    return out
+
+
+BONES = bone_layout()
+STARTS = np.array([s for _, s, _ in BONES])
+ENDS = np.array([e for _, _, e in BONES])
+
+
+@dataclass(slots=True, eq=False)
+class Fingers:
+    """The bodies, drives and joints of one hand's fingers, and its grips' memory."""
+
+    bones: list[int]
+    controls: list[int]
+    drives: list[int]
+    chain: list[int]
+    lengths: np.ndarray  # each bone's length (m)
+    radii: np.ndarray  # each bone's capsule radius (m)
+    finger_of: dict[int, str]  # bone entity -> its finger
+    sample: tuple[float, np.ndarray, np.ndarray] | None = None  # t, positions, quats
+    velocity: np.ndarray = field(default_factory=lambda: np.zeros((15, 6)))
+    tips: np.ndarray = field(default_factory=lambda: np.zeros((5, 3)))  # tracked
+    palm: np.ndarray = field(default_factory=lambda: np.zeros(3))  # tracked palm joint
+    #: object -> (the fingers gripping it, the tracked grip's width when it took hold)
+    grips: dict[int, tuple[tuple[str, ...], float]] = field(default_factory=dict)
+    #: object -> the parts ("palm" or fingers) pressing it in the last step
+    pressing: dict[int, tuple[str, ...]] = field(default_factory=dict)
+    colliding: bool = True
+    holding: bool = False  # whether the drives have their holding bounds
+
+    def entities(self) -> list[int]:
+        return [*self.chain, *self.drives, *self.bones, *self.controls]
+
+
+def world_joints(sample: HandJoints, frame: Transform | None
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The sample's joint positions (26, 3) and orientations (26, 4) in the world (through
+    the hand's frame object, a wheelchair, when it has one)."""
+    p = np.asarray(sample.positions, dtype=float)
+    q = np.asarray(sample.orientations, dtype=float)
+    if frame is None:
+        return p, q
+    rot = quat_to_matrix(frame.orientation)
+    return p @ rot.T + frame.position, quat_multiply(np.broadcast_to(frame.orientation,
+                                                                     q.shape), q)
+
+
+def bone_poses(p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each bone's centre (15, 3), orientation (15, 4; +x from its start joint to its end,
+    +y the start joint's flexion axis) and length (15,), from world joints."""
+    along = p[ENDS] - p[STARTS]
+    lengths = np.linalg.norm(along, axis=1)
+    x = along / np.maximum(lengths, 1e-9)[:, None]
+    y = quat_to_matrix(q[STARTS])[:, :, 1]
+    y = y - np.sum(y * x, axis=1, keepdims=True) * x
+    y /= np.maximum(np.linalg.norm(y, axis=1, keepdims=True), 1e-9)
+    frames = np.stack([x, y, np.cross(x, y)], axis=2)
+    return (p[STARTS] + p[ENDS]) / 2, matrices_to_quats(frames), lengths
+
+
+def _bone_body(radius: float, length: float, kind: str = BodyKind.DYNAMIC) -> Physical:
+    capsule = Shape("capsule", (radius, max(length, 1e-3)), rotation=ALONG_X)
+    return Physical(kind=kind, mass=BONE_MASS, shapes=[capsule], material=SKIN,
+                    category=HAND_BIT, mask=0xFFFFFFFF & ~HAND_BIT, gravity=False,
+                    can_sleep=False)
+
+
+def separate_palm(engine: Engine, palm: int) -> None:
+    """The palm's body in the hands' collision bit, so its own bones pass through it
+    (its body made again: a backend takes a body's filter when it is made)."""
+    world = engine.world
+    body = world.component_for_entity(palm, Physical)
+    wanted = replace(body, category=HAND_BIT, mask=body.mask & ~HAND_BIT)
+    if (body.category, body.mask) != (wanted.category, wanted.mask):
+        world.remove_component(palm, Physical)
+        world.add_component(palm, wanted)
+
+
+def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Transform | None,
+          drive: SetDriveLimits) -> Fingers:
+    """Spawn one hand's phalanges where the tracked ones are, their control bodies,
+    drives (bounded by ``drive``'s response, :data:`BONE_FORCE` and :data:`BONE_TORQUE`)
+    and the chain of anatomical joints."""
+    p, q = world_joints(sample, frame)
+    centres, quats, lengths = bone_poses(p, q)
+    radii = np.asarray(sample.radii, dtype=float)
+    bones, controls, drives, chain, sizes = [], [], [], [], []
+    finger_of: dict[int, str] = {}
+    for i, (finger, start, end) in enumerate(BONES):
+        label = f"{name} {HAND_JOINTS[start]}"
+        radius = float(np.clip(min(radii[start], radii[end]) or 0.008, 0.004, 0.015))
+        sizes.append(radius)
+        pose = Transform(centres[i].copy(), quats[i].copy())
+        bone = engine.spawn(Name(label), pose, _bone_body(radius, float(lengths[i])),
+                            Visual(shapes=[replace(_bone_body(radius, float(lengths[i]))
+                                                   .shapes[0])], color=BONE_COLOR),
+                            Graspable(False))
+        control = engine.spawn(Name(f"{label} tracker"), Transform(centres[i].copy(),
+                                                                   quats[i].copy()),
+                               Physical(kind=BodyKind.KINEMATIC, mass=1.0, shapes=[],
+                                        category=0, mask=0, gravity=False, can_sleep=False))
+        aim = engine.spawn(Name(f"{label} drive"), Joint(
+            kind=JointKind.SIX_DOF, body_a=bone, body_b=control, motor_max_force=BONE_FORCE,
+            id=f"{label} drive"))
+        engine.physics.push(replace(drive, key=aim, max_force=BONE_FORCE,
+                                    max_torque=BONE_TORQUE))
+        parent = palm if i % 3 == 0 else bones[-1]
+        # spread about the palm's dorsal axis (the thumb's CMC: about its own, the palm's
+        # being near its flexion axis)
+        spread = quat_to_matrix(quats[i] if finger == "thumb" else q[0])[:, 2]
+        chain.append(_link(engine, label, bone, parent, p[start], quats[i], spread, finger,
+                           i % 3))
+        bones.append(bone)
+        controls.append(control)
+        drives.append(aim)
+        finger_of[bone] = finger
+    return Fingers(bones, controls, drives, chain, lengths, np.array(sizes), finger_of)
+
+
+def _link(engine: Engine, label: str, bone: int, parent: int, anchor: np.ndarray,
+          quat: np.ndarray, spread: np.ndarray, finger: str, k: int) -> int:
+    """The anatomical joint at a bone's start: universal (flexion about the bone's +y,
+    limited; spread about the palm's dorsal axis) at the base of a finger, a hinge
+    further on."""
+    rot = quat_to_matrix(quat)
+    spread = spread - (spread @ rot[:, 1]) * rot[:, 1]
+    spread = spread / max(float(np.linalg.norm(spread)), 1e-9)
+    low, high = LIMITS[finger][k]
+    kind = JointKind.UNIVERSAL if k == 0 else JointKind.HINGE
+    joint = Joint(kind=kind, body_a=bone, body_b=parent, anchor=tuple(anchor.tolist()),
+                  axis=tuple(rot[:, 1].tolist()), axis2=tuple(spread.tolist()),
+                  low=low, high=high, id=f"{label} joint")
+    return engine.spawn(Name(f"{label} joint"), joint)
+
+
+def aim(fingers: Fingers, sample: HandJoints, frame: Transform | None, now: float,
+        stale_after: float) -> np.ndarray:
+    """The control bodies' rows (15, 13: pose and velocities) for this sample: the
+    velocities from the sample before it (zero once the samples stop coming). A bone's
+    drive aims at a point (:data:`BONE_TORQUE` is 0), so its control body's turn is its
+    start joint's as tracked, and it does not spin."""
+    p, q = world_joints(sample, frame)
+    centres, quats = (p[STARTS] + p[ENDS]) / 2, q[STARTS]
+    previous = fingers.sample
+    if previous is not None and sample.timestamp > previous[0]:
+        fingers.velocity[:, :3] = (centres - previous[1]) / (sample.timestamp - previous[0])
+    if previous is None or sample.timestamp > previous[0]:
+        fingers.sample = (sample.timestamp, centres, quats)
+    if now - sample.timestamp > stale_after:
+        fingers.velocity[:] = 0.0
+    fingers.tips = p[list(TIPS)]
+    fingers.palm = p[0]
+    return np.hstack([centres, quats, fingers.velocity])
+
+
+def palm_pose(previous: tuple[float, np.ndarray, ...] | None, sample: HandJoints,
+              frame: Transform | None, now: float, stale_after: float
+              ) -> tuple[float, np.ndarray, ...]:
+    """The palm joint's world pose and velocities (t, p, q, v, w): the velocities by
+    finite difference from ``previous`` (kept while no newer sample came; zero once the
+    samples stop coming)."""
+    p, q = world_joints(sample, frame)
+    v = w = np.zeros(3)
+    if previous is not None:
+        t0, p0, q0, v, w = previous
+        if sample.timestamp > t0:
+            dt = sample.timestamp - t0
+            v, w = (p[0] - p0) / dt, np.asarray(rotation_vector(q0, q[0])) / dt
+    if now - sample.timestamp > stale_after:
+        v = w = np.zeros(3)
+    return sample.timestamp, p[0], q[0], v, w
+
+
+def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.ndarray,
+                rows: np.ndarray, dt: float, held: frozenset[int] = frozenset()) -> float:
+    """How much of this frame's way to its targets the hand may go (0 to 1) before one
+    of its bodies would pass through something: once the hand is fast enough for its
+    thinnest bone to move its thickness in a frame, a ray per body that would move more
+    than half its thickness (a fast hand; 3 m/s is 25 mm a step, more than
+    a finger and a 5 mm plate), from where it is to where its target will be; a body
+    whose centre would go past the surface the ray meets goes only half its thickness
+    into it (its contacts take it from there; a hand pressing on something is not
+    held back). What the hand holds is no obstacle. Serial physics answers at once;
+    threaded physics a frame later, so this frame goes unlimited."""
+    speed = max(float(np.abs(rows[:, 7:10]).max()), float(np.abs(palm_target[7:10]).max()))
+    if 1.8 * speed * dt < float(fingers.radii.min()):
+        return 1.0  # slow: no body moves its thickness (√3 times an axis's speed bounds it)
+    world = engine.world
+    palm_t = world.try_component(palm, Transform)
+    if palm_t is None:
+        return 1.0
+    bodies = [palm, *fingers.bones]
+    here = np.vstack([palm_t.position, *(world.component_for_entity(b, Transform).position
+                                         for b in fingers.bones)])
+    there = np.vstack([palm_target[:3] + palm_target[7:10] * dt,
+                       rows[:, :3] + rows[:, 7:10] * dt])
+    way = there - here
+    far = np.linalg.norm(way, axis=1)
+    thick = np.concatenate([[_palm_reach(world, palm, way[0], far[0])], fingers.radii])
+    fast = np.flatnonzero(far > 0.5 * thick)
+    if not len(fast):
+        return 1.0
+    mask = 0xFFFFFFFF & ~HAND_BIT
+    rays = [(bodies[i], here[i], way[i], far[i] + thick[i], thick[i], far[i]) for i in fast]
+    answer = engine.physics.request(lambda backend: [
+        (backend.raycast(o, d, reach, ignore=key, mask=mask), th, f)
+        for key, o, d, reach, th, f in rays])
+    if not answer.done() or answer.exception() is not None:
+        return 1.0
+    share = 1.0
+    for hit, th, f in answer.result():
+        if hit is not None and hit.key not in held and f > hit.distance:
+            share = min(share, max(hit.distance - 0.5 * th, 0.0) / f)
+    return share
+
+
+def _palm_reach(world: Any, palm: int, way: np.ndarray, far: float) -> float:
+    """How far the palm's box reaches from its centre along ``way``."""
+    body, t = world.try_component(palm, Physical), world.try_component(palm, Transform)
+    box = next((s for s in body.shapes if s.kind == "box"), None) if body else None
+    if box is None or t is None or far <= 0.0:
+        return 0.02
+    local = quat_to_matrix(t.orientation).T @ (way / far)
+    return float(np.abs(local) @ (np.asarray(box.size[:3]) / 2))
+
+
+def limit(rows: np.ndarray, here: np.ndarray, share: float) -> None:
+    """Targets moved only ``share`` of the way from where the bodies are, their
+    velocities scaled alike (rows: position, orientation, velocities)."""
+    rows[:, :3] = here + share * (rows[:, :3] - here)
+    rows[:, 7:] *= share
+
+
+def push_controls(engine: Engine, rigs: list[tuple[Fingers, np.ndarray]]) -> None:
+    """Every fingered hand's control bodies moved by one command."""
+    if not rigs:
+        return
+    keys = [k for f, _ in rigs for k in f.controls]
+    engine.physics.push(SetPoses(keys, np.vstack([rows for _, rows in rigs])))
+
+
+def hold(engine: Engine, fingers: Fingers, limits: SetDriveLimits, holding: bool) -> None:
+    """The bones' drives at their holding bounds while the hand holds something."""
+    if fingers.holding == holding:
+        return
+    fingers.holding = holding
+    force, torque = (HOLD_FORCE, HOLD_TORQUE) if holding else (BONE_FORCE, BONE_TORQUE)
+    for drive in fingers.drives:
+        engine.physics.push(replace(limits, key=drive, max_force=force, max_torque=torque))
+
+
+def set_colliding(engine: Engine, fingers: Fingers, enabled: bool) -> None:
+    """The fingers collide as their palm does (the deviation rule)."""
+    if fingers.colliding == enabled:
+        return
+    fingers.colliding = enabled
+    for bone in fingers.bones:
+        engine.physics.push(SetCollisionEnabled(bone, enabled))
+
+
+def tips_now(engine: Engine, fingers: Fingers) -> np.ndarray:
+    """Where the physical fingertips are (5, 3): each distal bone's far end."""
+    world = engine.world
+    distal = [world.component_for_entity(fingers.bones[3 * f + 2], Transform)
+              for f in range(5)]
+    p = np.array([t.position for t in distal])
+    along = quat_to_matrix(np.array([t.orientation for t in distal]))[:, :, 0]
+    return p + along * (fingers.lengths[2::3] / 2)[:, None]
+
+
+def presses(contacts: np.ndarray, owner: dict[int, str], elapsed: float
+            ) -> dict[int, dict[str, tuple[np.ndarray, np.ndarray, float]]]:
+    """Each object pressed by a hand's parts this step, and for each part ("palm" or a
+    finger): the mean point, the unit direction of its force on the object and its size
+    (N), from the contacts (whose normal points from ``b`` into ``a``)."""
+    keys = np.fromiter(owner, dtype=np.int64, count=len(owner))
+    a, b = contacts["a"], contacts["b"]
+    rows = np.flatnonzero(np.isin(a, keys) | np.isin(b, keys))
+    sums: dict[tuple[int, str], list[Any]] = {}
+    for r in rows.tolist():
+        x, y = int(a[r]), int(b[r])
+        part, obj, sign = (owner[x], y, -1.0) if x in owner else (owner[y], x, 1.0)
+        if obj < 0 or obj in owner:
+            continue
+        impulse = float(contacts["impulse"][r])
+        entry = sums.setdefault((obj, part), [np.zeros(3), np.zeros(3), 0.0])
+        entry[0] += contacts["position"][r] * impulse
+        entry[1] += contacts["normal"][r] * (sign * impulse)
+        entry[2] += impulse
+    out: dict[int, dict[str, tuple[np.ndarray, np.ndarray, float]]] = {}
+    for (obj, part), (point, push, total) in sums.items():
+        size = float(np.linalg.norm(push))
+        if total <= 0.0 or size <= 0.0:
+            continue
+        out.setdefault(obj, {})[part] = (point / total, push / size, size / elapsed)
+    return out
+
+
+def opposed(parts: dict[str, tuple[np.ndarray, np.ndarray, float]],
+            mu: float = GRIP_MU) -> tuple[str, ...]:
+    """The parts that grip with the thumb (thumb first), or () where no finger or the
+    palm presses against the thumb: both presses at least :data:`PRESS_FORCE`, and the
+    line between them inside both friction cones (half-angle atan ``mu``)."""
+    thumb = parts.get("thumb")
+    if thumb is None or thumb[2] < PRESS_FORCE:
+        return ()
+    cone = math.cos(math.atan(mu))
+    holding = []
+    for part in (*FINGERS[1:], "palm"):
+        other = parts.get(part)
+        if other is None or other[2] < PRESS_FORCE:
+            continue
+        line = other[0] - thumb[0]
+        n = float(np.linalg.norm(line))
+        if n < 1e-6:
+            continue
+        line /= n
+        if float(thumb[1] @ line) >= cone and float(other[1] @ -line) >= cone:
+            holding.append(part)
+    return ("thumb", *holding) if holding else ()
+
+
+def aperture(fingers: Fingers, parts: tuple[str, ...], tips: np.ndarray | None = None,
+             palm: np.ndarray | None = None) -> float:
+    """How wide the grip of ``parts`` is: the thumb tip's distance to the nearest other
+    tip (or the palm) among them; the tracked hand's, or that of ``tips`` and ``palm``
+    (the physical hand's)."""
+    tips = fingers.tips if tips is None else tips
+    palm = fingers.palm if palm is None else palm
+    thumb = tips[0]
+    spots = [palm if part == "palm" else tips[FINGERS.index(part)]
+             for part in parts if part != "thumb"]
+    return min((float(np.linalg.norm(s - thumb)) for s in spots), default=0.0)
