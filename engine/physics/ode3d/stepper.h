@@ -38,6 +38,9 @@
  *    slope or starting to slide leaves it the next step, after one step at most with
  *    (1 - beta) of its friction. Contact forces reported are the whole forces: what the
  *    solver found, plus each preload carried down through the contacts under it.
+ *    A preloaded body on a face that moves across gravity and turns slower than the
+ *    sleep rule's limits is held still, before the step and after it (cs_hold_still):
+ *    what motion it has is the solver's residue, which adds up to a sway.
  *
  * 3. Contact softness from the step and the masses. ODE's constraint force mixing is an
  *    absolute number: 1e-5 is rigid for a 1 kg ball and a sponge for a 125 kg crate, and
@@ -80,6 +83,12 @@
 /* Seconds over which a body's contact force is averaged before the sideways part is
  * judged: a stack's solver noise pushes its crates back and forth, a lean does not. */
 #define REST_SMOOTHING 0.2
+/* A preloaded body resting on a face moving across gravity slower than this (m/s) and
+ * turning slower than REST_STILL_ANGULAR (rad/s) is held still: its motion across gravity
+ * and its spin are what the solver left unconverged (the sleep rule's limits, sleep.py:
+ * under them the body would be frozen by its sleep anyway). */
+#define REST_STILL_LINEAR 0.03
+#define REST_STILL_ANGULAR 0.0349
 
 typedef struct {
     double beta;      /* share of a resting body's weight preloaded; 0: off */
@@ -105,6 +114,7 @@ typedef struct {   /* a body's standing with the resting preload */
     int slipping;     /* a contact of it slides this step */
     int contacts;     /* contacts it has this step */
     int tilted;       /* one of them has a normal off the vertical */
+    int still;        /* it was held still this step (cs_hold_still) */
 } CsBody;
 
 typedef struct {
@@ -302,6 +312,25 @@ static inline void cs_switch(CsState *s, int exact_rows, const void *bodies, siz
     }
 }
 
+/* Hold a body still across gravity when it moves and turns slower than REST_STILL_*:
+ * its spin and its velocity across gravity are taken away (its velocity along gravity is
+ * left to the contacts). Returns whether it did. For a preloaded body on a face, before
+ * the step and again after it: QuickStep's few iterations leave a stack's crates a few
+ * mm/s and mrad/s of motion each step, which add up to a sway; the stack at 1/60 s drifted
+ * 14 to 28 mm in 20 s with it, 0.5 to 3 mm without (tools/bench_accuracy.py). A body
+ * slower than this is one the sleep rule would freeze anyway (PhysX's stabilisation
+ * damps bodies near their sleep threshold alike). */
+static inline int cs_hold_still(dBodyID b, const double *down) {
+    const dReal *v = dBodyGetLinearVel(b), *w = dBodyGetAngularVel(b);
+    double along = v[0] * down[0] + v[1] * down[1] + v[2] * down[2];
+    if (w[0] * w[0] + w[1] * w[1] + w[2] * w[2] >= REST_STILL_ANGULAR * REST_STILL_ANGULAR ||
+        cs_across2(b, down) >= REST_STILL_LINEAR * REST_STILL_LINEAR)
+        return 0;
+    dBodySetAngularVel(b, 0.0, 0.0, 0.0);
+    dBodySetLinearVel(b, along * down[0], along * down[1], along * down[2]);
+    return 1;
+}
+
 /* Step the world over the collected contacts: islands found, resting islands
  * preloaded, contact joints made in `group` (contact i's feedback is `feedback(ctx, i)`),
  * then joint-only islands small enough stepped by dWorldStep and the rest by QuickStep,
@@ -475,7 +504,7 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
         memset(st->solved, 0, sizeof st->solved);
         st->mu = dInfinity;
         st->friction = st->grip = 0.0;
-        st->preloaded = 0;
+        st->preloaded = st->still = 0;
         if (b == NULL) continue;
         r = cs_root(s->parent, i);
         if (dBodyIsEnabled(b)) {
@@ -497,6 +526,7 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
             dBodyAddForce(b, -cfg->beta * m.mass * gravity[0], -cfg->beta * m.mass * gravity[1],
                           -cfg->beta * m.mass * gravity[2]);
             st->preloaded = 1;
+            if (st->contacts >= 3) st->still = cs_hold_still(b, down);
         }
     }
     for (i = 0; i < s->ncontacts; i++) {  /* the contact joints */
@@ -532,6 +562,8 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
             free(mark);
         }
     }
+    for (i = 0; i < n; i++)  /* what the step left of a still body's motion */
+        if (s->bodies[i].still) cs_hold_still(cs_body_at(bodies, stride, i), down);
     /* forces: what the solver found (the preloads put back after this loop) */
     for (i = 0; i < s->ncontacts; i++) {
         const CsContact *c = &s->contacts[i];
@@ -567,7 +599,7 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
     for (i = 0; i < n; i++) {
         dBodyID b = cs_body_at(bodies, stride, i);
         CsBody *st = &s->bodies[i];
-        double up, side[3], weight, share, grip, keep = exp(-dt / REST_SMOOTHING);
+        double up, side[3], weight, share, grip, held_up, keep = exp(-dt / REST_SMOOTHING);
         dMass m;
         if (b == NULL || dBodyIsKinematic(b)) continue;
         if (!dBodyIsEnabled(b)) {  /* asleep: it starts afresh when woken */
@@ -580,20 +612,24 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
         up = -(st->solved[0] * down[0] + st->solved[1] * down[1] + st->solved[2] * down[2]);
         for (k = 0; k < 3; k++)  /* the whole force, as the solver found (1 - beta) of it */
             st->held[k] = keep * st->held[k] + (1.0 - keep) * st->solved[k] / share;
-        {
-            double held_up = -(st->held[0] * down[0] + st->held[1] * down[1] +
-                               st->held[2] * down[2]);
-            for (k = 0; k < 3; k++) side[k] = st->held[k] + held_up * down[k];
-            /* one that slid while preloaded comes back only when the preload cannot make
-             * it slide again: held sideways by less than (1 - beta) of the grip */
-            grip = REST_GRIP * (st->slid ? 1.0 - cfg->beta : 1.0) * st->mu * held_up;
-        }
+        held_up = -(st->held[0] * down[0] + st->held[1] * down[1] + st->held[2] * down[2]);
+        for (k = 0; k < 3; k++) side[k] = st->held[k] + held_up * down[k];
+        /* one that slid while preloaded comes back only when the preload cannot make it
+         * slide again: held sideways by less than (1 - beta) of the grip */
+        grip = REST_GRIP * (st->slid ? 1.0 - cfg->beta : 1.0) * st->mu * held_up;
         if (st->preloaded && st->friction >= REST_SLIDING * st->grip) st->slid = 1;
         if (side[0] * side[0] + side[1] * side[1] + side[2] * side[2] > grip * grip) {
             st->resting = 0;
         } else {
             st->slid = 0;
-            if (weight > 0.0 && up >= REST_SUPPORT * share * weight &&
+            /* held up: to come to rest, by what the solver found this step; to stay so,
+             * by the whole force averaged (the solver's (1 - beta) share of it is too
+             * noisy at few iterations: a crate in the middle of a stack at 10 iterations
+             * fell out of the preload every few steps, and each time the solver met its
+             * whole weight unprepared, the stack fell over at 1/60 s) */
+            if (weight > 0.0 && st->contacts > 0 &&
+                (st->preloaded ? held_up >= REST_SUPPORT * weight
+                               : up >= REST_SUPPORT * share * weight) &&
                 st->friction < REST_SLIDING * st->grip)
                 st->resting = st->resting < 2 ? st->resting + 1 : 2;
             else
