@@ -317,10 +317,10 @@ def versus_mujoco(ns: tuple[int, ...], seconds: float, repeats: int) -> list[dic
 
 #: Each policy turned off in turn (world settings), to price it against the defaults.
 POLICIES: dict[str, dict[str, Any]] = {
-    "all on (defaults)": {},
+    "policies on, sleeping off": {},
     "resting warm start off": {"warm_start": 0.0},
     "exact islands off": {"exact_rows": 0},
-    "sleep rule on (nothing asleep yet)": {"auto_sleep": True},
+    "sleeping on (defaults: the scene falls asleep)": {"auto_sleep": True},
 }
 
 
@@ -395,9 +395,10 @@ def asleep_vs_awake(n: int, repeats: int, settle: float = 12.0) -> list[dict[str
     return [row]
 
 
-def run_bench(quick: bool = False, repeats: int | None = None) -> list[dict[str, Any]]:
+def run_bench(quick: bool = False, repeats: int | None = None,
+              ns: tuple[int, ...] | None = None) -> list[dict[str, Any]]:
     """The frontier grid, then the headline ratios; every row, each saying its table."""
-    ns = (200,) if quick else (500, 2000)
+    ns = ns or ((200,) if quick else (500, 2000))
     repeats = repeats or (2 if quick else 5)
     seconds = 0.5 if quick else SIM_SECONDS
     iterations = (5, 20) if quick else ITERATIONS
@@ -425,7 +426,7 @@ def figures(rows: list[dict[str, Any]]) -> list[Any]:
         if r["table"] == "defaults vs MuJoCo":
             out.append(Figure(f"N={r['N']}, {r['ours']}", r["ours ms/step"], r["mujoco ms/step"],
                               "ms/step", "MuJoCo at its defaults, the same scene and step"))
-        elif r["table"] == "price of the policy" and r["variant"] == "all on (defaults)":
+        elif r["table"] == "price of the policy" and r["variant"] == "policies on, sleeping off":
             out.append(Figure(f"N={r['N']}, policy on", r["ms/step"], r["plain ms/step"],
                               "ms/step", "plain libode QuickStep, same iterations and step"))
         elif r["table"] == "asleep vs awake":
@@ -481,8 +482,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--repeats", type=int, default=None)
+    parser.add_argument("--n", type=int, nargs="+", default=None, help="boxes (500 2000)")
     args = parser.parse_args(argv)
-    rows = run_bench(args.quick, args.repeats)
+    rows = run_bench(args.quick, args.repeats, tuple(args.n) if args.n else None)
     for table in dict.fromkeys(r["table"] for r in rows):
         print(f"\n{table}")
         print_table([r for r in rows if r["table"] == table])
