@@ -307,7 +307,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("what", nargs="?", default="scheduler",
                        help="scheduler, physics, scene, scripting, sound, render, input, "
                             "contacts, avatars, import, hands, net, sweep, accuracy, stroke, "
-                            "experiment")
+                            "experiment, pareto")
     bench.add_argument("--backend", default=None, help="physics benchmark backend (ode, pymunk)")
     bench.add_argument("--quick", action="store_true", help="fewer sizes and steps")
     bench.add_argument("--stereo", action="store_true",

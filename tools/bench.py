@@ -199,16 +199,19 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
 }
 
 
-def _pareto_figures(rows: list[dict[str, Any]]) -> list[Figure]:
-    from tools.bench_pareto import figures
+def _resolve(name: str) -> Callable[..., Any]:
+    """``module:function`` looked up when needed, as BENCHMARKS' entries are (a benchmark
+    module imports this one for its rows and figures)."""
+    module_name, func_name = name.split(":")
+    return getattr(importlib.import_module(module_name), func_name)
 
-    return figures(rows)
+
+def _pareto_figures(rows: list[dict[str, Any]]) -> list[Figure]:
+    return _resolve("tools.bench_pareto:figures")(rows)
 
 
 def _pareto_plot() -> Callable[[dict[str, Any], Path], Path]:
-    from tools.bench_pareto import plot as pareto_plot
-
-    return pareto_plot
+    return _resolve("tools.bench_pareto:plot")
 
 
 #: benchmark -> its own plot, where the bars of ours beside the reference do not fit.
