@@ -213,7 +213,7 @@ def goal_cases() -> list[bench_accuracy.Case]:
 def accuracy(engine: str, iterations: int, dt: float) -> dict[str, float]:
     """Each goal case's |error| as a share of its goal, and the worst; the stack's drift."""
     shares: dict[str, float] = {}
-    drift = math.nan
+    drift = math.inf  # no stack case ran
     if engine == "pybullet":
         drift = pybullet_stack(dt, iterations)
         shares["stack"] = drift / 10.0
@@ -228,10 +228,10 @@ def accuracy(engine: str, iterations: int, dt: float) -> dict[str, float]:
                 got = case.ours(engine, dt)
         error = abs(case.error_of(got.value))
         if case.group == "stack":
-            drift = error
+            drift = error if math.isfinite(error) else 1e9
         share = error / float(case.goal or 1.0)
         shares[case.group] = max(shares.get(case.group, 0.0), share if math.isfinite(share)
-                                 else math.inf)
+                                 else 1e9)  # a run that blew up: plain data, off the chart
     return {"worst/goal": max(shares.values()), "stack drift mm": drift,
             **{f"{k}/goal": v for k, v in shares.items()}}
 
@@ -387,7 +387,8 @@ def asleep_vs_awake(n: int, repeats: int, settle: float = 12.0) -> list[dict[str
         awake_ms.append(times[1])
         ratios.append(times[0] / times[1])
         fell.append(when)
-    row = {"table": "asleep vs awake", "N": n, "all asleep at s": statistics.median(fell),
+    asleep_at = statistics.median(fell) if all(math.isfinite(t) for t in fell) else None
+    row = {"table": "asleep vs awake", "N": n, "all asleep at s": asleep_at,
            "asleep ms/step": statistics.median(slept_ms),
            "awake ms/step": statistics.median(awake_ms), **_spread(ratios)}
     row["x awake"] = row.pop("ratio")
