@@ -337,7 +337,7 @@ def _add_bench(sub: Any) -> None:
     bench.add_argument("what", nargs="?", default="scheduler",
                        help="scheduler, physics, scene, scripting, sound, render, input, "
                             "contacts, avatars, import, hands, net, sweep, accuracy, stroke, "
-                            "experiment, startup")
+                            "experiment, startup, pareto")
     bench.add_argument("--backend", default=None, help="physics benchmark backend (ode, pymunk)")
     bench.add_argument("--quick", action="store_true", help="fewer sizes and steps")
     bench.add_argument("--stereo", action="store_true",

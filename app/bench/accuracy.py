@@ -84,11 +84,32 @@ class Probe:
         return self.table[self.row[key], 7:10]
 
 
+#: World settings every case runs with on top of the defaults, and MuJoCo's options
+#: (``model.opt``) likewise: empty but while :func:`solver` holds them (bench pareto).
+_SOLVER: dict[str, Any] = {}
+_MJ_OPTIONS: dict[str, Any] = {}
+
+
+@contextmanager
+def solver(world_settings: dict[str, Any] | None = None,
+           mujoco_options: dict[str, Any] | None = None) -> Iterator[None]:
+    """Run the cases with these world settings (ours) and MuJoCo options instead of the
+    defaults, e.g. ``solver({"iterations": 5}, {"iterations": 5})``: how accurate each
+    engine is at each solver setting (``colosseum bench pareto``)."""
+    _SOLVER.update(world_settings or {})
+    _MJ_OPTIONS.update(mujoco_options or {})
+    try:
+        yield
+    finally:
+        _SOLVER.clear()
+        _MJ_OPTIONS.clear()
+
+
 @contextmanager
 def world(name: str, **settings: Any) -> Iterator[DynamicsBackend]:
     """A fresh backend at the default settings (plus ``settings``), closed afterwards."""
     backend = create_backend(name)
-    backend.configure(WorldSettings(**settings))
+    backend.configure(WorldSettings(**{**_SOLVER, **settings}))
     try:
         yield backend
     finally:
@@ -577,6 +598,8 @@ def _mujoco(body: str) -> tuple[Any, tuple[Any, Any]]:
 
     mujoco.set_mju_user_warning(lambda message: None)
     model = mujoco.MjModel.from_xml_string(f"<mujoco>{body}</mujoco>")
+    for option, value in _MJ_OPTIONS.items():
+        setattr(model.opt, option, value)
     data = mujoco.MjData(model)
     _RUNS.append(data)
     return mujoco, (model, data)

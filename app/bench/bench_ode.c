@@ -24,8 +24,16 @@
  * feedback is always attached here; FEEDBACK=1 also sums the impulses |f|·dt after
  * the step, the rest of the work the engine does to report them.
  *
+ * With POLICY=0 (the optional last argument) the program is plain libode instead, the
+ * reference the engine's policy is priced against (`colosseum bench pareto`): each pair's
+ * contacts become contact joints in the collision callback, as ODE's own demos make them
+ * (Approx1 friction, the world's CFM, no feedback), and dWorldQuickStep steps the world:
+ * no islands, no resting preload, no contact softness, no forces read back, no sleep rule
+ * (SLEEP and FEEDBACK are ignored).
+ *
  * Usage: bench_ode N STEPS SLEEP(0|1) FEEDBACK(0|1) SLEEP_TIME SLEEP_LINEAR SLEEP_ANGULAR
  *                  STEADY_SHARE SMOOTHING ITERATIONS ERP CFM WARM_START SOFTNESS EXACT_ROWS
+ *                  [POLICY(0|1), default 1] [DT, default 1/60]
  * Prints: ms_per_step=<mean ms> mean_z=<mean box height at the end> contacts=<last step>
  *         impulse=<sum of the last step's contact impulses, 0 without feedback>
  *         asleep=<bodies asleep at the end>
@@ -49,6 +57,10 @@ static CsSettings settings;
 static double dt = 1.0 / 60.0;
 static dJointFeedback *feedback;
 static int feedback_cap;
+static int policy = 1;              /* 0: plain libode, contact joints made right here */
+static dWorldID plain_world;
+static dJointGroupID plain_group;
+static int plain_contacts;          /* contacts made this step (plain) */
 
 static void near_callback(void *data, dGeomID o1, dGeomID o2) {
     dBodyID b1 = dGeomGetBody(o1), b2 = dGeomGetBody(o2);
@@ -65,8 +77,10 @@ static void near_callback(void *data, dGeomID o1, dGeomID o2) {
     for (int i = 0; i < n; i++) {
         c[i].surface.mode = dContactApprox1;
         c[i].surface.mu = 0.5;
+        if (!policy) dJointAttach(dJointCreateContact(plain_world, plain_group, &c[i]), b1, b2);
     }
-    cs_collect(&stepper, &settings, c, n, b1, b2, dt);
+    plain_contacts += policy ? 0 : n;
+    if (policy) cs_collect(&stepper, &settings, c, n, b1, b2, dt);
 }
 
 /* Room for `n` feedback records, made before any joint points at one (the engine keeps
@@ -122,10 +136,10 @@ static int make_rule(SrRule *r, int n, double linear, double angular, double ste
 }
 
 int main(int argc, char **argv) {
-    if (argc != 16) {
+    if (argc < 16 || argc > 18) {
         fprintf(stderr, "usage: %s N STEPS SLEEP FEEDBACK SLEEP_TIME SLEEP_LINEAR "
                 "SLEEP_ANGULAR STEADY_SHARE SMOOTHING ITERATIONS ERP CFM WARM_START SOFTNESS "
-                "EXACT_ROWS\n", argv[0]);
+                "EXACT_ROWS [POLICY] [DT]\n", argv[0]);
         return 2;
     }
     int n = atoi(argv[1]), steps = atoi(argv[2]), sleep = atoi(argv[3]);
@@ -137,6 +151,9 @@ int main(int argc, char **argv) {
     settings.beta = atof(argv[13]);
     settings.softness = atof(argv[14]);
     settings.exact_rows = atoi(argv[15]);
+    if (argc > 16) policy = atoi(argv[16]);
+    if (argc > 17) dt = atof(argv[17]);
+    if (!policy) sleep = sum_impulses = 0;
     SrRule rule;
     double bounds[6];
     cs_init(&stepper);
@@ -159,6 +176,8 @@ int main(int argc, char **argv) {
     dWorldSetContactSurfaceLayer(world, 0.001);
     dWorldSetAutoDisableFlag(world, 0); /* bodies sleep by the engine's rule */
     dCreatePlane(space, 0, 0, 1, 0);
+    plain_world = world;
+    plain_group = contacts;
 
     int columns = (n + 9) / 10;
     int side = (int)ceil(sqrt((double)columns));
@@ -181,8 +200,16 @@ int main(int argc, char **argv) {
     int ncontacts = 0;
     for (int s = 0; s < steps; s++) {
         dJointGroupEmpty(contacts);
+        if (!policy) { /* plain libode: collide (joints made there), step */
+            plain_contacts = 0;
+            dSpaceCollide(space, NULL, near_callback);
+            dWorldQuickStep(world, dt);
+            ncontacts = plain_contacts;
+            continue;
+        }
         cs_begin(&stepper, n);
-        dSpaceCollide(space, NULL, near_callback);
+        if (cs_any_awake(bodies, sizeof(dBodyID), n)) /* all asleep: no pair can touch */
+            dSpaceCollide(space, NULL, near_callback);
         if (reserve_feedback(stepper.ncontacts) < 0) {
             fprintf(stderr, "out of memory\n");
             return 1;

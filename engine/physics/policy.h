@@ -43,14 +43,20 @@ typedef struct {
     double weight;        /* its weight (N); 0: not dynamic, or no gravity */
     double share;         /* of its weight the solver held: 1 - beta where preloaded */
     int preloaded;        /* it got its weight's share this step */
+    int still;            /* the backend held it still this step (ODE: a preloaded body on a
+                           * face moving slower than the sleep limits) */
 } RpStep;
 
 /* One body's standing after a step: `held` (dim numbers, its contacts' net force averaged
  * over REST_SMOOTHING; `keep` = e^(-dt/REST_SMOOTHING)) and `slid` updated in place;
- * returns whether it was at rest this step: held up by REST_SUPPORT of the weight the
- * solver held, not pushed sideways beyond REST_GRIP of its friction (beyond (1 - beta) of
- * that once it slid while preloaded, until the push is gone), its friction short of
- * REST_SLIDING of what it could give. `down`: gravity's direction (unit, dim numbers);
+ * returns whether it was at rest this step: held up by REST_SUPPORT of its weight (to come
+ * to rest, by the share the solver held this step; to stay preloaded, by the whole force
+ * averaged: the solver's (1 - beta) share alone is too noisy at few iterations, and a
+ * crate falling out of the preload met its whole weight unprepared), not pushed sideways
+ * beyond REST_GRIP of its friction (beyond (1 - beta) of that once it slid while
+ * preloaded, until the push is gone), its friction short of REST_SLIDING of what it could
+ * give (unless the backend held it still: then friction at its bound is the solver's
+ * unconverged rest, not a slide). `down`: gravity's direction (unit, dim numbers);
  * `lifts`: how hard the contacts pushed it up this step (N), for the caller's own use.
  * The arithmetic is in one fixed order, so every caller gets the same bits. */
 static inline int rp_stand(const RpStep *s, double *held, uint8_t *slid, const double *down,
@@ -71,11 +77,12 @@ static inline int rp_stand(const RpStep *s, double *held, uint8_t *slid, const d
      * slide again: held sideways by less than (1 - beta) of the grip */
     grip = REST_GRIP * (*slid ? 1.0 - beta : 1.0) * s->mu * held_up;
     pushed = side2 > grip * grip;
-    sliding = s->friction >= REST_SLIDING * s->grip;
+    sliding = !s->still && s->friction >= REST_SLIDING * s->grip;
     *slid = (uint8_t)((*slid || (s->preloaded && sliding)) && pushed);
     *lifts = up;
-    return s->weight > 0.0 && !pushed && up >= REST_SUPPORT * s->share * s->weight &&
-           !sliding;
+    return s->weight > 0.0 && !pushed && !sliding &&
+           (s->preloaded ? held_up >= REST_SUPPORT * s->weight
+                         : up >= REST_SUPPORT * s->share * s->weight);
 }
 
 /* Steps in a row at rest, capped at 2: what a body needs to be preloaded. */

@@ -75,7 +75,8 @@ cdef struct StepJob:     # one step's collide-and-solve, run under the guard (_e
 cdef int collide_and_solve(void* arg) noexcept nogil:
     """Collide and step (stepper.h); -1 out of memory."""
     cdef StepJob* job = <StepJob*>arg
-    if cs_begin(&job.ctx.stepper, job.n) == 0:
+    if cs_begin(&job.ctx.stepper, job.n) == 0 and cs_any_awake(&job.slots[0].body,
+                                                               sizeof(Slot), job.n):
         dSpaceCollide(job.space, job.ctx, near_callback)
     return cs_solve(&job.ctx.stepper, &job.ctx.cfg, job.ctx.world, job.ctx.group,
                     &job.slots[0].body, sizeof(Slot), job.n, job.dt, contact_feedback,

@@ -273,6 +273,7 @@ cdef extern from "stepper.h" nogil:
     void cs_reset(CsState*, int)
     void cs_move(CsState*, int, int)
     int cs_begin(CsState*, int)
+    int cs_any_awake(const void*, size_t, int)
     int cs_collect(CsState*, const CsSettings*, const dContact*, int, dBodyID, dBodyID, double)
     int cs_solve(CsState*, const CsSettings*, dWorldID, dJointGroupID, const void*, size_t, int,
                  double, dJointFeedback* (*)(void*, int) noexcept, void*)

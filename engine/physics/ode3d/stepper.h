@@ -38,6 +38,9 @@
  *    slope or starting to slide leaves it the next step, after one step at most with
  *    (1 - beta) of its friction. Contact forces reported are the whole forces: what the
  *    solver found, plus each preload carried down through the contacts under it.
+ *    A preloaded body on a face that moves across gravity and turns slower than the
+ *    sleep rule's limits is held still, before the step and after it (cs_hold_still):
+ *    what motion it has is the solver's residue, which adds up to a sway.
  *
  * 3. Contact softness from the step and the masses. ODE's constraint force mixing is an
  *    absolute number: 1e-5 is rigid for a 1 kg ball and a sponge for a 125 kg crate, and
@@ -64,6 +67,13 @@
 #include "../policy.h" /* the resting rules and their constants, shared with pymunk */
 #include "../sleep.h"
 
+/* A preloaded body resting on a face moving across gravity slower than this (m/s) and
+ * turning slower than REST_STILL_ANGULAR (rad/s) is held still: its motion across gravity
+ * and its spin are what the solver left unconverged (the sleep rule's limits, sleep.py:
+ * under them the body would be frozen by its sleep anyway). */
+#define REST_STILL_LINEAR 0.03
+#define REST_STILL_ANGULAR 0.0349
+
 typedef struct {
     double beta;      /* share of a resting body's weight preloaded; 0: off */
     double softness;  /* contact CFM as a share of the step times the inverse masses */
@@ -73,6 +83,7 @@ typedef struct {
 typedef struct {   /* one contact this step, kept until its joint is made */
     dContact contact;
     dBodyID b1, b2;
+    int i1, i2;    /* their indices (body data; -1: the world), read once */
     int authored;  /* its softness is the author's */
 } CsContact;
 
@@ -88,6 +99,7 @@ typedef struct {   /* a body's standing with the resting preload */
     int slipping;     /* a contact of it slides this step */
     int contacts;     /* contacts it has this step */
     int tilted;       /* one of them has a normal off the vertical */
+    int still;        /* it was held still this step (cs_hold_still) */
 } CsBody;
 
 typedef struct {
@@ -97,6 +109,12 @@ typedef struct {
     CsBody *bodies;
     int *parent, *kind, *rows;  /* per body: union-find parent; island kind and rows */
     int capbodies;
+    /* cs_add_preloads' work: the bodies highest first (kept from step to step: they
+     * seldom change places, so an insertion sort puts them back in order), each body's
+     * contacts as linked lists, and the loads carried down */
+    struct CsHeight *order;
+    int norder, *head, *next, *which, capnext;
+    double *load;
     int oom;
 } CsState;
 
@@ -107,6 +125,11 @@ enum { CS_FREE = 0, CS_JOINTS = 1, CS_CONTACTS = 2, CS_UNREST = 4 };
 static inline void cs_init(CsState *s) { memset(s, 0, sizeof(CsState)); }
 
 static inline void cs_free(CsState *s) {
+    free(s->order);
+    free(s->head);
+    free(s->next);
+    free(s->which);
+    free(s->load);
     free(s->contacts);
     free(s->forces);
     free(s->bodies);
@@ -192,10 +215,12 @@ static inline int cs_collect(CsState *s, const CsSettings *cfg, const dContact *
         k->contact = contacts[i];
         k->b1 = b1;
         k->b2 = b2;
+        k->i1 = cs_body_index(b1);
+        k->i2 = cs_body_index(b2);
         k->authored = (f->mode & dContactSoftCFM) != 0;
         closing = -cs_relative_speed(b1, b2, &k->contact.geom, &slip2);
         if (slip2 > REST_SLIP * REST_SLIP) {
-            int i1 = cs_body_index(b1), i2 = cs_body_index(b2);
+            int i1 = k->i1, i2 = k->i2;
             if (i1 >= 0 && i1 < s->capbodies) s->bodies[i1].slipping = 1;
             if (i2 >= 0 && i2 < s->capbodies) s->bodies[i2].slipping = 1;
         }
@@ -232,6 +257,19 @@ static inline int cs_begin(CsState *s, int n) {
         s->capbodies = cap;
     }
     for (i = 0; i < n; i++) s->bodies[i].slipping = 0;
+    return 0;
+}
+
+/* Whether some of the `n` bodies is awake (enabled). With none, no pair can make a contact
+ * (a pair of sleepers, or a sleeper and static geometry, makes none), so the caller need
+ * not collide at all: a settled scene asleep otherwise spends most of its step hashing
+ * its geometry (500 boxes: 60 % of such a step). */
+static inline int cs_any_awake(const void *bodies, size_t stride, int n) {
+    int i;
+    for (i = 0; i < n; i++) {
+        dBodyID b = cs_body_at(bodies, stride, i);
+        if (b != NULL && dBodyIsEnabled(b)) return 1;
+    }
     return 0;
 }
 
@@ -285,13 +323,35 @@ static inline void cs_switch(CsState *s, int exact_rows, const void *bodies, siz
     }
 }
 
+/* Hold a body still when it moves and turns slower than REST_STILL_*: its spin and its
+ * velocity across gravity are taken away, and with `whole` its velocity along gravity
+ * too. Returns whether it did. For a preloaded body on a face: across gravity before the
+ * step (along it, the contacts meet gravity), whole after it (the velocity along gravity
+ * the contacts' corrections leave kept a column of 1 kg boxes above the sleep rule's
+ * steady band, 3 mm/s, and awake): QuickStep's few iterations leave a stack's crates a few
+ * mm/s and mrad/s of motion each step, which add up to a sway; the stack at 1/60 s drifted
+ * 14 to 28 mm in 20 s with it, 0.5 to 3 mm without (tools/bench_accuracy.py). A body
+ * slower than this is one the sleep rule would freeze anyway (PhysX's stabilisation
+ * damps bodies near their sleep threshold alike). */
+static inline int cs_hold_still(dBodyID b, const double *down, int whole) {
+    const dReal *v = dBodyGetLinearVel(b), *w = dBodyGetAngularVel(b);
+    double along = whole ? 0.0 : v[0] * down[0] + v[1] * down[1] + v[2] * down[2];
+    if (w[0] * w[0] + w[1] * w[1] + w[2] * w[2] >= REST_STILL_ANGULAR * REST_STILL_ANGULAR ||
+        (whole ? v[0] * v[0] + v[1] * v[1] + v[2] * v[2] : cs_across2(b, down)) >=
+            REST_STILL_LINEAR * REST_STILL_LINEAR)
+        return 0;
+    dBodySetAngularVel(b, 0.0, 0.0, 0.0);
+    dBodySetLinearVel(b, along * down[0], along * down[1], along * down[2]);
+    return 1;
+}
+
 /* Step the world over the collected contacts: islands found, resting islands
  * preloaded, contact joints made in `group` (contact i's feedback is `feedback(ctx, i)`),
  * then joint-only islands small enough stepped by dWorldStep and the rest by QuickStep,
  * and every contact's whole force put in s->forces. `bodies` points at the first of `n`
  * body handles `stride` bytes apart (NULL: a static body); each body's data is its index
  * among them. Returns 0, or -1 out of memory (the step was still taken). */
-typedef struct { double height; int index; } CsHeight;
+typedef struct CsHeight { double height; int index; } CsHeight;
 
 static int cs_higher_first(const void *x, const void *y) {
     double a = ((const CsHeight *)x)->height, b = ((const CsHeight *)y)->height;
@@ -306,35 +366,79 @@ static int cs_higher_first(const void *x, const void *y) {
  * preloaded too: a crate set on a resting stack reported ten times its weight on every
  * contact below it, an impact a contact sound heard.) Returns -1 when out of memory
  * (the forces are then the solver's alone). */
+/* Room for cs_add_preloads' work over `n` bodies and `nc` contacts; a new `n` starts the
+ * order afresh. Returns 0, or -1 out of memory. */
+static inline int cs_reserve_preloads(CsState *s, int n, int nc) {
+    int i;
+    if (s->norder != n) {
+        CsHeight *order = (CsHeight *)realloc(s->order, (size_t)(n + 1) * sizeof(CsHeight));
+        int *head = order ? (int *)realloc(s->head, (size_t)(n + 1) * sizeof(int)) : NULL;
+        double *load = head ? (double *)realloc(s->load, (size_t)(3 * n + 3) * sizeof(double))
+                            : NULL;
+        if (order) s->order = order;
+        if (head) s->head = head;
+        s->norder = 0;
+        if (!load) return -1;
+        s->load = load;
+        for (i = 0; i < n; i++) s->order[i].index = i;
+        s->norder = n;
+    }
+    if (2 * nc + 1 > s->capnext) {
+        int cap = 2 * nc + 1 > 2 * s->capnext ? 2 * nc + 1 : 2 * s->capnext;
+        int *next = (int *)realloc(s->next, (size_t)cap * sizeof(int));
+        int *which = next ? (int *)realloc(s->which, (size_t)cap * sizeof(int)) : NULL;
+        if (next) s->next = next;
+        if (!which) return -1;
+        s->which = which;
+        s->capnext = cap;
+    }
+    return 0;
+}
+
+/* The bodies highest first: last step's order sorted again by insertion (bodies seldom
+ * change places from one step to the next), or by qsort when many did. The same total
+ * order either way (ties by index). */
+static inline void cs_sort_heights(CsHeight *order, int n) {
+    int i, j, unsorted = 0;
+    for (i = 1; i < n; i++) unsorted += cs_higher_first(&order[i - 1], &order[i]) > 0;
+    if (unsorted > n / 16 + 1) {
+        qsort(order, (size_t)n, sizeof(CsHeight), cs_higher_first);
+        return;
+    }
+    for (i = 1; i < n && unsorted; i++) {
+        CsHeight x = order[i];
+        for (j = i - 1; j >= 0 && cs_higher_first(&order[j], &x) > 0; j--) order[j + 1] = order[j];
+        order[j + 1] = x;
+    }
+}
+
+/* Put the forces the preload stood in for back into the contacts that carry them, so a
+ * contact reports its whole force: each preloaded body's beta m g (upward) goes into the
+ * contacts holding it up, in proportion to what the solver found each to carry, and on
+ * through the bodies under them, highest first, down to the ground. (Scaling a contact
+ * by 1 / (1 - beta) for its preloaded body is right only when everything it carries is
+ * preloaded too: a crate set on a resting stack reported ten times its weight on every
+ * contact below it, an impact a contact sound heard.) Returns -1 when out of memory
+ * (the forces are then the solver's alone). */
 static inline int cs_add_preloads(CsState *s, const CsSettings *cfg, const dReal *gravity,
                                   const double *down, const void *bodies, size_t stride,
                                   int n) {
-    int i, e, nc = s->ncontacts, any = 0, status = 0;
-    CsHeight *order;
+    int i, e, nc = s->ncontacts, any = 0;
     int *head, *next, *which;
     double *load;
     for (i = 0; i < n && !any; i++) any = s->bodies[i].preloaded;
     if (!any || cfg->beta <= 0.0) return 0;
-    order = (CsHeight *)malloc((size_t)n * sizeof(CsHeight));
-    head = (int *)malloc((size_t)n * sizeof(int));
-    next = (int *)malloc((size_t)(2 * nc + 1) * sizeof(int));
-    which = (int *)malloc((size_t)(2 * nc + 1) * sizeof(int));
-    load = (double *)calloc((size_t)(3 * n), sizeof(double));
-    if (!order || !head || !next || !which || !load) {
-        status = -1;
-        goto done;
-    }
+    if (cs_reserve_preloads(s, n, nc) < 0) return -1;
+    head = s->head, next = s->next, which = s->which, load = s->load;
+    memset(load, 0, (size_t)(3 * n) * sizeof(double));
     for (i = 0; i < n; i++) {
         dBodyID b = cs_body_at(bodies, stride, i);
+        CsHeight *o = &s->order[i];
+        const dReal *pos = o->index >= 0 && cs_body_at(bodies, stride, o->index)
+                               ? dBodyGetPosition(cs_body_at(bodies, stride, o->index)) : NULL;
         head[i] = -1;
-        order[i].index = i;
-        order[i].height = 0.0;
-        if (b == NULL) continue;
-        {
-            const dReal *pos = dBodyGetPosition(b);
-            order[i].height = -(pos[0] * down[0] + pos[1] * down[1] + pos[2] * down[2]);
-        }
-        if (s->bodies[i].preloaded) {
+        o->height = pos ? -(pos[0] * down[0] + pos[1] * down[1] + pos[2] * down[2]) : 0.0;
+        if (b != NULL && s->bodies[i].preloaded) {
             dMass m;
             int k;
             dBodyGetMass(b, &m);
@@ -342,25 +446,25 @@ static inline int cs_add_preloads(CsState *s, const CsSettings *cfg, const dReal
         }
     }
     for (e = 0, i = 0; i < nc; i++) {  /* each body's contacts, as linked lists */
-        int a = cs_body_index(s->contacts[i].b1), b = cs_body_index(s->contacts[i].b2);
+        int a = s->contacts[i].i1, b = s->contacts[i].i2;
         which[e] = i; next[e] = head[a]; head[a] = e++;
         if (b >= 0) { which[e] = i; next[e] = head[b]; head[b] = e++; }
     }
-    qsort(order, (size_t)n, sizeof(CsHeight), cs_higher_first);
+    cs_sort_heights(s->order, n);
     for (i = 0; i < n; i++) {
-        int u = order[i].index, k;
+        int u = s->order[i].index, k;
         double *l = &load[3 * u], total = 0.0;
         if (l[0] == 0.0 && l[1] == 0.0 && l[2] == 0.0) continue;
         for (e = head[u]; e >= 0; e = next[e]) {  /* what holds it up, and how much */
             int c = which[e];
-            double sign = cs_body_index(s->contacts[c].b1) == u ? 1.0 : -1.0, *f = &s->forces[3 * c];
+            double sign = s->contacts[c].i1 == u ? 1.0 : -1.0, *f = &s->forces[3 * c];
             double up = -sign * (f[0] * down[0] + f[1] * down[1] + f[2] * down[2]);
             if (up > 0.0) total += up;
         }
         if (total <= 0.0) continue;  /* nothing holds it up: nothing to put back */
         for (e = head[u]; e >= 0; e = next[e]) {
-            int c = which[e], a = cs_body_index(s->contacts[c].b1);
-            int v = a == u ? cs_body_index(s->contacts[c].b2) : a;
+            int c = which[e], a = s->contacts[c].i1;
+            int v = a == u ? s->contacts[c].i2 : a;
             double sign = a == u ? 1.0 : -1.0, *f = &s->forces[3 * c], share;
             double up = -sign * (f[0] * down[0] + f[1] * down[1] + f[2] * down[2]);
             if (up <= 0.0) continue;
@@ -370,13 +474,7 @@ static inline int cs_add_preloads(CsState *s, const CsSettings *cfg, const dReal
                 for (k = 0; k < 3; k++) load[3 * v + k] += share * l[k];
         }
     }
-done:
-    free(order);
-    free(head);
-    free(next);
-    free(which);
-    free(load);
-    return status;
+    return 0;
 }
 
 static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
@@ -399,7 +497,7 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
     for (i = 0; i < s->ncontacts; i++) {
         const CsContact *c = &s->contacts[i];
         const double *nrm = c->contact.geom.normal;
-        int a = cs_body_index(c->b1), b = cs_body_index(c->b2);
+        int a = c->i1, b = c->i2;
         int tilted = fabs(nrm[0] * down[0] + nrm[1] * down[1] + nrm[2] * down[2]) < REST_LEVEL;
         s->bodies[a].contacts++;
         s->bodies[a].tilted |= tilted;
@@ -454,11 +552,11 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
         /* how fast it may move across gravity and be preloaded: four times that to stay
          * so (a stack's solver jitter is not a slide) */
         double moving = (st->preloaded ? 4.0 : 1.0) * REST_SLIP;
-        int r;
+        int r, was_still = st->still;
         memset(st->solved, 0, sizeof st->solved);
         st->mu = dInfinity;
         st->friction = st->grip = 0.0;
-        st->preloaded = 0;
+        st->preloaded = st->still = 0;
         if (b == NULL) continue;
         r = cs_root(s->parent, i);
         if (dBodyIsEnabled(b)) {
@@ -480,6 +578,10 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
             dBodyAddForce(b, -cfg->beta * m.mass * gravity[0], -cfg->beta * m.mass * gravity[1],
                           -cfg->beta * m.mass * gravity[2]);
             st->preloaded = 1;
+            /* on a face; or, held still last step, on level contacts only: a crate resting on
+             * another within the contact layer keeps 1 or 2 of its 4 contacts some steps */
+            if (st->contacts >= 3 || (was_still && !st->tilted))
+                st->still = cs_hold_still(b, down, 0);
         }
     }
     for (i = 0; i < s->ncontacts; i++) {  /* the contact joints */
@@ -515,13 +617,15 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
             free(mark);
         }
     }
+    for (i = 0; i < n; i++)  /* what the step left of a still body's motion */
+        if (s->bodies[i].still) cs_hold_still(cs_body_at(bodies, stride, i), down, 1);
     /* forces: what the solver found (the preloads put back after this loop) */
     for (i = 0; i < s->ncontacts; i++) {
         const CsContact *c = &s->contacts[i];
         const dJointFeedback *fb = feedback(ctx, i);
         const double *nrm = c->contact.geom.normal;
         double *f = &s->forces[3 * i], mu = c->contact.surface.mu, along, slide2, friction, grip;
-        int a = cs_body_index(c->b1), b = cs_body_index(c->b2);
+        int a = c->i1, b = c->i2;
         if (fb == NULL) {
             memset(f, 0, 3 * sizeof(double));
             continue;
@@ -553,6 +657,7 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
         double up, keep = exp(-dt / REST_SMOOTHING);
         RpStep step;
         uint8_t slid;
+        int rests;
         dMass m;
         if (b == NULL || dBodyIsKinematic(b)) continue;
         if (!dBodyIsEnabled(b)) {  /* asleep: it starts afresh when woken */
@@ -567,9 +672,10 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
         step.weight = m.mass * g;
         step.share = st->preloaded ? 1.0 - cfg->beta : 1.0; /* of its weight the solver held */
         step.preloaded = st->preloaded;
+        step.still = st->still;
         slid = (uint8_t)st->slid;
-        st->resting = rp_count(st->resting,
-                               rp_stand(&step, st->held, &slid, down, 3, keep, cfg->beta, &up));
+        rests = rp_stand(&step, st->held, &slid, down, 3, keep, cfg->beta, &up);
+        st->resting = rp_count(st->resting, rests && st->contacts > 0);
         st->slid = slid;
     }
     return status;

@@ -585,6 +585,7 @@ cdef extern from "policy.h" nogil:
         double weight
         double share
         int preloaded
+        int still
     int rp_stand(const RpStep *s, double *held, unsigned char *slid, const double *down,
                  int dim, double keep, double beta, double *lifts)
     int rp_count(int steps, int rests)
@@ -806,6 +807,7 @@ cdef class Resting:
             s.weight = self.mass[i] * g_size if a[i] else 0.0
             s.share = 1.0 - self.applied[i]
             s.preloaded = self.applied[i] > 0.0
+            s.still = 0
             rests = rp_stand(&s, &self.held[2 * i], &self.slid[i], down, 2, keep, beta, &up)
             self.steps[i] = rp_count(self.steps[i], rests)
             stays = s.weight > 0.0 and up >= 0.5 * REST_SUPPORT * s.share * s.weight
