@@ -43,13 +43,10 @@ ALLOWED: dict[str, str] = {
         "the step as one sequence, the GIL released once around it",
     "engine/scene/factory.py::_Builder.avatar": _REGISTRY,
     "engine/scene/factory.py::_Builder.joint": _REGISTRY,
-    "engine/scene/factory.py::_Builder.object_components": _REGISTRY,
-    "engine/scene/factory.py::_Builder.scene_entities": _REGISTRY,
     "engine/scene/snapshot.py::write_state": _REGISTRY,
     "engine/physics/pymunk2d/_rows.pyx::carried_down": _POLICY,
     "engine/physics/pymunk2d/_rows.pyx::Rows.contacts": _POLICY,
     "engine/physics/pymunk2d/_rows.pyx::planar_poses": _POLICY,
-    "engine/physics/pymunk2d/_rows.pyx::rest_standing": _POLICY,
 }
 
 

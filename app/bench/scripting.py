@@ -53,8 +53,6 @@ def _bare_reference(calls_per_round: int, rounds: int, args: tuple) -> float:
 def run_bench(quick: bool = False) -> list[dict[str, Any]]:
     from components import Script, Transform
     from engine.app import Engine, EngineConfig
-    from engine.events import Contacts
-    from engine.physics.backend import CONTACT_DTYPE
     from services.scripting.runtime import ScriptRuntime
     from systems import RegistryPlugin, load_plugin
     from systems.scripting import ScriptingPlugin, ScriptingSystem
@@ -85,32 +83,39 @@ def run_bench(quick: bool = False) -> list[dict[str, Any]]:
                      "us_per_call": ours, "us_per_frame": ours * scripts,
                      "bare_lupa_us": bare, "ratio": ours / bare})
 
-        # -- collision events ---------------------------------------------------
-        rng = np.random.default_rng(0)
-        batches = []
-        for _ in range(min(frames, 60)):
-            batch = np.zeros(pairs_per_frame * 4, CONTACT_DTYPE)
-            a = np.repeat(rng.choice(entities, pairs_per_frame), 4)
-            b = np.repeat(np.arange(10_000, 10_000 + pairs_per_frame), 4)  # unscripted
-            batch["a"], batch["b"] = a, b
-            batch["impulse"] = rng.random(len(batch))
-            batches.append(Contacts(batch))
-        before = system.contact_events
-        t0 = time.perf_counter()
-        for i in range(frames):
-            system._on_contacts(batches[i % len(batches)])
-        elapsed = time.perf_counter() - t0
-        events = system.contact_events - before
-        ours = elapsed / events * 1e6
-        bare = _bare_reference(pairs_per_frame, frames, (None, 0.5))
-        rows.append({"kind": CALLS_KIND, "benchmark": "collision event (10k/s, via Contacts)",
-                     "calls": events,
-                     "us_per_call": ours, "us_per_frame": ours * pairs_per_frame,
-                     "bare_lupa_us": bare, "ratio": ours / bare,
-                     "target_us": 5.0, "ok": ours < 5.0})
+        rows.append(_collision_row(system, entities, frames, pairs_per_frame))
         assert all(s.env.hits > 0 for s in runtime.scripts)
     rows.extend(churn_rows(quick))
     return rows
+
+
+def _collision_row(system: Any, entities: list[int], frames: int,
+                   pairs_per_frame: int) -> dict[str, Any]:
+    """Collision events to scripts through the scripting system's Contacts path, beside
+    bare lupa calls of the same count."""
+    from engine.events import Contacts
+    from engine.physics.backend import CONTACT_DTYPE
+
+    rng = np.random.default_rng(0)
+    batches = []
+    for _ in range(min(frames, 60)):
+        batch = np.zeros(pairs_per_frame * 4, CONTACT_DTYPE)
+        a = np.repeat(rng.choice(entities, pairs_per_frame), 4)
+        b = np.repeat(np.arange(10_000, 10_000 + pairs_per_frame), 4)  # unscripted
+        batch["a"], batch["b"] = a, b
+        batch["impulse"] = rng.random(len(batch))
+        batches.append(Contacts(batch))
+    before = system.contact_events
+    t0 = time.perf_counter()
+    for i in range(frames):
+        system._on_contacts(batches[i % len(batches)])
+    elapsed = time.perf_counter() - t0
+    events = system.contact_events - before
+    ours = elapsed / events * 1e6
+    bare = _bare_reference(pairs_per_frame, frames, (None, 0.5))
+    return {"kind": CALLS_KIND, "benchmark": "collision event (10k/s, via Contacts)",
+            "calls": events, "us_per_call": ours, "us_per_frame": ours * pairs_per_frame,
+            "bare_lupa_us": bare, "ratio": ours / bare, "target_us": 5.0, "ok": ours < 5.0}
 
 
 CHURN = """

@@ -161,7 +161,7 @@ class PostPassSpec:
 
 def binding_problem(action: str, profile: str, path: str) -> str | None:
     """What is wrong with a headset's ``Bind`` (None: nothing): the scene's check, and
-    the OpenXR display's (engine.xr.bindings.Rebinding)."""
+    the OpenXR display's (services.xr.bindings.Rebinding)."""
     return display_binding_problem(action, profile, path, suggest)
 
 

@@ -4,7 +4,7 @@ The loaded SceneDB is written self-contained (includes inlined, expressions
 frozen to their values) with each object's current pose and velocities (and,
 where the backend keeps one, its auto-sleep state), the joints' motor settings,
 the solver's random state, the scene's random generator, the simulated time and each
-running script's state (see :mod:`engine.scripting.persist`). Orientation is written exactly
+running script's state (see :mod:`services.scripting.persist`). Orientation is written exactly
 as ``Quaternion`` (and, for people, as ``Orientation`` degrees), floats with
 full precision, so loading the file continues the motion.
 
@@ -364,7 +364,7 @@ def _drop_follows(root: Block, written: set[str]) -> None:
 
 def _script_states(engine: Engine, ids: SceneIds, root: Block, names: dict[int, str]) -> None:
     """A ``ScriptState`` for each running script of a written object or of the scene, so
-    the saved file resumes its scripts (see :mod:`engine.scripting.persist`)."""
+    the saved file resumes its scripts (see :mod:`services.scripting.persist`)."""
     scripts = engine.try_resource(ScriptStates)
     if scripts is None:
         return
