@@ -62,15 +62,15 @@ def ball(name: str, width: float, at: tuple[float, ...], mass: float = 0.3) -> s
 
 def run(scene: str, folder: Path, feeds: dict[str, Feed], seconds: float,
         on_frame: Callable[[Any, dict[str, int]], None] | None = None, rate: float = RATE,
-        settle: float = 0.5) -> float:
+        settle: float = 0.5, backend: str = "ode") -> float:
     """Run ``scene`` with tracked hands (name -> t -> HandJoints, or TrackerPose for a
-    palm-only hand); CPU seconds per physics step after ``settle`` seconds."""
+    palm-only hand) on ``backend``; CPU seconds per physics step after ``settle`` seconds."""
     from engine import EngineConfig, Phase, system
     from engine.scene import instantiate, spec_from_text
     from services.input import InputHub
     from systems import create_engine
 
-    config = EngineConfig(backend="ode", fast=True, dt=1.0 / rate, content_dir=folder,
+    config = EngineConfig(backend=backend, fast=True, dt=1.0 / rate, content_dir=folder,
                           debug=False)
     with create_engine(config) as engine:
         ids = instantiate(engine, spec_from_text(scene, folder))
@@ -405,3 +405,39 @@ def run_rows(folder: Path, quick: bool = False) -> list[dict[str, Any]]:
     rows += cost(folder, 0.5 if quick else 2.0)
     rows.append(frame_budget(folder, 1.0 if quick else 3.0))
     return rows
+
+
+# -- the 2D hand (pymunk: the X–Z plane) --------------------------------------------------
+@cache
+def _side_pinch_gaps() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pinch gesture's scales, the gap between its thumb and index tips seen in the
+    plane (X–Z) at each, and their midpoints (the hand unturned: it bends in the plane)."""
+    from app.bench.hand_grips import curls
+    from services.input.events import HAND_JOINTS
+    from services.input.hand_pose import local_hand
+
+    thumb, index = HAND_JOINTS.index("thumb_tip"), HAND_JOINTS.index("index_tip")
+    scales = np.linspace(0.0, 1.0, 101)
+    gaps, mids = [], []
+    for s in scales:
+        p = local_hand(curls(float(s)))[0]
+        gaps.append(float(np.hypot(*(p[index] - p[thumb])[[0, 2]])))
+        mids.append((p[index] + p[thumb]) / 2)
+    return scales, np.array(gaps), np.array(mids)
+
+
+def side_pinch(device: str, centre: Any, grip: float, timestamp: float = 0.0) -> Any:
+    """A tracked hand pinching in the plane, as the 2D hand sees it: the pinch gesture
+    (unturned, so its fingers bend about Y) closed until its thumb and index tips are
+    ``grip`` apart in X–Z, put where their midpoint is ``centre``."""
+    from app.bench.hand_grips import curls
+    from services.input.hand_pose import pose_hand
+
+    scales, gaps, mids = _side_pinch_gaps()
+    order = np.argsort(gaps)
+    s = float(np.interp(grip, gaps[order], scales[order]))
+    mid = np.array([np.interp(s, scales, mids[:, k]) for k in range(3)])
+    at = np.asarray(centre, dtype=float) - mid
+    at[1] = centre[1]
+    return pose_hand(device, tuple(at.tolist()), (1.0, 0.0, 0.0, 0.0), curls(s),
+                     timestamp=timestamp)
