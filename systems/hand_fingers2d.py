@@ -6,7 +6,7 @@ plane can hold of them: the palm-only hand's body and six-DOF drive, and each fi
 three phalanges as capsules (segments in the plane) sized from the joints' radii and
 the projected bone lengths, chained to the palm and to each other by pivots about Y with
 rotary limits at the anatomical ranges (:data:`systems.hand_fingers.LIMITS`, flexion
-positive, from the pose they were made in, as on ODE).
+positive, counted from the straight finger seen in the plane).
 
 Each pivot is driven toward its tracked angle by a torque-bounded servo: the joint's
 motor (a pymunk ``SimpleMotor`` through :class:`~engine.physics.commands.SetMotor`) runs at
@@ -128,6 +128,9 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
     centres, theta, lengths = planar_bones(in_plane(p, y))
     quats = about_y(theta)
     sign = 1.0 if quat_to_matrix(q[0])[1, 1] >= 0.0 else -1.0  # the hand's +y: flexion
+    # a joint's limits count from the pose it is made in: the straight finger's are
+    # moved there (a hand first seen half curled opens as far as an open one)
+    made = flexions(theta, split_orientation(q[0])[0], sign)
     radii = np.asarray(sample.radii, dtype=float)
     bones, chain, sizes = [], [], []
     finger_of: dict[int, str] = {}
@@ -140,7 +143,8 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
                             Visual(shapes=[replace(body.shapes[0])], color=BONE_COLOR),
                             Graspable(False))
         parent = palm if i % 3 == 0 else bones[-1]
-        low, high = (THUMB_PLANAR if finger == "thumb" else LIMITS[finger])[i % 3]
+        low, high = THUMB_PLANAR[i % 3] if finger == "thumb" else \
+            (limit - float(made[i]) for limit in LIMITS[finger][i % 3])
         anchor = (float(p[start, 0]), y, float(p[start, 2]))
         chain.append(engine.spawn(Name(f"{label} joint"), Joint(
             kind=JointKind.HINGE, body_a=bone, body_b=parent, anchor=anchor,
@@ -172,7 +176,7 @@ def aim(engine: Engine, fingers: PlanarFingers, palm: int, sample: HandJoints,
         fingers.sample = (sample.timestamp, centres, about_y(theta))
     if now - sample.timestamp > stale_after:
         fingers.rates[:] = 0.0
-    fingers.tips = flat[list(TIPS)]
+    fingers.tips = chain_tips(flat, theta, fingers.lengths)
     fingers.palm = flat[0]
     error = np.angle(np.exp(1j * (target - current_flexions(engine, fingers, palm))))
     spin = fingers.rates + np.clip(error / fingers.time_constant, -MAX_SPIN, MAX_SPIN)
@@ -182,6 +186,16 @@ def aim(engine: Engine, fingers: PlanarFingers, palm: int, sample: HandJoints,
     for joint, rate in zip(fingers.chain, np.clip(spin, -2 * MAX_SPIN, 2 * MAX_SPIN).tolist(),
                            strict=True):
         push(SetMotor(joint, rate, torque))
+
+
+def chain_tips(flat: np.ndarray, theta: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """Where the hand's rigid chain puts its tips (5, 3) at the tracked angles: from each
+    finger's tracked base along its bones' tracked directions, by the lengths they were
+    made with. What the fingers are blocked from (a finger's deviation, a grip's width) is
+    measured from these: the thumb's projection shortens as it bends out of the plane,
+    which no rigid chain follows, and which is no block."""
+    steps = lengths[:, None] * np.stack([np.cos(theta), np.zeros(15), np.sin(theta)], axis=1)
+    return flat[STARTS[0::3]] + steps.reshape(5, 3, 3).sum(axis=1)
 
 
 def still(engine: Engine, fingers: PlanarFingers) -> None:
