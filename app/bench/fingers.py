@@ -1,4 +1,5 @@
-"""``colosseum bench hands``, the fingered hand's rows (``Hand { Fingers 1 }``, ODE).
+"""``colosseum bench hands``, the fingered hand's rows (``Hand { Fingers 1 }``, ODE; the 2D
+hand's on pymunk: :func:`run_rows_2d`).
 
 Each row is measured beside the palm-only hand's rows of :mod:`app.bench.hands`, with
 tracked 26-joint hands from :func:`services.input.hand_pose.pose_hand` and
