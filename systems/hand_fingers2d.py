@@ -47,7 +47,6 @@ from systems.hand_fingers import (
     LIMITS,
     SKIN,
     STARTS,
-    TIPS,
     Fingers,
     world_joints,
 )
