@@ -63,6 +63,8 @@ HOLD_TORQUE = 0.08
 #: plane, so its projection turns past any anatomical range (its distal bone's seen
 #: flexion reaches 2.7 in a fist) and is limited only short of a half turn.
 THUMB_PLANAR = ((-2.9, 2.9),) * 3
+#: How far (rad/s) a joint's wanted rate moves before its motor is told again.
+DEADBAND = 0.02
 #: The fastest a joint's servo turns it toward its target (rad/s).
 MAX_SPIN = 30.0
 
@@ -77,6 +79,9 @@ class PlanarFingers(Fingers):
     flex: tuple[float, np.ndarray] | None = None  # the last tracked flexions (t, (15,))
     rates: np.ndarray = field(default_factory=lambda: np.zeros(15))
     still: bool = False  # whether the motors were stopped (the hand untracked)
+    #: the rates (15,) and torque bound the motors were last told
+    told: np.ndarray = field(default_factory=lambda: np.full(15, np.nan))
+    told_torque: float = -1.0
 
 
 def in_plane(p: np.ndarray, y: float) -> np.ndarray:
@@ -181,10 +186,25 @@ def aim(engine: Engine, fingers: PlanarFingers, palm: int, sample: HandJoints,
     spin = fingers.rates + np.clip(error / fingers.time_constant, -MAX_SPIN, MAX_SPIN)
     torque = HOLD_TORQUE if fingers.holding else BONE_TORQUE
     fingers.still = False
+    tell(engine, fingers, np.clip(spin, -2 * MAX_SPIN, 2 * MAX_SPIN), torque)
+
+
+def tell(engine: Engine, fingers: PlanarFingers, rates: np.ndarray, torque: float) -> None:
+    """The motors whose rate moved more than :data:`DEADBAND` from what they were last
+    told (all of them when the torque bound changes) get a :class:`SetMotor` each: a
+    steady hand costs no commands, and what is left out the error term takes up (at most
+    ``DEADBAND`` times the time constant: a thousandth of a degree)."""
+    if torque != fingers.told_torque:
+        changed = np.ones(15, dtype=bool)
+    else:
+        changed = ~(np.abs(rates - fingers.told) <= DEADBAND)
+    if not changed.any():
+        return
+    fingers.told_torque = torque
+    fingers.told[changed] = rates[changed]
     push = engine.physics.push
-    for joint, rate in zip(fingers.chain, np.clip(spin, -2 * MAX_SPIN, 2 * MAX_SPIN).tolist(),
-                           strict=True):
-        push(SetMotor(joint, rate, torque))
+    for i in np.flatnonzero(changed).tolist():
+        push(SetMotor(fingers.chain[i], float(rates[i]), torque))
 
 
 def chain_tips(flat: np.ndarray, theta: np.ndarray, lengths: np.ndarray) -> np.ndarray:
@@ -203,9 +223,8 @@ def still(engine: Engine, fingers: PlanarFingers) -> None:
         return
     fingers.still = True
     fingers.rates[:] = 0.0
-    torque = HOLD_TORQUE if fingers.holding else BONE_TORQUE
-    for joint in fingers.chain:
-        engine.physics.push(SetMotor(joint, 0.0, torque))
+    fingers.told_torque = -1.0  # every motor told
+    tell(engine, fingers, np.zeros(15), HOLD_TORQUE if fingers.holding else BONE_TORQUE)
 
 
 def current_flexions(engine: Engine, fingers: PlanarFingers, palm: int) -> np.ndarray:
