@@ -193,7 +193,7 @@ def tell(engine: Engine, fingers: PlanarFingers, rates: np.ndarray, torque: floa
     """The motors whose rate moved more than :data:`DEADBAND` from what they were last
     told (all of them when the torque bound changes) get a :class:`SetMotor` each: a
     steady hand costs no commands, and what is left out the error term takes up (at most
-    ``DEADBAND`` times the time constant: a thousandth of a degree)."""
+    ``DEADBAND`` times the time constant: 0.6 mrad, a thirtieth of a degree)."""
     if torque != fingers.told_torque:
         changed = np.ones(15, dtype=bool)
     else:
