@@ -180,7 +180,8 @@ HAND_BLOCK = declare(BlockDeclaration(
             "(none: never)", unit="N"),
         Key("Marker", "bool", 1, "show a ball where the real hand (the tracker) is"),
         Key("Fingers", "bool", 0, "1: the palm and each finger's phalanges are bodies driven "
-            "toward the 26 tracked joints of input hand Tracker (ODE), and what the thumb and "
+            "toward the 26 tracked joints of input hand Tracker (ODE; on pymunk a 2D hand in "
+            "the plane), and what the thumb and "
             "an opposing finger or the palm press is held; 0: the palm only (the paper's "
             "hand)"),
         Key("NeutralModel", "asset", None, "model drawn while the hand touches nothing it "

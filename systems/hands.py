@@ -71,7 +71,7 @@ from engine.rotation import quat_multiply, quat_to_matrix
 from engine.services import HandControl
 from engine.system import Phase, PluginName, System
 from services.input import InputState
-from systems import hand_fingers
+from systems import hand_fingers, hand_fingers2d
 from systems.hand_ghost import GhostFingerSystem
 
 if TYPE_CHECKING:
@@ -351,10 +351,10 @@ class HandDriveSystem(System):
     def _fingered(self, engine: Engine, name: str) -> bool:
         """Whether this backend simulates a hand's fingers (told once if not)."""
         backend = engine.physics.backend_name
-        if backend == "ode":
+        if backend in ("ode", "pymunk"):  # pymunk: a 2D hand in the plane
             return True
-        self.hands.messages.warn(f"hand {name!r}: Fingers 1 needs the ode backend (this is "
-                                 f"{backend!r}); it is a palm only")
+        self.hands.messages.warn(f"hand {name!r}: Fingers 1 needs the ode or pymunk backend "
+                                 f"(this is {backend!r}); it is a palm only")
         return False
 
     def _move_fingers(self, engine: Engine, driven: list[tuple[_Rig, Any]],
@@ -372,26 +372,37 @@ class HandDriveSystem(System):
             sample = None if inputs is None or pose is None else inputs.hand(hand.tracker)
             fingers = rig.fingers
             if sample is None:
-                if fingers is not None and fingers.sample is not None and \
+                if isinstance(fingers, hand_fingers2d.PlanarFingers):
+                    hand_fingers2d.still(engine, fingers)
+                elif fingers is not None and fingers.sample is not None and \
                         fingers.velocity.any():
                     fingers.velocity[:] = 0.0
                     rows.append((fingers, np.hstack([*fingers.sample[1:], fingers.velocity])))
                 continue
             frame = _frame(engine, hand)
+            planar = engine.physics.backend_name == "pymunk"
             if fingers is None:
                 engine.physics.set_pose(rig.hand, pose[0], pose[1])
-                fingers = rig.fingers = hand_fingers.build(engine, rig.name, rig.hand, sample,
-                                                           frame, rig.limits)
+                fingers = rig.fingers = (hand_fingers2d if planar else hand_fingers).build(
+                    engine, rig.name, rig.hand, sample, frame, rig.limits)
+            if isinstance(fingers, hand_fingers2d.PlanarFingers):  # joints' motors, no aims
+                hand_fingers2d.aim(engine, fingers, rig.hand, sample, frame, inputs.now,
+                                   STALE_AFTER)
+                self._deviation(engine, rig, fingers)
+                continue
             aims = hand_fingers.aim(fingers, sample, frame, inputs.now, STALE_AFTER)
             self._sweep(engine, rig, fingers, np.concatenate(pose), aims, dt)
             rows.append((fingers, aims))
-            # each physical tip (where the last step left it) from its tracked one now
-            tips = hand_fingers.tips_now(engine, fingers)
-            found = engine.world.try_component(rig.hand, HandState)
-            if found is not None:
-                found.finger_deviation = tuple(
-                    np.linalg.norm(tips - fingers.tips, axis=1).tolist())
+            self._deviation(engine, rig, fingers)
         hand_fingers.push_controls(engine, rows)
+
+    @staticmethod
+    def _deviation(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers) -> None:
+        """Each physical tip (where the last step left it) from its tracked one now."""
+        tips = hand_fingers.tips_now(engine, fingers)
+        found = engine.world.try_component(rig.hand, HandState)
+        if found is not None:
+            found.finger_deviation = tuple(np.linalg.norm(tips - fingers.tips, axis=1).tolist())
 
     @staticmethod
     def _sweep(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers, palm: np.ndarray,

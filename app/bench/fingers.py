@@ -1,4 +1,5 @@
-"""``colosseum bench hands``, the fingered hand's rows (``Hand { Fingers 1 }``, ODE).
+"""``colosseum bench hands``, the fingered hand's rows (``Hand { Fingers 1 }``, ODE; the 2D
+hand's on pymunk: :func:`run_rows_2d`).
 
 Each row is measured beside the palm-only hand's rows of :mod:`app.bench.hands`, with
 tracked 26-joint hands from :func:`services.input.hand_pose.pose_hand` and
@@ -62,15 +63,15 @@ def ball(name: str, width: float, at: tuple[float, ...], mass: float = 0.3) -> s
 
 def run(scene: str, folder: Path, feeds: dict[str, Feed], seconds: float,
         on_frame: Callable[[Any, dict[str, int]], None] | None = None, rate: float = RATE,
-        settle: float = 0.5) -> float:
+        settle: float = 0.5, backend: str = "ode") -> float:
     """Run ``scene`` with tracked hands (name -> t -> HandJoints, or TrackerPose for a
-    palm-only hand); CPU seconds per physics step after ``settle`` seconds."""
+    palm-only hand) on ``backend``; CPU seconds per physics step after ``settle`` seconds."""
     from engine import EngineConfig, Phase, system
     from engine.scene import instantiate, spec_from_text
     from services.input import InputHub
     from systems import create_engine
 
-    config = EngineConfig(backend="ode", fast=True, dt=1.0 / rate, content_dir=folder,
+    config = EngineConfig(backend=backend, fast=True, dt=1.0 / rate, content_dir=folder,
                           debug=False)
     with create_engine(config) as engine:
         ids = instantiate(engine, spec_from_text(scene, folder))
@@ -357,7 +358,8 @@ def _as_tracker(feed: Feed, name: str) -> Feed:
     return pose
 
 
-def cost(folder: Path, seconds: float, count: int = 4) -> list[dict[str, Any]]:
+def cost(folder: Path, seconds: float, count: int = 4, backend: str = "ode"
+         ) -> list[dict[str, Any]]:
     """Fingered hands, palm-only hands and none, the same tracked traffic, alternated."""
     names = [f"h{i}" for i in range(count)]
     feeds: dict[str, Feed] = {n: _waving(n, i) for i, n in enumerate(names)}
@@ -367,13 +369,15 @@ def cost(folder: Path, seconds: float, count: int = 4) -> list[dict[str, Any]]:
     palms = TABLE + "".join(f'Object {{ ID "hand{i}" Position [{at[i][0]} {at[i][1]} '
                             f'{at[i][2]}] Hand {{ Tracker "{n}_palm" }} }}\n'
                             for i, n in enumerate(names))
-    run(fingered, folder, feeds, seconds)  # warm-up, discarded
-    runs = [(run(fingered, folder, feeds, seconds), run(palms, folder, feeds, seconds),
-             run(TABLE, folder, feeds, seconds)) for _ in range(REPEATS)]
+    on = {"backend": backend}
+    run(fingered, folder, feeds, seconds, **on)  # warm-up, discarded
+    runs = [(run(fingered, folder, feeds, seconds, **on), run(palms, folder, feeds, seconds,
+                                                              **on),
+             run(TABLE, folder, feeds, seconds, **on)) for _ in range(REPEATS)]
     f, p, n = (np.array([r[k] for r in runs]) for k in range(3))
     per_f, per_p = (f - n) / count * 1e6, (p - n) / count * 1e6
     spread = f"{per_f.min():.0f}-{per_f.max():.0f}"
-    return [{"case": f"cost, {count} fingered hands", "backend": "ode",
+    return [{"case": f"cost, {count} fingered hands", "backend": backend,
              "ms_per_step": float(np.median(f)) * 1e3,
              "without_hands_ms": float(np.median(n)) * 1e3,
              "us_per_hand_step": float(np.median(per_f)), "spread_us": spread,
@@ -405,3 +409,83 @@ def run_rows(folder: Path, quick: bool = False) -> list[dict[str, Any]]:
     rows += cost(folder, 0.5 if quick else 2.0)
     rows.append(frame_budget(folder, 1.0 if quick else 3.0))
     return rows
+
+
+# -- the 2D hand (pymunk: the X–Z plane) --------------------------------------------------
+@cache
+def _side_pinch_gaps() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pinch gesture's scales, the gap between its thumb and index tips seen in the
+    plane (X–Z) at each, and their midpoints (the hand unturned: it bends in the plane)."""
+    from app.bench.hand_grips import curls
+    from services.input.events import HAND_JOINTS
+    from services.input.hand_pose import local_hand
+
+    thumb, index = HAND_JOINTS.index("thumb_tip"), HAND_JOINTS.index("index_tip")
+    scales = np.linspace(0.0, 1.0, 101)
+    gaps, mids = [], []
+    for s in scales:
+        p = local_hand(curls(float(s)))[0]
+        gaps.append(float(np.hypot(*(p[index] - p[thumb])[[0, 2]])))
+        mids.append((p[index] + p[thumb]) / 2)
+    return scales, np.array(gaps), np.array(mids)
+
+
+def side_pinch(device: str, centre: Any, grip: float, timestamp: float = 0.0) -> Any:
+    """A tracked hand pinching in the plane, as the 2D hand sees it: the pinch gesture
+    (unturned, so its fingers bend about Y) closed until its thumb and index tips are
+    ``grip`` apart in X–Z, put where their midpoint is ``centre``."""
+    from app.bench.hand_grips import curls
+    from services.input.hand_pose import pose_hand
+
+    scales, gaps, mids = _side_pinch_gaps()
+    order = np.argsort(gaps)
+    s = float(np.interp(grip, gaps[order], scales[order]))
+    mid = np.array([np.interp(s, scales, mids[:, k]) for k in range(3)])
+    at = np.asarray(centre, dtype=float) - mid
+    at[1] = centre[1]
+    return pose_hand(device, tuple(at.tolist()), (1.0, 0.0, 0.0, 0.0), curls(s),
+                     timestamp=timestamp)
+
+
+def fingertips_2d(folder: Path, seconds: float, rate: float = RATE) -> dict[str, Any]:
+    """:func:`fingertips`' hand (swinging along X at 0.5 m/s peak, curling and opening) on
+    pymunk, unturned (its fingers bend in the plane): each physical tip's distance from
+    its tracked one seen in the plane (X and Z), RMS (mm). The thumb bends out of the
+    plane: its projection's length changes, which a rigid chain cannot follow, so its
+    figure is shown but not held to the goal."""
+    from services.input.events import HAND_JOINTS
+    from services.input.hand_pose import pose_hand
+    from systems.hand_fingers2d import tip_error
+
+    omega, names = 5.0, ("thumb", "index", "middle", "ring", "little")
+    tips = [HAND_JOINTS.index(f"{f}_tip") for f in names]
+
+    def sample(t: float) -> Any:
+        curl = 0.3 + 0.2 * np.sin(2.0 * t)
+        return pose_hand("right", (0.1 * np.sin(omega * t), 0.0, 1.0), (1.0, 0.0, 0.0, 0.0),
+                         dict.fromkeys(names, curl), timestamp=t)
+
+    err: list[np.ndarray] = []
+
+    def note(e: Any, ids: dict[str, int]) -> None:
+        if bones_of(e, ids["hand_r"]):
+            tracked = np.asarray(sample(e.time + 1.0 / rate).positions)[tips]
+            err.append(tip_error(tracked, physical_tips(e, ids["hand_r"])))
+
+    run(hand("hand_r", "right"), folder, {"right": sample}, seconds, note, rate,
+        backend="pymunk")
+    rms = np.sqrt(np.mean(np.square(err), axis=0)) * 1e3
+    worst = float(rms[1:].max())
+    return {"case": f"2D fingered, 0.5 m/s, {rate:g} Hz", "backend": "pymunk",
+            "error_rms_mm": worst, "tips_rms_mm": " ".join(f"{x:.2f}" for x in rms),
+            "goal": "<= 3 mm (fingers; the thumb's projection shown)",
+            "ok": "yes" if worst <= 3.0 else "NO"}
+
+
+def run_rows_2d(folder: Path, quick: bool = False) -> list[dict[str, Any]]:
+    """The 2D fingered hand's rows (pymunk): fingertips at 120 and 200 Hz, cost."""
+    seconds = 1.5 if quick else 4.0
+    rows = [fingertips_2d(folder, seconds)]
+    if not quick:
+        rows.append(fingertips_2d(folder, seconds, rate=200.0))
+    return rows + cost(folder, 0.5 if quick else 2.0, backend="pymunk")

@@ -20,7 +20,8 @@ Rows, each at 120 Hz physics (serial, unpaced), on ODE and on pymunk (``--backen
 Beside them, on ODE, the fingered hand's rows (``Hand { Fingers 1 }``): fingertip
 tracking, penetration, held jitter, a 3 Hz shake, a hand-over, a 3 m/s swipe at a thin
 plate, its cost per hand per step beside the palm's, and two hands in a 90 Hz frame
-(:mod:`app.bench.fingers`). pymunk has no fingered hand (a palm there, told).
+(:mod:`app.bench.fingers`). On pymunk, the 2D fingered hand's rows: fingertip tracking
+in the plane and its cost per hand per step beside the 2D palm's.
 """
 
 from __future__ import annotations
@@ -180,4 +181,8 @@ def run_bench(quick: bool = False, backend: str | None = None) -> list[dict[str,
                 from app.bench.fingers import run_rows
 
                 rows += run_rows(folder, quick)
+            elif name == "pymunk":
+                from app.bench.fingers import run_rows_2d
+
+                rows += run_rows_2d(folder, quick)
     return rows
