@@ -129,7 +129,8 @@ class PymunkBackend:
 
     def __init__(self) -> None:
         self._step_dt = 0.0  # the last substep's, for contact impulses (carried_down)
-        self._substeps = 1  # substeps the last step took (its contacts' impulse: n × the last's)
+        #: the contacts (and their rows) of the last step's substeps before its last
+        self._earlier: list[tuple[np.ndarray, np.ndarray]] = []
         #: substeps the step under way takes (the bodies' damping, per step, reads it)
         self._parts = [1]
         self._gravity = (0.0, 0.0)  # the space's, as configured (x, z)
@@ -249,12 +250,15 @@ class PymunkBackend:
         n = substeps(dt)
         self._parts[0] = n
         held = self._held_forces() if n > 1 else None
+        self._earlier = earlier = []
         for i in range(n):
             if i and held:
                 self._hold_forces(held)
             self._substep(dt / n)
+            if i < n - 1:  # read now: the next substep replaces chipmunk's arbiters
+                earlier.append((self.contacts(), self._contacts_rows))
+        self._earlier = earlier
         self._pushed.clear()
-        self._substeps = n
 
     def _held_forces(self) -> list[tuple[int, pymunk.Body, pymunk.Vec2d, float]]:
         """The forces and torques added for this step (pymunk clears them as it steps),
@@ -1030,8 +1034,9 @@ class PymunkBackend:
                 up = np.array([-gx / g, 0.0, -gz / g])
                 c["impulse"] = carried_down(pairs[:, 0], pairs[:, 1], c["impulse"],
                                             c["normal"] @ up, lifted * self._step_dt)
-            if self._substeps > 1:  # the last substep's, over the whole step
-                c["impulse"] *= self._substeps
+            if self._earlier:
+                c, pairs = _merge_contacts([*self._earlier, (c, pairs)])
+                self._earlier = []
             self._contacts, self._contacts_rows = c, pairs
         return self._contacts
 
@@ -1159,6 +1164,29 @@ def _velocity_func(gravity: float, linear_damping: float, angular_damping: float
             body.angular_velocity = body.angular_velocity * keep_w**root
 
     return update
+
+
+def _merge_contacts(parts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray,
+                                                                          np.ndarray]:
+    """A step's contacts from its substeps' (each: contacts and their rows): each pair of
+    bodies with the points it had in the last substep it touched in, and the impulses of
+    all its substeps (shared among those points as that substep shared its own; equally
+    where it had none), so an impact in an early substep is reported whole."""
+    c = np.concatenate([part[0] for part in parts])
+    rows = np.concatenate([part[1] for part in parts])
+    sub = np.concatenate([np.full(len(part[0]), i) for i, part in enumerate(parts)])
+    _, pair = np.unique(np.stack([c["a"], c["b"]], axis=1), axis=0, return_inverse=True)
+    pair = pair.reshape(-1)
+    total = np.bincount(pair, weights=c["impulse"])
+    last = np.full(len(total), -1)
+    np.maximum.at(last, pair, sub)
+    keep = sub == last[pair]
+    out, kept = c[keep].copy(), pair[keep]
+    own = np.bincount(kept, weights=out["impulse"], minlength=len(total))[kept]
+    count = np.bincount(kept, minlength=len(total))[kept]
+    share = np.divide(out["impulse"], own, out=1.0 / count, where=own > 0.0)
+    out["impulse"] = total[kept] * share
+    return out, rows[keep]
 
 
 def _stop(body: pymunk.Body) -> None:
