@@ -16,7 +16,10 @@ and wakes a sleeping group that an awake body touches, but only the rule puts bo
 sleep: each island as one chipmunk group, so they wake together. The rule reads the
 state through ``batch`` (pymunk's public ``pymunk.batch``), which also tells who sleeps.
 
-Cost: a step is the space's own step plus a fixed handful of batch calls and compiled
+A step longer than MAX_SUBSTEP (0.01 s) is taken as equal substeps of at most that, each
+as below (chipmunk's solver leaves a stack rocking at 1/60 s and 0.02 s; docs/PHYSICS.md).
+
+Cost: a step (a substep) is the space's own step plus a fixed handful of batch calls and compiled
 passes, no Python per body: before it, every force read (skipped while nothing touched
 the space since the last step), the preload added and every force written; after it, one
 body read and one arbiter read shared by the resting warm start (one pass,
