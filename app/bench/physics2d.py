@@ -45,7 +45,11 @@ from app.bench.readback import EcsReadback, pose_table, time_readback  # noqa: E
 from components import MaterialProps, Physical, Shape  # noqa: E402
 from engine.physics.backend import WorldSettings  # noqa: E402
 from engine.physics.pymunk2d import PymunkBackend  # noqa: E402
-from engine.physics.pymunk2d.backend import COLLISION_SLOP  # noqa: E402
+from engine.physics.pymunk2d.backend import (  # noqa: E402
+    COLLISION_SLOP,
+    MAX_SUBSTEP,
+    substeps,
+)
 from engine.physics.pymunk2d.shapes import PLANE_DEPTH, PLANE_HALF_LENGTH  # noqa: E402
 from engine.physics.sleep import SLEEP_TIME  # noqa: E402
 
@@ -185,6 +189,8 @@ def run_bench(ns: tuple[int, ...] = (100, 500, 2000), steps: int | None = None,
     what = ("on in both" if sleeping else "rule on in ours, off in raw" if rule else "off")
     print(f"boxes in 2D, dt 1/60 s, {ITERATIONS} iterations, warm start on in ours, "
           f"sleeping {what}; median ms per step ({'thread CPU time' if cpu else 'wall'})")
+    print(f"ours takes each step as {substeps(DT)} substep(s) (MAX_SUBSTEP {MAX_SUBSTEP} s), "
+          "raw takes it whole: the trajectories differ where that is more than one")
     print(f"{'N':>6} {'raw':>8} {'ours':>8} {'=step':>8} {'+sync':>7} {'ratio':>7} "
           f"{'contacts':>9} {'ratio+c':>8} {'same':>5}")
     for n in ns:

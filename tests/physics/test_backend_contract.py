@@ -562,9 +562,10 @@ def test_offset_shapes_spin_about_their_centre_of_mass(kit, make_backend) -> Non
     dumbbell = Physical(mass=1.0, shapes=[Shape("sphere", (0.1,)),
                                           Shape("sphere", (0.1,), offset=(1.0, 0.0, 0.0))])
     kit.add(backend, 1, dumbbell, (0.0, 0.0, 0.0))
-    kit.add(backend, 2, dumbbell, (0.0, 3.0, 0.0))
+    # apart in X too: in the plane (pymunk) bodies apart only in Y overlap and collide
+    kit.add(backend, 2, dumbbell, (5.0, 3.0, 0.0))
     backend.add_impulse(1, np.array([0.0, 0.0, 1.0]))  # at the centre of mass: no spin
-    backend.add_impulse(2, np.array([0.0, 0.0, 1.0]), np.array([0.0, 3.0, 0.0]))  # at origin
+    backend.add_impulse(2, np.array([0.0, 0.0, 1.0]), np.array([5.0, 3.0, 0.0]))  # at origin
     backend.step(1 / 60)  # an impulse may be spread over the next step
     still, spun = kit.row(backend, 1), kit.row(backend, 2)
     assert still["angular"][1] == pytest.approx(0.0, abs=1e-9)
