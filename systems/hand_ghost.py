@@ -23,7 +23,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from components import Hand, HandState, Shape, Transform, Visual
-from engine.rotation import from_to, matrices_to_quats
 from engine.system import Phase, System
 from services.input import InputState
 from services.input.events import FINGERS, HAND_JOINTS, HandJoints
@@ -55,7 +54,6 @@ BONES = _bones()
 _FINGER = np.array([b[0] for b in BONES])
 _A = np.array([b[1] for b in BONES])
 _B = np.array([b[2] for b in BONES])
-_UP = np.tile([0.0, 0.0, 1.0], (len(BONES), 1))  # a capsule's axis is its local Z
 
 
 @dataclass(slots=True, eq=False)
@@ -64,6 +62,7 @@ class _Ghost:
 
     bones: list[int]
     sizes: np.ndarray  # (bones, 2): radius, length
+    shown: bool = False  # whether any of its bones is visible
 
 
 def blocked_fingers(state: HandState, after: float = GHOST_AFTER) -> np.ndarray:
@@ -81,9 +80,21 @@ def bone_capsules(joints: HandJoints) -> tuple[np.ndarray, np.ndarray, np.ndarra
     r = np.asarray(joints.radii, dtype=float)
     along = p[_B] - p[_A]
     lengths = np.linalg.norm(along, axis=1)
-    quats = matrices_to_quats(from_to(_UP, along))
+    quats = _up_to(along / np.maximum(lengths, 1e-12)[:, None])
     radii = np.maximum((r[_A] + r[_B]) / 2.0, 1e-4)
     return (p[_A] + p[_B]) / 2.0, quats, np.column_stack([radii, lengths])
+
+
+def _up_to(v: np.ndarray) -> np.ndarray:
+    """The smallest turns (n, 4) of +Z onto unit directions ``v``, as quaternions built
+    straight from the half-way vector (every frame, for every bone: no matrices); a bone
+    along -Z (or of no length) turns about X."""
+    q = np.column_stack([1.0 + v[:, 2], -v[:, 1], v[:, 0], np.zeros(len(v))])
+    norm = np.linalg.norm(q, axis=1)
+    flipped = norm < 1e-6
+    q[flipped] = (0.0, 1.0, 0.0, 0.0)
+    norm[flipped] = 1.0
+    return q / norm[:, None]
 
 
 class GhostFingerSystem(System):
@@ -131,7 +142,10 @@ class GhostFingerSystem(System):
             assert ghost is not None
             for bone in ghost.bones:
                 world.component_for_entity(bone, Visual).visible = False
+            ghost.shown = False
             return
+        if ghost is not None and not ghost.shown and not shown.any():
+            return  # hidden and staying so: nothing to move (most frames of most hands)
         centres, quats, sizes = bone_capsules(joints)
         if ghost is None:
             ghost = self.ghosts[hand] = _Ghost([engine.spawn(
@@ -148,6 +162,7 @@ class GhostFingerSystem(System):
                 world.add_component(bone, _look(sizes[i], color, bool(shown[i])))
             elif visual.visible != shown[i] or tuple(visual.color) != color:
                 visual.visible, visual.color = bool(shown[i]), color  # type: ignore[assignment]
+        ghost.shown = bool(shown.any())
 
 
 def _look(size: np.ndarray, color: tuple[float, ...], visible: bool) -> Visual:
