@@ -132,13 +132,32 @@ def world_joints(sample: HandJoints, frame: Transform | None
                  ) -> tuple[np.ndarray, np.ndarray]:
     """The sample's joint positions (26, 3) and orientations (26, 4) in the world (through
     the hand's frame object, a wheelchair, when it has one)."""
-    p = np.asarray(sample.positions, dtype=float)
-    q = np.asarray(sample.orientations, dtype=float)
+    p, q = _arrays(sample)
     if frame is None:
         return p, q
     rot = quat_to_matrix(frame.orientation)
     return p @ rot.T + frame.position, quat_multiply(np.broadcast_to(frame.orientation,
                                                                      q.shape), q)
+
+
+#: The last samples' joints as arrays, by sample (the palm's drive and the bones' read
+#: each sample in the same frame; a sample's tuples are converted once).
+_SEEN: dict[int, tuple[HandJoints, np.ndarray, np.ndarray]] = {}
+
+
+def _arrays(sample: HandJoints) -> tuple[np.ndarray, np.ndarray]:
+    """The sample's positions (26, 3) and orientations (26, 4), read-only: shared."""
+    seen = _SEEN.get(id(sample))
+    if seen is not None and seen[0] is sample:
+        return seen[1], seen[2]
+    if len(_SEEN) >= 64:
+        _SEEN.clear()
+    p = np.asarray(sample.positions, dtype=float)
+    q = np.asarray(sample.orientations, dtype=float)
+    p.setflags(write=False)
+    q.setflags(write=False)
+    _SEEN[id(sample)] = (sample, p, q)
+    return p, q
 
 
 def bone_poses(p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -360,8 +379,16 @@ def tips_now(engine: Engine, fingers: Fingers) -> np.ndarray:
     distal = [world.component_for_entity(fingers.bones[3 * f + 2], Transform)
               for f in range(5)]
     p = np.array([t.position for t in distal])
-    along = quat_to_matrix(np.array([t.orientation for t in distal]))[:, :, 0]
-    return p + along * (fingers.lengths[2::3] / 2)[:, None]
+    return p + x_axes(np.array([t.orientation for t in distal])) * \
+        (fingers.lengths[2::3] / 2)[:, None]
+
+
+def x_axes(q: np.ndarray) -> np.ndarray:
+    """Each unit quaternion's (n, 4) turned +x (n, 3): the first column of its matrix
+    alone (every frame, for every hand: no normalising, no matrices)."""
+    w, x, y, z = q.T
+    return np.column_stack([1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + z * w),
+                            2.0 * (x * z - y * w)])
 
 
 def presses(contacts: np.ndarray, owner: dict[int, str], elapsed: float

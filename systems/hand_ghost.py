@@ -153,10 +153,12 @@ class GhostFingerSystem(System):
                 for i in range(len(BONES))], sizes.copy())
         resized = np.abs(sizes - ghost.sizes).max(axis=1) > RESIZE_AFTER
         for i, bone in enumerate(ghost.bones):
+            visual = world.component_for_entity(bone, Visual)
+            if not shown[i] and not visual.visible:
+                continue  # hidden and staying so: moved and sized when shown
             transform = world.component_for_entity(bone, Transform)
             transform.position[:] = centres[i]
             transform.orientation[:] = quats[i]
-            visual = world.component_for_entity(bone, Visual)
             if resized[i]:  # a new Visual: the renderer builds its capsule again
                 ghost.sizes[i] = sizes[i]
                 world.add_component(bone, _look(sizes[i], color, bool(shown[i])))
