@@ -123,6 +123,8 @@ class Fingers:
     pressing: dict[int, tuple[str, ...]] = field(default_factory=dict)
     colliding: bool = True
     holding: bool = False  # whether the drives have their holding bounds
+    #: the pose table's version and the bones' rows in it (read each frame in one go)
+    rows: tuple[int, np.ndarray] = (-1, np.zeros(0, np.int64))
 
     def entities(self) -> list[int]:
         return [*self.chain, *self.drives, *self.bones, *self.controls]
@@ -305,8 +307,7 @@ def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.nda
     if palm_t is None:
         return 1.0
     bodies = [palm, *fingers.bones]
-    here = np.vstack([palm_t.position, *(world.component_for_entity(b, Transform).position
-                                         for b in fingers.bones)])
+    here = np.vstack([palm_t.position, bone_table(engine, fingers)[:, :3]])
     there = np.vstack([palm_target[:3] + palm_target[7:10] * dt,
                        rows[:, :3] + rows[:, 7:10] * dt])
     way = there - here
@@ -373,14 +374,25 @@ def set_colliding(engine: Engine, fingers: Fingers, enabled: bool) -> None:
         engine.physics.push(SetCollisionEnabled(bone, enabled))
 
 
-def tips_now(engine: Engine, fingers: Fingers) -> np.ndarray:
-    """Where the physical fingertips are (5, 3): each distal bone's far end."""
-    world = engine.world
-    distal = [world.component_for_entity(fingers.bones[3 * f + 2], Transform)
-              for f in range(5)]
-    p = np.array([t.position for t in distal])
-    return p + x_axes(np.array([t.orientation for t in distal])) * \
-        (fingers.lengths[2::3] / 2)[:, None]
+def bone_table(engine: Engine, fingers: Fingers) -> np.ndarray:
+    """The bones' rows of the pose table (15, 13: position, orientation, velocities), read
+    in one go (their row indices kept while no Transform comes or goes)."""
+    poses = engine.world.poses
+    version, rows = fingers.rows
+    if version != poses.version:
+        rows = poses.rows(fingers.bones)
+        if (rows < 0).any():
+            raise LookupError("a fingered hand's bone has no Transform")
+        fingers.rows = (poses.version, rows)
+    return poses.table[rows]
+
+
+def tips_now(engine: Engine, fingers: Fingers, table: np.ndarray | None = None
+             ) -> np.ndarray:
+    """Where the physical fingertips are (5, 3): each distal bone's far end (from
+    ``table``, the bones' poses, when already read)."""
+    distal = (bone_table(engine, fingers) if table is None else table)[2::3]
+    return distal[:, :3] + x_axes(distal[:, 3:7]) * (fingers.lengths[2::3] / 2)[:, None]
 
 
 def x_axes(q: np.ndarray) -> np.ndarray:

@@ -152,13 +152,16 @@ class GhostFingerSystem(System):
                 Transform(centres[i], quats[i]), _look(sizes[i], color, False))
                 for i in range(len(BONES))], sizes.copy())
         resized = np.abs(sizes - ghost.sizes).max(axis=1) > RESIZE_AFTER
+        poses = world.poses
+        rows = poses.rows(ghost.bones)  # every bone moved in one go (hidden ones too)
+        if (rows < 0).any():
+            raise LookupError(f"hand {hand}: a ghost bone lost its Transform")
+        poses.position[rows] = centres
+        poses.orientation[rows] = quats
         for i, bone in enumerate(ghost.bones):
             visual = world.component_for_entity(bone, Visual)
             if not shown[i] and not visual.visible:
-                continue  # hidden and staying so: moved and sized when shown
-            transform = world.component_for_entity(bone, Transform)
-            transform.position[:] = centres[i]
-            transform.orientation[:] = quats[i]
+                continue  # hidden and staying so: sized when shown
             if resized[i]:  # a new Visual: the renderer builds its capsule again
                 ghost.sizes[i] = sizes[i]
                 world.add_component(bone, _look(sizes[i], color, bool(shown[i])))
