@@ -63,6 +63,8 @@ class _Ghost:
     bones: list[int]
     sizes: np.ndarray  # (bones, 2): radius, length
     shown: bool = False  # whether any of its bones is visible
+    #: which bones were shown, in which colour, when their looks were last set
+    looks: tuple[np.ndarray, tuple[float, ...]] | None = None
 
 
 def blocked_fingers(state: HandState, after: float = GHOST_AFTER) -> np.ndarray:
@@ -142,7 +144,7 @@ class GhostFingerSystem(System):
             assert ghost is not None
             for bone in ghost.bones:
                 world.component_for_entity(bone, Visual).visible = False
-            ghost.shown = False
+            ghost.shown, ghost.looks = False, None
             return
         if ghost is not None and not ghost.shown and not shown.any():
             return  # hidden and staying so: nothing to move (most frames of most hands)
@@ -158,6 +160,11 @@ class GhostFingerSystem(System):
             raise LookupError(f"hand {hand}: a ghost bone lost its Transform")
         poses.position[rows] = centres
         poses.orientation[rows] = quats
+        ghost.shown = bool(shown.any())
+        if ghost.looks is not None and not resized.any() and ghost.looks[1] == color and \
+                np.array_equal(ghost.looks[0], shown):
+            return  # the same bones shown, alike: only moved
+        ghost.looks = (shown.copy(), color)
         for i, bone in enumerate(ghost.bones):
             visual = world.component_for_entity(bone, Visual)
             if not shown[i] and not visual.visible:
@@ -167,7 +174,6 @@ class GhostFingerSystem(System):
                 world.add_component(bone, _look(sizes[i], color, bool(shown[i])))
             elif visual.visible != shown[i] or tuple(visual.color) != color:
                 visual.visible, visual.color = bool(shown[i]), color  # type: ignore[assignment]
-        ghost.shown = bool(shown.any())
 
 
 def _look(size: np.ndarray, color: tuple[float, ...], visible: bool) -> Visual:
