@@ -134,7 +134,7 @@ def world_joints(sample: HandJoints, frame: Transform | None
                  ) -> tuple[np.ndarray, np.ndarray]:
     """The sample's joint positions (26, 3) and orientations (26, 4) in the world (through
     the hand's frame object, a wheelchair, when it has one)."""
-    p, q = _arrays(sample)
+    p, q = joint_arrays(sample)
     if frame is None:
         return p, q
     rot = quat_to_matrix(frame.orientation)
@@ -142,12 +142,12 @@ def world_joints(sample: HandJoints, frame: Transform | None
                                                                      q.shape), q)
 
 
-#: The last samples' joints as arrays, by sample (the palm's drive and the bones' read
-#: each sample in the same frame; a sample's tuples are converted once).
+#: The last samples' joints as arrays, by sample (the palm's drive, the bones' and the
+#: ghost fingers read each sample in the same frame; a sample's tuples are converted once).
 _SEEN: dict[int, tuple[HandJoints, np.ndarray, np.ndarray]] = {}
 
 
-def _arrays(sample: HandJoints) -> tuple[np.ndarray, np.ndarray]:
+def joint_arrays(sample: HandJoints) -> tuple[np.ndarray, np.ndarray]:
     """The sample's positions (26, 3) and orientations (26, 4), read-only: shared."""
     seen = _SEEN.get(id(sample))
     if seen is not None and seen[0] is sample:

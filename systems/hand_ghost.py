@@ -27,6 +27,7 @@ from engine.system import Phase, System
 from services.input import InputState
 from services.input.events import FINGERS, HAND_JOINTS, HandJoints
 from services.input.hand_query import tracked_hand
+from systems.hand_fingers import joint_arrays
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -78,10 +79,10 @@ def blocked_fingers(state: HandState, after: float = GHOST_AFTER) -> np.ndarray:
 def bone_capsules(joints: HandJoints) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each bone's capsule: centre (n, 3), orientation (n, 4) and size (n, 2: radius,
     length between the joints' centres, the caps reaching round them)."""
-    p = np.asarray(joints.positions, dtype=float)
+    p = joint_arrays(joints)[0]
     r = np.asarray(joints.radii, dtype=float)
     along = p[_B] - p[_A]
-    lengths = np.linalg.norm(along, axis=1)
+    lengths = np.sqrt(np.einsum("ij,ij->i", along, along))
     quats = _up_to(along / np.maximum(lengths, 1e-12)[:, None])
     radii = np.maximum((r[_A] + r[_B]) / 2.0, 1e-4)
     return (p[_A] + p[_B]) / 2.0, quats, np.column_stack([radii, lengths])
@@ -91,8 +92,11 @@ def _up_to(v: np.ndarray) -> np.ndarray:
     """The smallest turns (n, 4) of +Z onto unit directions ``v``, as quaternions built
     straight from the half-way vector (every frame, for every bone: no matrices); a bone
     along -Z (or of no length) turns about X."""
-    q = np.column_stack([1.0 + v[:, 2], -v[:, 1], v[:, 0], np.zeros(len(v))])
-    norm = np.linalg.norm(q, axis=1)
+    q = np.zeros((len(v), 4))
+    q[:, 0] = 1.0 + v[:, 2]
+    q[:, 1] = -v[:, 1]
+    q[:, 2] = v[:, 0]
+    norm = np.sqrt(np.einsum("ij,ij->i", q, q))
     flipped = norm < 1e-6
     q[flipped] = (0.0, 1.0, 0.0, 0.0)
     norm[flipped] = 1.0
