@@ -85,6 +85,7 @@ CLOSING = 0.002
 ALONG_X = (math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0)
 BONE_COLOR = (0.85, 0.7, 0.6, 1.0)
 TIPS = tuple(HAND_JOINTS.index(f"{f}_tip") for f in FINGERS)
+TIPS_AT = np.array(TIPS)
 
 
 def bone_layout() -> list[tuple[str, int, int]]:
@@ -123,6 +124,8 @@ class Fingers:
     pressing: dict[int, tuple[str, ...]] = field(default_factory=dict)
     colliding: bool = True
     holding: bool = False  # whether the drives have their holding bounds
+    #: the thinnest bone's radius (m): a hand slower than it per frame casts no rays
+    thinnest: float = 0.0
     #: the pose table's version and the bones' rows in it (read each frame in one go)
     rows: tuple[int, np.ndarray] = (-1, np.zeros(0, np.int64))
 
@@ -231,7 +234,8 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
         controls.append(control)
         drives.append(aim)
         finger_of[bone] = finger
-    return Fingers(bones, controls, drives, chain, lengths, np.array(sizes), finger_of)
+    return Fingers(bones, controls, drives, chain, lengths, np.array(sizes), finger_of,
+                   thinnest=min(sizes))
 
 
 def _link(engine: Engine, label: str, bone: int, parent: int, anchor: np.ndarray,
@@ -257,17 +261,19 @@ def aim(fingers: Fingers, sample: HandJoints, frame: Transform | None, now: floa
     drive aims at a point (:data:`BONE_TORQUE` is 0), so its control body's turn is its
     start joint's as tracked, and it does not spin."""
     p, q = world_joints(sample, frame)
-    centres, quats = (p[STARTS] + p[ENDS]) / 2, q[STARTS]
-    previous = fingers.sample
-    if previous is not None and sample.timestamp > previous[0]:
-        fingers.velocity[:, :3] = (centres - previous[1]) / (sample.timestamp - previous[0])
-    if previous is None or sample.timestamp > previous[0]:
-        fingers.sample = (sample.timestamp, centres, quats)
-    if now - sample.timestamp > stale_after:
+    centres, quats = (p[STARTS] + p[ENDS]) * 0.5, q[STARTS]
+    t, previous = sample.timestamp, fingers.sample
+    if previous is None or t > previous[0]:
+        if previous is not None:
+            fingers.velocity[:, :3] = (centres - previous[1]) / (t - previous[0])
+        fingers.sample = (t, centres, quats)
+    if now - t > stale_after:
         fingers.velocity[:] = 0.0
-    fingers.tips = p[list(TIPS)]
+    fingers.tips = p[TIPS_AT]
     fingers.palm = p[0]
-    return np.hstack([centres, quats, fingers.velocity])
+    rows = np.empty((len(BONES), 13))  # its own rows: limit() moves them, not the sample
+    rows[:, :3], rows[:, 3:7], rows[:, 7:] = centres, quats, fingers.velocity
+    return rows
 
 
 def palm_pose(previous: tuple[float, np.ndarray, ...] | None, sample: HandJoints,
@@ -299,8 +305,8 @@ def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.nda
     into it (its contacts take it from there; a hand pressing on something is not
     held back). What the hand holds is no obstacle. Serial physics answers at once;
     threaded physics a frame later, so this frame goes unlimited."""
-    speed = max(float(np.abs(rows[:, 7:10]).max()), float(np.abs(palm_target[7:10]).max()))
-    if 1.8 * speed * dt < float(fingers.radii.min()):
+    speed = max(-rows[:, 7:10].min(), rows[:, 7:10].max(), *np.abs(palm_target[7:10]))
+    if 1.8 * speed * dt < fingers.thinnest:
         return 1.0  # slow: no body moves its thickness (√3 times an axis's speed bounds it)
     world = engine.world
     palm_t = world.try_component(palm, Transform)
@@ -395,12 +401,24 @@ def tips_now(engine: Engine, fingers: Fingers, table: np.ndarray | None = None
     return distal[:, :3] + x_axes(distal[:, 3:7]) * (fingers.lengths[2::3] / 2)[:, None]
 
 
+def _x_form() -> np.ndarray:
+    """The first column of a unit quaternion's matrix as a quadratic form (16, 3): its
+    products q_i q_j (w x y z order, flattened) times this."""
+    form = np.zeros((4, 4, 3))
+    for i, j, k, c in ((0, 0, 0, 1), (1, 1, 0, 1), (2, 2, 0, -1), (3, 3, 0, -1),
+                       (1, 2, 1, 1), (2, 1, 1, 1), (3, 0, 1, 1), (0, 3, 1, 1),
+                       (1, 3, 2, 1), (3, 1, 2, 1), (2, 0, 2, -1), (0, 2, 2, -1)):
+        form[i, j, k] = c
+    return form.reshape(16, 3)
+
+
+_X_FORM = _x_form()
+
+
 def x_axes(q: np.ndarray) -> np.ndarray:
     """Each unit quaternion's (n, 4) turned +x (n, 3): the first column of its matrix
-    alone (every frame, for every hand: no normalising, no matrices)."""
-    w, x, y, z = q.T
-    return np.column_stack([1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + z * w),
-                            2.0 * (x * z - y * w)])
+    alone, in two array operations (every frame, for every hand)."""
+    return (q[:, :, None] * q[:, None, :]).reshape(len(q), 16) @ _X_FORM
 
 
 def presses(contacts: np.ndarray, owner: dict[int, str], elapsed: float
