@@ -55,6 +55,14 @@ BONES = _bones()
 _FINGER = np.array([b[0] for b in BONES])
 _A = np.array([b[1] for b in BONES])
 _B = np.array([b[2] for b in BONES])
+#: Each bone from the 26 joints by one product: its far joint less its near one (along),
+#: and their mean (its centre, its radius).
+_ALONG = np.zeros((len(BONES), len(HAND_JOINTS)))
+_ALONG[np.arange(len(BONES)), _B], _ALONG[np.arange(len(BONES)), _A] = 1.0, -1.0
+_MEAN = np.abs(_ALONG) / 2.0
+#: A direction v's (x, y, z) as (v_z, -v_y, v_x, 0): with 1 added to w, the quaternion
+#: of +Z turned onto v, unnormalised.
+_HALF_WAY = np.array([[0.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]])
 
 
 @dataclass(slots=True, eq=False)
@@ -80,26 +88,25 @@ def bone_capsules(joints: HandJoints) -> tuple[np.ndarray, np.ndarray, np.ndarra
     """Each bone's capsule: centre (n, 3), orientation (n, 4) and size (n, 2: radius,
     length between the joints' centres, the caps reaching round them)."""
     p = joint_arrays(joints)[0]
-    r = np.asarray(joints.radii, dtype=float)
-    along = p[_B] - p[_A]
-    lengths = np.sqrt(np.einsum("ij,ij->i", along, along))
-    quats = _up_to(along / np.maximum(lengths, 1e-12)[:, None])
-    radii = np.maximum((r[_A] + r[_B]) / 2.0, 1e-4)
-    return (p[_A] + p[_B]) / 2.0, quats, np.column_stack([radii, lengths])
+    along = _ALONG @ p
+    sizes = np.empty((len(BONES), 2))
+    sizes[:, 1] = np.sqrt(np.einsum("ij,ij->i", along, along))
+    quats = _up_to(along / np.maximum(sizes[:, 1:], 1e-12))
+    sizes[:, 0] = np.maximum(_MEAN @ joints.radii, 1e-4)
+    return _MEAN @ p, quats, sizes
 
 
 def _up_to(v: np.ndarray) -> np.ndarray:
     """The smallest turns (n, 4) of +Z onto unit directions ``v``, as quaternions built
     straight from the half-way vector (every frame, for every bone: no matrices); a bone
     along -Z (or of no length) turns about X."""
-    q = np.zeros((len(v), 4))
-    q[:, 0] = 1.0 + v[:, 2]
-    q[:, 1] = -v[:, 1]
-    q[:, 2] = v[:, 0]
+    q = v @ _HALF_WAY
+    q[:, 0] += 1.0
     norm = np.sqrt(np.einsum("ij,ij->i", q, q))
-    flipped = norm < 1e-6
-    q[flipped] = (0.0, 1.0, 0.0, 0.0)
-    norm[flipped] = 1.0
+    if norm.min() < 1e-6:  # rare: along -Z
+        flipped = norm < 1e-6
+        q[flipped] = (0.0, 1.0, 0.0, 0.0)
+        norm[flipped] = 1.0
     return q / norm[:, None]
 
 
