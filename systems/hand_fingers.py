@@ -85,6 +85,7 @@ CLOSING = 0.002
 ALONG_X = (math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0)
 BONE_COLOR = (0.85, 0.7, 0.6, 1.0)
 TIPS = tuple(HAND_JOINTS.index(f"{f}_tip") for f in FINGERS)
+TIPS_AT = np.array(TIPS)
 
 
 def bone_layout() -> list[tuple[str, int, int]]:
@@ -123,6 +124,10 @@ class Fingers:
     pressing: dict[int, tuple[str, ...]] = field(default_factory=dict)
     colliding: bool = True
     holding: bool = False  # whether the drives have their holding bounds
+    #: the thinnest bone's radius (m): a hand slower than it per frame casts no rays
+    thinnest: float = 0.0
+    #: the pose table's version and the bones' rows in it (read each frame in one go)
+    rows: tuple[int, np.ndarray] = (-1, np.zeros(0, np.int64))
 
     def entities(self) -> list[int]:
         return [*self.chain, *self.drives, *self.bones, *self.controls]
@@ -132,13 +137,32 @@ def world_joints(sample: HandJoints, frame: Transform | None
                  ) -> tuple[np.ndarray, np.ndarray]:
     """The sample's joint positions (26, 3) and orientations (26, 4) in the world (through
     the hand's frame object, a wheelchair, when it has one)."""
-    p = np.asarray(sample.positions, dtype=float)
-    q = np.asarray(sample.orientations, dtype=float)
+    p, q = joint_arrays(sample)
     if frame is None:
         return p, q
     rot = quat_to_matrix(frame.orientation)
     return p @ rot.T + frame.position, quat_multiply(np.broadcast_to(frame.orientation,
                                                                      q.shape), q)
+
+
+#: The last samples' joints as arrays, by sample (the palm's drive, the bones' and the
+#: ghost fingers read each sample in the same frame; a sample's tuples are converted once).
+_SEEN: dict[int, tuple[HandJoints, np.ndarray, np.ndarray]] = {}
+
+
+def joint_arrays(sample: HandJoints) -> tuple[np.ndarray, np.ndarray]:
+    """The sample's positions (26, 3) and orientations (26, 4), read-only: shared."""
+    seen = _SEEN.get(id(sample))
+    if seen is not None and seen[0] is sample:
+        return seen[1], seen[2]
+    if len(_SEEN) >= 64:
+        _SEEN.clear()
+    p = np.asarray(sample.positions, dtype=float)
+    q = np.asarray(sample.orientations, dtype=float)
+    p.setflags(write=False)
+    q.setflags(write=False)
+    _SEEN[id(sample)] = (sample, p, q)
+    return p, q
 
 
 def bone_poses(p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -210,7 +234,8 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
         controls.append(control)
         drives.append(aim)
         finger_of[bone] = finger
-    return Fingers(bones, controls, drives, chain, lengths, np.array(sizes), finger_of)
+    return Fingers(bones, controls, drives, chain, lengths, np.array(sizes), finger_of,
+                   thinnest=min(sizes))
 
 
 def _link(engine: Engine, label: str, bone: int, parent: int, anchor: np.ndarray,
@@ -236,17 +261,19 @@ def aim(fingers: Fingers, sample: HandJoints, frame: Transform | None, now: floa
     drive aims at a point (:data:`BONE_TORQUE` is 0), so its control body's turn is its
     start joint's as tracked, and it does not spin."""
     p, q = world_joints(sample, frame)
-    centres, quats = (p[STARTS] + p[ENDS]) / 2, q[STARTS]
-    previous = fingers.sample
-    if previous is not None and sample.timestamp > previous[0]:
-        fingers.velocity[:, :3] = (centres - previous[1]) / (sample.timestamp - previous[0])
-    if previous is None or sample.timestamp > previous[0]:
-        fingers.sample = (sample.timestamp, centres, quats)
-    if now - sample.timestamp > stale_after:
+    centres, quats = (p[STARTS] + p[ENDS]) * 0.5, q[STARTS]
+    t, previous = sample.timestamp, fingers.sample
+    if previous is None or t > previous[0]:
+        if previous is not None:
+            fingers.velocity[:, :3] = (centres - previous[1]) / (t - previous[0])
+        fingers.sample = (t, centres, quats)
+    if now - t > stale_after:
         fingers.velocity[:] = 0.0
-    fingers.tips = p[list(TIPS)]
+    fingers.tips = p[TIPS_AT]
     fingers.palm = p[0]
-    return np.hstack([centres, quats, fingers.velocity])
+    rows = np.empty((len(BONES), 13))  # its own rows: limit() moves them, not the sample
+    rows[:, :3], rows[:, 3:7], rows[:, 7:] = centres, quats, fingers.velocity
+    return rows
 
 
 def palm_pose(previous: tuple[float, np.ndarray, ...] | None, sample: HandJoints,
@@ -278,16 +305,15 @@ def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.nda
     into it (its contacts take it from there; a hand pressing on something is not
     held back). What the hand holds is no obstacle. Serial physics answers at once;
     threaded physics a frame later, so this frame goes unlimited."""
-    speed = max(float(np.abs(rows[:, 7:10]).max()), float(np.abs(palm_target[7:10]).max()))
-    if 1.8 * speed * dt < float(fingers.radii.min()):
+    speed = max(-rows[:, 7:10].min(), rows[:, 7:10].max(), *np.abs(palm_target[7:10]))
+    if 1.8 * speed * dt < fingers.thinnest:
         return 1.0  # slow: no body moves its thickness (√3 times an axis's speed bounds it)
     world = engine.world
     palm_t = world.try_component(palm, Transform)
     if palm_t is None:
         return 1.0
     bodies = [palm, *fingers.bones]
-    here = np.vstack([palm_t.position, *(world.component_for_entity(b, Transform).position
-                                         for b in fingers.bones)])
+    here = np.vstack([palm_t.position, bone_table(engine, fingers)[:, :3]])
     there = np.vstack([palm_target[:3] + palm_target[7:10] * dt,
                        rows[:, :3] + rows[:, 7:10] * dt])
     way = there - here
@@ -354,14 +380,45 @@ def set_colliding(engine: Engine, fingers: Fingers, enabled: bool) -> None:
         engine.physics.push(SetCollisionEnabled(bone, enabled))
 
 
-def tips_now(engine: Engine, fingers: Fingers) -> np.ndarray:
-    """Where the physical fingertips are (5, 3): each distal bone's far end."""
-    world = engine.world
-    distal = [world.component_for_entity(fingers.bones[3 * f + 2], Transform)
-              for f in range(5)]
-    p = np.array([t.position for t in distal])
-    along = quat_to_matrix(np.array([t.orientation for t in distal]))[:, :, 0]
-    return p + along * (fingers.lengths[2::3] / 2)[:, None]
+def bone_table(engine: Engine, fingers: Fingers) -> np.ndarray:
+    """The bones' rows of the pose table (15, 13: position, orientation, velocities), read
+    in one go (their row indices kept while no Transform comes or goes)."""
+    poses = engine.world.poses
+    version, rows = fingers.rows
+    if version != poses.version:
+        rows = poses.rows(fingers.bones)
+        if (rows < 0).any():
+            raise LookupError("a fingered hand's bone has no Transform")
+        fingers.rows = (poses.version, rows)
+    return poses.table[rows]
+
+
+def tips_now(engine: Engine, fingers: Fingers, table: np.ndarray | None = None
+             ) -> np.ndarray:
+    """Where the physical fingertips are (5, 3): each distal bone's far end (from
+    ``table``, the bones' poses, when already read)."""
+    distal = (bone_table(engine, fingers) if table is None else table)[2::3]
+    return distal[:, :3] + x_axes(distal[:, 3:7]) * (fingers.lengths[2::3] / 2)[:, None]
+
+
+def _x_form() -> np.ndarray:
+    """The first column of a unit quaternion's matrix as a quadratic form (16, 3): its
+    products q_i q_j (w x y z order, flattened) times this."""
+    form = np.zeros((4, 4, 3))
+    for i, j, k, c in ((0, 0, 0, 1), (1, 1, 0, 1), (2, 2, 0, -1), (3, 3, 0, -1),
+                       (1, 2, 1, 1), (2, 1, 1, 1), (3, 0, 1, 1), (0, 3, 1, 1),
+                       (1, 3, 2, 1), (3, 1, 2, 1), (2, 0, 2, -1), (0, 2, 2, -1)):
+        form[i, j, k] = c
+    return form.reshape(16, 3)
+
+
+_X_FORM = _x_form()
+
+
+def x_axes(q: np.ndarray) -> np.ndarray:
+    """Each unit quaternion's (n, 4) turned +x (n, 3): the first column of its matrix
+    alone, in two array operations (every frame, for every hand)."""
+    return (q[:, :, None] * q[:, None, :]).reshape(len(q), 16) @ _X_FORM
 
 
 def presses(contacts: np.ndarray, owner: dict[int, str], elapsed: float

@@ -23,11 +23,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from components import Hand, HandState, Shape, Transform, Visual
-from engine.rotation import from_to, matrices_to_quats
 from engine.system import Phase, System
 from services.input import InputState
 from services.input.events import FINGERS, HAND_JOINTS, HandJoints
 from services.input.hand_query import tracked_hand
+from systems.hand_fingers import joint_arrays
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -55,7 +55,14 @@ BONES = _bones()
 _FINGER = np.array([b[0] for b in BONES])
 _A = np.array([b[1] for b in BONES])
 _B = np.array([b[2] for b in BONES])
-_UP = np.tile([0.0, 0.0, 1.0], (len(BONES), 1))  # a capsule's axis is its local Z
+#: Each bone from the 26 joints by one product: its far joint less its near one (along),
+#: and their mean (its centre, its radius).
+_ALONG = np.zeros((len(BONES), len(HAND_JOINTS)))
+_ALONG[np.arange(len(BONES)), _B], _ALONG[np.arange(len(BONES)), _A] = 1.0, -1.0
+_MEAN = np.abs(_ALONG) / 2.0
+#: A direction v's (x, y, z) as (v_z, -v_y, v_x, 0): with 1 added to w, the quaternion
+#: of +Z turned onto v, unnormalised.
+_HALF_WAY = np.array([[0.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]])
 
 
 @dataclass(slots=True, eq=False)
@@ -64,6 +71,9 @@ class _Ghost:
 
     bones: list[int]
     sizes: np.ndarray  # (bones, 2): radius, length
+    shown: bool = False  # whether any of its bones is visible
+    #: which bones were shown, in which colour, when their looks were last set
+    looks: tuple[np.ndarray, tuple[float, ...]] | None = None
 
 
 def blocked_fingers(state: HandState, after: float = GHOST_AFTER) -> np.ndarray:
@@ -77,13 +87,27 @@ def blocked_fingers(state: HandState, after: float = GHOST_AFTER) -> np.ndarray:
 def bone_capsules(joints: HandJoints) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each bone's capsule: centre (n, 3), orientation (n, 4) and size (n, 2: radius,
     length between the joints' centres, the caps reaching round them)."""
-    p = np.asarray(joints.positions, dtype=float)
-    r = np.asarray(joints.radii, dtype=float)
-    along = p[_B] - p[_A]
-    lengths = np.linalg.norm(along, axis=1)
-    quats = matrices_to_quats(from_to(_UP, along))
-    radii = np.maximum((r[_A] + r[_B]) / 2.0, 1e-4)
-    return (p[_A] + p[_B]) / 2.0, quats, np.column_stack([radii, lengths])
+    p = joint_arrays(joints)[0]
+    along = _ALONG @ p
+    sizes = np.empty((len(BONES), 2))
+    sizes[:, 1] = np.sqrt(np.einsum("ij,ij->i", along, along))
+    quats = _up_to(along / np.maximum(sizes[:, 1:], 1e-12))
+    sizes[:, 0] = np.maximum(_MEAN @ joints.radii, 1e-4)
+    return _MEAN @ p, quats, sizes
+
+
+def _up_to(v: np.ndarray) -> np.ndarray:
+    """The smallest turns (n, 4) of +Z onto unit directions ``v``, as quaternions built
+    straight from the half-way vector (every frame, for every bone: no matrices); a bone
+    along -Z (or of no length) turns about X."""
+    q = v @ _HALF_WAY
+    q[:, 0] += 1.0
+    norm = np.sqrt(np.einsum("ij,ij->i", q, q))
+    if norm.min() < 1e-6:  # rare: along -Z
+        flipped = norm < 1e-6
+        q[flipped] = (0.0, 1.0, 0.0, 0.0)
+        norm[flipped] = 1.0
+    return q / norm[:, None]
 
 
 class GhostFingerSystem(System):
@@ -131,18 +155,31 @@ class GhostFingerSystem(System):
             assert ghost is not None
             for bone in ghost.bones:
                 world.component_for_entity(bone, Visual).visible = False
+            ghost.shown, ghost.looks = False, None
             return
+        if ghost is not None and not ghost.shown and not shown.any():
+            return  # hidden and staying so: nothing to move (most frames of most hands)
         centres, quats, sizes = bone_capsules(joints)
         if ghost is None:
             ghost = self.ghosts[hand] = _Ghost([engine.spawn(
                 Transform(centres[i], quats[i]), _look(sizes[i], color, False))
                 for i in range(len(BONES))], sizes.copy())
         resized = np.abs(sizes - ghost.sizes).max(axis=1) > RESIZE_AFTER
+        poses = world.poses
+        rows = poses.rows(ghost.bones)  # every bone moved in one go (hidden ones too)
+        if (rows < 0).any():
+            raise LookupError(f"hand {hand}: a ghost bone lost its Transform")
+        poses.position[rows] = centres
+        poses.orientation[rows] = quats
+        ghost.shown = bool(shown.any())
+        if ghost.looks is not None and not resized.any() and ghost.looks[1] == color and \
+                np.array_equal(ghost.looks[0], shown):
+            return  # the same bones shown, alike: only moved
+        ghost.looks = (shown.copy(), color)
         for i, bone in enumerate(ghost.bones):
-            transform = world.component_for_entity(bone, Transform)
-            transform.position[:] = centres[i]
-            transform.orientation[:] = quats[i]
             visual = world.component_for_entity(bone, Visual)
+            if not shown[i] and not visual.visible:
+                continue  # hidden and staying so: sized when shown
             if resized[i]:  # a new Visual: the renderer builds its capsule again
                 ghost.sizes[i] = sizes[i]
                 world.add_component(bone, _look(sizes[i], color, bool(shown[i])))
