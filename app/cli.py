@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from app.runner import execute_run, fail, prepare_run
-from engine.app import EngineConfig
+from engine.config import EngineConfig
 from engine.memory import keep_freed_memory
 from engine.physics.backend import BackendName
 from services.net.protocol import BARRIER_WAIT

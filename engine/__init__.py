@@ -14,8 +14,10 @@ from engine.lazy import lazy_exports
 from engine.system import Phase, Plugin, System, system
 
 if TYPE_CHECKING:
-    from engine.app import Engine, EngineConfig
+    from engine.app import Engine
+    from engine.config import EngineConfig
 
 __all__ = ["Engine", "EngineConfig", "Phase", "Plugin", "System", "system"]
 
-__getattr__, __dir__ = lazy_exports(__name__, {"engine.app": ("Engine", "EngineConfig")})
+__getattr__, __dir__ = lazy_exports(__name__, {"engine.app": ("Engine",),
+                                               "engine.config": ("EngineConfig",)})

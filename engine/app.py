@@ -12,21 +12,18 @@
 from __future__ import annotations
 
 import logging
-import os
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
 
 from components import Transform
+from engine.config import EngineConfig
 from engine.events import Despawned, EventBus, Spawned
 from engine.memory import paused_gc
-from engine.physics.backend import BackendName, WorldSettings
 from engine.physics.driver import DetachedPhysics, PhysicsPort
-from engine.realtime import TIME_STEP, CostLog, Pacing, RealTimeController, Tick, advance
+from engine.realtime import CostLog, RealTimeController, Tick, advance
 from engine.system import (
     ANY_COMPONENT,
     Phase,
@@ -57,39 +54,6 @@ class MissingResource(KeyError):
 
     def __str__(self) -> str:
         return str(self.args[0])
-
-
-@dataclass(slots=True)
-class EngineConfig:
-    """Run-time choices; the CLI fills these from its flags."""
-
-    content_dir: Path | None = None
-    mode: str = "serial"  # "serial" | "threaded"
-    backend: str = BackendName.ODE
-    dt: float = TIME_STEP
-    substeps: int = 1
-    seed: int = 0
-    fast: bool = False
-    early: str = "sleep"
-    late: str = "slowmo"
-    max_dt: float = 1.0 / 20.0
-    max_substeps: int = 8
-    headless: bool = True
-    render: bool = False
-    sound: str = "null"
-    world: WorldSettings = field(default_factory=WorldSettings)
-    #: Folders besides the content folder that its scene and scripts may name files in
-    #: (``--allow-path``; see :mod:`engine.confine`).
-    allow_paths: tuple[Path, ...] = ()
-    options: dict[str, Any] = field(default_factory=dict)
-    #: Check that every system touches only the component types it declares (slower; the
-    #: test suite turns it on with COLOSSEUM_DEBUG=1, ``colosseum run --debug`` too).
-    debug: bool = field(default_factory=lambda: os.environ.get("COLOSSEUM_DEBUG") == "1")
-
-    def pacing(self) -> Pacing:
-        return Pacing(dt=self.dt, paced=not self.fast, early=self.early, late=self.late,
-                      max_dt=max(self.max_dt, self.dt), substeps=self.substeps,
-                      max_substeps=max(self.max_substeps, self.substeps))
 
 
 class Engine:

@@ -42,6 +42,7 @@ from engine.rotation import (
     rotation_vector,
 )
 from services.input.events import FINGERS, HAND_JOINTS, HandJoints
+from services.input.hand_pose import flexion
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -204,6 +205,7 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
     p, q = world_joints(sample, frame)
     centres, quats, lengths = bone_poses(p, q)
     radii = np.asarray(sample.radii, dtype=float)
+    bent = flexion(sample)  # a joint's zero is its pose when made: the limits count from it
     bones, controls, drives, chain, sizes = [], [], [], [], []
     finger_of: dict[int, str] = {}
     for i, (finger, start, end) in enumerate(BONES):
@@ -229,7 +231,7 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
         # being near its flexion axis)
         spread = quat_to_matrix(quats[i] if finger == "thumb" else q[0])[:, 2]
         chain.append(_link(engine, label, bone, parent, p[start], quats[i], spread, finger,
-                           i % 3))
+                           i % 3, bent[finger][i % 3]))
         bones.append(bone)
         controls.append(control)
         drives.append(aim)
@@ -239,14 +241,14 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
 
 
 def _link(engine: Engine, label: str, bone: int, parent: int, anchor: np.ndarray,
-          quat: np.ndarray, spread: np.ndarray, finger: str, k: int) -> int:
+          quat: np.ndarray, spread: np.ndarray, finger: str, k: int, bent: float) -> int:
     """The anatomical joint at a bone's start: universal (flexion about the bone's +y,
     limited; spread about the palm's dorsal axis) at the base of a finger, a hinge
-    further on."""
+    further on. ``bent``: its flexion now (rad), which the joint takes as its zero."""
     rot = quat_to_matrix(quat)
     spread = spread - (spread @ rot[:, 1]) * rot[:, 1]
     spread = spread / max(float(np.linalg.norm(spread)), 1e-9)
-    low, high = LIMITS[finger][k]
+    low, high = (limit - bent for limit in LIMITS[finger][k])
     kind = JointKind.UNIVERSAL if k == 0 else JointKind.HINGE
     joint = Joint(kind=kind, body_a=bone, body_b=parent, anchor=tuple(anchor.tolist()),
                   axis=tuple(rot[:, 1].tolist()), axis2=tuple(spread.tolist()),

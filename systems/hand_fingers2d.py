@@ -34,7 +34,6 @@ from components import Graspable, Joint, Name, Physical, Shape, Transform, Visua
 from components.joint import JointKind
 from components.physical import BodyKind
 from engine.physics.commands import SetDriveLimits, SetMotor
-from engine.physics.pymunk2d.planar import split_orientation
 from engine.rotation import quat_to_matrix
 from services.input.events import HAND_JOINTS, HandJoints
 from systems.hand_fingers import (
@@ -68,6 +67,14 @@ DEADBAND = 0.02
 #: The fastest a joint's servo turns it toward its target (rad/s).
 MAX_SPIN = 30.0
 
+
+
+def _split_orientation(q: np.ndarray) -> tuple[float, np.ndarray, bool]:
+    """The plane's turn of ``q`` (pymunk2d.planar's; imported here, when a 2D hand runs:
+    the pymunk package loads pymunk, which a 3D scene does not need)."""
+    from engine.physics.pymunk2d.planar import split_orientation
+
+    return split_orientation(q)
 
 @dataclass(slots=True, eq=False)
 class PlanarFingers(Fingers):
@@ -134,7 +141,7 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
     sign = 1.0 if quat_to_matrix(q[0])[1, 1] >= 0.0 else -1.0  # the hand's +y: flexion
     # a joint's limits count from the pose it is made in: the straight finger's are
     # moved there (a hand first seen half curled opens as far as an open one)
-    made = flexions(theta, split_orientation(q[0])[0], sign)
+    made = flexions(theta, _split_orientation(q[0])[0], sign)
     radii = np.asarray(sample.radii, dtype=float)
     bones, chain, sizes = [], [], []
     finger_of: dict[int, str] = {}
@@ -170,7 +177,7 @@ def aim(engine: Engine, fingers: PlanarFingers, palm: int, sample: HandJoints,
     p, q = world_joints(sample, frame)
     flat = in_plane(p, fingers.plane_y)
     centres, theta, _ = planar_bones(flat)
-    target = flexions(theta, split_orientation(q[0])[0], fingers.flex_sign)
+    target = flexions(theta, _split_orientation(q[0])[0], fingers.flex_sign)
     previous = fingers.flex
     if previous is not None and sample.timestamp > previous[0]:
         step = np.angle(np.exp(1j * (target - previous[1])))
@@ -233,7 +240,7 @@ def current_flexions(engine: Engine, fingers: PlanarFingers, palm: int) -> np.nd
     quats = np.array([world.component_for_entity(b, Transform).orientation
                       for b in fingers.bones])
     theta = -2.0 * np.arctan2(quats[:, 2], quats[:, 0])
-    palm_theta = split_orientation(world.component_for_entity(palm, Transform).orientation)[0]
+    palm_theta = _split_orientation(world.component_for_entity(palm, Transform).orientation)[0]
     return flexions(theta, palm_theta, fingers.flex_sign)
 
 

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from app.runner import fail, prepare_run
-from engine.app import EngineConfig
+from engine.config import EngineConfig
 from engine.experiments.design import Design, TrialPlan, plan, staircase_trial
 from engine.experiments.ordering import rng_for
 from engine.experiments.session import SessionError, SessionFiles, read_rows

@@ -248,3 +248,24 @@ def test_a_recorded_hand_reads_back_the_same_and_a_short_one_is_refused():
     line["radii"] = line["radii"][:25]
     with pytest.raises(ValueError, match="a list of 26"):
         event_from_record(line)
+
+
+def test_a_hand_first_seen_as_a_fist_opens_flat(tmp_path: Path):
+    """The chain's joint limits are anatomical, not counted from the first sample's pose
+    (a joint's zero is where it was made): a hand first tracked as a fist opens fully."""
+    from services.input.hand_pose import GESTURES, pose_hand
+
+    gaps: list[float] = []
+
+    def opening(t: float) -> Any:
+        curls = {f: max(0.0, 1.0 - t) for f in GESTURES["fist"]}  # fist, opening over 1 s
+        return pose_hand("right", (0, 0, 1), (1, 0, 0, 0), curls, timestamp=t)
+
+    def note(e: Any, ids: dict[str, int]) -> None:
+        if e.time > 1.3:
+            tracked = np.asarray(opening(e.time).positions)[[5, 10, 15, 20, 25]]
+            gaps.append(float(np.linalg.norm(bench.physical_tips(e, ids["hand_r"]) - tracked,
+                                             axis=1).max()))
+
+    bench.run(bench.hand("hand_r", "right"), tmp_path, {"right": opening}, 1.8, note, settle=0)
+    assert gaps and max(gaps) < 0.006  # every fingertip within 6 mm of the open hand's
