@@ -57,6 +57,19 @@ class Key:
         return f"{self.unit}, {self.doc}" if self.doc else self.unit
 
 
+@dataclass(frozen=True, slots=True)
+class Body:
+    """What a block may know of an object it names by ID (a joint's bodies): its pose
+    (position, quaternion) as the scene places it, whether it has a body and whether
+    that body is static, and whether this scene (or snippet) makes it (else it is one of
+    the running world's)."""
+
+    pose: tuple[tuple[float, ...], tuple[float, ...]]
+    physical: bool
+    static: bool
+    here: bool
+
+
 class BuildContext(Protocol):
     """What a block's *build* function may ask of the scene being built."""
 
@@ -111,6 +124,23 @@ class BuildContext(Protocol):
     def suggest(self, name: str, choices: Any) -> str:
         """`` (did you mean 'X'?)`` for the closest of ``choices``; empty if none is."""
 
+    def problem(self, key: str | None, message: str) -> None:
+        """An error at ``key``'s line that leaves out only what it says (the run goes on,
+        as for an asset that failed)."""
+
+    def within_world(self, key: str) -> None:
+        """Tell a point at ``key`` (its first three numbers: x y z) outside the world."""
+
+    def body(self, name: str) -> Body | None:
+        """Object ``name`` as made so far (None: no such object; see :meth:`left_out`)."""
+
+    def left_out(self, name: str) -> bool:
+        """Whether object ``name`` was left out (an asset it needs failed, told)."""
+
+    def join(self, joint: Any, bodies: tuple[str, str | None], skipped: bool = False) -> None:
+        """Make ``joint`` (a Joint) between the objects ``bodies`` names, once they exist;
+        ``skipped`` keeps its place (a body was left out)."""
+
     def sound_file(self, key: str, outcome: str) -> str | None:
         """``key``'s sound file if it can be played; else None, and ``outcome`` (what is
         left out) told as a problem at its line."""
@@ -142,6 +172,9 @@ class BlockDeclaration:
     saves: type | None = None
     save: Save | None = None
     unnamed: str = ""
+    #: A top-level block that makes no entity of its own: its build hands what it makes
+    #: to the context (a joint, a scene-wide setting) and returns nothing.
+    entity: bool = True
 
 
 #: Every declaration made so far, by block name (engine.scene.blocks registers each).

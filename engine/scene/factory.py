@@ -53,9 +53,9 @@ from components.avatar import (
     SavedLayer,
     SavedRequest,
 )
+from components.blocks import Body
 from components.display import binding_problem as display_binding_problem
 from components.hand import HAND_SIZE
-from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, SPRING_KINDS, JointKind, Spring
 from components.script import SavedScript, ScriptHandler, ScriptTimer
 from engine.anomalies import AnomalySpec
 from engine.assets import AssetError, Assets, nodes_name
@@ -75,7 +75,7 @@ from engine.physics.backend import (
     WorldSettings,
     metres,
 )
-from engine.physics.commands import HINGE2_BODIES, TWO_AXES, SetSleepState, parallel
+from engine.physics.commands import SetSleepState
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
 from engine.realtime import STEP_RANGE, STEP_WARNING, TIME_STEP
 from engine.rotation import UNIT_ROUNDING, euler_to_quat, rotate, view_problem
@@ -483,6 +483,27 @@ class _Context:
     def sound_file(self, key: str, outcome: str) -> str | None:
         return self.builder.sound_file(self.reader, key, outcome)
 
+    def problem(self, key: str | None, message: str) -> None:
+        self.builder.told(self._loc(key), message)
+
+    def within_world(self, key: str) -> None:
+        self.builder.inside(self.reader.value(key), key)
+
+    def body(self, name: str) -> Body | None:
+        b = self.builder
+        pose = b.poses.get(name)
+        if pose is None:
+            return None
+        return Body(pose, name in b.physical_ids, name in b.static_ids, name in b.own_poses)
+
+    def left_out(self, name: str) -> bool:
+        return name in self.builder.skipped
+
+    def join(self, joint: Joint, bodies: tuple[str, str | None], skipped: bool = False
+             ) -> None:
+        self.builder.spec.joints.append(JointSpec(self.owner, joint, bodies, self.loc,
+                                                  skipped))
+
 
 class _Builder:
     def __init__(self, folder: Path, report: Reporter, assets: Assets):
@@ -537,11 +558,6 @@ class _Builder:
         spec.materials = self.materials
         for i, blk in enumerate(root.blocks("Object")):
             spec.entities.append(self.object(blk, i))
-        spawned = {es.id for es in spec.entities}
-        for i, blk in enumerate(root.blocks("Joint")):
-            js = self.joint(blk, i, spawned)
-            if js is not None:
-                spec.joints.append(js)
         spec.sleep = self.sleep
         self.shaders(root, spec)
         self.world(root, spec)
@@ -695,6 +711,8 @@ class _Builder:
                 bid = _Reader(blk, block.name)("ID") or block.unnamed or \
                     f"{block.name.lower()}{i}"
                 made = self.declared(block, blk, bid, "Scene", False)
+                if not block.entity:  # its build handed what it made to the context
+                    continue
                 skipped = made is None or (not made and block.hook is not None)
                 parts = [] if skipped and block.hook is not None else [Name(bid), *(made or [])]
                 spec.entities.append(EntitySpec(bid, parts, blk.loc, skipped=skipped))
@@ -1104,105 +1122,6 @@ class _Builder:
                           None if force is None else np.array(_floats(force)),
                           bool(r("RestPreloaded")))
 
-    # -- joints ------------------------------------------------------------
-    def joint(self, blk: Block, index: int, spawned: set[str]) -> JointSpec | None:
-        """The joint; its reference poses are the file's or, when this spec spawns both
-        bodies, their poses now (where they are when the joint is made)."""
-        r = _Reader(blk, "Joint")
-        jid = r("ID") or f"joint{index}"
-        kind = SCENE_JOINT_TYPES[r("Type")]
-        bodies = r("Bodies")
-        a, b = bodies[0], bodies[1] if len(bodies) > 1 else None
-        left_out = [name for name in bodies if name in self.skipped]
-        if left_out:
-            where = r.value("Bodies").loc
-            self.problems.append(Diagnostic(
-                where.path, where.line, where.col, ERROR,
-                f"joint '{jid}' is left out: its body '{left_out[0]}' was (see its error)"))
-            return JointSpec(jid, Joint(kind=kind, id=jid), (a, b), blk.loc, skipped=True)
-        for name in bodies:
-            if name not in self.physical_ids and (
-                    name in self.own_poses or name not in self.poses):
-                self.report.error(r.value("Bodies").loc,
-                                  f"joint body '{name}' has no PhysicalAttributes")
-                return None
-        if b is not None and a == b:
-            self.report.error(r.value("Bodies").loc, f"a joint needs two different bodies, "
-                                                     f"got '{a}' twice (one body alone: "
-                                                     f"Bodies [\"{a}\"] joins it to the world)")
-            return None
-        for key in _AXES_NEEDED.get(kind, ()):
-            axis = r.value(key)
-            if axis is not None and not any(item.data for item in axis.data):
-                self.report.error(axis.loc, f"{key} must not be zero: a {r('Type')} joint "
-                                            "turns or slides along it")
-        if kind in TWO_AXES and any(r("Axis")) and any(r("Axis2")) and \
-                parallel(r("Axis"), r("Axis2")):
-            key, other = ("Axis2", "Axis") if r.has("Axis2") else ("Axis", "Axis2")
-            given = " ".join(f"{x:g}" for x in r(other))
-            self.report.error(r.value(key).loc, f"{key} must not be parallel to {other} "
-                              f"[{given}]{'' if r.has(other) else ' (its default)'}: a "
-                              f"{r('Type')} joint turns about two different axes")
-        if kind == JointKind.HINGE2 and (b is None or {a, b} & self.static_ids):
-            self.report.error(r.value("Bodies").loc, f"{HINGE2_BODIES} (Bodies [\"wheel\" "
-                                                     "\"chassis\"], both dynamic)")
-        self.inside(r.value("Anchor"), "Anchor")
-        for key in ("ReferencePose1", "ReferencePose2"):
-            self.inside(r.value(key), key)
-        linear = kind in LINEAR_KINDS
-        conv = (lambda x: x) if linear else math.radians
-        anchor = _floats(r("Anchor")) if r.has("Anchor") else self.poses[a][0]
-        low, high = r("Low"), r("High")
-
-        def pose(key: str, body: str) -> tuple[float, ...]:
-            return _floats(r(key)) if r.has(key) else (*self.poses[body][0],
-                                                        *self.poses[body][1])
-
-        reference = None
-        if r.has("ReferencePose1") or r.has("ReferencePose2") or {a, b} - {None} <= spawned:
-            reference = (pose("ReferencePose1", a),
-                         None if b is None else pose("ReferencePose2", b))
-        joint = Joint(kind=kind, anchor=anchor, axis=_floats(r("Axis")),
-                      axis2=_floats(r("Axis2")),
-                      low=None if low is None else conv(low),
-                      high=None if high is None else conv(high),
-                      motor_velocity=conv(r("MotorVelocity")),
-                      motor_max_force=float(r("MotorMaxForce")), id=jid, reference=reference,
-                      spring=self.spring(r, kind))
-        return JointSpec(jid, joint, (a, b), blk.loc)
-
-    def spring(self, r: _Reader, kind: str) -> Spring | None:
-        """The joint's ``Spring`` block in the engine's units (per radian), or None (told
-        when it cannot act: a joint without one free axis, nothing to pull with)."""
-        blk = r.value("Spring")
-        if blk is None or blk.kind != STRUCTURE:
-            return None
-        s = _Reader(blk.data, "Spring")
-        if kind not in SPRING_KINDS:
-            self.report.error(blk.loc, f"a {r('Type')} joint takes no Spring (Hinge, "
-                                       f"MotorizedHinge and Slider do: one free axis)")
-            return None
-        bad = False
-        for key in ("Stiffness", "Damping"):
-            if not 0 <= s(key) < math.inf:
-                self.report.error(s.value(key).loc, f"Spring {key} must be 0 or more, got "
-                                                    f"{s(key):g}")
-                bad = True
-        most = s("MaxForce")
-        if most is not None and not most > 0:
-            self.report.error(s.value("MaxForce").loc, f"Spring MaxForce must be above 0, "
-                                                       f"got {most:g}")
-            bad = True
-        if not bad and s("Stiffness") == 0 and s("Damping") == 0:
-            self.report.error(blk.loc, "a Spring needs a Stiffness or a Damping above 0")
-            bad = True
-        if bad:
-            return None
-        per = 1.0 if kind in LINEAR_KINDS else math.degrees(1.0)  # per degree -> per radian
-        return Spring(float(s("Stiffness")) * per, float(s("Damping")) * per,
-                      float(s("Target")) if kind in LINEAR_KINDS else math.radians(s("Target")),
-                      math.inf if most is None else float(most))
-
     # -- shaders, world, scene-level entities ---------------------------------
     def shaders(self, root: _Index, spec: SceneSpec) -> None:
         files = {}
@@ -1403,14 +1322,6 @@ class _Builder:
             states[owner] = SavedScript(str(r("Globals")), str(r("Locals")), timers, handlers)
             self.script_blocks[owner] = blk
         return states
-
-
-#: The axes a joint kind turns or slides along (a zero one is an error).
-_AXES_NEEDED = {
-    JointKind.HINGE: ("Axis",), JointKind.MOTORIZED_HINGE: ("Axis",),
-    JointKind.SLIDER: ("Axis",), JointKind.UNIVERSAL: ("Axis", "Axis2"),
-    JointKind.HINGE2: ("Axis", "Axis2"),
-}
 
 
 def _positive(value: float, default: float) -> float:

@@ -87,7 +87,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Material": _f(STRUCT_T, doc="surface properties", repeat=True, struct="Material"),
         "MaterialPair": _f(STRUCT_T, doc="contact parameters for two materials", repeat=True,
                            struct="MaterialPair"),
-        "Joint": _f(STRUCT_T, doc="a constraint between bodies", repeat=True, struct="Joint"),
         "VertexShader": _f(STRUCT_T, None,
                            "a GLSL vertex shader file (see docs/GLSL.md)", repeat=True,
                            struct="VertexShader"),
@@ -261,35 +260,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Bounce": _f(FLOAT_T, None, "restitution for this pair, 0..1"),
         "Softness": _f(FLOAT_T, None, "contact softness for this pair"),
         "Collide": _f(BOOL_T, 1, "0: the two materials pass through each other"),
-    },
-    "Joint": {
-        "ID": _id("joint"),
-        "Type": _f(ENUM_T, None, "the kind of constraint", required=True, allowed=JOINT_TYPES),
-        "Bodies": _f(STRINGVECTOR_T, None, "one object (jointed to the world) or two",
-                     required=True, ref="Object", lengths=(1, 2)),
-        "Anchor": _f(VEC3_T, None, "m, world frame, with the bodies at their reference poses "
-                     "(default: first body's position)"),
-        "Axis": _f(VEC3_T, (0.0, 0.0, 1.0), "hinge, slider or first axis, world frame"),
-        "Axis2": _f(VEC3_T, (0.0, 1.0, 0.0), "second axis (Universal, Hinge2), world frame"),
-        "Low": _f(FLOAT_T, None, "lower limit: degrees, or m for a slider"),
-        "High": _f(FLOAT_T, None, "upper limit: degrees, or m for a slider"),
-        "MotorVelocity": _f(FLOAT_T, 0.0, "deg/s, or m/s for a slider"),
-        "MotorMaxForce": _f(FLOAT_T, 0.0, "N*m, or N for a slider"),
-        "ReferencePose1": _f(VECTOR_T, None, "[x y z qw qx qy qz] (m, quaternion): the first "
-                             "body's pose when the joint was first made; Anchor and axes are "
-                             "as they were then (default: the body's own pose)", lengths=(7,)),
-        "ReferencePose2": _f(VECTOR_T, None, "the same for the second body", lengths=(7,)),
-        "Spring": _f(STRUCT_T, None, "a spring-damper on a Hinge's, MotorizedHinge's or "
-                     "Slider's free axis (beside its limits and motor)", struct="Spring"),
-    },
-    "Spring": {
-        "Stiffness": _f(FLOAT_T, 0.0, "N*m per degree, or N/m for a slider: its pull toward "
-                        "Target"),
-        "Damping": _f(FLOAT_T, 0.0, "N*m per deg/s, or N per m/s: how it resists the joint's "
-                      "rate (alone, without Stiffness: a damper)"),
-        "Target": _f(FLOAT_T, 0.0, "degrees, or m for a slider, counted as Low and High are "
-                     "(0: where the joint was made)"),
-        "MaxForce": _f(FLOAT_T, None, "N*m, or N: the most it pulls with (default: no bound)"),
     },
     "VertexShader": {
         "ID": _id("vertex shader", True),
