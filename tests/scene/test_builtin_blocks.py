@@ -113,3 +113,28 @@ def test_a_declaration_in_no_known_place_is_refused() -> None:
         declare(BlockDeclaration("Joint", (), _brake))
     with pytest.raises(BlockError, match="no type"):
         declare(BlockDeclaration("Odd", (Key("X", "color"),), _brake))
+
+
+def test_a_joint_is_a_declared_block_that_makes_no_entity_of_its_own(tmp_path: Path) -> None:
+    """Joint goes through the registry (entity=False): its build hands the context a
+    joint between bodies by ID, with the bodies' poses as reference, and a saved state
+    writes it back under the ID its place gave it."""
+    text = ('Object { ID "a" Position [0 0 1] PhysicalAttributes { Mass 1 } }\n'
+            'Object { ID "b" Position [1 0 1] PhysicalAttributes { Mass 1 } }\n'
+            'Joint { Type "Hinge" Bodies ["a" "b"] Low -30 }\n')
+    joint = BLOCKS["Joint"]
+    assert builtin(joint) and not joint.entity and "Joint" in sc.SCHEMAS["Scene"]
+    spec = spec_from_text(text, tmp_path, np.random.default_rng(1),
+                          path=str(tmp_path / "m.scene"))
+    assert [e.id for e in spec.entities] == ["a", "b"]
+    (js,) = spec.joints
+    assert (js.id, js.bodies, js.joint.low) == ("joint0", ("a", "b"), pytest.approx(-np.pi / 6))
+    assert js.joint.reference == ((0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0),
+                                  (1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0))
+    with create_engine(EngineConfig(fast=True)) as engine:
+        instantiate(engine, spec)
+        saved = write_state(engine)
+    assert 'ID "joint0"' in saved
+    with pytest.raises(SceneError, match="no PhysicalAttributes"):
+        spec_from_text(text.replace("PhysicalAttributes { Mass 1 }", "VisualAttributes { }", 1),
+                       tmp_path)
