@@ -124,15 +124,19 @@ class BuildContext(Protocol):
     def suggest(self, name: str, choices: Any) -> str:
         """`` (did you mean 'X'?)`` for the closest of ``choices``; empty if none is."""
 
-    def problem(self, key: str | None, message: str) -> None:
-        """An error at ``key``'s line that leaves out only what it says (the run goes on,
-        as for an asset that failed)."""
+    def problem(self, key: str | None, message: str, warning: bool = False) -> None:
+        """An error (or ``warning``) at ``key``'s line that leaves out only what it says:
+        listed with the scene's problems, the run goes on (as for an asset that failed)."""
 
     def within_world(self, key: str) -> None:
         """Tell a point at ``key`` (its first three numbers: x y z) outside the world."""
 
     def body(self, name: str) -> Body | None:
         """Object ``name`` as made so far (None: no such object; see :meth:`left_out`)."""
+
+    def view_problem(self, forward: tuple[float, ...]) -> str | None:
+        """What is wrong with a view along ``forward`` (None: nothing): engine.rotation's
+        check, lent here because a component module cannot import it."""
 
     def left_out(self, name: str) -> bool:
         """Whether object ``name`` was left out (an asset it needs failed, told)."""

@@ -30,7 +30,6 @@ import engine.scene.random_state as random_state
 import engine.scene.schema as sc
 from components import (
     Avatar,
-    Camera,
     ClipSpec,
     Graspable,
     Hold,
@@ -191,7 +190,6 @@ class SceneSpec:
     time: float = 0.0
     #: The scene's random generator when a saved state was written (see random_state).
     random_state: dict[str, object] | None = None
-    camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
     #: References by ID that declared blocks made, set once the entities exist.
     links: list[Link] = field(default_factory=list)
     #: Object ID -> sleep-rule state a saved state carries (see :class:`SleepState`).
@@ -483,8 +481,8 @@ class _Context:
     def sound_file(self, key: str, outcome: str) -> str | None:
         return self.builder.sound_file(self.reader, key, outcome)
 
-    def problem(self, key: str | None, message: str) -> None:
-        self.builder.told(self._loc(key), message)
+    def problem(self, key: str | None, message: str, warning: bool = False) -> None:
+        self.builder.told(self._loc(key), message, WARNING if warning else ERROR)
 
     def within_world(self, key: str) -> None:
         self.builder.inside(self.reader.value(key), key)
@@ -495,6 +493,9 @@ class _Context:
         if pose is None:
             return None
         return Body(pose, name in b.physical_ids, name in b.static_ids, name in b.own_poses)
+
+    def view_problem(self, forward: tuple[float, ...]) -> str | None:
+        return view_problem(forward)
 
     def left_out(self, name: str) -> bool:
         return name in self.builder.skipped
@@ -1258,23 +1259,6 @@ class _Builder:
                 f"{STEP_WARNING:g} s ({TIME_STEP:g} is the default)"))
 
     def scene_entities(self, root: _Index, spec: SceneSpec) -> None:
-        for i, b in enumerate(root.blocks("Camera")):
-            r = _Reader(b, "Camera")
-            cid = r("ID") or f"camera{i}"
-            if r.has("Follow") and r("Follow") in self.skipped:
-                where = r.value("Follow").loc
-                self.problems.append(Diagnostic(
-                    where.path, where.line, where.col, ERROR,
-                    f"camera '{cid}' follows nothing: object '{r('Follow')}' was left out"))
-            elif r.has("Follow"):
-                spec.camera_follow[cid] = r("Follow")
-            self.camera_view(r, cid, b)
-            cam = Camera(fov=float(r("Fov")), near=float(r("Near")), far=float(r("Far")),
-                         active=bool(r("Active")), offset=_floats(r("Offset")),
-                         look_at=_floats(r("LookAt")),
-                         eye_separation=float(r("EyeSeparation")))
-            spec.entities.append(EntitySpec(cid, [Name(cid), Transform(r("Position")), cam],
-                                            b.loc))
         for b in root.blocks("Measure"):
             r = _Reader(b, "Measure")
             spec.measures.append(MeasureSpec(r("ID"), r("Object"), r("Value")))
@@ -1291,23 +1275,6 @@ class _Builder:
                 self.problems.append(Diagnostic(
                     block.loc.path, block.loc.line, block.loc.col, WARNING,
                     f"ScriptState for {owner!r}, which runs no script here; ignored"))
-
-    def camera_view(self, r: _Reader, cid: str, blk: Block) -> None:
-        """Warn about a camera with no well-defined view direction (the picture and the
-        3D sound listener follow it): LookAt at its eye, or straight along Z."""
-        if r.has("Follow"):  # LookAt and Offset are in the followed object's frame
-            if not r.has("LookAt"):
-                return  # it takes the object's orientation
-            eye = r("Offset")
-        else:
-            eye = r("Position")
-        problem = view_problem(np.subtract(r("LookAt"), eye))
-        if problem is not None:
-            where = (r.value("LookAt") or r.value("Position") or blk).loc
-            self.problems.append(Diagnostic(
-                where.path, where.line, where.col, WARNING,
-                f"camera '{cid}': {problem}; the view is meaningless and 3D sound unpanned: "
-                "move its LookAt (or Position) so it looks across, not along, Z"))
 
     def saved_scripts(self, root: _Index) -> dict[str, SavedScript]:
         """Owner -> the saved state its script resumes from (a loaded saved state)."""
@@ -1408,9 +1375,6 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     with paused_gc():
         entities = engine.spawn_many([es.components for es in made])
     ids = dict(zip([es.id for es in made], entities, strict=True))
-    for cam_id, target in spec.camera_follow.items():
-        cam = engine.world.component_for_entity(ids[cam_id], Camera)
-        cam.follow = ids[target]
     for link in spec.links:
         if link.entity in ids and link.target in ids:
             setattr(engine.world.component_for_entity(ids[link.entity], link.component),

@@ -52,7 +52,6 @@ _EXAMPLES: dict[tuple[str, str], str] = {
     ("ShaderProgram", "FragmentShader"): '"toon_fragment"',
     ("ShaderState", "ID"): '"toon"', ("ShaderState", "ShaderProgram"): '"toon"',
     ("Uniform", "ID"): '"DiffuseColor"', ("Uniform", "Value"): "[0 0.25 1]",
-    ("Camera", "ID"): '"main"', ("Camera", "Follow"): '"ball"',
     ("World", "SolverSeed"): "2767133776",
     ("World", "Time"): "2.0",
     ("ScriptState", "Owner"): '"ball"', ("ScriptState", "Globals"): '"{score = 3}"',
