@@ -124,12 +124,33 @@ class BuildContext(Protocol):
     def suggest(self, name: str, choices: Any) -> str:
         """`` (did you mean 'X'?)`` for the closest of ``choices``; empty if none is."""
 
-    def problem(self, key: str | None, message: str, warning: bool = False) -> None:
-        """An error (or ``warning``) at ``key``'s line that leaves out only what it says:
-        listed with the scene's problems, the run goes on (as for an asset that failed)."""
+    def problem(self, key: str | None, message: str, warning: bool = False,
+                item: int | None = None) -> None:
+        """An error (or ``warning``) at ``key``'s line (at its ``item``-th value, where
+        given) that leaves out only what it says: listed with the scene's problems, the
+        run goes on (as for an asset that failed)."""
 
-    def within_world(self, key: str) -> None:
-        """Tell a point at ``key`` (its first three numbers: x y z) outside the world."""
+    def within_world(self, key: str, points: bool = False) -> None:
+        """Tell a point at ``key`` (its first three numbers: x y z; with ``points``, every
+        three numbers) outside the world."""
+
+    def orientation(self) -> tuple[float, ...]:
+        """The block's exact ``Quaternion`` where one is written, else its ``Orientation``
+        (Euler degrees), as a unit quaternion."""
+
+    def quaternion(self, key: str) -> tuple[float, ...]:
+        """``key`` as a unit quaternion; all zeros is told (and the identity taken)."""
+
+    def skinned_model(self, key: str, outcome: str) -> Any | None:
+        """``key``'s skinned model (engine.assets.skinned) if it can be read; else None,
+        and ``outcome`` (what is left out) told as a problem."""
+
+    def saved(self, block: str, owner: str) -> tuple[Mapping[str, Any], BuildContext] | None:
+        """The top-level ``block`` (a saved state's, such as AvatarState) whose Owner is
+        ``owner``, taken: its values and a context telling at its lines; None if none."""
+
+    def saved_script(self, owner: str) -> Any:
+        """The saved state (SavedScript) ``owner``'s script resumes from, taken; or None."""
 
     def body(self, name: str) -> Body | None:
         """Object ``name`` as made so far (None: no such object; see :meth:`left_out`)."""

@@ -29,10 +29,7 @@ import engine.scene.blocks as blocks
 import engine.scene.random_state as random_state
 import engine.scene.schema as sc
 from components import (
-    Avatar,
-    ClipSpec,
     Graspable,
-    Hold,
     Joint,
     MaterialProps,
     Name,
@@ -43,14 +40,6 @@ from components import (
     Trigger,
     UserOwned,
     Visual,
-)
-from components.avatar import (
-    SavedAvatar,
-    SavedDrive,
-    SavedGroup,
-    SavedHold,
-    SavedLayer,
-    SavedRequest,
 )
 from components.blocks import Body
 from components.display import binding_problem as display_binding_problem
@@ -349,18 +338,6 @@ class _Index:
         return found[-1].value if found else None
 
 
-def _below(parents: Any, node: int | None, ancestor: int | None) -> bool:
-    """Whether ``node`` lies in the subtree under ``ancestor`` (not ``ancestor`` itself)."""
-    if node is None or ancestor is None:
-        return False
-    node = int(parents[node])
-    while node >= 0:
-        if node == ancestor:
-            return True
-        node = int(parents[node])
-    return False
-
-
 def _floats(t: Any) -> tuple[float, ...]:
     return tuple(map(float, t))
 
@@ -481,11 +458,44 @@ class _Context:
     def sound_file(self, key: str, outcome: str) -> str | None:
         return self.builder.sound_file(self.reader, key, outcome)
 
-    def problem(self, key: str | None, message: str, warning: bool = False) -> None:
-        self.builder.told(self._loc(key), message, WARNING if warning else ERROR)
+    def problem(self, key: str | None, message: str, warning: bool = False,
+                item: int | None = None) -> None:
+        written = None if key is None or item is None else self.reader.value(key)
+        where = self._loc(key) if written is None else written.data[item].loc
+        self.builder.told(where, message, WARNING if warning else ERROR)
 
-    def within_world(self, key: str) -> None:
-        self.builder.inside(self.reader.value(key), key)
+    def within_world(self, key: str, points: bool = False) -> None:
+        value = self.reader.value(key)
+        if not points or value is None:
+            self.builder.inside(value, key)
+            return
+        items = value.data
+        for k in range(0, len(items) - 2, 3):  # each point x y z within the world
+            self.builder.inside(Value(VECTOR, items[k:k + 3], items[k].loc), f"{key} point")
+
+    def orientation(self) -> tuple[float, ...]:
+        return self.builder.orientation(self.reader)
+
+    def quaternion(self, key: str) -> tuple[float, ...]:
+        return self.builder.quaternion(self.reader, key)
+
+    def skinned_model(self, key: str, outcome: str) -> Any | None:
+        b = self.builder
+        try:
+            return b.assets.skinned(self.reader(key), self._loc(key), b.folder)
+        except AssetError as exc:
+            b.problem(exc, outcome)
+            return None
+
+    def saved(self, block: str, owner: str) -> tuple[Mapping[str, Any], _Context] | None:
+        found = self.builder.saved_blocks(block).pop(owner, None)
+        if found is None:
+            return None
+        r = _Reader(found, block)
+        return r, self.at(r, found.loc)
+
+    def saved_script(self, owner: str) -> Any:
+        return self.builder.script_states.pop(owner, None)
 
     def body(self, name: str) -> Body | None:
         b = self.builder
@@ -532,8 +542,9 @@ class _Builder:
         self.extent: float | None = None
         #: What is built so far (declared blocks' links and headset check read it).
         self.spec = SceneSpec()
-        #: Avatar ID -> the AvatarState block it resumes from (a loaded saved state).
-        self.avatar_states: dict[str, Block] = {}
+        #: Saved-state block kind -> owner ID -> the block it resumes from (taken).
+        self.owned: dict[str, dict[str, Block]] = {}
+        self.root: _Index | None = None
 
     def build(self, db: SceneDB) -> SceneSpec:
         spec = self.spec = SceneSpec()
@@ -541,8 +552,7 @@ class _Builder:
         if self.extent is None:
             self.extent = self.world_extent(root)
         self.script_states = self.saved_scripts(root)
-        self.avatar_states = {str(_Reader(b, "AvatarState")("Owner")): b
-                              for b in root.blocks("AvatarState")}
+        self.root, self.owned = root, {}
         for blk in root.blocks("Material"):
             r = _Reader(blk, "Material")
             name = str(r("ID"))
@@ -567,10 +577,15 @@ class _Builder:
         spec.anomalies = read_anomalies(root.blocks, self.report, self.problems)
         spec.experiment = read_experiment(db.root, self.report, spec.anomalies, self.folder)
         self.check_input_names(spec.input)
-        for i, blk in enumerate(root.blocks("Avatar")):
-            spec.entities.append(self.avatar(blk, i))
         self.unclaimed_script_states()
         return spec
+
+    def saved_blocks(self, kind: str) -> dict[str, Block]:
+        """Owner ID -> the top-level ``kind`` block (a saved state's) about it."""
+        if kind not in self.owned:
+            blks = [] if self.root is None else self.root.blocks(kind)
+            self.owned[kind] = {str(_Reader(b, kind)("Owner")): b for b in blks}
+        return self.owned[kind]
 
     # -- assets --------------------------------------------------------------
     def problem(self, error: AssetError, outcome: str) -> None:
@@ -904,199 +919,9 @@ class _Builder:
                                    lambda: _model_shape(model.triangles(), scale, method), loc)
         return _copy_shape(made)
 
-    # -- avatars -------------------------------------------------------------
     def told(self, loc: Loc, message: str, severity: str = ERROR) -> None:
         """A problem with a model's content (not the text): told, the run goes on."""
         self.problems.append(Diagnostic(loc.path, loc.line, loc.col, severity, message))
-
-    def avatar(self, blk: Block, index: int) -> EntitySpec:
-        """An avatar's components; left out (told) when its model cannot be read or has
-        no skin. Names of clips and bones the model lacks are told and ignored."""
-        r = _Reader(blk, "Avatar")
-        aid = r("ID") or f"avatar{index}"
-        file, where = r("Model"), r.value("Model").loc
-        try:
-            model = self.assets.skinned(file, where, self.folder)
-        except AssetError as exc:
-            self.problem(exc, f"avatar '{aid}' is left out")
-            return EntitySpec(aid, [], blk.loc, skipped=True)
-        if not model.skin_count:
-            self.told(where, f'model "{file}" has no skin (no joints to animate); use it in an '
-                             f"Object instead; avatar '{aid}' is left out")
-            return EntitySpec(aid, [], blk.loc, skipped=True)
-        for warning in model.warnings:
-            self.told(where, f'model "{file}": {warning}', WARNING)
-
-        def clip(name: str, loc: Loc) -> bool:
-            if model.clip(name) is not None:
-                return True
-            names = ", ".join(model.clip_names) or "none"
-            self.told(loc, f'model "{file}" has no clip "{name}"{suggest(name, model.clip_names)}'
-                           f" (its clips: {names}); it is not played")
-            return False
-
-        def bone(name: str, loc: Loc) -> bool:
-            if model.node(name) is not None:
-                return True
-            self.told(loc, f'model "{file}" has no bone "{name}"'
-                           f"{suggest(name, model.node_names)}")
-            return False
-
-        first = r("Animation") if r.has("Animation") and clip(
-            r("Animation"), r.value("Animation").loc) else None
-        blend = dict(self.weights(r, "Blend", clip)) if r.has("Blend") else {}
-        queue = [n for n, item in zip(r("Queue") or (), r.value("Queue").data if r.has(
-            "Queue") else (), strict=True) if clip(n, item.loc)]
-        clips = []
-        for b in r.blocks("Clip"):
-            c = _Reader(b, "Clip")
-            if clip(c("Name"), c.value("Name").loc):
-                clips.append(ClipSpec(c("Name"), float(c("Speed")), bool(c("Loop")),
-                                      _opt(c("GroundSpeed"))))
-        legs = []
-        if r.has("FootIK"):
-            bones, items = r("FootIK"), r.value("FootIK").data
-            if len(bones) % 3:
-                self.report.error(r.value("FootIK").loc, f"FootIK names bones in threes (hip, "
-                                  f"knee, ankle), got {len(bones)}")
-            for k in range(0, len(bones) - len(bones) % 3, 3):
-                if not all([bone(bones[k + j], items[k + j].loc) for j in range(3)]):
-                    continue
-                hip, knee, ankle = (model.node(bones[k + j]) for j in range(3))
-                for upper, lower, j in ((hip, knee, 1), (knee, ankle, 2)):
-                    if not _below(model.parents, lower, upper):
-                        self.told(items[k + j].loc, f'"{bones[k + j]}" does not hang below '
-                                  f'"{bones[k + j - 1]}" in model "{file}": a leg is hip, knee, '
-                                  "ankle, each below the one before; that leg is left out")
-                        break
-                else:
-                    legs.append((bones[k], bones[k + 1], bones[k + 2]))
-        self.inside(r.value("Position"), "Position")
-        path = self.points(r, "Path")
-        holds = []
-        for b in r.blocks("Hold"):
-            h = _Reader(b, "Hold")
-            if bone(h("Bone"), h.value("Bone").loc):
-                holds.append(Hold(h("Bone"), h("Object"), _floats(h("Offset")),
-                                  euler_to_quat(h("Orientation"))))
-        capsule = None
-        if r.has("Capsule"):
-            diameter, length = _floats(r("Capsule"))
-            if diameter <= 0 or length < 0:
-                self.report.error(r.value("Capsule").loc, "Capsule is [diameter length], "
-                                                          "positive")
-            capsule = (diameter / 2, length)
-        for key in ("Scale", "Speed", "Fade", "StepHeight", "Smoothing", "TurnRate"):
-            if r(key) is not None and (r(key) < 0 or (key == "Scale" and r(key) == 0)):
-                self.report.error(r.value(key).loc, f"{key} must be positive, got {r(key)}")
-        scale = float(r("Scale"))
-        state = self.avatar_states.pop(aid, None)
-        avatar = Avatar(model=file, scale=scale, clip=first,
-                        loop=None if r("Loop") is None else bool(r("Loop")),
-                        speed=_opt(r("Speed")), blend=blend, queue=queue, fade=float(r("Fade")),
-                        clips=clips, ground_follow=bool(r("GroundFollow")),
-                        step_height=float(r("StepHeight")), smoothing=float(r("Smoothing")),
-                        foot_ik=legs, path=path, path_loop=bool(r("PathLoop")),
-                        turn_rate=math.radians(float(r("TurnRate"))), capsule=capsule,
-                        holds=holds, saved=None if state is None else self.saved_avatar(
-                            state, clip, bone))
-        visual = Visual(model=file, scale=(scale,) * 3, color=_color(r("Color")),
-                        shader_state=r("ShaderState"), shadower=bool(r("Shadower")),
-                        shadowed=bool(r("Shadowed")))
-        comps: list[Any] = [Name(aid), Transform(_floats(r("Position")), self.orientation(r)),
-                            visual, avatar]
-        if r.has("User"):
-            comps.append(UserOwned(r("User")))
-        if r.has("Script"):
-            comps.append(Script(file=r("Script"), saved=self.script_states.pop(aid, None)))
-        return EntitySpec(aid, comps, blk.loc)
-
-    def weights(self, r: _Reader, key: str, clip: Callable[[str, Loc], bool]
-                ) -> list[tuple[str, float]]:
-        """Clips named by ``key`` with their ``Weights`` (1 each by default); clips the
-        model lacks are told (``clip``) and left out."""
-        names, weights = r(key), r("Weights") or (1.0,) * len(r(key))
-        if len(weights) != len(names):
-            self.report.error(r.value("Weights").loc if r.has("Weights") else r.value(key).loc,
-                              f"Weights has {len(weights)} numbers for {len(names)} {key} "
-                              "clips")
-        return [(n, float(w)) for n, w, item in zip(names, weights, r.value(key).data,
-                                                     strict=False) if clip(n, item.loc)]
-
-    def points(self, r: _Reader, key: str) -> list[tuple[float, float, float]]:
-        """A path: ``r(key)`` as points [x y z ...]."""
-        if not r.has(key):
-            return []
-        items = r.value(key).data
-        for k in range(0, len(items) - 2, 3):  # each point x y z within the world
-            self.inside(Value(VECTOR, items[k:k + 3], items[k].loc), f"{key} point")
-        flat = _floats(r(key))
-        if len(flat) % 3:
-            self.report.error(r.value(key).loc, f"{key} is points [x y z ...], got {len(flat)} "
-                                                "numbers")
-        return [(flat[k], flat[k + 1], flat[k + 2]) for k in range(0, len(flat) - 2, 3)]
-
-    def not_negative(self, r: _Reader, *keys: str) -> None:
-        for key in keys:
-            if r(key) is not None and not r(key) >= 0:
-                self.report.error(r.value(key).loc, f"{key} must not be negative, got {r(key)}")
-
-    def saved_avatar(self, blk: Block, clip: Callable[[str, Loc], bool],
-                     bone: Callable[[str, Loc], bool]) -> SavedAvatar:
-        """An ``AvatarState`` as its avatar resumes from it. Clips and bones its model
-        lacks are told and left out; numbers out of range are errors."""
-        r = _Reader(blk, "AvatarState")
-        groups = []
-        for b in r.blocks("Group"):
-            g = _Reader(b, "AnimationGroup")
-            if not 0.0 <= g("Phase") <= 1.0:
-                self.report.error(g.value("Phase").loc, f"Phase is 0..1, got {g('Phase')}")
-            layers = []
-            for lb in g.blocks("Layer"):
-                c = _Reader(lb, "AnimationLayer")
-                self.not_negative(c, "Speed", "Weight", "FadeFrom", "FadeTo", "FadeTime",
-                                  "FadeLength")
-                if clip(c("Clip"), c.value("Clip").loc):
-                    layers.append(SavedLayer(c("Clip"), float(c("Speed")), float(c("Weight")),
-                                             float(c("FadeFrom")), float(c("FadeTo")),
-                                             float(c("FadeTime")), float(c("FadeLength"))))
-            if layers:
-                groups.append(SavedGroup(tuple(layers), float(g("Phase")), bool(g("Loop")),
-                                         bool(g("Ended")), bool(g("Current"))))
-        queue = []
-        for b in r.blocks("Queued"):
-            q = _Reader(b, "AnimationRequest")
-            self.not_negative(q, "Fade", "Speed")
-            weights = self.weights(q, "Clips", clip)
-            if weights:
-                queue.append(SavedRequest(tuple(weights), float(q("Fade")), _opt(q("Speed")),
-                                          None if q("Loop") is None else bool(q("Loop"))))
-        path = self.points(r, "Path")
-        if not 0 <= r("Waypoint") <= len(path):
-            self.report.error(r.value("Waypoint").loc, f"Waypoint is a point of Path (0 to "
-                              f"{len(path)}), got {r('Waypoint')}")
-        holds = []
-        for b in r.blocks("Hold"):
-            h = _Reader(b, "HeldState")
-            if bone(h("Bone"), h.value("Bone").loc):
-                holds.append(SavedHold(Hold(h("Bone"), h("Object"), _floats(h("Offset")),
-                                            self.quaternion(h, "Quaternion")),
-                                       None if h("Last") is None else _floats(h("Last"))))
-        drives = []
-        for b in r.blocks("Drive"):
-            d = _Reader(b, "BoneDrive")
-            if bone(d("Bone"), d.value("Bone").loc):
-                drives.append(SavedDrive(d("Bone"), _floats(d("Position")),
-                                         self.quaternion(d, "Quaternion")))
-        capsule = None
-        if r.has("CapsulePosition"):
-            turn = self.quaternion(r, "CapsuleQuaternion") if r.has("CapsuleQuaternion") \
-                else _IDENTITY
-            capsule = (_floats(r("CapsulePosition")), turn)
-        return SavedAvatar(tuple(groups), tuple(queue), tuple(path), bool(r("PathLoop")),
-                           int(r("Waypoint")), _opt(r("Ground")),
-                           None if r("GroundAt") is None else _floats(r("GroundAt")),
-                           float(r("StepOffset")), tuple(holds), tuple(drives), capsule)
 
     def sleep_spec(self, r: _Reader) -> SleepState:
         """An object's saved sleep-rule state, so a loaded state falls asleep on time."""

@@ -102,8 +102,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                       "measures, colosseum sweep's table)", repeat=True, struct="Measure"),
         "Script": _f(ASSET_T, doc="a Lua script run for the whole scene", repeat=True),
         "World": _f(STRUCT_T, doc="dynamics settings", struct="World"),
-        "Avatar": _f(STRUCT_T, doc="a skinned, animated figure (glTF)", repeat=True,
-                     struct="Avatar"),
         "Model": _f(STRUCT_T, doc="a model file (glTF, Collada) whose bodies, joints and "
                     "materials join the scene", repeat=True, struct="Model"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
@@ -405,60 +403,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     "ScriptHandler": {
         "Event": _f(STRING_T, None, "the custom event's name (on(name, fn))", required=True),
         "Function": _f(STRING_T, None, "the name of the function it calls", required=True),
-    },
-    "Avatar": {
-        "ID": _id("avatar"),
-        "User": _f(STRING_T, None, "the user (colosseum join --user NAME) it stands for — an "
-                   "avatar, a wheelchair, hands: a server takes it out of the world "
-                   "--leave-after s after that user's node leaves, unless the user comes "
-                   "back"),
-        "Model": _f(ASSET_T, None, ".glb or .gltf with a skin (Blender, Maya, Mixamo exports)",
-                    required=True),
-        "Position": _f(VEC3_T, (0.0, 0.0, 0.0), "m, where its feet stand"),
-        "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees; unturned it faces +Y"),
-        "Quaternion": _f(VECTOR_T, None, "exact orientation [w x y z]; wins over Orientation",
-                         lengths=(4,)),
-        "Scale": _f(FLOAT_T, 1.0, "uniform scale of the model"),
-        "Animation": _f(STRING_T, None, "clip played first"),
-        "Loop": _f(BOOL_T, None, "1: the first clip loops, 0: it does not (default: as its "
-                   "Clip block says, else 1)"),
-        "Speed": _f(FLOAT_T, None, "playback rate of the first clip (default: its Clip "
-                    "block's Speed, else 1)"),
-        "Blend": _f(STRINGVECTOR_T, None, "clips played at once from the start (with Weights)"),
-        "Weights": _f(VECTOR_T, None, "weight of each Blend clip"),
-        "Queue": _f(STRINGVECTOR_T, None, "clips played in turn when the first one ends"),
-        "Fade": _f(FLOAT_T, 0.2, "s, default crossfade between clips"),
-        "Clip": _f(STRUCT_T, doc="how one clip plays", repeat=True, struct="Clip"),
-        "GroundFollow": _f(BOOL_T, 0, "keep the feet on the ground below (ray casts)"),
-        "StepHeight": _f(FLOAT_T, 0.5, "m, highest step it walks up"),
-        "Smoothing": _f(FLOAT_T, 0.1, "s, how fast a step up or down is taken"),
-        "FootIK": _f(STRINGVECTOR_T, None, "bone triples [hip knee ankle ...] whose feet meet "
-                     "slopes and steps"),
-        "Path": _f(VECTOR_T, None, "m, points [x y z x y z ...] walked in turn"),
-        "PathLoop": _f(BOOL_T, 1, "after the last point, walk back to the first"),
-        "TurnRate": _f(FLOAT_T, 180.0, "deg/s, how fast it turns toward the next point"),
-        "Capsule": _f(VECTOR_T, None, "[diameter length] m: a kinematic body dynamic objects "
-                      "bump into", lengths=(2,)),
-        "Hold": _f(STRUCT_T, doc="an object carried by a bone", repeat=True, struct="Hold"),
-        "Color": _f(VECTOR_T, (1.0, 1.0, 1.0, 1.0), "RGB or RGBA, 0..1, times the model's",
-                    lengths=(3, 4)),
-        "ShaderState": _f(REF_T, None, "the shader state it is drawn with", ref="ShaderState"),
-        "Shadower": _f(BOOL_T, 1, "casts shadows"),
-        "Shadowed": _f(BOOL_T, 1, "receives shadows"),
-        "Script": _f(ASSET_T, doc="Lua script attached to this avatar"),
-    },
-    "Clip": {
-        "Name": _f(STRING_T, None, "the clip's name in the model", required=True),
-        "Speed": _f(FLOAT_T, 1.0, "playback rate"),
-        "Loop": _f(BOOL_T, 1, "1: the clip starts again when it ends; 0: it holds its last pose"),
-        "GroundSpeed": _f(FLOAT_T, None, "m/s it walks at speed 1 (default: measured from the "
-                          "clip's root motion)"),
-    },
-    "Hold": {
-        "Object": _f(REF_T, None, "the object carried", required=True, ref="Object"),
-        "Bone": _f(STRING_T, None, "the bone (node name) holding it", required=True),
-        "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, in the bone's frame"),
-        "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees, in the bone's frame"),
     },
     # -- saved avatars (written by --save-state; engine.scene.snapshot) --
     "AvatarState": {
