@@ -149,6 +149,17 @@ class BuildContext(Protocol):
         """The top-level ``block`` (a saved state's, such as AvatarState) whose Owner is
         ``owner``, taken: its values and a context telling at its lines; None if none."""
 
+    def claim(self, kind: str, name: str) -> str | None:
+        """Claim the scene-wide ``name`` of ``kind`` (an anomaly's ID) for this block:
+        where it was claimed first (``path:line:col``), or None if this is the first."""
+
+    def scene(self, setting: str) -> Any:
+        """The scene-wide ``setting`` (a SceneSpec field, such as the list ``anomalies``)
+        a block that makes no entity fills."""
+
+    def where(self, key: str) -> str:
+        """``key``'s place (its block's where it is not written) as ``path:line``."""
+
     def saved_script(self, owner: str) -> Any:
         """The saved state (SavedScript) ``owner``'s script resumes from, taken; or None."""
 

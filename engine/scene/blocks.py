@@ -307,3 +307,4 @@ def builtin(block: BlockType) -> bool:
 
 
 on_declare(register_declared)
+import engine.scene.anomalies  # noqa: E402, F401, I001  (declares the anomaly blocks)

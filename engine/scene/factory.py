@@ -67,7 +67,6 @@ from engine.physics.commands import SetSleepState
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
 from engine.realtime import STEP_RANGE, STEP_WARNING, TIME_STEP
 from engine.rotation import UNIT_ROUNDING, euler_to_quat, rotate, view_problem
-from engine.scene.anomalies import read_anomalies
 from engine.scene.db import (
     INCLUDE,
     STRINGVECTOR,
@@ -497,6 +496,17 @@ class _Context:
     def saved_script(self, owner: str) -> Any:
         return self.builder.script_states.pop(owner, None)
 
+    def claim(self, kind: str, name: str) -> str | None:
+        first = self.builder.claimed.setdefault((kind, name), self.loc)
+        return None if first is self.loc else f"{first.path}:{first.line}:{first.col}"
+
+    def scene(self, setting: str) -> Any:
+        return getattr(self.builder.spec, setting)
+
+    def where(self, key: str) -> str:
+        where = self._loc(key)
+        return f"{where.path}:{where.line}"
+
     def body(self, name: str) -> Body | None:
         b = self.builder
         pose = b.poses.get(name)
@@ -545,6 +555,8 @@ class _Builder:
         #: Saved-state block kind -> owner ID -> the block it resumes from (taken).
         self.owned: dict[str, dict[str, Block]] = {}
         self.root: _Index | None = None
+        #: (kind, name) -> where a block claimed that scene-wide name first.
+        self.claimed: dict[tuple[str, str], Loc] = {}
 
     def build(self, db: SceneDB) -> SceneSpec:
         spec = self.spec = SceneSpec()
@@ -552,7 +564,7 @@ class _Builder:
         if self.extent is None:
             self.extent = self.world_extent(root)
         self.script_states = self.saved_scripts(root)
-        self.root, self.owned = root, {}
+        self.root, self.owned, self.claimed = root, {}, {}
         for blk in root.blocks("Material"):
             r = _Reader(blk, "Material")
             name = str(r("ID"))
@@ -574,7 +586,6 @@ class _Builder:
         self.world(root, spec)
         self.scene_entities(root, spec)
         spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
-        spec.anomalies = read_anomalies(root.blocks, self.report, self.problems)
         spec.experiment = read_experiment(db.root, self.report, spec.anomalies, self.folder)
         self.check_input_names(spec.input)
         self.unclaimed_script_states()

@@ -23,7 +23,6 @@ from typing import Any
 
 from components.joint import SCENE_JOINT_TYPES
 from components.shape import ShapeKind
-from engine.anomalies import ANOMALIES, COMMON_DOCS, EYES, ONSET_DEFAULT
 from engine.experiments.ordering import ORDERS as EXPERIMENT_ORDERS
 from engine.measures import QUANTITIES
 from engine.physics.backend import WORLD_EXTENT, BackendName, WorldSettings
@@ -587,35 +586,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Markers": _f(BOOL_T, 1, "1: send task markers (Lua emit(\"marker\", text))"),
     },
 }
-
-def _anomaly_blocks() -> dict[str, dict[str, Field]]:
-    """A block per anomaly (engine.anomalies is the one vocabulary): its common keys, then
-    a key per severity parameter with its range and unit in the docs."""
-    blocks = {}
-    for kind in ANOMALIES.values():
-        fields = {
-            "ID": _f(STRING_T, "", COMMON_DOCS["ID"]),
-            "Enabled": _f(BOOL_T, 1, COMMON_DOCS["Enabled"]),
-            "Onset": _f(FLOAT_T, ONSET_DEFAULT, COMMON_DOCS["Onset"]),
-            "Eye": _f(ENUM_T, "both", COMMON_DOCS["Eye"], allowed=EYES),
-            "Input": _f(STRING_T, None, COMMON_DOCS["Input"]),
-        }
-        for p in kind.params:
-            doc = f"{p.doc} ({p.range_text()})"
-            if p.choices:
-                fields[p.key] = _f(ENUM_T, p.default, doc, allowed=p.choices)
-            elif p.size > 1:
-                fields[p.key] = _f(VECTOR_T, p.default, doc, lengths=(p.size,))
-            else:
-                fields[p.key] = _f(FLOAT_T, p.default, doc)
-        blocks[kind.block] = fields
-    return blocks
-
-
-for _kind in ANOMALIES.values():
-    SCHEMAS["Scene"][_kind.block] = _f(STRUCT_T, doc=f"a visual anomaly: {_kind.doc} "
-                                       "(engine.anomalies)", repeat=True, struct=_kind.block)
-SCHEMAS.update(_anomaly_blocks())
 
 #: Declarations whose ``ID`` others may reference, by the schema name used in ``Field.ref``.
 ID_KINDS = ("Object", "Material", "Joint", "VertexShader", "FragmentShader", "ShaderProgram",
