@@ -157,7 +157,7 @@ class BuildContext(Protocol):
         """The scene-wide ``setting`` (a SceneSpec field, such as the list ``anomalies``)
         a block that makes no entity fills."""
 
-    def where(self, key: str) -> str:
+    def where(self, key: str | None) -> str:
         """``key``'s place (its block's where it is not written) as ``path:line``."""
 
     def saved_script(self, owner: str) -> Any:

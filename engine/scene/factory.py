@@ -86,6 +86,7 @@ from engine.scene.diagnostics import (
     suggest,
 )
 from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS, InputSpec, read_inputs
+from engine.scene.postpass import PostPassSpec
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -131,18 +132,6 @@ class ShaderProgramSpec:
     vertex: str | None  # file path of the vertex shader
     fragment: str | None
     enabled: bool
-
-
-@dataclass(slots=True)
-class PostPassSpec:
-    """A ``PostPass`` block: a full-screen pass (a fragment shader file) over the frame."""
-
-    id: str
-    file: str
-    uniforms: dict[str, float | tuple[float, ...]]
-    enabled: bool
-    feedback: bool
-    origin: str
 
 
 def binding_problem(action: str, profile: str, path: str) -> str | None:
@@ -503,7 +492,7 @@ class _Context:
     def scene(self, setting: str) -> Any:
         return getattr(self.builder.spec, setting)
 
-    def where(self, key: str) -> str:
+    def where(self, key: str | None) -> str:
         where = self._loc(key)
         return f"{where.path}:{where.line}"
 
@@ -973,11 +962,6 @@ class _Builder:
         for b in root.blocks("ShaderState"):
             r = _Reader(b, "ShaderState")
             spec.shader_states[r("ID")] = ShaderStateSpec(r("ShaderProgram"), _uniforms(r))
-        for b in root.blocks("PostPass"):
-            r = _Reader(b, "PostPass")
-            spec.post_passes.append(PostPassSpec(
-                str(r("ID")), str(r("File")), _uniforms(r), bool(r("Enabled")),
-                bool(r("Feedback")), f"{b.loc.path}:{b.loc.line}"))
 
     def world_extent(self, root: _Index) -> float:
         """The file's World Extent (m), checked; the default where it is refused."""
@@ -1095,9 +1079,6 @@ class _Builder:
                 f"{STEP_WARNING:g} s ({TIME_STEP:g} is the default)"))
 
     def scene_entities(self, root: _Index, spec: SceneSpec) -> None:
-        for b in root.blocks("Measure"):
-            r = _Reader(b, "Measure")
-            spec.measures.append(MeasureSpec(r("ID"), r("Object"), r("Value")))
         for i, e in enumerate(root.get_all("Script")):
             sid = f"script{i}"
             script = Script(file=e.value.data, saved=self.script_states.pop(sid, None))

@@ -24,7 +24,6 @@ from typing import Any
 from components.joint import SCENE_JOINT_TYPES
 from components.shape import ShapeKind
 from engine.experiments.ordering import ORDERS as EXPERIMENT_ORDERS
-from engine.measures import QUANTITIES
 from engine.physics.backend import WORLD_EXTENT, BackendName, WorldSettings
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
 from engine.realtime import TIME_STEP
@@ -97,16 +96,11 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "ShaderState": _f(STRUCT_T, None,
                           "a program and values for its uniforms; objects draw with it",
                           repeat=True, struct="ShaderState"),
-        "Measure": _f(STRUCT_T, None, "a value the run reports at its end (--stats "
-                      "measures, colosseum sweep's table)", repeat=True, struct="Measure"),
         "Script": _f(ASSET_T, doc="a Lua script run for the whole scene", repeat=True),
         "World": _f(STRUCT_T, doc="dynamics settings", struct="World"),
         "Model": _f(STRUCT_T, doc="a model file (glTF, Collada) whose bodies, joints and "
                     "materials join the scene", repeat=True, struct="Model"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
-        "PostPass": _f(STRUCT_T, doc="a full-screen pass over the drawn frame (your GLSL "
-                       "fragment shader; engine.render.postprocess)", repeat=True,
-                       struct="PostPass"),
         "Input": _f(STRUCT_T, doc="input devices and how their trackers, wheels and buttons "
                     "are calibrated (engine.input)", repeat=True, struct="Input"),
         "Output": _f(STRUCT_T, doc="engine values published every frame over OSC or LSL",
@@ -278,24 +272,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                             ref="ShaderProgram"),
         "Uniform": _f(STRUCT_T, None, "a uniform's value", repeat=True, struct="Uniform"),
     },
-    "PostPass": {
-        "ID": _id("post-processing pass", True),
-        "File": _f(ASSET_T, None, "the fragment shader: it reads u_scene (the frame) at v_uv "
-                   "and writes one vec4 (see docs/GLSL.md)", required=True),
-        "Uniform": _f(STRUCT_T, None, "a uniform's value", repeat=True, struct="Uniform"),
-        "Enabled": _f(BOOL_T, 1, "0: declared, switched on later (Lua enablePost)"),
-        "Feedback": _f(BOOL_T, 0, "1: the pass also reads its own last output (u_previous)"),
-    },
     "Uniform": {
         "ID": _f(STRING_T, None, "uniform name in the GLSL source", required=True),
         "Value": _f(NUMBER_OR_VECTOR_T, None,
                     "a number, or up to 4 numbers (vec2..vec4)", required=True),
-    },
-    "Measure": {
-        "ID": _id("measure", required=True),
-        "Object": _f(REF_T, None, "the object measured", ref="Object", required=True),
-        "Value": _f(ENUM_T, "z", "x, y, z (m), vx, vy, vz (m/s) or speed (m/s) at the end "
-                    "of the run", allowed=QUANTITIES),
     },
     "Session": {
         "Folder": _f(STRING_T, "", "the folder session logs go to, relative to the working "
