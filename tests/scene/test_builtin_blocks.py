@@ -138,3 +138,28 @@ def test_a_joint_is_a_declared_block_that_makes_no_entity_of_its_own(tmp_path: P
     with pytest.raises(SceneError, match="no PhysicalAttributes"):
         spec_from_text(text.replace("PhysicalAttributes { Mass 1 }", "VisualAttributes { }", 1),
                        tmp_path)
+
+
+def test_a_setting_block_fills_the_scene_and_a_second_id_is_claimed_once(tmp_path: Path
+                                                                         ) -> None:
+    """Anomalies, Measure and PostPass make no entity: their builds fill the scene's lists
+    (anomalies in the vocabulary's order), and two anomalies with one ID are told at the
+    second in that order, naming where the first is."""
+    text = ('Object { ID "ball" Position [0 0 1] }\n'
+            'Measure { ID "height" Object "ball" }\n'
+            'Hemianopia { ID "h" Side "left" }\n'
+            'DoubleVision { }\n'
+            'PostPass { ID "grey" File "grey.frag" Uniform { ID "amount" Value 0.5 } }\n')
+    (tmp_path / "grey.frag").write_text("void main() {}\n")
+    spec = spec_from_text(text, tmp_path, path=str(tmp_path / "m.scene"))
+    assert [e.id for e in spec.entities] == ["ball"]
+    assert [(m.id, m.object, m.value) for m in spec.measures] == [("height", "ball", "z")]
+    assert [a.id for a in spec.anomalies] == ["double_vision", "h"]  # vocabulary order
+    (post,) = spec.post_passes
+    assert (post.id, post.uniforms, post.origin) == ("grey", {"amount": 0.5},
+                                                    f"{tmp_path / 'm.scene'}:5")
+    with pytest.raises(SceneError) as twice:
+        spec_from_text(text + 'Neglect { ID "h" }\n', tmp_path, path="m.scene")
+    # Neglect comes before Hemianopia in the vocabulary: the Hemianopia is the second
+    assert "m.scene:3:12: error: a second anomaly 'h' (the first is at m.scene:6:9)" in \
+        str(twice.value)
