@@ -308,5 +308,6 @@ def builtin(block: BlockType) -> bool:
 
 on_declare(register_declared)
 import engine.measures  # noqa: E402, F401, I001  (the engine's blocks declared outside components)
+import engine.physics.backend  # noqa: E402, F401, I001
 import engine.scene.anomalies  # noqa: E402, F401, I001
 import engine.scene.postpass  # noqa: E402, F401, I001

@@ -571,6 +571,7 @@ class _Builder:
         for i, blk in enumerate(root.blocks("Object")):
             spec.entities.append(self.object(blk, i))
         spec.sleep = self.sleep
+        self.declared_entities(root, spec, entity=False)
         self.shaders(root, spec)
         self.world(root, spec)
         self.scene_entities(root, spec)
@@ -717,17 +718,18 @@ class _Builder:
             return None
         return made + self.declared_blocks(r, block.name, owner, has_body, parts)
 
-    def declared_entities(self, root: _Index, spec: SceneSpec) -> None:
+    def declared_entities(self, root: _Index, spec: SceneSpec, entity: bool = True) -> None:
         """Top-level declared blocks: an entity each, named by its ID (one its build
-        leaves out keeps its place, skipped)."""
+        leaves out keeps its place, skipped); with ``entity`` False, those that make none
+        (joints, scene-wide settings), before the world's settings are read."""
         for block in blocks.BLOCKS.values():
-            if "Scene" not in block.inside:
+            if "Scene" not in block.inside or block.entity != entity:
                 continue
             for i, blk in enumerate(root.blocks(block.name)):
                 bid = _Reader(blk, block.name)("ID") or block.unnamed or \
                     f"{block.name.lower()}{i}"
                 made = self.declared(block, blk, bid, "Scene", False)
-                if not block.entity:  # its build handed what it made to the context
+                if not entity:  # its build handed what it made to the context
                     continue
                 skipped = made is None or (not made and block.hook is not None)
                 parts = [] if skipped and block.hook is not None else [Name(bid), *(made or [])]
@@ -1021,12 +1023,7 @@ class _Builder:
         for key in ("Iterations", "MaxContacts"):
             if w(key) < 1:
                 self.report.error(w.value(key).loc, f"{key} must be at least 1, got {w(key)}")
-        pairs = []
-        for b in root.blocks("MaterialPair"):
-            p = _Reader(b, "MaterialPair")
-            pairs.append(MaterialPair(str(p("Material1")), str(p("Material2")),
-                                      _opt(p("Friction")), _opt(p("Bounce")),
-                                      _opt(p("Softness")), bool(p("Collide"))))
+        pairs = spec.material_pairs  # the MaterialPair blocks (engine.physics.backend)
         for key in ("SleepTime", "SleepLinear", "SleepAngular"):
             if not (w(key) > 0 and math.isfinite(w(key))):
                 self.report.error(w.value(key).loc, f"{key} must be a positive number")
@@ -1054,7 +1051,6 @@ class _Builder:
                                        w("SleepAngular"), math.degrees(SLEEP_ANGULAR))),
                                    material_pairs=pairs, solver_seed=w("SolverSeed"),
                                    extent=self.extent or WORLD_EXTENT)
-        spec.material_pairs = pairs
         spec.time_step = float(w("TimeStep"))
         spec.backend = w("Dynamics")
         spec.time = float(w("Time"))

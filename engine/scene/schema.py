@@ -83,8 +83,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     "Scene": {
         "Object": _f(STRUCT_T, doc="a body and/or visual", repeat=True, struct="Object"),
         "Material": _f(STRUCT_T, doc="surface properties", repeat=True, struct="Material"),
-        "MaterialPair": _f(STRUCT_T, doc="contact parameters for two materials", repeat=True,
-                           struct="MaterialPair"),
         "VertexShader": _f(STRUCT_T, None,
                            "a GLSL vertex shader file (see docs/GLSL.md)", repeat=True,
                            struct="VertexShader"),
@@ -240,14 +238,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Softness": _f(FLOAT_T, 0.0, "contact softness (0 = hard)"),
         "Density": _f(FLOAT_T, 1000.0, "kg/m^3"),
         "ContactSound": _f(ASSET_T, None, "played on impacts"),
-    },
-    "MaterialPair": {
-        "Material1": _f(REF_T, None, "one material", required=True, ref="Material"),
-        "Material2": _f(REF_T, None, "the other material", required=True, ref="Material"),
-        "Friction": _f(FLOAT_T, None, "Coulomb coefficient for this pair"),
-        "Bounce": _f(FLOAT_T, None, "restitution for this pair, 0..1"),
-        "Softness": _f(FLOAT_T, None, "contact softness for this pair"),
-        "Collide": _f(BOOL_T, 1, "0: the two materials pass through each other"),
     },
     "VertexShader": {
         "ID": _id("vertex shader", True),
