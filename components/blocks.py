@@ -220,9 +220,9 @@ _LISTENERS: list[Callable[[BlockDeclaration], None]] = []
 
 def declare(block: BlockDeclaration) -> BlockDeclaration:
     """Declare ``block`` (a component module does so when it is imported)."""
-    DECLARED[block.name] = block
-    for listener in _LISTENERS:
+    for listener in _LISTENERS:  # one refused (a name taken) is not declared
         listener(block)
+    DECLARED[block.name] = block
     return block
 
 

@@ -15,7 +15,7 @@ import pytest
 
 import engine.scene.schema as sc
 from components import Wheelchair
-from components.blocks import BlockDeclaration, BuildContext, Key, declare
+from components.blocks import DECLARED, BlockDeclaration, BuildContext, Key, declare
 from engine.app import EngineConfig
 from engine.scene import SceneError, instantiate, keys, spec_from_text, write_state
 from engine.scene.blocks import BLOCKS, BlockError, builtin, from_content, unregister
@@ -163,3 +163,10 @@ def test_a_setting_block_fills_the_scene_and_a_second_id_is_claimed_once(tmp_pat
     # Neglect comes before Hemianopia in the vocabulary: the Hemianopia is the second
     assert "m.scene:3:12: error: a second anomaly 'h' (the first is at m.scene:6:9)" in \
         str(twice.value)
+
+
+def test_a_refused_declaration_leaves_the_one_it_clashed_with() -> None:
+    joint = BLOCKS["Joint"]
+    with pytest.raises(BlockError, match="exists already"):
+        declare(BlockDeclaration("Joint", (), _brake))
+    assert DECLARED["Joint"].build is joint.hook and BLOCKS["Joint"] is joint
