@@ -8,6 +8,7 @@ Orientations are unit quaternions ``(w, x, y, z)``. The vocabularies
 :class:`~components.shape.ShapeKind`) live beside the component that uses them.
 """
 
+import components.avatar_block  # noqa: E402, F401, I001  (declares the Avatar block)
 from components.avatar import Avatar, ClipSpec, Hold
 from components.camera import Camera
 from components.controller import Controller

@@ -57,6 +57,19 @@ class Key:
         return f"{self.unit}, {self.doc}" if self.doc else self.unit
 
 
+@dataclass(frozen=True, slots=True)
+class Body:
+    """What a block may know of an object it names by ID (a joint's bodies): its pose
+    (position, quaternion) as the scene places it, whether it has a body and whether
+    that body is static, and whether this scene (or snippet) makes it (else it is one of
+    the running world's)."""
+
+    pose: tuple[tuple[float, ...], tuple[float, ...]]
+    physical: bool
+    static: bool
+    here: bool
+
+
 class BuildContext(Protocol):
     """What a block's *build* function may ask of the scene being built."""
 
@@ -111,6 +124,59 @@ class BuildContext(Protocol):
     def suggest(self, name: str, choices: Any) -> str:
         """`` (did you mean 'X'?)`` for the closest of ``choices``; empty if none is."""
 
+    def problem(self, key: str | None, message: str, warning: bool = False,
+                item: int | None = None) -> None:
+        """An error (or ``warning``) at ``key``'s line (at its ``item``-th value, where
+        given) that leaves out only what it says: listed with the scene's problems, the
+        run goes on (as for an asset that failed)."""
+
+    def within_world(self, key: str, points: bool = False) -> None:
+        """Tell a point at ``key`` (its first three numbers: x y z; with ``points``, every
+        three numbers) outside the world."""
+
+    def orientation(self) -> tuple[float, ...]:
+        """The block's exact ``Quaternion`` where one is written, else its ``Orientation``
+        (Euler degrees), as a unit quaternion."""
+
+    def quaternion(self, key: str) -> tuple[float, ...]:
+        """``key`` as a unit quaternion; all zeros is told (and the identity taken)."""
+
+    def skinned_model(self, key: str, outcome: str) -> Any | None:
+        """``key``'s skinned model (engine.assets.skinned) if it can be read; else None,
+        and ``outcome`` (what is left out) told as a problem."""
+
+    def saved(self, block: str, owner: str) -> tuple[Mapping[str, Any], BuildContext] | None:
+        """The top-level ``block`` (a saved state's, such as AvatarState) whose Owner is
+        ``owner``, taken: its values and a context telling at its lines; None if none."""
+
+    def claim(self, kind: str, name: str) -> str | None:
+        """Claim the scene-wide ``name`` of ``kind`` (an anomaly's ID) for this block:
+        where it was claimed first (``path:line:col``), or None if this is the first."""
+
+    def scene(self, setting: str) -> Any:
+        """The scene-wide ``setting`` (a SceneSpec field, such as the list ``anomalies``)
+        a block that makes no entity fills."""
+
+    def where(self, key: str | None) -> str:
+        """``key``'s place (its block's where it is not written) as ``path:line``."""
+
+    def saved_script(self, owner: str) -> Any:
+        """The saved state (SavedScript) ``owner``'s script resumes from, taken; or None."""
+
+    def body(self, name: str) -> Body | None:
+        """Object ``name`` as made so far (None: no such object; see :meth:`left_out`)."""
+
+    def view_problem(self, forward: tuple[float, ...]) -> str | None:
+        """What is wrong with a view along ``forward`` (None: nothing): engine.rotation's
+        check, lent here because a component module cannot import it."""
+
+    def left_out(self, name: str) -> bool:
+        """Whether object ``name`` was left out (an asset it needs failed, told)."""
+
+    def join(self, joint: Any, bodies: tuple[str, str | None], skipped: bool = False) -> None:
+        """Make ``joint`` (a Joint) between the objects ``bodies`` names, once they exist;
+        ``skipped`` keeps its place (a body was left out)."""
+
     def sound_file(self, key: str, outcome: str) -> str | None:
         """``key``'s sound file if it can be played; else None, and ``outcome`` (what is
         left out) told as a problem at its line."""
@@ -142,6 +208,9 @@ class BlockDeclaration:
     saves: type | None = None
     save: Save | None = None
     unnamed: str = ""
+    #: A top-level block that makes no entity of its own: its build hands what it makes
+    #: to the context (a joint, a scene-wide setting) and returns nothing.
+    entity: bool = True
 
 
 #: Every declaration made so far, by block name (engine.scene.blocks registers each).
@@ -151,9 +220,9 @@ _LISTENERS: list[Callable[[BlockDeclaration], None]] = []
 
 def declare(block: BlockDeclaration) -> BlockDeclaration:
     """Declare ``block`` (a component module does so when it is imported)."""
-    DECLARED[block.name] = block
-    for listener in _LISTENERS:
+    for listener in _LISTENERS:  # one refused (a name taken) is not declared
         listener(block)
+    DECLARED[block.name] = block
     return block
 
 

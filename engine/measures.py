@@ -8,7 +8,11 @@ end of the run), a Lua script with ``measure(name, value)`` (the last value give
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
+
+from components.blocks import BlockDeclaration, BuildContext, Key, declare
 
 #: What a Measure block can read of its object: position and velocity components, speed.
 QUANTITIES = ("x", "y", "z", "vx", "vy", "vz", "speed")
@@ -45,3 +49,21 @@ def quantity(value: str, position: tuple[float, ...], velocity: tuple[float, ...
     if value.startswith("v"):
         return float(velocity["xyz".index(value[1])])
     return float(position["xyz".index(value)])
+
+
+def build_measure(v: Mapping[str, Any], ctx: BuildContext) -> list[Any]:
+    """A ``Measure`` block: a value the run reports at its end (the scene's measures)."""
+    ctx.scene("measures").append(MeasureSpec(v["ID"], v["Object"], v["Value"]))
+    return []
+
+
+MEASURE_BLOCK = declare(BlockDeclaration(
+    "Measure", inside=("Scene",), build=build_measure, entity=False,
+    doc="a value the run reports at its end (--stats measures, colosseum sweep's table)",
+    keys=(
+        Key("ID", "string", "", "name other declarations use to refer to this measure",
+            required=True),
+        Key("Object", "ref", None, "the object measured", ref="Object", required=True),
+        Key("Value", "enum", "z", "x, y, z (m), vx, vy, vz (m/s) or speed (m/s) at the end "
+            "of the run", allowed=QUANTITIES),
+    )))

@@ -13,13 +13,15 @@ thread in threaded mode). Nothing here is thread-safe; the engine's
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from components import Joint, Physical
+from components.blocks import BlockDeclaration, BuildContext, Key, declare
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME, SleepState
 
 #: Half the side of the cube every body stays in (m), by default (``World { Extent }``).
@@ -209,6 +211,30 @@ class MaterialPair:
     bounce: float | None = None
     softness: float | None = None
     collide: bool = True
+
+
+def _optional(value: Any) -> float | None:
+    return None if value is None else float(value)
+
+
+def build_material_pair(v: Mapping[str, Any], ctx: BuildContext) -> list[Any]:
+    """A ``MaterialPair`` block: contact parameters the world's settings carry."""
+    ctx.scene("material_pairs").append(MaterialPair(
+        str(v["Material1"]), str(v["Material2"]), _optional(v["Friction"]),
+        _optional(v["Bounce"]), _optional(v["Softness"]), bool(v["Collide"])))
+    return []
+
+
+MATERIAL_PAIR_BLOCK = declare(BlockDeclaration(
+    "MaterialPair", inside=("Scene",), build=build_material_pair, entity=False,
+    doc="contact parameters for two materials", keys=(
+        Key("Material1", "ref", None, "one material", required=True, ref="Material"),
+        Key("Material2", "ref", None, "the other material", required=True, ref="Material"),
+        Key("Friction", "float", None, "Coulomb coefficient for this pair"),
+        Key("Bounce", "float", None, "restitution for this pair, 0..1"),
+        Key("Softness", "float", None, "contact softness for this pair"),
+        Key("Collide", "bool", 1, "0: the two materials pass through each other"),
+    )))
 
 
 @dataclass(slots=True)

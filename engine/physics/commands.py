@@ -40,7 +40,15 @@ from typing import Any, ClassVar
 import numpy as np
 
 from components import Joint, MaterialProps, Physical, Shape
-from components.joint import AXISLESS_KINDS, SPRING_KINDS, JointKind, Spring
+from components.joint import (  # noqa: F401  (HINGE2_BODIES: the scripting API's too)
+    AXISLESS_KINDS,
+    HINGE2_BODIES,
+    SPRING_KINDS,
+    TWO_AXES,
+    JointKind,
+    Spring,
+    parallel,
+)
 from engine.physics.backend import (
     MAX_DENSITY,
     MAX_MASS,
@@ -216,20 +224,6 @@ class AddJoint(Command):
         for pose in j.reference or ():
             if pose is not None:
                 _vector(name, "reference pose", pose, 7)
-
-
-#: Kinds that turn about two axes, which ODE needs independent (it aborts the process on
-#: parallel hinge2 axes; a universal's fail its step).
-TWO_AXES = frozenset({JointKind.UNIVERSAL, JointKind.HINGE2})
-#: Why a hinge2 needs two bodies (ODE aborts the process on one alone).
-HINGE2_BODIES = ("a hinge2 joint joins two bodies, the wheel (a) to its chassis (b); it "
-                 "cannot join one to the world or to a static object")
-
-
-def parallel(a: Any, b: Any) -> bool:
-    """Whether two non-zero axes point along one line (within a millionth of a radian)."""
-    u, v = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    return bool(np.linalg.norm(np.cross(u, v)) <= 1e-6 * np.linalg.norm(u) * np.linalg.norm(v))
 
 
 def _check_material(command: str, material: MaterialProps) -> None:

@@ -1,58 +1,78 @@
-"""The scene's anomaly blocks (``DoubleVision``, ``Hemianopia``, ...; engine.anomalies) as
-checked specs.
+"""The scene's anomaly blocks (``DoubleVision``, ``Hemianopia``, ...; engine.anomalies),
+declared on the block registry as blocks that fill a scene-wide setting (the scene's
+anomalies) rather than make an entity.
 
-The schema checks types; this module checks what the vocabulary adds: a severity out of
-its range is clamped with a warning at its line (the scene still runs); two blocks with one
-ID are an error. An ``Input`` binding is checked when the anomalies plugin binds it, as a
+The schema checks types; the build checks what the vocabulary adds: a severity out of its
+range is clamped with a warning at its line (the scene still runs); two blocks with one ID
+are an error. An ``Input`` binding is checked when the anomalies plugin binds it, as a
 Controller's is (a bad one is told with its scene line and ignored).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Mapping
+from typing import Any
 
-import engine.scene.schema as sc
-from engine.anomalies import ANOMALIES, AnomalySpec, check_onset, check_value
-from engine.scene.db import Block
-from engine.scene.diagnostics import WARNING, Diagnostic, Loc, Reporter
+from components.blocks import BlockDeclaration, Build, BuildContext, Key, declare
+from engine.anomalies import (
+    ANOMALIES,
+    COMMON_DOCS,
+    EYES,
+    ONSET_DEFAULT,
+    AnomalyKind,
+    AnomalySpec,
+    check_onset,
+    check_value,
+)
 
 
-def read_anomalies(blocks: Callable[[str], list[Block]], report: Reporter,
-                   warnings: list[Diagnostic]) -> list[AnomalySpec]:
-    """Every anomaly block (``blocks(name)`` gives a top-level key's blocks), in the order
-    of the vocabulary, then of the file; errors go to ``report``, warnings (clamped values,
-    which leave the scene runnable) to ``warnings``."""
-
-    def warn(loc: Loc, message: str) -> None:
-        warnings.append(Diagnostic(loc.path, loc.line, loc.col, WARNING, message))
-
-    specs: list[AnomalySpec] = []
-    seen: dict[str, Loc] = {}
-    for kind in ANOMALIES.values():
-        defaults = {key: f.default for key, f in sc.SCHEMAS[kind.block].items()}
-        for block in blocks(kind.block):
-            written = {e.key: e.value for e in block}  # the last one written wins
-            values = {**defaults, **{key: v.py() for key, v in written.items()}}
-            where = {key: v.loc for key, v in written.items()}
-            anomaly_id = str(values["ID"]) or kind.name
-            first = seen.setdefault(anomaly_id, block.loc)
-            if first is not block.loc:
-                report.error(block.loc, f"a second anomaly '{anomaly_id}' (the first is at "
-                                        f"{first.path}:{first.line}:{first.col}); give one "
-                                        "an ID of its own")
-                continue
-            severity = {}
-            for param in kind.params:
-                severity[param.key], problem = check_value(kind, param.key, values[param.key])
-                if problem:
-                    warn(where.get(param.key, block.loc), problem)
-            onset, problem = check_onset(float(values["Onset"]))
+def _builder(kind: AnomalyKind) -> Build:
+    """The build of ``kind``'s block: its checked spec added to the scene's anomalies."""
+    def build(v: Mapping[str, Any], ctx: BuildContext) -> list[Any]:
+        anomaly_id = ctx.owner
+        first = ctx.claim("anomaly", anomaly_id)
+        if first is not None:
+            ctx.error(None, f"a second anomaly '{anomaly_id}' (the first is at {first}); "
+                      "give one an ID of its own")
+            return []
+        severity = {}
+        for param in kind.params:
+            value = v[param.key]
+            severity[param.key], problem = check_value(
+                kind, param.key, list(value) if isinstance(value, tuple) else value)
             if problem:
-                warn(where.get("Onset", block.loc), problem)
-            binding = values["Input"]
-            loc = where.get("Input", block.loc)
-            specs.append(AnomalySpec(anomaly_id, kind.name, severity, bool(values["Enabled"]),
-                                     onset, str(values["Eye"]),
-                                     None if binding is None else str(binding),
-                                     f"{loc.path}:{loc.line}"))
-    return specs
+                ctx.problem(param.key, problem, warning=True)
+        onset, problem = check_onset(float(v["Onset"]))
+        if problem:
+            ctx.problem("Onset", problem, warning=True)
+        binding = v["Input"]
+        ctx.scene("anomalies").append(AnomalySpec(
+            anomaly_id, kind.name, severity, bool(v["Enabled"]), onset, str(v["Eye"]),
+            None if binding is None else str(binding), ctx.where("Input")))
+        return []
+    return build
+
+
+def _keys(kind: AnomalyKind) -> tuple[Key, ...]:
+    """Its common keys, then a key per severity parameter with its range in the docs."""
+    keys = [Key("ID", "string", "", COMMON_DOCS["ID"]),
+            Key("Enabled", "bool", 1, COMMON_DOCS["Enabled"]),
+            Key("Onset", "float", ONSET_DEFAULT, COMMON_DOCS["Onset"]),
+            Key("Eye", "enum", "both", COMMON_DOCS["Eye"], allowed=EYES),
+            Key("Input", "string", None, COMMON_DOCS["Input"])]
+    for p in kind.params:
+        doc = f"{p.doc} ({p.range_text()})"
+        if p.choices:
+            keys.append(Key(p.key, "enum", p.default, doc, allowed=p.choices))
+        elif p.size > 1:
+            keys.append(Key(p.key, "vector", p.default, doc, lengths=(p.size,)))
+        else:
+            keys.append(Key(p.key, "float", p.default, doc))
+    return tuple(keys)
+
+
+#: A block per anomaly, in the order of the vocabulary (the scene's anomalies keep it).
+ANOMALY_BLOCKS = tuple(declare(BlockDeclaration(
+    kind.block, _keys(kind), _builder(kind), f"a visual anomaly: {kind.doc} "
+    "(engine.anomalies)", inside=("Scene",), unnamed=kind.name, entity=False))
+    for kind in ANOMALIES.values())

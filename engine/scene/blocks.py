@@ -89,6 +89,9 @@ class BlockType:
     module: str = ""
     #: The ID of a top-level one written without one ("": its name and place, sound0).
     unnamed: str = ""
+    #: Whether a top-level one is an entity (False: its build hands its work to the
+    #: context, as a Joint does).
+    entity: bool = True
 
     def build(self, values: Mapping[str, Any]) -> Any:
         """The component from checked values (scene keys)."""
@@ -209,7 +212,7 @@ def register_declared(declared: BlockDeclaration) -> BlockType:
     docs = {p: doc if isinstance(doc, str) else doc[p] for p in declared.inside}
     block = BlockType(name, declared.saves, tuple(declared.inside), docs[declared.inside[0]],
                       keys, declared.build, declared.save, declared.build.__module__,
-                      declared.unnamed)
+                      declared.unnamed, declared.entity)
     _enter(block, fields, docs, declared.repeat)
     return block
 
@@ -304,3 +307,7 @@ def builtin(block: BlockType) -> bool:
 
 
 on_declare(register_declared)
+import engine.measures  # noqa: E402, F401, I001  (the engine's blocks declared outside components)
+import engine.physics.backend  # noqa: E402, F401, I001
+import engine.scene.anomalies  # noqa: E402, F401, I001
+import engine.scene.postpass  # noqa: E402, F401, I001

@@ -29,11 +29,7 @@ import engine.scene.blocks as blocks
 import engine.scene.random_state as random_state
 import engine.scene.schema as sc
 from components import (
-    Avatar,
-    Camera,
-    ClipSpec,
     Graspable,
-    Hold,
     Joint,
     MaterialProps,
     Name,
@@ -45,17 +41,9 @@ from components import (
     UserOwned,
     Visual,
 )
-from components.avatar import (
-    SavedAvatar,
-    SavedDrive,
-    SavedGroup,
-    SavedHold,
-    SavedLayer,
-    SavedRequest,
-)
+from components.blocks import Body
 from components.display import binding_problem as display_binding_problem
 from components.hand import HAND_SIZE, PALM_SIZE
-from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, SPRING_KINDS, JointKind, Spring
 from components.script import SavedScript, ScriptHandler, ScriptTimer
 from engine.anomalies import AnomalySpec
 from engine.assets import AssetError, Assets, nodes_name
@@ -77,10 +65,9 @@ from engine.physics.backend import (
     WorldSettings,
     metres,
 )
-from engine.physics.commands import HINGE2_BODIES, TWO_AXES, SetSleepState, parallel
+from engine.physics.commands import SetSleepState
 from engine.realtime import STEP_RANGE, STEP_WARNING, TIME_STEP
 from engine.rotation import UNIT_ROUNDING, euler_to_quat, rotate, view_problem
-from engine.scene.anomalies import read_anomalies
 from engine.scene.db import (
     INCLUDE,
     STRINGVECTOR,
@@ -100,6 +87,7 @@ from engine.scene.diagnostics import (
     suggest,
 )
 from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS, InputSpec, read_inputs
+from engine.scene.postpass import PostPassSpec
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -147,18 +135,6 @@ class ShaderProgramSpec:
     enabled: bool
 
 
-@dataclass(slots=True)
-class PostPassSpec:
-    """A ``PostPass`` block: a full-screen pass (a fragment shader file) over the frame."""
-
-    id: str
-    file: str
-    uniforms: dict[str, float | tuple[float, ...]]
-    enabled: bool
-    feedback: bool
-    origin: str
-
-
 def binding_problem(action: str, profile: str, path: str) -> str | None:
     """What is wrong with a headset's ``Bind`` (None: nothing): the scene's check, and
     the OpenXR display's (services.xr.bindings.Rebinding)."""
@@ -192,7 +168,6 @@ class SceneSpec:
     time: float = 0.0
     #: The scene's random generator when a saved state was written (see random_state).
     random_state: dict[str, object] | None = None
-    camera_follow: dict[str, str] = field(default_factory=dict)  # camera ID -> object ID
     #: References by ID that declared blocks made, set once the entities exist.
     links: list[Link] = field(default_factory=list)
     #: Object ID -> sleep-rule state a saved state carries (see :class:`SleepState`).
@@ -354,18 +329,6 @@ class _Index:
         return found[-1].value if found else None
 
 
-def _below(parents: Any, node: int | None, ancestor: int | None) -> bool:
-    """Whether ``node`` lies in the subtree under ``ancestor`` (not ``ancestor`` itself)."""
-    if node is None or ancestor is None:
-        return False
-    node = int(parents[node])
-    while node >= 0:
-        if node == ancestor:
-            return True
-        node = int(parents[node])
-    return False
-
-
 def _floats(t: Any) -> tuple[float, ...]:
     return tuple(map(float, t))
 
@@ -486,6 +449,74 @@ class _Context:
     def sound_file(self, key: str, outcome: str) -> str | None:
         return self.builder.sound_file(self.reader, key, outcome)
 
+    def problem(self, key: str | None, message: str, warning: bool = False,
+                item: int | None = None) -> None:
+        written = None if key is None or item is None else self.reader.value(key)
+        where = self._loc(key) if written is None else written.data[item].loc
+        self.builder.told(where, message, WARNING if warning else ERROR)
+
+    def within_world(self, key: str, points: bool = False) -> None:
+        value = self.reader.value(key)
+        if not points or value is None:
+            self.builder.inside(value, key)
+            return
+        items = value.data
+        for k in range(0, len(items) - 2, 3):  # each point x y z within the world
+            self.builder.inside(Value(VECTOR, items[k:k + 3], items[k].loc), f"{key} point")
+
+    def orientation(self) -> tuple[float, ...]:
+        return self.builder.orientation(self.reader)
+
+    def quaternion(self, key: str) -> tuple[float, ...]:
+        return self.builder.quaternion(self.reader, key)
+
+    def skinned_model(self, key: str, outcome: str) -> Any | None:
+        b = self.builder
+        try:
+            return b.assets.skinned(self.reader(key), self._loc(key), b.folder)
+        except AssetError as exc:
+            b.problem(exc, outcome)
+            return None
+
+    def saved(self, block: str, owner: str) -> tuple[Mapping[str, Any], _Context] | None:
+        found = self.builder.saved_blocks(block).pop(owner, None)
+        if found is None:
+            return None
+        r = _Reader(found, block)
+        return r, self.at(r, found.loc)
+
+    def saved_script(self, owner: str) -> Any:
+        return self.builder.script_states.pop(owner, None)
+
+    def claim(self, kind: str, name: str) -> str | None:
+        first = self.builder.claimed.setdefault((kind, name), self.loc)
+        return None if first is self.loc else f"{first.path}:{first.line}:{first.col}"
+
+    def scene(self, setting: str) -> Any:
+        return getattr(self.builder.spec, setting)
+
+    def where(self, key: str | None) -> str:
+        where = self._loc(key)
+        return f"{where.path}:{where.line}"
+
+    def body(self, name: str) -> Body | None:
+        b = self.builder
+        pose = b.poses.get(name)
+        if pose is None:
+            return None
+        return Body(pose, name in b.physical_ids, name in b.static_ids, name in b.own_poses)
+
+    def view_problem(self, forward: tuple[float, ...]) -> str | None:
+        return view_problem(forward)
+
+    def left_out(self, name: str) -> bool:
+        return name in self.builder.skipped
+
+    def join(self, joint: Joint, bodies: tuple[str, str | None], skipped: bool = False
+             ) -> None:
+        self.builder.spec.joints.append(JointSpec(self.owner, joint, bodies, self.loc,
+                                                  skipped))
+
 
 class _Builder:
     def __init__(self, folder: Path, report: Reporter, assets: Assets):
@@ -513,8 +544,11 @@ class _Builder:
         self.extent: float | None = None
         #: What is built so far (declared blocks' links and headset check read it).
         self.spec = SceneSpec()
-        #: Avatar ID -> the AvatarState block it resumes from (a loaded saved state).
-        self.avatar_states: dict[str, Block] = {}
+        #: Saved-state block kind -> owner ID -> the block it resumes from (taken).
+        self.owned: dict[str, dict[str, Block]] = {}
+        self.root: _Index | None = None
+        #: (kind, name) -> where a block claimed that scene-wide name first.
+        self.claimed: dict[tuple[str, str], Loc] = {}
 
     def build(self, db: SceneDB) -> SceneSpec:
         spec = self.spec = SceneSpec()
@@ -522,8 +556,7 @@ class _Builder:
         if self.extent is None:
             self.extent = self.world_extent(root)
         self.script_states = self.saved_scripts(root)
-        self.avatar_states = {str(_Reader(b, "AvatarState")("Owner")): b
-                              for b in root.blocks("AvatarState")}
+        self.root, self.owned, self.claimed = root, {}, {}
         for blk in root.blocks("Material"):
             r = _Reader(blk, "Material")
             name = str(r("ID"))
@@ -540,23 +573,23 @@ class _Builder:
         spec.materials = self.materials
         for i, blk in enumerate(root.blocks("Object")):
             spec.entities.append(self.object(blk, i))
-        spawned = {es.id for es in spec.entities}
-        for i, blk in enumerate(root.blocks("Joint")):
-            js = self.joint(blk, i, spawned)
-            if js is not None:
-                spec.joints.append(js)
         spec.sleep = self.sleep
+        self.declared_entities(root, spec, entity=False)
         self.shaders(root, spec)
         self.world(root, spec)
         self.scene_entities(root, spec)
         spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
-        spec.anomalies = read_anomalies(root.blocks, self.report, self.problems)
         spec.experiment = read_experiment(db.root, self.report, spec.anomalies, self.folder)
         self.check_input_names(spec.input)
-        for i, blk in enumerate(root.blocks("Avatar")):
-            spec.entities.append(self.avatar(blk, i))
         self.unclaimed_script_states()
         return spec
+
+    def saved_blocks(self, kind: str) -> dict[str, Block]:
+        """Owner ID -> the top-level ``kind`` block (a saved state's) about it."""
+        if kind not in self.owned:
+            blks = [] if self.root is None else self.root.blocks(kind)
+            self.owned[kind] = {str(_Reader(b, kind)("Owner")): b for b in blks}
+        return self.owned[kind]
 
     # -- assets --------------------------------------------------------------
     def problem(self, error: AssetError, outcome: str) -> None:
@@ -689,16 +722,19 @@ class _Builder:
             return None
         return made + self.declared_blocks(r, block.name, owner, has_body, parts)
 
-    def declared_entities(self, root: _Index, spec: SceneSpec) -> None:
+    def declared_entities(self, root: _Index, spec: SceneSpec, entity: bool = True) -> None:
         """Top-level declared blocks: an entity each, named by its ID (one its build
-        leaves out keeps its place, skipped)."""
+        leaves out keeps its place, skipped); with ``entity`` False, those that make none
+        (joints, scene-wide settings), before the world's settings are read."""
         for block in blocks.BLOCKS.values():
-            if "Scene" not in block.inside:
+            if "Scene" not in block.inside or block.entity != entity:
                 continue
             for i, blk in enumerate(root.blocks(block.name)):
                 bid = _Reader(blk, block.name)("ID") or block.unnamed or \
                     f"{block.name.lower()}{i}"
                 made = self.declared(block, blk, bid, "Scene", False)
+                if not entity:  # its build handed what it made to the context
+                    continue
                 skipped = made is None or (not made and block.hook is not None)
                 parts = [] if skipped and block.hook is not None else [Name(bid), *(made or [])]
                 spec.entities.append(EntitySpec(bid, parts, blk.loc, skipped=skipped))
@@ -889,199 +925,9 @@ class _Builder:
                                    lambda: _model_shape(model.triangles(), scale, method), loc)
         return _copy_shape(made)
 
-    # -- avatars -------------------------------------------------------------
     def told(self, loc: Loc, message: str, severity: str = ERROR) -> None:
         """A problem with a model's content (not the text): told, the run goes on."""
         self.problems.append(Diagnostic(loc.path, loc.line, loc.col, severity, message))
-
-    def avatar(self, blk: Block, index: int) -> EntitySpec:
-        """An avatar's components; left out (told) when its model cannot be read or has
-        no skin. Names of clips and bones the model lacks are told and ignored."""
-        r = _Reader(blk, "Avatar")
-        aid = r("ID") or f"avatar{index}"
-        file, where = r("Model"), r.value("Model").loc
-        try:
-            model = self.assets.skinned(file, where, self.folder)
-        except AssetError as exc:
-            self.problem(exc, f"avatar '{aid}' is left out")
-            return EntitySpec(aid, [], blk.loc, skipped=True)
-        if not model.skin_count:
-            self.told(where, f'model "{file}" has no skin (no joints to animate); use it in an '
-                             f"Object instead; avatar '{aid}' is left out")
-            return EntitySpec(aid, [], blk.loc, skipped=True)
-        for warning in model.warnings:
-            self.told(where, f'model "{file}": {warning}', WARNING)
-
-        def clip(name: str, loc: Loc) -> bool:
-            if model.clip(name) is not None:
-                return True
-            names = ", ".join(model.clip_names) or "none"
-            self.told(loc, f'model "{file}" has no clip "{name}"{suggest(name, model.clip_names)}'
-                           f" (its clips: {names}); it is not played")
-            return False
-
-        def bone(name: str, loc: Loc) -> bool:
-            if model.node(name) is not None:
-                return True
-            self.told(loc, f'model "{file}" has no bone "{name}"'
-                           f"{suggest(name, model.node_names)}")
-            return False
-
-        first = r("Animation") if r.has("Animation") and clip(
-            r("Animation"), r.value("Animation").loc) else None
-        blend = dict(self.weights(r, "Blend", clip)) if r.has("Blend") else {}
-        queue = [n for n, item in zip(r("Queue") or (), r.value("Queue").data if r.has(
-            "Queue") else (), strict=True) if clip(n, item.loc)]
-        clips = []
-        for b in r.blocks("Clip"):
-            c = _Reader(b, "Clip")
-            if clip(c("Name"), c.value("Name").loc):
-                clips.append(ClipSpec(c("Name"), float(c("Speed")), bool(c("Loop")),
-                                      _opt(c("GroundSpeed"))))
-        legs = []
-        if r.has("FootIK"):
-            bones, items = r("FootIK"), r.value("FootIK").data
-            if len(bones) % 3:
-                self.report.error(r.value("FootIK").loc, f"FootIK names bones in threes (hip, "
-                                  f"knee, ankle), got {len(bones)}")
-            for k in range(0, len(bones) - len(bones) % 3, 3):
-                if not all([bone(bones[k + j], items[k + j].loc) for j in range(3)]):
-                    continue
-                hip, knee, ankle = (model.node(bones[k + j]) for j in range(3))
-                for upper, lower, j in ((hip, knee, 1), (knee, ankle, 2)):
-                    if not _below(model.parents, lower, upper):
-                        self.told(items[k + j].loc, f'"{bones[k + j]}" does not hang below '
-                                  f'"{bones[k + j - 1]}" in model "{file}": a leg is hip, knee, '
-                                  "ankle, each below the one before; that leg is left out")
-                        break
-                else:
-                    legs.append((bones[k], bones[k + 1], bones[k + 2]))
-        self.inside(r.value("Position"), "Position")
-        path = self.points(r, "Path")
-        holds = []
-        for b in r.blocks("Hold"):
-            h = _Reader(b, "Hold")
-            if bone(h("Bone"), h.value("Bone").loc):
-                holds.append(Hold(h("Bone"), h("Object"), _floats(h("Offset")),
-                                  euler_to_quat(h("Orientation"))))
-        capsule = None
-        if r.has("Capsule"):
-            diameter, length = _floats(r("Capsule"))
-            if diameter <= 0 or length < 0:
-                self.report.error(r.value("Capsule").loc, "Capsule is [diameter length], "
-                                                          "positive")
-            capsule = (diameter / 2, length)
-        for key in ("Scale", "Speed", "Fade", "StepHeight", "Smoothing", "TurnRate"):
-            if r(key) is not None and (r(key) < 0 or (key == "Scale" and r(key) == 0)):
-                self.report.error(r.value(key).loc, f"{key} must be positive, got {r(key)}")
-        scale = float(r("Scale"))
-        state = self.avatar_states.pop(aid, None)
-        avatar = Avatar(model=file, scale=scale, clip=first,
-                        loop=None if r("Loop") is None else bool(r("Loop")),
-                        speed=_opt(r("Speed")), blend=blend, queue=queue, fade=float(r("Fade")),
-                        clips=clips, ground_follow=bool(r("GroundFollow")),
-                        step_height=float(r("StepHeight")), smoothing=float(r("Smoothing")),
-                        foot_ik=legs, path=path, path_loop=bool(r("PathLoop")),
-                        turn_rate=math.radians(float(r("TurnRate"))), capsule=capsule,
-                        holds=holds, saved=None if state is None else self.saved_avatar(
-                            state, clip, bone))
-        visual = Visual(model=file, scale=(scale,) * 3, color=_color(r("Color")),
-                        shader_state=r("ShaderState"), shadower=bool(r("Shadower")),
-                        shadowed=bool(r("Shadowed")))
-        comps: list[Any] = [Name(aid), Transform(_floats(r("Position")), self.orientation(r)),
-                            visual, avatar]
-        if r.has("User"):
-            comps.append(UserOwned(r("User")))
-        if r.has("Script"):
-            comps.append(Script(file=r("Script"), saved=self.script_states.pop(aid, None)))
-        return EntitySpec(aid, comps, blk.loc)
-
-    def weights(self, r: _Reader, key: str, clip: Callable[[str, Loc], bool]
-                ) -> list[tuple[str, float]]:
-        """Clips named by ``key`` with their ``Weights`` (1 each by default); clips the
-        model lacks are told (``clip``) and left out."""
-        names, weights = r(key), r("Weights") or (1.0,) * len(r(key))
-        if len(weights) != len(names):
-            self.report.error(r.value("Weights").loc if r.has("Weights") else r.value(key).loc,
-                              f"Weights has {len(weights)} numbers for {len(names)} {key} "
-                              "clips")
-        return [(n, float(w)) for n, w, item in zip(names, weights, r.value(key).data,
-                                                     strict=False) if clip(n, item.loc)]
-
-    def points(self, r: _Reader, key: str) -> list[tuple[float, float, float]]:
-        """A path: ``r(key)`` as points [x y z ...]."""
-        if not r.has(key):
-            return []
-        items = r.value(key).data
-        for k in range(0, len(items) - 2, 3):  # each point x y z within the world
-            self.inside(Value(VECTOR, items[k:k + 3], items[k].loc), f"{key} point")
-        flat = _floats(r(key))
-        if len(flat) % 3:
-            self.report.error(r.value(key).loc, f"{key} is points [x y z ...], got {len(flat)} "
-                                                "numbers")
-        return [(flat[k], flat[k + 1], flat[k + 2]) for k in range(0, len(flat) - 2, 3)]
-
-    def not_negative(self, r: _Reader, *keys: str) -> None:
-        for key in keys:
-            if r(key) is not None and not r(key) >= 0:
-                self.report.error(r.value(key).loc, f"{key} must not be negative, got {r(key)}")
-
-    def saved_avatar(self, blk: Block, clip: Callable[[str, Loc], bool],
-                     bone: Callable[[str, Loc], bool]) -> SavedAvatar:
-        """An ``AvatarState`` as its avatar resumes from it. Clips and bones its model
-        lacks are told and left out; numbers out of range are errors."""
-        r = _Reader(blk, "AvatarState")
-        groups = []
-        for b in r.blocks("Group"):
-            g = _Reader(b, "AnimationGroup")
-            if not 0.0 <= g("Phase") <= 1.0:
-                self.report.error(g.value("Phase").loc, f"Phase is 0..1, got {g('Phase')}")
-            layers = []
-            for lb in g.blocks("Layer"):
-                c = _Reader(lb, "AnimationLayer")
-                self.not_negative(c, "Speed", "Weight", "FadeFrom", "FadeTo", "FadeTime",
-                                  "FadeLength")
-                if clip(c("Clip"), c.value("Clip").loc):
-                    layers.append(SavedLayer(c("Clip"), float(c("Speed")), float(c("Weight")),
-                                             float(c("FadeFrom")), float(c("FadeTo")),
-                                             float(c("FadeTime")), float(c("FadeLength"))))
-            if layers:
-                groups.append(SavedGroup(tuple(layers), float(g("Phase")), bool(g("Loop")),
-                                         bool(g("Ended")), bool(g("Current"))))
-        queue = []
-        for b in r.blocks("Queued"):
-            q = _Reader(b, "AnimationRequest")
-            self.not_negative(q, "Fade", "Speed")
-            weights = self.weights(q, "Clips", clip)
-            if weights:
-                queue.append(SavedRequest(tuple(weights), float(q("Fade")), _opt(q("Speed")),
-                                          None if q("Loop") is None else bool(q("Loop"))))
-        path = self.points(r, "Path")
-        if not 0 <= r("Waypoint") <= len(path):
-            self.report.error(r.value("Waypoint").loc, f"Waypoint is a point of Path (0 to "
-                              f"{len(path)}), got {r('Waypoint')}")
-        holds = []
-        for b in r.blocks("Hold"):
-            h = _Reader(b, "HeldState")
-            if bone(h("Bone"), h.value("Bone").loc):
-                holds.append(SavedHold(Hold(h("Bone"), h("Object"), _floats(h("Offset")),
-                                            self.quaternion(h, "Quaternion")),
-                                       None if h("Last") is None else _floats(h("Last"))))
-        drives = []
-        for b in r.blocks("Drive"):
-            d = _Reader(b, "BoneDrive")
-            if bone(d("Bone"), d.value("Bone").loc):
-                drives.append(SavedDrive(d("Bone"), _floats(d("Position")),
-                                         self.quaternion(d, "Quaternion")))
-        capsule = None
-        if r.has("CapsulePosition"):
-            turn = self.quaternion(r, "CapsuleQuaternion") if r.has("CapsuleQuaternion") \
-                else _IDENTITY
-            capsule = (_floats(r("CapsulePosition")), turn)
-        return SavedAvatar(tuple(groups), tuple(queue), tuple(path), bool(r("PathLoop")),
-                           int(r("Waypoint")), _opt(r("Ground")),
-                           None if r("GroundAt") is None else _floats(r("GroundAt")),
-                           float(r("StepOffset")), tuple(holds), tuple(drives), capsule)
 
     def sleep_spec(self, r: _Reader) -> SleepState:
         """An object's saved sleep-rule state, so a loaded state falls asleep on time."""
@@ -1108,105 +954,6 @@ class _Builder:
                           None if force is None else np.array(_floats(force)),
                           bool(r("RestPreloaded")))
 
-    # -- joints ------------------------------------------------------------
-    def joint(self, blk: Block, index: int, spawned: set[str]) -> JointSpec | None:
-        """The joint; its reference poses are the file's or, when this spec spawns both
-        bodies, their poses now (where they are when the joint is made)."""
-        r = _Reader(blk, "Joint")
-        jid = r("ID") or f"joint{index}"
-        kind = SCENE_JOINT_TYPES[r("Type")]
-        bodies = r("Bodies")
-        a, b = bodies[0], bodies[1] if len(bodies) > 1 else None
-        left_out = [name for name in bodies if name in self.skipped]
-        if left_out:
-            where = r.value("Bodies").loc
-            self.problems.append(Diagnostic(
-                where.path, where.line, where.col, ERROR,
-                f"joint '{jid}' is left out: its body '{left_out[0]}' was (see its error)"))
-            return JointSpec(jid, Joint(kind=kind, id=jid), (a, b), blk.loc, skipped=True)
-        for name in bodies:
-            if name not in self.physical_ids and (
-                    name in self.own_poses or name not in self.poses):
-                self.report.error(r.value("Bodies").loc,
-                                  f"joint body '{name}' has no PhysicalAttributes")
-                return None
-        if b is not None and a == b:
-            self.report.error(r.value("Bodies").loc, f"a joint needs two different bodies, "
-                                                     f"got '{a}' twice (one body alone: "
-                                                     f"Bodies [\"{a}\"] joins it to the world)")
-            return None
-        for key in _AXES_NEEDED.get(kind, ()):
-            axis = r.value(key)
-            if axis is not None and not any(item.data for item in axis.data):
-                self.report.error(axis.loc, f"{key} must not be zero: a {r('Type')} joint "
-                                            "turns or slides along it")
-        if kind in TWO_AXES and any(r("Axis")) and any(r("Axis2")) and \
-                parallel(r("Axis"), r("Axis2")):
-            key, other = ("Axis2", "Axis") if r.has("Axis2") else ("Axis", "Axis2")
-            given = " ".join(f"{x:g}" for x in r(other))
-            self.report.error(r.value(key).loc, f"{key} must not be parallel to {other} "
-                              f"[{given}]{'' if r.has(other) else ' (its default)'}: a "
-                              f"{r('Type')} joint turns about two different axes")
-        if kind == JointKind.HINGE2 and (b is None or {a, b} & self.static_ids):
-            self.report.error(r.value("Bodies").loc, f"{HINGE2_BODIES} (Bodies [\"wheel\" "
-                                                     "\"chassis\"], both dynamic)")
-        self.inside(r.value("Anchor"), "Anchor")
-        for key in ("ReferencePose1", "ReferencePose2"):
-            self.inside(r.value(key), key)
-        linear = kind in LINEAR_KINDS
-        conv = (lambda x: x) if linear else math.radians
-        anchor = _floats(r("Anchor")) if r.has("Anchor") else self.poses[a][0]
-        low, high = r("Low"), r("High")
-
-        def pose(key: str, body: str) -> tuple[float, ...]:
-            return _floats(r(key)) if r.has(key) else (*self.poses[body][0],
-                                                        *self.poses[body][1])
-
-        reference = None
-        if r.has("ReferencePose1") or r.has("ReferencePose2") or {a, b} - {None} <= spawned:
-            reference = (pose("ReferencePose1", a),
-                         None if b is None else pose("ReferencePose2", b))
-        joint = Joint(kind=kind, anchor=anchor, axis=_floats(r("Axis")),
-                      axis2=_floats(r("Axis2")),
-                      low=None if low is None else conv(low),
-                      high=None if high is None else conv(high),
-                      motor_velocity=conv(r("MotorVelocity")),
-                      motor_max_force=float(r("MotorMaxForce")), id=jid, reference=reference,
-                      spring=self.spring(r, kind))
-        return JointSpec(jid, joint, (a, b), blk.loc)
-
-    def spring(self, r: _Reader, kind: str) -> Spring | None:
-        """The joint's ``Spring`` block in the engine's units (per radian), or None (told
-        when it cannot act: a joint without one free axis, nothing to pull with)."""
-        blk = r.value("Spring")
-        if blk is None or blk.kind != STRUCTURE:
-            return None
-        s = _Reader(blk.data, "Spring")
-        if kind not in SPRING_KINDS:
-            self.report.error(blk.loc, f"a {r('Type')} joint takes no Spring (Hinge, "
-                                       f"MotorizedHinge and Slider do: one free axis)")
-            return None
-        bad = False
-        for key in ("Stiffness", "Damping"):
-            if not 0 <= s(key) < math.inf:
-                self.report.error(s.value(key).loc, f"Spring {key} must be 0 or more, got "
-                                                    f"{s(key):g}")
-                bad = True
-        most = s("MaxForce")
-        if most is not None and not most > 0:
-            self.report.error(s.value("MaxForce").loc, f"Spring MaxForce must be above 0, "
-                                                       f"got {most:g}")
-            bad = True
-        if not bad and s("Stiffness") == 0 and s("Damping") == 0:
-            self.report.error(blk.loc, "a Spring needs a Stiffness or a Damping above 0")
-            bad = True
-        if bad:
-            return None
-        per = 1.0 if kind in LINEAR_KINDS else math.degrees(1.0)  # per degree -> per radian
-        return Spring(float(s("Stiffness")) * per, float(s("Damping")) * per,
-                      float(s("Target")) if kind in LINEAR_KINDS else math.radians(s("Target")),
-                      math.inf if most is None else float(most))
-
     # -- shaders, world, scene-level entities ---------------------------------
     def shaders(self, root: _Index, spec: SceneSpec) -> None:
         files = {}
@@ -1221,11 +968,6 @@ class _Builder:
         for b in root.blocks("ShaderState"):
             r = _Reader(b, "ShaderState")
             spec.shader_states[r("ID")] = ShaderStateSpec(r("ShaderProgram"), _uniforms(r))
-        for b in root.blocks("PostPass"):
-            r = _Reader(b, "PostPass")
-            spec.post_passes.append(PostPassSpec(
-                str(r("ID")), str(r("File")), _uniforms(r), bool(r("Enabled")),
-                bool(r("Feedback")), f"{b.loc.path}:{b.loc.line}"))
 
     def world_extent(self, root: _Index) -> float:
         """The file's World Extent (m), checked; the default where it is refused."""
@@ -1282,18 +1024,12 @@ class _Builder:
         blk = root.value("World")
         w = _Reader(blk.data if blk else None, "World")
         self.time_step(w)
-        pairs = []
-        for b in root.blocks("MaterialPair"):
-            p = _Reader(b, "MaterialPair")
-            pairs.append(MaterialPair(str(p("Material1")), str(p("Material2")),
-                                      _opt(p("Friction")), _opt(p("Bounce")),
-                                      _opt(p("Softness")), bool(p("Collide"))))
+        pairs = spec.material_pairs  # the MaterialPair blocks (engine.physics.backend)
         checked = self.world_numbers(w)
         spec.world = WorldSettings(gravity=_floats(w("Gravity")),
                                    auto_sleep=bool(w("AutoSleep")),
                                    material_pairs=pairs, solver_seed=w("SolverSeed"),
                                    extent=self.extent or WORLD_EXTENT, **checked)
-        spec.material_pairs = pairs
         spec.time_step = float(w("TimeStep"))
         spec.backend = w("Dynamics")
         spec.time = float(w("Time"))
@@ -1335,26 +1071,6 @@ class _Builder:
                 f"{STEP_WARNING:g} s ({TIME_STEP:g} is the default)"))
 
     def scene_entities(self, root: _Index, spec: SceneSpec) -> None:
-        for i, b in enumerate(root.blocks("Camera")):
-            r = _Reader(b, "Camera")
-            cid = r("ID") or f"camera{i}"
-            if r.has("Follow") and r("Follow") in self.skipped:
-                where = r.value("Follow").loc
-                self.problems.append(Diagnostic(
-                    where.path, where.line, where.col, ERROR,
-                    f"camera '{cid}' follows nothing: object '{r('Follow')}' was left out"))
-            elif r.has("Follow"):
-                spec.camera_follow[cid] = r("Follow")
-            self.camera_view(r, cid, b)
-            cam = Camera(fov=float(r("Fov")), near=float(r("Near")), far=float(r("Far")),
-                         active=bool(r("Active")), offset=_floats(r("Offset")),
-                         look_at=_floats(r("LookAt")),
-                         eye_separation=float(r("EyeSeparation")))
-            spec.entities.append(EntitySpec(cid, [Name(cid), Transform(r("Position")), cam],
-                                            b.loc))
-        for b in root.blocks("Measure"):
-            r = _Reader(b, "Measure")
-            spec.measures.append(MeasureSpec(r("ID"), r("Object"), r("Value")))
         for i, e in enumerate(root.get_all("Script")):
             sid = f"script{i}"
             script = Script(file=e.value.data, saved=self.script_states.pop(sid, None))
@@ -1369,23 +1085,6 @@ class _Builder:
                     block.loc.path, block.loc.line, block.loc.col, WARNING,
                     f"ScriptState for {owner!r}, which runs no script here; ignored"))
 
-    def camera_view(self, r: _Reader, cid: str, blk: Block) -> None:
-        """Warn about a camera with no well-defined view direction (the picture and the
-        3D sound listener follow it): LookAt at its eye, or straight along Z."""
-        if r.has("Follow"):  # LookAt and Offset are in the followed object's frame
-            if not r.has("LookAt"):
-                return  # it takes the object's orientation
-            eye = r("Offset")
-        else:
-            eye = r("Position")
-        problem = view_problem(np.subtract(r("LookAt"), eye))
-        if problem is not None:
-            where = (r.value("LookAt") or r.value("Position") or blk).loc
-            self.problems.append(Diagnostic(
-                where.path, where.line, where.col, WARNING,
-                f"camera '{cid}': {problem}; the view is meaningless and 3D sound unpanned: "
-                "move its LookAt (or Position) so it looks across, not along, Z"))
-
     def saved_scripts(self, root: _Index) -> dict[str, SavedScript]:
         """Owner -> the saved state its script resumes from (a loaded saved state)."""
         states: dict[str, SavedScript] = {}
@@ -1399,14 +1098,6 @@ class _Builder:
             states[owner] = SavedScript(str(r("Globals")), str(r("Locals")), timers, handlers)
             self.script_blocks[owner] = blk
         return states
-
-
-#: The axes a joint kind turns or slides along (a zero one is an error).
-_AXES_NEEDED = {
-    JointKind.HINGE: ("Axis",), JointKind.MOTORIZED_HINGE: ("Axis",),
-    JointKind.SLIDER: ("Axis",), JointKind.UNIVERSAL: ("Axis", "Axis2"),
-    JointKind.HINGE2: ("Axis", "Axis2"),
-}
 
 
 #: The World block's bounded keys and the WorldSettings field each sets.
@@ -1496,9 +1187,6 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
     with paused_gc():
         entities = engine.spawn_many([es.components for es in made])
     ids = dict(zip([es.id for es in made], entities, strict=True))
-    for cam_id, target in spec.camera_follow.items():
-        cam = engine.world.component_for_entity(ids[cam_id], Camera)
-        cam.follow = ids[target]
     for link in spec.links:
         if link.entity in ids and link.target in ids:
             setattr(engine.world.component_for_entity(ids[link.entity], link.component),

@@ -23,10 +23,8 @@ from typing import Any
 
 from components.joint import SCENE_JOINT_TYPES
 from components.shape import ShapeKind
-from engine.anomalies import ANOMALIES, COMMON_DOCS, EYES, ONSET_DEFAULT
 from engine.experiments.design import END_ON, RESETS, Design
 from engine.experiments.ordering import ORDERS as EXPERIMENT_ORDERS
-from engine.measures import QUANTITIES
 from engine.physics.backend import WORLD_EXTENT, BackendName, WorldSettings
 from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
 from engine.realtime import TIME_STEP
@@ -88,9 +86,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     "Scene": {
         "Object": _f(STRUCT_T, doc="a body and/or visual", repeat=True, struct="Object"),
         "Material": _f(STRUCT_T, doc="surface properties", repeat=True, struct="Material"),
-        "MaterialPair": _f(STRUCT_T, doc="contact parameters for two materials", repeat=True,
-                           struct="MaterialPair"),
-        "Joint": _f(STRUCT_T, doc="a constraint between bodies", repeat=True, struct="Joint"),
         "VertexShader": _f(STRUCT_T, None,
                            "a GLSL vertex shader file (see docs/GLSL.md)", repeat=True,
                            struct="VertexShader"),
@@ -102,21 +97,11 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "ShaderState": _f(STRUCT_T, None,
                           "a program and values for its uniforms; objects draw with it",
                           repeat=True, struct="ShaderState"),
-        "Camera": _f(STRUCT_T, None,
-                     "a viewpoint (the first active one is drawn and heard from)", repeat=True,
-                     struct="Camera"),
-        "Measure": _f(STRUCT_T, None, "a value the run reports at its end (--stats "
-                      "measures, colosseum sweep's table)", repeat=True, struct="Measure"),
         "Script": _f(ASSET_T, doc="a Lua script run for the whole scene", repeat=True),
         "World": _f(STRUCT_T, doc="dynamics settings", struct="World"),
-        "Avatar": _f(STRUCT_T, doc="a skinned, animated figure (glTF)", repeat=True,
-                     struct="Avatar"),
         "Model": _f(STRUCT_T, doc="a model file (glTF, Collada) whose bodies, joints and "
                     "materials join the scene", repeat=True, struct="Model"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
-        "PostPass": _f(STRUCT_T, doc="a full-screen pass over the drawn frame (your GLSL "
-                       "fragment shader; services.render.postprocess)", repeat=True,
-                       struct="PostPass"),
         "Input": _f(STRUCT_T, doc="input devices and how their trackers, wheels and buttons "
                     "are calibrated (services.input)", repeat=True, struct="Input"),
         "Output": _f(STRUCT_T, doc="engine values published every frame over OSC or LSL",
@@ -257,43 +242,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Density": _f(FLOAT_T, 1000.0, "kg/m^3"),
         "ContactSound": _f(ASSET_T, None, "played on impacts"),
     },
-    "MaterialPair": {
-        "Material1": _f(REF_T, None, "one material", required=True, ref="Material"),
-        "Material2": _f(REF_T, None, "the other material", required=True, ref="Material"),
-        "Friction": _f(FLOAT_T, None, "Coulomb coefficient for this pair"),
-        "Bounce": _f(FLOAT_T, None, "restitution for this pair, 0..1"),
-        "Softness": _f(FLOAT_T, None, "contact softness for this pair"),
-        "Collide": _f(BOOL_T, 1, "0: the two materials pass through each other"),
-    },
-    "Joint": {
-        "ID": _id("joint"),
-        "Type": _f(ENUM_T, None, "the kind of constraint", required=True, allowed=JOINT_TYPES),
-        "Bodies": _f(STRINGVECTOR_T, None, "one object (jointed to the world) or two",
-                     required=True, ref="Object", lengths=(1, 2)),
-        "Anchor": _f(VEC3_T, None, "m, world frame, with the bodies at their reference poses "
-                     "(default: first body's position)"),
-        "Axis": _f(VEC3_T, (0.0, 0.0, 1.0), "hinge, slider or first axis, world frame"),
-        "Axis2": _f(VEC3_T, (0.0, 1.0, 0.0), "second axis (Universal, Hinge2), world frame"),
-        "Low": _f(FLOAT_T, None, "lower limit: degrees, or m for a slider"),
-        "High": _f(FLOAT_T, None, "upper limit: degrees, or m for a slider"),
-        "MotorVelocity": _f(FLOAT_T, 0.0, "deg/s, or m/s for a slider"),
-        "MotorMaxForce": _f(FLOAT_T, 0.0, "N*m, or N for a slider"),
-        "ReferencePose1": _f(VECTOR_T, None, "[x y z qw qx qy qz] (m, quaternion): the first "
-                             "body's pose when the joint was first made; Anchor and axes are "
-                             "as they were then (default: the body's own pose)", lengths=(7,)),
-        "ReferencePose2": _f(VECTOR_T, None, "the same for the second body", lengths=(7,)),
-        "Spring": _f(STRUCT_T, None, "a spring-damper on a Hinge's, MotorizedHinge's or "
-                     "Slider's free axis (beside its limits and motor)", struct="Spring"),
-    },
-    "Spring": {
-        "Stiffness": _f(FLOAT_T, 0.0, "N*m per degree, or N/m for a slider: its pull toward "
-                        "Target"),
-        "Damping": _f(FLOAT_T, 0.0, "N*m per deg/s, or N per m/s: how it resists the joint's "
-                      "rate (alone, without Stiffness: a damper)"),
-        "Target": _f(FLOAT_T, 0.0, "degrees, or m for a slider, counted as Low and High are "
-                     "(0: where the joint was made)"),
-        "MaxForce": _f(FLOAT_T, None, "N*m, or N: the most it pulls with (default: no bound)"),
-    },
     "VertexShader": {
         "ID": _id("vertex shader", True),
         "File": _f(ASSET_T, None, "GLSL source file", required=True),
@@ -317,37 +265,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                             ref="ShaderProgram"),
         "Uniform": _f(STRUCT_T, None, "a uniform's value", repeat=True, struct="Uniform"),
     },
-    "PostPass": {
-        "ID": _id("post-processing pass", True),
-        "File": _f(ASSET_T, None, "the fragment shader: it reads u_scene (the frame) at v_uv "
-                   "and writes one vec4 (see docs/GLSL.md)", required=True),
-        "Uniform": _f(STRUCT_T, None, "a uniform's value", repeat=True, struct="Uniform"),
-        "Enabled": _f(BOOL_T, 1, "0: declared, switched on later (Lua enablePost)"),
-        "Feedback": _f(BOOL_T, 0, "1: the pass also reads its own last output (u_previous)"),
-    },
     "Uniform": {
         "ID": _f(STRING_T, None, "uniform name in the GLSL source", required=True),
         "Value": _f(NUMBER_OR_VECTOR_T, None,
                     "a number, or up to 4 numbers (vec2..vec4)", required=True),
-    },
-    "Camera": {
-        "ID": _id("camera"),
-        "Position": _f(VEC3_T, (0.0, -5.0, 2.0), "m, world frame (with Follow, see Offset)"),
-        "LookAt": _f(VEC3_T, (0.0, 0.0, 0.0),
-                     "m, the point it looks at (in the followed object's frame with Follow)"),
-        "Fov": _f(FLOAT_T, 60.0, "degrees, vertical"),
-        "Near": _f(FLOAT_T, 0.05, "m, nearest distance drawn"),
-        "Far": _f(FLOAT_T, 500.0, "m, farthest distance drawn"),
-        "Active": _f(BOOL_T, 1, "1: the one drawn and heard from (the first active)"),
-        "Follow": _f(REF_T, None, "object to follow at Offset", ref="Object"),
-        "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, its place in the followed object's frame"),
-        "EyeSeparation": _f(FLOAT_T, 0.0, "m; > 0 renders stereo"),
-    },
-    "Measure": {
-        "ID": _id("measure", required=True),
-        "Object": _f(REF_T, None, "the object measured", ref="Object", required=True),
-        "Value": _f(ENUM_T, "z", "x, y, z (m), vx, vy, vz (m/s) or speed (m/s) at the end "
-                    "of the run", allowed=QUANTITIES),
     },
     "Session": {
         "Folder": _f(STRING_T, "", "the folder session logs go to, relative to the working "
@@ -458,60 +379,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
     "ScriptHandler": {
         "Event": _f(STRING_T, None, "the custom event's name (on(name, fn))", required=True),
         "Function": _f(STRING_T, None, "the name of the function it calls", required=True),
-    },
-    "Avatar": {
-        "ID": _id("avatar"),
-        "User": _f(STRING_T, None, "the user (colosseum join --user NAME) it stands for — an "
-                   "avatar, a wheelchair, hands: a server takes it out of the world "
-                   "--leave-after s after that user's node leaves, unless the user comes "
-                   "back"),
-        "Model": _f(ASSET_T, None, ".glb or .gltf with a skin (Blender, Maya, Mixamo exports)",
-                    required=True),
-        "Position": _f(VEC3_T, (0.0, 0.0, 0.0), "m, where its feet stand"),
-        "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees; unturned it faces +Y"),
-        "Quaternion": _f(VECTOR_T, None, "exact orientation [w x y z]; wins over Orientation",
-                         lengths=(4,)),
-        "Scale": _f(FLOAT_T, 1.0, "uniform scale of the model"),
-        "Animation": _f(STRING_T, None, "clip played first"),
-        "Loop": _f(BOOL_T, None, "1: the first clip loops, 0: it does not (default: as its "
-                   "Clip block says, else 1)"),
-        "Speed": _f(FLOAT_T, None, "playback rate of the first clip (default: its Clip "
-                    "block's Speed, else 1)"),
-        "Blend": _f(STRINGVECTOR_T, None, "clips played at once from the start (with Weights)"),
-        "Weights": _f(VECTOR_T, None, "weight of each Blend clip"),
-        "Queue": _f(STRINGVECTOR_T, None, "clips played in turn when the first one ends"),
-        "Fade": _f(FLOAT_T, 0.2, "s, default crossfade between clips"),
-        "Clip": _f(STRUCT_T, doc="how one clip plays", repeat=True, struct="Clip"),
-        "GroundFollow": _f(BOOL_T, 0, "keep the feet on the ground below (ray casts)"),
-        "StepHeight": _f(FLOAT_T, 0.5, "m, highest step it walks up"),
-        "Smoothing": _f(FLOAT_T, 0.1, "s, how fast a step up or down is taken"),
-        "FootIK": _f(STRINGVECTOR_T, None, "bone triples [hip knee ankle ...] whose feet meet "
-                     "slopes and steps"),
-        "Path": _f(VECTOR_T, None, "m, points [x y z x y z ...] walked in turn"),
-        "PathLoop": _f(BOOL_T, 1, "after the last point, walk back to the first"),
-        "TurnRate": _f(FLOAT_T, 180.0, "deg/s, how fast it turns toward the next point"),
-        "Capsule": _f(VECTOR_T, None, "[diameter length] m: a kinematic body dynamic objects "
-                      "bump into", lengths=(2,)),
-        "Hold": _f(STRUCT_T, doc="an object carried by a bone", repeat=True, struct="Hold"),
-        "Color": _f(VECTOR_T, (1.0, 1.0, 1.0, 1.0), "RGB or RGBA, 0..1, times the model's",
-                    lengths=(3, 4)),
-        "ShaderState": _f(REF_T, None, "the shader state it is drawn with", ref="ShaderState"),
-        "Shadower": _f(BOOL_T, 1, "casts shadows"),
-        "Shadowed": _f(BOOL_T, 1, "receives shadows"),
-        "Script": _f(ASSET_T, doc="Lua script attached to this avatar"),
-    },
-    "Clip": {
-        "Name": _f(STRING_T, None, "the clip's name in the model", required=True),
-        "Speed": _f(FLOAT_T, 1.0, "playback rate"),
-        "Loop": _f(BOOL_T, 1, "1: the clip starts again when it ends; 0: it holds its last pose"),
-        "GroundSpeed": _f(FLOAT_T, None, "m/s it walks at speed 1 (default: measured from the "
-                          "clip's root motion)"),
-    },
-    "Hold": {
-        "Object": _f(REF_T, None, "the object carried", required=True, ref="Object"),
-        "Bone": _f(STRING_T, None, "the bone (node name) holding it", required=True),
-        "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, in the bone's frame"),
-        "Orientation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees, in the bone's frame"),
     },
     # -- saved avatars (written by --save-state; engine.scene.snapshot) --
     "AvatarState": {
@@ -696,35 +563,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Markers": _f(BOOL_T, 1, "1: send task markers (Lua emit(\"marker\", text))"),
     },
 }
-
-def _anomaly_blocks() -> dict[str, dict[str, Field]]:
-    """A block per anomaly (engine.anomalies is the one vocabulary): its common keys, then
-    a key per severity parameter with its range and unit in the docs."""
-    blocks = {}
-    for kind in ANOMALIES.values():
-        fields = {
-            "ID": _f(STRING_T, "", COMMON_DOCS["ID"]),
-            "Enabled": _f(BOOL_T, 1, COMMON_DOCS["Enabled"]),
-            "Onset": _f(FLOAT_T, ONSET_DEFAULT, COMMON_DOCS["Onset"]),
-            "Eye": _f(ENUM_T, "both", COMMON_DOCS["Eye"], allowed=EYES),
-            "Input": _f(STRING_T, None, COMMON_DOCS["Input"]),
-        }
-        for p in kind.params:
-            doc = f"{p.doc} ({p.range_text()})"
-            if p.choices:
-                fields[p.key] = _f(ENUM_T, p.default, doc, allowed=p.choices)
-            elif p.size > 1:
-                fields[p.key] = _f(VECTOR_T, p.default, doc, lengths=(p.size,))
-            else:
-                fields[p.key] = _f(FLOAT_T, p.default, doc)
-        blocks[kind.block] = fields
-    return blocks
-
-
-for _kind in ANOMALIES.values():
-    SCHEMAS["Scene"][_kind.block] = _f(STRUCT_T, doc=f"a visual anomaly: {_kind.doc} "
-                                       "(engine.anomalies)", repeat=True, struct=_kind.block)
-SCHEMAS.update(_anomaly_blocks())
 
 #: Declarations whose ``ID`` others may reference, by the schema name used in ``Field.ref``.
 ID_KINDS = ("Object", "Material", "Joint", "VertexShader", "FragmentShader", "ShaderProgram",

@@ -561,7 +561,7 @@ def _written(blk: Block, name: str) -> Block | None:
 def _declared_entities(world: World, ids: SceneIds, root: Block) -> None:
     """Top-level declared blocks (an entity each, named by ID or place) as they are now."""
     for name, block in blocks.BLOCKS.items():
-        if "Scene" not in block.inside:
+        if "Scene" not in block.inside or not block.entity:  # a Joint is written above
             continue
         written = [e for e in root.entries if e.key == name and e.value.kind == STRUCTURE]
         for i, entry in enumerate(written):

@@ -671,8 +671,9 @@ class ScriptAPI:
             ids[es.id] = -1 if es.skipped else self.engine.spawn(*es.components)
             made.append(ids[es.id])
         objects = made[:len(spec.db.blocks("Object"))] if spec.db is not None else []
-        avatars = made[len(made) - len(spec.db.blocks("Avatar")):] if spec.db is not None \
-            else []  # the factory makes avatars last
+        avatars = [ids[str(b.get("ID") or f"avatar{i}")]  # (the factory's name by place)
+                   for i, b in enumerate(spec.db.blocks("Avatar"))] if spec.db is not None \
+            else []
         joints: list[int] = []
         for js in spec.joints:
             if js.skipped:

@@ -92,7 +92,8 @@ def test_a_model_block_imports_the_same_objects_into_a_scene(models):
                                                                 [s.kind for s in b.shapes])
     # the scene's own material wins over the model's, and a camera follows a model's body
     assert components(spec, "Door")[Physical].material.friction == 0.2
-    assert spec.camera_follow == {"eye": "s/Sphere"}
+    assert [(k.entity, k.field, k.target) for k in spec.links
+            if k.component is Camera] == [("eye", "follow", "s/Sphere")]
     assert isinstance(components(spec, "eye")[Camera], Camera)
 
 

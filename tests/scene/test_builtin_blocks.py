@@ -15,7 +15,7 @@ import pytest
 
 import engine.scene.schema as sc
 from components import Wheelchair
-from components.blocks import BlockDeclaration, BuildContext, Key, declare
+from components.blocks import DECLARED, BlockDeclaration, BuildContext, Key, declare
 from engine.app import EngineConfig
 from engine.scene import SceneError, instantiate, keys, spec_from_text, write_state
 from engine.scene.blocks import BLOCKS, BlockError, builtin, from_content, unregister
@@ -113,3 +113,60 @@ def test_a_declaration_in_no_known_place_is_refused() -> None:
         declare(BlockDeclaration("Joint", (), _brake))
     with pytest.raises(BlockError, match="no type"):
         declare(BlockDeclaration("Odd", (Key("X", "color"),), _brake))
+
+
+def test_a_joint_is_a_declared_block_that_makes_no_entity_of_its_own(tmp_path: Path) -> None:
+    """Joint goes through the registry (entity=False): its build hands the context a
+    joint between bodies by ID, with the bodies' poses as reference, and a saved state
+    writes it back under the ID its place gave it."""
+    text = ('Object { ID "a" Position [0 0 1] PhysicalAttributes { Mass 1 } }\n'
+            'Object { ID "b" Position [1 0 1] PhysicalAttributes { Mass 1 } }\n'
+            'Joint { Type "Hinge" Bodies ["a" "b"] Low -30 }\n')
+    joint = BLOCKS["Joint"]
+    assert builtin(joint) and not joint.entity and "Joint" in sc.SCHEMAS["Scene"]
+    spec = spec_from_text(text, tmp_path, np.random.default_rng(1),
+                          path=str(tmp_path / "m.scene"))
+    assert [e.id for e in spec.entities] == ["a", "b"]
+    (js,) = spec.joints
+    assert (js.id, js.bodies, js.joint.low) == ("joint0", ("a", "b"), pytest.approx(-np.pi / 6))
+    assert js.joint.reference == ((0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0),
+                                  (1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0))
+    with create_engine(EngineConfig(fast=True)) as engine:
+        instantiate(engine, spec)
+        saved = write_state(engine)
+    assert 'ID "joint0"' in saved
+    with pytest.raises(SceneError, match="no PhysicalAttributes"):
+        spec_from_text(text.replace("PhysicalAttributes { Mass 1 }", "VisualAttributes { }", 1),
+                       tmp_path)
+
+
+def test_a_setting_block_fills_the_scene_and_a_second_id_is_claimed_once(tmp_path: Path
+                                                                         ) -> None:
+    """Anomalies, Measure and PostPass make no entity: their builds fill the scene's lists
+    (anomalies in the vocabulary's order), and two anomalies with one ID are told at the
+    second in that order, naming where the first is."""
+    text = ('Object { ID "ball" Position [0 0 1] }\n'
+            'Measure { ID "height" Object "ball" }\n'
+            'Hemianopia { ID "h" Side "left" }\n'
+            'DoubleVision { }\n'
+            'PostPass { ID "grey" File "grey.frag" Uniform { ID "amount" Value 0.5 } }\n')
+    (tmp_path / "grey.frag").write_text("void main() {}\n")
+    spec = spec_from_text(text, tmp_path, path=str(tmp_path / "m.scene"))
+    assert [e.id for e in spec.entities] == ["ball"]
+    assert [(m.id, m.object, m.value) for m in spec.measures] == [("height", "ball", "z")]
+    assert [a.id for a in spec.anomalies] == ["double_vision", "h"]  # vocabulary order
+    (post,) = spec.post_passes
+    assert (post.id, post.uniforms, post.origin) == ("grey", {"amount": 0.5},
+                                                    f"{tmp_path / 'm.scene'}:5")
+    with pytest.raises(SceneError) as twice:
+        spec_from_text(text + 'Neglect { ID "h" }\n', tmp_path, path="m.scene")
+    # Neglect comes before Hemianopia in the vocabulary: the Hemianopia is the second
+    assert "m.scene:3:12: error: a second anomaly 'h' (the first is at m.scene:6:9)" in \
+        str(twice.value)
+
+
+def test_a_refused_declaration_leaves_the_one_it_clashed_with() -> None:
+    joint = BLOCKS["Joint"]
+    with pytest.raises(BlockError, match="exists already"):
+        declare(BlockDeclaration("Joint", (), _brake))
+    assert DECLARED["Joint"].build is joint.hook and BLOCKS["Joint"] is joint

@@ -112,7 +112,9 @@ def test_joints_world_cameras_lights_controllers(rep):
     assert rep.world.iterations == 30 and rep.time_step == 0.005 and rep.backend == "ode"
     (pair,) = rep.world.material_pairs
     assert (pair.a, pair.b, pair.friction) == ("wood", "3", 0.05)
-    assert comps(rep, "eye")[Camera].fov == 70 and rep.camera_follow == {"eye": "crate"}
+    assert comps(rep, "eye")[Camera].fov == 70
+    follows = [(k.entity, k.field, k.target) for k in rep.links if k.component is Camera]
+    assert follows == [("eye", "follow", "crate")]
     assert comps(rep, "light0")[Light].kind == "point"
     assert comps(rep, "push")[Controller].target == "motor:hinge"
 
