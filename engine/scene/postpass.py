@@ -43,7 +43,7 @@ def build_post_pass(v: Mapping[str, Any], ctx: BuildContext) -> list[Any]:
 POST_PASS_BLOCK = declare(BlockDeclaration(
     "PostPass", inside=("Scene",), build=build_post_pass, entity=False,
     doc="a full-screen pass over the drawn frame (your GLSL fragment shader; "
-    "engine.render.postprocess)", keys=(
+    "services.render.postprocess)", keys=(
         Key("ID", "string", "", "name other declarations use to refer to this "
             "post-processing pass", required=True),
         Key("File", "asset", None, "the fragment shader: it reads u_scene (the frame) at v_uv "

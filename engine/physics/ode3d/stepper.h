@@ -5,7 +5,7 @@
  * A step: the caller collides, handing every pair's contacts to cs_collect (which does
  * not make joints yet); cs_solve then finds the islands, makes the contact joints with
  * their final surfaces, and steps; afterwards cs_forces holds every contact's force.
- * Three things on top of ODE's own step, each chosen by measurement (tools/bench_accuracy.py,
+ * Three things on top of ODE's own step, each chosen by measurement (app/bench/accuracy.py,
  * docs/PHYSICS.md):
  *
  * 1. Islands solved exactly. Islands held together by joints alone (a pendulum, a chain,
@@ -330,7 +330,7 @@ static inline void cs_switch(CsState *s, int exact_rows, const void *bodies, siz
  * the contacts' corrections leave kept a column of 1 kg boxes above the sleep rule's
  * steady band, 3 mm/s, and awake): QuickStep's few iterations leave a stack's crates a few
  * mm/s and mrad/s of motion each step, which add up to a sway; the stack at 1/60 s drifted
- * 14 to 28 mm in 20 s with it, 0.5 to 3 mm without (tools/bench_accuracy.py). A body
+ * 14 to 28 mm in 20 s with it, 0.5 to 3 mm without (app/bench/accuracy.py). A body
  * slower than this is one the sleep rule would freeze anyway (PhysX's stabilisation
  * damps bodies near their sleep threshold alike). */
 static inline int cs_hold_still(dBodyID b, const double *down, int whole) {
