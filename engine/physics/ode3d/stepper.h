@@ -1,5 +1,5 @@
 /* How Colosseum steps a libode world: plain C, shared by the binding (_ode.pyx) and the
- * plain-C reference of `colosseum bench physics` (tools/bench_ode.c), so both solve the
+ * plain-C reference of `colosseum bench physics` (app/bench/bench_ode.c), so both solve the
  * same problem with the same settings.
  *
  * A step: the caller collides, handing every pair's contacts to cs_collect (which does
