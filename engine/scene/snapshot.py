@@ -585,6 +585,7 @@ def _literal_value(value: Any) -> Value:
     return _vec(value)
 
 
+# Long: the sections in file order; blocks not on the registry yet are written here
 def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
                 names: dict[int, str] | None = None) -> str:
     """Scene text of the running simulation; needs a scene loaded with ``instantiate``.

@@ -287,6 +287,7 @@ cdef class Rows:
                 velocity[4, i] = -p[5]
                 velocity[5, i] = 0.0
 
+    # Long: one typed pass over pymunk.batch's arbiter buffers (C locals)
     def contacts(self, const int64_t[:, ::1] ints, const double[:, ::1] floats):
         """One CONTACT_DTYPE row per touching arbiter, sorted by keys then place; and
         each one's rows (side a, side b; -1: the keyless world), (m, 2) int64.
@@ -431,6 +432,7 @@ cdef class Rows:
             begin = end[r]
 
 
+# Long: one typed pass over the pose table into the plane (C locals)
 def planar_poses(const double[:, ::1] table, const double[:, ::1] rest,
                  const double[:, ::1] cog, double[:, ::1] out,
                  unsigned char[::1] flags) -> int:
@@ -501,6 +503,7 @@ def planar_poses(const double[:, ::1] table, const double[:, ::1] rest,
     return flagged
 
 
+# Long: one typed pass over the contact rows (C locals)
 def carried_down(const int64_t[::1] rows_a, const int64_t[::1] rows_b,
                  const double[:] impulse, const double[::1] normal_up,
                  const double[::1] load, int rounds) -> cnp.ndarray:
