@@ -27,7 +27,6 @@ in the plane and its cost per hand per step beside the 2D palm's.
 from __future__ import annotations
 
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
 
@@ -44,35 +43,23 @@ REPEATS = 3
 
 def _rig(scene: str, folder: Path, backend: str, paths: dict[str, Any], seconds: float,
          on_frame: Any = None) -> float:
-    """Run ``scene`` with trackers on ``paths`` (t -> position); CPU seconds per step."""
-    from engine import EngineConfig, Phase, system
-    from engine.scene import instantiate, spec_from_text
-    from services.input import InputHub
+    """Run ``scene`` with trackers on ``paths`` (t -> position); CPU seconds per step
+    (the fingered hand's runner, :func:`app.bench.fingers.run`, fed tracker poses)."""
+    from app.bench.fingers import run
+
+    feeds = {name: _pose_feed(name, path) for name, path in paths.items()}
+    return run(scene, folder, feeds, seconds, on_frame, rate=RATE, settle=0.5, backend=backend)
+
+
+def _pose_feed(name: str, path: Any) -> Any:
+    """A tracker's pose at t on ``path``, its velocity by central difference."""
     from services.input.events import TrackerPose
-    from systems import create_engine
 
-    config = EngineConfig(backend=backend, fast=True, dt=1.0 / RATE, content_dir=folder,
-                          debug=False)
-    with create_engine(config) as engine:
-        ids = instantiate(engine, spec_from_text(scene, folder))
-        engine.start()
-        hub = engine.resource(InputHub)
-        hub.clock = lambda: engine.time
+    def feed(t: float) -> TrackerPose:
+        v = (path(t + 1e-4) - path(t - 1e-4)) / 2e-4
+        return TrackerPose(name, tuple(path(t)), (1.0, 0.0, 0.0, 0.0), tuple(v), t)
 
-        @system(Phase.INPUT, before=("InputSystem",))
-        def trackers(e: Any, dt: float) -> None:
-            t = e.time
-            for name, path in paths.items():
-                v = (path(t + 1e-4) - path(t - 1e-4)) / 2e-4
-                hub.inject(TrackerPose(name, tuple(path(t)), (1.0, 0.0, 0.0, 0.0), tuple(v), t))
-
-        engine.add_system(trackers)
-        if on_frame is not None:
-            engine.add_system(system(Phase.POST_PHYSICS)(lambda e, dt: on_frame(e, ids)))
-        engine.run(seconds=0.5)  # rigged and settled
-        steps0, t0 = engine.physics.steps, time.thread_time()
-        engine.run(seconds=seconds)
-        return (time.thread_time() - t0) / max(engine.physics.steps - steps0, 1)
+    return feed
 
 
 def _hand(name: str, x: float, y: float, z: float) -> str:
