@@ -19,6 +19,7 @@ from components.light import Light
 from components.name import Name
 from components.physical import MaterialProps, Physical
 from components.script import Script
+from components.session import SessionSettings
 from components.shape import Shape
 from components.sound import Sound
 from components.transform import Transform
@@ -44,6 +45,7 @@ __all__ = [
     "Name",
     "Physical",
     "Script",
+    "SessionSettings",
     "Shape",
     "Sound",
     "Transform",

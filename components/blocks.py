@@ -157,6 +157,9 @@ class BuildContext(Protocol):
         """The scene-wide ``setting`` (a SceneSpec field, such as the list ``anomalies``)
         a block that makes no entity fills."""
 
+    def set_scene(self, setting: str, value: Any) -> None:
+        """Set the scene-wide ``setting`` (a SceneSpec field: the World's ``time_step``)."""
+
     def where(self, key: str | None) -> str:
         """``key``'s place (its block's where it is not written) as ``path:line``."""
 
@@ -196,7 +199,8 @@ class BlockDeclaration:
     ``doc`` is what the block is (its key's meaning where it stands; a mapping, place ->
     text, where it means something else in each place); ``repeat`` whether
     an object (or its parent block) may hold several (at the top level every block
-    repeats); ``saves`` the component type whose live values ``save`` writes back.
+    repeats but one ``once`` or a ``setting``); ``saves`` the component type whose live
+    values ``save`` writes back.
     """
 
     name: str
@@ -211,6 +215,14 @@ class BlockDeclaration:
     #: A top-level block that makes no entity of its own: its build hands what it makes
     #: to the context (a joint, a scene-wide setting) and returns nothing.
     entity: bool = True
+    #: Built before the scene's objects, which name what it makes (a material, a shader)
+    #: or are checked against it (the world's extent); the rest are built after them.
+    first: bool = False
+    #: Written at most once at the top level (a Session log).
+    once: bool = False
+    #: A scene's setting, written at most once (World): built from its defaults, at the
+    #: top of the file, where the scene does not write it.
+    setting: bool = False
 
 
 #: Every declaration made so far, by block name (engine.scene.blocks registers each).

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import Any
 
+from components.blocks import BlockDeclaration, BuildContext, Key, declare
 from components.shape import Shape
 
 
@@ -27,6 +30,36 @@ class MaterialProps:
     softness: float = 0.0
     density: float = 1000.0
     contact_sound: str | None = None
+
+
+def build_material(v: Mapping[str, Any], ctx: BuildContext) -> list[Any]:
+    """A ``Material`` block: surface properties objects name by ID (built before them)."""
+    ctx.check_mass("Density")
+    name = str(v["ID"])
+    ctx.scene("materials")[name] = MaterialProps(
+        name=name, friction=float(v["Friction"]), bounce=float(v["Bounce"]),
+        bounce_velocity=float(v["BounceVelocity"]), softness=float(v["Softness"]),
+        density=float(v["Density"]),
+        contact_sound=ctx.sound_file("ContactSound", "the material stays silent"))
+    if ctx.given("Density"):  # its objects' masses come from it
+        ctx.scene("dense_materials").add(name)
+    return []
+
+
+_MATERIAL = MaterialProps()
+MATERIAL_BLOCK = declare(BlockDeclaration(
+    "Material", inside=("Scene",), build=build_material, entity=False, first=True,
+    doc="surface properties", keys=(
+        Key("ID", "string", None, "name or number objects use to refer to it", required=True,
+            example='"wood"'),
+        Key("Friction", "float", _MATERIAL.friction, "Coulomb coefficient"),
+        Key("Bounce", "float", _MATERIAL.bounce, "restitution 0..1"),
+        Key("BounceVelocity", "float", _MATERIAL.bounce_velocity,
+            "m/s below which nothing bounces"),
+        Key("Softness", "float", _MATERIAL.softness, "contact softness (0 = hard)"),
+        Key("Density", "float", _MATERIAL.density, "kg/m^3"),
+        Key("ContactSound", "asset", None, "played on impacts", example='"sounds/knock.wav"'),
+    )))
 
 
 @dataclass(slots=True)

@@ -37,11 +37,10 @@ import json
 import logging
 import math
 import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
-from components import Hand, Joint, Name, Transform
+from components import Hand, Joint, Name, SessionSettings, Transform
 from engine.events import (
     AnomalySwitched,
     ContactBegan,
@@ -50,7 +49,6 @@ from engine.events import (
     HandReleased,
 )
 from engine.rotation import quat_to_euler
-from engine.scene.schema import SCHEMAS
 from engine.system import Phase, PluginName, System
 from systems.wheelchair import WheelchairModeChanged
 
@@ -64,40 +62,12 @@ FORMAT, VERSION = "colosseum-session", 1
 FLUSH_EVERY = 1.0
 
 
-#: The Session block's keys: their defaults are the settings' (one place, the schema).
-_KEYS = SCHEMAS["Session"]
-
-
-@dataclass(frozen=True, slots=True)
-class SessionSettings:
-    """A scene's ``Session`` block."""
-
-    folder: str = _KEYS["Folder"].default
-    name: str = _KEYS["Name"].default
-    chair: str | None = _KEYS["Chair"].default
-    pose_rate: float = float(_KEYS["PoseRate"].default)
-    ground: tuple[str, ...] = tuple(_KEYS["Ground"].default)
-    end_run: bool = bool(_KEYS["EndRun"].default)
-
-
 def scene_settings(engine: Engine) -> SessionSettings | None:
     """The scene's ``Session`` block (None: the scene has none)."""
     from engine.scene import SceneIds
 
     ids = engine.try_resource(SceneIds)
-    db = None if ids is None else ids.spec.db
-    blocks = [] if db is None else db.blocks("Session")
-    if not blocks:
-        return None
-    block, fields = blocks[-1], SCHEMAS["Session"]
-
-    def value(key: str) -> Any:
-        found = block.get(key)
-        return fields[key].default if found is None else found
-
-    return SessionSettings(folder=str(value("Folder")), name=str(value("Name")),
-                           chair=value("Chair"), pose_rate=float(value("PoseRate")),
-                           ground=tuple(value("Ground")), end_run=bool(value("EndRun")))
+    return None if ids is None else ids.spec.settings.get("Session")
 
 
 def log_folder(asked: str | Path | None, scene_folder: str, content: Path | None,

@@ -30,8 +30,10 @@ STATES = GOLDEN / "states"
 #: Content folders whose saved state (after a few frames) is kept as a golden input too.
 SAVED = ("demo", "hands", "stroke", "avatars", "pool", "multiuser")
 FRAMES = 5
-#: Fields of a spec that are places, caches or the parsed text, not the built world.
-_SKIP = {"loc", "db", "assets", "content_dir", "problems"}
+#: Fields of a spec that are places, caches or the parsed text, not the built world; and
+#: lookup tables the building used, whose results are dumped (shader programs' files,
+#: masses from a material's density).
+_SKIP = {"loc", "db", "assets", "content_dir", "problems", "shader_files", "dense_materials"}
 DIGITS = 9
 
 

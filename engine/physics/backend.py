@@ -228,11 +228,13 @@ def build_material_pair(v: Mapping[str, Any], ctx: BuildContext) -> list[Any]:
 MATERIAL_PAIR_BLOCK = declare(BlockDeclaration(
     "MaterialPair", inside=("Scene",), build=build_material_pair, entity=False,
     doc="contact parameters for two materials", keys=(
-        Key("Material1", "ref", None, "one material", required=True, ref="Material"),
-        Key("Material2", "ref", None, "the other material", required=True, ref="Material"),
-        Key("Friction", "float", None, "Coulomb coefficient for this pair"),
-        Key("Bounce", "float", None, "restitution for this pair, 0..1"),
-        Key("Softness", "float", None, "contact softness for this pair"),
+        Key("Material1", "ref", None, "one material", required=True, ref="Material",
+            example='"rubber"'),
+        Key("Material2", "ref", None, "the other material", required=True, ref="Material",
+            example='"wood"'),
+        Key("Friction", "float", None, "Coulomb coefficient for this pair", example="0.9"),
+        Key("Bounce", "float", None, "restitution for this pair, 0..1", example="0.6"),
+        Key("Softness", "float", None, "contact softness for this pair", example="0.001"),
         Key("Collide", "bool", 1, "0: the two materials pass through each other"),
     )))
 

@@ -92,6 +92,12 @@ class BlockType:
     #: Whether a top-level one is an entity (False: its build hands its work to the
     #: context, as a Joint does).
     entity: bool = True
+    #: Built before the scene's objects (see components.blocks.BlockDeclaration).
+    first: bool = False
+    #: A scene's one setting (World): built from its defaults where it is not written.
+    setting: bool = False
+    #: At most one at the top level (a setting is too).
+    once: bool = False
 
     def build(self, values: Mapping[str, Any]) -> Any:
         """The component from checked values (scene keys)."""
@@ -177,7 +183,8 @@ def _enter(block: BlockType, fields: dict[str, sc.Field], docs: Mapping[str, str
     for place in block.inside:
         sc.SCHEMAS[place][block.name] = sc.Field(sc.STRUCT_T, None, docs[place],
                                                  struct=block.name,
-                                                 repeat=repeat or place == "Scene")
+                                                 repeat=repeat or (
+                                                     place == "Scene" and not block.once))
     for listener in _LISTENERS:
         for changed in (block.name, *block.inside):
             listener(changed)
@@ -206,13 +213,15 @@ def register_declared(declared: BlockDeclaration) -> BlockType:
         keys[k.name] = BlockKey(k.name, KeyInfo(k.meaning, k.low, k.high), None)
         if k.example is not None:
             EXAMPLES[(name, k.name)] = k.example
-    if "Scene" in declared.inside and "ID" not in fields:  # an entity's name
+    named = not (declared.setting or declared.once)  # one of many, named by its ID
+    if "Scene" in declared.inside and "ID" not in fields and named:
         fields["ID"] = sc.Field(sc.STRING_T, "", f"name of this {name}")
     doc = declared.doc
     docs = {p: doc if isinstance(doc, str) else doc[p] for p in declared.inside}
     block = BlockType(name, declared.saves, tuple(declared.inside), docs[declared.inside[0]],
                       keys, declared.build, declared.save, declared.build.__module__,
-                      declared.unnamed, declared.entity)
+                      declared.unnamed, declared.entity, declared.first, declared.setting,
+                      declared.once or declared.setting)
     _enter(block, fields, docs, declared.repeat)
     return block
 
@@ -311,3 +320,5 @@ import engine.measures  # noqa: E402, F401, I001  (the engine's blocks declared 
 import engine.physics.backend  # noqa: E402, F401, I001
 import engine.scene.anomalies  # noqa: E402, F401, I001
 import engine.scene.postpass  # noqa: E402, F401, I001
+import engine.scene.world  # noqa: E402, F401, I001
+import engine.scene.shaders  # noqa: E402, F401, I001

@@ -26,7 +26,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 import engine.scene.blocks as blocks
-import engine.scene.random_state as random_state
 import engine.scene.schema as sc
 from components import (
     Graspable,
@@ -54,11 +53,9 @@ from engine.measures import MeasureSpec
 from engine.memory import paused_gc
 from engine.physics.backend import (
     MAX_DENSITY,
-    MAX_EXTENT,
     MAX_MASS,
     MAX_SPEED,
     WORLD_EXTENT,
-    WORLD_RANGES,
     BackendName,
     MaterialPair,
     SleepState,
@@ -66,7 +63,7 @@ from engine.physics.backend import (
     metres,
 )
 from engine.physics.commands import SetSleepState
-from engine.realtime import STEP_RANGE, STEP_WARNING, TIME_STEP
+from engine.realtime import TIME_STEP
 from engine.rotation import UNIT_ROUNDING, euler_to_quat, rotate, view_problem
 from engine.scene.db import (
     INCLUDE,
@@ -88,6 +85,7 @@ from engine.scene.diagnostics import (
 )
 from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS, InputSpec, read_inputs
 from engine.scene.postpass import PostPassSpec
+from engine.scene.shaders import ShaderProgramSpec, ShaderStateSpec
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -122,19 +120,6 @@ class JointSpec:
     skipped: bool = False
 
 
-@dataclass(slots=True)
-class ShaderStateSpec:
-    program: str
-    uniforms: dict[str, float | tuple[float, ...]]
-
-
-@dataclass(slots=True)
-class ShaderProgramSpec:
-    vertex: str | None  # file path of the vertex shader
-    fragment: str | None
-    enabled: bool
-
-
 def binding_problem(action: str, profile: str, path: str) -> str | None:
     """What is wrong with a headset's ``Bind`` (None: nothing): the scene's check, and
     the OpenXR display's (services.xr.bindings.Rebinding)."""
@@ -162,6 +147,10 @@ class SceneSpec:
     material_pairs: list[MaterialPair] = field(default_factory=list)
     shader_programs: dict[str, ShaderProgramSpec] = field(default_factory=dict)
     shader_states: dict[str, ShaderStateSpec] = field(default_factory=dict)
+    #: (VertexShader or FragmentShader, ID) -> its file, which a program names.
+    shader_files: dict[tuple[str, str], str] = field(default_factory=dict)
+    #: The materials that set a Density (their objects' masses come from it).
+    dense_materials: set[str] = field(default_factory=set)
     world: WorldSettings = field(default_factory=WorldSettings)
     time_step: float = TIME_STEP
     backend: str = BackendName.ODE
@@ -188,6 +177,8 @@ class SceneSpec:
     experiment: Design | None = None
     #: The ``PostPass`` blocks, in order.
     post_passes: list[PostPassSpec] = field(default_factory=list)
+    #: Scene-wide settings a plugin's block makes, by block name (``Session``).
+    settings: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass(slots=True)
@@ -314,6 +305,7 @@ class _Index:
     """The root block's entries grouped by key in one pass (10,000 objects, a dozen keys)."""
 
     def __init__(self, root: Block):
+        self.loc = root.loc
         self.groups: dict[str, list[Entry]] = {}
         for e in root:
             self.groups.setdefault(e.key, []).append(e)
@@ -331,16 +323,6 @@ class _Index:
 
 def _floats(t: Any) -> tuple[float, ...]:
     return tuple(map(float, t))
-
-
-def _uniforms(r: _Reader) -> dict[str, float | tuple[float, ...]]:
-    """A block's ``Uniform`` entries: name -> number or numbers."""
-    uniforms: dict[str, float | tuple[float, ...]] = {}
-    for u in r.blocks("Uniform"):
-        ur = _Reader(u, "Uniform")
-        val = ur("Value")
-        uniforms[ur("ID")] = _floats(val) if isinstance(val, tuple) else float(val)
-    return uniforms
 
 
 Pose = tuple[tuple[float, ...], tuple[float, ...]]
@@ -495,6 +477,9 @@ class _Context:
     def scene(self, setting: str) -> Any:
         return getattr(self.builder.spec, setting)
 
+    def set_scene(self, setting: str, value: Any) -> None:
+        setattr(self.builder.spec, setting, value)
+
     def where(self, key: str | None) -> str:
         where = self._loc(key)
         return f"{where.path}:{where.line}"
@@ -526,7 +511,6 @@ class _Builder:
         self.problems: list[Diagnostic] = []
         self.skipped: set[str] = set()  # IDs of objects left out for a failed asset
         self.materials: dict[str, MaterialProps] = {"default": MaterialProps()}
-        self.dense_materials: set[str] = set()
         #: Object ID -> pose (position, quaternion), the file's own ...
         self.own_poses: dict[str, Pose] = {}
         #: ... and, for a spawned snippet, the running world's bodies after them
@@ -551,32 +535,18 @@ class _Builder:
         self.claimed: dict[tuple[str, str], Loc] = {}
 
     def build(self, db: SceneDB) -> SceneSpec:
-        spec = self.spec = SceneSpec()
+        spec = self.spec = SceneSpec(materials=self.materials)
         root = _Index(db.root)
-        if self.extent is None:
-            self.extent = self.world_extent(root)
         self.script_states = self.saved_scripts(root)
         self.root, self.owned, self.claimed = root, {}, {}
-        for blk in root.blocks("Material"):
-            r = _Reader(blk, "Material")
-            name = str(r("ID"))
-            density = r.value("Density")
-            if density is not None:
-                self.limited(density, "Density", MAX_DENSITY, "kg/m³")
-            self.materials[name] = MaterialProps(
-                name=name, friction=float(r("Friction")), bounce=float(r("Bounce")),
-                bounce_velocity=float(r("BounceVelocity")), softness=float(r("Softness")),
-                density=float(r("Density")),
-                contact_sound=self.sound_file(r, "ContactSound", "the material stays silent"))
-            if r.has("Density"):
-                self.dense_materials.add(name)
-        spec.materials = self.materials
+        self.declared_entities(root, spec, entity=False, first=True)  # materials, world
+        if self.extent is None:  # a spawned snippet's is the running world's
+            self.extent = spec.world.extent
+        spec.world.extent = self.extent
         for i, blk in enumerate(root.blocks("Object")):
             spec.entities.append(self.object(blk, i))
         spec.sleep = self.sleep
         self.declared_entities(root, spec, entity=False)
-        self.shaders(root, spec)
-        self.world(root, spec)
         self.scene_entities(root, spec)
         spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
         spec.experiment = read_experiment(db.root, self.report, spec.anomalies, self.folder)
@@ -722,15 +692,20 @@ class _Builder:
             return None
         return made + self.declared_blocks(r, block.name, owner, has_body, parts)
 
-    def declared_entities(self, root: _Index, spec: SceneSpec, entity: bool = True) -> None:
+    def declared_entities(self, root: _Index, spec: SceneSpec, entity: bool = True,
+                          first: bool = False) -> None:
         """Top-level declared blocks: an entity each, named by its ID (one its build
         leaves out keeps its place, skipped); with ``entity`` False, those that make none
-        (joints, scene-wide settings), before the world's settings are read."""
+        (joints, scene-wide settings); with ``first``, those built before the objects. A
+        scene's setting not written is built from its defaults."""
         for block in blocks.BLOCKS.values():
-            if "Scene" not in block.inside or block.entity != entity:
+            if "Scene" not in block.inside or (block.entity, block.first) != (entity, first):
                 continue
-            for i, blk in enumerate(root.blocks(block.name)):
-                bid = _Reader(blk, block.name)("ID") or block.unnamed or \
+            written = root.blocks(block.name)
+            if block.setting and not written:
+                written = [Block(loc=root.loc)]
+            for i, blk in enumerate(written):
+                bid = _Reader(blk, block.name).get("ID") or block.unnamed or \
                     f"{block.name.lower()}{i}"
                 made = self.declared(block, blk, bid, "Scene", False)
                 if not entity:  # its build handed what it made to the context
@@ -799,7 +774,7 @@ class _Builder:
             material = MaterialProps(**{**_fields(material), "density": float(phys("Density"))})
         if phys.has("Mass"):
             mass: float | None = float(phys("Mass"))
-        elif phys.has("Density") or mat_name in self.dense_materials:
+        elif phys.has("Density") or mat_name in self.spec.dense_materials:
             mass = None
         else:
             mass = 1.0
@@ -954,32 +929,7 @@ class _Builder:
                           None if force is None else np.array(_floats(force)),
                           bool(r("RestPreloaded")))
 
-    # -- shaders, world, scene-level entities ---------------------------------
-    def shaders(self, root: _Index, spec: SceneSpec) -> None:
-        files = {}
-        for key in ("VertexShader", "FragmentShader"):
-            files[key] = {str(_Reader(b, key)("ID")): _Reader(b, key)("File")
-                          for b in root.blocks(key)}
-        for b in root.blocks("ShaderProgram"):
-            r = _Reader(b, "ShaderProgram")
-            spec.shader_programs[r("ID")] = ShaderProgramSpec(
-                files["VertexShader"].get(r("VertexShader")),
-                files["FragmentShader"].get(r("FragmentShader")), bool(r("Enable")))
-        for b in root.blocks("ShaderState"):
-            r = _Reader(b, "ShaderState")
-            spec.shader_states[r("ID")] = ShaderStateSpec(r("ShaderProgram"), _uniforms(r))
-
-    def world_extent(self, root: _Index) -> float:
-        """The file's World Extent (m), checked; the default where it is refused."""
-        blk = root.value("World")
-        w = _Reader(blk.data if blk else None, "World")
-        extent = w("Extent")
-        if not (0 < extent <= MAX_EXTENT):
-            self.report.error(w.value("Extent").loc, f"Extent must be a positive number of "
-                              f"metres up to {MAX_EXTENT:g}, got {extent:g}")
-            return WORLD_EXTENT
-        return float(extent)
-
+    # -- the world's bounds, scene-level entities -----------------------------
     def inside(self, value: Value | None, what: str) -> None:
         """Report a point the file wrote (a VECTOR whose first three numbers are x y z)
         outside the world, at the number that is."""
@@ -1020,56 +970,6 @@ class _Builder:
             self.report.error(value.loc, f"{key} is {speed:g} {unit}, over the limit of "
                                          f"{MAX_SPEED:g} {unit}")
 
-    def world(self, root: _Index, spec: SceneSpec) -> None:
-        blk = root.value("World")
-        w = _Reader(blk.data if blk else None, "World")
-        self.time_step(w)
-        pairs = spec.material_pairs  # the MaterialPair blocks (engine.physics.backend)
-        checked = self.world_numbers(w)
-        spec.world = WorldSettings(gravity=_floats(w("Gravity")),
-                                   auto_sleep=bool(w("AutoSleep")),
-                                   material_pairs=pairs, solver_seed=w("SolverSeed"),
-                                   extent=self.extent or WORLD_EXTENT, **checked)
-        spec.time_step = float(w("TimeStep"))
-        spec.backend = w("Dynamics")
-        spec.time = float(w("Time"))
-        if w("RandomState") is not None:
-            try:
-                spec.random_state = random_state.parse(str(w("RandomState")))
-            except ValueError as exc:
-                self.report.error(w.value("RandomState").loc, str(exc))
-
-    def world_numbers(self, w: _Reader) -> dict[str, Any]:
-        """The World block's bounded settings, each checked against its one range
-        (:data:`WORLD_RANGES`); a refused one reported at its key and left at its default."""
-        defaults = WorldSettings()
-        checked: dict[str, Any] = {}
-        for key, name in _WORLD_KEYS.items():
-            value, allowed = w(key), WORLD_RANGES[name]
-            if name == "sleep_angular":  # the file's is in deg/s
-                value = math.radians(value)
-            if value not in allowed:
-                shown = math.degrees(value) if name == "sleep_angular" else value
-                self.report.error(w.value(key).loc, f"{key} must be {allowed.text()}, got "
-                                                    f"{shown:g}")
-                value = getattr(defaults, name)
-            checked[name] = type(getattr(defaults, name))(value)
-        return checked
-
-    def time_step(self, w: _Reader) -> None:
-        """TimeStep within :data:`STEP_RANGE` (an error), up to :data:`STEP_WARNING` (else
-        a warning: the step is suspicious)."""
-        step, where = w("TimeStep"), w.value("TimeStep")
-        low, high = STEP_RANGE
-        if not (low < step <= high):
-            self.report.error(where.loc, f"TimeStep must be more than {low:g} s and at most "
-                                         f"{high:g} s, got {step:g}")
-        elif step > STEP_WARNING:
-            self.problems.append(Diagnostic(
-                where.loc.path, where.loc.line, where.loc.col, WARNING,
-                f"TimeStep {step:g} s is long: contacts and joints lose accuracy past "
-                f"{STEP_WARNING:g} s ({TIME_STEP:g} is the default)"))
-
     def scene_entities(self, root: _Index, spec: SceneSpec) -> None:
         for i, e in enumerate(root.get_all("Script")):
             sid = f"script{i}"
@@ -1098,14 +998,6 @@ class _Builder:
             states[owner] = SavedScript(str(r("Globals")), str(r("Locals")), timers, handlers)
             self.script_blocks[owner] = blk
         return states
-
-
-#: The World block's bounded keys and the WorldSettings field each sets.
-_WORLD_KEYS = {"ERP": "erp", "CFM": "cfm", "Iterations": "iterations",
-               "MaxContacts": "max_contacts", "WarmStart": "warm_start",
-               "ContactSoftness": "contact_softness", "ExactRows": "exact_rows",
-               "SleepTime": "sleep_time", "SleepLinear": "sleep_linear",
-               "SleepAngular": "sleep_angular"}
 
 
 def _opt(v: Any) -> float | None:

@@ -3,7 +3,7 @@ type, default, meaning and an example. ``colosseum keys [BLOCK]`` prints it; doc
 is :func:`reference_markdown` (a test keeps the page equal to it).
 
 >>> print(block_text("Uniform"))
-Uniform  (inside ShaderState: a uniform's value)
+Uniform  (inside PostPass: a uniform's value)
   ID     STRING, required                 uniform name in the GLSL source
          e.g. ID "DiffuseColor"
   Value  FLOAT or VECTOR (1-4), required  a number, or up to 4 numbers (vec2..vec4)
@@ -41,19 +41,7 @@ _EXAMPLES: dict[tuple[str, str], str] = {
     ("Spring", "MaxForce"): "20",
     ("Geometry", "File"): '"models/rock.obj"', ("Geometry", "Size"): "[0.6]",
     ("Geometry", "ParseMethod"): '"ConvexHull"',
-    ("Material", "ID"): '"wood"', ("Material", "ContactSound"): '"sounds/knock.wav"',
-    ("MaterialPair", "Material1"): '"rubber"', ("MaterialPair", "Material2"): '"wood"',
-    ("MaterialPair", "Friction"): "0.9", ("MaterialPair", "Bounce"): "0.6",
-    ("MaterialPair", "Softness"): "0.001",
-    ("VertexShader", "ID"): '"toon_vertex"', ("VertexShader", "File"): '"shaders/toon.vert"',
-    ("FragmentShader", "ID"): '"toon_fragment"',
-    ("FragmentShader", "File"): '"shaders/toon.frag"',
-    ("ShaderProgram", "ID"): '"toon"', ("ShaderProgram", "VertexShader"): '"toon_vertex"',
-    ("ShaderProgram", "FragmentShader"): '"toon_fragment"',
-    ("ShaderState", "ID"): '"toon"', ("ShaderState", "ShaderProgram"): '"toon"',
     ("Uniform", "ID"): '"DiffuseColor"', ("Uniform", "Value"): "[0 0.25 1]",
-    ("World", "SolverSeed"): "2767133776",
-    ("World", "Time"): "2.0",
     ("ScriptState", "Owner"): '"ball"', ("ScriptState", "Globals"): '"{score = 3}"',
     ("ScriptState", "Locals"): '"{bounces = 2}"',
     ("ScriptTimer", "Function"): '"kick"', ("ScriptTimer", "Due"): "0.5",
@@ -75,8 +63,6 @@ _EXAMPLES: dict[tuple[str, str], str] = {
     ("HeldState", "Last"): "[0.4 0.2 1.1]",
     ("BoneDrive", "Bone"): '"hand.L"', ("BoneDrive", "Position"): "[0.3 0.4 1.2]",
     ("BoneDrive", "Quaternion"): "[1 0 0 0]",
-    ("Session", "Folder"): '"sessions"', ("Session", "Name"): '"stroke"',
-    ("Session", "Chair"): '"wheelchair"', ("Session", "Ground"): '["floor" "ramp"]',
     ("Experiment", "ID"): '"reach"', ("Experiment", "Track"): '["wheelchair" "hand_r"]',
     ("ExperimentFactor", "ID"): '"blur"', ("ExperimentFactor", "Levels"): "[0 0.3 0.6]",
     ("ExperimentFactor", "Variable"): '"blur_level"', ("ExperimentFactor", "Anomaly"): '"blur"',

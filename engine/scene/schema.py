@@ -17,7 +17,6 @@ later expressions); keys starting with a capital are checked against this schema
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -25,9 +24,7 @@ from components.joint import SCENE_JOINT_TYPES
 from components.shape import ShapeKind
 from engine.experiments.design import END_ON, RESETS, Design
 from engine.experiments.ordering import ORDERS as EXPERIMENT_ORDERS
-from engine.physics.backend import WORLD_EXTENT, BackendName, WorldSettings
-from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR, SLEEP_TIME
-from engine.realtime import TIME_STEP
+from engine.physics.backend import BackendName, WorldSettings
 
 #: The solver settings' defaults, defined once (engine.physics.backend.WorldSettings).
 _WORLD = WorldSettings()
@@ -85,20 +82,7 @@ TRACKER_FILTERS = ("none", "oneeuro")
 SCHEMAS: dict[str, dict[str, Field]] = {
     "Scene": {
         "Object": _f(STRUCT_T, doc="a body and/or visual", repeat=True, struct="Object"),
-        "Material": _f(STRUCT_T, doc="surface properties", repeat=True, struct="Material"),
-        "VertexShader": _f(STRUCT_T, None,
-                           "a GLSL vertex shader file (see docs/GLSL.md)", repeat=True,
-                           struct="VertexShader"),
-        "FragmentShader": _f(STRUCT_T, None,
-                             "a GLSL fragment shader file", repeat=True, struct="FragmentShader"),
-        "ShaderProgram": _f(STRUCT_T, None,
-                            "a vertex and a fragment shader linked together", repeat=True,
-                            struct="ShaderProgram"),
-        "ShaderState": _f(STRUCT_T, None,
-                          "a program and values for its uniforms; objects draw with it",
-                          repeat=True, struct="ShaderState"),
         "Script": _f(ASSET_T, doc="a Lua script run for the whole scene", repeat=True),
-        "World": _f(STRUCT_T, doc="dynamics settings", struct="World"),
         "Model": _f(STRUCT_T, doc="a model file (glTF, Collada) whose bodies, joints and "
                     "materials join the scene", repeat=True, struct="Model"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
@@ -106,9 +90,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                     "are calibrated (services.input)", repeat=True, struct="Input"),
         "Output": _f(STRUCT_T, doc="engine values published every frame over OSC or LSL",
                      repeat=True, struct="Output"),
-        "Session": _f(STRUCT_T, None, "a session log: one JSON-lines file per run with the "
-                      "time, task events, grasps, the chair's pose and collisions, anomaly "
-                      "switches (the session plugin)", struct="Session"),
         "Experiment": _f(STRUCT_T, None, "a study's design: factors and levels, blocks, "
                          "counterbalancing, practice trials, staircases (colosseum experiment "
                          "run; docs/experiments.md)", struct="Experiment"),
@@ -233,58 +214,10 @@ SCHEMAS: dict[str, dict[str, Field]] = {
                      "scene's, as `colosseum import` writes them; 0: drawn whole, as scenery"),
         "Prefix": _f(STRING_T, "", "put before every ID it declares (to import a model twice)"),
     },
-    "Material": {
-        "ID": Field(STRING_T, None, "name or number objects use to refer to it", required=True),
-        "Friction": _f(FLOAT_T, 0.5, "Coulomb coefficient"),
-        "Bounce": _f(FLOAT_T, 0.0, "restitution 0..1"),
-        "BounceVelocity": _f(FLOAT_T, 0.1, "m/s below which nothing bounces"),
-        "Softness": _f(FLOAT_T, 0.0, "contact softness (0 = hard)"),
-        "Density": _f(FLOAT_T, 1000.0, "kg/m^3"),
-        "ContactSound": _f(ASSET_T, None, "played on impacts"),
-    },
-    "VertexShader": {
-        "ID": _id("vertex shader", True),
-        "File": _f(ASSET_T, None, "GLSL source file", required=True),
-    },
-    "FragmentShader": {
-        "ID": _id("fragment shader", True),
-        "File": _f(ASSET_T, None, "GLSL source file", required=True),
-    },
-    "ShaderProgram": {
-        "ID": _id("shader program", True),
-        "VertexShader": _f(REF_T, None,
-                           "vertex shader ID (default: the engine's vertex stage)",
-                           ref="VertexShader"),
-        "FragmentShader": _f(REF_T, None, "fragment shader ID", ref="FragmentShader"),
-        "Enable": _f(BOOL_T, 1, "0 draws its objects with the default material"),
-    },
-    "ShaderState": {
-        "ID": _id("shader state", True),
-        "ShaderProgram": _f(REF_T, None,
-                            "the program whose uniforms it sets", required=True,
-                            ref="ShaderProgram"),
-        "Uniform": _f(STRUCT_T, None, "a uniform's value", repeat=True, struct="Uniform"),
-    },
     "Uniform": {
         "ID": _f(STRING_T, None, "uniform name in the GLSL source", required=True),
         "Value": _f(NUMBER_OR_VECTOR_T, None,
                     "a number, or up to 4 numbers (vec2..vec4)", required=True),
-    },
-    "Session": {
-        "Folder": _f(STRING_T, "", "the folder session logs go to, relative to the working "
-                     "directory (default: sessions/ there; never inside the content folder, "
-                     "never out of the working directory); colosseum run --sessions DIR "
-                     "wins"),
-        "Name": _f(STRING_T, "", "the log file's name before its date and time (a name, "
-                   "not a path; default: the content folder's name)"),
-        "Chair": _f(REF_T, None, "the wheelchair whose pose is logged at PoseRate and whose "
-                    "collisions are logged (its chassis and what is jointed to it)",
-                    ref="Object"),
-        "PoseRate": _f(FLOAT_T, 10.0, "Hz: how often the chair's pose is logged"),
-        "Ground": _f(STRINGVECTOR_T, ("floor",), "objects the chair rolls on: touching them "
-                     "is not a collision", ref="Object"),
-        "EndRun": _f(BOOL_T, 1, "1: the run stops when a script ends the session "
-                     "(emit(\"session_end\", {reason = ...}))"),
     },
     "Experiment": {
         "ID": _f(STRING_T, "", "the experiment's name: sessions go to "
@@ -445,47 +378,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Position": _f(VEC3_T, None, "m, world frame", required=True),
         "Quaternion": _f(VECTOR_T, None, "world orientation [w x y z]", required=True,
                          lengths=(4,)),
-    },
-    "World": {
-        "Gravity": _f(VEC3_T, _WORLD.gravity, "m/s^2"),
-        "TimeStep": _f(FLOAT_T, TIME_STEP, "s, fixed dynamics step (more than 0, at most 1; "
-                       "past 0.05 contacts and joints lose accuracy)"),
-        "Extent": _f(FLOAT_T, WORLD_EXTENT, "m: bodies stay within this distance of the "
-                     "origin on every axis; positions beyond it are refused, and a body "
-                     "that leaves it is stopped (up to 1e12)"),
-        "Dynamics": _f(ENUM_T, "ode", "dynamics backend: ode (3D) or pymunk (2D, X-Z plane)",
-                       allowed=BACKENDS),
-        "Iterations": _f(INT_T, _WORLD.iterations,
-                         "solver iterations per step (ODE QuickStep, pymunk): more converge "
-                         "stacks and long chains further, at a cost that grows with them"),
-        "WarmStart": _f(FLOAT_T, _WORLD.warm_start,
-                        "share of a resting body's weight carried from step to step (0 to "
-                        "0.99; 0: off): stacks stand still with few iterations (ODE; see "
-                        "docs/PHYSICS.md)"),
-        "ContactSoftness": _f(FLOAT_T, _WORLD.contact_softness,
-                              "contacts' give, as a share of their own stiffness: the same "
-                              "for every mass and step; a bouncing contact is always rigid "
-                              "(ODE; a material's Softness overrides)"),
-        "ExactRows": _f(INT_T, _WORLD.exact_rows,
-                        "islands held by joints alone with up to this many constraint rows "
-                        "are solved exactly (ODE dWorldStep): accurate pendulums and "
-                        "mechanisms, at a cost that grows with the cube of the rows; 0: all "
-                        "by the iterative solver"),
-        "ERP": _f(FLOAT_T, _WORLD.erp, "error reduction per step"),
-        "CFM": _f(FLOAT_T, _WORLD.cfm, "constraint force mixing"),
-        "MaxContacts": _f(INT_T, _WORLD.max_contacts, "per pair of geometries"),
-        "AutoSleep": _f(BOOL_T, 1, "bodies that rest fall asleep (stop being simulated) "
-                        "until something wakes them; see engine.physics.sleep"),
-        "SleepTime": _f(FLOAT_T, SLEEP_TIME, "s a body must stay quiet (slow and not "
-                        "accelerated) before it and what it touches fall asleep"),
-        "SleepLinear": _f(FLOAT_T, SLEEP_LINEAR, "m/s: slow means a smoothed speed under "
-                          "this; it is steady when its velocity stays within a tenth of it"),
-        "SleepAngular": _f(FLOAT_T, round(math.degrees(SLEEP_ANGULAR), 12), "deg/s: the same "
-                           "for spin"),
-        "Time": _f(FLOAT_T, 0.0, "s, simulated time this state was saved at"),
-        "SolverSeed": _f(INT_T, None, "the solver's random state when this state was saved"),
-        "RandomState": _f(STRING_T, None, "the scene's random generator (randInterval and "
-                          "randNormal in text scripts spawn) when this state was saved"),
     },
     # -- input devices and bindings (services.input; address space in docs/input-format.md) --
     "Input": {
