@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from components.blocks import BlockDeclaration, BuildContext, Key, declare
+from components.exact import exact_degrees
 
 
 class JointKind(StrEnum):
@@ -230,6 +231,22 @@ def _spring(j: Mapping[str, Any], ctx: BuildContext, kind: JointKind) -> Spring 
                   math.inf if most is None else float(most))
 
 
+def save_joint(joint: Joint) -> dict[str, Any]:
+    """A joint as made at first (anchor, axes, where its bodies were) and its motor now,
+    in file units that read back to the bit (what a saved state sets on its block)."""
+    conv = (lambda x: x) if joint.kind in LINEAR_KINDS else exact_degrees
+    keys: dict[str, Any] = {"Anchor": tuple(joint.anchor), "Axis": tuple(joint.axis),
+                            "Axis2": tuple(joint.axis2)}
+    if joint.reference is not None:
+        pose_a, pose_b = joint.reference
+        keys["ReferencePose1"] = tuple(pose_a)
+        if pose_b is not None:
+            keys["ReferencePose2"] = tuple(pose_b)
+    keys["MotorVelocity"] = conv(float(joint.motor_velocity))
+    keys["MotorMaxForce"] = float(joint.motor_max_force)
+    return keys
+
+
 def _values_only(values: Mapping[str, Any], ctx: BuildContext) -> list[Any]:
     """A block whose values the block around it reads (it builds nothing itself)."""
     return []
@@ -237,7 +254,7 @@ def _values_only(values: Mapping[str, Any], ctx: BuildContext) -> list[Any]:
 
 _ANGLE = "degrees, or m for a slider"
 JOINT_BLOCK = declare(BlockDeclaration(
-    "Joint", inside=("Scene",), build=build_joint, entity=False,
+    "Joint", inside=("Scene",), build=build_joint, entity=False, saves=Joint, save=save_joint,
     doc="a constraint between bodies", keys=(
         Key("ID", "string", "", "name other declarations use to refer to this joint",
             example='"pivot"'),

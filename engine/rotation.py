@@ -15,7 +15,7 @@ call; the scalar helpers (:func:`rotate`) take plain sequences for the scene cod
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -50,29 +50,6 @@ def quat_to_euler(q: Sequence[float]) -> tuple[float, float, float]:
     ry = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
     rz = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
     return (math.degrees(rx), math.degrees(ry), math.degrees(rz))
-
-
-def exact_degrees(rad: float) -> float:
-    """Degrees ``d`` with ``math.radians(d) == rad`` when such a float exists (nearest else).
-
-    A saved state writes angular velocities in degrees; this keeps the reload bit-exact
-    for most values and within one ulp for the rest.
-    """
-    return exact_preimage(math.radians, rad, math.degrees(rad))
-
-
-def exact_preimage(forward: Callable[[float], float], value: float, guess: float) -> float:
-    """A float ``x`` within four ulps of ``guess`` with ``forward(x) == value`` (``guess``
-    when there is none): what a saved file writes for a value its reader converts (degrees
-    to radians, per degree to per radian), so the reload gives the value to the bit."""
-    up = down = guess
-    for _ in range(4):
-        if forward(up) == value:
-            return up
-        if forward(down) == value:
-            return down
-        up, down = math.nextafter(up, math.inf), math.nextafter(down, -math.inf)
-    return guess
 
 
 def rotate(q: Sequence[float], v: Sequence[float]) -> tuple[float, float, float]:

@@ -42,6 +42,7 @@ import engine.scene.random_state as random_state
 import engine.scene.schema as sc
 from components import HandState, Joint, Name, Transform
 from components.avatar import SavedAvatar
+from components.exact import exact_degrees, exact_preimage
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, Spring
 from engine.anomalies import ANOMALIES, Anomalies
 from engine.assets.generated import is_generated
@@ -52,7 +53,7 @@ from engine.physics.backend import (
     SupportsSleepState,
 )
 from engine.physics.driver import PhysicsUnavailable
-from engine.rotation import exact_degrees, exact_preimage, quat_to_euler
+from engine.rotation import quat_to_euler
 from engine.scene.db import (
     FLOAT,
     INT,
@@ -190,18 +191,9 @@ def _write_body(blk: Block, t: Transform | _Row, sleep: SleepState | None) -> No
 
 
 def _write_joint(blk: Block, joint: Joint) -> None:
-    """A joint as made at first (anchor, axes, where its bodies were) and its motor now."""
-    conv = (lambda x: x) if joint.kind in LINEAR_KINDS else exact_degrees
-    _set(blk, "Anchor", _vec(joint.anchor))
-    _set(blk, "Axis", _vec(joint.axis))
-    _set(blk, "Axis2", _vec(joint.axis2))
-    if joint.reference is not None:
-        pose_a, pose_b = joint.reference
-        _set(blk, "ReferencePose1", _vec(pose_a))
-        if pose_b is not None:
-            _set(blk, "ReferencePose2", _vec(pose_b))
-    _set(blk, "MotorVelocity", Value(FLOAT, conv(float(joint.motor_velocity)), _HERE))
-    _set(blk, "MotorMaxForce", Value(FLOAT, float(joint.motor_max_force), _HERE))
+    """A joint's block as its declaration saves it (components.joint.save_joint)."""
+    for key, value in blocks.BLOCKS["Joint"].save(joint).items():
+        _set(blk, key, _literal_value(value))
 
 
 def _live_joint(world: World, entity: int | None, names: dict[int, str]) -> Joint | None:
