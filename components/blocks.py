@@ -243,3 +243,41 @@ def on_declare(listener: Callable[[BlockDeclaration], None]) -> None:
     _LISTENERS.append(listener)
     for block in list(DECLARED.values()):
         listener(block)
+
+
+#: value (the key's, its default where not written), context -> the components.
+KeyBuild = Callable[[Any, BuildContext], "list[Any]"]
+
+
+@dataclass(frozen=True, slots=True)
+class KeyDeclaration:
+    """A key a feature adds to a block it does not own: ``Script`` on an ``Object`` (and at
+    the top level, where each one is an entity of its own), ``Graspable``, ``User``.
+    *build* gets the key's value (its default where not written) and the context of the
+    block it stands in, and returns the components it makes there (often none)."""
+
+    key: Key
+    build: KeyBuild
+    inside: tuple[str, ...] = ("Object",)
+
+
+#: Every key declaration made so far, by (place, key).
+DECLARED_KEYS: dict[tuple[str, str], KeyDeclaration] = {}
+_KEY_LISTENERS: list[Callable[[KeyDeclaration], None]] = []
+
+
+def declare_key(declared: KeyDeclaration) -> KeyDeclaration:
+    """Declare a key (a component module does so when it is imported)."""
+    for listener in _KEY_LISTENERS:
+        listener(declared)
+    for place in declared.inside:
+        DECLARED_KEYS[(place, declared.key.name)] = declared
+    return declared
+
+
+def on_declare_key(listener: Callable[[KeyDeclaration], None]) -> None:
+    """Call ``listener`` with every key declaration, those made already first."""
+    _KEY_LISTENERS.append(listener)
+    for declared in list({id(d): d for d in DECLARED_KEYS.values()}.values()):
+        listener(declared)
+

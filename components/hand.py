@@ -8,7 +8,14 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
 
-from components.blocks import BlockDeclaration, BuildContext, Key, declare
+from components.blocks import (
+    BlockDeclaration,
+    BuildContext,
+    Key,
+    KeyDeclaration,
+    declare,
+    declare_key,
+)
 from components.physical import Physical
 
 
@@ -79,6 +86,16 @@ class Graspable:
     """Whether hands may hold this object (dynamic bodies may, unless this says no)."""
 
     enabled: bool = True
+
+
+def build_graspable(graspable: int, ctx: BuildContext) -> list[Any]:
+    """An object's ``Graspable``: 0 marks it as one no hand may hold."""
+    return [] if graspable else [Graspable(False)]
+
+
+GRASPABLE_KEY = declare_key(KeyDeclaration(
+    Key("Graspable", "bool", 1, "0: hands cannot hold it (dynamic bodies can by default)"),
+    build_graspable))
 
 
 #: A hand's body where the author gives it no size or mass: a hand-sized box (m) of a

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
+
+from components.blocks import BuildContext, Key, KeyDeclaration, declare_key
 
 
 @dataclass(frozen=True, slots=True)
@@ -44,3 +47,18 @@ class Script:
     enabled: bool = True
     #: The state to resume from (a loaded saved state); None starts the script afresh.
     saved: SavedScript | None = None
+
+
+def build_script(file: str | None, ctx: BuildContext) -> list[Any]:
+    """An object's (or the scene's) ``Script``: the script it runs, resuming where a saved
+    state left it."""
+    return [] if file is None else [Script(file=file, saved=ctx.saved_script(ctx.owner))]
+
+
+OBJECT_SCRIPT_KEY = declare_key(KeyDeclaration(
+    Key("Script", "asset", None, "Lua script attached to this object",
+        example='"scripts/ball.lua"'), build_script))
+SCENE_SCRIPT_KEY = declare_key(KeyDeclaration(
+    Key("Script", "asset", None, "a Lua script run for the whole scene", repeat=True,
+        example='"scripts/scene.lua"'), build_script, inside=("Scene",)))
+

@@ -35,7 +35,15 @@ from typing import Any, NamedTuple, TypeVar, get_type_hints
 
 import components  # noqa: F401  (every component module declares its block on import)
 import engine.scene.schema as sc
-from components.blocks import DECLARED, BlockDeclaration, Build, Save, on_declare
+from components.blocks import (
+    DECLARED,
+    BlockDeclaration,
+    Build,
+    KeyDeclaration,
+    Save,
+    on_declare,
+    on_declare_key,
+)
 
 T = TypeVar("T")
 #: Where a content folder's block may stand: inside an ``Object``, or at the top of a
@@ -226,6 +234,34 @@ def register_declared(declared: BlockDeclaration) -> BlockType:
     return block
 
 
+#: (place, key) -> a key a feature declared on a block it does not own (Script, User).
+KEYS: dict[tuple[str, str], KeyDeclaration] = {}
+
+
+def register_key(declared: KeyDeclaration) -> None:
+    """Register a key declared on another block (components.blocks.KeyDeclaration)."""
+    k = declared.key
+    for place in declared.inside:
+        known = KEYS.get((place, k.name))
+        if place not in sc.SCHEMAS or (known is None and k.name in sc.SCHEMAS[place]) or (
+                known is not None and known.build.__module__ != declared.build.__module__):
+            raise BlockError(f"key {k.name!r}: {place} has it already, or is no block")
+        if k.kind not in _KINDS:
+            raise BlockError(f"key {k.name!r} has no type {k.kind!r}")
+        sc.SCHEMAS[place][k.name] = sc.Field(_KINDS[k.kind], k.default, k.meaning, k.repeat,
+                                             k.required, k.allowed, k.ref, k.struct, k.lengths)
+        KEYS[(place, k.name)] = declared
+        if k.example is not None:
+            EXAMPLES[(place, k.name)] = k.example
+        for listener in _LISTENERS:
+            listener(place)
+
+
+def keys_of(place: str) -> list[tuple[str, KeyDeclaration]]:
+    """The keys features declared on block ``place``, in the order they were declared."""
+    return [(name, declared) for (at, name), declared in KEYS.items() if at == place]
+
+
 #: A declaration's key types -> the schema's (the same names).
 _KINDS = {t: t for t in (sc.INT_T, sc.FLOAT_T, sc.BOOL_T, sc.STRING_T, sc.ASSET_T, sc.VEC3_T,
                          sc.VECTOR_T, sc.STRINGVECTOR_T, sc.STRUCT_T, sc.ENUM_T, sc.REF_T,
@@ -316,6 +352,7 @@ def builtin(block: BlockType) -> bool:
 
 
 on_declare(register_declared)
+on_declare_key(register_key)
 import engine.measures  # noqa: E402, F401, I001  (the engine's blocks declared outside components)
 import engine.physics.backend  # noqa: E402, F401, I001
 import engine.scene.anomalies  # noqa: E402, F401, I001

@@ -28,16 +28,13 @@ import numpy as np
 import engine.scene.blocks as blocks
 import engine.scene.schema as sc
 from components import (
-    Graspable,
     Joint,
     MaterialProps,
     Name,
     Physical,
-    Script,
     Shape,
     Transform,
     Trigger,
-    UserOwned,
     Visual,
 )
 from components.blocks import Body
@@ -647,13 +644,11 @@ class _Builder:
                                "RestSteps", "RestSlid", "RestForce", "RestPreloaded"))):
                 self.sleep[oid] = self.sleep_spec(r)
         self.own_poses[oid] = (position, quat)
-        if r.has("Script"):
-            comps.append(Script(file=r("Script"), saved=self.script_states.pop(oid, None)))
-        if not r("Graspable"):
-            comps.append(Graspable(False))
-        if r.has("User"):
-            comps.append(UserOwned(r("User")))
-        comps += self.declared_blocks(r, "Object", oid, phys_blk is not None or bare, comps)
+        has_body = phys_blk is not None or bare
+        context = _Context(self, r, blk.loc, oid, "Object", has_body, r, comps)
+        for name, declared in blocks.keys_of("Object"):  # Script, Graspable, User ...
+            comps += declared.build(r(name), context)
+        comps += self.declared_blocks(r, "Object", oid, has_body, comps)
         return EntitySpec(oid, comps, blk.loc)
 
     def declared_blocks(self, r: _Reader | _Index, place: str, owner: str,
@@ -971,10 +966,15 @@ class _Builder:
                                          f"{MAX_SPEED:g} {unit}")
 
     def scene_entities(self, root: _Index, spec: SceneSpec) -> None:
-        for i, e in enumerate(root.get_all("Script")):
-            sid = f"script{i}"
-            script = Script(file=e.value.data, saved=self.script_states.pop(sid, None))
-            spec.entities.append(EntitySpec(sid, [Name(sid), script], e.loc))
+        """The top-level keys features declared (each a ``Script``: an entity, script0 ...)
+        and then the top-level declared blocks that are entities."""
+        for name, declared in blocks.keys_of("Scene"):
+            for i, e in enumerate(root.get_all(name)):
+                eid = f"{name.lower()}{i}"
+                context = _Context(self, _Reader(Block([e], e.loc), "Scene"), e.loc, eid,
+                                   "Scene", False)
+                made = declared.build(e.value.py(), context)
+                spec.entities.append(EntitySpec(eid, [Name(eid), *made], e.loc))
         self.declared_entities(root, spec)
 
     def unclaimed_script_states(self) -> None:

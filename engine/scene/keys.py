@@ -27,10 +27,9 @@ _TYPES = {
 
 #: Examples where the type and default say too little (block, key) -> value text.
 _EXAMPLES: dict[tuple[str, str], str] = {
-    ("Scene", "Script"): '"scripts/scene.lua"',
     ("Scene", "Content"): '"../content/demo"',
     ("Object", "ID"): '"crate1"', ("Object", "Size"): "[1 1 1]",
-    ("Object", "Quaternion"): "[1 0 0 0]", ("Object", "Script"): '"scripts/ball.lua"',
+    ("Object", "Quaternion"): "[1 0 0 0]",
     ("Object", "VelocitySamples"): "[0 0 0.01 0 0 0]", ("Object", "IdleSteps"): "5",
     ("Visual", "Texture"): '"textures/wood.png"', ("Visual", "ShaderState"): '"toon"',
     ("Visual", "Color"): "[0.72 0.52 0.3]",

@@ -82,7 +82,6 @@ TRACKER_FILTERS = ("none", "oneeuro")
 SCHEMAS: dict[str, dict[str, Field]] = {
     "Scene": {
         "Object": _f(STRUCT_T, doc="a body and/or visual", repeat=True, struct="Object"),
-        "Script": _f(ASSET_T, doc="a Lua script run for the whole scene", repeat=True),
         "Model": _f(STRUCT_T, doc="a model file (glTF, Collada) whose bodies, joints and "
                     "materials join the scene", repeat=True, struct="Model"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
@@ -124,12 +123,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "PhysicalAttributes": _f(STRUCT_T, None,
                                  "its body and collision shapes (no block: not simulated)",
                                  struct="Physical"),
-        "Script": _f(ASSET_T, doc="Lua script attached to this object"),
-        "Graspable": _f(BOOL_T, 1, "0: hands cannot hold it (dynamic bodies can by default)"),
-        "User": _f(STRING_T, None, "the user (colosseum join --user NAME) it stands for — an "
-                   "avatar, a wheelchair, hands: a server takes it out of the world "
-                   "--leave-after s after that user's node leaves, unless the user comes "
-                   "back"),
         "UserData": _f(ANY_T, None, "free-form data for custom systems", repeat=True),
         # The sleep rule's state (engine.physics.sleep; written by --save-state so a
         # loaded state falls asleep when the uninterrupted run would).
