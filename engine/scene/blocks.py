@@ -257,6 +257,17 @@ def register_key(declared: KeyDeclaration) -> None:
             listener(place)
 
 
+def unregister_key(place: str, name: str) -> None:
+    """Take key ``name`` off block ``place`` again (a test's own key)."""
+    from components.blocks import DECLARED_KEYS
+
+    if KEYS.pop((place, name), None) is not None:
+        DECLARED_KEYS.pop((place, name), None)
+        sc.SCHEMAS[place].pop(name, None)
+        for listener in _LISTENERS:
+            listener(place)
+
+
 def keys_of(place: str) -> list[tuple[str, KeyDeclaration]]:
     """The keys features declared on block ``place``, in the order they were declared."""
     return [(name, declared) for (at, name), declared in KEYS.items() if at == place]

@@ -697,6 +697,8 @@ class _Builder:
             if "Scene" not in block.inside or (block.entity, block.first) != (entity, first):
                 continue
             written = root.blocks(block.name)
+            if block.once:  # written again: the last one replaces it (told by the check)
+                written = written[-1:]
             if block.setting and not written:
                 written = [Block(loc=root.loc)]
             for i, blk in enumerate(written):
