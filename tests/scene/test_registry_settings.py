@@ -1,7 +1,7 @@
 """The blocks and keys on the registry that are not entities: settings built from their
 defaults where unwritten (World), blocks built before the objects that name them
-(Material), blocks written once, the last replacing the first (Session), and keys a feature adds to another block
-(Script, Graspable, User; a content folder's own)."""
+(Material), blocks written once, the last replacing the first (Session), and keys a
+feature adds to another block (Script, Graspable, User; a content folder's own)."""
 
 from __future__ import annotations
 
