@@ -17,9 +17,9 @@ import pytest
 from app.bench import fingers as bench
 from app.bench.hand_grips import pinch
 from components import Hand, HandState, Physical, Transform
+from components.hand import HAND_SIZE, PALM_SIZE
 from engine.events import Contacts, HandGrasped, HandReleased
 from engine.scene import spec_from_text
-from engine.scene.factory import HAND_SIZE, PALM_SIZE
 from systems.hand_fingers import opposed
 from systems.hands import Hands
 
