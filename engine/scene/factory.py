@@ -49,7 +49,6 @@ from engine.anomalies import AnomalySpec
 from engine.assets import AssetError, Assets, nodes_name
 from engine.assets.geometry import convex_hull
 from engine.experiments.design import Design
-from engine.experiments.scene import read_experiment
 from engine.measures import MeasureSpec
 from engine.memory import paused_gc
 from engine.physics.backend import (
@@ -86,7 +85,7 @@ from engine.scene.diagnostics import (
     Reporter,
     suggest,
 )
-from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS, InputSpec, read_inputs
+from engine.scene.inputs import InputSpec
 from engine.scene.postpass import PostPassSpec
 
 if TYPE_CHECKING:
@@ -397,8 +396,10 @@ class _Context:
         written = None if key is None else self.reader.value(key)
         return self.loc if written is None else written.loc
 
-    def error(self, key: str | None, message: str) -> None:
-        self.builder.report.error(self._loc(key), message)
+    def error(self, key: str | None, message: str, item: int | None = None) -> None:
+        written = None if key is None or item is None else self.reader.value(key)
+        where = self._loc(key) if written is None else written.data[item].loc
+        self.builder.report.error(where, message)
 
     def warning(self, key: str | None, message: str) -> None:
         self.builder.report.warning(self._loc(key), message)
@@ -431,7 +432,7 @@ class _Context:
 
     def input_name(self, key: str, kind: str, who: str) -> None:
         if self.reader(key):
-            self.builder.input_names.append((who, kind, self.reader(key), self._loc(key)))
+            self.gathered("input names").append((who, kind, self.reader(key), self, key))
 
     def model_file(self, key: str) -> str | None:
         return self.builder.model(self.reader, key)
@@ -495,6 +496,19 @@ class _Context:
     def scene(self, setting: str) -> Any:
         return getattr(self.builder.spec, setting)
 
+    def settle(self, setting: str, value: Any) -> None:
+        setattr(self.builder.spec, setting, value)
+
+    def gathered(self, name: str) -> list[Any]:
+        return self.builder.gathered.setdefault(name, [])
+
+    def variables(self) -> set[str]:
+        root = self.builder.root
+        return set() if root is None else {k for k in root.groups if k[:1].islower()}
+
+    def folder(self) -> str:
+        return str(self.builder.folder)
+
     def where(self, key: str | None) -> str:
         where = self._loc(key)
         return f"{where.path}:{where.line}"
@@ -534,9 +548,10 @@ class _Builder:
         self.physical_ids: set[str] = set()
         self.static_ids: set[str] = set()  # bodies that never move (a joint sees no body)
         self.sleep: dict[str, SleepState] = {}
-        #: Inputs blocks name (who, "tracker" or "glove", the name, where), checked
-        #: against the scene's Input once it is read.
-        self.input_names: list[tuple[str, str, str, Loc]] = []
+        #: Scene-wide lists blocks fill while the scene is built (the trackers a hand
+        #: names) and the parts each block kind with a finish step made, for that step.
+        self.gathered: dict[str, list[Any]] = {}
+        self.finishing: dict[str, list[Any]] = {}
         #: Owner -> the saved state its script resumes from, and the block that said so.
         self.script_states: dict[str, SavedScript] = {}
         self.script_blocks: dict[str, Block] = {}
@@ -557,6 +572,7 @@ class _Builder:
             self.extent = self.world_extent(root)
         self.script_states = self.saved_scripts(root)
         self.root, self.owned, self.claimed = root, {}, {}
+        self.gathered, self.finishing = {}, {}
         for blk in root.blocks("Material"):
             r = _Reader(blk, "Material")
             name = str(r("ID"))
@@ -578,11 +594,18 @@ class _Builder:
         self.shaders(root, spec)
         self.world(root, spec)
         self.scene_entities(root, spec)
-        spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
-        spec.experiment = read_experiment(db.root, self.report, spec.anomalies, self.folder)
-        self.check_input_names(spec.input)
+        self.finish(db.root.loc)
         self.unclaimed_script_states()
         return spec
+
+    def finish(self, loc: Loc) -> None:
+        """Each block kind's finish step, once every block is built, with the parts its
+        blocks made (Input's: every Input block's devices and trackers as one spec)."""
+        for block in list(blocks.BLOCKS.values()):
+            if block.finish is not None:
+                ctx = _Context(self, _Reader(None, block.name), loc, block.name, "Scene",
+                               False)
+                block.finish(self.finishing.get(block.name, []), ctx)
 
     def saved_blocks(self, kind: str) -> dict[str, Block]:
         """Owner ID -> the top-level ``kind`` block (a saved state's) about it."""
@@ -695,7 +718,7 @@ class _Builder:
         outer = r if isinstance(r, _Reader) and place == "Object" else None
         for block in blocks.BLOCKS.values():
             if place in block.inside:
-                for blk in r.blocks(block.name):
+                for blk in r.blocks(block.written_as):
                     made += self.declared(block, blk, owner, place, has_body, outer,
                                           parts) or []
         return made
@@ -705,9 +728,11 @@ class _Builder:
                  parts: list[Any] | None = None) -> list[Any] | None:
         """One declared block's components, and those of the blocks declared inside it;
         None (told at the line) when a value is out of its key's range or its build
-        leaves it out."""
+        leaves it out. A repeated key's value is every value written (in order)."""
         r = _Reader(blk, block.name)
-        values = {k: r(k) for k in block.keys}
+        fields = sc.SCHEMAS[block.name]
+        values = {k: r(k) if not fields[k].repeat or fields[k].type == sc.STRUCT_T else
+                  tuple(e.value.py() for e in r.entries if e.key == k) for k in block.keys}
         problems = block.problems(values)
         for k, message in problems:
             self.report.error(r.value(k).loc, f"{block.name}: {message}")
@@ -720,7 +745,10 @@ class _Builder:
                                                outer, parts))
         if made is None:
             return None
-        return made + self.declared_blocks(r, block.name, owner, has_body, parts)
+        made = made + self.declared_blocks(r, block.name, owner, has_body, parts)
+        if block.finish is not None:  # its finish step gets every block's parts
+            self.finishing.setdefault(block.name, []).extend(made)
+        return made
 
     def declared_entities(self, root: _Index, spec: SceneSpec, entity: bool = True) -> None:
         """Top-level declared blocks: an entity each, named by its ID (one its build
@@ -729,12 +757,13 @@ class _Builder:
         for block in blocks.BLOCKS.values():
             if "Scene" not in block.inside or block.entity != entity:
                 continue
-            for i, blk in enumerate(root.blocks(block.name)):
-                bid = _Reader(blk, block.name)("ID") or block.unnamed or \
+            written = root.blocks(block.written_as)
+            for i, blk in enumerate(written[-1:] if block.once else written):
+                bid = _Reader(blk, block.name).get("ID") or block.unnamed or \
                     f"{block.name.lower()}{i}"
                 made = self.declared(block, blk, bid, "Scene", False)
-                if not entity:  # its build handed what it made to the context
-                    continue
+                if not entity:  # its build handed what it made to the context (or to
+                    continue  # its finish step)
                 skipped = made is None or (not made and block.hook is not None)
                 parts = [] if skipped and block.hook is not None else [Name(bid), *(made or [])]
                 spec.entities.append(EntitySpec(bid, parts, blk.loc, skipped=skipped))
@@ -754,27 +783,6 @@ class _Builder:
             elif gr.has("Primitive") and gr("Primitive") != "plane":
                 shapes.append(_primitive(gr, size))
         return shapes, model, scale
-
-    def check_input_names(self, inputs: InputSpec) -> None:
-        """Trackers and gloves blocks name (a hand's) must be ones the scene declares (or
-        the desktop device's); with none declared, names from a device that sends them
-        (OSC, LSL) are expected, and a name nothing declares is told as a warning."""
-        declared = {"tracker": {t.id for t in inputs.trackers},
-                    "glove": {b.device for b in inputs.buttons}}
-        desktop = {"tracker": DESKTOP_TRACKERS, "glove": DESKTOP_GLOVES}
-        for who, what, name, loc in self.input_names:
-            known_here = {*declared[what], *desktop[what]}
-            if name in known_here:
-                continue
-            known = ", ".join(sorted(known_here))
-            hint = suggest(name, sorted(known_here))
-            if declared[what]:
-                self.report.error(loc, f"{who}: no {what} {name!r} in this scene's Input "
-                                  f"(known: {known}){hint}")
-            else:
-                self.report.warning(loc, f"{who}: {what} {name!r} is declared nowhere; it "
-                                    f"must come from a device that sends it (known here: "
-                                    f"{known}){hint}")
 
     def limited(self, value: Value, key: str, most: float, unit: str) -> None:
         """Report a Mass or Density not positive, or past what any body may have."""
