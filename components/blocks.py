@@ -4,10 +4,13 @@ A :class:`BlockDeclaration` names the block, where it may stand (``"Scene"``: th
 level, an entity of its own; ``"Object"``: on an object; or inside another block), its
 keys (:class:`Key`: type, default, unit, range, example) and two plain functions: *build*
 (the checked values -> the components) and *save* (a live component -> the values a
-saved state writes back). The scene format (:mod:`engine.scene.blocks`) turns every
-declaration into its schema, its checks, ``colosseum keys`` and KEYS.md, building and
-``--save-state``; the declaration lives in the component's own module, which is why this
-vocabulary sits in the components layer: declaring a block imports nothing of the engine.
+saved state writes back); a block whose parts only make sense together (several
+``Input`` blocks are one input setup) also gives a *finish* step, run once the whole
+scene is built, with every part its blocks made. The scene format
+(:mod:`engine.scene.blocks`) turns every declaration into its schema, its checks,
+``colosseum keys`` and KEYS.md, building and ``--save-state``; the declaration lives in
+the component's own module, which is why this vocabulary sits in the components layer:
+declaring a block imports nothing of the engine.
 """
 
 from __future__ import annotations
@@ -31,7 +34,8 @@ class Key:
     ``example`` is the value text ``colosseum keys`` shows where the default says too
     little. ``lengths``, ``allowed``, ``ref`` and ``struct`` are the schema's: how many
     numbers a vector holds, an enum's choices, the kind a reference names, the block a
-    structure opens.
+    structure opens. A ``repeat`` key (not a structure) reaches *build* as the tuple of
+    every value written, in order.
     """
 
     name: str
@@ -80,8 +84,9 @@ class BuildContext(Protocol):
     #: Whether the object it stands in has a body (PhysicalAttributes, or neither block).
     has_body: bool
 
-    def error(self, key: str | None, message: str) -> None:
-        """An error at ``key``'s line (None: the block's own line); the scene fails."""
+    def error(self, key: str | None, message: str, item: int | None = None) -> None:
+        """An error at ``key``'s line (None: the block's own line; ``item``: at that value
+        of a vector, or of a list written as ``key``); the scene fails."""
 
     def given(self, key: str) -> bool:
         """Whether the author wrote ``key`` (not only its default)."""
@@ -157,8 +162,20 @@ class BuildContext(Protocol):
         """The scene-wide ``setting`` (a SceneSpec field, such as the list ``anomalies``)
         a block that makes no entity fills."""
 
-    def set_scene(self, setting: str, value: Any) -> None:
-        """Set the scene-wide ``setting`` (a SceneSpec field: the World's ``time_step``)."""
+    def settle(self, setting: str, value: Any) -> None:
+        """Set the scene-wide ``setting`` (a SceneSpec field, such as ``input``) to
+        ``value``: a finish step's result."""
+
+    def gathered(self, name: str) -> list[Any]:
+        """The scene-wide list ``name`` that blocks add to while the scene is built and a
+        finish step reads (``input_name`` adds to ``"input names"``: (who, kind, name, the
+        context and key telling at its line))."""
+
+    def variables(self) -> set[str]:
+        """The names of the scene's own variables (lower-case keys at its top)."""
+
+    def folder(self) -> str:
+        """The content folder the scene's files are relative to."""
 
     def where(self, key: str | None) -> str:
         """``key``'s place (its block's where it is not written) as ``path:line``."""
@@ -190,6 +207,9 @@ class BuildContext(Protocol):
 Build = Callable[[Mapping[str, Any], BuildContext], "list[Any] | None"]
 #: a live component -> the keys a saved state sets on its block (values as Python data).
 Save = Callable[[Any], dict[str, Any]]
+#: every part the blocks of one kind made (in file order; empty where none is written), a
+#: scene-wide context -> nothing (it settles what they make together: ctx.settle).
+Finish = Callable[[list[Any], BuildContext], None]
 
 
 @dataclass(frozen=True, slots=True)
@@ -199,8 +219,14 @@ class BlockDeclaration:
     ``doc`` is what the block is (its key's meaning where it stands; a mapping, place ->
     text, where it means something else in each place); ``repeat`` whether
     an object (or its parent block) may hold several (at the top level every block
-    repeats but one ``once`` or a ``setting``); ``saves`` the component type whose live
-    values ``save`` writes back.
+    repeats, unless ``once``: a second is warned about and replaces the first; a
+    ``setting`` is once too); ``saves`` the component type whose live values ``save``
+    writes back.
+
+    ``key`` is the key it is written as where it stands, where that differs from its name:
+    a block's name is its schema's, one for the whole format (``InputDevice``), while
+    inside ``Input`` it is written ``Device``. ``finish`` runs once the scene is built,
+    written or not (see :data:`Finish`).
     """
 
     name: str
@@ -213,16 +239,27 @@ class BlockDeclaration:
     save: Save | None = None
     unnamed: str = ""
     #: A top-level block that makes no entity of its own: its build hands what it makes
-    #: to the context (a joint, a scene-wide setting) and returns nothing.
+    #: to the context (a joint, a scene-wide setting), or returns the parts its finish
+    #: step puts together.
     entity: bool = True
-    #: Built before the scene's objects, which name what it makes (a material, a shader)
-    #: or are checked against it (the world's extent); the rest are built after them.
-    first: bool = False
-    #: Written at most once at the top level (a Session log).
+    key: str = ""
+    #: Written at most once at the top level (a Session log, an Experiment).
     once: bool = False
-    #: A scene's setting, written at most once (World): built from its defaults, at the
-    #: top of the file, where the scene does not write it.
+    #: A top-level block is given an ``ID`` key (its entity's name) unless it has one;
+    #: False: it has none (a scene-wide setting nothing refers to, such as ``Input``).
+    named: bool = True
+    finish: Finish | None = None
+    #: Built before the scene's objects, which name what it makes (a material) or are
+    #: checked against it (the world's extent); the rest are built after them.
+    first: bool = False
+    #: A scene's setting (World): written at most once, and built from its defaults, at
+    #: the top of the file, where the scene does not write it.
     setting: bool = False
+
+    @property
+    def written_as(self) -> str:
+        """The key it is written as (its ``key``, else its name)."""
+        return self.key or self.name
 
 
 #: Every declaration made so far, by block name (engine.scene.blocks registers each).

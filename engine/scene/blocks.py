@@ -39,6 +39,7 @@ from components.blocks import (
     DECLARED,
     BlockDeclaration,
     Build,
+    Finish,
     KeyDeclaration,
     Save,
     on_declare,
@@ -100,12 +101,21 @@ class BlockType:
     #: Whether a top-level one is an entity (False: its build hands its work to the
     #: context, as a Joint does).
     entity: bool = True
+    #: The key it is written as ("": its name; ``Device`` for ``InputDevice``).
+    key: str = ""
+    #: Run once the scene is built, with every part its blocks made (components.blocks).
+    finish: Finish | None = None
+    #: A top-level one the scene holds once: only the last written is built.
+    once: bool = False
     #: Built before the scene's objects (see components.blocks.BlockDeclaration).
     first: bool = False
     #: A scene's one setting (World): built from its defaults where it is not written.
     setting: bool = False
-    #: At most one at the top level (a setting is too).
-    once: bool = False
+
+    @property
+    def written_as(self) -> str:
+        """The key an author writes it as, where it stands."""
+        return self.key or self.name
 
     def build(self, values: Mapping[str, Any]) -> Any:
         """The component from checked values (scene keys)."""
@@ -184,15 +194,15 @@ def register(name: str, component: type, inside: tuple[str, ...] = ("Object",),
 
 
 def _enter(block: BlockType, fields: dict[str, sc.Field], docs: Mapping[str, str],
-           repeat: bool) -> None:
-    """Make ``block`` known: its schema, a key in each place it stands, the listeners."""
+           repeat: bool, once: bool = False) -> None:
+    """Make ``block`` known: its schema, a key in each place it stands (repeatable at the
+    top level unless ``once``), the listeners."""
     BLOCKS[block.name] = block
     sc.SCHEMAS[block.name] = fields
     for place in block.inside:
-        sc.SCHEMAS[place][block.name] = sc.Field(sc.STRUCT_T, None, docs[place],
-                                                 struct=block.name,
-                                                 repeat=repeat or (
-                                                     place == "Scene" and not block.once))
+        sc.SCHEMAS[place][block.written_as] = sc.Field(
+            sc.STRUCT_T, None, docs[place], struct=block.name,
+            repeat=repeat or (place == "Scene" and not once))
     for listener in _LISTENERS:
         for changed in (block.name, *block.inside):
             listener(changed)
@@ -211,6 +221,12 @@ def register_declared(declared: BlockDeclaration) -> BlockType:
     if (known is None and name in sc.SCHEMAS) or (
             known is not None and known.module != declared.build.__module__):
         raise BlockError(f"block {name!r} exists already; choose another name")
+    written = declared.written_as
+    taken = [p for p in declared.inside
+             if written in sc.SCHEMAS[p] and sc.SCHEMAS[p][written].struct != name]
+    if taken:
+        raise BlockError(f"block {name!r}: {taken[0]} has a key {written!r} "
+                         "already; choose another key")
     fields: dict[str, sc.Field] = {}
     keys: dict[str, BlockKey] = {}
     for k in declared.keys:
@@ -221,16 +237,16 @@ def register_declared(declared: BlockDeclaration) -> BlockType:
         keys[k.name] = BlockKey(k.name, KeyInfo(k.meaning, k.low, k.high), None)
         if k.example is not None:
             EXAMPLES[(name, k.name)] = k.example
-    named = not (declared.setting or declared.once)  # one of many, named by its ID
-    if "Scene" in declared.inside and "ID" not in fields and named:
+    named = declared.named and not (declared.setting or declared.once)
+    if "Scene" in declared.inside and named and "ID" not in fields:  # its entity's name
         fields["ID"] = sc.Field(sc.STRING_T, "", f"name of this {name}")
     doc = declared.doc
     docs = {p: doc if isinstance(doc, str) else doc[p] for p in declared.inside}
     block = BlockType(name, declared.saves, tuple(declared.inside), docs[declared.inside[0]],
                       keys, declared.build, declared.save, declared.build.__module__,
-                      declared.unnamed, declared.entity, declared.first, declared.setting,
-                      declared.once or declared.setting)
-    _enter(block, fields, docs, declared.repeat)
+                      declared.unnamed, declared.entity, declared.key, declared.finish,
+                      declared.once or declared.setting, declared.first, declared.setting)
+    _enter(block, fields, docs, declared.repeat, declared.once or declared.setting)
     return block
 
 
@@ -330,7 +346,7 @@ def unregister(name: str) -> None:
     sc.SCHEMAS.pop(name, None)
     for place in block.inside:
         if place in sc.SCHEMAS:
-            sc.SCHEMAS[place].pop(name, None)
+            sc.SCHEMAS[place].pop(block.written_as, None)
             for listener in _LISTENERS:
                 listener(place)
 
@@ -362,11 +378,38 @@ def builtin(block: BlockType) -> bool:
     return block.hook is not None
 
 
-on_declare(register_declared)
-on_declare_key(register_key)
-import engine.measures  # noqa: E402, F401, I001  (the engine's blocks declared outside components)
-import engine.physics.backend  # noqa: E402, F401, I001
+#: The engine's modules that declare blocks outside components, in the order their blocks
+#: are registered after the components' own (the schema, ``colosseum keys`` and KEYS.md list
+#: them so, whichever of them a program happened to import first).
+ENGINE_BLOCKS = ("engine.physics.backend", "engine.measures", "engine.scene.anomalies",
+                 "engine.scene.postpass", "engine.scene.world", "engine.scene.shaders",
+                 "engine.scene.inputs", "engine.experiments.scene")
+
+
+def _rank(declared: BlockDeclaration) -> int:
+    """Where a declaration made before this module was imported is registered."""
+    module = declared.build.__module__
+    if module.startswith("components."):
+        return 0
+    return ENGINE_BLOCKS.index(module) + 1 if module in ENGINE_BLOCKS else len(ENGINE_BLOCKS) + 1
+
+
+def _register_declared_so_far() -> None:
+    """Register every declaration made so far, in :func:`_rank`'s order, then each one
+    made from now on (a content folder's) as it is made."""
+    ordered = sorted(DECLARED.values(), key=_rank)  # stable: a module's own order is kept
+    DECLARED.clear()
+    DECLARED.update((d.name, d) for d in ordered)
+    on_declare(register_declared)
+
+
+import engine.physics.backend  # noqa: E402, F401, I001  (the engine's blocks declared
+import engine.measures  # noqa: E402, F401, I001  outside components: ENGINE_BLOCKS)
 import engine.scene.anomalies  # noqa: E402, F401, I001
 import engine.scene.postpass  # noqa: E402, F401, I001
+import engine.scene.inputs  # noqa: E402, F401, I001
+import engine.experiments.scene  # noqa: E402, F401, I001
 import engine.scene.world  # noqa: E402, F401, I001
 import engine.scene.shaders  # noqa: E402, F401, I001
+_register_declared_so_far()
+on_declare_key(register_key)

@@ -35,7 +35,6 @@ from components.script import SavedScript, ScriptHandler, ScriptTimer
 from engine.anomalies import AnomalySpec
 from engine.assets import AssetError, Assets
 from engine.experiments.design import Design
-from engine.experiments.scene import read_experiment
 from engine.measures import MeasureSpec
 from engine.memory import paused_gc
 from engine.physics.backend import (
@@ -64,7 +63,7 @@ from engine.scene.diagnostics import (
     Reporter,
     suggest,
 )
-from engine.scene.inputs import DESKTOP_GLOVES, DESKTOP_TRACKERS, InputSpec, read_inputs
+from engine.scene.inputs import InputSpec
 from engine.scene.objects import ObjectBuilder
 from engine.scene.postpass import PostPassSpec
 from engine.scene.reader import Index as _Index
@@ -279,8 +278,10 @@ class _Context:
         written = None if key is None else self.reader.value(key)
         return self.loc if written is None else written.loc
 
-    def error(self, key: str | None, message: str) -> None:
-        self.builder.report.error(self._loc(key), message)
+    def error(self, key: str | None, message: str, item: int | None = None) -> None:
+        written = None if key is None or item is None else self.reader.value(key)
+        where = self._loc(key) if written is None else written.data[item].loc
+        self.builder.report.error(where, message)
 
     def warning(self, key: str | None, message: str) -> None:
         self.builder.report.warning(self._loc(key), message)
@@ -313,7 +314,7 @@ class _Context:
 
     def input_name(self, key: str, kind: str, who: str) -> None:
         if self.reader(key):
-            self.builder.input_names.append((who, kind, self.reader(key), self._loc(key)))
+            self.gathered("input names").append((who, kind, self.reader(key), self, key))
 
     def model_file(self, key: str) -> str | None:
         return self.builder.model(self.reader, key)
@@ -377,8 +378,18 @@ class _Context:
     def scene(self, setting: str) -> Any:
         return getattr(self.builder.spec, setting)
 
-    def set_scene(self, setting: str, value: Any) -> None:
+    def settle(self, setting: str, value: Any) -> None:
         setattr(self.builder.spec, setting, value)
+
+    def gathered(self, name: str) -> list[Any]:
+        return self.builder.gathered.setdefault(name, [])
+
+    def variables(self) -> set[str]:
+        root = self.builder.root
+        return set() if root is None else {k for k in root.groups if k[:1].islower()}
+
+    def folder(self) -> str:
+        return str(self.builder.folder)
 
     def where(self, key: str | None) -> str:
         where = self._loc(key)
@@ -421,9 +432,10 @@ class _Builder(ObjectBuilder):
         self.physical_ids: set[str] = set()
         self.static_ids: set[str] = set()  # bodies that never move (a joint sees no body)
         self.sleep: dict[str, SleepState] = {}
-        #: Inputs blocks name (who, "tracker" or "glove", the name, where), checked
-        #: against the scene's Input once it is read.
-        self.input_names: list[tuple[str, str, str, Loc]] = []
+        #: Scene-wide lists blocks fill while the scene is built (the trackers a hand
+        #: names) and the parts each block kind with a finish step made, for that step.
+        self.gathered: dict[str, list[Any]] = {}
+        self.finishing: dict[str, list[Any]] = {}
         #: Owner -> the saved state its script resumes from, and the block that said so.
         self.script_states: dict[str, SavedScript] = {}
         self.script_blocks: dict[str, Block] = {}
@@ -442,6 +454,7 @@ class _Builder(ObjectBuilder):
         root = _Index(db.root)
         self.script_states = self.saved_scripts(root)
         self.root, self.owned, self.claimed = root, {}, {}
+        self.gathered, self.finishing = {}, {}
         self.declared_entities(root, spec, entity=False, first=True)  # materials, world
         if self.extent is None:  # a spawned snippet's is the running world's
             self.extent = spec.world.extent
@@ -451,11 +464,18 @@ class _Builder(ObjectBuilder):
         spec.sleep = self.sleep
         self.declared_entities(root, spec, entity=False)
         self.scene_entities(root, spec)
-        spec.input = read_inputs(root.blocks("Input"), root.blocks("Output"), self.report)
-        spec.experiment = read_experiment(db.root, self.report, spec.anomalies, self.folder)
-        self.check_input_names(spec.input)
+        self.finish(db.root.loc)
         self.unclaimed_script_states()
         return spec
+
+    def finish(self, loc: Loc) -> None:
+        """Each block kind's finish step, once every block is built, with the parts its
+        blocks made (Input's: every Input block's devices and trackers as one spec)."""
+        for block in list(blocks.BLOCKS.values()):
+            if block.finish is not None:
+                ctx = _Context(self, _Reader(None, block.name), loc, block.name, "Scene",
+                               False)
+                block.finish(self.finishing.get(block.name, []), ctx)
 
     def saved_blocks(self, kind: str) -> dict[str, Block]:
         """Owner ID -> the top-level ``kind`` block (a saved state's) about it."""
@@ -492,7 +512,7 @@ class _Builder(ObjectBuilder):
         outer = r if isinstance(r, _Reader) and place == "Object" else None
         for block in blocks.BLOCKS.values():
             if place in block.inside:
-                for blk in r.blocks(block.name):
+                for blk in r.blocks(block.written_as):
                     made += self.declared(block, blk, owner, place, has_body, outer,
                                           parts) or []
         return made
@@ -502,9 +522,11 @@ class _Builder(ObjectBuilder):
                  parts: list[Any] | None = None) -> list[Any] | None:
         """One declared block's components, and those of the blocks declared inside it;
         None (told at the line) when a value is out of its key's range or its build
-        leaves it out."""
+        leaves it out. A repeated key's value is every value written (in order)."""
         r = _Reader(blk, block.name)
-        values = {k: r(k) for k in block.keys}
+        fields = sc.SCHEMAS[block.name]
+        values = {k: r(k) if not fields[k].repeat or fields[k].type == sc.STRUCT_T else
+                  tuple(e.value.py() for e in r.entries if e.key == k) for k in block.keys}
         problems = block.problems(values)
         for k, message in problems:
             self.report.error(r.value(k).loc, f"{block.name}: {message}")
@@ -517,7 +539,10 @@ class _Builder(ObjectBuilder):
                                                outer, parts))
         if made is None:
             return None
-        return made + self.declared_blocks(r, block.name, owner, has_body, parts)
+        made = made + self.declared_blocks(r, block.name, owner, has_body, parts)
+        if block.finish is not None:  # its finish step gets every block's parts
+            self.finishing.setdefault(block.name, []).extend(made)
+        return made
 
     def declared_entities(self, root: _Index, spec: SceneSpec, entity: bool = True,
                           first: bool = False) -> None:
@@ -528,7 +553,7 @@ class _Builder(ObjectBuilder):
         for block in blocks.BLOCKS.values():
             if "Scene" not in block.inside or (block.entity, block.first) != (entity, first):
                 continue
-            written = root.blocks(block.name)
+            written = root.blocks(block.written_as)
             if block.once:  # written again: the last one replaces it (told by the check)
                 written = written[-1:]
             if block.setting and not written:
@@ -537,33 +562,11 @@ class _Builder(ObjectBuilder):
                 bid = _Reader(blk, block.name).get("ID") or block.unnamed or \
                     f"{block.name.lower()}{i}"
                 made = self.declared(block, blk, bid, "Scene", False)
-                if not entity:  # its build handed what it made to the context
-                    continue
+                if not entity:  # its build handed what it made to the context (or to
+                    continue  # its finish step)
                 skipped = made is None or (not made and block.hook is not None)
                 parts = [] if skipped and block.hook is not None else [Name(bid), *(made or [])]
                 spec.entities.append(EntitySpec(bid, parts, blk.loc, skipped=skipped))
-
-
-    def check_input_names(self, inputs: InputSpec) -> None:
-        """Trackers and gloves blocks name (a hand's) must be ones the scene declares (or
-        the desktop device's); with none declared, names from a device that sends them
-        (OSC, LSL) are expected, and a name nothing declares is told as a warning."""
-        declared = {"tracker": {t.id for t in inputs.trackers},
-                    "glove": {b.device for b in inputs.buttons}}
-        desktop = {"tracker": DESKTOP_TRACKERS, "glove": DESKTOP_GLOVES}
-        for who, what, name, loc in self.input_names:
-            known_here = {*declared[what], *desktop[what]}
-            if name in known_here:
-                continue
-            known = ", ".join(sorted(known_here))
-            hint = suggest(name, sorted(known_here))
-            if declared[what]:
-                self.report.error(loc, f"{who}: no {what} {name!r} in this scene's Input "
-                                  f"(known: {known}){hint}")
-            else:
-                self.report.warning(loc, f"{who}: {what} {name!r} is declared nowhere; it "
-                                    f"must come from a device that sends it (known here: "
-                                    f"{known}){hint}")
 
 
     def scene_entities(self, root: _Index, spec: SceneSpec) -> None:

@@ -62,12 +62,6 @@ _EXAMPLES: dict[tuple[str, str], str] = {
     ("HeldState", "Last"): "[0.4 0.2 1.1]",
     ("BoneDrive", "Bone"): '"hand.L"', ("BoneDrive", "Position"): "[0.3 0.4 1.2]",
     ("BoneDrive", "Quaternion"): "[1 0 0 0]",
-    ("Experiment", "ID"): '"reach"', ("Experiment", "Track"): '["wheelchair" "hand_r"]',
-    ("ExperimentFactor", "ID"): '"blur"', ("ExperimentFactor", "Levels"): "[0 0.3 0.6]",
-    ("ExperimentFactor", "Variable"): '"blur_level"', ("ExperimentFactor", "Anomaly"): '"blur"',
-    ("ExperimentFactor", "Param"): '"Acuity"', ("Staircase", "ID"): '"contrast"',
-    ("Staircase", "Step"): "[0.1 0.05 0.02]", ("Staircase", "Anomaly"): '"contrast_loss"',
-    ("Staircase", "Param"): '"Loss"', ("Staircase", "Variable"): '"loss"',
 }
 
 

@@ -22,14 +22,7 @@ from typing import Any
 
 from components.joint import SCENE_JOINT_TYPES
 from components.shape import ShapeKind
-from engine.experiments.design import END_ON, RESETS, Design
-from engine.experiments.ordering import ORDERS as EXPERIMENT_ORDERS
-from engine.physics.backend import BackendName, WorldSettings
-
-#: The solver settings' defaults, defined once (engine.physics.backend.WorldSettings).
-_WORLD = WorldSettings()
-#: An Experiment block's defaults are the design's (engine.experiments.design).
-_DESIGN = Design("")
+from engine.physics.backend import BackendName
 
 # Field types.
 INT_T = "int"
@@ -74,10 +67,6 @@ PRIMITIVES = (ShapeKind.SPHERE, ShapeKind.BOX, ShapeKind.CAPSULE, ShapeKind.CYLI
 PARSE_METHODS = ("TriangleMesh", "ConvexHull", "Box", "Sphere")
 JOINT_TYPES = tuple(SCENE_JOINT_TYPES)
 BACKENDS = tuple(BackendName)
-INPUT_KINDS = ("osc", "lsl", "serial", "openxr", "desktop")
-OUTPUT_KINDS = ("osc", "lsl")
-LSL_SCOPES = ("machine", "link", "site", "organization", "global")
-TRACKER_FILTERS = ("none", "oneeuro")
 
 SCHEMAS: dict[str, dict[str, Field]] = {
     "Scene": {
@@ -85,13 +74,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Model": _f(STRUCT_T, doc="a model file (glTF, Collada) whose bodies, joints and "
                     "materials join the scene", repeat=True, struct="Model"),
         "UserData": _f(ANY_T, doc="free-form data for custom systems", repeat=True),
-        "Input": _f(STRUCT_T, doc="input devices and how their trackers, wheels and buttons "
-                    "are calibrated (services.input)", repeat=True, struct="Input"),
-        "Output": _f(STRUCT_T, doc="engine values published every frame over OSC or LSL",
-                     repeat=True, struct="Output"),
-        "Experiment": _f(STRUCT_T, None, "a study's design: factors and levels, blocks, "
-                         "counterbalancing, practice trials, staircases (colosseum experiment "
-                         "run; docs/experiments.md)", struct="Experiment"),
         "Content": _f(STRING_T, None, "the content folder a saved state continues (relative "
                       "to this file): its file names are relative to that folder, its "
                       "systems/ and scripts/ are the ones used"),
@@ -212,78 +194,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Value": _f(NUMBER_OR_VECTOR_T, None,
                     "a number, or up to 4 numbers (vec2..vec4)", required=True),
     },
-    "Experiment": {
-        "ID": _f(STRING_T, "", "the experiment's name: sessions go to "
-                 "sessions/<ID>/<participant>/ (default: the content folder's name)"),
-        "Factor": _f(STRUCT_T, None, "a factor and its levels", repeat=True,
-                     struct="ExperimentFactor"),
-        "Staircase": _f(STRUCT_T, None, "an adaptive procedure: one block of trials after "
-                        "the factorial ones", repeat=True, struct="Staircase"),
-        "Order": _f(ENUM_T, _DESIGN.order, "the order of the within cells: random (a seed per "
-                    "participant and block), latin (a Latin square's row by participant "
-                    "number), balanced (a balanced Latin square's), fixed (as declared)",
-                    allowed=EXPERIMENT_ORDERS),
-        "Blocks": _f(INT_T, _DESIGN.blocks, "blocks; each holds every cell Repeats times"),
-        "Repeats": _f(INT_T, _DESIGN.repeats, "trials per cell in each block"),
-        "Practice": _f(INT_T, _DESIGN.practice, "practice trials before the first block "
-                       "(block 0, marked)"),
-        "Timeout": _f(FLOAT_T, _DESIGN.timeout, "s of simulated time after which a trial "
-                      "ends with "
-                      "outcome \"timeout\""),
-        "Reset": _f(ENUM_T, _DESIGN.reset, "trial: every trial starts from a freshly built "
-                    "world; never: one world runs through the session", allowed=RESETS),
-        "EndOn": _f(ENUM_T, _DESIGN.end_on, "what ends a trial besides the timeout: finish "
-                    "(trial:finish(outcome)) or response (also the first trial:respond)",
-                    allowed=END_ON),
-        "Seed": _f(INT_T, _DESIGN.seed, "the design's seed: random orders come from it and the "
-                   "participant number"),
-        "Track": _f(STRINGVECTOR_T, None, "objects whose poses are logged each trial "
-                    "(tracking/trial-NNN.csv)", ref="Object"),
-        "TrackCamera": _f(BOOL_T, int(_DESIGN.track_camera), "1: log the active camera (the "
-                          "head) too"),
-        "TrackRate": _f(FLOAT_T, _DESIGN.track_rate, "Hz of the tracking log (0: every "
-                        "frame)"),
-        "Break": _f(FLOAT_T, _DESIGN.pause, "s of pause between blocks (none with --fast)"),
-    },
-    "ExperimentFactor": {
-        "ID": Field(STRING_T, None, "the factor's name (a trials.csv column; Lua "
-                    "experiment:condition(ID))", required=True),
-        "Levels": Field(ANY_T, None, "its levels: numbers [0 0.5 1] or names "
-                        "[\"none\" \"left\"]", required=True),
-        "Within": _f(BOOL_T, 1, "1: every participant meets every level; 0: between "
-                     "participants, by participant number"),
-        "Variable": _f(STRING_T, None, "a scene variable the level sets before the world is "
-                       "built (as --param)"),
-        "Anomaly": _f(STRING_T, None, "an anomaly the level switches: \"off\" or \"none\" "
-                      "off, any other level on"),
-        "Param": _f(STRING_T, None, "the Anomaly's parameter the level sets (Acuity, Side, "
-                    "Loss, ...)"),
-    },
-    "Staircase": {
-        "ID": Field(STRING_T, None, "its name (a trials.csv column holding the intensity)",
-                    required=True),
-        "Method": _f(ENUM_T, "updown", "updown: a transformed up/down staircase; quest: a "
-                     "Bayesian (QUEST-style) one", allowed=("updown", "quest")),
-        "Start": _f(FLOAT_T, 0.5, "the first trial's intensity"),
-        "Step": _f(VECTOR_T, (0.1,), "step sizes: the first, then one more after each "
-                   "reversal (the last kept)"),
-        "Down": _f(INT_T, 3, "correct answers in a row that lower the intensity"),
-        "Up": _f(INT_T, 1, "wrong answers in a row that raise it"),
-        "Trials": _f(INT_T, 40, "at most this many trials"),
-        "Reversals": _f(INT_T, 0, "stop after this many reversals (0: after Trials)"),
-        "Average": _f(INT_T, 6, "the threshold is the mean of the last this many reversals"),
-        "Min": _f(FLOAT_T, 0.0, "the lowest intensity"),
-        "Max": _f(FLOAT_T, 1.0, "the highest intensity"),
-        "Response": _f(STRING_T, "seen", "the response (trial:respond(name, value)) whose "
-                       "true value is a correct answer"),
-        "Slope": _f(FLOAT_T, 10.0, "quest: the logistic psychometric function's slope "
-                    "(per unit of intensity)"),
-        "Guess": _f(FLOAT_T, 0.0, "quest: the guess rate"),
-        "Lapse": _f(FLOAT_T, 0.01, "quest: the lapse rate"),
-        "Variable": _f(STRING_T, None, "a scene variable the intensity sets"),
-        "Anomaly": _f(STRING_T, None, "an anomaly switched on at the intensity"),
-        "Param": _f(STRING_T, None, "the Anomaly's parameter the intensity sets"),
-    },
     "ScriptState": {
         "Owner": _f(STRING_T, None, "the object whose script this is, or the scene script's "
                     "name by its place (script0, script1, ...)", required=True),
@@ -371,81 +281,6 @@ SCHEMAS: dict[str, dict[str, Field]] = {
         "Position": _f(VEC3_T, None, "m, world frame", required=True),
         "Quaternion": _f(VECTOR_T, None, "world orientation [w x y z]", required=True,
                          lengths=(4,)),
-    },
-    # -- input devices and bindings (services.input; address space in docs/input-format.md) --
-    "Input": {
-        "Device": _f(STRUCT_T, doc="a device to open", repeat=True, struct="InputDevice"),
-        "Tracker": _f(STRUCT_T, doc="calibration and filtering of one 6-DOF tracker",
-                      repeat=True, struct="InputTracker"),
-        "Wheel": _f(STRUCT_T, doc="a wheel counter: counts to angular velocity", repeat=True,
-                    struct="InputWheel"),
-        "Button": _f(STRUCT_T, doc="a button given a name of its own", repeat=True,
-                     struct="InputButton"),
-        "LostAfter": _f(FLOAT_T, 0.5, "s of silence after which a tracker, glove or wheel is "
-                        "reported lost (DeviceLost) until it sends again"),
-    },
-    "InputDevice": {
-        "ID": _f(STRING_T, "", "name trackers refer to (default: the Kind)"),
-        "Kind": _f(ENUM_T, None, "transport", required=True, allowed=INPUT_KINDS),
-        "Port": _f(INT_T, 9000, "osc: UDP port to listen on"),
-        "Address": _f(STRING_T, "127.0.0.1", "osc: address to listen on (0.0.0.0: every "
-                      "network interface)"),
-        "Path": _f(STRING_T, "", "serial: the port, e.g. /dev/ttyUSB0"),
-        "Baud": _f(INT_T, 115200, "serial: bits per second"),
-        "Line": _f(STRING_T, "{name} {count}", "serial: one line's fields: {name} {count} "
-                   "{button} {pressed} {axis} {value} {x} {y} {z} {qw} {qx} {qy} {qz}"),
-        "Streams": _f(STRINGVECTOR_T, (), "lsl: streams to open, by name or \"type:TYPE\""),
-        "Scope": _f(ENUM_T, "site", "lsl: how far stream discovery reaches",
-                    allowed=LSL_SCOPES),
-        "Timeout": _f(FLOAT_T, None, "s; overrides Input LostAfter for this device's sources"),
-        "TurnsPerSecond": _f(FLOAT_T, 0.5, "desktop: wheel turns per second while W/S/A/D "
-                             "are held"),
-    },
-    "InputTracker": {
-        "ID": Field(STRING_T, None, "the tracker's name as its device sends it", required=True),
-        "Device": _f(STRING_T, "", "only poses from this device (its ID); default: any"),
-        "Offset": _f(VEC3_T, (0.0, 0.0, 0.0), "m, added after rotation and scale"),
-        "Rotation": _f(VEC3_T, (0.0, 0.0, 0.0), "Euler degrees turning the device frame "
-                       "into the scene frame"),
-        "Scale": _f(FLOAT_T, 1.0, "device units to metres"),
-        "Axes": _f(STRING_T, "x y z", "which device axis becomes engine X, Y and Z, e.g. "
-                   "\"x -z y\" for a Y-up device"),
-        "Filter": _f(ENUM_T, "none", "jitter filter", allowed=TRACKER_FILTERS),
-        "MinCutoff": _f(FLOAT_T, 1.0, "one-euro: Hz, jitter cut at rest (lower: smoother)"),
-        "Beta": _f(FLOAT_T, 10.0, "one-euro: s/m, how fast the cutoff rises with speed "
-                   "(higher: less lag in fast moves)"),
-        "Predict": _f(FLOAT_T, 0.0, "ms of constant-velocity prediction"),
-        "Object": _f(REF_T, None, "an object without physics (a cursor, a marker) whose pose "
-                     "follows the tracker", ref="Object"),
-        "Camera": _f(REF_T, None, "a camera (give it an ID) whose pose follows the tracker: "
-                     "a headset", ref="Camera"),
-    },
-    "InputWheel": {
-        "ID": Field(STRING_T, None, "the counter's name as its device sends it",
-                    required=True),
-        "CountsPerTurn": _f(INT_T, 1024, "encoder counts per wheel revolution"),
-        "Wrap": _f(INT_T, 0, "the counter wraps to 0 at this value (0: it never wraps)"),
-        "MaxTurnsPerSecond": _f(FLOAT_T, 20.0, "faster jumps are a counter reset, not motion"),
-        "Invert": _f(BOOL_T, 0, "1: counts run backwards"),
-        "Window": _f(FLOAT_T, 0.1, "s of counts the angular velocity is measured over"),
-    },
-    "InputButton": {
-        "ID": Field(STRING_T, None, "the name scripts and controllers use", required=True),
-        "Device": Field(STRING_T, None, "the glove or device sending it", required=True),
-        "Name": Field(STRING_T, None, "the button's name on that device", required=True),
-        "Invert": _f(BOOL_T, 0, "1: a normally-closed switch (pressed when it reads 0)"),
-    },
-    "Output": {
-        "Kind": _f(ENUM_T, "osc", "transport", allowed=OUTPUT_KINDS),
-        "Address": _f(STRING_T, "127.0.0.1", "osc: where to send"),
-        "Port": _f(INT_T, 9001, "osc: UDP port to send to"),
-        "Name": _f(STRING_T, "colosseum", "lsl: stream name prefix"),
-        "Scope": _f(ENUM_T, "site", "lsl: how far stream discovery reaches",
-                    allowed=LSL_SCOPES),
-        "Value": _f(STRING_T, None, "a value sent every frame: position:OBJECT, "
-                    "velocity:OBJECT, angular_velocity:OBJECT, controller:ID, wheel:NAME, "
-                    "tracker:NAME, or a name Python systems set", repeat=True),
-        "Markers": _f(BOOL_T, 1, "1: send task markers (Lua emit(\"marker\", text))"),
     },
 }
 

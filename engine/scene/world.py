@@ -34,16 +34,16 @@ _BOUNDED = {"ERP": "erp", "CFM": "cfm", "Iterations": "iterations",
 def build_world(v: Mapping[str, Any], ctx: BuildContext) -> list[Any]:
     """The scene's world settings, step, backend and clock (a saved state's too)."""
     _check_step(float(v["TimeStep"]), ctx)
-    ctx.set_scene("world", WorldSettings(
+    ctx.settle("world", WorldSettings(
         gravity=tuple(map(float, v["Gravity"])), auto_sleep=bool(v["AutoSleep"]),
         material_pairs=ctx.scene("material_pairs"), solver_seed=v["SolverSeed"],
         extent=_extent(v, ctx), **_bounded(v, ctx)))
-    ctx.set_scene("time_step", float(v["TimeStep"]))
-    ctx.set_scene("backend", v["Dynamics"])
-    ctx.set_scene("time", float(v["Time"]))
+    ctx.settle("time_step", float(v["TimeStep"]))
+    ctx.settle("backend", v["Dynamics"])
+    ctx.settle("time", float(v["Time"]))
     if v["RandomState"] is not None:
         try:
-            ctx.set_scene("random_state", random_state.parse(str(v["RandomState"])))
+            ctx.settle("random_state", random_state.parse(str(v["RandomState"])))
         except ValueError as exc:
             ctx.error("RandomState", str(exc))
     return []

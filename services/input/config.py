@@ -21,8 +21,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Iterable
 
-from engine.scene.inputs import DeviceSpec
-from engine.scene.schema import INPUT_KINDS
+from engine.scene.inputs import INPUT_KINDS, DeviceSpec
 from services.input.desktop import DesktopDevice, WindowDevice
 from services.input.device import MONOTONIC, Clock, DeviceError, InputDevice
 

@@ -4,12 +4,13 @@ because one reads the other (the World block's are in tests/physics/test_world_s
 from __future__ import annotations
 
 from engine.experiments.design import Design
+from engine.experiments.scene import EXPERIMENT_BLOCK
 from engine.scene.schema import SCHEMAS
 from systems.session import SessionSettings
 
 
 def test_an_experiment_block_s_defaults_are_the_design_s() -> None:
-    keys, design = SCHEMAS["Experiment"], Design("")
+    keys, design = {k.name: k for k in EXPERIMENT_BLOCK.keys}, Design("")
     for key, name in (("Order", "order"), ("Blocks", "blocks"), ("Repeats", "repeats"),
                       ("Practice", "practice"), ("Timeout", "timeout"), ("Reset", "reset"),
                       ("EndOn", "end_on"), ("Seed", "seed"), ("TrackCamera", "track_camera"),

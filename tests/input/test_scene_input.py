@@ -93,3 +93,42 @@ def test_input_devices_from_the_command_line_are_opened(tmp_path: Path):
     # that opened are listed, and --stats is written after the run closed them
     assert [(d["name"], d["kind"], d["state"]) for d in devices] == [
         ("osc", "osc", "closed"), ("desktop", "desktop", "closed")]
+
+
+def test_several_input_blocks_are_one_setup_told_at_file_line_with_did_you_mean(
+        tmp_path: Path):
+    """The Input blocks' finish step reads every block: a tracker may name a device
+    another Input block declares, a second device of one ID is told wherever it stands,
+    and a hand naming a tracker no block declares is told at its own line; each with
+    file:line:col and a did-you-mean."""
+    from engine.scene import check
+
+    good = spec_from_text('Input { LostAfter 2 Device { ID "mocap" Kind "osc" } }\n'
+                          'Input { Tracker { ID "hand_x" Device "mocap" } }\n'
+                          'Output { Value "a" }\nOutput { Value "b" Value "c" }\n',
+                          tmp_path).input
+    assert [d.id for d in good.devices] == ["mocap"] and good.trackers[0].device == "mocap"
+    assert good.lost_after == 0.5  # the last Input block's (its default)
+    assert [o.values for o in good.outputs] == [("a",), ("b", "c")]
+    scene = tmp_path / "main.scene"
+    scene.write_text('Input { Device { ID "mocap" Kind "osc" } }\n'
+                     'Input { Tracker { ID "hand_x" Device "mocapp" } }\n'
+                     'Input { Device { ID "mocap" Kind "osc" Port 9001 } }\n'
+                     'Object { ID "h" Hand { Tracker "hand_y" } }\n')
+    told = [(d.line, d.col, d.severity, d.message) for d in check(scene)
+            if d.path == str(scene)]
+    assert told == [
+        (2, 38, "error", "unknown input device 'mocapp' (did you mean 'mocap'?) "
+                         "(declared: mocap)"),
+        (3, 16, "error", f"duplicate input device 'mocap' (first declared at {scene}:1:16)"),
+        (4, 32, "error", "hand 'h': no tracker 'hand_y' in this scene's Input (known: "
+                         "hand_l, hand_r, hand_x) (did you mean 'hand_x'?)")]
+
+
+def test_the_blocks_inside_input_are_documented_by_the_key_they_are_written_as():
+    from engine.scene import keys
+
+    assert keys.find_block("Tracker") == "InputTracker"
+    text = keys.block_text(keys.find_block("Device") or "")
+    assert text.startswith("InputDevice  (inside Input as Device: a device to open)")
+    assert "Kind" in text and "required" in text

@@ -123,3 +123,64 @@ def test_a_content_folders_block_stays_out_of_the_engines_reference():
     load_scene(POOL)
     assert "Buoyancy" in keys.blocks(content=True) and "Buoyancy" not in keys.blocks()
     assert "Buoyancy" not in keys.reference_markdown()
+
+
+_LAPS = '''"""A lap's checkpoints: numbered alone, told at their lines where the numbers clash."""
+from dataclasses import dataclass
+
+from components.blocks import BlockDeclaration, Key, declare
+
+
+@dataclass
+class Checkpoint:
+    number: int
+    of: int = 0  # how many the lap has: known once every block is built
+
+
+def build(values, ctx):
+    gate = Checkpoint(int(values["Number"]))
+    ctx.gathered("checkpoints").append((gate, ctx))
+    return [gate]
+
+
+def finish(parts, ctx):
+    seen = set()
+    for gate, at in ctx.gathered("checkpoints"):
+        gate.of = len(parts)
+        if gate.number in seen:
+            at.error("Number", f"checkpoint {gate.number} is given twice")
+        seen.add(gate.number)
+
+
+declare(BlockDeclaration("Checkpoint", inside=("Scene",), build=build, finish=finish,
+                         doc="a gate of the lap", keys=(
+                             Key("Number", "int", 1, "its place in the lap"),)))
+'''
+
+
+def test_a_content_folders_block_has_a_finish_step_after_every_block(tmp_path: Path):
+    """A content folder's systems/*.py declares a top-level block whose finish step sees
+    every block's parts (each gate learns how many the lap has) and tells a clash at the
+    line of the block that made it, as the engine's Input does."""
+    from engine.scene import check, load_spec
+
+    folder = tmp_path / "laps"
+    (folder / "systems").mkdir(parents=True)
+    (folder / "systems" / "laps.py").write_text(_LAPS)
+    (folder / "main.scene").write_text('Checkpoint { ID "a" Number 1 }\n'
+                                       'Checkpoint { ID "b" Number 2 }\n'
+                                       'Checkpoint { ID "c" Number 3 }\n')
+    try:
+        spec = load_spec(folder)
+        gates = {e.id: c for e in spec.entities for c in e.components
+                 if type(c).__name__ == "Checkpoint"}
+        assert {k: (g.number, g.of) for k, g in gates.items()} == {
+            "a": (1, 3), "b": (2, 3), "c": (3, 3)}
+        assert blocks.from_content("Checkpoint")  # not among the engine's own blocks
+        (folder / "main.scene").write_text('Checkpoint { ID "a" Number 1 }\n'
+                                           'Checkpoint { ID "b" Number 1 }\n')
+        told = [(Path(d.path).name, d.line, d.col, d.severity, d.message)
+                for d in check(folder / "main.scene")]
+        assert told == [("main.scene", 2, 28, "error", "checkpoint 1 is given twice")]
+    finally:
+        blocks.unregister("Checkpoint")
