@@ -39,9 +39,6 @@ ALLOWED: dict[str, str] = {
         "ODE's per-pair callback in the GIL-free step: filter, collide, contact",
     "engine/physics/ode3d/_world.pxi::World.step":
         "the step as one sequence, the GIL released once around it",
-    "engine/scene/snapshot.py::write_state":
-        "the saved file's sections in their order; the blocks not on the registry yet "
-        "(Input, Output, Material, World, scripts) are written here",
     "engine/physics/pymunk2d/_rows.pyx::carried_down":
         "one typed pass over the contact rows (C locals; a helper per part would be a "
         "Python call per row)",

@@ -577,7 +577,6 @@ def _literal_value(value: Any) -> Value:
     return _vec(value)
 
 
-# Long: the sections in file order; blocks not on the registry yet are written here
 def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
                 names: dict[int, str] | None = None) -> str:
     """Scene text of the running simulation; needs a scene loaded with ``instantiate``.
@@ -601,42 +600,10 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
         root.entries.insert(0, Entry("Content", _string(
             Path(os.path.relpath(dst, here)).as_posix()), _HERE))
     world = engine.world
-    # the solver's random state, each body's auto-sleep state and its exact state, where
-    # the backend has them
-    try:
-        seed, sleep, exact = engine.physics.request(lambda backend: (
-            getattr(backend, "solver_seed", None),
-            backend.sleep_states() if isinstance(backend, SupportsSleepState) else None,
-            _rows(backend.exact_state()) if isinstance(backend, SupportsExactState) else {})
-        ).result(5.0)
-    except PhysicsUnavailable:  # no physics here (a node), or it stopped: poses only
-        seed, sleep, exact = None, None, {}
+    seed, sleep, exact = _physics_state(engine)
     names = {} if names is None else names  # entity -> the object ID written for it
-    hands: dict[int, Block] = {}  # hand entity -> its written Object block
-    objects = [e for e in root.entries if e.key == "Object"]
-    for index, entry in enumerate(objects):
-        eid = ids.entities.get(spec.entities[index].id)
-        t = _transform(world, eid)
-        if eid is None or t is None:
-            root.entries.remove(entry)
-            continue
-        names[eid] = oid = spec.entities[index].id
-        blk = entry.value.data
-        if blk.value("ID") is None:  # its name by place would move as others are left out
-            _set(blk, "ID", _string(oid))
-        _write_body(blk, exact.get(eid, t), None if sleep is None else sleep.get(eid))
-        if world.has_component(eid, HandState):
-            hands[eid] = blk
-        _declared(world, eid, blk)
-    joints = [e for e in root.entries if e.key == "Joint"]
-    for js, entry in zip(spec.joints, joints, strict=False):
-        joint = _live_joint(world, ids.joints.get(js.id), names)
-        if joint is None:
-            root.entries.remove(entry)
-            continue
-        if entry.value.data.value("ID") is None:
-            _set(entry.value.data, "ID", _string(js.id))
-        _write_joint(entry.value.data, joint)
+    hands = _objects(world, ids, root, names, sleep, exact)
+    _joints(world, ids, root, names)
     avatars = _avatars(world, ids, root, set(names.values()))  # before spawned ones come
     spawns = _Spawns(world, root, names, _taken(ids), sleep, dst, exact)
     for rec in ids.spawned:
@@ -652,17 +619,73 @@ def write_state(engine: Engine, out_path: str | os.PathLike | None = None,
     _script_states(engine, ids, root, names | avatars)
     _anomalies(engine, root)
     names.update(avatars)  # the caller's map names avatars too
-    world_entry = next((e for e in root.entries if e.key == "World"), None)
-    if world_entry is None or world_entry.value.kind != STRUCTURE:
-        world_entry = Entry("World", Value(STRUCTURE, Block(), _HERE), _HERE)
-        root.entries.append(world_entry)
-    _set(world_entry.value.data, "Time", Value(FLOAT, float(engine.time), _HERE))
-    if seed is not None:  # the solver shuffles constraints with it
-        _set(world_entry.value.data, "SolverSeed", Value(INT, int(seed), _HERE))
-    generator = random_state.text(engine.rng)  # what spawned text's randInterval draws from
-    if generator is not None:
-        _set(world_entry.value.data, "RandomState", _string(generator))
+    _world_clock(engine, root, seed)
     return _header(spec.db.path, engine.time, dst) + write(root, literal=True)
+
+
+def _physics_state(engine: Engine) -> tuple[int | None, dict[int, SleepState] | None,
+                                             dict[int, _Row]]:
+    """The solver's random state, each body's auto-sleep state and its exact state, where
+    the backend has them (none without local physics: a node, or physics stopped)."""
+    try:
+        return engine.physics.request(lambda backend: (
+            getattr(backend, "solver_seed", None),
+            backend.sleep_states() if isinstance(backend, SupportsSleepState) else None,
+            _rows(backend.exact_state()) if isinstance(backend, SupportsExactState) else {})
+        ).result(5.0)
+    except PhysicsUnavailable:  # poses only
+        return None, None, {}
+
+
+def _objects(world: World, ids: SceneIds, root: Block, names: dict[int, str],
+             sleep: dict[int, SleepState] | None, exact: dict[int, _Row]) -> dict[int, Block]:
+    """The file's objects as they are now (one gone is left out), each named in ``names``
+    and its declared blocks saved; the hands' written blocks, by entity."""
+    spec, hands = ids.spec, {}
+    objects = [e for e in root.entries if e.key == "Object"]
+    for index, entry in enumerate(objects):
+        eid = ids.entities.get(spec.entities[index].id)
+        t = _transform(world, eid)
+        if eid is None or t is None:
+            root.entries.remove(entry)
+            continue
+        names[eid] = oid = spec.entities[index].id
+        blk = entry.value.data
+        if blk.value("ID") is None:  # its name by place would move as others are left out
+            _set(blk, "ID", _string(oid))
+        _write_body(blk, exact.get(eid, t), None if sleep is None else sleep.get(eid))
+        if world.has_component(eid, HandState):
+            hands[eid] = blk
+        _declared(world, eid, blk)
+    return hands
+
+
+def _joints(world: World, ids: SceneIds, root: Block, names: dict[int, str]) -> None:
+    """The file's joints that still hold written bodies, as their declaration saves them."""
+    joints = [e for e in root.entries if e.key == "Joint"]
+    for js, entry in zip(ids.spec.joints, joints, strict=False):
+        joint = _live_joint(world, ids.joints.get(js.id), names)
+        if joint is None:
+            root.entries.remove(entry)
+            continue
+        if entry.value.data.value("ID") is None:
+            _set(entry.value.data, "ID", _string(js.id))
+        _write_joint(entry.value.data, joint)
+
+
+def _world_clock(engine: Engine, root: Block, seed: int | None) -> None:
+    """The World block's time, the solver's random state and the scene's generator (what
+    spawned text's randInterval draws from), so the saved state continues the run."""
+    entry = next((e for e in root.entries if e.key == "World"), None)
+    if entry is None or entry.value.kind != STRUCTURE:
+        entry = Entry("World", Value(STRUCTURE, Block(), _HERE), _HERE)
+        root.entries.append(entry)
+    _set(entry.value.data, "Time", Value(FLOAT, float(engine.time), _HERE))
+    if seed is not None:  # the solver shuffles constraints with it
+        _set(entry.value.data, "SolverSeed", Value(INT, int(seed), _HERE))
+    generator = random_state.text(engine.rng)
+    if generator is not None:
+        _set(entry.value.data, "RandomState", _string(generator))
 
 
 def content_folder(db: SceneDB) -> Path:
