@@ -16,6 +16,7 @@ import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -33,7 +34,19 @@ from engine.scene.db import (
     Value,
 )
 from engine.scene.diagnostics import ERROR, WARNING, Diagnostic, Loc, printable
-from engine.scene.schema import SCHEMAS
+from engine.scene.schema import (
+    ASSET_T,
+    ENUM_T,
+    NUMBER_OR_VECTOR_T,
+    REF_T,
+    SCHEMAS,
+    STRING_T,
+    STRINGVECTOR_T,
+    STRUCT_T,
+    VEC3_T,
+    VECTOR_T,
+    Field,
+)
 
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
@@ -309,6 +322,36 @@ class _Blocks:
     def entry(self, key: str, value: Value, comment: str | None = None) -> Entry:
         return Entry(key, value, self.loc, (f"// {comment}",) if comment else ())
 
+    def declared(self, name: str, values: dict[str, Any], comment: str | None = None,
+                 key: str | None = None) -> Entry:
+        """Block ``name`` with ``values`` (key -> Python value, None left out), each
+        written as its declared type says (engine.scene.blocks): a key the block does
+        not declare is a writer out of step with the scene format, refused here rather
+        than written into a scene that would not load."""
+        fields = SCHEMAS[name]
+        entries = []
+        for k, v in values.items():
+            if v is None:
+                continue
+            if k not in fields:
+                raise KeyError(f"block {name!r} declares no key {k!r}")
+            entries.append(self.entry(k, self.typed(fields[k], v)))
+        return self.entry(key or name, self.block(entries), comment)
+
+    def typed(self, field: Field, v: Any) -> Value:
+        """``v`` as the scene value of a key of type ``field.type``."""
+        if field.type == STRUCT_T:
+            assert field.struct is not None
+            return self.declared(field.struct, v).value
+        if field.type in (VEC3_T, VECTOR_T) or (
+                field.type == NUMBER_OR_VECTOR_T and isinstance(v, tuple | list)):
+            return self.vec(v)
+        if field.type == STRINGVECTOR_T:
+            return self.texts(v)
+        if field.type in (STRING_T, ASSET_T, REF_T, ENUM_T):
+            return self.text(str(v))
+        return self.num(v)
+
 
 def to_db(scene: ImportedScene, file_ref: str, prefix: str = "",
           header: Sequence[str] = (), loc: Loc | None = None) -> SceneDB:
@@ -318,43 +361,31 @@ def to_db(scene: ImportedScene, file_ref: str, prefix: str = "",
     b = _Blocks(loc or Loc(str(scene.source), 0, 0))
     entries: list[Entry] = list(scene.scene_extras)
     for m in scene.materials:
-        entries.append(b.entry("Material", b.block([
-            b.entry("ID", b.text(prefix + m.id)), b.entry("Friction", b.num(m.friction)),
-            b.entry("Bounce", b.num(m.bounce))])))
-    for pair in material_pairs(scene):
-        a, c, friction, bounce = pair
-        entries.append(b.entry("MaterialPair", b.block([
-            b.entry("Material1", b.text(a if a == "default" else prefix + a)),
-            b.entry("Material2", b.text(c if c == "default" else prefix + c)),
-            b.entry("Friction", b.num(friction)), b.entry("Bounce", b.num(bounce))]),
+        entries.append(b.declared("Material", {"ID": prefix + m.id, "Friction": m.friction,
+                                               "Bounce": m.bounce}))
+    for a, c, friction, bounce in material_pairs(scene):
+        entries.append(b.declared("MaterialPair", {
+            "Material1": a if a == "default" else prefix + a,
+            "Material2": c if c == "default" else prefix + c,
+            "Friction": friction, "Bounce": bounce},
             comment=f"the file combines these materials' friction and bounce by its own rule "
                     f"(the engine's default: {ENGINE_FRICTION}, {ENGINE_BOUNCE})"))
     for o in scene.objects:
         entries.append(b.entry("Object", b.block(_object(b, o, file_ref, prefix))))
     for j in scene.joints:
-        body = [b.entry("ID", b.text(prefix + j.id)), b.entry("Type", b.text(j.type)),
-                b.entry("Bodies", b.texts(prefix + x for x in j.bodies)),
-                b.entry("Anchor", b.vec(j.anchor)), b.entry("Axis", b.vec(j.axis))]
-        if j.axis2 is not None:
-            body.append(b.entry("Axis2", b.vec(j.axis2)))
-        if j.low is not None:
-            body.append(b.entry("Low", b.num(j.low)))
-        if j.high is not None:
-            body.append(b.entry("High", b.num(j.high)))
-        if j.motor_max_force:
-            body += [b.entry("MotorVelocity", b.num(j.motor_velocity)),
-                     b.entry("MotorMaxForce", b.num(j.motor_max_force))]
-        if j.spring is not None:
-            body.append(b.entry("Spring", b.block(_spring(b, j.spring))))
-        entries.append(b.entry("Joint", b.block(body)))
+        motor = bool(j.motor_max_force)
+        entries.append(b.declared("Joint", {
+            "ID": prefix + j.id, "Type": j.type, "Bodies": [prefix + x for x in j.bodies],
+            "Anchor": j.anchor, "Axis": j.axis, "Axis2": j.axis2, "Low": j.low,
+            "High": j.high, "MotorVelocity": j.motor_velocity if motor else None,
+            "MotorMaxForce": j.motor_max_force if motor else None,
+            "Spring": None if j.spring is None else _spring(j.spring)}))
     if scene.world:
-        entries.append(b.entry("World", b.block([
-            b.entry(key, b.vec(value) if isinstance(value, tuple) else b.num(value))
-            for key, value in scene.world.items()])))
+        entries.append(b.declared("World", dict(scene.world)))
     for cam in scene.cameras:
-        entries.append(b.entry("Camera", b.block([
-            b.entry("ID", b.text(prefix + cam.id)), b.entry("Position", b.vec(cam.position)),
-            b.entry("LookAt", b.vec(cam.look_at)), b.entry("Fov", b.num(cam.fov))])))
+        entries.append(b.declared("Camera", {
+            "ID": prefix + cam.id, "Position": cam.position, "LookAt": cam.look_at,
+            "Fov": cam.fov}))
     if header and entries:
         first = entries[0]
         entries[0] = Entry(first.key, first.value, first.loc,
@@ -428,15 +459,10 @@ def _merged(generated: list[Entry], typed: list[Entry]) -> list[Entry]:
     return [e for e in generated if e.key not in keys] + typed
 
 
-def _spring(b: _Blocks, s: SpringDecl) -> list[Entry]:
-    out = [b.entry("Stiffness", b.num(s.stiffness))]
-    if s.damping:
-        out.append(b.entry("Damping", b.num(s.damping)))
-    if s.target:
-        out.append(b.entry("Target", b.num(s.target)))
-    if s.max_force is not None:
-        out.append(b.entry("MaxForce", b.num(s.max_force)))
-    return out
+def _spring(s: SpringDecl) -> dict[str, Any]:
+    """A joint's Spring block's keys (those at their defaults left out)."""
+    return {"Stiffness": s.stiffness, "Damping": s.damping or None,
+            "Target": s.target or None, "MaxForce": s.max_force}
 
 
 def _shape(b: _Blocks, s: ShapeDecl, file_ref: str) -> list[Entry]:

@@ -80,3 +80,19 @@ def test_a_key_declared_on_the_object_is_checked_built_and_documented(tmp_path: 
     finally:
         blocks.unregister_key("Object", "Drag")
     assert "Drag" not in keys.block_text("Object")
+
+
+def test_the_importer_writes_blocks_as_their_declarations_type_them():
+    """A writer out of step with the scene format fails here, not in a user's scene."""
+    from engine.interchange.model import _Blocks
+    from engine.scene.db import FLOAT, STRING, STRINGVECTOR, VECTOR
+    from engine.scene.diagnostics import Loc
+
+    b = _Blocks(Loc("model.gltf", 0, 0))
+    entry = b.declared("Joint", {"ID": "j", "Type": "Hinge", "Bodies": ["a", "b"],
+                                 "Axis": (0.0, 1.0, 0.0), "Low": -30.5, "High": None})
+    kinds = {e.key: e.value.kind for e in entry.value.data.entries}
+    assert kinds == {"ID": STRING, "Type": STRING, "Bodies": STRINGVECTOR, "Axis": VECTOR,
+                     "Low": FLOAT}
+    with pytest.raises(KeyError, match="declares no key 'Lo'"):
+        b.declared("Joint", {"Lo": 1.0})
