@@ -11,8 +11,17 @@ and index round an object along X. Each row is measured at the physics rate it i
 * ``penetration``: contact depths of the bones in a ball pinched off the table and
   lifted, and in a box a pointing index pushes along the table.
 * ``held still``, ``shake``, ``hand-over``, ``swipe``: as on ODE, in the plane (the left
-  hand takes the ball from below, its fingers up; the swiping hand's palm leads, its
-  fingers up).
+  hand comes down onto the ball the right holds and pinches it as the right does: seen
+  from the side the two pinches are one, and hands pass through hands; the swiping
+  hand's palm leads, its fingers up).
+
+Seen in the plane the pinch gesture's other fingers lie across what it pinches, so every
+pinching hand comes down onto its object (:func:`approach`) rather than being made round
+it. The pinch is placed for the grip it has (:func:`side_pinch`), so the hand comes down a
+few millimetres as it closes: placed for the object's width and closed by the fingers
+alone it takes no hold in the plane (the thumb closes mostly across the plane, and its
+rigid chain's tip stays about a centimetre short of the object). The right hand of the
+hand-over opens where it holds, or opening would pull the ball down with it.
 """
 
 from __future__ import annotations
@@ -253,18 +262,20 @@ def hand_over_2d(folder: Path, rate: float) -> dict[str, Any]:
 
 
 def swipe_2d(folder: Path, rate: float) -> dict[str, Any]:
-    """The open hand, unturned (its fingers along +X), swept at 3 m/s along X through a
-    fixed 5 mm plate at x = 0: the farthest any of its bodies' centres got (mm)."""
+    """The open hand, its fingers up and its palm leading (turned a quarter about Y: it
+    still bends in the plane), swept at 3 m/s along X at a fixed 5 mm plate at x = 0
+    (its bottom 0.1 m below the wrist, its top past the fingertips): the farthest any of
+    its bodies' centres got (mm)."""
     from components import Transform
     from services.input.hand_pose import GESTURES, pose_hand
 
     plate = ('Object { ID "plate" Position [0 0 1] Dynamic 0\n'
              '  PhysicalAttributes { Geometry { Primitive "box" Size [0.005 0.4 0.4] } } }\n')
+    up = (np.cos(-np.pi / 4), 0.0, np.sin(-np.pi / 4), 0.0)  # fingers +Z, palm facing +X
 
     def feed(t: float) -> Any:
-        x = float(np.interp(t, [0.0, 0.3, 0.4], [-0.3, -0.3, 0.0]))  # 3 m/s
-        return pose_hand("right", (x, 0.0, 1.0), (1.0, 0.0, 0.0, 0.0), GESTURES["open"],
-                         timestamp=t)
+        x = float(np.interp(t, [0.0, 0.3, 0.4], [-0.12, -0.12, 0.18]))  # 3 m/s
+        return pose_hand("right", (x, 0.0, 0.9), up, GESTURES["open"], timestamp=t)
 
     farthest = [-1.0]
 
@@ -273,6 +284,6 @@ def swipe_2d(folder: Path, rate: float) -> dict[str, Any]:
             x = float(e.world.component_for_entity(body, Transform).position[0])
             farthest[0] = max(farthest[0], x)
 
-    run(plate + hand("hand_r", "right", (-0.3, 0.0, 1.0)), folder, {"right": feed}, 0.6,
+    run(plate + hand("hand_r", "right", (-0.12, 0.0, 0.9)), folder, {"right": feed}, 0.6,
         note, rate, settle=0.0, backend=BACKEND)
     return {"farthest_centre_mm": farthest[0] * 1e3}
