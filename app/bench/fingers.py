@@ -189,6 +189,17 @@ def depths(engine: Any, bones: set[int], obj: int) -> list[float]:
 
 def held_ball(folder: Path, rate: float = RATE) -> list[dict[str, Any]]:
     """Pinch a ball, lift it, hold still: penetration while grasping, jitter while still."""
+    got = pinched_ball(folder, rate)
+    jitter, ok = got["jitter_rms_mm"], got["held"]
+    return [penetration_row("pinched ball, lifted", got["depths"]),
+            {"case": "fingered, held ball still", "backend": "ode", "jitter_rms_mm": jitter,
+             "goal": "<= 0.5 mm, held", "ok": "yes" if jitter <= 0.5 and ok else
+             "NO" if ok else "NO (not held)"}]
+
+
+def pinched_ball(folder: Path, rate: float = RATE) -> dict[str, Any]:
+    """:func:`held_ball`'s run: the bones' contact depths in the ball (m), its jitter held
+    still (mm) and whether it was held, lifted, throughout."""
     from components import HandState, Transform
 
     width = 0.06
@@ -209,11 +220,8 @@ def held_ball(folder: Path, rate: float = RATE) -> list[dict[str, Any]]:
         {"right": feed}, 3.0, note, rate, settle=0.0)
     s = np.array(spots)
     jitter = float(np.sqrt(np.mean(np.sum((s - s.mean(axis=0)) ** 2, axis=1)))) * 1e3
-    ok = all(held) and bool(s[:, 2].min() > centre[2] + 0.1)
-    return [penetration_row("pinched ball, lifted", deep),
-            {"case": "fingered, held ball still", "backend": "ode", "jitter_rms_mm": jitter,
-             "goal": "<= 0.5 mm, held", "ok": "yes" if jitter <= 0.5 and ok else
-             "NO" if ok else "NO (not held)"}]
+    return {"depths": deep, "jitter_rms_mm": jitter,
+            "held": all(held) and bool(s[:, 2].min() > centre[2] + 0.1)}
 
 
 def penetration_row(case: str, deep: list[float]) -> dict[str, Any]:
@@ -226,6 +234,11 @@ def penetration_row(case: str, deep: list[float]) -> dict[str, Any]:
 
 def pushed_box(folder: Path, rate: float = RATE) -> dict[str, Any]:
     """A pointing index finger pushes a 0.5 kg box along the table."""
+    return penetration_row("index pushing a box", pushed_box_depths(folder, rate))
+
+
+def pushed_box_depths(folder: Path, rate: float = RATE) -> list[float]:
+    """:func:`pushed_box`'s run: the bones' contact depths in the box (m)."""
     from services.input.hand_pose import GESTURES, pose_hand
 
     box = ('Object { ID "box" Position [0.1 0 0.8] PhysicalAttributes { Mass 0.5\n'
@@ -241,7 +254,7 @@ def pushed_box(folder: Path, rate: float = RATE) -> dict[str, Any]:
     run(TABLE + box + hand("hand_r", "right", (-0.15, 0.0, 0.8)), folder, {"right": feed},
         2.0, lambda e, ids: deep.extend(depths(e, set(bones_of(e, ids["hand_r"])),
                                                ids["box"])), rate, settle=0.0)
-    return penetration_row("index pushing a box", deep)
+    return deep
 
 
 def shake(folder: Path, rate: float = RATE) -> dict[str, Any]:

@@ -28,6 +28,7 @@ from app.bench.hands import (
     cost,
     held_cup,
     palm_hand_over,
+    palm_push,
     palm_shake,
     palm_swipe,
     tracking,
@@ -38,7 +39,8 @@ BACKENDS = ("ode", "pymunk")
 TRACKING = ("tracking: RMS distance (mm) from the tracked pose, the fingered hand's tips or "
             "palm beside the palm-only hand on the same sinusoid along X")
 PENETRATION = ("penetration: how deep (mm) the fingered hand's bones go into what they press,"
-               " every contact of the run")
+               " every contact of the run; palm-only: its palm's deepest into a cup it is "
+               "pressed onto and grasps by the button, and into the box it pushes flat")
 HELD = ("held still: the object's jitter (mm, RMS from its mean) while the tracked hand "
         "holds still in the air; palm-only: a cup held by its grasp button")
 SHAKE = ("shake: a 0.3 kg cup pinched (palm-only: held by its button) and shaken up and "
@@ -88,45 +90,42 @@ def _tracking(folder: Path, backend: str, rate: float, quick: bool) -> list[dict
     return rows
 
 
-def _penetration(case: str, deep: list[float]) -> dict[str, Any]:
+def _penetration(case: str, deep: list[float], palm: list[float]) -> dict[str, Any]:
+    """The depths' distribution (mm), the palm-only hand's deepest beside it."""
     d = np.array(deep or [0.0]) * 1e3
+    palm_deepest = max(palm) * 1e3 if palm else float("nan")
     return {"kind": PENETRATION, "case": case, "contacts": len(deep),
             "median mm": float(np.median(d)), "p95 mm": float(np.percentile(d, 95)),
-            "deepest mm": float(d.max()), "goal": "deepest <= 2 mm",
-            "ok": _verdict({"deepest": bool(deep) and d.max() <= 2.0})}
-
-
-def _penetration_of(case: str, row: dict[str, Any]) -> dict[str, Any]:
-    """:func:`app.bench.fingers.penetration_row`'s figures in this table's columns."""
-    return {"kind": PENETRATION, "case": case, "contacts": row["contacts"],
-            "median mm": row["median_mm"], "p95 mm": row["p95_mm"],
-            "deepest mm": row["deepest_mm"], "goal": "deepest <= 2 mm",
-            "ok": _verdict({"deepest": row["ok"] == "yes"})}
+            "deepest mm": float(d.max()), "palm-only deepest mm": palm_deepest,
+            "goal": "deepest <= 2 mm",
+            "ok": _verdict({"fingered": bool(deep) and d.max() <= 2.0,
+                            "palm-only": bool(palm) and palm_deepest <= 2.0})}
 
 
 def _held_ball(folder: Path, backend: str, rate: float, quick: bool) -> list[dict[str, Any]]:
     """The pinched ball: penetration while it is grasped and lifted, jitter held still;
-    the palm-only hand's held cup beside it."""
+    the palm-only hand's held cup beside it (pressed on, grasped by the button, lifted)."""
     if backend == "ode":
-        deep_row, still = fingers.held_ball(folder, rate)
-        pen = _penetration_of("pinched ball, lifted", deep_row)
-        jitter, held = still["jitter_rms_mm"], still["ok"] != "NO (not held)"
+        got = fingers.pinched_ball(folder, rate)
     else:
         got = fingers2d.held_ball_2d(folder, rate)
-        pen = _penetration("pinched ball, lifted", got["depths"])
-        jitter, held = got["jitter_rms_mm"], got["held"]
     palm = held_cup(folder, backend, 2.0, rate)
     palm_held = palm["ok"] != "NO (not held)"
-    return [pen, {"kind": HELD, "case": "pinched ball held still", "fingered mm": jitter,
-                  "palm-only mm": palm["jitter_rms_mm"], "goal": "<= 0.5 mm, held",
-                  "ok": _verdict({"fingered": held and jitter <= 0.5,
-                                  "palm-only": palm_held and palm["jitter_rms_mm"] <= 0.5})}]
+    jitter = got["jitter_rms_mm"]
+    return [_penetration("pinched ball, lifted", got["depths"], palm["depths"]),
+            {"kind": HELD, "case": "pinched ball held still", "fingered mm": jitter,
+             "palm-only mm": palm["jitter_rms_mm"], "goal": "<= 0.5 mm, held",
+             "ok": _verdict({"fingered": got["held"] and jitter <= 0.5,
+                             "palm-only": palm_held and palm["jitter_rms_mm"] <= 0.5})}]
 
 
 def _pushed_box(folder: Path, backend: str, rate: float, quick: bool) -> list[dict[str, Any]]:
+    """A pointing index pushing a box; the palm-only hand's flat palm pushing it beside."""
     if backend == "ode":
-        return [_penetration_of("index pushing a box", fingers.pushed_box(folder, rate))]
-    return [_penetration("index pushing a box", fingers2d.pushed_box_2d(folder, rate)["depths"])]
+        deep = fingers.pushed_box_depths(folder, rate)
+    else:
+        deep = fingers2d.pushed_box_2d(folder, rate)["depths"]
+    return [_penetration("index pushing a box", deep, palm_push(folder, backend, rate)["depths"])]
 
 
 def _shake(folder: Path, backend: str, rate: float, quick: bool) -> list[dict[str, Any]]:

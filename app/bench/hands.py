@@ -105,8 +105,12 @@ def held_cup(folder: Path, backend: str, seconds: float, rate: float = RATE
              '  Geometry { Primitive "cylinder" Size [0.08 0.1] } } }\n'
              'Object { ID "hand_r" Position [0 0 0.9] Hand { Tracker "hand_r" Glove "g" } }\n')
     cup: list[np.ndarray] = []
+    deep: list[float] = []
 
     def pinch(e: Any, ids: dict[str, int]) -> None:
+        from app.bench.fingers import depths
+
+        deep.extend(depths(e, {ids["hand_r"]}, ids["cup"]))
         if abs(e.time - 0.3) < 0.5 / rate:
             e.resource(InputHub).inject(Button("g", "pinch", True, e.time))
         if e.time > 1.5:
@@ -122,7 +126,7 @@ def held_cup(folder: Path, backend: str, seconds: float, rate: float = RATE
     jitter_mm *= 1e3
     held = bool(spots[:, 2].min() > 0.8 + 0.2)  # lifted with the hand (it rested at 0.8)
     return {"case": "held cup at rest", "backend": backend, "jitter_rms_mm": jitter_mm,
-            "goal": "<= 0.5 mm, held",
+            "depths": deep, "goal": "<= 0.5 mm, held",
             "ok": "yes" if jitter_mm <= 0.5 and held else "NO" if held else "NO (not held)"}
 
 
@@ -145,6 +149,25 @@ def _press(e: Any, glove: str, at: float, down: bool, rate: float) -> None:
 def _lifted(t: float) -> np.ndarray:
     """:func:`held_cup`'s hand: down onto the cup, grasped at 0.3 s, lifted 25 cm by 1 s."""
     return np.array([0.0, 0.0, np.interp(t, [0.0, 0.3, 0.4, 1.0], [0.9, 0.857, 0.857, 1.1])])
+
+
+def palm_push(folder: Path, backend: str, rate: float) -> dict[str, Any]:
+    """The palm-only hand, flat, pushes a 0.5 kg box along the table (as the fingered
+    hand's pointing index does): the palm's contact depths in the box (m)."""
+    from app.bench.fingers import TABLE, TOP, depths
+
+    box = ('Object { ID "box" Position [0.1 0 0.8] PhysicalAttributes { Mass 0.5\n'
+           '  Geometry { Primitive "box" Size [0.1 0.1 0.1] } } }\n')
+
+    def path(t: float) -> np.ndarray:
+        return np.array([float(np.interp(t, [0.0, 0.9, 2.5], [-0.2, -0.2, 0.05])), 0.0,
+                         TOP + 0.03])
+
+    deep: list[float] = []
+    _rig(TABLE + box + _hand("hand_r", -0.2, 0.0, TOP + 0.03), folder, backend,
+         {"hand_r": path}, 2.0, lambda e, ids: deep.extend(depths(e, {ids["hand_r"]},
+                                                                   ids["box"])), rate)
+    return {"depths": deep}
 
 
 def palm_shake(folder: Path, backend: str, rate: float) -> dict[str, Any]:
