@@ -32,7 +32,7 @@ BENCHMARKS: dict[str, str] = {
     "input": "app.bench.input:run_bench",
     "contacts": "app.bench:bench_contacts",
     "avatars": "app.bench.avatars:run_bench",
-    "hands": "app.bench.hands:run_bench",
+    "hands": "app.bench.hand_rows:run_bench",
     "import": "app.bench.model_import:run_bench",
     "net": "app.bench.net:run_bench",
     "sweep": "app.bench.sweep:run_bench",

@@ -1,14 +1,15 @@
 """``colosseum bench hands``, the fingered hand's rows (``Hand { Fingers 1 }``, ODE; the 2D
-hand's on pymunk: :func:`run_rows_2d`).
+hand's on pymunk: :mod:`app.bench.fingers2d`; the tables: :mod:`app.bench.hands`).
 
 Each row is measured beside the palm-only hand's rows of :mod:`app.bench.hands`, with
 tracked 26-joint hands from :func:`services.input.hand_pose.pose_hand` and
-:mod:`app.bench.hand_grips` (a pinch closing round an object), at 120 Hz physics unless the
-row says otherwise (serial, unpaced):
+:mod:`app.bench.hand_grips` (a pinch closing round an object), at the frame rate each is
+given (``rate``; the bench runs every row at 200 and at 100 Hz, steps of 0.005 and 0.01 s;
+120 Hz by default), serial, unpaced:
 
 * ``fingertips``: the hand swinging along X at 0.5 m/s peak with its fingers curling and
   opening; RMS of each physical fingertip's distance from its tracked tip at the same
-  instant (mm). Goal ≤ 3 mm; at 120 and at 200 Hz. ``fingered palm``: the same at 1 m/s,
+  instant (mm). Goal ≤ 3 mm. ``fingered palm``: the same at 1 m/s,
   the palm's (goal ≤ 5 mm).
 * ``penetration``: how deep fingertips and phalanges go into what they press while a
   ball is pinched, lifted and held, and into a box a finger pushes along the table:
@@ -92,6 +93,9 @@ def run(scene: str, folder: Path, feeds: dict[str, Feed], seconds: float,
         engine.run(seconds=seconds)
         spent = time.thread_time() - t0
         run.per_frame = spent / max(engine.frame - frames0, 1)  # type: ignore[attr-defined]
+        # the step physics took (hands step at 1/120 s or finer: 0.01 s is two substeps)
+        substeps = max(engine.physics.controller.substeps, 1)
+        run.physics_step = config.dt / substeps  # type: ignore[attr-defined]
         return spent / max(engine.physics.steps - steps0, 1)
 
 
@@ -183,8 +187,19 @@ def depths(engine: Any, bones: set[int], obj: int) -> list[float]:
     return out
 
 
-def held_ball(folder: Path) -> list[dict[str, Any]]:
+def held_ball(folder: Path, rate: float = RATE) -> list[dict[str, Any]]:
     """Pinch a ball, lift it, hold still: penetration while grasping, jitter while still."""
+    got = pinched_ball(folder, rate)
+    jitter, ok = got["jitter_rms_mm"], got["held"]
+    return [penetration_row("pinched ball, lifted", got["depths"]),
+            {"case": "fingered, held ball still", "backend": "ode", "jitter_rms_mm": jitter,
+             "goal": "<= 0.5 mm, held", "ok": "yes" if jitter <= 0.5 and ok else
+             "NO" if ok else "NO (not held)"}]
+
+
+def pinched_ball(folder: Path, rate: float = RATE) -> dict[str, Any]:
+    """:func:`held_ball`'s run: the bones' contact depths in the ball (m), its jitter held
+    still (mm) and whether it was held, lifted, throughout."""
     from components import HandState, Transform
 
     width = 0.06
@@ -202,14 +217,11 @@ def held_ball(folder: Path) -> list[dict[str, Any]]:
                                                                     HandState).held)
 
     run(TABLE + ball("ball", width, centre) + hand("hand_r", "right"), folder,
-        {"right": feed}, 3.0, note, settle=0.0)
+        {"right": feed}, 3.0, note, rate, settle=0.0)
     s = np.array(spots)
     jitter = float(np.sqrt(np.mean(np.sum((s - s.mean(axis=0)) ** 2, axis=1)))) * 1e3
-    ok = all(held) and bool(s[:, 2].min() > centre[2] + 0.1)
-    return [penetration_row("pinched ball, lifted", deep),
-            {"case": "fingered, held ball still", "backend": "ode", "jitter_rms_mm": jitter,
-             "goal": "<= 0.5 mm, held", "ok": "yes" if jitter <= 0.5 and ok else
-             "NO" if ok else "NO (not held)"}]
+    return {"depths": deep, "jitter_rms_mm": jitter,
+            "held": all(held) and bool(s[:, 2].min() > centre[2] + 0.1)}
 
 
 def penetration_row(case: str, deep: list[float]) -> dict[str, Any]:
@@ -220,8 +232,13 @@ def penetration_row(case: str, deep: list[float]) -> dict[str, Any]:
             "goal": "deepest <= 2 mm", "ok": "yes" if deep and d.max() <= 2.0 else "NO"}
 
 
-def pushed_box(folder: Path) -> dict[str, Any]:
+def pushed_box(folder: Path, rate: float = RATE) -> dict[str, Any]:
     """A pointing index finger pushes a 0.5 kg box along the table."""
+    return penetration_row("index pushing a box", pushed_box_depths(folder, rate))
+
+
+def pushed_box_depths(folder: Path, rate: float = RATE) -> list[float]:
+    """:func:`pushed_box`'s run: the bones' contact depths in the box (m)."""
     from services.input.hand_pose import GESTURES, pose_hand
 
     box = ('Object { ID "box" Position [0.1 0 0.8] PhysicalAttributes { Mass 0.5\n'
@@ -236,11 +253,11 @@ def pushed_box(folder: Path) -> dict[str, Any]:
     deep: list[float] = []
     run(TABLE + box + hand("hand_r", "right", (-0.15, 0.0, 0.8)), folder, {"right": feed},
         2.0, lambda e, ids: deep.extend(depths(e, set(bones_of(e, ids["hand_r"])),
-                                               ids["box"])), settle=0.0)
-    return penetration_row("index pushing a box", deep)
+                                               ids["box"])), rate, settle=0.0)
+    return deep
 
 
-def shake(folder: Path) -> dict[str, Any]:
+def shake(folder: Path, rate: float = RATE) -> dict[str, Any]:
     """A 0.3 kg cup pinched, lifted, shaken at 3 Hz ±10 cm for 2 s."""
     from components import HandState, Transform
 
@@ -267,7 +284,7 @@ def shake(folder: Path) -> dict[str, Any]:
             held.append(ids["cup"] in e.world.component_for_entity(ids["hand_r"],
                                                                    HandState).held)
 
-    run(TABLE + cup + hand("hand_r", "right"), folder, {"right": feed}, 3.7, note,
+    run(TABLE + cup + hand("hand_r", "right"), folder, {"right": feed}, 3.7, note, rate,
         settle=0.0)
     survived = bool(held) and all(held) and max(worst) < 0.05
     return {"case": "fingered, cup shaken 3 Hz +-10 cm", "backend": "ode",
@@ -276,7 +293,7 @@ def shake(folder: Path) -> dict[str, Any]:
             "goal": "held throughout", "ok": "yes" if survived else "NO"}
 
 
-def hand_over(folder: Path) -> dict[str, Any]:
+def hand_over(folder: Path, rate: float = RATE) -> dict[str, Any]:
     """The right hand holds a ball up; the left takes it; the right lets go."""
     from components import Transform
 
@@ -298,15 +315,15 @@ def hand_over(folder: Path) -> dict[str, Any]:
 
     scene = TABLE + ball("ball", width, centre) + hand("hand_r", "right") + \
         hand("hand_l", "left", (0.0, 0.3, 1.0))
-    run(scene, folder, {"right": right, "left": left}, 3.6, note, settle=0.0)
+    run(scene, folder, {"right": right, "left": left}, 3.6, note, rate, settle=0.0)
     moved = float(np.linalg.norm(seen["last"] - seen["ball"])) * 1e3
     lifted = bool(seen["last"][2] > centre[2] + 0.1)
     return {"case": "fingered, hand-over right to left", "backend": "ode",
-            "moved_mm": moved, "goal": "<= 5 mm, still held",
+            "moved_mm": moved, "held": lifted, "goal": "<= 5 mm, still held",
             "ok": "yes" if moved <= 5.0 and lifted else "NO"}
 
 
-def swipe(folder: Path) -> dict[str, Any]:
+def swipe(folder: Path, rate: float = RATE) -> dict[str, Any]:
     """The open hand swept at 3 m/s through a fixed 5 mm plate at x = 0."""
     from components import Transform
     from services.input.hand_pose import GESTURES, pose_hand
@@ -327,7 +344,7 @@ def swipe(folder: Path) -> dict[str, Any]:
             farthest[0] = max(farthest[0], x)
 
     run(plate + hand("hand_r", "right", (-0.12, 0.0, 1.0)), folder, {"right": feed}, 0.6,
-        note, settle=0.0)
+        note, rate, settle=0.0)
     return {"case": "fingered, 3 m/s swipe at a 5 mm plate", "backend": "ode",
             "farthest_centre_mm": farthest[0] * 1e3, "goal": "no bone's centre past "
             "the plate (< -2.5 mm)", "ok": "yes" if farthest[0] < -0.0025 else "NO"}
@@ -395,97 +412,3 @@ def frame_budget(folder: Path, seconds: float) -> dict[str, Any]:
     return {"case": "two fingered hands, 90 Hz frames", "backend": "ode",
             "ms_per_frame": ms, "budget_ms": 1e3 / 90.0, "goal": "inside the frame budget",
             "ok": "yes" if ms < 1e3 / 90.0 else "NO"}
-
-
-def run_rows(folder: Path, quick: bool = False) -> list[dict[str, Any]]:
-    """Every fingered row (``quick``: shorter runs, one step size)."""
-    seconds = 1.5 if quick else 4.0
-    rows = [fingertips(folder, seconds)]
-    if not quick:
-        rows.append(fingertips(folder, seconds, rate=200.0))
-    rows.append(fingertips(folder, seconds, speed=1.0))
-    rows += held_ball(folder)
-    rows += [pushed_box(folder), shake(folder), hand_over(folder), swipe(folder)]
-    rows += cost(folder, 0.5 if quick else 2.0)
-    rows.append(frame_budget(folder, 1.0 if quick else 3.0))
-    return rows
-
-
-# -- the 2D hand (pymunk: the X–Z plane) --------------------------------------------------
-@cache
-def _side_pinch_gaps() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The pinch gesture's scales, the gap between its thumb and index tips seen in the
-    plane (X–Z) at each, and their midpoints (the hand unturned: it bends in the plane)."""
-    from app.bench.hand_grips import curls
-    from services.input.events import HAND_JOINTS
-    from services.input.hand_pose import local_hand
-
-    thumb, index = HAND_JOINTS.index("thumb_tip"), HAND_JOINTS.index("index_tip")
-    scales = np.linspace(0.0, 1.0, 101)
-    gaps, mids = [], []
-    for s in scales:
-        p = local_hand(curls(float(s)))[0]
-        gaps.append(float(np.hypot(*(p[index] - p[thumb])[[0, 2]])))
-        mids.append((p[index] + p[thumb]) / 2)
-    return scales, np.array(gaps), np.array(mids)
-
-
-def side_pinch(device: str, centre: Any, grip: float, timestamp: float = 0.0) -> Any:
-    """A tracked hand pinching in the plane, as the 2D hand sees it: the pinch gesture
-    (unturned, so its fingers bend about Y) closed until its thumb and index tips are
-    ``grip`` apart in X–Z, put where their midpoint is ``centre``."""
-    from app.bench.hand_grips import curls
-    from services.input.hand_pose import pose_hand
-
-    scales, gaps, mids = _side_pinch_gaps()
-    order = np.argsort(gaps)
-    s = float(np.interp(grip, gaps[order], scales[order]))
-    mid = np.array([np.interp(s, scales, mids[:, k]) for k in range(3)])
-    at = np.asarray(centre, dtype=float) - mid
-    at[1] = centre[1]
-    return pose_hand(device, tuple(at.tolist()), (1.0, 0.0, 0.0, 0.0), curls(s),
-                     timestamp=timestamp)
-
-
-def fingertips_2d(folder: Path, seconds: float, rate: float = RATE) -> dict[str, Any]:
-    """:func:`fingertips`' hand (swinging along X at 0.5 m/s peak, curling and opening) on
-    pymunk, unturned (its fingers bend in the plane): each physical tip's distance from
-    its tracked one seen in the plane (X and Z), RMS (mm). The thumb bends out of the
-    plane: its projection's length changes, which a rigid chain cannot follow, so its
-    figure is shown but not held to the goal."""
-    from services.input.events import HAND_JOINTS
-    from services.input.hand_pose import pose_hand
-    from systems.hand_fingers2d import tip_error
-
-    omega, names = 5.0, ("thumb", "index", "middle", "ring", "little")
-    tips = [HAND_JOINTS.index(f"{f}_tip") for f in names]
-
-    def sample(t: float) -> Any:
-        curl = 0.3 + 0.2 * np.sin(2.0 * t)
-        return pose_hand("right", (0.1 * np.sin(omega * t), 0.0, 1.0), (1.0, 0.0, 0.0, 0.0),
-                         dict.fromkeys(names, curl), timestamp=t)
-
-    err: list[np.ndarray] = []
-
-    def note(e: Any, ids: dict[str, int]) -> None:
-        if bones_of(e, ids["hand_r"]):
-            tracked = np.asarray(sample(e.time + 1.0 / rate).positions)[tips]
-            err.append(tip_error(tracked, physical_tips(e, ids["hand_r"])))
-
-    run(hand("hand_r", "right"), folder, {"right": sample}, seconds, note, rate,
-        backend="pymunk")
-    rms = np.sqrt(np.mean(np.square(err), axis=0)) * 1e3
-    worst = float(rms[1:].max())
-    return {"case": f"2D fingered, 0.5 m/s, {rate:g} Hz", "backend": "pymunk",
-            "error_rms_mm": worst, "tips_rms_mm": " ".join(f"{x:.2f}" for x in rms),
-            "goal": "<= 3 mm (fingers; the thumb's projection shown)",
-            "ok": "yes" if worst <= 3.0 else "NO"}
-
-
-def run_rows_2d(folder: Path, quick: bool = False) -> list[dict[str, Any]]:
-    """The 2D fingered hand's rows (pymunk): fingertips at 120 and 200 Hz, cost."""
-    seconds = 1.5 if quick else 4.0
-    rows = [fingertips_2d(folder, seconds)]
-    if not quick:
-        rows.append(fingertips_2d(folder, seconds, rate=200.0))
-    return rows + cost(folder, 0.5 if quick else 2.0, backend="pymunk")

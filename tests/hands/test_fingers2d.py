@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from app.bench import fingers as bench
+from app.bench import fingers2d as bench2d
 from components import HandState, Transform
 from engine.events import Contacts, HandGrasped, HandReleased
 from services.input.events import FINGERS, HAND_JOINTS, TrackerPose
@@ -63,7 +64,7 @@ def _pinch_and_lift(t: float) -> Any:
     grip = float(np.interp(t, [0.2, 0.6, 2.2, 2.5], [WIDTH + 0.03, WIDTH - 0.01,
                                                      WIDTH - 0.01, WIDTH + 0.03]))
     lift = float(np.interp(t, [1.0, 1.6], [0.0, 0.15]))
-    return bench.side_pinch("right", CENTRE + [0.0, 0.0, lift], grip, timestamp=t)
+    return bench2d.side_pinch("right", CENTRE + [0.0, 0.0, lift], grip, timestamp=t)
 
 
 def test_a_pinch_in_the_plane_holds_a_ball_against_gravity_and_opening_lets_go(
