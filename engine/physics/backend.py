@@ -379,6 +379,10 @@ class DynamicsBackend(Protocol):
     def add_joint(self, key: int, joint: Joint) -> None: ...
     def remove_joint(self, key: int) -> None: ...
     def set_motor(self, key: int, velocity: float, max_force: float) -> None: ...
+    def set_servos(self, keys: np.ndarray, table: np.ndarray) -> None:
+        """Aim hinges' and universal joints' motors at moving angles, each step from the
+        joint's angle then (:class:`~engine.physics.commands.SetServos`' rows)."""
+
     def joint_state(self, key: int) -> tuple[float, float]:
         """Position (angle or distance) and rate of a joint's first axis."""
 

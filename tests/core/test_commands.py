@@ -77,7 +77,8 @@ def every_command() -> list[cmd.Command | cmd.Step]:
     sleep = SleepState(True, 3, np.arange(12.0).reshape(2, 6))
     return [cmd.AddBody(4, body, (1, 2, 3), (1, 0, 0, 0), (0, 0, -1), (0, 1, 0)),
             cmd.RemoveBody(4), cmd.AddJoint(9, joint), cmd.RemoveJoint(9),
-            cmd.SetMotor(9, 1.5, 20), cmd.ApplyForce(4, (1, 0, 0), (0, 0, 1)),
+            cmd.SetMotor(9, 1.5, 20), cmd.SetServos([9, 10], np.ones((2, 7))),
+            cmd.ApplyForce(4, (1, 0, 0), (0, 0, 1)),
             cmd.ApplyTorque(4, (0, 0, 2)), cmd.ApplyImpulse(4, (0, 1, 0)),
             cmd.SetPose(4, (0, 0, 5), (0, 1, 0, 0)), cmd.SetVelocity(4, (1, 1, 1), (0, 0, 0)),
             cmd.SetPoses([4, 5], np.arange(26.0).reshape(2, 13)),

@@ -392,6 +392,10 @@ class OdeBackend:
     def set_motor(self, key: int, velocity: float, max_force: float) -> None:
         _ode.set_motor(self._world, int(key), float(velocity), float(max_force))
 
+    def set_servos(self, keys: np.ndarray, table: np.ndarray) -> None:
+        _ode.set_servos(self._world, np.ascontiguousarray(keys, dtype=np.int64),
+                        np.ascontiguousarray(table, dtype=np.float64))
+
     def joint_state(self, key: int) -> tuple[float, float]:
         return _ode.joint_state(self._world, int(key))
 
