@@ -6,11 +6,15 @@ from the tracked joints' radii and bone lengths (the thumb's metacarpal, proxima
 distal; each other finger's proximal, intermediate and distal, its metacarpal being the
 palm). They are chained to the palm and to each other by joints with the anatomical
 limits — a universal joint (flexion and spread) at the MCP and the thumb's CMC, hinges
-at the PIP and DIP (the thumb's MCP and IP) — and each is driven toward its tracked pose
-by its own bounded six-DOF drive to a kinematic control body put where the tracked bone
-is (so its tracked velocity is fed forward and a blocked finger pushes with at most
-:data:`BONE_FORCE`, never through). The hand's bones share the collision bit
-:data:`HAND_BIT` and none of them collides with another (a fist is no collision).
+at the PIP and DIP (the thumb's MCP and IP) — and each joint's own motor is a servo
+toward its tracked angles (:class:`~engine.physics.commands.SetServos`: aimed each step
+from the joint's angle then, the tracked rate fed forward, the torque bounded by
+:data:`BONE_FORCE` at the fingertip, so a blocked finger pushes with a bounded force,
+never through).
+No control bodies and no drive rows of their own: the chain's joints carry the drive (a
+hand is 15 fewer bodies and about a fifth fewer constraint rows than with a six-DOF
+drive per bone). The hand's bones share the collision bit :data:`HAND_BIT` and none of
+them collides with another (a fist is no collision).
 
 Grasping by contact reads the step's contacts: an object is held when the thumb and an
 opposing finger or the palm press it (each at least :data:`PRESS_FORCE`; the tracked grip
@@ -34,7 +38,7 @@ import numpy as np
 from components import Graspable, Joint, Name, Physical, Shape, Transform, Visual
 from components.joint import JointKind
 from components.physical import BodyKind, MaterialProps
-from engine.physics.commands import SetCollisionEnabled, SetDriveLimits, SetPoses
+from engine.physics.commands import SetCollisionEnabled, SetDriveLimits, SetServos
 from engine.rotation import (
     matrices_to_quats,
     quat_multiply,
@@ -42,7 +46,7 @@ from engine.rotation import (
     rotation_vector,
 )
 from services.input.events import FINGERS, HAND_JOINTS, HandJoints
-from services.input.hand_pose import flexion
+from services.input.hand_pose import ANATOMY
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -53,17 +57,16 @@ HAND_BIT = 1 << 30
 #: A phalanx's mass (kg): heavy enough beside a 0.45 kg palm and a 0.3 kg cup for the
 #: solver's 40 iterations, light enough that a finger stops on what it touches.
 BONE_MASS = 0.1
-#: Each phalanx's drive bounds (N, N·m): a finger of three presses with up to ~3× this.
-#: No torque: a bone's centre, its joint to the bone before it and that joint's one or
-#: two free axes fix its orientation, and a motor row bounded by 0 is no row at all
-#: (three fewer rows per bone for the solver).
+#: The force (N) a fingertip presses with at most: each joint's servo torque is bounded
+#: by it times the joint's distance to the tip along the finger (a blocked finger
+#: pushes with at most this at its tip, whichever joint bends it).
 BONE_FORCE = 8.0
-BONE_TORQUE = 0.0
-#: The drive bounds while the hand holds something (N, N·m): the object is held by the
-#: palm's constraint, and fingers pressing it at full force through the loop palm –
-#: finger – object – palm sink into it (the solver converges slowly round a loop).
+#: The bound while the hand holds something (N): the object is held by the palm's
+#: constraint, and fingers pressing it at full force through the loop palm – finger –
+#: object – palm sink into it (the solver converges slowly round a loop).
 HOLD_FORCE = 1.5
-HOLD_TORQUE = 0.0
+#: The fastest a joint's servo corrects its error (rad/s; the tracked rate comes on top).
+MAX_SPIN = 30.0
 #: Skin: the bones' friction.
 SKIN = MaterialProps(name="skin", friction=1.0, density=1000.0)
 #: The anatomical limits (radians, flexion positive) of each finger's three joints, and
@@ -102,21 +105,41 @@ def bone_layout() -> list[tuple[str, int, int]]:
 BONES = bone_layout()
 STARTS = np.array([s for _, s, _ in BONES])
 ENDS = np.array([e for _, _, e in BONES])
+BASES = np.arange(0, 15, 3)  # each finger's first bone (its joint: universal)
+#: Each bone's parent bone as two joints (its vector: p[PARENT_B] - p[PARENT_A]): the
+#: bone before it, or a finger's metacarpal (the thumb's first bone: its rest heading).
+PARENT_A = np.array([STARTS[i - 1] if i % 3 else max(STARTS[i] - 1, 0) for i in range(15)])
+PARENT_B = np.array([ENDS[i - 1] if i % 3 else STARTS[i] for i in range(15)])
+#: Each bone's flexion axis and the thumb's rest heading, in the wrist's frame (right).
+REST_Y = np.array([ANATOMY[f].rest()[:, 1] for f, _, _ in BONES])
+THUMB_REST_X = ANATOMY["thumb"].rest()[:, 0]
+THUMB_FIRST = HAND_JOINTS.index("thumb_metacarpal")
 
 
 @dataclass(slots=True, eq=False)
 class Fingers:
-    """The bodies, drives and joints of one hand's fingers, and its grips' memory."""
+    """The bodies and joints of one hand's fingers, their servos' state, and its grips'
+    memory."""
 
     bones: list[int]
-    controls: list[int]
-    drives: list[int]
     chain: list[int]
     lengths: np.ndarray  # each bone's length (m)
     radii: np.ndarray  # each bone's capsule radius (m)
     finger_of: dict[int, str]  # bone entity -> its finger
+    #: the tracked joints' angles (15, 2: flexion, spread) when the joints were made: each
+    #: joint counts its angles from there
+    zero: np.ndarray = field(default_factory=lambda: np.zeros((15, 2)))
+    #: each finger's spread axis (5, 3) in the tracked palm joint's frame
+    spread_axes: np.ndarray = field(default_factory=lambda: np.zeros((5, 3)))
+    time_constant: float = 0.03  # the servos' (s): the hand drive's
     sample: tuple[float, np.ndarray, np.ndarray] | None = None  # t, positions, quats
-    velocity: np.ndarray = field(default_factory=lambda: np.zeros((15, 6)))
+    velocity: np.ndarray = field(default_factory=lambda: np.zeros((15, 3)))  # tracked
+    angles: tuple[float, np.ndarray] | None = None  # the last sample's (t, (15, 2))
+    rates: np.ndarray = field(default_factory=lambda: np.zeros((15, 2)))
+    #: each joint's distance to its fingertip along the finger (15,; m): its torque arm
+    levers: np.ndarray = field(default_factory=lambda: np.zeros(15))
+    #: the servos' rows (15, 7) sent each frame (SetServos' layout)
+    servos: np.ndarray = field(default_factory=lambda: np.zeros((15, 7)))
     tips: np.ndarray = field(default_factory=lambda: np.zeros((5, 3)))  # tracked
     palm: np.ndarray = field(default_factory=lambda: np.zeros(3))  # tracked palm joint
     #: object -> (the fingers gripping it, the tracked grip's width when it took hold)
@@ -124,14 +147,14 @@ class Fingers:
     #: object -> the parts ("palm" or fingers) pressing it in the last step
     pressing: dict[int, tuple[str, ...]] = field(default_factory=dict)
     colliding: bool = True
-    holding: bool = False  # whether the drives have their holding bounds
+    holding: bool = False  # whether the servos have their holding bound
     #: the thinnest bone's radius (m): a hand slower than it per frame casts no rays
     thinnest: float = 0.0
     #: the pose table's version and the bones' rows in it (read each frame in one go)
     rows: tuple[int, np.ndarray] = (-1, np.zeros(0, np.int64))
 
     def entities(self) -> list[int]:
-        return [*self.chain, *self.drives, *self.bones, *self.controls]
+        return [*self.chain, *self.bones]
 
 
 def world_joints(sample: HandJoints, frame: Transform | None
@@ -197,16 +220,63 @@ def separate_palm(engine: Engine, palm: int) -> None:
         world.add_component(palm, wanted)
 
 
+#: Each joint's flexion axis in the wrist's frame: a right hand's, a left hand's (its
+#: mirror image, the axis turned round); and the thumb's rest heading alike.
+FLEX_AXES = (REST_Y, REST_Y * (-1.0, 1.0, -1.0))
+THUMB_REST = (THUMB_REST_X, THUMB_REST_X * (1.0, -1.0, 1.0))
+#: The rows of :func:`joint_angles`' stack: the 15 flexions, then the 5 spreads.
+_ROWS = np.concatenate([np.arange(15), BASES])
+_SPREAD_ROWS = np.arange(20) >= 15
+
+
+def _matrix(q: np.ndarray) -> np.ndarray:
+    """A unit quaternion's rotation matrix, from plain floats (one quaternion: numpy's
+    machinery for stacks costs more than the arithmetic)."""
+    w, x, y, z = q.tolist()
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def joint_angles(p: np.ndarray, q: np.ndarray, spread_axes: np.ndarray | None = None
+                 ) -> np.ndarray:
+    """Each joint's tracked angles (15, 2), from world joints: its flexion (radians, toward
+    the palm positive: :func:`services.input.hand_pose.flexion`'s, all fingers at once,
+    in the wrist's frame) and, at a finger's base, its spread about ``spread_axes`` (5, 3,
+    in the palm joint's frame; 0 without them): the angle from the parent bone to the
+    bone about the axis (a spread: seen along it). In a few array operations on one
+    stack of 20 rows: this runs for every hand every frame."""
+    wrist = _matrix(q[1])
+    v = p @ wrist  # the joints in the wrist's frame
+    left = int(v[THUMB_FIRST, 1] < v[1, 1])  # a left hand's thumb is toward -y
+    parent = v[PARENT_B] - v[PARENT_A]
+    parent[0] = THUMB_REST[left]
+    bone = v[ENDS] - v[STARTS]
+    spread = np.zeros((5, 3)) if spread_axes is None else \
+        spread_axes @ (_matrix(q[0]).T @ wrist)
+    a, b = parent[_ROWS].T, bone[_ROWS].T
+    c = np.vstack([FLEX_AXES[left], spread]).T
+    triple = a[0] * (b[1] * c[2] - b[2] * c[1]) + a[1] * (b[2] * c[0] - b[0] * c[2]) + \
+        a[2] * (b[0] * c[1] - b[1] * c[0])
+    dot = (a * b).sum(axis=0) - ((a * c).sum(axis=0) * (b * c).sum(axis=0)) * _SPREAD_ROWS
+    angles = np.arctan2(triple, dot)
+    out = np.zeros((15, 2))
+    out[:, 0] = angles[:15]
+    out[BASES, 1] = angles[15:]
+    return out
+
+
 def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Transform | None,
           drive: SetDriveLimits) -> Fingers:
-    """Spawn one hand's phalanges where the tracked ones are, their control bodies,
-    drives (bounded by ``drive``'s response, :data:`BONE_FORCE` and :data:`BONE_TORQUE`)
-    and the chain of anatomical joints."""
+    """Spawn one hand's phalanges where the tracked ones are and the chain of anatomical
+    joints, whose servos take ``drive``'s time constant (their bounds:
+    :data:`BONE_FORCE` at the tip)."""
     p, q = world_joints(sample, frame)
     centres, quats, lengths = bone_poses(p, q)
     radii = np.asarray(sample.radii, dtype=float)
-    bent = flexion(sample)  # a joint's zero is its pose when made: the limits count from it
-    bones, controls, drives, chain, sizes = [], [], [], [], []
+    # a joint's zero is its pose when made: the limits and the servo count from it
+    bent = joint_angles(p, q)[:, 0]
+    bones, chain, sizes, spreads = [], [], [], []
     finger_of: dict[int, str] = {}
     for i, (finger, start, end) in enumerate(BONES):
         label = f"{name} {HAND_JOINTS[start]}"
@@ -217,37 +287,38 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
                             Visual(shapes=[replace(_bone_body(radius, float(lengths[i]))
                                                    .shapes[0])], color=BONE_COLOR),
                             Graspable(False))
-        control = engine.spawn(Name(f"{label} tracker"), Transform(centres[i].copy(),
-                                                                   quats[i].copy()),
-                               Physical(kind=BodyKind.KINEMATIC, mass=1.0, shapes=[],
-                                        category=0, mask=0, gravity=False, can_sleep=False))
-        aim = engine.spawn(Name(f"{label} drive"), Joint(
-            kind=JointKind.SIX_DOF, body_a=bone, body_b=control, motor_max_force=BONE_FORCE,
-            id=f"{label} drive"))
-        engine.physics.push(replace(drive, key=aim, max_force=BONE_FORCE,
-                                    max_torque=BONE_TORQUE))
         parent = palm if i % 3 == 0 else bones[-1]
         # spread about the palm's dorsal axis (the thumb's CMC: about its own, the palm's
         # being near its flexion axis)
-        spread = quat_to_matrix(quats[i] if finger == "thumb" else q[0])[:, 2]
+        spread = _spread_axis(quats[i], quat_to_matrix(quats[i] if finger == "thumb"
+                                                       else q[0])[:, 2])
+        if i % 3 == 0:
+            spreads.append(spread)
         chain.append(_link(engine, label, bone, parent, p[start], quats[i], spread, finger,
-                           i % 3, bent[finger][i % 3]))
+                           i % 3, float(bent[i])))
         bones.append(bone)
-        controls.append(control)
-        drives.append(aim)
         finger_of[bone] = finger
-    return Fingers(bones, controls, drives, chain, lengths, np.array(sizes), finger_of,
-                   thinnest=min(sizes))
+    fingers = Fingers(bones, chain, lengths, np.array(sizes), finger_of,
+                      spread_axes=np.array(spreads) @ quat_to_matrix(q[0]),
+                      time_constant=drive.time_constant or 0.03, thinnest=min(sizes),
+                      levers=lengths.reshape(5, 3)[:, ::-1].cumsum(axis=1)[:, ::-1].ravel())
+    fingers.zero = joint_angles(p, q, fingers.spread_axes)
+    return fingers
+
+
+def _spread_axis(quat: np.ndarray, spread: np.ndarray) -> np.ndarray:
+    """A base joint's spread axis: ``spread`` made square to the bone's flexion axis."""
+    flex = quat_to_matrix(quat)[:, 1]
+    spread = spread - (spread @ flex) * flex
+    return spread / max(float(np.linalg.norm(spread)), 1e-9)
 
 
 def _link(engine: Engine, label: str, bone: int, parent: int, anchor: np.ndarray,
           quat: np.ndarray, spread: np.ndarray, finger: str, k: int, bent: float) -> int:
     """The anatomical joint at a bone's start: universal (flexion about the bone's +y,
-    limited; spread about the palm's dorsal axis) at the base of a finger, a hinge
-    further on. ``bent``: its flexion now (rad), which the joint takes as its zero."""
+    limited; spread about ``spread``) at the base of a finger, a hinge further on.
+    ``bent``: its flexion now (rad), which the joint takes as its zero."""
     rot = quat_to_matrix(quat)
-    spread = spread - (spread @ rot[:, 1]) * rot[:, 1]
-    spread = spread / max(float(np.linalg.norm(spread)), 1e-9)
     low, high = (limit - bent for limit in LIMITS[finger][k])
     kind = JointKind.UNIVERSAL if k == 0 else JointKind.HINGE
     joint = Joint(kind=kind, body_a=bone, body_b=parent, anchor=tuple(anchor.tolist()),
@@ -258,24 +329,49 @@ def _link(engine: Engine, label: str, bone: int, parent: int, anchor: np.ndarray
 
 def aim(fingers: Fingers, sample: HandJoints, frame: Transform | None, now: float,
         stale_after: float) -> np.ndarray:
-    """The control bodies' rows (15, 13: pose and velocities) for this sample: the
-    velocities from the sample before it (zero once the samples stop coming). A bone's
-    drive aims at a point (:data:`BONE_TORQUE` is 0), so its control body's turn is its
-    start joint's as tracked, and it does not spin."""
+    """The servos' rows (15, 7) for this sample: each joint's tracked angles counted from
+    its zero, their rates from the sample before (zero once the samples stop coming),
+    the torque bound (:data:`BONE_FORCE` at the tip, :data:`HOLD_FORCE` while holding).
+    Also notes the tracked bones' centres and velocities (the fast-hand rays'), tips and
+    palm."""
     p, q = world_joints(sample, frame)
-    centres, quats = (p[STARTS] + p[ENDS]) * 0.5, q[STARTS]
+    centres = (p[STARTS] + p[ENDS]) * 0.5
+    angles = joint_angles(p, q, fingers.spread_axes)
     t, previous = sample.timestamp, fingers.sample
     if previous is None or t > previous[0]:
         if previous is not None:
-            fingers.velocity[:, :3] = (centres - previous[1]) / (t - previous[0])
-        fingers.sample = (t, centres, quats)
+            fingers.velocity = (centres - previous[1]) / (t - previous[0])
+            fingers.rates = (angles - fingers.angles[1]) / (t - previous[0])
+        fingers.sample = (t, centres, q[STARTS])
+        fingers.angles = (t, angles)
     if now - t > stale_after:
-        fingers.velocity[:] = 0.0
+        fingers.velocity = np.zeros((15, 3))
+        fingers.rates = np.zeros((15, 2))
     fingers.tips = p[TIPS_AT]
     fingers.palm = p[0]
-    rows = np.empty((len(BONES), 13))  # its own rows: limit() moves them, not the sample
-    rows[:, :3], rows[:, 3:7], rows[:, 7:] = centres, quats, fingers.velocity
+    return servo_rows(fingers, angles)
+
+
+def servo_rows(fingers: Fingers, angles: np.ndarray) -> np.ndarray:
+    """The servos' rows (15, 7) aiming at ``angles`` (tracked, 15 × 2) at the fingers'
+    tracked rates, with the bound that fits whether the hand holds something."""
+    rows = fingers.servos
+    rows[:, 0:2] = angles - fingers.zero
+    rows[:, 2:4] = fingers.rates
+    rows[:, 4] = (HOLD_FORCE if fingers.holding else BONE_FORCE) * fingers.levers
+    rows[:, 5] = fingers.time_constant
+    rows[:, 6] = MAX_SPIN
     return rows
+
+
+def still(fingers: Fingers) -> np.ndarray | None:
+    """An untracked hand's servos held at their last targets, not moving on (once: None
+    when they already are)."""
+    if fingers.angles is None or not fingers.rates.any():
+        return None
+    fingers.rates = np.zeros((15, 2))
+    fingers.velocity = np.zeros((15, 3))
+    return servo_rows(fingers, fingers.angles[1])
 
 
 def palm_pose(previous: tuple[float, np.ndarray, ...] | None, sample: HandJoints,
@@ -297,7 +393,7 @@ def palm_pose(previous: tuple[float, np.ndarray, ...] | None, sample: HandJoints
 
 
 def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.ndarray,
-                rows: np.ndarray, dt: float, held: frozenset[int] = frozenset()) -> float:
+                dt: float, held: frozenset[int] = frozenset()) -> float:
     """How much of this frame's way to its targets the hand may go (0 to 1) before one
     of its bodies would pass through something: once the hand is fast enough for its
     thinnest bone to move its thickness in a frame, a ray per body that would move more
@@ -306,8 +402,12 @@ def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.nda
     whose centre would go past the surface the ray meets goes only half its thickness
     into it (its contacts take it from there; a hand pressing on something is not
     held back). What the hand holds is no obstacle. Serial physics answers at once;
-    threaded physics a frame later, so this frame goes unlimited."""
-    speed = max(-rows[:, 7:10].min(), rows[:, 7:10].max(), *np.abs(palm_target[7:10]))
+    threaded physics a frame later, so this frame goes unlimited. The bones' targets:
+    the tracked bones' centres and velocities (:func:`aim`'s)."""
+    if fingers.sample is None:
+        return 1.0
+    centres, velocity = fingers.sample[1], fingers.velocity
+    speed = max(-velocity.min(), velocity.max(), *np.abs(palm_target[7:10]))
     if 1.8 * speed * dt < fingers.thinnest:
         return 1.0  # slow: no body moves its thickness (√3 times an axis's speed bounds it)
     world = engine.world
@@ -317,7 +417,7 @@ def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.nda
     bodies = [palm, *fingers.bones]
     here = np.vstack([palm_t.position, bone_table(engine, fingers)[:, :3]])
     there = np.vstack([palm_target[:3] + palm_target[7:10] * dt,
-                       rows[:, :3] + rows[:, 7:10] * dt])
+                       centres + velocity * dt])
     way = there - here
     far = np.linalg.norm(way, axis=1)
     thick = np.concatenate([[_palm_reach(world, palm, way[0], far[0])], fingers.radii])
@@ -355,22 +455,22 @@ def limit(rows: np.ndarray, here: np.ndarray, share: float) -> None:
     rows[:, 7:] *= share
 
 
-def push_controls(engine: Engine, rigs: list[tuple[Fingers, np.ndarray]]) -> None:
-    """Every fingered hand's control bodies moved by one command."""
+def push_servos(engine: Engine, rigs: list[tuple[Fingers, np.ndarray]]) -> None:
+    """Every fingered hand's servos aimed by one command."""
     if not rigs:
         return
-    keys = [k for f, _ in rigs for k in f.controls]
-    engine.physics.push(SetPoses(keys, np.vstack([rows for _, rows in rigs])))
+    keys = [k for f, _ in rigs for k in f.chain]
+    engine.physics.push(SetServos(keys, np.vstack([rows for _, rows in rigs])))
 
 
-def hold(engine: Engine, fingers: Fingers, limits: SetDriveLimits, holding: bool) -> None:
-    """The bones' drives at their holding bounds while the hand holds something."""
+def hold(fingers: Fingers, holding: bool) -> bool:
+    """The servos at their holding bound while the hand holds something; whether that
+    changed (their rows then go again)."""
     if fingers.holding == holding:
-        return
+        return False
     fingers.holding = holding
-    force, torque = (HOLD_FORCE, HOLD_TORQUE) if holding else (BONE_FORCE, BONE_TORQUE)
-    for drive in fingers.drives:
-        engine.physics.push(replace(limits, key=drive, max_force=force, max_torque=torque))
+    fingers.servos[:, 4] = (HOLD_FORCE if holding else BONE_FORCE) * fingers.levers
+    return True
 
 
 def set_colliding(engine: Engine, fingers: Fingers, enabled: bool) -> None:

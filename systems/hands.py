@@ -315,7 +315,7 @@ class HandDriveSystem(System):
         found = dict(engine.world.get_components(Hand, HandState, Transform))
         driven = [(rig, found[rig.hand]) for rig in rigs.values() if rig.hand in found]
         poses = self._move_controls(engine, driven, inputs)
-        self._move_fingers(engine, driven, inputs, poses, dt)
+        servos = self._move_fingers(engine, driven, inputs, poses, dt)
         for (rig, (hand, state, t)), pose in zip(driven, poses, strict=True):
             self._drive(engine, rig, hand, state, t, pose, dt)
             pressed = inputs is not None and hand.glove != "" and inputs.button(hand.glove,
@@ -329,9 +329,14 @@ class HandDriveSystem(System):
             rig.pressed = pressed
             if rig.fingers is not None and rig.fingers.grips:
                 self._open_grips(engine, rig)
-            if rig.fingers is not None and rig.limits is not None:
-                hand_fingers.hold(engine, rig.fingers, rig.limits, bool(rig.grasps))
+            fingers = rig.fingers
+            if fingers is not None and hand_fingers.hold(fingers, bool(rig.grasps)) and \
+                    not isinstance(fingers, hand_fingers2d.PlanarFingers) and \
+                    fingers.angles is not None and \
+                    not any(f is fingers for f, _ in servos):
+                servos.append((fingers, fingers.servos))  # its new bound, this frame
             state.held = tuple(rig.grasps)
+        hand_fingers.push_servos(engine, servos)
 
     def _open_grips(self, engine: Engine, rig: _Rig) -> None:
         """Let go of what the fingers gripped once the tracked grip opened
@@ -359,13 +364,16 @@ class HandDriveSystem(System):
 
     def _move_fingers(self, engine: Engine, driven: list[tuple[_Rig, Any]],
                       inputs: InputState | None,
-                      poses: list[tuple[np.ndarray, ...] | None], dt: float) -> None:
-        """Put every fingered hand's bone control bodies where its tracked bones are, in
-        one command; a hand's bones are made at its first sample (sized from it), the palm
-        put at the tracked palm first. An untracked hand's bones hold still. A hand that
-        would pass through something this frame goes only as far as it
-        (:func:`~systems.hand_fingers.sweep_share`), its palm too."""
+                      poses: list[tuple[np.ndarray, ...] | None], dt: float
+                      ) -> list[tuple[hand_fingers.Fingers, np.ndarray]]:
+        """Aim every fingered hand's joint servos at its tracked angles (their rows, sent
+        in one command once the frame's grips are known); a hand's bones are made at its
+        first sample (sized from it), the palm put at the tracked palm first. An
+        untracked hand's joints hold still. A hand that would pass through something
+        this frame goes only as far as it (:func:`~systems.hand_fingers.sweep_share`):
+        its palm is held back, and its fingers with it."""
         rows = []
+        planar = engine.physics.backend_name == "pymunk"
         for (rig, (hand, _, _)), pose in zip(driven, poses, strict=True):
             if rig.limits is None:
                 continue
@@ -374,13 +382,12 @@ class HandDriveSystem(System):
             if sample is None:
                 if isinstance(fingers, hand_fingers2d.PlanarFingers):
                     hand_fingers2d.still(engine, fingers)
-                elif fingers is not None and fingers.sample is not None and \
-                        fingers.velocity.any():
-                    fingers.velocity[:] = 0.0
-                    rows.append((fingers, np.hstack([*fingers.sample[1:], fingers.velocity])))
+                elif fingers is not None:
+                    held = hand_fingers.still(fingers)
+                    if held is not None:
+                        rows.append((fingers, held))
                 continue
             frame = _frame(engine, hand)
-            planar = engine.physics.backend_name == "pymunk"
             if fingers is None:
                 engine.physics.set_pose(rig.hand, pose[0], pose[1])
                 fingers = rig.fingers = (hand_fingers2d if planar else hand_fingers).build(
@@ -390,11 +397,11 @@ class HandDriveSystem(System):
                                    STALE_AFTER)
                 self._deviation(engine, rig, fingers)
                 continue
-            aims = hand_fingers.aim(fingers, sample, frame, inputs.now, STALE_AFTER)
-            self._sweep(engine, rig, fingers, np.concatenate(pose), aims, dt)
-            rows.append((fingers, aims))
+            rows.append((fingers, hand_fingers.aim(fingers, sample, frame, inputs.now,
+                                                   STALE_AFTER)))
+            self._sweep(engine, rig, fingers, np.concatenate(pose), dt)
             self._deviation(engine, rig, fingers)
-        hand_fingers.push_controls(engine, rows)
+        return rows
 
     @staticmethod
     def _deviation(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers) -> None:
@@ -406,18 +413,16 @@ class HandDriveSystem(System):
 
     @staticmethod
     def _sweep(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers, palm: np.ndarray,
-               aims: np.ndarray, dt: float) -> None:
-        """A fast hand's targets, bones and palm, held short of what it would pass."""
+               dt: float) -> None:
+        """A fast hand's palm target held short of what the hand would pass (its fingers
+        hang on it by their joints)."""
         if not fingers.colliding:
             return
-        share = hand_fingers.sweep_share(engine, fingers, rig.hand, palm, aims, dt,
+        share = hand_fingers.sweep_share(engine, fingers, rig.hand, palm, dt,
                                          frozenset(rig.grasps))
         if share >= 1.0:
             return
         world = engine.world
-        here = np.vstack([world.component_for_entity(b, Transform).position
-                          for b in fingers.bones])
-        hand_fingers.limit(aims, here, share)
         row = palm[None].copy()
         hand_fingers.limit(row, world.component_for_entity(rig.hand, Transform).position,
                            share)
