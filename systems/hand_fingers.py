@@ -130,8 +130,10 @@ class Fingers:
     #: the tracked joints' angles (15, 2: flexion, spread) when the joints were made: each
     #: joint counts its angles from there
     zero: np.ndarray = field(default_factory=lambda: np.zeros((15, 2)))
-    #: each finger's spread axis (5, 3) in the tracked palm joint's frame
-    spread_axes: np.ndarray = field(default_factory=lambda: np.zeros((5, 3)))
+    #: the forms its angles are measured with, and whether it is a left hand
+    #: (:func:`angle_forms`: its spread axes in the tracked wrist's frame)
+    forms: tuple[np.ndarray, int] = (np.zeros((20, 9, 2)), 0)
+    keys: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # its joints
     time_constant: float = 0.03  # the servos' (s): the hand drive's
     sample: tuple[float, np.ndarray, np.ndarray] | None = None  # t, positions, quats
     velocity: np.ndarray = field(default_factory=lambda: np.zeros((15, 3)))  # tracked
@@ -266,30 +268,40 @@ def _matrix(q: np.ndarray) -> np.ndarray:
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
-def joint_angles(p: np.ndarray, q: np.ndarray, spread_axes: np.ndarray | None = None
-                 ) -> np.ndarray:
-    """Each joint's tracked angles (15, 2), from world joints: its flexion (radians, toward
-    the palm positive: :func:`services.input.hand_pose.flexion`'s, all fingers at once,
-    in the wrist's frame) and, at a finger's base, its spread about ``spread_axes`` (5, 3,
-    in the palm joint's frame; 0 without them): the angle from the parent bone to the
-    bone about the axis (a spread: seen along it). Each angle is atan2 of two quadratic
-    forms of its two bones, all 20 in one product: this runs for every hand every frame."""
+def angle_forms(p: np.ndarray, q: np.ndarray, spread_axes: np.ndarray | None = None
+                ) -> tuple[np.ndarray, int]:
+    """The quadratic forms (20, 9, 2) :func:`joint_angles` measures one hand's angles
+    with, and whether it is a left hand (its thumb toward the wrist's -y), from world
+    joints: the flexions about their axes in the wrist's frame (a left hand's mirrored);
+    each finger's spread about ``spread_axes`` (5, 3, world; None: no spread), seen
+    along it: (a × b) · s over a · b - (a · s)(b · s). Made once per hand: its spread
+    axes turn with its wrist."""
     wrist = _matrix(q[1])
-    bones = (GATHER @ p) @ wrist  # parents (20), then bones (20), in the wrist's frame
-    left = int(float((p[THUMB_FIRST] - p[1]) @ wrist[:, 1]) < 0.0)  # thumb toward -y
-    bones[0] = bones[15] = THUMB_REST[left]  # the thumb's flexion and spread rows
-    forms = np.empty((20, 9, 2))
+    left = int(float((p[THUMB_FIRST] - p[1]) @ wrist[:, 1]) < 0.0)
+    forms = np.zeros((20, 9, 2))
     forms[:15] = FLEX_FORMS[left]
-    if spread_axes is None:
-        forms[15:] = 0.0
-    else:  # the spread: seen along its axis s, (a × b) · s and a · b - (a · s)(b · s)
-        s = spread_axes @ (_matrix(q[0]).T @ wrist)
+    if spread_axes is not None:
+        s = spread_axes @ wrist
         forms[15:, :, 0] = s @ CROSS_FLAT
         forms[15:, :, 1] = np.eye(3).ravel() - (s[:, :, None] * s[:, None, :]).reshape(5, 9)
+    return forms, left
+
+
+def joint_angles(p: np.ndarray, q: np.ndarray,
+                 forms: tuple[np.ndarray, int] | None = None) -> np.ndarray:
+    """Each joint's tracked angles (15, 2), from world joints: its flexion (radians, toward
+    the palm positive: :func:`services.input.hand_pose.flexion`'s, all fingers at once,
+    in the wrist's frame) and, at a finger's base, its spread: the angle from the parent
+    bone to the bone about an axis (a spread: seen along it), each atan2 of two
+    quadratic forms of the two bones (:func:`angle_forms`; default: this sample's, no
+    spread), all 20 in one product: this runs for every hand every frame."""
+    forms, left = angle_forms(p, q) if forms is None else forms
+    bones = (GATHER @ p) @ _matrix(q[1])  # parents (20), then bones, in the wrist's frame
+    bones[0] = bones[15] = THUMB_REST[left]  # the thumb's flexion and spread rows
     outer = (bones[:20, :, None] * bones[20:, None, :]).reshape(20, 1, 9)
     y, x = (outer @ forms).reshape(20, 2).T
-    out = np.zeros((15, 2))
     angles = np.arctan2(y, x)
+    out = np.zeros((15, 2))
     out[:, 0] = angles[:15]
     out[BASES, 1] = angles[15:]
     return out
@@ -327,12 +339,12 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
                            i % 3, float(bent[i])))
         bones.append(bone)
         finger_of[bone] = finger
-    fingers = Fingers(bones, chain, lengths, np.array(sizes), finger_of,
-                      spread_axes=np.array(spreads) @ quat_to_matrix(q[0]),
-                      time_constant=drive.time_constant or 0.03, thinnest=min(sizes),
-                      levers=lengths.reshape(5, 3)[:, ::-1].cumsum(axis=1)[:, ::-1].ravel())
-    fingers.zero = joint_angles(p, q, fingers.spread_axes)
-    return fingers
+    forms = angle_forms(p, q, np.array(spreads))
+    return Fingers(bones, chain, lengths, np.array(sizes), finger_of,
+                   zero=joint_angles(p, q, forms), forms=forms,
+                   keys=np.array(chain, np.int64), time_constant=drive.time_constant or 0.03,
+                   thinnest=min(sizes),
+                   levers=lengths.reshape(5, 3)[:, ::-1].cumsum(axis=1)[:, ::-1].ravel())
 
 
 def _spread_axis(quat: np.ndarray, spread: np.ndarray) -> np.ndarray:
@@ -365,7 +377,7 @@ def aim(fingers: Fingers, sample: HandJoints, frame: Transform | None, now: floa
     palm."""
     p, q = world_joints(sample, frame)
     centres = (p[STARTS] + p[ENDS]) * 0.5
-    angles = joint_angles(p, q, fingers.spread_axes)
+    angles = joint_angles(p, q, fingers.forms)
     t, previous = sample.timestamp, fingers.sample
     if previous is None or t > previous[0]:
         if previous is not None:
@@ -415,7 +427,8 @@ def palm_pose(previous: tuple[float, np.ndarray, ...] | None, sample: HandJoints
         t0, p0, q0, v, w = previous
         if sample.timestamp > t0:
             dt = sample.timestamp - t0
-            v, w = (p[0] - p0) / dt, np.asarray(rotation_vector(q0, q[0])) / dt
+            v, w = (p[0] - p0) / dt, np.array(rotation_vector(q0.tolist(),
+                                                              q[0].tolist())) / dt
     if now - sample.timestamp > stale_after:
         v = w = np.zeros(3)
     return sample.timestamp, p[0], q[0], v, w
@@ -488,8 +501,11 @@ def push_servos(engine: Engine, rigs: list[tuple[Fingers, np.ndarray]]) -> None:
     """Every fingered hand's servos aimed by one command."""
     if not rigs:
         return
-    keys = [k for f, _ in rigs for k in f.chain]
-    engine.physics.push(SetServos(keys, np.vstack([rows for _, rows in rigs])))
+    if len(rigs) == 1:
+        engine.physics.push(SetServos(rigs[0][0].keys, rigs[0][1]))
+        return
+    engine.physics.push(SetServos(np.concatenate([f.keys for f, _ in rigs]),
+                                  np.vstack([rows for _, rows in rigs])))
 
 
 def hold(fingers: Fingers, holding: bool) -> bool:

@@ -345,8 +345,8 @@ class SetServos(Command):
         if keys.ndim != 1 or table.shape != (len(keys), 7):
             raise CommandError(f"SetServos: {len(keys)} keys need a table of shape "
                                f"({len(keys)}, 7), got {table.shape}")
-        bad = ~np.isfinite(table).all(axis=1) | (table[:, 4:] < 0.0).any(axis=1)
-        if bad.any():
+        if not (np.isfinite(table).all() and (table[:, 4:] >= 0.0).all()):  # which row:
+            bad = ~np.isfinite(table).all(axis=1) | ~(table[:, 4:] >= 0.0).all(axis=1)
             raise CommandError(f"SetServos: joint {keys[bad][0]}'s row must be 7 finite "
                                "numbers, its torque bound, time constant and spin cap >= 0; "
                                f"got {table[bad][0].tolist()}")
@@ -647,7 +647,8 @@ def check_limits(command: Command, limits: Limits) -> None:
                                f"the limit of {limits.max_speed:g} {unit}")
     if isinstance(command, SetPoses):
         _rows_inside(command, limits)
-    if isinstance(command, SetServos) and len(command.keys):
+    if isinstance(command, SetServos) and len(command.keys) and \
+            np.abs(command.table[:, 2:4]).max() > limits.max_speed:
         fast = np.abs(command.table[:, 2:4]).max(axis=1) > limits.max_speed
         if fast.any():
             row = int(np.flatnonzero(fast)[0])
