@@ -397,11 +397,11 @@ def servo_rows(fingers: Fingers, angles: np.ndarray) -> np.ndarray:
     """The servos' rows (15, 7) aiming at ``angles`` (tracked, 15 × 2) at the fingers'
     tracked rates, with the bound that fits whether the hand holds something."""
     rows = fingers.servos
-    rows[:, 0:2] = angles - fingers.zero
+    np.subtract(angles, fingers.zero, out=rows[:, 0:2])
     rows[:, 2:4] = fingers.rates
-    rows[:, 4] = (HOLD_FORCE if fingers.holding else BONE_FORCE) * fingers.levers
-    rows[:, 5] = fingers.time_constant
-    rows[:, 6] = MAX_SPIN
+    if rows[0, 5] != fingers.time_constant:  # its first rows (then only hold() changes them)
+        rows[:, 4] = (HOLD_FORCE if fingers.holding else BONE_FORCE) * fingers.levers
+        rows[:, 5:7] = (fingers.time_constant, MAX_SPIN)
     return rows
 
 

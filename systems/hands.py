@@ -406,10 +406,10 @@ class HandDriveSystem(System):
     @staticmethod
     def _deviation(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers) -> None:
         """Each physical tip (where the last step left it) from its tracked one now."""
-        tips = hand_fingers.tips_now(engine, fingers)
         found = engine.world.try_component(rig.hand, HandState)
         if found is not None:
-            found.finger_deviation = tuple(np.linalg.norm(tips - fingers.tips, axis=1).tolist())
+            away = hand_fingers.tips_now(engine, fingers) - fingers.tips
+            found.finger_deviation = tuple(np.sqrt((away * away).sum(axis=1)).tolist())
 
     @staticmethod
     def _sweep(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers, palm: np.ndarray,
