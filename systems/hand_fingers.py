@@ -368,16 +368,50 @@ def _link(engine: Engine, label: str, bone: int, parent: int, anchor: np.ndarray
     return engine.spawn(Name(f"{label} joint"), joint)
 
 
-def aim(fingers: Fingers, sample: HandJoints, frame: Transform | None, now: float,
-        stale_after: float) -> np.ndarray:
-    """The servos' rows (15, 7) for this sample: each joint's tracked angles counted from
-    its zero, their rates from the sample before (zero once the samples stop coming),
-    the torque bound (:data:`BONE_FORCE` at the tip, :data:`HOLD_FORCE` while holding).
-    Also notes the tracked bones' centres and velocities (the fast-hand rays'), tips and
-    palm."""
-    p, q = world_joints(sample, frame)
-    centres = (p[STARTS] + p[ENDS]) * 0.5
-    angles = joint_angles(p, q, fingers.forms)
+def aim(hands: list[tuple[Fingers, HandJoints, Transform | None]], now: float,
+        stale_after: float) -> list[np.ndarray]:
+    """Each hand's servos' rows (15, 7) for its sample: each joint's tracked angles
+    counted from its zero, their rates from the sample before (zero once the samples
+    stop coming), the torque bound (:data:`BONE_FORCE` at the tip, :data:`HOLD_FORCE`
+    while holding). Also notes each hand's tracked bones' centres and velocities (the
+    fast-hand rays'), tips and palm. Every hand's angles in one pass
+    (:func:`joint_angles`' products, stacked): numpy's cost per call, not its
+    arithmetic, is what a frame of hands pays."""
+    joints = [world_joints(sample, frame) for _, sample, frame in hands]
+    p = np.stack([j[0] for j in joints])
+    forms, thumbs = _stacked([f for f, _, _ in hands])
+    bones = (GATHER @ p) @ np.stack([_matrix(j[1][1]) for j in joints])
+    bones[:, 0] = bones[:, 15] = thumbs  # the thumb's flexion and spread rows
+    n = len(hands)
+    outer = (bones[:, :20, :, None] * bones[:, 20:, None, :]).reshape(n, 20, 1, 9)
+    yx = (outer @ forms).reshape(n, 20, 2)
+    turns = np.arctan2(yx[:, :, 0], yx[:, :, 1])
+    angles = np.zeros((n, 15, 2))
+    angles[:, :, 0] = turns[:, :15]
+    angles[:, BASES, 1] = turns[:, 15:]
+    centres = (p[:, STARTS] + p[:, ENDS]) * 0.5
+    return [_noted(f, sample, j, centres[i], angles[i], now, stale_after)
+            for i, ((f, sample, _), j) in enumerate(zip(hands, joints, strict=True))]
+
+
+#: The last hands :func:`aim` stacked, their forms (n, 20, 9, 2) and thumbs' rest
+#: headings (n, 3) (the same hands frame after frame: stacked once).
+_STACK: list[Any] = [(), None, None]
+
+
+def _stacked(hands: list[Fingers]) -> tuple[np.ndarray, np.ndarray]:
+    if len(hands) != len(_STACK[0]) or any(a is not b for a, b in zip(hands, _STACK[0],
+                                                                          strict=True)):
+        _STACK[:] = [tuple(hands), np.stack([f.forms[0] for f in hands]),
+                     np.stack([THUMB_REST[f.forms[1]] for f in hands])]
+    return _STACK[1], _STACK[2]
+
+
+def _noted(fingers: Fingers, sample: HandJoints, joints: tuple[np.ndarray, np.ndarray],
+           centres: np.ndarray, angles: np.ndarray, now: float, stale_after: float
+           ) -> np.ndarray:
+    """One hand's part of :func:`aim`: its sample's rates, velocities, tips, palm."""
+    p, q = joints
     t, previous = sample.timestamp, fingers.sample
     if previous is None or t > previous[0]:
         if previous is not None:
@@ -530,6 +564,12 @@ def set_colliding(engine: Engine, fingers: Fingers, enabled: bool) -> None:
 def bone_table(engine: Engine, fingers: Fingers) -> np.ndarray:
     """The bones' rows of the pose table (15, 13: position, orientation, velocities), read
     in one go (their row indices kept while no Transform comes or goes)."""
+    return engine.world.poses.table[_rows(engine, fingers)]
+
+
+def _rows(engine: Engine, fingers: Fingers) -> np.ndarray:
+    """The bones' row indices in the pose table (kept while no Transform comes or
+    goes)."""
     poses = engine.world.poses
     version, rows = fingers.rows
     if version != poses.version:
@@ -537,7 +577,17 @@ def bone_table(engine: Engine, fingers: Fingers) -> np.ndarray:
         if (rows < 0).any():
             raise LookupError("a fingered hand's bone has no Transform")
         fingers.rows = (poses.version, rows)
-    return poses.table[rows]
+    return rows
+
+
+def tips_of(engine: Engine, hands: list[Fingers]) -> np.ndarray:
+    """Where every hand's physical fingertips are (n, 5, 3), read in one go."""
+    if len(hands) == 1:
+        return tips_now(engine, hands[0])[None]
+    distal = engine.world.poses.table[np.concatenate([_rows(engine, f)[2::3]
+                                                      for f in hands])]
+    half = np.concatenate([f.lengths[2::3] for f in hands]) * 0.5
+    return (distal[:, :3] + x_axes(distal[:, 3:7]) * half[:, None]).reshape(-1, 5, 3)
 
 
 def tips_now(engine: Engine, fingers: Fingers, table: np.ndarray | None = None

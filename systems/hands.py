@@ -372,7 +372,8 @@ class HandDriveSystem(System):
         untracked hand's joints hold still. A hand that would pass through something
         this frame goes only as far as it (:func:`~systems.hand_fingers.sweep_share`):
         its palm is held back, and its fingers with it."""
-        rows = []
+        rows: list[tuple[hand_fingers.Fingers, np.ndarray]] = []
+        aiming: list[tuple[_Rig, hand_fingers.Fingers, Any, Transform | None, Any]] = []
         planar = engine.physics.backend_name == "pymunk"
         for (rig, (hand, _, _)), pose in zip(driven, poses, strict=True):
             if rig.limits is None:
@@ -397,18 +398,29 @@ class HandDriveSystem(System):
                                    STALE_AFTER)
                 self._deviation(engine, rig, fingers)
                 continue
-            rows.append((fingers, hand_fingers.aim(fingers, sample, frame, inputs.now,
-                                                   STALE_AFTER)))
+            aiming.append((rig, fingers, sample, frame, pose))
+        if not aiming:
+            return rows
+        # every hand's angles, then every hand's physical tips, each in one pass
+        aims = hand_fingers.aim([(f, s, fr) for _, f, s, fr, _ in aiming], inputs.now,
+                                STALE_AFTER)
+        tips = hand_fingers.tips_of(engine, [f for _, f, _, _, _ in aiming])
+        for (rig, fingers, _, _, pose), servos, at in zip(aiming, aims, tips, strict=True):
+            rows.append((fingers, servos))
             self._sweep(engine, rig, fingers, np.concatenate(pose), dt)
-            self._deviation(engine, rig, fingers)
+            self._deviation(engine, rig, fingers, at)
         return rows
 
     @staticmethod
-    def _deviation(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers) -> None:
-        """Each physical tip (where the last step left it) from its tracked one now."""
+    def _deviation(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers,
+                   tips: np.ndarray | None = None) -> None:
+        """Each physical tip (where the last step left it; ``tips`` when already read)
+        from its tracked one now."""
         found = engine.world.try_component(rig.hand, HandState)
         if found is not None:
-            away = hand_fingers.tips_now(engine, fingers) - fingers.tips
+            if tips is None:
+                tips = hand_fingers.tips_now(engine, fingers)
+            away = tips - fingers.tips
             found.finger_deviation = tuple(np.sqrt((away * away).sum(axis=1)).tolist())
 
     @staticmethod
