@@ -253,6 +253,10 @@ class WorldSettings:
     #: Islands held by joints alone with up to this many constraint rows are solved
     #: exactly (ODE's dWorldStep); 0: every island by the iterative solver.
     exact_rows: int = 60
+    #: Islands with contacts are solved with at least this many iterations, the others
+    #: with ``iterations`` (0: all with ``iterations``): hands pressing on things need
+    #: more than the fingers of a hand in the air (systems/hands.py).
+    contact_iterations: int = 0
     auto_sleep: bool = True
     #: The sleep rule's limits (see :mod:`engine.physics.sleep`): seconds quiet, m/s, rad/s.
     sleep_time: float = SLEEP_TIME
@@ -325,6 +329,7 @@ WORLD_RANGES: dict[str, Range] = {
     "warm_start": Range(0.0, 0.99),
     "contact_softness": Range(0.0),
     "exact_rows": Range(0),
+    "contact_iterations": Range(0),
     "sleep_time": Range(0.0, low_open=True),
     "sleep_linear": Range(0.0, low_open=True),
     "sleep_angular": Range(0.0, low_open=True),

@@ -83,7 +83,8 @@ class OdeBackend:
         self._settings = settings
         self._world.configure(vec(settings.gravity, 3, "gravity"), settings.erp, settings.cfm,
                               settings.iterations, settings.max_contacts, settings.warm_start,
-                              settings.contact_softness, settings.exact_rows, settings.extent)
+                              settings.contact_softness, settings.exact_rows, settings.extent,
+                              settings.contact_iterations)
         if not settings.auto_sleep:  # everyone awake, nothing counted
             _ode.wake_all(self._world)
             self._rule.forget(slice(None))

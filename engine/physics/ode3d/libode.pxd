@@ -256,6 +256,7 @@ cdef extern from "stepper.h" nogil:
         double beta
         double softness
         int exact_rows
+        int contact_iterations
 
     ctypedef struct CsBody:
         double held[3]

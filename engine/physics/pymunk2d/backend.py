@@ -205,7 +205,8 @@ class PymunkBackend:
         if settings.gravity[1] != 0.0:
             self._warn("world", "gravity", "gravity's Y component dropped (not in the X–Z plane)")
         space.gravity = self._gravity = (float(gx), float(gz))
-        space.iterations = max(1, int(settings.iterations))
+        # one space, one count: the more of the two the settings ask for
+        space.iterations = max(1, int(settings.iterations), int(settings.contact_iterations))
         if not 0.0 <= settings.warm_start < 1.0:
             raise ValueError(f"warm start must be in [0, 1), got {settings.warm_start}")
         self._resting.beta = float(settings.warm_start)
