@@ -407,23 +407,25 @@ class HandDriveSystem(System):
         # every hand's angles, then every hand's physical tips, each in one pass
         aims = hand_fingers.aim([(f, s, fr) for _, f, s, fr, _ in aiming], inputs.now,
                                 STALE_AFTER)
-        tips = hand_fingers.tips_of(engine, [f for _, f, _, _, _ in aiming])
-        for (rig, fingers, _, _, pose), servos, at in zip(aiming, aims, tips, strict=True):
+        away = hand_fingers.tips_of(engine, [f for _, f, _, _, _ in aiming]) - \
+            np.stack([f.tips for _, f, _, _, _ in aiming])
+        deviations = np.sqrt((away * away).sum(axis=2)).tolist()
+        found = engine.world.try_component
+        for (rig, fingers, _, _, pose), servos, deviation in zip(aiming, aims, deviations,
+                                                                 strict=True):
             rows.append((fingers, servos))
             self._sweep(engine, rig, fingers, np.concatenate(pose), dt)
-            self._deviation(engine, rig, fingers, at)
+            state = found(rig.hand, HandState)
+            if state is not None:  # each physical tip (the last step's) from its tracked one
+                state.finger_deviation = tuple(deviation)
         return rows
 
     @staticmethod
-    def _deviation(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers,
-                   tips: np.ndarray | None = None) -> None:
-        """Each physical tip (where the last step left it; ``tips`` when already read)
-        from its tracked one now."""
+    def _deviation(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers) -> None:
+        """Each physical tip (where the last step left it) from its tracked one now."""
         found = engine.world.try_component(rig.hand, HandState)
         if found is not None:
-            if tips is None:
-                tips = hand_fingers.tips_now(engine, fingers)
-            away = tips - fingers.tips
+            away = hand_fingers.tips_now(engine, fingers) - fingers.tips
             found.finger_deviation = tuple(np.sqrt((away * away).sum(axis=1)).tolist())
 
     @staticmethod
@@ -731,12 +733,8 @@ class HandContactSystem(System):
         elapsed = snapshot.time - self._seen[1] if self._seen[0] >= 0 else dt
         if stepped:
             self._seen = (snapshot.step, snapshot.time)
-        owners = {rig.hand: rig.hand for rig in rigs.values()}
-        for rig in rigs.values():
-            if rig.fingers is not None:
-                owners.update(dict.fromkeys(rig.fingers.bones, rig.hand))
         contacts = _contact_batch(frames)
-        touches = _hand_contacts(contacts, owners)
+        touches = {} if contacts is None else _hand_contacts(contacts, self._owners(rigs))
         world = engine.world
         outputs = _outputs(engine)
         sent = frozenset() if outputs is None else outputs.sent  # what Output blocks name
@@ -764,6 +762,15 @@ class HandContactSystem(System):
                 outputs.set(rig.grasp_output, 1.0 if rig.grasps else 0.0)
             if hand.break_force is not None and rig.grasps:
                 self._strain(engine, rig, hand.break_force)
+
+    @staticmethod
+    def _owners(rigs: dict[int, _Rig]) -> dict[int, int]:
+        """Each palm and bone -> its hand."""
+        owners = {rig.hand: rig.hand for rig in rigs.values()}
+        for rig in rigs.values():
+            if rig.fingers is not None:
+                owners.update(dict.fromkeys(rig.fingers.bones, rig.hand))
+        return owners
 
     def _fingers(self, engine: Engine, rig: _Rig, state: HandState,
                  contacts: np.ndarray | None, elapsed: float) -> None:
