@@ -670,6 +670,25 @@ def opposed(parts: dict[str, tuple[np.ndarray, np.ndarray, float]],
     return ("thumb", *holding) if holding else ()
 
 
+def grip_width(fingers: Fingers, grip: tuple[str, ...],
+               presses: dict[str, tuple[np.ndarray, np.ndarray, float]], tips: np.ndarray,
+               palm: np.ndarray) -> float:
+    """How wide the physical grip ``grip`` is round what it presses: between the thumb's
+    press and each finger's (their mean contact points, :func:`presses`) plus both
+    fingertips' radii — the width of fingertips touching it, wherever on the finger
+    it is touched (a finger pressing with its middle phalanx holds its tip off the
+    object) — or from the thumb's tip to the palm (:func:`aperture`'s); the narrowest."""
+    thumb = presses["thumb"][0]
+    spans = []
+    for part in grip[1:]:
+        if part == "palm" or part not in presses:
+            spans.append(aperture(fingers, ("thumb", part), tips, palm))
+        else:
+            tip = fingers.radii[3 * FINGERS.index(part) + 2] + fingers.radii[2]
+            spans.append(float(np.linalg.norm(presses[part][0] - thumb)) + float(tip))
+    return min(spans)
+
+
 def aperture(fingers: Fingers, parts: tuple[str, ...], tips: np.ndarray | None = None,
              palm: np.ndarray | None = None) -> float:
     """How wide the grip of ``parts`` is: the thumb tip's distance to the nearest other

@@ -791,8 +791,8 @@ class HandContactSystem(System):
                 # closing on it: the tracked grip narrower than the physical one round it
                 # (fingers opening off it still touch it; they do not take it again)
                 palm = world.component_for_entity(rig.hand, Transform).position
-                width = hand_fingers.aperture(fingers, grip,
-                                              hand_fingers.tips_now(engine, fingers), palm)
+                width = hand_fingers.grip_width(fingers, grip, parts,
+                                                hand_fingers.tips_now(engine, fingers), palm)
                 if hand_fingers.aperture(fingers, grip) > width - hand_fingers.CLOSING:
                     continue
                 try:
