@@ -6,11 +6,15 @@ from the tracked joints' radii and bone lengths (the thumb's metacarpal, proxima
 distal; each other finger's proximal, intermediate and distal, its metacarpal being the
 palm). They are chained to the palm and to each other by joints with the anatomical
 limits — a universal joint (flexion and spread) at the MCP and the thumb's CMC, hinges
-at the PIP and DIP (the thumb's MCP and IP) — and each is driven toward its tracked pose
-by its own bounded six-DOF drive to a kinematic control body put where the tracked bone
-is (so its tracked velocity is fed forward and a blocked finger pushes with at most
-:data:`BONE_FORCE`, never through). The hand's bones share the collision bit
-:data:`HAND_BIT` and none of them collides with another (a fist is no collision).
+at the PIP and DIP (the thumb's MCP and IP) — and each joint's own motor is a servo
+toward its tracked angles (:class:`~engine.physics.commands.SetServos`: aimed each step
+from the joint's angle then, the tracked rate fed forward, the torque bounded by
+:data:`BONE_FORCE` at the fingertip, so a blocked finger pushes with a bounded force,
+never through).
+No control bodies and no drive rows of their own: the chain's joints carry the drive (a
+hand is 15 fewer bodies and about a fifth fewer constraint rows than with a six-DOF
+drive per bone). The hand's bones share the collision bit :data:`HAND_BIT` and none of
+them collides with another (a fist is no collision).
 
 Grasping by contact reads the step's contacts: an object is held when the thumb and an
 opposing finger or the palm press it (each at least :data:`PRESS_FORCE`; the tracked grip
@@ -25,6 +29,7 @@ several users hold one object as before.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
@@ -34,7 +39,7 @@ import numpy as np
 from components import Graspable, Joint, Name, Physical, Shape, Transform, Visual
 from components.joint import JointKind
 from components.physical import BodyKind, MaterialProps
-from engine.physics.commands import SetCollisionEnabled, SetDriveLimits, SetPoses
+from engine.physics.commands import SetCollisionEnabled, SetDriveLimits, SetServos
 from engine.rotation import (
     matrices_to_quats,
     quat_multiply,
@@ -42,7 +47,7 @@ from engine.rotation import (
     rotation_vector,
 )
 from services.input.events import FINGERS, HAND_JOINTS, HandJoints
-from services.input.hand_pose import flexion
+from services.input.hand_pose import ANATOMY
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -53,17 +58,16 @@ HAND_BIT = 1 << 30
 #: A phalanx's mass (kg): heavy enough beside a 0.45 kg palm and a 0.3 kg cup for the
 #: solver's 40 iterations, light enough that a finger stops on what it touches.
 BONE_MASS = 0.1
-#: Each phalanx's drive bounds (N, N·m): a finger of three presses with up to ~3× this.
-#: No torque: a bone's centre, its joint to the bone before it and that joint's one or
-#: two free axes fix its orientation, and a motor row bounded by 0 is no row at all
-#: (three fewer rows per bone for the solver).
+#: The force (N) a fingertip presses with at most: each joint's servo torque is bounded
+#: by it times the joint's distance to the tip along the finger (a blocked finger
+#: pushes with at most this at its tip, whichever joint bends it).
 BONE_FORCE = 8.0
-BONE_TORQUE = 0.0
-#: The drive bounds while the hand holds something (N, N·m): the object is held by the
-#: palm's constraint, and fingers pressing it at full force through the loop palm –
-#: finger – object – palm sink into it (the solver converges slowly round a loop).
+#: The bound while the hand holds something (N): the object is held by the palm's
+#: constraint, and fingers pressing it at full force through the loop palm – finger –
+#: object – palm sink into it (the solver converges slowly round a loop).
 HOLD_FORCE = 1.5
-HOLD_TORQUE = 0.0
+#: The fastest a joint's servo corrects its error (rad/s; the tracked rate comes on top).
+MAX_SPIN = 30.0
 #: Skin: the bones' friction.
 SKIN = MaterialProps(name="skin", friction=1.0, density=1000.0)
 #: The anatomical limits (radians, flexion positive) of each finger's three joints, and
@@ -102,21 +106,43 @@ def bone_layout() -> list[tuple[str, int, int]]:
 BONES = bone_layout()
 STARTS = np.array([s for _, s, _ in BONES])
 ENDS = np.array([e for _, _, e in BONES])
+BASES = np.arange(0, 15, 3)  # each finger's first bone (its joint: universal)
+#: Each bone's parent bone as two joints (its vector: p[PARENT_B] - p[PARENT_A]): the
+#: bone before it, or a finger's metacarpal (the thumb's first bone: its rest heading).
+PARENT_A = np.array([STARTS[i - 1] if i % 3 else max(STARTS[i] - 1, 0) for i in range(15)])
+PARENT_B = np.array([ENDS[i - 1] if i % 3 else STARTS[i] for i in range(15)])
+#: Each bone's flexion axis and the thumb's rest heading, in the wrist's frame (right).
+REST_Y = np.array([ANATOMY[f].rest()[:, 1] for f, _, _ in BONES])
+THUMB_REST_X = ANATOMY["thumb"].rest()[:, 0]
+THUMB_FIRST = HAND_JOINTS.index("thumb_metacarpal")
 
 
 @dataclass(slots=True, eq=False)
 class Fingers:
-    """The bodies, drives and joints of one hand's fingers, and its grips' memory."""
+    """The bodies and joints of one hand's fingers, their servos' state, and its grips'
+    memory."""
 
     bones: list[int]
-    controls: list[int]
-    drives: list[int]
     chain: list[int]
     lengths: np.ndarray  # each bone's length (m)
     radii: np.ndarray  # each bone's capsule radius (m)
     finger_of: dict[int, str]  # bone entity -> its finger
+    #: the tracked joints' angles (15, 2: flexion, spread) when the joints were made: each
+    #: joint counts its angles from there
+    zero: np.ndarray = field(default_factory=lambda: np.zeros((15, 2)))
+    #: the forms its angles are measured with, and whether it is a left hand
+    #: (:func:`angle_forms`: its spread axes in the tracked wrist's frame)
+    forms: tuple[np.ndarray, int] = (np.zeros((20, 9, 2)), 0)
+    keys: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # its joints
+    time_constant: float = 0.03  # the servos' (s): the hand drive's
     sample: tuple[float, np.ndarray, np.ndarray] | None = None  # t, positions, quats
-    velocity: np.ndarray = field(default_factory=lambda: np.zeros((15, 6)))
+    velocity: np.ndarray = field(default_factory=lambda: np.zeros((15, 3)))  # tracked
+    angles: tuple[float, np.ndarray] | None = None  # the last sample's (t, (15, 2))
+    rates: np.ndarray = field(default_factory=lambda: np.zeros((15, 2)))
+    #: each joint's distance to its fingertip along the finger (15,; m): its torque arm
+    levers: np.ndarray = field(default_factory=lambda: np.zeros(15))
+    #: the servos' rows (15, 7) sent each frame (SetServos' layout)
+    servos: np.ndarray = field(default_factory=lambda: np.zeros((15, 7)))
     tips: np.ndarray = field(default_factory=lambda: np.zeros((5, 3)))  # tracked
     palm: np.ndarray = field(default_factory=lambda: np.zeros(3))  # tracked palm joint
     #: object -> (the fingers gripping it, the tracked grip's width when it took hold)
@@ -124,14 +150,14 @@ class Fingers:
     #: object -> the parts ("palm" or fingers) pressing it in the last step
     pressing: dict[int, tuple[str, ...]] = field(default_factory=dict)
     colliding: bool = True
-    holding: bool = False  # whether the drives have their holding bounds
+    holding: bool = False  # whether the servos have their holding bound
     #: the thinnest bone's radius (m): a hand slower than it per frame casts no rays
     thinnest: float = 0.0
     #: the pose table's version and the bones' rows in it (read each frame in one go)
     rows: tuple[int, np.ndarray] = (-1, np.zeros(0, np.int64))
 
     def entities(self) -> list[int]:
-        return [*self.chain, *self.drives, *self.bones, *self.controls]
+        return [*self.chain, *self.bones]
 
 
 def world_joints(sample: HandJoints, frame: Transform | None
@@ -158,8 +184,11 @@ def joint_arrays(sample: HandJoints) -> tuple[np.ndarray, np.ndarray]:
         return seen[1], seen[2]
     if len(_SEEN) >= 64:
         _SEEN.clear()
-    p = np.asarray(sample.positions, dtype=float)
-    q = np.asarray(sample.orientations, dtype=float)
+    # (flattened in C: half the time of numpy's walk through nested tuples)
+    flat = itertools.chain.from_iterable
+    p = np.fromiter(flat(sample.positions), float, 3 * len(sample.positions))
+    q = np.fromiter(flat(sample.orientations), float, 4 * len(sample.orientations))
+    p, q = p.reshape(-1, 3), q.reshape(-1, 4)
     p.setflags(write=False)
     q.setflags(write=False)
     _SEEN[id(sample)] = (sample, p, q)
@@ -197,16 +226,98 @@ def separate_palm(engine: Engine, palm: int) -> None:
         world.add_component(palm, wanted)
 
 
+def _gather() -> np.ndarray:
+    """The matrix (40, 26) whose product with the joints gives each angle's two bones
+    (:func:`joint_angles`' 20 rows: the 15 flexions, then the 5 spreads): the parent
+    bone (the thumb's first: none, its rest heading is added), then the bone."""
+    out = np.zeros((40, 26))
+    for row, i in enumerate([*range(15), *BASES]):
+        if i:
+            out[row, PARENT_B[i]], out[row, PARENT_A[i]] = 1.0, -1.0
+        out[20 + row, ENDS[i]], out[20 + row, STARTS[i]] = 1.0, -1.0
+    return out
+
+
+def _cross_flat(axes: np.ndarray) -> np.ndarray:
+    """Each axis' (n, 3) cross-product form flattened (n, 9): ``outer(a, b) · it`` is the
+    triple product (a × b) · axis."""
+    out = np.zeros((len(axes), 3, 3))
+    out[:, 0, 1], out[:, 1, 2], out[:, 2, 0] = axes[:, 2], axes[:, 0], axes[:, 1]
+    out[:, 1, 0], out[:, 2, 1], out[:, 0, 2] = -axes[:, 2], -axes[:, 0], -axes[:, 1]
+    return out.reshape(len(axes), 9)
+
+
+GATHER = _gather()
+#: The flexion rows' forms (15, 9, 2) in the wrist's frame, a right hand's and a left
+#: hand's (its mirror image, the axis turned round): the triple product with the
+#: flexion axis, and the dot product.
+FLEX_FORMS = tuple(np.stack([_cross_flat(axes), np.tile(np.eye(3).ravel(), (15, 1))],
+                            axis=2) for axes in (REST_Y, REST_Y * (-1.0, 1.0, -1.0)))
+#: The thumb's rest heading (its first bone's parent) in the wrist's frame: right, left.
+THUMB_REST = (THUMB_REST_X, THUMB_REST_X * (1.0, -1.0, 1.0))
+#: x, y, z into the flattened cross-product form (3, 9): ``axes @ CROSS_FLAT``.
+CROSS_FLAT = _cross_flat(np.eye(3))
+
+
+def _matrix(q: np.ndarray) -> np.ndarray:
+    """A unit quaternion's rotation matrix, from plain floats (one quaternion: numpy's
+    machinery for stacks costs more than the arithmetic)."""
+    w, x, y, z = q.tolist()
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def angle_forms(p: np.ndarray, q: np.ndarray, spread_axes: np.ndarray | None = None
+                ) -> tuple[np.ndarray, int]:
+    """The quadratic forms (20, 9, 2) :func:`joint_angles` measures one hand's angles
+    with, and whether it is a left hand (its thumb toward the wrist's -y), from world
+    joints: the flexions about their axes in the wrist's frame (a left hand's mirrored);
+    each finger's spread about ``spread_axes`` (5, 3, world; None: no spread), seen
+    along it: (a × b) · s over a · b - (a · s)(b · s). Made once per hand: its spread
+    axes turn with its wrist."""
+    wrist = _matrix(q[1])
+    left = int(float((p[THUMB_FIRST] - p[1]) @ wrist[:, 1]) < 0.0)
+    forms = np.zeros((20, 9, 2))
+    forms[:15] = FLEX_FORMS[left]
+    if spread_axes is not None:
+        s = spread_axes @ wrist
+        forms[15:, :, 0] = s @ CROSS_FLAT
+        forms[15:, :, 1] = np.eye(3).ravel() - (s[:, :, None] * s[:, None, :]).reshape(5, 9)
+    return forms, left
+
+
+def joint_angles(p: np.ndarray, q: np.ndarray,
+                 forms: tuple[np.ndarray, int] | None = None) -> np.ndarray:
+    """Each joint's tracked angles (15, 2), from world joints: its flexion (radians, toward
+    the palm positive: :func:`services.input.hand_pose.flexion`'s, all fingers at once,
+    in the wrist's frame) and, at a finger's base, its spread: the angle from the parent
+    bone to the bone about an axis (a spread: seen along it), each atan2 of two
+    quadratic forms of the two bones (:func:`angle_forms`; default: this sample's, no
+    spread), all 20 in one product: this runs for every hand every frame."""
+    forms, left = angle_forms(p, q) if forms is None else forms
+    bones = (GATHER @ p) @ _matrix(q[1])  # parents (20), then bones, in the wrist's frame
+    bones[0] = bones[15] = THUMB_REST[left]  # the thumb's flexion and spread rows
+    outer = (bones[:20, :, None] * bones[20:, None, :]).reshape(20, 1, 9)
+    y, x = (outer @ forms).reshape(20, 2).T
+    angles = np.arctan2(y, x)
+    out = np.zeros((15, 2))
+    out[:, 0] = angles[:15]
+    out[BASES, 1] = angles[15:]
+    return out
+
+
 def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Transform | None,
           drive: SetDriveLimits) -> Fingers:
-    """Spawn one hand's phalanges where the tracked ones are, their control bodies,
-    drives (bounded by ``drive``'s response, :data:`BONE_FORCE` and :data:`BONE_TORQUE`)
-    and the chain of anatomical joints."""
+    """Spawn one hand's phalanges where the tracked ones are and the chain of anatomical
+    joints, whose servos take ``drive``'s time constant (their bounds:
+    :data:`BONE_FORCE` at the tip)."""
     p, q = world_joints(sample, frame)
     centres, quats, lengths = bone_poses(p, q)
     radii = np.asarray(sample.radii, dtype=float)
-    bent = flexion(sample)  # a joint's zero is its pose when made: the limits count from it
-    bones, controls, drives, chain, sizes = [], [], [], [], []
+    # a joint's zero is its pose when made: the limits and the servo count from it
+    bent = joint_angles(p, q)[:, 0]
+    bones, chain, sizes, spreads = [], [], [], []
     finger_of: dict[int, str] = {}
     for i, (finger, start, end) in enumerate(BONES):
         label = f"{name} {HAND_JOINTS[start]}"
@@ -217,37 +328,38 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
                             Visual(shapes=[replace(_bone_body(radius, float(lengths[i]))
                                                    .shapes[0])], color=BONE_COLOR),
                             Graspable(False))
-        control = engine.spawn(Name(f"{label} tracker"), Transform(centres[i].copy(),
-                                                                   quats[i].copy()),
-                               Physical(kind=BodyKind.KINEMATIC, mass=1.0, shapes=[],
-                                        category=0, mask=0, gravity=False, can_sleep=False))
-        aim = engine.spawn(Name(f"{label} drive"), Joint(
-            kind=JointKind.SIX_DOF, body_a=bone, body_b=control, motor_max_force=BONE_FORCE,
-            id=f"{label} drive"))
-        engine.physics.push(replace(drive, key=aim, max_force=BONE_FORCE,
-                                    max_torque=BONE_TORQUE))
         parent = palm if i % 3 == 0 else bones[-1]
         # spread about the palm's dorsal axis (the thumb's CMC: about its own, the palm's
         # being near its flexion axis)
-        spread = quat_to_matrix(quats[i] if finger == "thumb" else q[0])[:, 2]
+        spread = _spread_axis(quats[i], quat_to_matrix(quats[i] if finger == "thumb"
+                                                       else q[0])[:, 2])
+        if i % 3 == 0:
+            spreads.append(spread)
         chain.append(_link(engine, label, bone, parent, p[start], quats[i], spread, finger,
-                           i % 3, bent[finger][i % 3]))
+                           i % 3, float(bent[i])))
         bones.append(bone)
-        controls.append(control)
-        drives.append(aim)
         finger_of[bone] = finger
-    return Fingers(bones, controls, drives, chain, lengths, np.array(sizes), finger_of,
-                   thinnest=min(sizes))
+    forms = angle_forms(p, q, np.array(spreads))
+    return Fingers(bones, chain, lengths, np.array(sizes), finger_of,
+                   zero=joint_angles(p, q, forms), forms=forms,
+                   keys=np.array(chain, np.int64), time_constant=drive.time_constant or 0.03,
+                   thinnest=min(sizes),
+                   levers=lengths.reshape(5, 3)[:, ::-1].cumsum(axis=1)[:, ::-1].ravel())
+
+
+def _spread_axis(quat: np.ndarray, spread: np.ndarray) -> np.ndarray:
+    """A base joint's spread axis: ``spread`` made square to the bone's flexion axis."""
+    flex = quat_to_matrix(quat)[:, 1]
+    spread = spread - (spread @ flex) * flex
+    return spread / max(float(np.linalg.norm(spread)), 1e-9)
 
 
 def _link(engine: Engine, label: str, bone: int, parent: int, anchor: np.ndarray,
           quat: np.ndarray, spread: np.ndarray, finger: str, k: int, bent: float) -> int:
     """The anatomical joint at a bone's start: universal (flexion about the bone's +y,
-    limited; spread about the palm's dorsal axis) at the base of a finger, a hinge
-    further on. ``bent``: its flexion now (rad), which the joint takes as its zero."""
+    limited; spread about ``spread``) at the base of a finger, a hinge further on.
+    ``bent``: its flexion now (rad), which the joint takes as its zero."""
     rot = quat_to_matrix(quat)
-    spread = spread - (spread @ rot[:, 1]) * rot[:, 1]
-    spread = spread / max(float(np.linalg.norm(spread)), 1e-9)
     low, high = (limit - bent for limit in LIMITS[finger][k])
     kind = JointKind.UNIVERSAL if k == 0 else JointKind.HINGE
     joint = Joint(kind=kind, body_a=bone, body_b=parent, anchor=tuple(anchor.tolist()),
@@ -256,26 +368,85 @@ def _link(engine: Engine, label: str, bone: int, parent: int, anchor: np.ndarray
     return engine.spawn(Name(f"{label} joint"), joint)
 
 
-def aim(fingers: Fingers, sample: HandJoints, frame: Transform | None, now: float,
-        stale_after: float) -> np.ndarray:
-    """The control bodies' rows (15, 13: pose and velocities) for this sample: the
-    velocities from the sample before it (zero once the samples stop coming). A bone's
-    drive aims at a point (:data:`BONE_TORQUE` is 0), so its control body's turn is its
-    start joint's as tracked, and it does not spin."""
-    p, q = world_joints(sample, frame)
-    centres, quats = (p[STARTS] + p[ENDS]) * 0.5, q[STARTS]
+def aim(hands: list[tuple[Fingers, HandJoints, Transform | None]], now: float,
+        stale_after: float) -> list[np.ndarray]:
+    """Each hand's servos' rows (15, 7) for its sample: each joint's tracked angles
+    counted from its zero, their rates from the sample before (zero once the samples
+    stop coming), the torque bound (:data:`BONE_FORCE` at the tip, :data:`HOLD_FORCE`
+    while holding). Also notes each hand's tracked bones' centres and velocities (the
+    fast-hand rays'), tips and palm. Every hand's angles in one pass
+    (:func:`joint_angles`' products, stacked): numpy's cost per call, not its
+    arithmetic, is what a frame of hands pays."""
+    joints = [world_joints(sample, frame) for _, sample, frame in hands]
+    p = np.stack([j[0] for j in joints])
+    forms, thumbs = _stacked([f for f, _, _ in hands])
+    bones = (GATHER @ p) @ np.stack([_matrix(j[1][1]) for j in joints])
+    bones[:, 0] = bones[:, 15] = thumbs  # the thumb's flexion and spread rows
+    n = len(hands)
+    outer = (bones[:, :20, :, None] * bones[:, 20:, None, :]).reshape(n, 20, 1, 9)
+    yx = (outer @ forms).reshape(n, 20, 2)
+    turns = np.arctan2(yx[:, :, 0], yx[:, :, 1])
+    angles = np.zeros((n, 15, 2))
+    angles[:, :, 0] = turns[:, :15]
+    angles[:, BASES, 1] = turns[:, 15:]
+    centres = (p[:, STARTS] + p[:, ENDS]) * 0.5
+    return [_noted(f, sample, j, centres[i], angles[i], now, stale_after)
+            for i, ((f, sample, _), j) in enumerate(zip(hands, joints, strict=True))]
+
+
+#: The last hands :func:`aim` stacked, their forms (n, 20, 9, 2) and thumbs' rest
+#: headings (n, 3) (the same hands frame after frame: stacked once).
+_STACK: list[Any] = [(), None, None]
+
+
+def _stacked(hands: list[Fingers]) -> tuple[np.ndarray, np.ndarray]:
+    if len(hands) != len(_STACK[0]) or any(a is not b for a, b in zip(hands, _STACK[0],
+                                                                          strict=True)):
+        _STACK[:] = [tuple(hands), np.stack([f.forms[0] for f in hands]),
+                     np.stack([THUMB_REST[f.forms[1]] for f in hands])]
+    return _STACK[1], _STACK[2]
+
+
+def _noted(fingers: Fingers, sample: HandJoints, joints: tuple[np.ndarray, np.ndarray],
+           centres: np.ndarray, angles: np.ndarray, now: float, stale_after: float
+           ) -> np.ndarray:
+    """One hand's part of :func:`aim`: its sample's rates, velocities, tips, palm."""
+    p, q = joints
     t, previous = sample.timestamp, fingers.sample
     if previous is None or t > previous[0]:
         if previous is not None:
-            fingers.velocity[:, :3] = (centres - previous[1]) / (t - previous[0])
-        fingers.sample = (t, centres, quats)
+            fingers.velocity = (centres - previous[1]) / (t - previous[0])
+            fingers.rates = (angles - fingers.angles[1]) / (t - previous[0])
+        fingers.sample = (t, centres, q[STARTS])
+        fingers.angles = (t, angles)
     if now - t > stale_after:
-        fingers.velocity[:] = 0.0
+        fingers.velocity = np.zeros((15, 3))
+        fingers.rates = np.zeros((15, 2))
     fingers.tips = p[TIPS_AT]
     fingers.palm = p[0]
-    rows = np.empty((len(BONES), 13))  # its own rows: limit() moves them, not the sample
-    rows[:, :3], rows[:, 3:7], rows[:, 7:] = centres, quats, fingers.velocity
+    return servo_rows(fingers, angles)
+
+
+def servo_rows(fingers: Fingers, angles: np.ndarray) -> np.ndarray:
+    """The servos' rows (15, 7) aiming at ``angles`` (tracked, 15 × 2) at the fingers'
+    tracked rates, with the bound that fits whether the hand holds something."""
+    rows = fingers.servos
+    np.subtract(angles, fingers.zero, out=rows[:, 0:2])
+    rows[:, 2:4] = fingers.rates
+    if rows[0, 5] != fingers.time_constant:  # its first rows (then only hold() changes them)
+        rows[:, 4] = (HOLD_FORCE if fingers.holding else BONE_FORCE) * fingers.levers
+        rows[:, 5:7] = (fingers.time_constant, MAX_SPIN)
     return rows
+
+
+def still(fingers: Fingers) -> np.ndarray | None:
+    """An untracked hand's servos held at their last targets, not moving on (once: None
+    when they already are)."""
+    if fingers.angles is None or not fingers.rates.any():
+        return None
+    fingers.rates = np.zeros((15, 2))
+    fingers.velocity = np.zeros((15, 3))
+    return servo_rows(fingers, fingers.angles[1])
 
 
 def palm_pose(previous: tuple[float, np.ndarray, ...] | None, sample: HandJoints,
@@ -290,14 +461,15 @@ def palm_pose(previous: tuple[float, np.ndarray, ...] | None, sample: HandJoints
         t0, p0, q0, v, w = previous
         if sample.timestamp > t0:
             dt = sample.timestamp - t0
-            v, w = (p[0] - p0) / dt, np.asarray(rotation_vector(q0, q[0])) / dt
+            v, w = (p[0] - p0) / dt, np.array(rotation_vector(q0.tolist(),
+                                                              q[0].tolist())) / dt
     if now - sample.timestamp > stale_after:
         v = w = np.zeros(3)
     return sample.timestamp, p[0], q[0], v, w
 
 
 def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.ndarray,
-                rows: np.ndarray, dt: float, held: frozenset[int] = frozenset()) -> float:
+                dt: float, held: frozenset[int] = frozenset()) -> float:
     """How much of this frame's way to its targets the hand may go (0 to 1) before one
     of its bodies would pass through something: once the hand is fast enough for its
     thinnest bone to move its thickness in a frame, a ray per body that would move more
@@ -306,8 +478,12 @@ def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.nda
     whose centre would go past the surface the ray meets goes only half its thickness
     into it (its contacts take it from there; a hand pressing on something is not
     held back). What the hand holds is no obstacle. Serial physics answers at once;
-    threaded physics a frame later, so this frame goes unlimited."""
-    speed = max(-rows[:, 7:10].min(), rows[:, 7:10].max(), *np.abs(palm_target[7:10]))
+    threaded physics a frame later, so this frame goes unlimited. The bones' targets:
+    the tracked bones' centres and velocities (:func:`aim`'s)."""
+    if fingers.sample is None:
+        return 1.0
+    centres, velocity = fingers.sample[1], fingers.velocity
+    speed = max(-velocity.min(), velocity.max(), *np.abs(palm_target[7:10]))
     if 1.8 * speed * dt < fingers.thinnest:
         return 1.0  # slow: no body moves its thickness (√3 times an axis's speed bounds it)
     world = engine.world
@@ -317,7 +493,7 @@ def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.nda
     bodies = [palm, *fingers.bones]
     here = np.vstack([palm_t.position, bone_table(engine, fingers)[:, :3]])
     there = np.vstack([palm_target[:3] + palm_target[7:10] * dt,
-                       rows[:, :3] + rows[:, 7:10] * dt])
+                       centres + velocity * dt])
     way = there - here
     far = np.linalg.norm(way, axis=1)
     thick = np.concatenate([[_palm_reach(world, palm, way[0], far[0])], fingers.radii])
@@ -355,22 +531,25 @@ def limit(rows: np.ndarray, here: np.ndarray, share: float) -> None:
     rows[:, 7:] *= share
 
 
-def push_controls(engine: Engine, rigs: list[tuple[Fingers, np.ndarray]]) -> None:
-    """Every fingered hand's control bodies moved by one command."""
+def push_servos(engine: Engine, rigs: list[tuple[Fingers, np.ndarray]]) -> None:
+    """Every fingered hand's servos aimed by one command."""
     if not rigs:
         return
-    keys = [k for f, _ in rigs for k in f.controls]
-    engine.physics.push(SetPoses(keys, np.vstack([rows for _, rows in rigs])))
-
-
-def hold(engine: Engine, fingers: Fingers, limits: SetDriveLimits, holding: bool) -> None:
-    """The bones' drives at their holding bounds while the hand holds something."""
-    if fingers.holding == holding:
+    if len(rigs) == 1:
+        engine.physics.push(SetServos(rigs[0][0].keys, rigs[0][1]))
         return
+    engine.physics.push(SetServos(np.concatenate([f.keys for f, _ in rigs]),
+                                  np.vstack([rows for _, rows in rigs])))
+
+
+def hold(fingers: Fingers, holding: bool) -> bool:
+    """The servos at their holding bound while the hand holds something; whether that
+    changed (their rows then go again)."""
+    if fingers.holding == holding:
+        return False
     fingers.holding = holding
-    force, torque = (HOLD_FORCE, HOLD_TORQUE) if holding else (BONE_FORCE, BONE_TORQUE)
-    for drive in fingers.drives:
-        engine.physics.push(replace(limits, key=drive, max_force=force, max_torque=torque))
+    fingers.servos[:, 4] = (HOLD_FORCE if holding else BONE_FORCE) * fingers.levers
+    return True
 
 
 def set_colliding(engine: Engine, fingers: Fingers, enabled: bool) -> None:
@@ -385,6 +564,12 @@ def set_colliding(engine: Engine, fingers: Fingers, enabled: bool) -> None:
 def bone_table(engine: Engine, fingers: Fingers) -> np.ndarray:
     """The bones' rows of the pose table (15, 13: position, orientation, velocities), read
     in one go (their row indices kept while no Transform comes or goes)."""
+    return engine.world.poses.table[_rows(engine, fingers)]
+
+
+def _rows(engine: Engine, fingers: Fingers) -> np.ndarray:
+    """The bones' row indices in the pose table (kept while no Transform comes or
+    goes)."""
     poses = engine.world.poses
     version, rows = fingers.rows
     if version != poses.version:
@@ -392,7 +577,17 @@ def bone_table(engine: Engine, fingers: Fingers) -> np.ndarray:
         if (rows < 0).any():
             raise LookupError("a fingered hand's bone has no Transform")
         fingers.rows = (poses.version, rows)
-    return poses.table[rows]
+    return rows
+
+
+def tips_of(engine: Engine, hands: list[Fingers]) -> np.ndarray:
+    """Where every hand's physical fingertips are (n, 5, 3), read in one go."""
+    if len(hands) == 1:
+        return tips_now(engine, hands[0])[None]
+    distal = engine.world.poses.table[np.concatenate([_rows(engine, f)[2::3]
+                                                      for f in hands])]
+    half = np.concatenate([f.lengths[2::3] for f in hands]) * 0.5
+    return (distal[:, :3] + x_axes(distal[:, 3:7]) * half[:, None]).reshape(-1, 5, 3)
 
 
 def tips_now(engine: Engine, fingers: Fingers, table: np.ndarray | None = None
@@ -473,6 +668,25 @@ def opposed(parts: dict[str, tuple[np.ndarray, np.ndarray, float]],
         if float(thumb[1] @ line) >= cone and float(other[1] @ -line) >= cone:
             holding.append(part)
     return ("thumb", *holding) if holding else ()
+
+
+def grip_width(fingers: Fingers, grip: tuple[str, ...],
+               presses: dict[str, tuple[np.ndarray, np.ndarray, float]], tips: np.ndarray,
+               palm: np.ndarray) -> float:
+    """How wide the physical grip ``grip`` is round what it presses: between the thumb's
+    press and each finger's (their mean contact points, :func:`presses`) plus both
+    fingertips' radii — the width of fingertips touching it, wherever on the finger
+    it is touched (a finger pressing with its middle phalanx holds its tip off the
+    object) — or from the thumb's tip to the palm (:func:`aperture`'s); the narrowest."""
+    thumb = presses["thumb"][0]
+    spans = []
+    for part in grip[1:]:
+        if part == "palm" or part not in presses:
+            spans.append(aperture(fingers, ("thumb", part), tips, palm))
+        else:
+            tip = fingers.radii[3 * FINGERS.index(part) + 2] + fingers.radii[2]
+            spans.append(float(np.linalg.norm(presses[part][0] - thumb)) + float(tip))
+    return min(spans)
 
 
 def aperture(fingers: Fingers, parts: tuple[str, ...], tips: np.ndarray | None = None,

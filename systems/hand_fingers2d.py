@@ -82,7 +82,6 @@ class PlanarFingers(Fingers):
 
     plane_y: float = 0.0  # the Y the bones (and the tracked joints) are put at
     flex_sign: float = 1.0  # +1 when the hand's flexion axis points along +Y
-    time_constant: float = 0.03  # the servo's (s): the hand drive's
     flex: tuple[float, np.ndarray] | None = None  # the last tracked flexions (t, (15,))
     rates: np.ndarray = field(default_factory=lambda: np.zeros(15))
     still: bool = False  # whether the motors were stopped (the hand untracked)
@@ -164,8 +163,8 @@ def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Trans
         bones.append(bone)
         finger_of[bone] = finger
     tau = drive.time_constant if drive.time_constant else 0.03
-    return PlanarFingers(bones, [], [], chain, lengths, np.array(sizes), finger_of,
-                         plane_y=y, flex_sign=sign, time_constant=tau)
+    return PlanarFingers(bones, chain, lengths, np.array(sizes), finger_of,
+                         time_constant=tau, plane_y=y, flex_sign=sign)
 
 
 def aim(engine: Engine, fingers: PlanarFingers, palm: int, sample: HandJoints,

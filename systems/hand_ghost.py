@@ -131,8 +131,9 @@ class GhostFingerSystem(System):
         inputs = engine.try_resource(InputState)
         for entity, (_, state) in world.get_components(Hand, HandState):
             ghost = self.ghosts.get(entity)
-            if ghost is None and not state.finger_deviation:
-                continue  # a palm-only hand
+            if ghost is None and not any(d > self.threshold for d in state.finger_deviation):
+                continue  # a palm-only hand, or no finger blocked (in plain Python: the
+                # common case, every frame)
             blocked = blocked_fingers(state, self.threshold)
             if ghost is None and not blocked.any():
                 continue

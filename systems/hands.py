@@ -81,9 +81,12 @@ log = logging.getLogger("colosseum.hands")
 
 #: The longest physics step hands are simulated with (s).
 MAX_STEP = 1.0 / 120.0
-#: The fewest solver iterations hands are simulated with: a hand pressing with its full
-#: drive force on a cup on a table (300 N through 0.3 kg) sinks into it and jitters by
-#: millimetres at ODE's 20; at 40 it rests within a millimetre, still.
+#: The fewest solver iterations islands with contacts are simulated with while hands
+#: exist: a hand pressing with its full drive force on a cup on a table (300 N through
+#: 0.3 kg) sinks into it and jitters by millimetres at ODE's 20; at 40 it rests within a
+#: millimetre, still. Islands without contacts keep the world's iterations (a fingered
+#: hand in the air: its fingertips 1.5 mm from their tracked tips at 20, 1.0 at 40, for
+#: half the solver's cost; WorldSettings.contact_iterations).
 MIN_ITERATIONS = 40
 #: The drive's time constant when the hand names none: max(2 Δt, this) seconds.
 MIN_TIME_CONSTANT = 0.03
@@ -315,7 +318,7 @@ class HandDriveSystem(System):
         found = dict(engine.world.get_components(Hand, HandState, Transform))
         driven = [(rig, found[rig.hand]) for rig in rigs.values() if rig.hand in found]
         poses = self._move_controls(engine, driven, inputs)
-        self._move_fingers(engine, driven, inputs, poses, dt)
+        servos = self._move_fingers(engine, driven, inputs, poses, dt)
         for (rig, (hand, state, t)), pose in zip(driven, poses, strict=True):
             self._drive(engine, rig, hand, state, t, pose, dt)
             pressed = inputs is not None and hand.glove != "" and inputs.button(hand.glove,
@@ -329,9 +332,14 @@ class HandDriveSystem(System):
             rig.pressed = pressed
             if rig.fingers is not None and rig.fingers.grips:
                 self._open_grips(engine, rig)
-            if rig.fingers is not None and rig.limits is not None:
-                hand_fingers.hold(engine, rig.fingers, rig.limits, bool(rig.grasps))
+            fingers = rig.fingers
+            if fingers is not None and hand_fingers.hold(fingers, bool(rig.grasps)) and \
+                    not isinstance(fingers, hand_fingers2d.PlanarFingers) and \
+                    fingers.angles is not None and \
+                    not any(f is fingers for f, _ in servos):
+                servos.append((fingers, fingers.servos))  # its new bound, this frame
             state.held = tuple(rig.grasps)
+        hand_fingers.push_servos(engine, servos)
 
     def _open_grips(self, engine: Engine, rig: _Rig) -> None:
         """Let go of what the fingers gripped once the tracked grip opened
@@ -359,13 +367,17 @@ class HandDriveSystem(System):
 
     def _move_fingers(self, engine: Engine, driven: list[tuple[_Rig, Any]],
                       inputs: InputState | None,
-                      poses: list[tuple[np.ndarray, ...] | None], dt: float) -> None:
-        """Put every fingered hand's bone control bodies where its tracked bones are, in
-        one command; a hand's bones are made at its first sample (sized from it), the palm
-        put at the tracked palm first. An untracked hand's bones hold still. A hand that
-        would pass through something this frame goes only as far as it
-        (:func:`~systems.hand_fingers.sweep_share`), its palm too."""
-        rows = []
+                      poses: list[tuple[np.ndarray, ...] | None], dt: float
+                      ) -> list[tuple[hand_fingers.Fingers, np.ndarray]]:
+        """Aim every fingered hand's joint servos at its tracked angles (their rows, sent
+        in one command once the frame's grips are known); a hand's bones are made at its
+        first sample (sized from it), the palm put at the tracked palm first. An
+        untracked hand's joints hold still. A hand that would pass through something
+        this frame goes only as far as it (:func:`~systems.hand_fingers.sweep_share`):
+        its palm is held back, and its fingers with it."""
+        rows: list[tuple[hand_fingers.Fingers, np.ndarray]] = []
+        aiming: list[tuple[_Rig, hand_fingers.Fingers, Any, Transform | None, Any]] = []
+        planar = engine.physics.backend_name == "pymunk"
         for (rig, (hand, _, _)), pose in zip(driven, poses, strict=True):
             if rig.limits is None:
                 continue
@@ -374,13 +386,12 @@ class HandDriveSystem(System):
             if sample is None:
                 if isinstance(fingers, hand_fingers2d.PlanarFingers):
                     hand_fingers2d.still(engine, fingers)
-                elif fingers is not None and fingers.sample is not None and \
-                        fingers.velocity.any():
-                    fingers.velocity[:] = 0.0
-                    rows.append((fingers, np.hstack([*fingers.sample[1:], fingers.velocity])))
+                elif fingers is not None:
+                    held = hand_fingers.still(fingers)
+                    if held is not None:
+                        rows.append((fingers, held))
                 continue
             frame = _frame(engine, hand)
-            planar = engine.physics.backend_name == "pymunk"
             if fingers is None:
                 engine.physics.set_pose(rig.hand, pose[0], pose[1])
                 fingers = rig.fingers = (hand_fingers2d if planar else hand_fingers).build(
@@ -390,34 +401,45 @@ class HandDriveSystem(System):
                                    STALE_AFTER)
                 self._deviation(engine, rig, fingers)
                 continue
-            aims = hand_fingers.aim(fingers, sample, frame, inputs.now, STALE_AFTER)
-            self._sweep(engine, rig, fingers, np.concatenate(pose), aims, dt)
-            rows.append((fingers, aims))
-            self._deviation(engine, rig, fingers)
-        hand_fingers.push_controls(engine, rows)
+            aiming.append((rig, fingers, sample, frame, pose))
+        if not aiming:
+            return rows
+        # every hand's angles, then every hand's physical tips, each in one pass
+        aims = hand_fingers.aim([(f, s, fr) for _, f, s, fr, _ in aiming], inputs.now,
+                                STALE_AFTER)
+        away = hand_fingers.tips_of(engine, [f for _, f, _, _, _ in aiming]) - \
+            np.stack([f.tips for _, f, _, _, _ in aiming])
+        deviations = np.sqrt((away * away).sum(axis=2)).tolist()
+        found = engine.world.try_component
+        for (rig, fingers, _, _, pose), servos, deviation in zip(aiming, aims, deviations,
+                                                                 strict=True):
+            rows.append((fingers, servos))
+            self._sweep(engine, rig, fingers, np.concatenate(pose), dt)
+            state = found(rig.hand, HandState)
+            if state is not None:  # each physical tip (the last step's) from its tracked one
+                state.finger_deviation = tuple(deviation)
+        return rows
 
     @staticmethod
     def _deviation(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers) -> None:
         """Each physical tip (where the last step left it) from its tracked one now."""
-        tips = hand_fingers.tips_now(engine, fingers)
         found = engine.world.try_component(rig.hand, HandState)
         if found is not None:
-            found.finger_deviation = tuple(np.linalg.norm(tips - fingers.tips, axis=1).tolist())
+            away = hand_fingers.tips_now(engine, fingers) - fingers.tips
+            found.finger_deviation = tuple(np.sqrt((away * away).sum(axis=1)).tolist())
 
     @staticmethod
     def _sweep(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers, palm: np.ndarray,
-               aims: np.ndarray, dt: float) -> None:
-        """A fast hand's targets, bones and palm, held short of what it would pass."""
+               dt: float) -> None:
+        """A fast hand's palm target held short of what the hand would pass (its fingers
+        hang on it by their joints)."""
         if not fingers.colliding:
             return
-        share = hand_fingers.sweep_share(engine, fingers, rig.hand, palm, aims, dt,
+        share = hand_fingers.sweep_share(engine, fingers, rig.hand, palm, dt,
                                          frozenset(rig.grasps))
         if share >= 1.0:
             return
         world = engine.world
-        here = np.vstack([world.component_for_entity(b, Transform).position
-                          for b in fingers.bones])
-        hand_fingers.limit(aims, here, share)
         row = palm[None].copy()
         hand_fingers.limit(row, world.component_for_entity(rig.hand, Transform).position,
                            share)
@@ -496,13 +518,14 @@ class HandDriveSystem(System):
     @staticmethod
     def _enough_iterations(engine: Engine) -> None:
         world = engine.config.world
-        if world.iterations >= MIN_ITERATIONS:
+        if max(world.iterations, world.contact_iterations) >= MIN_ITERATIONS:
             return
         # without the seed: the solver's random state goes on where it is
-        engine.config.world = replace(world, iterations=MIN_ITERATIONS, solver_seed=None)
+        engine.config.world = replace(world, contact_iterations=MIN_ITERATIONS,
+                                      solver_seed=None)
         engine.physics.push(ConfigureWorld(engine.config.world))
-        log.info("hands: the solver runs %d iterations (the world asked for %d)",
-                 MIN_ITERATIONS, world.iterations)
+        log.info("hands: islands with contacts are solved with %d iterations (the world "
+                 "asked for %d)", MIN_ITERATIONS, world.iterations)
 
     def _forget(self, engine: Engine, entity: int) -> None:
         rig = self.hands.rigs.pop(entity, None)
@@ -710,12 +733,8 @@ class HandContactSystem(System):
         elapsed = snapshot.time - self._seen[1] if self._seen[0] >= 0 else dt
         if stepped:
             self._seen = (snapshot.step, snapshot.time)
-        owners = {rig.hand: rig.hand for rig in rigs.values()}
-        for rig in rigs.values():
-            if rig.fingers is not None:
-                owners.update(dict.fromkeys(rig.fingers.bones, rig.hand))
         contacts = _contact_batch(frames)
-        touches = _hand_contacts(contacts, owners)
+        touches = {} if contacts is None else _hand_contacts(contacts, self._owners(rigs))
         world = engine.world
         outputs = _outputs(engine)
         sent = frozenset() if outputs is None else outputs.sent  # what Output blocks name
@@ -744,6 +763,15 @@ class HandContactSystem(System):
             if hand.break_force is not None and rig.grasps:
                 self._strain(engine, rig, hand.break_force)
 
+    @staticmethod
+    def _owners(rigs: dict[int, _Rig]) -> dict[int, int]:
+        """Each palm and bone -> its hand."""
+        owners = {rig.hand: rig.hand for rig in rigs.values()}
+        for rig in rigs.values():
+            if rig.fingers is not None:
+                owners.update(dict.fromkeys(rig.fingers.bones, rig.hand))
+        return owners
+
     def _fingers(self, engine: Engine, rig: _Rig, state: HandState,
                  contacts: np.ndarray | None, elapsed: float) -> None:
         """A fingered hand after a step: what its thumb and an opposing finger or its palm
@@ -763,8 +791,8 @@ class HandContactSystem(System):
                 # closing on it: the tracked grip narrower than the physical one round it
                 # (fingers opening off it still touch it; they do not take it again)
                 palm = world.component_for_entity(rig.hand, Transform).position
-                width = hand_fingers.aperture(fingers, grip,
-                                              hand_fingers.tips_now(engine, fingers), palm)
+                width = hand_fingers.grip_width(fingers, grip, parts,
+                                                hand_fingers.tips_now(engine, fingers), palm)
                 if hand_fingers.aperture(fingers, grip) > width - hand_fingers.CLOSING:
                     continue
                 try:

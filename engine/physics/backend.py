@@ -255,6 +255,10 @@ class WorldSettings:
     #: Islands held by joints alone with up to this many constraint rows are solved
     #: exactly (ODE's dWorldStep); 0: every island by the iterative solver.
     exact_rows: int = 60
+    #: Islands with contacts are solved with at least this many iterations, the others
+    #: with ``iterations`` (0: all with ``iterations``): hands pressing on things need
+    #: more than the fingers of a hand in the air (systems/hands.py).
+    contact_iterations: int = 0
     auto_sleep: bool = True
     #: The sleep rule's limits (see :mod:`engine.physics.sleep`): seconds quiet, m/s, rad/s.
     sleep_time: float = SLEEP_TIME
@@ -327,6 +331,7 @@ WORLD_RANGES: dict[str, Range] = {
     "warm_start": Range(0.0, 0.99),
     "contact_softness": Range(0.0),
     "exact_rows": Range(0),
+    "contact_iterations": Range(0),
     "sleep_time": Range(0.0, low_open=True),
     "sleep_linear": Range(0.0, low_open=True),
     "sleep_angular": Range(0.0, low_open=True),
@@ -381,6 +386,10 @@ class DynamicsBackend(Protocol):
     def add_joint(self, key: int, joint: Joint) -> None: ...
     def remove_joint(self, key: int) -> None: ...
     def set_motor(self, key: int, velocity: float, max_force: float) -> None: ...
+    def set_servos(self, keys: np.ndarray, table: np.ndarray) -> None:
+        """Aim hinges' and universal joints' motors at moving angles, each step from the
+        joint's angle then (:class:`~engine.physics.commands.SetServos`' rows)."""
+
     def joint_state(self, key: int) -> tuple[float, float]:
         """Position (angle or distance) and rate of a joint's first axis."""
 

@@ -173,6 +173,10 @@ class BallisticBackend:
     def set_motor(self, key: int, velocity: float, max_force: float) -> None:
         self._refused(key)
 
+    def set_servos(self, keys: np.ndarray, table: np.ndarray) -> None:
+        for key in np.asarray(keys).tolist():
+            self._refused(key)
+
     def joint_state(self, key: int) -> tuple[float, float]:
         self._refused(key)
         return (0.0, 0.0)

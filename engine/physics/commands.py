@@ -321,6 +321,43 @@ class SetMotor(Command):
         self._set("max_force", _scalar("SetMotor", "maxForce", self.max_force, 0.0))
 
 
+@dataclass(frozen=True, slots=True, eq=False)
+class SetServos(Command):
+    """Aim hinges' and universal joints' own motors at moving angles, in one command (a
+    fingered hand's fifteen joints, every frame): row ``i`` of ``table`` is joint
+    ``keys[i]``'s target angles (rad, as the joint counts them: 0 where it was made; a
+    hinge's second unused), their rates (rad/s, fed forward), its torque bound (N·m), the
+    time constant its error closes with (s) and the cap on the correcting spin (rad/s).
+    The backend aims each motor every step from the joint's angle then; ``key`` is the
+    first joint's, for messages about the whole command."""
+
+    keys: np.ndarray
+    table: np.ndarray
+    on_joint: ClassVar[bool] = True
+
+    def __post_init__(self) -> None:
+        try:
+            keys = np.array(self.keys, dtype=np.int64, ndmin=1)
+            table = np.array(self.table, dtype=np.float64, ndmin=2)
+        except (TypeError, ValueError):
+            raise CommandError("SetServos: keys must be joint ids and table rows of 7 "
+                               "numbers") from None
+        if keys.ndim != 1 or table.shape != (len(keys), 7):
+            raise CommandError(f"SetServos: {len(keys)} keys need a table of shape "
+                               f"({len(keys)}, 7), got {table.shape}")
+        if not (np.isfinite(table).all() and (table[:, 4:] >= 0.0).all()):  # which row:
+            bad = ~np.isfinite(table).all(axis=1) | ~(table[:, 4:] >= 0.0).all(axis=1)
+            raise CommandError(f"SetServos: joint {keys[bad][0]}'s row must be 7 finite "
+                               "numbers, its torque bound, time constant and spin cap >= 0; "
+                               f"got {table[bad][0].tolist()}")
+        self._set("keys", keys)
+        self._set("table", table)
+
+    @property
+    def key(self) -> int:  # type: ignore[override]
+        return int(self.keys[0]) if len(self.keys) else -1
+
+
 @dataclass(frozen=True, slots=True)
 class ApplyForce(Command):
     """A force (N) for the next step, at a world point (None: the centre of mass)."""
@@ -610,6 +647,14 @@ def check_limits(command: Command, limits: Limits) -> None:
                                f"the limit of {limits.max_speed:g} {unit}")
     if isinstance(command, SetPoses):
         _rows_inside(command, limits)
+    if isinstance(command, SetServos) and len(command.keys) and \
+            np.abs(command.table[:, 2:4]).max() > limits.max_speed:
+        fast = np.abs(command.table[:, 2:4]).max(axis=1) > limits.max_speed
+        if fast.any():
+            row = int(np.flatnonzero(fast)[0])
+            raise CommandError(f"SetServos: joint {command.keys[row]}: rate "
+                               f"{np.abs(command.table[row, 2:4]).max():g} rad/s is over "
+                               f"the limit of {limits.max_speed:g} rad/s")
     if isinstance(command, SetMotor) and abs(command.velocity) > limits.max_speed:
         raise CommandError(f"{name}: velocity {command.velocity:g} is over the limit of "
                            f"{limits.max_speed:g} (rad/s or m/s)")
@@ -666,7 +711,7 @@ def _body_inside(name: str, body: Physical, extent: float) -> None:
 
 #: Every command type by name: the serialised form's ``"command"`` field.
 COMMANDS: dict[str, type] = {cls.__name__: cls for cls in (
-    AddBody, RemoveBody, AddJoint, RemoveJoint, SetMotor, ApplyForce, ApplyTorque,
+    AddBody, RemoveBody, AddJoint, RemoveJoint, SetMotor, SetServos, ApplyForce, ApplyTorque,
     ApplyImpulse, SetPose, SetPoses, SetVelocity, SetKinematicTarget, SetCollisionEnabled,
     SetGravityEnabled, SetSleeping, SetSleepState, SetJointTarget, SetDriveLimits,
     ConfigureWorld, Step)}

@@ -74,6 +74,7 @@ _APPLY: dict[type, Callable[[DynamicsBackend, Any], Any]] = {
     cmd.AddJoint: lambda b, c: b.add_joint(c.key, c.joint),
     cmd.RemoveJoint: lambda b, c: b.remove_joint(c.key),
     cmd.SetMotor: lambda b, c: b.set_motor(c.key, c.velocity, c.max_force),
+    cmd.SetServos: lambda b, c: b.set_servos(c.keys, c.table),
     cmd.ApplyForce: lambda b, c: b.add_force(c.key, np.array(c.force), _vec(c.point)),
     cmd.ApplyTorque: lambda b, c: b.add_torque(c.key, np.array(c.torque)),
     cmd.ApplyImpulse: lambda b, c: b.add_impulse(c.key, np.array(c.impulse), _vec(c.point)),

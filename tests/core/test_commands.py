@@ -40,6 +40,10 @@ NAN, INF = float("nan"), float("inf")
                                    [NAN, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0]]),
      "body 4's row is not 13 finite numbers"),
     (lambda: cmd.SetPoses([3], np.zeros((1, 7))), r"1 keys need a table of shape \(1, 13\)"),
+    (lambda: cmd.SetServos([3, 4], [[0, 0, 0, 0, 1, 0.03, 30], [0, 0, 0, 0, -1, 0.03, 30]]),
+     "joint 4's row must be 7 finite numbers, its torque bound, time constant"),
+    (lambda: cmd.SetServos([3], [[NAN, 0, 0, 0, 1, 0.03, 30]]), "joint 3's row must be 7"),
+    (lambda: cmd.SetServos([3], np.zeros((1, 13))), r"1 keys need a table of shape \(1, 7\)"),
 ])
 def test_bad_values_are_refused_when_the_command_is_made(make, message):
     with pytest.raises(cmd.CommandError, match=message):
@@ -54,6 +58,14 @@ def test_a_ball_joint_needs_no_axis_and_quaternions_are_normalised():
     poses = cmd.SetPoses([1, 2], rows)
     assert poses.table[:, 3].tolist() == [1.0, 1.0] and rows[1, 3] == 2.0  # a copy
     assert poses.key == 1
+
+
+def test_servos_faster_than_the_world_s_limit_are_refused_by_their_joint():
+    rows = np.zeros((2, 7))
+    rows[1, 3] = 2e5
+    with pytest.raises(cmd.CommandError, match="SetServos: joint 8: rate 200000 rad/s is "
+                                               "over the limit"):
+        DetachedPhysics().push(cmd.SetServos([7, 8], rows))
 
 
 @pytest.mark.parametrize("column, value, message", [
@@ -77,7 +89,8 @@ def every_command() -> list[cmd.Command | cmd.Step]:
     sleep = SleepState(True, 3, np.arange(12.0).reshape(2, 6))
     return [cmd.AddBody(4, body, (1, 2, 3), (1, 0, 0, 0), (0, 0, -1), (0, 1, 0)),
             cmd.RemoveBody(4), cmd.AddJoint(9, joint), cmd.RemoveJoint(9),
-            cmd.SetMotor(9, 1.5, 20), cmd.ApplyForce(4, (1, 0, 0), (0, 0, 1)),
+            cmd.SetMotor(9, 1.5, 20), cmd.SetServos([9, 10], np.ones((2, 7))),
+            cmd.ApplyForce(4, (1, 0, 0), (0, 0, 1)),
             cmd.ApplyTorque(4, (0, 0, 2)), cmd.ApplyImpulse(4, (0, 1, 0)),
             cmd.SetPose(4, (0, 0, 5), (0, 1, 0, 0)), cmd.SetVelocity(4, (1, 1, 1), (0, 0, 0)),
             cmd.SetPoses([4, 5], np.arange(26.0).reshape(2, 13)),

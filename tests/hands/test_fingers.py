@@ -71,7 +71,9 @@ def test_colosseum_keys_hand_documents_fingers():
 
 def test_fingertips_follow_the_tracked_tips_at_half_a_metre_per_second(tmp_path: Path):
     row = bench.fingertips(tmp_path, 1.5)
-    assert row["error_rms_mm"] <= 1.5  # goal 3 mm (0.64 mm measured)
+    # goal 3 mm; 1.52 mm measured with the hand in the air solved at the world's 20
+    # iterations (contact_iterations: 40 only where it touches something), 0.98 at 40
+    assert row["error_rms_mm"] <= 2.0
     assert row["palm_rms_mm"] <= 1.5
 
 

@@ -266,3 +266,88 @@ def test_a_world_with_meshes_steps_on_another_thread() -> None:
     worker.start()
     worker.join()
     assert z_of(b, 2) == pytest.approx(0.3, abs=0.02)
+
+
+def _servo_rig(kind: str = "hinge", gravity: bool = False, mass: float = 1.0) -> OdeBackend:
+    """A 1 m rod (centre 0.5 m out along +x) on a joint at the origin to the world:
+    a hinge about +y, or a universal (+y on the rod, +z on the world)."""
+    b = make()
+    b.add_body(1, Physical(mass=mass, shapes=[Shape("box", (1.0, 0.05, 0.05))],
+                           gravity=gravity), np.array([0.5, 0.0, 0.0]), I4)
+    b.add_joint(2, Joint(kind=kind, body_a=1, anchor=(0, 0, 0), axis=(0, 1, 0),
+                         axis2=(0, 0, 1)))
+    return b
+
+
+def _servo(b: OdeBackend, target: tuple[float, float], rate: tuple[float, float],
+           torque: float, tau: float = 0.03) -> None:
+    b.set_servos(np.array([2]), np.array([[*target, *rate, torque, tau, 30.0]]))
+
+
+def test_a_servo_brings_a_hinge_to_its_angle_and_follows_a_moving_one() -> None:
+    b = _servo_rig()
+    _servo(b, (0.5, 0.0), (0.0, 0.0), 50.0)
+    run(b, 60, 1 / 120)
+    assert b.joint_state(2)[0] == pytest.approx(0.5, abs=1e-3)
+    _servo(b, (0.5, 0.0), (1.0, 0.0), 50.0)  # the target moves on at 1 rad/s each step
+    run(b, 60, 1 / 120)
+    angle, rate = b.joint_state(2)
+    assert angle == pytest.approx(1.0, abs=0.01) and rate == pytest.approx(1.0, abs=0.01)
+
+
+def test_a_servo_pushes_with_no_more_than_its_torque() -> None:
+    """A 1 kg rod held level needs 4.9 N·m: 10 hold it at its target, 2 do not."""
+    for torque, holds in ((10.0, True), (2.0, False)):
+        b = _servo_rig(gravity=True)
+        _servo(b, (0.0, 0.0), (0.0, 0.0), torque)
+        run(b, 60, 1 / 120)
+        assert (abs(b.joint_state(2)[0]) < 0.01) is holds
+
+
+def test_a_universal_joint_s_servo_turns_both_axes() -> None:
+    b = _servo_rig("universal")
+    _servo(b, (0.3, -0.2), (0.0, 0.0), 50.0)
+    run(b, 120, 1 / 120)
+    assert b.joint_state(2)[0] == pytest.approx(0.3, abs=1e-3)
+    rod = b.read_state().orientation[0]
+    heading = (2.0 * (rod[1] * rod[2] + rod[0] * rod[3]), 1.0 - 2.0 * (rod[2] ** 2 + rod[3] ** 2))
+    assert abs(math.atan2(*heading)) == pytest.approx(0.2, abs=1e-3)  # its x about +z
+
+
+def test_only_hinges_and_universal_joints_take_a_servo() -> None:
+    b = make()
+    b.add_body(1, Physical(shapes=[Shape("sphere", (0.1,))]), np.zeros(3), I4)
+    b.add_joint(2, Joint(kind="ball", body_a=1))
+    with pytest.raises(ValueError, match="only a hinge or a universal joint takes a servo"):
+        _servo(b, (0.0, 0.0), (0.0, 0.0), 1.0)
+
+
+def _chain_or_stack(chain: bool, **settings: object) -> np.ndarray:
+    """Poses after 60 steps: a chain of 14 hinged rods in the air (joints only, 70 rows:
+    more than exact_rows), or 3 boxes stacked on a plane (contacts)."""
+    b = make(**settings)
+    if chain:
+        for i in range(14):
+            b.add_body(i + 1, Physical(shapes=[Shape("box", (0.1, 0.02, 0.02))]),
+                       np.array([0.1 * i + 0.05, 0.0, 2.0]), I4)
+            b.add_joint(100 + i, Joint(kind="hinge", body_a=i + 1, body_b=i or None,
+                                       anchor=(0.1 * i, 0.0, 2.0), axis=(0, 1, 0)))
+    else:
+        b.add_body(50, Physical(kind="static", shapes=[Shape("plane", (0, 0, 1, 0))]),
+                   np.zeros(3), I4)
+        for i in range(3):
+            b.add_body(i + 1, Physical(shapes=[Shape("box", (0.2, 0.2, 0.2))]),
+                       np.array([0.01 * i, 0.0, 0.1 + 0.2 * i]), I4)
+    run(b, 60, 1 / 120)
+    return np.hstack([b.read_state().position, b.read_state().orientation])
+
+
+def test_contact_iterations_solve_islands_with_contacts_and_only_them() -> None:
+    """With contact_iterations 40 over the world's 20, a stack is solved as at 40 and a
+    chain of joints alone as at 20 (bit for bit: one pass each, the same seed)."""
+    more = {"iterations": 20, "contact_iterations": 40, "solver_seed": 7}
+    assert (_chain_or_stack(True, **more) ==
+            _chain_or_stack(True, iterations=20, solver_seed=7)).all()
+    stack = _chain_or_stack(False, **more)
+    assert (stack == _chain_or_stack(False, iterations=40, solver_seed=7)).all()
+    assert (stack != _chain_or_stack(False, iterations=20, solver_seed=7)).any()

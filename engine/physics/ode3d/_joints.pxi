@@ -45,6 +45,22 @@ cdef class _Spring:
     cdef double axis[3]     # the free axis in ODE's body 1
 
 
+cdef class _Servo:
+    """A hinge's or universal joint's own motor aimed at a moving angle each step (a
+    fingered hand's joints: :func:`set_servos`). Each step the motor of axis k asks for
+    ``rate + (target - angle) (1 - e^(-dt/τ)) / dt`` (the correction capped at
+    ``max_spin``; the error closes as e^(-t/τ), as the six-DOF drive's does) with at most
+    ``max_torque``, and the target moves on by ``rate dt``: the tracked rate is fed
+    forward, a blocked joint pushes with a bounded torque and never through, and the
+    angle is ODE's own (the one its limits count), read where the step starts."""
+    cdef double target[2]   # rad, as ODE counts the axis' angle (0 where the joint was made)
+    cdef double rate[2]     # rad/s
+    cdef double max_torque  # N m
+    cdef double tau         # s (0: all of the error in one step)
+    cdef double max_spin    # rad/s
+    cdef int axes           # 1 (hinge) or 2 (universal)
+
+
 cdef class _JointRec:
     cdef dJointID joint
     cdef int kind
@@ -52,6 +68,7 @@ cdef class _JointRec:
     cdef public object bodies   # (key_a, key_b or None)
     cdef _Drive drive
     cdef _Spring spring
+    cdef _Servo servo
     cdef dJointFeedback feedback  # written by each step once asked for (joint_force)
     cdef bint watched
 
@@ -594,6 +611,8 @@ cdef void drive_joints(World w, double dt):
         rec = <_JointRec>obj
         if rec.spring is not None:
             aim_spring(rec, dt)
+        if rec.servo is not None:
+            aim_servo(rec, dt)
         if rec.drive is None:
             continue
         d = rec.drive
@@ -678,6 +697,61 @@ cdef void aim_spring(_JointRec rec, double dt) noexcept:
         dJointSetLMotorParam(sp.motor, dParamCFM, 1.0 / soft)
         dJointSetLMotorParam(sp.motor, dParamVel, -sp.stiffness * (x - sp.target) / soft)
         dJointSetLMotorParam(sp.motor, dParamFMax, sp.max_force)
+
+
+cdef void aim_servo(_JointRec rec, double dt) noexcept:
+    """Set a servo's motor rows for this step from the joint's angles now (see _Servo)."""
+    cdef _Servo sv = rec.servo
+    cdef double rate = (1.0 - exp(-dt / sv.tau)) / dt if sv.tau > 0.0 else 1.0 / dt
+    cdef double angle, fix
+    cdef int k
+    for k in range(sv.axes):
+        if rec.kind == JOINT_HINGE:
+            angle = dJointGetHingeAngle(rec.joint)
+        elif k == 0:
+            angle = dJointGetUniversalAngle1(rec.joint)
+        else:
+            angle = dJointGetUniversalAngle2(rec.joint)
+        if not isfinite(angle):
+            return  # a body gone wrong: the step's check stops it
+        fix = max(-sv.max_spin, min(sv.max_spin, (sv.target[k] - angle) * rate))
+        joint_param(rec, dParamVel + 0x100 * k, clamp_speed(sv.rate[k] + fix))
+        joint_param(rec, dParamFMax + 0x100 * k, sv.max_torque)
+        sv.target[k] += sv.rate[k] * dt
+
+
+def set_servos(World w, const int64_t[::1] keys, const double[:, ::1] table) -> None:
+    """Aim hinges' and universal joints' motors at moving angles (see _Servo): row i of
+    ``table`` is joint ``keys[i]``'s target angles (2; a hinge's second unused), their
+    rates, its torque bound, time constant and spin cap. One call for every joint of
+    every fingered hand each frame; the rows were checked (SetServos)."""
+    cdef _JointRec rec
+    cdef _Servo sv
+    cdef Py_ssize_t i
+    cdef int k
+    cdef dBodyID b
+    if table.shape[0] != keys.shape[0] or table.shape[1] != 7:
+        raise ValueError(f"set_servos: {keys.shape[0]} joints need a table of "
+                         f"({keys.shape[0]}, 7)")
+    for i in range(keys.shape[0]):
+        rec = joint_of(w, keys[i])
+        if rec.kind != JOINT_HINGE and rec.kind != JOINT_UNIVERSAL:
+            raise ValueError(f"joint {keys[i]}: only a hinge or a universal joint takes a "
+                             "servo")
+        sv = rec.servo
+        if sv is None:
+            sv = rec.servo = _Servo()
+            sv.axes = 1 if rec.kind == JOINT_HINGE else 2
+        for k in range(2):
+            sv.target[k] = table[i, k]
+            sv.rate[k] = table[i, 2 + k]
+        sv.max_torque = table[i, 4]
+        sv.tau = table[i, 5]
+        sv.max_spin = min(table[i, 6], MAX_SPEED)
+        for k in range(2):
+            b = dJointGetBody(rec.joint, k)
+            if b != NULL:
+                wake(w, b)
 
 
 cdef void free_joint(_JointRec rec) noexcept:

@@ -231,9 +231,11 @@ cdef class World:
     # -- settings -------------------------------------------------------------------
     def configure(self, gravity, double erp, double cfm, int iterations,
                   int max_contacts, double warm_start, double softness,
-                  int exact_rows, double extent=_WORLD_EXTENT) -> None:
-        """World settings; ``warm_start``, ``softness`` and ``exact_rows`` are stepper.h's
-        (the resting contacts' preload, the contacts' CFM share, the exact islands);
+                  int exact_rows, double extent=_WORLD_EXTENT,
+                  int contact_iterations=0) -> None:
+        """World settings; ``warm_start``, ``softness``, ``exact_rows`` and
+        ``contact_iterations`` are stepper.h's (the resting contacts' preload, the
+        contacts' CFM share, the exact islands, the iterations of islands with contacts);
         ``extent`` bounds every body's position on each axis."""
         self.check()
         if max_contacts < 1:
@@ -252,6 +254,7 @@ cdef class World:
         self.ctx.cfg.beta = warm_start
         self.ctx.cfg.softness = softness
         self.ctx.cfg.exact_rows = max(exact_rows, 0)
+        self.ctx.cfg.contact_iterations = max(contact_iterations, 0)
         free(self.ctx.buf)
         self.ctx.buf = <dContact*>calloc(max(max_contacts, CANDIDATES), sizeof(dContact))
         self.ctx.max_contacts = max_contacts

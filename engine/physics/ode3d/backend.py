@@ -83,7 +83,8 @@ class OdeBackend:
         self._settings = settings
         self._world.configure(vec(settings.gravity, 3, "gravity"), settings.erp, settings.cfm,
                               settings.iterations, settings.max_contacts, settings.warm_start,
-                              settings.contact_softness, settings.exact_rows, settings.extent)
+                              settings.contact_softness, settings.exact_rows, settings.extent,
+                              settings.contact_iterations)
         if not settings.auto_sleep:  # everyone awake, nothing counted
             _ode.wake_all(self._world)
             self._rule.forget(slice(None))
@@ -391,6 +392,10 @@ class OdeBackend:
 
     def set_motor(self, key: int, velocity: float, max_force: float) -> None:
         _ode.set_motor(self._world, int(key), float(velocity), float(max_force))
+
+    def set_servos(self, keys: np.ndarray, table: np.ndarray) -> None:
+        _ode.set_servos(self._world, np.ascontiguousarray(keys, dtype=np.int64),
+                        np.ascontiguousarray(table, dtype=np.float64))
 
     def joint_state(self, key: int) -> tuple[float, float]:
         return _ode.joint_state(self._world, int(key))

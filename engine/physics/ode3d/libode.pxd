@@ -235,6 +235,7 @@ cdef extern from "ode/ode.h" nogil:
     void dJointSetUniversalParam(dJointID, int, dReal)
     dReal dJointGetUniversalAngle1(dJointID)
     dReal dJointGetUniversalAngle1Rate(dJointID)
+    dReal dJointGetUniversalAngle2(dJointID)
     void dJointSetHinge2Anchor(dJointID, dReal, dReal, dReal)
     void dJointSetHinge2Axes(dJointID, const dReal*, const dReal*)
     void dJointSetHinge2Param(dJointID, int, dReal)
@@ -255,6 +256,7 @@ cdef extern from "stepper.h" nogil:
         double beta
         double softness
         int exact_rows
+        int contact_iterations
 
     ctypedef struct CsBody:
         double held[3]

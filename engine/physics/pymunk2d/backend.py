@@ -205,7 +205,8 @@ class PymunkBackend:
         if settings.gravity[1] != 0.0:
             self._warn("world", "gravity", "gravity's Y component dropped (not in the X–Z plane)")
         space.gravity = self._gravity = (float(gx), float(gz))
-        space.iterations = max(1, int(settings.iterations))
+        # one space, one count: the more of the two the settings ask for
+        space.iterations = max(1, int(settings.iterations), int(settings.contact_iterations))
         if not 0.0 <= settings.warm_start < 1.0:
             raise ValueError(f"warm start must be in [0, 1), got {settings.warm_start}")
         self._resting.beta = float(settings.warm_start)
@@ -816,6 +817,15 @@ class PymunkBackend:
         rec = self._joint(key)
         rec.set_motor(float(velocity), float(max_force), self._space)
         self._wake_joint(rec)
+
+    def set_servos(self, keys: np.ndarray, table: np.ndarray) -> None:
+        """Each joint's motor aimed once, now, from its angle now (a pivot has one axis:
+        the second of each row is not used; the 2D hand aims its own motors each frame)."""
+        for key, row in zip(np.asarray(keys).tolist(), np.asarray(table).tolist(),
+                            strict=True):
+            angle = self.joint_state(key)[0]
+            fix = (row[0] - angle) / row[5] if row[5] > 0.0 else 0.0
+            self.set_motor(key, row[2] + max(-row[6], min(row[6], fix)), row[4])
 
     def joint_state(self, key: int) -> tuple[float, float]:
         return self._joint(key).state()
