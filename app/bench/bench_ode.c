@@ -223,6 +223,7 @@ int main(int argc, char **argv) {
         }
         ncontacts = stepper.ncontacts;
         if (sum_impulses) {
+            cs_whole_forces(&stepper); /* the preloads put back, as the engine reports them */
             impulse = 0;
             for (int i = 0; i < ncontacts; i++) {
                 const double *f = &stepper.forces[3 * i];
