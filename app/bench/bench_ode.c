@@ -16,13 +16,10 @@
  * time). ODE's own auto-disable stays off, as in the engine, so both sides put the same
  * boxes to sleep on the same steps and do the same work.
  *
- * With FEEDBACK=1 every contact joint also gets a dJointFeedback and the
- * impulse |f|·dt of each contact is computed after the step, which is the
- * extra work the engine does to report contact impulses.
- *
- * The engine's step reads every contact's force back (its impulse is reported), so
- * feedback is always attached here; FEEDBACK=1 also sums the impulses |f|·dt after
- * the step, the rest of the work the engine does to report them.
+ * The engine's step reads every contact's force back (the resting rules judge each body by
+ * them), so feedback is always attached here; FEEDBACK=1 also puts the preloads back into
+ * them (cs_whole_forces) and sums the impulses |f|·dt after the step, the rest of the work
+ * the engine does when its contact reports are read.
  *
  * With POLICY=0 (the optional last argument) the program is plain libode instead, the
  * reference the engine's policy is priced against (`colosseum bench pareto`): each pair's
@@ -223,6 +220,7 @@ int main(int argc, char **argv) {
         }
         ncontacts = stepper.ncontacts;
         if (sum_impulses) {
+            cs_whole_forces(&stepper); /* the preloads put back, as the engine reports them */
             impulse = 0;
             for (int i = 0; i < ncontacts; i++) {
                 const double *f = &stepper.forces[3 * i];

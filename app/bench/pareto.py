@@ -79,10 +79,13 @@ def _ours(name: str, n: int, settings: WorldSettings) -> Any:
     return backend
 
 
-def time_ours(name: str, n: int, dt: float, steps: int, **settings: Any) -> dict[str, float]:
+def time_ours(name: str, n: int, dt: float, steps: int, read_contacts: bool = False,
+              **settings: Any) -> dict[str, float]:
     """CPU ms per step of our backend, the step and the readback of every body's state
-    (what the dynamics system does each step); ``settings`` over max_contacts 4, sleeping
-    off."""
+    (what the dynamics system does each step), and with ``read_contacts`` the step's
+    contacts with their impulses (what the engine's driver reads for contact events; ODE
+    works their whole forces out only when they are read); ``settings`` over max_contacts
+    4, sleeping off."""
     world = WorldSettings(**{"max_contacts": 4, "auto_sleep": False, **settings})
     backend = _ours(name, n, world)
     table = np.zeros((backend.body_count(), 13))
@@ -90,6 +93,8 @@ def time_ours(name: str, n: int, dt: float, steps: int, **settings: Any) -> dict
     for _ in range(steps):
         backend.step(dt)
         backend.read_state_into(table)
+        if read_contacts:
+            backend.contacts()
     ms = (time.thread_time() - t0) / steps * 1e3
     asleep = backend.sleeping_count() if hasattr(backend, "sleeping_count") else 0
     backend.close()
@@ -97,12 +102,14 @@ def time_ours(name: str, n: int, dt: float, steps: int, **settings: Any) -> dict
 
 
 def time_libode(exe: Path, n: int, dt: float, steps: int, iterations: int, policy: bool,
-                **override: Any) -> dict[str, float]:
+                forces: bool = False, **override: Any) -> dict[str, float]:
     """CPU ms per step of the plain C program: plain QuickStep, or the engine's step
-    (``policy``) with the default world's settings (``override`` changes some)."""
+    (``policy``) with the default world's settings (``override`` changes some); with
+    ``forces`` it also reads every contact's whole force, as the engine's contact reports
+    do."""
     w = WorldSettings(iterations=iterations, **override)
     sleep = int(policy and w.auto_sleep)
-    out = subprocess.run([str(exe), str(n), str(steps), str(sleep), str(int(policy)),
+    out = subprocess.run([str(exe), str(n), str(steps), str(sleep), str(int(policy and forces)),
                           repr(SLEEP_TIME), repr(SLEEP_LINEAR), repr(SLEEP_ANGULAR),
                           repr(STEADY_SHARE), repr(SMOOTHING), str(w.iterations), repr(w.erp),
                           repr(w.cfm), repr(w.warm_start), repr(w.contact_softness),
@@ -332,7 +339,9 @@ def price_of_policy(exe: Path, ns: tuple[int, ...], seconds: float, repeats: int
         steps = round(seconds / HEADLINE_STEP)
         plain: list[float] = []
         runs: dict[str, list[float]] = {k: [] for k in (*POLICIES, "libode+stepper.h",
-                                                        "ours step only (no readback)")}
+                                                        "ours step only (no readback)",
+                                                        "ours + contact reports",
+                                                        "libode+stepper.h + every force")}
         for _ in range(repeats):
             plain.append(time_libode(exe, n, HEADLINE_STEP, steps, iterations, False)["ms"])
             runs["libode+stepper.h"].append(time_libode(
@@ -341,6 +350,11 @@ def price_of_policy(exe: Path, ns: tuple[int, ...], seconds: float, repeats: int
                 runs[name].append(time_ours("ode", n, HEADLINE_STEP, steps,
                                             iterations=iterations, **settings)["ms"])
             runs["ours step only (no readback)"].append(_step_only(n, steps, iterations))
+            runs["ours + contact reports"].append(time_ours(
+                "ode", n, HEADLINE_STEP, steps, read_contacts=True, iterations=iterations)["ms"])
+            runs["libode+stepper.h + every force"].append(time_libode(
+                exe, n, HEADLINE_STEP, steps, iterations, True, forces=True,
+                auto_sleep=False)["ms"])
         for name, times in runs.items():
             row = {"table": "price of the policy", "N": n, "variant": name,
                    "ms/step": statistics.median(times), "plain ms/step": statistics.median(plain),

@@ -351,17 +351,24 @@ cdef dJointFeedback* contact_feedback(void* ctx, int i) noexcept nogil:
 
 
 cdef void record_impulses(Ctx* c, double dt) noexcept nogil:
-    """Each contact's impulse, |f|·dt of its whole force (stepper.h adds what it
-    preloaded to what the solver found)."""
+    """Each contact's impulse, |f|·dt of its whole force (stepper.h's cs_whole_forces
+    adds what it preloaded to what the solver found). Run when the records are first read
+    after a step, not by the step: a step whose contacts nobody reads does not pay for
+    them (the resting rules read what the solver found, not these)."""
     cdef int i
+    c.impulses_owed = 0
     if c.oom or c.stepper.oom:
         return
+    cs_whole_forces(&c.stepper)
     for i in range(c.nrec):
         c.recs[i].impulse = norm3(&c.stepper.forces[3 * i]) * dt
 
 
 def contacts(World w) -> np.ndarray:
-    """The last step's contacts as raw bytes shaped for CONTACT_DTYPE (caller views them)."""
+    """The last step's contacts as raw bytes shaped for CONTACT_DTYPE (caller views them),
+    their impulses recorded on the first read after the step."""
+    if w.ctx.impulses_owed:
+        record_impulses(&w.ctx, w.ctx.dt)
     cdef cnp.ndarray[cnp.uint8_t, ndim=1] out = np.empty(
         w.ctx.nrec * sizeof(ContactRec), np.uint8)
     if w.ctx.nrec:

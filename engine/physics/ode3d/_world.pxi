@@ -54,6 +54,7 @@ cdef struct Ctx:         # what the near callback needs, passed through ODE's vo
     dJointFeedback** chunks
     int nchunks
     int oom
+    bint impulses_owed   # the last step's impulses are not in recs yet (contacts() puts them)
     double dt            # the step in progress
     int64_t* linked      # (body key, static key) pairs a joint holds together: no contacts
     dGeomID proxy        # a sphere in no space: a capsule's stand-in against a triangle mesh
@@ -325,10 +326,10 @@ cdef class World:
     # Long: the step as one sequence, the GIL released once around it
     def step(self, double dt, bint sleep=False) -> list:
         """Aim the drives, collide and step (stepper.h: exact islands, warm-started
-        contacts) with the GIL released and ODE's failures guarded, then record the contact
-        impulses and check every moving body; with ``sleep``, the sleep rule bound by
-        :meth:`bind_sleep` then puts quiet islands to sleep (stepper.h's cs_sleep, over
-        the islands of this step). Returns (key, FAULT_*) of the bodies stopped. Raises
+        contacts) with the GIL released and ODE's failures guarded, then check every moving
+        body (the contact impulses are recorded when read: :func:`contacts`); with
+        ``sleep``, the sleep rule bound by :meth:`bind_sleep` then puts quiet islands to
+        sleep (stepper.h's cs_sleep, over the islands of this step). Returns (key, FAULT_*) of the bodies stopped. Raises
         OdeFailure when ODE fails inside (the world is then abandoned)."""
         cdef int nf = 0, failed, solved = 0, i, slept = 0
         cdef double keep = 0.0
@@ -345,6 +346,7 @@ cdef class World:
         dAllocateODEDataForThread(dAllocateMaskAll)
         dJointGroupEmpty(self.ctx.group)
         self.ctx.nrec = 0
+        self.ctx.impulses_owed = 0
         self.ctx.oom = 0
         self.last_dt = dt
         self.ctx.dt = dt
@@ -364,7 +366,7 @@ cdef class World:
                 if solved < 0:
                     self.ctx.oom = 1
                 kinematic_arrive(self, dt)
-                record_impulses(&self.ctx, dt)
+                self.ctx.impulses_owed = 1  # recorded when read: contacts()
                 nf = check_bodies(self)
                 if sleep and self.n and not self.ctx.stepper.oom:
                     for i in range(self.n):

@@ -279,6 +279,7 @@ cdef extern from "stepper.h" nogil:
     int cs_collect(CsState*, const CsSettings*, const dContact*, int, dBodyID, dBodyID, double)
     int cs_solve(CsState*, const CsSettings*, dWorldID, dJointGroupID, const void*, size_t, int,
                  double, dJointFeedback* (*)(void*, int) noexcept, void*)
+    void cs_whole_forces(CsState*)
     void cs_disable(dBodyID)
     int cs_sleep(CsState*, SrRule*, const void*, size_t, int, double, double, double,
                  const uint8_t*)

@@ -4,7 +4,9 @@
  *
  * A step: the caller collides, handing every pair's contacts to cs_collect (which does
  * not make joints yet); cs_solve then finds the islands, makes the contact joints with
- * their final surfaces, and steps; afterwards cs_forces holds every contact's force.
+ * their final surfaces, and steps; afterwards s->forces holds what the solver found each
+ * contact to do, and cs_whole_forces makes them the whole forces (a caller that reads
+ * them runs it: the preloads put back).
  * Three things on top of ODE's own step, each chosen by measurement (app/bench/accuracy.py,
  * docs/PHYSICS.md):
  *
@@ -70,13 +72,6 @@
 #include "../policy.h" /* the resting rules and their constants, shared with pymunk */
 #include "../sleep.h"
 
-/* A preloaded body resting on a face moving across gravity slower than this (m/s) and
- * turning slower than REST_STILL_ANGULAR (rad/s) is held still: its motion across gravity
- * and its spin are what the solver left unconverged (the sleep rule's limits, sleep.py:
- * under them the body would be frozen by its sleep anyway). */
-#define REST_STILL_LINEAR 0.03
-#define REST_STILL_ANGULAR 0.0349
-
 typedef struct {
     double beta;      /* share of a resting body's weight preloaded; 0: off */
     double softness;  /* contact CFM as a share of the step times the inverse masses */
@@ -114,12 +109,13 @@ typedef struct {
     CsBody *bodies;
     int *parent, *kind, *rows;  /* per body: union-find parent; island kind and rows */
     int capbodies;
-    /* cs_add_preloads' work: the bodies highest first (kept from step to step: they
+    /* cs_keep_preloads' and cs_whole_forces' work: the bodies highest first (kept from step to step: they
      * seldom change places, so an insertion sort puts them back in order), each body's
      * contacts as linked lists, and the loads carried down */
-    struct CsHeight *order;
+    struct CsHeight *order, *spare;  /* spare: the merge sort's room */
     int norder, *head, *next, *which, capnext;
-    double *load;
+    double *load, down[3];
+    int owed;  /* bodies whose preloads cs_whole_forces has yet to put back (0: none) */
     int oom;
 } CsState;
 
@@ -131,6 +127,7 @@ static inline void cs_init(CsState *s) { memset(s, 0, sizeof(CsState)); }
 
 static inline void cs_free(CsState *s) {
     free(s->order);
+    free(s->spare);
     free(s->head);
     free(s->next);
     free(s->which);
@@ -242,6 +239,7 @@ static inline int cs_collect(CsState *s, const CsSettings *cfg, const dContact *
 static inline int cs_begin(CsState *s, int n) {
     int i;
     s->ncontacts = 0;
+    s->owed = 0;
     if (n > s->capbodies) {
         int cap = n > 2 * s->capbodies ? n : 2 * s->capbodies;
         CsBody *b = (CsBody *)realloc(s->bodies, (size_t)cap * sizeof(CsBody));
@@ -375,37 +373,26 @@ static inline int cs_hold_still(dBodyID b, const double *down, int whole) {
     return 1;
 }
 
-/* Step the world over the collected contacts: islands found, resting islands
- * preloaded, contact joints made in `group` (contact i's feedback is `feedback(ctx, i)`),
- * then joint-only islands small enough stepped by dWorldStep and the rest by QuickStep,
- * and every contact's whole force put in s->forces. `bodies` points at the first of `n`
- * body handles `stride` bytes apart (NULL: a static body); each body's data is its index
- * among them. Returns 0, or -1 out of memory (the step was still taken). */
 typedef struct CsHeight { double height; int index; } CsHeight;
 
-static int cs_higher_first(const void *x, const void *y) {
-    double a = ((const CsHeight *)x)->height, b = ((const CsHeight *)y)->height;
-    return a > b ? -1 : a < b ? 1 : ((const CsHeight *)x)->index - ((const CsHeight *)y)->index;
+/* Whether `x` goes before `y`, highest first (ties by index): a total order. */
+static inline int cs_higher_first(const CsHeight *x, const CsHeight *y) {
+    return x->height > y->height || (!(x->height < y->height) && x->index < y->index);
 }
 
-/* Put the forces the preload stood in for back into the contacts that carry them, so a
- * contact reports its whole force: each preloaded body's beta m g (upward) goes into the
- * contacts holding it up, in proportion to what the solver found each to carry, and on
- * through the bodies under them, highest first, down to the ground. (Scaling a contact
- * by 1 / (1 - beta) for its preloaded body is right only when everything it carries is
- * preloaded too: a crate set on a resting stack reported ten times its weight on every
- * contact below it, an impact a contact sound heard.) Returns -1 when out of memory
- * (the forces are then the solver's alone). */
-/* Room for cs_add_preloads' work over `n` bodies and `nc` contacts; a new `n` starts the
+/* Room for cs_keep_preloads' and cs_whole_forces' work over `n` bodies and `nc` contacts; a new `n` starts the
  * order afresh. Returns 0, or -1 out of memory. */
 static inline int cs_reserve_preloads(CsState *s, int n, int nc) {
     int i;
     if (s->norder != n) {
         CsHeight *order = (CsHeight *)realloc(s->order, (size_t)(n + 1) * sizeof(CsHeight));
-        int *head = order ? (int *)realloc(s->head, (size_t)(n + 1) * sizeof(int)) : NULL;
+        CsHeight *spare = order ? (CsHeight *)realloc(s->spare, (size_t)(n + 1) *
+                                                      sizeof(CsHeight)) : NULL;
+        int *head = spare ? (int *)realloc(s->head, (size_t)(n + 1) * sizeof(int)) : NULL;
         double *load = head ? (double *)realloc(s->load, (size_t)(3 * n + 3) * sizeof(double))
                             : NULL;
         if (order) s->order = order;
+        if (spare) s->spare = spare;
         if (head) s->head = head;
         s->norder = 0;
         if (!load) return -1;
@@ -425,19 +412,45 @@ static inline int cs_reserve_preloads(CsState *s, int n, int nc) {
     return 0;
 }
 
+/* Merge sort of `n` heights (cs_higher_first), `spare` room for as many. */
+static inline void cs_merge_sort(CsHeight *order, CsHeight *spare, int n) {
+    int width, lo, i, j, k, mid, hi;
+    CsHeight *from = order, *to = spare, *swap;
+    for (lo = 0; lo < n; lo += 8) {  /* runs of 8 by insertion */
+        hi = lo + 8 < n ? lo + 8 : n;
+        for (i = lo + 1; i < hi; i++) {
+            CsHeight x = order[i];
+            for (j = i - 1; j >= lo && cs_higher_first(&x, &order[j]); j--) order[j + 1] = order[j];
+            order[j + 1] = x;
+        }
+    }
+    for (width = 8; width < n; width *= 2) {
+        for (lo = 0; lo < n; lo += 2 * width) {
+            mid = lo + width < n ? lo + width : n;
+            hi = lo + 2 * width < n ? lo + 2 * width : n;
+            for (i = lo, j = mid, k = lo; k < hi; k++)
+                to[k] = j >= hi || (i < mid && !cs_higher_first(&from[j], &from[i]))
+                            ? from[i++] : from[j++];
+        }
+        swap = from, from = to, to = swap;
+    }
+    if (from != order) memcpy(order, from, (size_t)n * sizeof(CsHeight));
+}
+
 /* The bodies highest first: last step's order sorted again by insertion (bodies seldom
- * change places from one step to the next), or by qsort when many did. The same total
- * order either way (ties by index). */
-static inline void cs_sort_heights(CsHeight *order, int n) {
+ * change places from one step to the next), or by a merge sort when many did (the
+ * bodies of a layer of columns swap places with the solver's jitter every step). The
+ * same total order either way (ties by index). */
+static inline void cs_sort_heights(CsHeight *order, CsHeight *spare, int n) {
     int i, j, unsorted = 0;
-    for (i = 1; i < n; i++) unsorted += cs_higher_first(&order[i - 1], &order[i]) > 0;
+    for (i = 1; i < n; i++) unsorted += cs_higher_first(&order[i], &order[i - 1]);
     if (unsorted > n / 16 + 1) {
-        qsort(order, (size_t)n, sizeof(CsHeight), cs_higher_first);
+        cs_merge_sort(order, spare, n);
         return;
     }
     for (i = 1; i < n && unsorted; i++) {
         CsHeight x = order[i];
-        for (j = i - 1; j >= 0 && cs_higher_first(&order[j], &x) > 0; j--) order[j + 1] = order[j];
+        for (j = i - 1; j >= 0 && cs_higher_first(&x, &order[j]); j--) order[j + 1] = order[j];
         order[j + 1] = x;
     }
 }
@@ -448,39 +461,56 @@ static inline void cs_sort_heights(CsHeight *order, int n) {
  * through the bodies under them, highest first, down to the ground. (Scaling a contact
  * by 1 / (1 - beta) for its preloaded body is right only when everything it carries is
  * preloaded too: a crate set on a resting stack reported ten times its weight on every
- * contact below it, an impact a contact sound heard.) Returns -1 when out of memory
- * (the forces are then the solver's alone). */
-static inline int cs_add_preloads(CsState *s, const CsSettings *cfg, const dReal *gravity,
-                                  const double *down, const void *bodies, size_t stride,
-                                  int n) {
-    int i, e, nc = s->ncontacts, any = 0;
-    int *head, *next, *which;
-    double *load;
+ * contact below it, an impact a contact sound heard.)
+ *
+ * In two parts, so that a step whose forces nobody reads does not pay for them (the
+ * physics never reads them: the resting rules read what the solver found). cs_solve
+ * keeps what the step leaves (cs_keep_preloads: each preloaded body's load and every
+ * body's height, as they were at the step); cs_whole_forces, run by a caller that reads
+ * s->forces, does the rest, once per step. Returns -1 when out of memory (the forces
+ * are then the solver's alone). */
+static inline int cs_keep_preloads(CsState *s, const CsSettings *cfg, const dReal *gravity,
+                                   const double *down, const void *bodies, size_t stride,
+                                   int n) {
+    int i, k, any = 0;
+    s->owed = 0;
     for (i = 0; i < n && !any; i++) any = s->bodies[i].preloaded;
     if (!any || cfg->beta <= 0.0) return 0;
-    if (cs_reserve_preloads(s, n, nc) < 0) return -1;
-    head = s->head, next = s->next, which = s->which, load = s->load;
-    memset(load, 0, (size_t)(3 * n) * sizeof(double));
+    if (cs_reserve_preloads(s, n, s->ncontacts) < 0) return -1;
+    memset(s->load, 0, (size_t)(3 * n) * sizeof(double));
     for (i = 0; i < n; i++) {
         dBodyID b = cs_body_at(bodies, stride, i);
         CsHeight *o = &s->order[i];
         const dReal *pos = o->index >= 0 && cs_body_at(bodies, stride, o->index)
                                ? dBodyGetPosition(cs_body_at(bodies, stride, o->index)) : NULL;
-        head[i] = -1;
         o->height = pos ? -(pos[0] * down[0] + pos[1] * down[1] + pos[2] * down[2]) : 0.0;
         if (b != NULL && s->bodies[i].preloaded) {
             dMass m;
-            int k;
             dBodyGetMass(b, &m);
-            for (k = 0; k < 3; k++) load[3 * i + k] = -cfg->beta * m.mass * gravity[k];
+            for (k = 0; k < 3; k++) s->load[3 * i + k] = -cfg->beta * m.mass * gravity[k];
         }
     }
+    for (k = 0; k < 3; k++) s->down[k] = down[k];
+    s->owed = n;
+    return 0;
+}
+
+/* The whole forces in s->forces (see cs_keep_preloads): a no-op unless the last cs_solve
+ * preloaded some body and they have not been put back since. */
+static inline void cs_whole_forces(CsState *s) {
+    int i, e, n = s->owed, nc = s->ncontacts;
+    int *head = s->head, *next = s->next, *which = s->which;
+    double *load = s->load;
+    const double *down = s->down;
+    if (n <= 0) return;
+    s->owed = 0;
+    for (i = 0; i < n; i++) head[i] = -1;
     for (e = 0, i = 0; i < nc; i++) {  /* each body's contacts, as linked lists */
         int a = s->contacts[i].i1, b = s->contacts[i].i2;
         which[e] = i; next[e] = head[a]; head[a] = e++;
         if (b >= 0) { which[e] = i; next[e] = head[b]; head[b] = e++; }
     }
-    cs_sort_heights(s->order, n);
+    cs_sort_heights(s->order, s->spare, n);
     for (i = 0; i < n; i++) {
         int u = s->order[i].index, k;
         double *l = &load[3 * u], total = 0.0;
@@ -504,14 +534,13 @@ static inline int cs_add_preloads(CsState *s, const CsSettings *cfg, const dReal
                 for (k = 0; k < 3; k++) load[3 * v + k] += share * l[k];
         }
     }
-    return 0;
 }
 
 static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
                            dJointGroupID group, const void *bodies, size_t stride, int n,
                            double dt, dJointFeedback *(*feedback)(void *, int), void *ctx) {
     dVector3 gravity;
-    double g, down[3];
+    double g, down[3], keep;
     int i, k, status = 0, passes = 0, present[3] = {0, 0, 0};
     int its = dWorldGetQuickStepNumIterations(world);
     int more = cfg->contact_iterations > its;
@@ -621,7 +650,9 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
             status = -1;
             continue;
         }
-        memset(fb, 0, sizeof(dJointFeedback));
+        /* the solver writes every field of a stepped joint's record; f1, the one read
+         * back, starts at zero for a joint it does not step */
+        fb->f1[0] = fb->f1[1] = fb->f1[2] = 0.0;
         dJointSetFeedback(j, fb);
     }
     passes = present[0] + present[1] + present[2];
@@ -683,12 +714,13 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
             s->bodies[b].grip += grip;
         }
     }
-    if (cs_add_preloads(s, cfg, gravity, down, bodies, stride, n) < 0) status = -1;
+    if (cs_keep_preloads(s, cfg, gravity, down, bodies, stride, n) < 0) status = -1;
     /* each body's standing for the next step */
+    keep = exp(-dt / REST_SMOOTHING);
     for (i = 0; i < n; i++) {
         dBodyID b = cs_body_at(bodies, stride, i);
         CsBody *st = &s->bodies[i];
-        double up, keep = exp(-dt / REST_SMOOTHING);
+        double up;
         RpStep step;
         uint8_t slid;
         int rests;
