@@ -33,6 +33,13 @@
 /* Seconds over which a body's contact force is averaged before the sideways part is
  * judged: a stack's solver noise pushes its crates back and forth, a lean does not. */
 #define REST_SMOOTHING 0.2
+/* A preloaded body resting on a face moving across gravity slower than this (m/s) and
+ * turning slower than REST_STILL_ANGULAR (rad/s) is held still: its motion across gravity
+ * and its spin are what the solver left unconverged (the sleep rule's limits, sleep.py:
+ * under them the body would be frozen by its sleep anyway). ODE holds it before and after
+ * its step (ode3d/stepper.h's cs_hold_still); pymunk does not yet (docs/PHYSICS.md). */
+#define REST_STILL_LINEAR 0.03
+#define REST_STILL_ANGULAR 0.0349
 
 /* What a body's contacts did in one step, as the backend read it. */
 typedef struct {
