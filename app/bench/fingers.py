@@ -303,7 +303,10 @@ def hand_over(folder: Path, rate: float = RATE) -> dict[str, Any]:
     right = grasping("right", centre, width, (0.0, 1.0, 0.0), lift(), open_at=2.6)
 
     def left(t: float) -> Any:
-        at = seen.get("ball", centre + np.array([0.0, 0.0, 0.15]))
+        """Open, 0.25 m aside until the ball is up, then over it (at 0.5 m/s) and closed:
+        a hand kept on the ball from the start would push it before the right holds it."""
+        aside = np.array([0.0, float(np.interp(t, [1.2, 1.7], [0.25, 0.0])), 0.0])
+        at = seen.get("ball", centre + np.array([0.0, 0.0, 0.15])) + aside
         grip = float(np.interp(t, [1.8, 2.2], [width + 0.04, width - 0.02]))
         return pinch("left", at, (1.0, 0.0, 0.0), width, grip, left=True, timestamp=t)
 
