@@ -37,7 +37,7 @@
  * turning slower than REST_STILL_ANGULAR (rad/s) is held still: its motion across gravity
  * and its spin are what the solver left unconverged (the sleep rule's limits, sleep.py:
  * under them the body would be frozen by its sleep anyway). ODE holds it before and after
- * its step (ode3d/stepper.h's cs_hold_still); pymunk does not yet (docs/PHYSICS.md). */
+ * its step (ode3d/stepper.h's cs_hold_still), pymunk after each step (pymunk2d/_rows.pyx). */
 #define REST_STILL_LINEAR 0.03
 #define REST_STILL_ANGULAR 0.0349
 
@@ -50,8 +50,8 @@ typedef struct {
     double weight;        /* its weight (N); 0: not dynamic, or no gravity */
     double share;         /* of its weight the solver held: 1 - beta where preloaded */
     int preloaded;        /* it got its weight's share this step */
-    int still;            /* the backend held it still this step (ODE: a preloaded body on a
-                           * face moving slower than the sleep limits) */
+    int still;            /* the backend held it still this step (a preloaded body on a face
+                           * moving slower than REST_STILL_*) */
 } RpStep;
 
 /* One body's standing after a step: `held` (dim numbers, its contacts' net force averaged

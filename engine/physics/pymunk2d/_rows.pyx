@@ -596,7 +596,7 @@ cdef extern from "policy.h" nogil:
                  const Py_ssize_t *label, const unsigned char *moving,
                  const unsigned char *unrest, const double *weight, double *ramp,
                  double up, double down, unsigned char *blocked)
-    double REST_SUPPORT, REST_SLIP, REST_SMOOTHING
+    double REST_SUPPORT, REST_SLIP, REST_SMOOTHING, REST_STILL_LINEAR, REST_STILL_ANGULAR
 
 
 cdef inline void *_data(cnp.ndarray a, object dtype, Py_ssize_t size, str name) except NULL:
@@ -626,6 +626,7 @@ cdef class Resting:
     cdef int8_t *steps
     cdef unsigned char *slid
     cdef unsigned char *kept
+    cdef unsigned char *still
     cdef double *ramp
     cdef double *applied
     cdef double *lifted
@@ -640,6 +641,7 @@ cdef class Resting:
     cdef unsigned char *blocked
     cdef Py_ssize_t *labels
     cdef public bint found  # labels hold this step's islands
+    cdef public Py_ssize_t held_still  # rows held still by the last step's pass
 
     def __init__(self, dict arrays) -> None:
         n = self.n = len(arrays["ramp"])
@@ -654,6 +656,7 @@ cdef class Resting:
         self.steps = <int8_t *>_data(arrays["steps"], np.int8, n, "steps")
         self.slid = <unsigned char *>_data(arrays["slid"], u1, n, "slid")
         self.kept = <unsigned char *>_data(arrays["kept"], u1, n, "kept")
+        self.still = <unsigned char *>_data(arrays["still"], u1, n, "still")
         self.ramp = <double *>_data(arrays["ramp"], f8, n, "ramp")
         self.applied = <double *>_data(arrays["applied"], f8, n, "applied")
         self.lifted = <double *>_data(arrays["lifted"], f8, n, "lifted")
@@ -668,6 +671,7 @@ cdef class Resting:
         self.blocked = <unsigned char *>_data(arrays["blocked"], u1, n, "blocked")
         self.labels = <Py_ssize_t *>_data(arrays["labels"], ip, n, "labels")
         self.found = False
+        self.held_still = 0
 
     def preload(self, cnp.ndarray forces, cnp.ndarray gather, cnp.ndarray awake,
                 cnp.ndarray out, double beta, double gx, double gz) -> int:
@@ -710,7 +714,9 @@ cdef class Resting:
         level ground; not jointed or touching a kinematic body), the islands when some
         are, and every row's ramp (up by ``ramp_up`` where chosen, down by twice that
         elsewhere). ``raw``: the step's body read (row r at ``gather[r]``), ``awake`` per
-        row. How many rows have their ramp on for the next step."""
+        row; a row held still (preloaded, on a face, slower than REST_STILL_*) has its
+        velocity zeroed in ``raw``, which the caller writes back (``held_still`` counts them).
+        How many rows have their ramp on for the next step."""
         cdef Py_ssize_t m = cnp.PyArray_DIM(ints, 0) if cnp.PyArray_NDIM(ints) else 0
         cdef Py_ssize_t nb = cnp.PyArray_SIZE(raw) // _BF, i, r, on = 0
         cdef int64_t *arb = <int64_t *>_data(ints, np.int64, _AI * m, "ints")
@@ -721,6 +727,7 @@ cdef class Resting:
         cdef double g_size = sqrt(gx * gx + gz * gz), down[2]
         cdef double keep = exp(-dt / REST_SMOOTHING)
         cdef int chosen = 0
+        self.held_still = 0
         if rows.n != self.n:
             raise ValueError("Resting.after: the rows were planned for other bodies")
         if g_size == 0.0:
@@ -792,16 +799,17 @@ cdef class Resting:
                 if ends[1 - k] < n and self.kinematic[ends[1 - k]]:
                     self.unrest[r] = 1
 
-    cdef int _stand(self, const double *body, const Py_ssize_t *g, const unsigned char *a,
+    cdef int _stand(self, double *body, const Py_ssize_t *g, const unsigned char *a,
                     const double *down, double keep, double beta,
                     double g_size) noexcept nogil:
         """Each row's standing (rp_stand) and whether it is chosen; how many are."""
         cdef Py_ssize_t i
         cdef RpStep s
         cdef double up, speed
-        cdef const double *p
+        cdef double *p
         cdef int rests, stays, count = 0
         for i in range(self.n):
+            self._hold(i, &body[_BF * g[i]], a[i], down)
             s.solved = &self.force[2 * i]
             s.mu = self.mu[i]
             s.friction = self.friction[i]
@@ -810,7 +818,7 @@ cdef class Resting:
             s.weight = self.mass[i] * g_size if a[i] else 0.0
             s.share = 1.0 - self.applied[i]
             s.preloaded = self.applied[i] > 0.0
-            s.still = 0
+            s.still = self.still[i]
             rests = rp_stand(&s, &self.held[2 * i], &self.slid[i], down, 2, keep, beta, &up)
             self.steps[i] = rp_count(self.steps[i], rests)
             stays = s.weight > 0.0 and up >= 0.5 * REST_SUPPORT * s.share * s.weight
@@ -824,6 +832,31 @@ cdef class Resting:
             self.moving[i] = self.dynamic[i] and a[i]
             count += self.chosen[i]
         return count
+
+    cdef inline void _hold(self, Py_ssize_t i, double *p, bint awake,
+                           const double *down) noexcept nogil:
+        """Hold row ``i`` still where it was preloaded this step, rests on a face (two
+        contact points; or, held still last step, on level contacts only) and moves across
+        gravity and turns slower than REST_STILL_*: its spin and its velocity across gravity
+        are zeroed in its read ``p``, and its velocity along gravity too where the whole is
+        that slow. What motion it has is the solver's residue. ODE's cs_hold_still in the
+        plane, after the step (which is before the next): chipmunk's sequential impulses
+        leave a stack rocking on its base for ten seconds and more, above the sleep rule's
+        steady band."""
+        cdef double along = p[3] * down[0] + p[4] * down[1]
+        cdef double whole = p[3] * p[3] + p[4] * p[4]
+        cdef bint hold = (awake and self.applied[i] > 0.0
+                          and (self.points[i] >= 2 or (self.still[i] and not self.tilted[i]))
+                          and whole - along * along < REST_STILL_LINEAR * REST_STILL_LINEAR
+                          and p[5] * p[5] < REST_STILL_ANGULAR * REST_STILL_ANGULAR)
+        self.still[i] = hold
+        if hold:
+            if whole < REST_STILL_LINEAR * REST_STILL_LINEAR:
+                along = 0.0
+            p[3] = along * down[0]
+            p[4] = along * down[1]
+            p[5] = 0.0
+            self.held_still += 1
 
 
 cdef void _islands(Rows rows, const int64_t *arb, Py_ssize_t m, const unsigned char *moving,

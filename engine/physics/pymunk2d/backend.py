@@ -354,6 +354,22 @@ class PymunkBackend:
         reader = self._reader
         resting.after(reader.rows, reader.arbiters(ordered=True), raw, reader.gather, awake, dt,
                       self._gravity)
+        if resting.held_still:
+            self._hold_still(raw)
+
+    def _hold_still(self, raw: np.ndarray) -> None:
+        """Write back the velocities of the rows the resting pass held still (zeroed in
+        ``raw``, the step's read, which the state read and the sleep rule go on with): in
+        one batch, or one by one where some body sleeps (a batch write would wake it)."""
+        reader = self._reader
+        if not reader.sleepers:
+            reader.set_velocities(raw)
+            return
+        records = self._records
+        for row in np.flatnonzero(self._resting.still).tolist():
+            body = records[row].body
+            body.velocity = (0.0, 0.0)
+            body.angular_velocity = 0.0
 
     def _rest_bodies(self) -> None:
         """Per row, for the resting rule: friction coefficient, mass under gravity (0: not

@@ -27,6 +27,7 @@ from engine.physics.pymunk2d import _rows
 _ID = pymunk.batch.BodyFields.BODY_ID
 _FORCE = pymunk.batch.BodyFields.FORCE
 _ID_FORCE = _ID | _FORCE
+_VELOCITY = pymunk.batch.BodyFields.VELOCITY | pymunk.batch.BodyFields.ANGULAR_VELOCITY
 _BODY = (pymunk.batch.BodyFields.BODY_ID | pymunk.batch.BodyFields.POSITION
          | pymunk.batch.BodyFields.ANGLE | pymunk.batch.BodyFields.VELOCITY
          | pymunk.batch.BodyFields.ANGULAR_VELOCITY)
@@ -51,6 +52,7 @@ class Buffers:
         self.arbiters = pymunk.batch.Buffer()
         self.forces = pymunk.batch.Buffer()
         self.writes = pymunk.batch.Buffer()
+        self.velocities = pymunk.batch.Buffer()  # writes only, as ``writes``
         self.written: np.ndarray | None = None  # the array ``writes`` holds now
 
 
@@ -155,6 +157,21 @@ class SpaceReader:
             buffers.writes.set_float_buf(forces.reshape(-1))
             buffers.written = forces
         pymunk.batch.set_space_bodies(self._space, _FORCE, buffers.writes)
+
+    def set_velocities(self, raw: np.ndarray) -> None:
+        """Every body's velocity and spin from a read (:meth:`read`'s array, (n, 6)), in
+        one batch. Setting a velocity wakes a body: only for a space where none sleeps."""
+        if self._sleepers:
+            raise RuntimeError("set_velocities would wake the sleeping bodies")
+        velocities = np.ascontiguousarray(raw[:, 3:6])
+        buffer = self._buffers.velocities
+        buffer.set_float_buf(velocities.reshape(-1))
+        pymunk.batch.set_space_bodies(self._space, _VELOCITY, buffer)
+
+    @property
+    def sleepers(self) -> int:
+        """How many bodies slept at the last read."""
+        return self._sleepers
 
     def new_step(self) -> None:
         """The space was stepped: its arbiters are new."""
