@@ -40,6 +40,13 @@
  * its step (ode3d/stepper.h's cs_hold_still), pymunk after each step (pymunk2d/_rows.pyx). */
 #define REST_STILL_LINEAR 0.03
 #define REST_STILL_ANGULAR 0.0349
+/* pymunk holds a body only where it is in equilibrium on its base: the line of gravity
+ * through its centre of mass falls within the span (across gravity) of the contact points
+ * it lies on, this share of the span in from either end. A block whose centre of mass
+ * lies past its base starts at rest on both corners and tips slowly at first, under
+ * REST_STILL_*: held, it would stand forever (tests/physics/test_mass_frame_and_springs.py;
+ * ODE's hold lets that block tip without this test). */
+#define REST_BASE_MARGIN 0.05
 
 /* What a body's contacts did in one step, as the backend read it. */
 typedef struct {
@@ -51,7 +58,8 @@ typedef struct {
     double share;         /* of its weight the solver held: 1 - beta where preloaded */
     int preloaded;        /* it got its weight's share this step */
     int still;            /* the backend held it still this step (a preloaded body on a face
-                           * moving slower than REST_STILL_*) */
+                           * moving slower than REST_STILL_*; pymunk: in equilibrium on it,
+                           * REST_BASE_MARGIN) */
 } RpStep;
 
 /* One body's standing after a step: `held` (dim numbers, its contacts' net force averaged

@@ -5,12 +5,14 @@ chipmunk's sequential impulses have no block solve, and a crate resting at zero 
 loses the corner that lifts by a hair: from the first steps on the bench's 10-crate stack
 rocked on its base, slower and slower, above the sleep rule's steady band (asleep 5 to 14
 s after settling; columns of dropped boxes 4 to 6 s, never at 1/60 s in 8 s). What holds
-them is policy.h's hold, which ODE's step had: a preloaded body resting on a face, slower
-than REST_STILL_*, is held still (engine/physics/pymunk2d/_rows.pyx, Resting._hold).
+them is policy.h's hold, which ODE's step had: a preloaded body resting on a face in
+equilibrium, slower than REST_STILL_*, is held still (engine/physics/pymunk2d/_rows.pyx,
+Resting._hold and _balanced); one whose centre of mass lies past its base is not.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -91,3 +93,26 @@ def test_a_held_crate_still_answers_a_push() -> None:
     moved = backend.read_state().position[0] - start
     backend.close()
     assert moved[0] > 0.01, moved  # 10 crates' weight is 12 kN: 50 kN slides the pile
+
+
+@pytest.mark.parametrize("dt", STEPS)
+@pytest.mark.parametrize("turned", [False, True], ids=["upright", "turned"])
+def test_a_block_whose_centre_of_mass_lies_past_its_base_is_not_held(dt: float,
+                                                                     turned: bool) -> None:
+    """The hold is for bodies in equilibrium: a 0.2 m wide, 1 m tall block whose centre of
+    mass lies 0.14 m to the side (past its edge, 0.1 m) starts at rest on both corners
+    and tips slowly at first, under REST_STILL_*; held, it would stand forever. Turned: the
+    same block laid along X and stood up a quarter turn about Y (its centre of mass given
+    along its own Z), so the centre of mass is found only through the body's angle."""
+    backend = create_backend("pymunk")
+    backend.configure(WorldSettings())
+    bench._floor(backend)
+    size, offset = ((1.0, 0.2, 0.2), (0.0, 0.0, 0.14)) if turned else \
+        ((0.2, 0.2, 1.0), (0.14, 0.0, 0.0))
+    block = Physical(mass=1.0, shapes=[Shape("box", size)], center_of_mass=offset)
+    bench._add(backend, 0, block, (0.0, 0.0, 0.5), bench._quat_y(math.pi / 2 if turned else 0.0))
+    for _ in range(round(3.0 / dt)):
+        backend.step(dt)
+    height = backend.read_state().position[0][2]
+    backend.close()
+    assert height < 0.3, height  # on its side (0.1 m up), not standing (0.5 m)

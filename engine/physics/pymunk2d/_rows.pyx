@@ -13,7 +13,7 @@ A :class:`Rows` is planned for a fixed list of bodies, identified by their pymun
 """
 
 cimport numpy as cnp
-from libc.math cimport INFINITY, atan2, exp, fabs, hypot, isfinite, sqrt
+from libc.math cimport INFINITY, atan2, cos, exp, fabs, hypot, isfinite, sin, sqrt
 from libc.stdint cimport int8_t, int64_t, uint64_t
 from libc.stdlib cimport free, malloc, realloc
 from libc.string cimport memcpy
@@ -597,6 +597,7 @@ cdef extern from "policy.h" nogil:
                  const unsigned char *unrest, const double *weight, double *ramp,
                  double up, double down, unsigned char *blocked)
     double REST_SUPPORT, REST_SLIP, REST_SMOOTHING, REST_STILL_LINEAR, REST_STILL_ANGULAR
+    double REST_BASE_MARGIN
 
 
 cdef inline void *_data(cnp.ndarray a, object dtype, Py_ssize_t size, str name) except NULL:
@@ -619,6 +620,7 @@ cdef class Resting:
     cdef object _keep  # the arrays behind the pointers
     cdef double *mu
     cdef double *mass
+    cdef double *cog
     cdef unsigned char *jointed
     cdef unsigned char *kinematic
     cdef unsigned char *dynamic
@@ -627,6 +629,8 @@ cdef class Resting:
     cdef unsigned char *slid
     cdef unsigned char *kept
     cdef unsigned char *still
+    cdef double *base
+    cdef double *reach
     cdef double *ramp
     cdef double *applied
     cdef double *lifted
@@ -649,6 +653,7 @@ cdef class Resting:
         f8, u1, i8, ip = np.float64, np.uint8, np.int64, np.intp
         self.mu = <double *>_data(arrays["mu"], f8, n, "mu")
         self.mass = <double *>_data(arrays["mass"], f8, n, "mass")
+        self.cog = <double *>_data(arrays["cog"], f8, 2 * n, "cog")
         self.jointed = <unsigned char *>_data(arrays["jointed"], u1, n, "jointed")
         self.kinematic = <unsigned char *>_data(arrays["kinematic"], u1, n, "kinematic")
         self.dynamic = <unsigned char *>_data(arrays["dynamic"], u1, n, "dynamic")
@@ -657,6 +662,8 @@ cdef class Resting:
         self.slid = <unsigned char *>_data(arrays["slid"], u1, n, "slid")
         self.kept = <unsigned char *>_data(arrays["kept"], u1, n, "kept")
         self.still = <unsigned char *>_data(arrays["still"], u1, n, "still")
+        self.base = <double *>_data(arrays["base"], f8, 2 * n, "base")
+        self.reach = <double *>_data(arrays["reach"], f8, 2 * n, "reach")
         self.ramp = <double *>_data(arrays["ramp"], f8, n, "ramp")
         self.applied = <double *>_data(arrays["applied"], f8, n, "applied")
         self.lifted = <double *>_data(arrays["lifted"], f8, n, "lifted")
@@ -751,8 +758,9 @@ cdef class Resting:
                        double dt, const double *down) noexcept nogil:
         """What each row's contacts did this step: their net force on it (x, z; N), the
         friction they made and the most they could (a pair's μ is the geometric mean),
-        its contact points, whether a normal is off the vertical; and which rows touch a
-        kinematic body (unrest, as are the jointed)."""
+        its contact points, whether a normal is off the vertical, the span across gravity
+        of the points of the contacts it lies on (their normal, a to b, has it above:
+        ``reach``); and which rows touch a kinematic body (unrest, as are the jointed)."""
         cdef Py_ssize_t i, r, k, n = self.n
         cdef Py_ssize_t ends[2]
         cdef double sign[2]
@@ -770,6 +778,8 @@ cdef class Resting:
             self.points[r] = 0
             self.tilted[r] = 0
             self.unrest[r] = self.jointed[r]
+            self.reach[2 * r] = INFINITY
+            self.reach[2 * r + 1] = -INFINITY
         for i in range(m):
             n_points = <int>arb[_AI * i + 2]
             if n_points <= 0:
@@ -796,6 +806,8 @@ cdef class Resting:
                 self.grip[r] += pair_mu * fabs(along)
                 self.points[r] += n_points
                 self.tilted[r] |= off
+                if sign[k] * (nx * down[0] + nz * down[1]) > 1e-6:  # r lies on it
+                    _reach(&self.reach[2 * r], f, n_points, down)
                 if ends[1 - k] < n and self.kinematic[ends[1 - k]]:
                     self.unrest[r] = 1
 
@@ -835,20 +847,19 @@ cdef class Resting:
 
     cdef inline void _hold(self, Py_ssize_t i, double *p, bint awake,
                            const double *down) noexcept nogil:
-        """Hold row ``i`` still where it was preloaded this step, rests on a face (two
-        contact points; or, held still last step, on level contacts only) and moves across
-        gravity and turns slower than REST_STILL_*: its spin and its velocity across gravity
-        are zeroed in its read ``p``, and its velocity along gravity too where the whole is
-        that slow. What motion it has is the solver's residue. ODE's cs_hold_still in the
-        plane, after the step (which is before the next): chipmunk's sequential impulses
-        leave a stack rocking on its base for ten seconds and more, above the sleep rule's
-        steady band."""
+        """Hold row ``i`` still where it was preloaded this step, rests on a face in
+        equilibrium (:meth:`_balanced`) and moves across gravity and turns slower than
+        REST_STILL_*: its spin and its velocity across gravity are zeroed in its read
+        ``p``, and its velocity along gravity too where the whole is that slow. What motion
+        it has is the solver's residue. ODE's cs_hold_still in the plane, after the step
+        (which is before the next): chipmunk's sequential impulses leave a stack rocking on
+        its base for ten seconds and more, above the sleep rule's steady band."""
         cdef double along = p[3] * down[0] + p[4] * down[1]
         cdef double whole = p[3] * p[3] + p[4] * p[4]
         cdef bint hold = (awake and self.applied[i] > 0.0
-                          and (self.points[i] >= 2 or (self.still[i] and not self.tilted[i]))
                           and whole - along * along < REST_STILL_LINEAR * REST_STILL_LINEAR
-                          and p[5] * p[5] < REST_STILL_ANGULAR * REST_STILL_ANGULAR)
+                          and p[5] * p[5] < REST_STILL_ANGULAR * REST_STILL_ANGULAR
+                          and self._balanced(i, p, down))
         self.still[i] = hold
         if hold:
             if whole < REST_STILL_LINEAR * REST_STILL_LINEAR:
@@ -857,6 +868,43 @@ cdef class Resting:
             p[4] = along * down[1]
             p[5] = 0.0
             self.held_still += 1
+
+    cdef inline bint _balanced(self, Py_ssize_t i, const double *p,
+                               const double *down) noexcept nogil:
+        """Whether row ``i`` (read ``p``) stands in equilibrium on its base: the line of
+        gravity through its centre of mass (its position plus its turned centre of
+        gravity) falls within the base, REST_BASE_MARGIN of its width in from either end.
+        Its base is the span across gravity of this step's points of the contacts it lies
+        on where they are two apart (a face); else, held still last step and with two
+        points on any side or level contacts only, the base it was held on (a crate of a
+        stack loses for a step the corner that lifts by a hair)."""
+        cdef double *base = &self.base[2 * i]
+        cdef const double *reach = &self.reach[2 * i]
+        cdef double c = cos(p[2]), s = sin(p[2]), cx, cz, at, margin
+        if reach[1] > reach[0]:
+            base[0] = reach[0]
+            base[1] = reach[1]
+        elif not (self.still[i] and (self.points[i] >= 2 or not self.tilted[i])):
+            return False
+        cx = p[0] + c * self.cog[2 * i] - s * self.cog[2 * i + 1]
+        cz = p[1] + s * self.cog[2 * i] + c * self.cog[2 * i + 1]
+        at = -cx * down[1] + cz * down[0]
+        margin = REST_BASE_MARGIN * (base[1] - base[0])
+        return base[0] + margin <= at <= base[1] - margin
+
+
+cdef inline void _reach(double *span, const double *f, int n_points,
+                        const double *down) noexcept nogil:
+    """Widen ``span`` (least, most) by the across-gravity place of an arbiter's contact
+    points (``f``: its floats; each point the midpoint of the two shapes' own)."""
+    cdef int j
+    cdef const double *q
+    cdef double at
+    for j in range(min(n_points, 2)):
+        q = &f[4 + 5 * j]  # POINT_A_j (x, z), POINT_B_j (x, z), DISTANCE_j
+        at = -0.5 * (q[0] + q[2]) * down[1] + 0.5 * (q[1] + q[3]) * down[0]
+        span[0] = min(span[0], at)
+        span[1] = max(span[1], at)
 
 
 cdef void _islands(Rows rows, const int64_t *arb, Py_ssize_t m, const unsigned char *moving,

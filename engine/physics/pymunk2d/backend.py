@@ -373,8 +373,9 @@ class PymunkBackend:
 
     def _rest_bodies(self) -> None:
         """Per row, for the resting rule: friction coefficient, mass under gravity (0: not
-        dynamic or gravity off), jointed, a kinematic body with shapes (what it touches is
-        not at rest; a hand's control body has none and touches nothing), dynamic."""
+        dynamic or gravity off), centre of gravity (whether it stands over its base),
+        jointed, a kinematic body with shapes (what it touches is not at rest; a hand's
+        control body has none and touches nothing), dynamic."""
         recs = self._records
         n = len(recs)
         dynamic = np.fromiter((r.body.body_type == pymunk.Body.DYNAMIC for r in recs), bool, n)
@@ -382,6 +383,7 @@ class PymunkBackend:
             np.fromiter((r.physical.material.friction for r in recs), float, n),
             np.fromiter((r.body.mass if d and r.physical.gravity else 0.0
                          for r, d in zip(recs, dynamic.tolist(), strict=True)), float, n),
+            self._cogs,
             np.fromiter((bool(r.joints) for r in recs), bool, n),
             np.fromiter((r.body.body_type == pymunk.Body.KINEMATIC and bool(r.physical.shapes)
                          for r in recs), bool, n),

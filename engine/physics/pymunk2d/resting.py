@@ -18,9 +18,11 @@ what rests on it instead). What the contacts did is read from pymunk's arbiters 
 batch and everything after the step is one compiled pass (``_rows.Resting.after``), as
 is the preload before it (``_rows.Resting.preload``): no Python per body.
 
-A preloaded body resting on a face (two contact points) that moves across gravity and
-turns slower than REST_STILL_* (the sleep rule's limits) is held still after the step, as
-ODE's step holds it (policy.h): chipmunk has no block solve, and a crate resting at zero
+A preloaded body resting on a face (two contact points) in equilibrium (its centre of
+mass over the span of the points it lies on, policy.h's REST_BASE_MARGIN in: a block whose
+centre of mass lies past its base must tip) that moves across gravity and turns slower
+than REST_STILL_* (the sleep rule's limits) is held still after the step, as ODE's step
+holds it (policy.h): chipmunk has no block solve, and a crate resting at zero
 depth loses the corner that lifts by a hair, so from the first steps a stack rocks on its
 base; the rocking decayed over 5 to 14 s above the sleep rule's steady band (asleep 5 to
 14 s after settling), held it is asleep half a second after, and stands closer (the
@@ -45,12 +47,13 @@ class RestingSupport:
     over policy.h's rules: one call before a step, one after it)."""
 
     #: per-row arrays that follow their bodies when rows change; the rest start afresh
-    _FOLLOW = ("steps", "slid", "held", "ramp", "still")
-    _SHAPES = {"mu": ((), np.float64), "mass": ((), np.float64),
+    _FOLLOW = ("steps", "slid", "held", "ramp", "still", "base")
+    _SHAPES = {"mu": ((), np.float64), "mass": ((), np.float64), "cog": ((2,), np.float64),
                "jointed": ((), np.uint8), "kinematic": ((), np.uint8),
                "dynamic": ((), np.uint8), "held": ((2,), np.float64),
                "steps": ((), np.int8), "slid": ((), np.uint8), "kept": ((), np.uint8),
-               "still": ((), np.uint8),
+               "still": ((), np.uint8), "base": ((2,), np.float64),
+               "reach": ((2,), np.float64),
                "ramp": ((), np.float64), "applied": ((), np.float64),
                "lifted": ((), np.float64), "force": ((2,), np.float64),
                "friction": ((), np.float64), "grip": ((), np.float64),
@@ -88,12 +91,13 @@ class RestingSupport:
         self._pass = _rows.Resting(arrays)
         self.on = bool((arrays["ramp"] > 0).any())
 
-    def bodies(self, mu: np.ndarray, mass: np.ndarray, jointed: np.ndarray,
+    def bodies(self, mu: np.ndarray, mass: np.ndarray, cog: np.ndarray, jointed: np.ndarray,
                kinematic: np.ndarray, dynamic: np.ndarray) -> None:
         """Per row: friction coefficient, mass under gravity (0: not dynamic or gravity
-        off), jointed, a kinematic body with shapes (what it touches is not at rest),
-        dynamic."""
-        for name, value in (("mu", mu), ("mass", mass), ("jointed", jointed),
+        off), centre of gravity in the body's frame ((n, 2): whether it stands over its
+        base decides the hold), jointed, a kinematic body with shapes (what it touches is
+        not at rest), dynamic."""
+        for name, value in (("mu", mu), ("mass", mass), ("cog", cog), ("jointed", jointed),
                             ("kinematic", kinematic), ("dynamic", dynamic)):
             self.arrays[name][:] = value
 
