@@ -200,11 +200,20 @@ def held_ball(folder: Path, rate: float = RATE) -> list[dict[str, Any]]:
 def pinched_ball(folder: Path, rate: float = RATE) -> dict[str, Any]:
     """:func:`held_ball`'s run: the bones' contact depths in the ball (m), its jitter held
     still (mm) and whether it was held, lifted, throughout."""
-    from components import HandState, Transform
-
     width = 0.06
     centre = np.array([0.0, 0.0, TOP + width / 2])
     feed = grasping("right", centre, width, (0.0, 1.0, 0.0), lift())
+    return held_ball_run(TABLE + ball("ball", width, centre) + hand("hand_r", "right"),
+                         folder, feed, centre, rate)
+
+
+def held_ball_run(scene: str, folder: Path, feed: Feed, centre: np.ndarray, rate: float,
+                  backend: str = "ode") -> dict[str, Any]:
+    """Run ``scene`` (a right hand ``hand_r`` and a ``ball`` at ``centre``) with the right
+    hand fed ``feed`` for 3 s: the bones' contact depths in the ball (m), the ball's jitter
+    after 2 s (mm) and whether it was held, lifted, all that time (both backends' rows)."""
+    from components import HandState, Transform
+
     deep: list[float] = []
     spots: list[np.ndarray] = []
     held: list[bool] = []
@@ -216,12 +225,11 @@ def pinched_ball(folder: Path, rate: float = RATE) -> dict[str, Any]:
             held.append(ids["ball"] in e.world.component_for_entity(ids["hand_r"],
                                                                     HandState).held)
 
-    run(TABLE + ball("ball", width, centre) + hand("hand_r", "right"), folder,
-        {"right": feed}, 3.0, note, rate, settle=0.0)
+    run(scene, folder, {"right": feed}, 3.0, note, rate, settle=0.0, backend=backend)
     s = np.array(spots)
     jitter = float(np.sqrt(np.mean(np.sum((s - s.mean(axis=0)) ** 2, axis=1)))) * 1e3
     return {"depths": deep, "jitter_rms_mm": jitter,
-            "held": all(held) and bool(s[:, 2].min() > centre[2] + 0.1)}
+            "held": bool(all(held) and s[:, 2].min() > centre[2] + 0.1)}
 
 
 def penetration_row(case: str, deep: list[float]) -> dict[str, Any]:

@@ -41,6 +41,7 @@ from app.bench.fingers import (
     bones_of,
     depths,
     hand,
+    held_ball_run,
     lift,
     physical_tips,
     run,
@@ -136,8 +137,6 @@ def approach(motion: Callable[[float], np.ndarray], height: float = 0.1
 def held_ball_2d(folder: Path, rate: float) -> dict[str, Any]:
     """A ball on the table pinched in the plane, lifted 15 cm and held still: the bones'
     contact depths in it throughout, its jitter (RMS from its mean, mm) after 2 s."""
-    from components import HandState, Transform
-
     width = 0.06
     centre = np.array([0.0, 0.0, TOP + width / 2])
     up = approach(lift())
@@ -146,23 +145,8 @@ def held_ball_2d(folder: Path, rate: float) -> dict[str, Any]:
         grip = float(np.interp(t, [0.3, 0.7], [width + 0.03, width - SQUEEZE]))
         return side_pinch("right", centre + up(t), grip, t)
 
-    deep: list[float] = []
-    spots: list[np.ndarray] = []
-    held: list[bool] = []
-
-    def note(e: Any, ids: dict[str, int]) -> None:
-        deep.extend(depths(e, set(bones_of(e, ids["hand_r"])), ids["ball"]))
-        if e.time > 2.0:
-            spots.append(e.world.component_for_entity(ids["ball"], Transform).position.copy())
-            held.append(ids["ball"] in e.world.component_for_entity(ids["hand_r"],
-                                                                    HandState).held)
-
-    run(TABLE + ball("ball", width, centre, 0.1) + hand("hand_r", "right"), folder,
-        {"right": feed}, 3.0, note, rate, settle=0.0, backend=BACKEND)
-    s = np.array(spots)
-    jitter = float(np.sqrt(np.mean(np.sum((s - s.mean(axis=0)) ** 2, axis=1)))) * 1e3
-    return {"depths": deep, "jitter_rms_mm": jitter,
-            "held": bool(all(held) and s[:, 2].min() > centre[2] + 0.1)}
+    return held_ball_run(TABLE + ball("ball", width, centre, 0.1) + hand("hand_r", "right"),
+                         folder, feed, centre, rate, backend=BACKEND)
 
 
 def pushed_box_2d(folder: Path, rate: float) -> dict[str, Any]:
