@@ -321,6 +321,22 @@ class SetMotor(Command):
         self._set("max_force", _scalar("SetMotor", "maxForce", self.max_force, 0.0))
 
 
+def keyed_table(command: str, keys: Any, table: Any, width: int, kind: str
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """A batch command's ``keys`` and ``table`` as arrays, a row of ``width`` numbers per
+    key; a CommandError names the command and what is wrong."""
+    try:
+        ids = np.array(keys, dtype=np.int64, ndmin=1)
+        rows = np.array(table, dtype=np.float64, ndmin=2)
+    except (TypeError, ValueError):
+        raise CommandError(f"{command}: keys must be {kind} ids and table rows of {width} "
+                           "numbers") from None
+    if ids.ndim != 1 or rows.shape != (len(ids), width):
+        raise CommandError(f"{command}: {len(ids)} keys need a table of shape "
+                           f"({len(ids)}, {width}), got {rows.shape}")
+    return ids, rows
+
+
 @dataclass(frozen=True, slots=True, eq=False)
 class SetServos(Command):
     """Aim hinges' and universal joints' own motors at moving angles, in one command (a
@@ -336,15 +352,7 @@ class SetServos(Command):
     on_joint: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
-        try:
-            keys = np.array(self.keys, dtype=np.int64, ndmin=1)
-            table = np.array(self.table, dtype=np.float64, ndmin=2)
-        except (TypeError, ValueError):
-            raise CommandError("SetServos: keys must be joint ids and table rows of 7 "
-                               "numbers") from None
-        if keys.ndim != 1 or table.shape != (len(keys), 7):
-            raise CommandError(f"SetServos: {len(keys)} keys need a table of shape "
-                               f"({len(keys)}, 7), got {table.shape}")
+        keys, table = keyed_table("SetServos", self.keys, self.table, 7, "joint")
         if not (np.isfinite(table).all() and (table[:, 4:] >= 0.0).all()):  # which row:
             bad = ~np.isfinite(table).all(axis=1) | ~(table[:, 4:] >= 0.0).all(axis=1)
             raise CommandError(f"SetServos: joint {keys[bad][0]}'s row must be 7 finite "
@@ -450,15 +458,7 @@ class SetPoses(Command):
     table: np.ndarray
 
     def __post_init__(self) -> None:
-        try:
-            keys = np.array(self.keys, dtype=np.int64, ndmin=1)
-            table = np.array(self.table, dtype=np.float64, ndmin=2)
-        except (TypeError, ValueError):
-            raise CommandError("SetPoses: keys must be entity ids and table rows of 13 "
-                               "numbers") from None
-        if keys.ndim != 1 or table.shape != (len(keys), 13):
-            raise CommandError(f"SetPoses: {len(keys)} keys need a table of shape "
-                               f"({len(keys)}, 13), got {table.shape}")
+        keys, table = keyed_table("SetPoses", self.keys, self.table, 13, "entity")
         bad = ~np.isfinite(table).all(axis=1)
         if bad.any():
             raise CommandError(f"SetPoses: body {keys[bad][0]}'s row is not 13 finite "
