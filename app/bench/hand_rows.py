@@ -9,8 +9,8 @@ Each row is one (case, step, backend): the scene's step ``step s`` (0.005 and 0.
 and lag at the same speed, a held object's jitter: :mod:`app.bench.hands`) it is measured
 at the same step on the same backend and printed beside the fingered one; ``ok`` holds
 both to the goal. Then the cost rows (:func:`app.bench.hands.cost`, the palm-only hand's
-at 120 Hz; :func:`app.bench.fingers.cost`, fingered beside palm-only; two fingered hands in
-a 90 Hz frame).
+at 120 Hz; :func:`app.bench.fingers.cost`, fingered beside palm-only, at both steps; two
+fingered hands in a 90 Hz frame).
 """
 
 from __future__ import annotations
@@ -205,7 +205,9 @@ def run_bench(quick: bool = False, backend: str | None = None) -> list[dict[str,
         rows = run_rows(folder, quick, names)
         for name in names:
             rows.append(cost(folder, name, 0.5 if quick else 3.0))
-            rows += fingers.cost(folder, 0.5 if quick else 2.0, backend=name)
+            for step in STEPS[1:] if quick else STEPS:  # the fingered hand's at both steps
+                rows += fingers.cost(folder, 0.5 if quick else 2.0, backend=name,
+                                     rate=1.0 / step)
             if name == "ode":
                 rows.append(fingers.frame_budget(folder, 1.0 if quick else 3.0))
     return rows
