@@ -22,7 +22,7 @@ from app.bench import accuracy as bench
 from components import MaterialProps, Physical, Shape
 from engine.physics import create_backend
 from engine.physics.backend import DynamicsBackend, WorldSettings
-from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR
+from tests.physics.settling_helpers import settled_and_asleep
 
 STEPS = [0.005, 0.01, 1 / 60, 0.02]
 
@@ -62,20 +62,8 @@ def test_a_settled_scene_is_asleep_within_2_s_of_settling(
     slower than the sleep limits to the end (8 s). Asleep: every body, in the run with
     sleeping on, within 2 s of that."""
     (awake, n), (sleeping, _) = scene(False), scene(True)
-    steps = round(8.0 / dt)
-    fast = np.zeros(steps, bool)
-    asleep_at = None
-    for i in range(steps):
-        awake.step(dt)
-        sleeping.step(dt)
-        state = awake.read_state()
-        fast[i] = (np.linalg.norm(state.linear_velocity, axis=1).max() >= SLEEP_LINEAR or
-                   np.linalg.norm(state.angular_velocity, axis=1).max() >= SLEEP_ANGULAR)
-        if asleep_at is None and all(sleeping.is_sleeping(k) for k in range(n)):
-            asleep_at = (i + 1) * dt
-    settled_at = (np.flatnonzero(fast).max() + 1) * dt if fast.any() else 0.0
-    awake.close()
-    sleeping.close()
+    settled_at, asleep_at = settled_and_asleep(
+        awake, sleeping, dt, lambda b: all(b.is_sleeping(k) for k in range(n)))
     assert settled_at < 4.0, settled_at  # the drop is over, well before the end
     assert asleep_at is not None and asleep_at - settled_at <= 2.0, (settled_at, asleep_at)
 

@@ -17,7 +17,7 @@ from app.bench import accuracy as bench
 from components import MaterialProps, Physical, Shape
 from engine.physics import create_backend
 from engine.physics.backend import WorldSettings
-from engine.physics.sleep import SLEEP_ANGULAR, SLEEP_LINEAR
+from tests.physics.settling_helpers import settled_and_asleep
 
 STACK = next(c for c in bench.cases() if c.group == "stack")
 
@@ -50,20 +50,7 @@ def test_settled_columns_are_asleep_within_2_s_of_settling(dt: float) -> None:
     """Settled: from when every box of the same scene with sleeping off moves and turns
     slower than the sleep limits to the end (8 s). Asleep: every box, in the run with
     sleeping on, within 2 s of that."""
-    awake, sleeping = _columns(False), _columns(True)
-    steps = round(8.0 / dt)
-    fast = np.zeros(steps, bool)
-    asleep_at = None
-    for i in range(steps):
-        awake.step(dt)
-        sleeping.step(dt)
-        state = awake.read_state()
-        fast[i] = (np.linalg.norm(state.linear_velocity, axis=1).max() >= SLEEP_LINEAR or
-                   np.linalg.norm(state.angular_velocity, axis=1).max() >= SLEEP_ANGULAR)
-        if asleep_at is None and sleeping.sleeping_count() == 40:
-            asleep_at = (i + 1) * dt
-    settled_at = (np.flatnonzero(fast).max() + 1) * dt if fast.any() else 0.0
-    awake.close()
-    sleeping.close()
+    settled_at, asleep_at = settled_and_asleep(_columns(False), _columns(True), dt,
+                                               lambda b: b.sleeping_count() == 40)
     assert settled_at < 4.0, settled_at  # the drop is over, well before the end
     assert asleep_at is not None and asleep_at - settled_at <= 2.0, (settled_at, asleep_at)
