@@ -32,7 +32,7 @@ def build_session(v: Mapping[str, Any], ctx: BuildContext) -> list[Any]:
 
 _DEFAULT = SessionSettings()
 SESSION_BLOCK = declare(BlockDeclaration(
-    "Session", inside=("Scene",), build=build_session, entity=False, once=True,
+    "Session", inside=("Scene",), build=build_session, entity=False, once=True, named=False,
     doc="a session log: one JSON-lines file per run with the time, task events, grasps, the "
     "chair's pose and collisions, anomaly switches (the session plugin)", keys=(
         Key("Folder", "string", _DEFAULT.folder, "the folder session logs go to, relative to "

@@ -194,7 +194,7 @@ def register(name: str, component: type, inside: tuple[str, ...] = ("Object",),
 
 
 def _enter(block: BlockType, fields: dict[str, sc.Field], docs: Mapping[str, str],
-           repeat: bool, once: bool = False) -> None:
+           repeat: bool) -> None:
     """Make ``block`` known: its schema, a key in each place it stands (repeatable at the
     top level unless ``once``), the listeners."""
     BLOCKS[block.name] = block
@@ -202,7 +202,7 @@ def _enter(block: BlockType, fields: dict[str, sc.Field], docs: Mapping[str, str
     for place in block.inside:
         sc.SCHEMAS[place][block.written_as] = sc.Field(
             sc.STRUCT_T, None, docs[place], struct=block.name,
-            repeat=repeat or (place == "Scene" and not once))
+            repeat=repeat or (place == "Scene" and not block.once))
     for listener in _LISTENERS:
         for changed in (block.name, *block.inside):
             listener(changed)
@@ -237,8 +237,7 @@ def register_declared(declared: BlockDeclaration) -> BlockType:
         keys[k.name] = BlockKey(k.name, KeyInfo(k.meaning, k.low, k.high), None)
         if k.example is not None:
             EXAMPLES[(name, k.name)] = k.example
-    named = declared.named and not (declared.setting or declared.once)
-    if "Scene" in declared.inside and named and "ID" not in fields:  # its entity's name
+    if "Scene" in declared.inside and declared.named and "ID" not in fields:  # its name
         fields["ID"] = sc.Field(sc.STRING_T, "", f"name of this {name}")
     doc = declared.doc
     docs = {p: doc if isinstance(doc, str) else doc[p] for p in declared.inside}
@@ -246,7 +245,7 @@ def register_declared(declared: BlockDeclaration) -> BlockType:
                       keys, declared.build, declared.save, declared.build.__module__,
                       declared.unnamed, declared.entity, declared.key, declared.finish,
                       declared.once or declared.setting, declared.first, declared.setting)
-    _enter(block, fields, docs, declared.repeat, declared.once or declared.setting)
+    _enter(block, fields, docs, declared.repeat)
     return block
 
 

@@ -90,6 +90,7 @@ def _check_step(step: float, ctx: BuildContext) -> None:
 
 WORLD_BLOCK = declare(BlockDeclaration(
     "World", inside=("Scene",), build=build_world, entity=False, first=True, setting=True,
+    named=False,
     doc="dynamics settings", keys=(
         Key("Gravity", "vec3", _WORLD.gravity, "m/s^2"),
         Key("TimeStep", "float", TIME_STEP, "s, fixed dynamics step (more than 0, at most 1; "
