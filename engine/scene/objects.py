@@ -42,10 +42,6 @@ def _fingered(hand: Value) -> bool:
     return any(e.key == "Fingers" and bool(e.value.data) for e in hand.data.entries)
 
 
-def _opt(v: Any) -> float | None:
-    return None if v is None else float(v)
-
-
 def _fields(m: MaterialProps) -> dict[str, Any]:
     return {k: getattr(m, k) for k in m.__slots__}
 
