@@ -296,14 +296,22 @@ def joint_angles(p: np.ndarray, q: np.ndarray,
     quadratic forms of the two bones (:func:`angle_forms`; default: this sample's, no
     spread), all 20 in one product: this runs for every hand every frame."""
     forms, left = angle_forms(p, q) if forms is None else forms
-    bones = (GATHER @ p) @ _matrix(q[1])  # parents (20), then bones, in the wrist's frame
-    bones[0] = bones[15] = THUMB_REST[left]  # the thumb's flexion and spread rows
-    outer = (bones[:20, :, None] * bones[20:, None, :]).reshape(20, 1, 9)
-    y, x = (outer @ forms).reshape(20, 2).T
-    angles = np.arctan2(y, x)
-    out = np.zeros((15, 2))
-    out[:, 0] = angles[:15]
-    out[BASES, 1] = angles[15:]
+    return _angles(p[None], _matrix(q[1])[None], forms[None], THUMB_REST[left][None])[0]
+
+
+def _angles(p: np.ndarray, wrists: np.ndarray, forms: np.ndarray, thumbs: np.ndarray
+            ) -> np.ndarray:
+    """:func:`joint_angles` for n hands at once (n, 15, 2): their joints (n, 26, 3), wrist
+    matrices (n, 3, 3), forms (n, 20, 9, 2) and thumbs' rest headings (n, 3)."""
+    bones = (GATHER @ p) @ wrists  # parents (20), then bones, in each wrist's frame
+    bones[:, 0] = bones[:, 15] = thumbs  # the thumb's flexion and spread rows
+    n = len(p)
+    outer = (bones[:, :20, :, None] * bones[:, 20:, None, :]).reshape(n, 20, 1, 9)
+    yx = (outer @ forms).reshape(n, 20, 2)
+    turns = np.arctan2(yx[:, :, 0], yx[:, :, 1])
+    out = np.zeros((n, 15, 2))
+    out[:, :, 0] = turns[:, :15]
+    out[:, BASES, 1] = turns[:, 15:]
     return out
 
 
@@ -380,15 +388,7 @@ def aim(hands: list[tuple[Fingers, HandJoints, Transform | None]], now: float,
     joints = [world_joints(sample, frame) for _, sample, frame in hands]
     p = np.stack([j[0] for j in joints])
     forms, thumbs = _stacked([f for f, _, _ in hands])
-    bones = (GATHER @ p) @ np.stack([_matrix(j[1][1]) for j in joints])
-    bones[:, 0] = bones[:, 15] = thumbs  # the thumb's flexion and spread rows
-    n = len(hands)
-    outer = (bones[:, :20, :, None] * bones[:, 20:, None, :]).reshape(n, 20, 1, 9)
-    yx = (outer @ forms).reshape(n, 20, 2)
-    turns = np.arctan2(yx[:, :, 0], yx[:, :, 1])
-    angles = np.zeros((n, 15, 2))
-    angles[:, :, 0] = turns[:, :15]
-    angles[:, BASES, 1] = turns[:, 15:]
+    angles = _angles(p, np.stack([_matrix(j[1][1]) for j in joints]), forms, thumbs)
     centres = (p[:, STARTS] + p[:, ENDS]) * 0.5
     return [_noted(f, sample, j, centres[i], angles[i], now, stale_after)
             for i, ((f, sample, _), j) in enumerate(zip(hands, joints, strict=True))]
