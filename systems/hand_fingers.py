@@ -586,8 +586,8 @@ def tips_of(engine: Engine, hands: list[Fingers]) -> np.ndarray:
         return tips_now(engine, hands[0])[None]
     distal = engine.world.poses.table[np.concatenate([_rows(engine, f)[2::3]
                                                       for f in hands])]
-    half = np.concatenate([f.lengths[2::3] for f in hands]) * 0.5
-    return (distal[:, :3] + x_axes(distal[:, 3:7]) * half[:, None]).reshape(-1, 5, 3)
+    lengths = np.concatenate([f.lengths[2::3] for f in hands])
+    return _far_ends(distal, lengths).reshape(-1, 5, 3)
 
 
 def tips_now(engine: Engine, fingers: Fingers, table: np.ndarray | None = None
@@ -595,7 +595,13 @@ def tips_now(engine: Engine, fingers: Fingers, table: np.ndarray | None = None
     """Where the physical fingertips are (5, 3): each distal bone's far end (from
     ``table``, the bones' poses, when already read)."""
     distal = (bone_table(engine, fingers) if table is None else table)[2::3]
-    return distal[:, :3] + x_axes(distal[:, 3:7]) * (fingers.lengths[2::3] / 2)[:, None]
+    return _far_ends(distal, fingers.lengths[2::3])
+
+
+def _far_ends(poses: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """The far ends (n, 3) of bones of ``lengths`` along their x axes, at ``poses``
+    (their pose-table rows: position, then quaternion)."""
+    return poses[:, :3] + x_axes(poses[:, 3:7]) * (lengths / 2)[:, None]
 
 
 def _x_form() -> np.ndarray:
