@@ -50,6 +50,19 @@ TOP = 0.75
 TABLE = ('Object { ID "table" Position [0 0 0.725] Dynamic 0\n'
          '  PhysicalAttributes { Geometry { Primitive "box" Size [1.2 1 0.05] } } }\n')
 Feed = Callable[[float], Any]
+#: The rows' objects: a 0.3 kg cup on the table, a 0.5 kg box a hand pushes along it, a
+#: fixed 5 mm plate a hand is swept at (at x = 0).
+CUP = ('Object { ID "cup" Position [0 0 0.8] PhysicalAttributes { Mass 0.3\n'
+       '  Geometry { Primitive "cylinder" Size [0.08 0.1] } } }\n')
+PUSHED_BOX = ('Object { ID "box" Position [0.1 0 0.8] PhysicalAttributes { Mass 0.5\n'
+              '  Geometry { Primitive "box" Size [0.1 0.1 0.1] } } }\n')
+PLATE = ('Object { ID "plate" Position [0 0 1] Dynamic 0\n'
+         '  PhysicalAttributes { Geometry { Primitive "box" Size [0.005 0.4 0.4] } } }\n')
+
+
+def shaken(t: float) -> float:
+    """The shake rows' motion up and down (m): 3 Hz, ±10 cm, from 1.7 s on."""
+    return 0.1 * float(np.sin(2 * np.pi * 3.0 * (t - 1.7))) if t > 1.7 else 0.0
 
 
 def hand(name: str, tracker: str, at: tuple[float, float, float] = (0.0, 0.0, 1.0)) -> str:
@@ -249,8 +262,6 @@ def pushed_box_depths(folder: Path, rate: float = RATE) -> list[float]:
     """:func:`pushed_box`'s run: the bones' contact depths in the box (m)."""
     from services.input.hand_pose import GESTURES, pose_hand
 
-    box = ('Object { ID "box" Position [0.1 0 0.8] PhysicalAttributes { Mass 0.5\n'
-           '  Geometry { Primitive "box" Size [0.1 0.1 0.1] } } }\n')
     # the hand's fingers along +x, its pointing index 4 cm above the table; it moves +x
     q = (1.0, 0.0, 0.0, 0.0)
 
@@ -259,7 +270,7 @@ def pushed_box_depths(folder: Path, rate: float = RATE) -> list[float]:
         return pose_hand("right", (x, 0.0, TOP + 0.04), q, GESTURES["point"], timestamp=t)
 
     deep: list[float] = []
-    run(TABLE + box + hand("hand_r", "right", (-0.15, 0.0, 0.8)), folder, {"right": feed},
+    run(TABLE + PUSHED_BOX + hand("hand_r", "right", (-0.15, 0.0, 0.8)), folder, {"right": feed},
         2.0, lambda e, ids: deep.extend(depths(e, set(bones_of(e, ids["hand_r"])),
                                                ids["box"])), rate, settle=0.0)
     return deep
@@ -285,13 +296,10 @@ def shaken_cup(folder: Path, rate: float,
 
     width = 0.08
     centre = np.array([0.0, 0.0, TOP + 0.05])
-    cup = ('Object { ID "cup" Position [0 0 0.8] PhysicalAttributes { Mass 0.3\n'
-           '  Geometry { Primitive "cylinder" Size [0.08 0.1] } } }\n')
 
     def motion(t: float) -> np.ndarray:
         up = lift(0.2)(t)
-        if t > 1.7:
-            up[2] += 0.1 * np.sin(2 * np.pi * 3.0 * (t - 1.7))
+        up[2] += shaken(t)
         return up
 
     worst: list[float] = []
@@ -305,7 +313,7 @@ def shaken_cup(folder: Path, rate: float,
             held.append(ids["cup"] in e.world.component_for_entity(ids["hand_r"],
                                                                    HandState).held)
 
-    run(TABLE + cup + hand("hand_r", "right"), folder,
+    run(TABLE + CUP + hand("hand_r", "right"), folder,
         {"right": pinching(centre, width, motion)}, 3.7, note, rate, settle=0.0,
         backend=backend)
     return {"held_share": float(np.mean(held)) if held else 0.0,
@@ -351,8 +359,6 @@ def swipe(folder: Path, rate: float = RATE) -> dict[str, Any]:
     from components import Transform
     from services.input.hand_pose import GESTURES, pose_hand
 
-    plate = ('Object { ID "plate" Position [0 0 1] Dynamic 0\n'
-             '  PhysicalAttributes { Geometry { Primitive "box" Size [0.005 0.4 0.4] } } }\n')
     q = (np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4))  # fingers along +y, edge-on
 
     def feed(t: float) -> Any:
@@ -366,7 +372,7 @@ def swipe(folder: Path, rate: float = RATE) -> dict[str, Any]:
             x = float(e.world.component_for_entity(body, Transform).position[0])
             farthest[0] = max(farthest[0], x)
 
-    run(plate + hand("hand_r", "right", (-0.12, 0.0, 1.0)), folder, {"right": feed}, 0.6,
+    run(PLATE + hand("hand_r", "right", (-0.12, 0.0, 1.0)), folder, {"right": feed}, 0.6,
         note, rate, settle=0.0)
     return {"case": "fingered, 3 m/s swipe at a 5 mm plate", "backend": "ode",
             "farthest_centre_mm": farthest[0] * 1e3, "goal": "no bone's centre past "

@@ -34,6 +34,8 @@ from typing import Any
 import numpy as np
 
 from app.bench.fingers import (
+    PLATE,
+    PUSHED_BOX,
     SQUEEZE,
     TABLE,
     TOP,
@@ -154,8 +156,6 @@ def pushed_box_2d(folder: Path, rate: float) -> dict[str, Any]:
     """A pointing index pushes a 0.5 kg box along the table, in the plane."""
     from services.input.hand_pose import GESTURES, pose_hand
 
-    box = ('Object { ID "box" Position [0.1 0 0.8] PhysicalAttributes { Mass 0.5\n'
-           '  Geometry { Primitive "box" Size [0.1 0.1 0.1] } } }\n')
 
     def feed(t: float) -> Any:
         x = float(np.interp(t, [0.0, 0.4, 2.0], [-0.22, -0.22, 0.05]))
@@ -163,7 +163,7 @@ def pushed_box_2d(folder: Path, rate: float) -> dict[str, Any]:
                          GESTURES["point"], timestamp=t)
 
     deep: list[float] = []
-    run(TABLE + box + hand("hand_r", "right", (-0.15, 0.0, 0.8)), folder, {"right": feed},
+    run(TABLE + PUSHED_BOX + hand("hand_r", "right", (-0.15, 0.0, 0.8)), folder, {"right": feed},
         2.0, lambda e, ids: deep.extend(depths(e, set(bones_of(e, ids["hand_r"])),
                                                ids["box"])), rate, settle=0.0,
         backend=BACKEND)
@@ -231,8 +231,6 @@ def swipe_2d(folder: Path, rate: float) -> dict[str, Any]:
     from components import Transform
     from services.input.hand_pose import GESTURES, pose_hand
 
-    plate = ('Object { ID "plate" Position [0 0 1] Dynamic 0\n'
-             '  PhysicalAttributes { Geometry { Primitive "box" Size [0.005 0.4 0.4] } } }\n')
     up = (np.cos(-np.pi / 4), 0.0, np.sin(-np.pi / 4), 0.0)  # fingers +Z, palm facing +X
 
     def feed(t: float) -> Any:
@@ -246,6 +244,6 @@ def swipe_2d(folder: Path, rate: float) -> dict[str, Any]:
             x = float(e.world.component_for_entity(body, Transform).position[0])
             farthest[0] = max(farthest[0], x)
 
-    run(plate + hand("hand_r", "right", (-0.12, 0.0, 0.9)), folder, {"right": feed}, 0.6,
+    run(PLATE + hand("hand_r", "right", (-0.12, 0.0, 0.9)), folder, {"right": feed}, 0.6,
         note, rate, settle=0.0, backend=BACKEND)
     return {"farthest_centre_mm": farthest[0] * 1e3}

@@ -93,17 +93,19 @@ def tracking(folder: Path, backend: str, seconds: float, rate: float = RATE,
             "ok": "yes" if error_mm <= 5 and abs(lag_ms) <= 15 else "NO"}
 
 
+CUP_SCENE = ('Object { ID "table" Position [0 0 0.725] Dynamic 0\n'
+             '  PhysicalAttributes { Geometry { Primitive "box" Size [1 1 0.05] } } }\n'
+             'Object { ID "cup" Position [0 0 0.8] PhysicalAttributes { Mass 0.3\n'
+             '  Geometry { Primitive "cylinder" Size [0.08 0.1] } } }\n'
+             'Object { ID "hand_r" Position [0 0 0.9] Hand { Tracker "hand_r" Glove "g" } }\n')
+
+
 def held_cup(folder: Path, backend: str, seconds: float, rate: float = RATE
              ) -> dict[str, Any]:
     from components import Transform
     from services.input import InputHub
     from services.input.events import Button
 
-    scene = ('Object { ID "table" Position [0 0 0.725] Dynamic 0\n'
-             '  PhysicalAttributes { Geometry { Primitive "box" Size [1 1 0.05] } } }\n'
-             'Object { ID "cup" Position [0 0 0.8] PhysicalAttributes { Mass 0.3\n'
-             '  Geometry { Primitive "cylinder" Size [0.08 0.1] } } }\n'
-             'Object { ID "hand_r" Position [0 0 0.9] Hand { Tracker "hand_r" Glove "g" } }\n')
     cup: list[np.ndarray] = []
     deep: list[float] = []
 
@@ -120,7 +122,7 @@ def held_cup(folder: Path, backend: str, seconds: float, rate: float = RATE
         return np.array([0.0, 0.0, np.interp(t, [0.0, 0.3, 0.4, 1.0], [0.9, 0.857, 0.857,
                                                                         1.1])])
 
-    _rig(scene, folder, backend, {"hand_r": lift}, seconds, pinch, rate)
+    _rig(CUP_SCENE, folder, backend, {"hand_r": lift}, seconds, pinch, rate)
     spots = np.array(cup)
     jitter_mm = float(np.sqrt(np.mean(np.sum((spots - spots.mean(axis=0)) ** 2, axis=1))))
     jitter_mm *= 1e3
@@ -128,13 +130,6 @@ def held_cup(folder: Path, backend: str, seconds: float, rate: float = RATE
     return {"case": "held cup at rest", "backend": backend, "jitter_rms_mm": jitter_mm,
             "depths": deep, "goal": "<= 0.5 mm, held",
             "ok": "yes" if jitter_mm <= 0.5 and held else "NO" if held else "NO (not held)"}
-
-
-CUP_SCENE = ('Object { ID "table" Position [0 0 0.725] Dynamic 0\n'
-             '  PhysicalAttributes { Geometry { Primitive "box" Size [1 1 0.05] } } }\n'
-             'Object { ID "cup" Position [0 0 0.8] PhysicalAttributes { Mass 0.3\n'
-             '  Geometry { Primitive "cylinder" Size [0.08 0.1] } } }\n'
-             'Object { ID "hand_r" Position [0 0 0.9] Hand { Tracker "hand_r" Glove "g" } }\n')
 
 
 def _press(e: Any, glove: str, at: float, down: bool, rate: float) -> None:
@@ -154,17 +149,15 @@ def _lifted(t: float) -> np.ndarray:
 def palm_push(folder: Path, backend: str, rate: float) -> dict[str, Any]:
     """The palm-only hand, flat, pushes a 0.5 kg box along the table (as the fingered
     hand's pointing index does): the palm's contact depths in the box (m)."""
-    from app.bench.fingers import TABLE, TOP, depths
+    from app.bench.fingers import PUSHED_BOX, TABLE, TOP, depths
 
-    box = ('Object { ID "box" Position [0.1 0 0.8] PhysicalAttributes { Mass 0.5\n'
-           '  Geometry { Primitive "box" Size [0.1 0.1 0.1] } } }\n')
 
     def path(t: float) -> np.ndarray:
         return np.array([float(np.interp(t, [0.0, 0.9, 2.5], [-0.2, -0.2, 0.05])), 0.0,
                          TOP + 0.03])
 
     deep: list[float] = []
-    _rig(TABLE + box + _hand("hand_r", -0.2, 0.0, TOP + 0.03), folder, backend,
+    _rig(TABLE + PUSHED_BOX + _hand("hand_r", -0.2, 0.0, TOP + 0.03), folder, backend,
          {"hand_r": path}, 2.0, lambda e, ids: deep.extend(depths(e, {ids["hand_r"]},
                                                                    ids["box"])), rate)
     return {"depths": deep}
@@ -173,12 +166,12 @@ def palm_push(folder: Path, backend: str, rate: float) -> dict[str, Any]:
 def palm_shake(folder: Path, backend: str, rate: float) -> dict[str, Any]:
     """:func:`held_cup`'s cup, held by the grasp button, shaken up and down at 3 Hz ±10 cm
     for 2 s: held throughout, and how far it got from where the hand holds it (mm)."""
+    from app.bench.fingers import shaken
     from components import HandState, Transform
 
     def path(t: float) -> np.ndarray:
         at = _lifted(t)
-        if t > 1.7:
-            at[2] += 0.1 * np.sin(2 * np.pi * 3.0 * (t - 1.7))
+        at[2] += shaken(t)
         return at
 
     off: list[np.ndarray] = []
@@ -233,10 +226,9 @@ def palm_swipe(folder: Path, backend: str, rate: float) -> dict[str, Any]:
     """The palm-only hand swept at 3 m/s along X at a fixed 5 mm plate at x = 0: the
     farthest its centre got (mm; the plate's near face at -2.5, the palm's own face
     45 mm ahead of its centre)."""
+    from app.bench.fingers import PLATE
     from components import Transform
 
-    plate = ('Object { ID "plate" Position [0 0 1] Dynamic 0\n'
-             '  PhysicalAttributes { Geometry { Primitive "box" Size [0.005 0.4 0.4] } } }\n')
     farthest = [-1.0]
 
     def path(t: float) -> np.ndarray:
@@ -246,7 +238,7 @@ def palm_swipe(folder: Path, backend: str, rate: float) -> dict[str, Any]:
         x = float(e.world.component_for_entity(ids["hand_r"], Transform).position[0])
         farthest[0] = max(farthest[0], x)
 
-    _rig(plate + _hand("hand_r", -0.12, 0.0, 1.0), folder, backend, {"hand_r": path}, 0.6,
+    _rig(PLATE + _hand("hand_r", -0.12, 0.0, 1.0), folder, backend, {"hand_r": path}, 0.6,
          note, rate)
     return {"farthest_centre_mm": farthest[0] * 1e3}
 
