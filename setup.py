@@ -7,7 +7,8 @@ into engine rows (engine/physics/pymunk2d/_rows.pyx), the scene scanner
 (engine/scene/_scan.pyx) and the network pose codec's per-frame passes
 (services/net/_codec.pyx: built without fused multiply-add, so every machine's arithmetic
 is the same to the bit, as a server's copy of the poses and its nodes' must be), and the
-skeletons' hierarchy and palettes (engine/animation/_compose.pyx)."""
+skeletons' hierarchy and palettes (engine/animation/_compose.pyx), and the fingered hands'
+per-frame arithmetic (systems/_fingers.pyx)."""
 
 import shlex
 import subprocess
@@ -61,7 +62,10 @@ def extensions() -> list[Extension]:
                       extra_compile_args=["-O3", "-ffp-contract=off"])
     compose = Extension("engine.animation._compose", ["engine/animation/_compose.pyx"],
                         extra_compile_args=["-O3"])
-    return cythonize([ext, sleep, rows, scan, codec, compose], language_level=3,
+    fingers = Extension("systems._fingers", ["systems/_fingers.pyx"],
+                        include_dirs=[numpy.get_include()], extra_compile_args=["-O3"],
+                        define_macros=[("NPY_NO_DEPRECATED_API", "NPY_1_7_API_VERSION")])
+    return cythonize([ext, sleep, rows, scan, codec, compose, fingers], language_level=3,
                      compiler_directives={"boundscheck": False, "wraparound": False})
 
 

@@ -29,8 +29,8 @@ several users hold one object as before.
 
 from __future__ import annotations
 
-import itertools
 import math
+from collections.abc import Container
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
@@ -40,14 +40,10 @@ from components import Graspable, Joint, Name, Physical, Shape, Transform, Visua
 from components.joint import JointKind
 from components.physical import BodyKind, MaterialProps
 from engine.physics.commands import SetCollisionEnabled, SetDriveLimits, SetServos
-from engine.rotation import (
-    matrices_to_quats,
-    quat_multiply,
-    quat_to_matrix,
-    rotation_vector,
-)
+from engine.rotation import matrices_to_quats, quat_to_matrix
 from services.input.events import FINGERS, HAND_JOINTS, HandJoints
 from services.input.hand_pose import ANATOMY
+from systems import _fingers
 
 if TYPE_CHECKING:
     from engine.app import Engine
@@ -90,7 +86,6 @@ CLOSING = 0.002
 ALONG_X = (math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0)
 BONE_COLOR = (0.85, 0.7, 0.6, 1.0)
 TIPS = tuple(HAND_JOINTS.index(f"{f}_tip") for f in FINGERS)
-TIPS_AT = np.array(TIPS)
 
 
 def bone_layout() -> list[tuple[str, int, int]]:
@@ -115,6 +110,7 @@ PARENT_B = np.array([ENDS[i - 1] if i % 3 else STARTS[i] for i in range(15)])
 REST_Y = np.array([ANATOMY[f].rest()[:, 1] for f, _, _ in BONES])
 THUMB_REST_X = ANATOMY["thumb"].rest()[:, 0]
 THUMB_FIRST = HAND_JOINTS.index("thumb_metacarpal")
+_fingers.layout(STARTS, ENDS, PARENT_A, PARENT_B, TIPS)
 
 
 @dataclass(slots=True, eq=False)
@@ -153,6 +149,8 @@ class Fingers:
     holding: bool = False  # whether the servos have their holding bound
     #: the thinnest bone's radius (m): a hand slower than it per frame casts no rays
     thinnest: float = 0.0
+    #: the fastest of its tracked bones' velocity components (m/s; :func:`aim`'s)
+    fastest: float = 0.0
     #: the pose table's version and the bones' rows in it (read each frame in one go)
     rows: tuple[int, np.ndarray] = (-1, np.zeros(0, np.int64))
 
@@ -164,12 +162,10 @@ def world_joints(sample: HandJoints, frame: Transform | None
                  ) -> tuple[np.ndarray, np.ndarray]:
     """The sample's joint positions (26, 3) and orientations (26, 4) in the world (through
     the hand's frame object, a wheelchair, when it has one)."""
-    p, q = joint_arrays(sample)
     if frame is None:
-        return p, q
-    rot = quat_to_matrix(frame.orientation)
-    return p @ rot.T + frame.position, quat_multiply(np.broadcast_to(frame.orientation,
-                                                                     q.shape), q)
+        return joint_arrays(sample)
+    return _fingers.read_joints(sample.positions, sample.orientations, frame.position,
+                                frame.orientation)
 
 
 #: The last samples' joints as arrays, by sample (the palm's drive, the bones' and the
@@ -184,11 +180,7 @@ def joint_arrays(sample: HandJoints) -> tuple[np.ndarray, np.ndarray]:
         return seen[1], seen[2]
     if len(_SEEN) >= 64:
         _SEEN.clear()
-    # (flattened in C: half the time of numpy's walk through nested tuples)
-    flat = itertools.chain.from_iterable
-    p = np.fromiter(flat(sample.positions), float, 3 * len(sample.positions))
-    q = np.fromiter(flat(sample.orientations), float, 4 * len(sample.orientations))
-    p, q = p.reshape(-1, 3), q.reshape(-1, 4)
+    p, q = _fingers.read_joints(sample.positions, sample.orientations)
     p.setflags(write=False)
     q.setflags(write=False)
     _SEEN[id(sample)] = (sample, p, q)
@@ -226,18 +218,6 @@ def separate_palm(engine: Engine, palm: int) -> None:
         world.add_component(palm, wanted)
 
 
-def _gather() -> np.ndarray:
-    """The matrix (40, 26) whose product with the joints gives each angle's two bones
-    (:func:`joint_angles`' 20 rows: the 15 flexions, then the 5 spreads): the parent
-    bone (the thumb's first: none, its rest heading is added), then the bone."""
-    out = np.zeros((40, 26))
-    for row, i in enumerate([*range(15), *BASES]):
-        if i:
-            out[row, PARENT_B[i]], out[row, PARENT_A[i]] = 1.0, -1.0
-        out[20 + row, ENDS[i]], out[20 + row, STARTS[i]] = 1.0, -1.0
-    return out
-
-
 def _cross_flat(axes: np.ndarray) -> np.ndarray:
     """Each axis' (n, 3) cross-product form flattened (n, 9): ``outer(a, b) · it`` is the
     triple product (a × b) · axis."""
@@ -247,14 +227,13 @@ def _cross_flat(axes: np.ndarray) -> np.ndarray:
     return out.reshape(len(axes), 9)
 
 
-GATHER = _gather()
 #: The flexion rows' forms (15, 9, 2) in the wrist's frame, a right hand's and a left
 #: hand's (its mirror image, the axis turned round): the triple product with the
 #: flexion axis, and the dot product.
 FLEX_FORMS = tuple(np.stack([_cross_flat(axes), np.tile(np.eye(3).ravel(), (15, 1))],
                             axis=2) for axes in (REST_Y, REST_Y * (-1.0, 1.0, -1.0)))
 #: The thumb's rest heading (its first bone's parent) in the wrist's frame: right, left.
-THUMB_REST = (THUMB_REST_X, THUMB_REST_X * (1.0, -1.0, 1.0))
+THUMB_REST = (np.ascontiguousarray(THUMB_REST_X), THUMB_REST_X * (1.0, -1.0, 1.0))
 #: x, y, z into the flattened cross-product form (3, 9): ``axes @ CROSS_FLAT``.
 CROSS_FLAT = _cross_flat(np.eye(3))
 
@@ -294,25 +273,11 @@ def joint_angles(p: np.ndarray, q: np.ndarray,
     in the wrist's frame) and, at a finger's base, its spread: the angle from the parent
     bone to the bone about an axis (a spread: seen along it), each atan2 of two
     quadratic forms of the two bones (:func:`angle_forms`; default: this sample's, no
-    spread), all 20 in one product: this runs for every hand every frame."""
+    spread), in C (:func:`systems._fingers.angles`): this runs for every hand every
+    frame."""
     forms, left = angle_forms(p, q) if forms is None else forms
-    return _angles(p[None], _matrix(q[1])[None], forms[None], THUMB_REST[left][None])[0]
-
-
-def _angles(p: np.ndarray, wrists: np.ndarray, forms: np.ndarray, thumbs: np.ndarray
-            ) -> np.ndarray:
-    """:func:`joint_angles` for n hands at once (n, 15, 2): their joints (n, 26, 3), wrist
-    matrices (n, 3, 3), forms (n, 20, 9, 2) and thumbs' rest headings (n, 3)."""
-    bones = (GATHER @ p) @ wrists  # parents (20), then bones, in each wrist's frame
-    bones[:, 0] = bones[:, 15] = thumbs  # the thumb's flexion and spread rows
-    n = len(p)
-    outer = (bones[:, :20, :, None] * bones[:, 20:, None, :]).reshape(n, 20, 1, 9)
-    yx = (outer @ forms).reshape(n, 20, 2)
-    turns = np.arctan2(yx[:, :, 0], yx[:, :, 1])
-    out = np.zeros((n, 15, 2))
-    out[:, :, 0] = turns[:, :15]
-    out[:, BASES, 1] = turns[:, 15:]
-    return out
+    return _fingers.angles(np.ascontiguousarray(p, float), np.ascontiguousarray(q, float),
+                           np.ascontiguousarray(forms, float), THUMB_REST[left])
 
 
 def build(engine: Engine, name: str, palm: int, sample: HandJoints, frame: Transform | None,
@@ -382,61 +347,24 @@ def aim(hands: list[tuple[Fingers, HandJoints, Transform | None]], now: float,
     counted from its zero, their rates from the sample before (zero once the samples
     stop coming), the torque bound (:data:`BONE_FORCE` at the tip, :data:`HOLD_FORCE`
     while holding). Also notes each hand's tracked bones' centres and velocities (the
-    fast-hand rays'), tips and palm. Every hand's angles in one pass
-    (:func:`joint_angles`' products, stacked): numpy's cost per call, not its
-    arithmetic, is what a frame of hands pays."""
-    joints = [world_joints(sample, frame) for _, sample, frame in hands]
-    p = np.stack([j[0] for j in joints])
-    forms, thumbs = _stacked([f for f, _, _ in hands])
-    angles = _angles(p, np.stack([_matrix(j[1][1]) for j in joints]), forms, thumbs)
-    centres = (p[:, STARTS] + p[:, ENDS]) * 0.5
-    return [_noted(f, sample, j, centres[i], angles[i], now, stale_after)
-            for i, ((f, sample, _), j) in enumerate(zip(hands, joints, strict=True))]
-
-
-#: The last hands :func:`aim` stacked, their forms (n, 20, 9, 2) and thumbs' rest
-#: headings (n, 3) (the same hands frame after frame: stacked once).
-_STACK: list[Any] = [(), None, None]
-
-
-def _stacked(hands: list[Fingers]) -> tuple[np.ndarray, np.ndarray]:
-    if len(hands) != len(_STACK[0]) or any(a is not b for a, b in zip(hands, _STACK[0],
-                                                                          strict=True)):
-        _STACK[:] = [tuple(hands), np.stack([f.forms[0] for f in hands]),
-                     np.stack([THUMB_REST[f.forms[1]] for f in hands])]
-    return _STACK[1], _STACK[2]
-
-
-def _noted(fingers: Fingers, sample: HandJoints, joints: tuple[np.ndarray, np.ndarray],
-           centres: np.ndarray, angles: np.ndarray, now: float, stale_after: float
-           ) -> np.ndarray:
-    """One hand's part of :func:`aim`: its sample's rates, velocities, tips, palm."""
-    p, q = joints
-    t, previous = sample.timestamp, fingers.sample
-    if previous is None or t > previous[0]:
-        if previous is not None:
-            fingers.velocity = (centres - previous[1]) / (t - previous[0])
-            fingers.rates = (angles - fingers.angles[1]) / (t - previous[0])
-        fingers.sample = (t, centres, q[STARTS])
-        fingers.angles = (t, angles)
-    if now - t > stale_after:
-        fingers.velocity = np.zeros((15, 3))
-        fingers.rates = np.zeros((15, 2))
-    fingers.tips = p[TIPS_AT]
-    fingers.palm = p[0]
-    return servo_rows(fingers, angles)
+    fast-hand rays'), tips and palm (:func:`systems._fingers.note`)."""
+    out = []
+    for fingers, sample, frame in hands:
+        p, q = world_joints(sample, frame)
+        fingers.fastest = _fingers.aim(fingers, p, q, THUMB_REST[fingers.forms[1]],
+                                       sample.timestamp, now - sample.timestamp > stale_after,
+                                       HOLD_FORCE if fingers.holding else BONE_FORCE, MAX_SPIN)
+        out.append(fingers.servos)
+    return out
 
 
 def servo_rows(fingers: Fingers, angles: np.ndarray) -> np.ndarray:
     """The servos' rows (15, 7) aiming at ``angles`` (tracked, 15 × 2) at the fingers'
     tracked rates, with the bound that fits whether the hand holds something."""
-    rows = fingers.servos
-    np.subtract(angles, fingers.zero, out=rows[:, 0:2])
-    rows[:, 2:4] = fingers.rates
-    if rows[0, 5] != fingers.time_constant:  # its first rows (then only hold() changes them)
-        rows[:, 4] = (HOLD_FORCE if fingers.holding else BONE_FORCE) * fingers.levers
-        rows[:, 5:7] = (fingers.time_constant, MAX_SPIN)
-    return rows
+    _fingers.servo_rows(fingers.servos, angles, fingers.zero, fingers.rates, fingers.levers,
+                        HOLD_FORCE if fingers.holding else BONE_FORCE,
+                        fingers.time_constant, MAX_SPIN)
+    return fingers.servos
 
 
 def still(fingers: Fingers) -> np.ndarray | None:
@@ -446,6 +374,7 @@ def still(fingers: Fingers) -> np.ndarray | None:
         return None
     fingers.rates = np.zeros((15, 2))
     fingers.velocity = np.zeros((15, 3))
+    fingers.fastest = 0.0
     return servo_rows(fingers, fingers.angles[1])
 
 
@@ -454,22 +383,15 @@ def palm_pose(previous: tuple[float, np.ndarray, ...] | None, sample: HandJoints
               ) -> tuple[float, np.ndarray, ...]:
     """The palm joint's world pose and velocities (t, p, q, v, w): the velocities by
     finite difference from ``previous`` (kept while no newer sample came; zero once the
-    samples stop coming)."""
+    samples stop coming; :func:`systems._fingers.palm_motion`)."""
     p, q = world_joints(sample, frame)
-    v = w = np.zeros(3)
-    if previous is not None:
-        t0, p0, q0, v, w = previous
-        if sample.timestamp > t0:
-            dt = sample.timestamp - t0
-            v, w = (p[0] - p0) / dt, np.array(rotation_vector(q0.tolist(),
-                                                              q[0].tolist())) / dt
-    if now - sample.timestamp > stale_after:
-        v = w = np.zeros(3)
-    return sample.timestamp, p[0], q[0], v, w
+    return _fingers.palm_motion(p, q, sample.timestamp, previous,
+                                now - sample.timestamp > stale_after)
 
 
-def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.ndarray,
-                dt: float, held: frozenset[int] = frozenset()) -> float:
+def sweep_share(engine: Engine, fingers: Fingers, palm: int,
+                palm_target: tuple[np.ndarray, ...], dt: float,
+                held: Container[int] = frozenset()) -> float:
     """How much of this frame's way to its targets the hand may go (0 to 1) before one
     of its bodies would pass through something: once the hand is fast enough for its
     thinnest bone to move its thickness in a frame, a ray per body that would move more
@@ -479,11 +401,13 @@ def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.nda
     into it (its contacts take it from there; a hand pressing on something is not
     held back). What the hand holds is no obstacle. Serial physics answers at once;
     threaded physics a frame later, so this frame goes unlimited. The bones' targets:
-    the tracked bones' centres and velocities (:func:`aim`'s)."""
+    the tracked bones' centres and velocities (:func:`aim`'s); the palm's: its pose and
+    velocities (position, orientation, velocity, spin)."""
     if fingers.sample is None:
         return 1.0
     centres, velocity = fingers.sample[1], fingers.velocity
-    speed = max(-velocity.min(), velocity.max(), *np.abs(palm_target[7:10]))
+    position, _, palm_velocity, _ = palm_target
+    speed = max(fingers.fastest, *map(abs, palm_velocity.tolist()))
     if 1.8 * speed * dt < fingers.thinnest:
         return 1.0  # slow: no body moves its thickness (√3 times an axis's speed bounds it)
     world = engine.world
@@ -492,7 +416,7 @@ def sweep_share(engine: Engine, fingers: Fingers, palm: int, palm_target: np.nda
         return 1.0
     bodies = [palm, *fingers.bones]
     here = np.vstack([palm_t.position, bone_table(engine, fingers)[:, :3]])
-    there = np.vstack([palm_target[:3] + palm_target[7:10] * dt,
+    there = np.vstack([position + palm_velocity * dt,
                        centres + velocity * dt])
     way = there - here
     far = np.linalg.norm(way, axis=1)
@@ -580,48 +504,18 @@ def _rows(engine: Engine, fingers: Fingers) -> np.ndarray:
     return rows
 
 
-def tips_of(engine: Engine, hands: list[Fingers]) -> np.ndarray:
-    """Where every hand's physical fingertips are (n, 5, 3), read in one go."""
-    if len(hands) == 1:
-        return tips_now(engine, hands[0])[None]
-    distal = engine.world.poses.table[np.concatenate([_rows(engine, f)[2::3]
-                                                      for f in hands])]
-    lengths = np.concatenate([f.lengths[2::3] for f in hands])
-    return _far_ends(distal, lengths).reshape(-1, 5, 3)
+def deviations(engine: Engine, fingers: Fingers) -> tuple[float, ...]:
+    """Each physical fingertip's distance (m; where the last step left it) from its
+    tracked one now, read from the pose table in one go."""
+    return _fingers.deviations(engine.world.poses.table, _rows(engine, fingers),
+                               fingers.lengths, fingers.tips)
 
 
-def tips_now(engine: Engine, fingers: Fingers, table: np.ndarray | None = None
-             ) -> np.ndarray:
-    """Where the physical fingertips are (5, 3): each distal bone's far end (from
-    ``table``, the bones' poses, when already read)."""
-    distal = (bone_table(engine, fingers) if table is None else table)[2::3]
-    return _far_ends(distal, fingers.lengths[2::3])
-
-
-def _far_ends(poses: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-    """The far ends (n, 3) of bones of ``lengths`` along their x axes, at ``poses``
-    (their pose-table rows: position, then quaternion)."""
-    return poses[:, :3] + x_axes(poses[:, 3:7]) * (lengths / 2)[:, None]
-
-
-def _x_form() -> np.ndarray:
-    """The first column of a unit quaternion's matrix as a quadratic form (16, 3): its
-    products q_i q_j (w x y z order, flattened) times this."""
-    form = np.zeros((4, 4, 3))
-    for i, j, k, c in ((0, 0, 0, 1), (1, 1, 0, 1), (2, 2, 0, -1), (3, 3, 0, -1),
-                       (1, 2, 1, 1), (2, 1, 1, 1), (3, 0, 1, 1), (0, 3, 1, 1),
-                       (1, 3, 2, 1), (3, 1, 2, 1), (2, 0, 2, -1), (0, 2, 2, -1)):
-        form[i, j, k] = c
-    return form.reshape(16, 3)
-
-
-_X_FORM = _x_form()
-
-
-def x_axes(q: np.ndarray) -> np.ndarray:
-    """Each unit quaternion's (n, 4) turned +x (n, 3): the first column of its matrix
-    alone, in two array operations (every frame, for every hand)."""
-    return (q[:, :, None] * q[:, None, :]).reshape(len(q), 16) @ _X_FORM
+def tips_now(engine: Engine, fingers: Fingers) -> np.ndarray:
+    """Where the physical fingertips are (5, 3): each distal bone's far end, read from the
+    pose table in one go (:func:`systems._fingers.far_ends`)."""
+    return _fingers.far_ends(engine.world.poses.table, fingers.lengths[2::3],
+                             _rows(engine, fingers)[2::3])
 
 
 def presses(contacts: np.ndarray, owner: dict[int, str], elapsed: float

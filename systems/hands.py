@@ -404,20 +404,12 @@ class HandDriveSystem(System):
             aiming.append((rig, fingers, sample, frame, pose))
         if not aiming:
             return rows
-        # every hand's angles, then every hand's physical tips, each in one pass
         aims = hand_fingers.aim([(f, s, fr) for _, f, s, fr, _ in aiming], inputs.now,
                                 STALE_AFTER)
-        away = hand_fingers.tips_of(engine, [f for _, f, _, _, _ in aiming]) - \
-            np.stack([f.tips for _, f, _, _, _ in aiming])
-        deviations = np.sqrt((away * away).sum(axis=2)).tolist()
-        found = engine.world.try_component
-        for (rig, fingers, _, _, pose), servos, deviation in zip(aiming, aims, deviations,
-                                                                 strict=True):
+        for (rig, fingers, _, _, pose), servos in zip(aiming, aims, strict=True):
             rows.append((fingers, servos))
-            self._sweep(engine, rig, fingers, np.concatenate(pose), dt)
-            state = found(rig.hand, HandState)
-            if state is not None:  # each physical tip (the last step's) from its tracked one
-                state.finger_deviation = tuple(deviation)
+            self._sweep(engine, rig, fingers, pose, dt)
+            self._deviation(engine, rig, fingers)
         return rows
 
     @staticmethod
@@ -425,22 +417,20 @@ class HandDriveSystem(System):
         """Each physical tip (where the last step left it) from its tracked one now."""
         found = engine.world.try_component(rig.hand, HandState)
         if found is not None:
-            away = hand_fingers.tips_now(engine, fingers) - fingers.tips
-            found.finger_deviation = tuple(np.sqrt((away * away).sum(axis=1)).tolist())
+            found.finger_deviation = hand_fingers.deviations(engine, fingers)
 
     @staticmethod
-    def _sweep(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers, palm: np.ndarray,
-               dt: float) -> None:
+    def _sweep(engine: Engine, rig: _Rig, fingers: hand_fingers.Fingers,
+               palm: tuple[np.ndarray, ...], dt: float) -> None:
         """A fast hand's palm target held short of what the hand would pass (its fingers
         hang on it by their joints)."""
         if not fingers.colliding:
             return
-        share = hand_fingers.sweep_share(engine, fingers, rig.hand, palm, dt,
-                                         frozenset(rig.grasps))
+        share = hand_fingers.sweep_share(engine, fingers, rig.hand, palm, dt, rig.grasps)
         if share >= 1.0:
             return
         world = engine.world
-        row = palm[None].copy()
+        row = np.concatenate(palm)[None]
         hand_fingers.limit(row, world.component_for_entity(rig.hand, Transform).position,
                            share)
         engine.physics.push(SetPoses([rig.control], row))
