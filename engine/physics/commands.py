@@ -459,16 +459,16 @@ class SetPoses(Command):
 
     def __post_init__(self) -> None:
         keys, table = keyed_table("SetPoses", self.keys, self.table, 13, "entity")
-        bad = ~np.isfinite(table).all(axis=1)
-        if bad.any():
+        bad = None if np.isfinite(table).all() else ~np.isfinite(table).all(axis=1)
+        if bad is not None:
             raise CommandError(f"SetPoses: body {keys[bad][0]}'s row is not 13 finite "
                                f"numbers: {table[bad][0].tolist()}")
         norm = np.sqrt(np.einsum("ij,ij->i", table[:, 3:7], table[:, 3:7]))
         if (norm == 0.0).any():
             raise CommandError(f"SetPoses: body {keys[norm == 0.0][0]}'s orientation must "
                                "be a non-zero quaternion w, x, y, z")
-        off = np.abs(norm - 1.0) > UNIT_ROUNDING  # unit to rounding: kept bit-exact
-        if off.any():
+        if np.abs(norm - 1.0).max(initial=0.0) > UNIT_ROUNDING:  # unit to rounding: as it is
+            off = np.abs(norm - 1.0) > UNIT_ROUNDING
             table[off, 3:7] /= norm[off, None]
         self._set("keys", keys)
         self._set("table", table)
@@ -674,6 +674,9 @@ def _rows_inside(command: SetPoses, limits: Limits) -> None:
     """:func:`check_limits` for every row of a :class:`SetPoses` at once: positions in
     the world, speeds under the limit (the first row that is not is told, by its body)."""
     table = command.table
+    if not len(table) or (np.abs(table[:, 0:3]).max() <= limits.extent and
+                          np.abs(table[:, 7:13]).max() * math.sqrt(3.0) <= limits.max_speed):
+        return  # (no component past the limit over √3: no speed past it)
     out = (np.abs(table[:, 0:3]) > limits.extent).any(axis=1)
     if out.any():
         row = int(np.flatnonzero(out)[0])
