@@ -70,8 +70,7 @@ def test_check_and_keys_load_no_heavy_library(command: str, plain: Path) -> None
 def test_a_run_of_a_plain_scene_loads_none_of_what_it_does_not_use(plain: Path) -> None:
     loaded = loaded_by(cli("run", str(plain), "--frames", "1", "--headless", "--fast"),
                        plain.parent)
-    unused = set(HEAVY) - {"lupa"}  # the scripting plugin starts Lua for every scene
-    assert loaded.isdisjoint(unused), sorted(loaded & unused)
+    assert loaded.isdisjoint(HEAVY), sorted(loaded & set(HEAVY))  # Lua only for scripts
     assert "esper" in loaded and "numpy" in loaded  # it did run
 
 
@@ -80,3 +79,13 @@ def test_a_scene_with_a_model_loads_the_model_library(plain: Path) -> None:
     demo = ROOT / "content" / "demo"
     loaded = loaded_by(cli("check", str(demo)), plain.parent)
     assert {"trimesh", "soundfile"} <= loaded
+
+
+def test_a_scene_with_a_script_starts_lua(plain: Path) -> None:
+    """Lua comes with the scene's first script, also one added to a plain scene."""
+    (plain / "scripts").mkdir()
+    (plain / "scripts" / "scene.lua").write_text("x = 1\n", encoding="utf-8")
+    (plain / "main.scene").write_text(PLAIN + 'Script "scripts/scene.lua"\n', encoding="utf-8")
+    loaded = loaded_by(cli("run", str(plain), "--frames", "1", "--headless", "--fast"),
+                       plain.parent)
+    assert "lupa" in loaded
