@@ -182,7 +182,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run(sub)
     _add_serve_and_join(sub)
     _add_sweep_and_score(sub)
-    from app.experiments.cli import add_parser as add_experiment_parser
+    from app.experiments.parser import add_parser as add_experiment_parser
 
     add_experiment_parser(sub, add_run_flags, add_param_flag)
     _add_files(sub)
