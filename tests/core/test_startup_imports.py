@@ -18,6 +18,14 @@ ROOT = Path(__file__).resolve().parents[2]
 #: Loaded only by a scene (or a command) that uses them.
 HEAVY = ("trimesh", "scipy", "moderngl", "lupa", "openal", "matplotlib", "zmq", "dask",
          "pythonosc", "soundfile", "PIL", "pymunk", "pylsl", "serial")
+#: Our own modules (and the standard library's, numpy's) that reading a scene file without
+#: models, shaders or random numbers does not need: they come with a run, a model, a
+#: shader, a command that writes.
+NOT_FOR_READING = ("engine.app", "engine.events", "engine.physics.commands",
+                   "engine.physics.driver", "engine.interchange.importer",
+                   "engine.assets.gltf", "engine.assets.dae", "engine.assets.skinned",
+                   "services.render", "app.experiments.cli", "engine.experiments.session",
+                   "numpy.random", "subprocess", "tempfile", "hashlib")
 #: A scene with boxes and a ground: no model, script, sound, shader or device.
 PLAIN = """World { Gravity [0 0 -9.81] }
 Object { ID "ground" Dynamic 0 VisualAttributes { Geometry { Primitive "plane" } }
@@ -28,10 +36,12 @@ Object { ID "box" Position [0 0 1]
 """
 
 
-def loaded_by(code: str, cwd: Path) -> set[str]:
-    """Top-level modules in ``sys.modules`` after ``code`` ran in a fresh interpreter."""
+def loaded_by(code: str, cwd: Path, whole: bool = False) -> set[str]:
+    """Top-level modules (``whole``: every module, by its full name) in ``sys.modules``
+    after ``code`` ran in a fresh interpreter."""
+    name = "m" if whole else "m.split('.')[0]"
     probe = (f"{code}\nimport json, sys\n"
-             "print(json.dumps(sorted({m.split('.')[0] for m in sys.modules})))")
+             f"print(json.dumps(sorted({{{name} for m in sys.modules}})))")
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     done = subprocess.run([sys.executable, "-c", probe], cwd=cwd, env=env, capture_output=True,
                           text=True, timeout=120, check=False)
@@ -65,6 +75,16 @@ def test_check_and_keys_load_no_heavy_library(command: str, plain: Path) -> None
     loaded = loaded_by(cli(*argv), plain.parent)
     assert loaded.isdisjoint(HEAVY), sorted(loaded & set(HEAVY))
     assert "esper" not in loaded  # reading a scene needs no ECS world
+
+
+@pytest.mark.parametrize("command", ["check", "keys"])
+def test_reading_a_plain_scene_loads_none_of_our_runtime(command: str, plain: Path) -> None:
+    """Nor the engine's runtime, its model importers, the renderer, the experiment runner
+    or numpy.random (parse draws no number from a scene that has none)."""
+    argv = ("check", str(plain)) if command == "check" else ("keys",)
+    loaded = loaded_by(cli(*argv), plain.parent, whole=True)
+    assert loaded.isdisjoint(NOT_FOR_READING), sorted(loaded & set(NOT_FOR_READING))
+    assert "engine.scene.blocks" in loaded  # it did read the blocks
 
 
 def test_a_run_of_a_plain_scene_loads_none_of_what_it_does_not_use(plain: Path) -> None:
