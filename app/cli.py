@@ -160,7 +160,11 @@ JOIN_FLAGS = ("seconds", "frames", "headless", "sound", "screenshot", "record_fr
 
 
 def add_run_flags(parser: argparse.ArgumentParser, names: tuple[str, ...]) -> None:
-    limit = parser.add_mutually_exclusive_group()
+    """``names``' flags; ``--seconds`` and ``--frames`` exclude each other. The group is
+    made only where one of them is taken (argparse fails on an empty group when it
+    prints the usage: ``colosseum experiment run`` without its arguments did)."""
+    limit = parser.add_mutually_exclusive_group() if {"seconds", "frames"} & set(names) \
+        else parser
     for name in names:
         flags, options = RUN_FLAG_TABLE[name]
         (limit if name in ("seconds", "frames") else parser).add_argument(*flags, **options)
@@ -172,17 +176,53 @@ def add_param_flag(parser: argparse.ArgumentParser) -> None:
                         "built (repeatable; what colosseum sweep varies)")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``colosseum`` command: one helper per group of sub-commands."""
+class _OnlyCommand:
+    """The sub-commands' action, passing on only ``name``'s parser: ``colosseum check``
+    builds check's arguments alone, not the other commands' (a few milliseconds of its
+    start). The others' parsers are never made, so they take no arguments either."""
+
+    def __init__(self, sub: Any, name: str) -> None:
+        self.sub, self.name = sub, name
+
+    def add_parser(self, name: str, **kwargs: Any) -> Any:
+        return self.sub.add_parser(name, **kwargs) if name == self.name else _Unused()
+
+
+class _Unused:
+    """A parser not built: whatever is asked of it, it takes and does nothing."""
+
+    def __getattr__(self, name: str) -> Any:
+        return lambda *args, **kwargs: self
+
+
+#: ``--log-level``'s choices.
+LOG_LEVELS = ("debug", "info", "warning", "error")
+
+
+def _command_named(argv: list[str]) -> str | None:
+    """The sub-command ``argv`` names, where it names a known one before anything else
+    (``--log-level LEVEL`` may come first); None otherwise (``--help``, a mistake)."""
+    rest = list(argv)
+    if rest and rest[0] == "--log-level" and len(rest) > 1 and rest[1] in LOG_LEVELS:
+        rest = rest[2:]
+    elif rest and rest[0].startswith("--log-level=") and rest[0][12:] in LOG_LEVELS:
+        rest = rest[1:]
+    return rest[0] if rest and rest[0] in COMMANDS else None
+
+
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The ``colosseum`` command: one helper per group of sub-commands; with ``only``,
+    that sub-command's arguments alone (what parsing a command line naming it needs)."""
     parser = argparse.ArgumentParser(prog="colosseum", description=__doc__.splitlines()[0])
-    parser.add_argument("--log-level", default="info",
-                        choices=["debug", "info", "warning", "error"],
+    parser.add_argument("--log-level", default="info", choices=list(LOG_LEVELS),
                         help="how much to log (default: info)")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    if only is not None:
+        sub = _OnlyCommand(sub, only)
     _add_run(sub)
     _add_serve_and_join(sub)
     _add_sweep_and_score(sub)
-    from app.experiments.cli import add_parser as add_experiment_parser
+    from app.experiments.parser import add_parser as add_experiment_parser
 
     add_experiment_parser(sub, add_run_flags, add_param_flag)
     _add_files(sub)
@@ -356,7 +396,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     """The command line as parsed, where a command's trailing path may also come after its
     options (``join tcp://HOST:PORT --user alice my_sim``: argparse alone stops taking
     positionals once an option follows the first)."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else argv
+    parser = build_parser(only=_command_named(argv))
     args, extra = parser.parse_known_args(argv)
     if (len(extra) == 1 and not extra[0].startswith("-") and hasattr(args, "path")
             and args.path is None):

@@ -230,7 +230,7 @@ def _stamp(path: Path) -> tuple[int, int] | None:
     return info.st_mtime_ns, info.st_size
 
 
-def _build(content: Content, rng: np.random.Generator, params: dict[str, str] | None = None,
+def _build(content: Content, rng: np.random.Generator | None, params: dict[str, str] | None = None,
            allow: Iterable[Path] = (), skipped: Collection[Loc] = ()
            ) -> tuple[Content, SceneSpec]:
     """Parse, leave out the parts at ``skipped``, find the content folder, import its
@@ -283,7 +283,7 @@ def check_path(path: Path, output: str = "text", allow: Iterable[Path] = ()) -> 
     from engine.scene.diagnostics import Reporter
 
     try:  # as a run reads it: the content's asset loaders first, a saved state's folder
-        content, spec = _build(resolve(path), np.random.default_rng(0), allow=allow)
+        content, spec = _build(resolve(path), None, allow=allow)  # the parser's seed-0 rng
         assert spec.db is not None
         report = Report(Reporter([*spec.db.warnings, *spec.problems,
                                   *shader_diagnostics(spec, content.folder)]).diagnostics,
@@ -306,6 +306,8 @@ def shader_diagnostics(spec: SceneSpec, folder: Path) -> list:
     """Warnings, from the GLSL source alone (no GPU), about what a run that draws would
     warn about: uniforms of a program that nothing sets, vertex inputs the engine never
     feeds (:func:`services.render.shaders.unset_in_source`), at the shader file's line."""
+    if not spec.shader_programs:  # the renderer's modules only for a scene with shaders
+        return []
     from engine.scene import Diagnostic
     from engine.scene.diagnostics import WARNING
     from services.render.glsl import DEFAULT_USER_VERTEX

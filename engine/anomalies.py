@@ -28,10 +28,12 @@ import difflib
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from engine.events import AnomalySwitched
 from engine.system import PluginName
+
+if TYPE_CHECKING:
+    from engine.events import AnomalySwitched
 
 #: A parameter's value: a number, numbers (a vector) or a word.
 Value = float | tuple[float, ...] | str
@@ -356,6 +358,8 @@ class Anomalies:
             state.enabled = bool(enabled)
         if (switched or checked or onset is not None or eye is not None) and \
                 self.emit is not None:
+            from engine.events import AnomalySwitched  # a scene's check emits none
+
             self.emit(AnomalySwitched(state.id, state.kind.name, state.enabled, state.onset,
                                       tuple(state.values.items()), source))
         return problems

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import stat
-import tempfile
 from pathlib import Path
 
 
@@ -32,6 +31,8 @@ def write_atomic(path: Path, text: str, mode: int | None = None) -> None:
     path = Path(path)
     if mode is None:
         mode = file_mode(path)
+    import tempfile  # (and random) for a command that writes, not for every check
+
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
         os.fchmod(fd, mode if mode is not None else _default_mode())

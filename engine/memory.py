@@ -13,7 +13,6 @@ TRIM_THRESHOLD bytes of it free at its top), the next frame reuses it.
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
 import gc
 import logging
 from collections.abc import Iterator
@@ -30,10 +29,11 @@ _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3  # glibc's mallopt parameters
 
 def keep_freed_memory() -> bool:
     """Set glibc's thresholds for a frame loop; False where the C library is not glibc
-    (nothing to do there)."""
-    name = ctypes.util.find_library("c")
+    (nothing to do there). ``mallopt`` is looked up among the symbols the process has
+    loaded (the C library among them): ``ctypes.util.find_library`` would run
+    ``ldconfig`` and import ``subprocess`` at every command's start."""
     try:
-        mallopt = ctypes.CDLL(name).mallopt
+        mallopt = ctypes.CDLL(None).mallopt
     except (OSError, AttributeError, TypeError):
         return False
     ok = bool(mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)) and bool(

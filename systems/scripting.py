@@ -90,27 +90,21 @@ class ScriptingSystem(System):
         #: (by then the hand's grip has opened).
         self._grips: dict[tuple[int, int], tuple[str, ...]] = {}
         self._world: World | None = None
+        self._engine: Engine | None = None
 
     # -- setup ------------------------------------------------------------------
     def setup(self, engine: Engine) -> None:
-        content = engine.config.content_dir
-        scripts_dir = Path(content) / "scripts" if content is not None else None
-        limits = self.limits or engine.config.options.get("script_limits") or ScriptLimits()
-        api = ScriptAPI(engine)
-        self.api = api
-        runtime = ScriptRuntime(limits, scripts_dir, api=api.install, seed=engine.config.seed)
-        runtime.emit_hook = lambda name, data: engine.events.emit(CustomEvent(name, data))
-        self.runtime = runtime
-        engine.insert_resource(runtime)
+        self._engine = engine
+        self.api = ScriptAPI(engine)
         engine.insert_resource(self)
         engine.insert_resource(self, as_type=ScriptStates)
         world = engine.world
         self._exists = world.entity_exists
         self._world = world
-        world.on_add(Script, lambda e, c: self._pending.append((e, c)))
+        world.on_add(Script, self._added)
         world.on_remove(Script, lambda e, c: self._unload(e))
         for entity, script in world.get_component(Script):
-            self._pending.append((entity, script))
+            self._added(entity, script)
         events = engine.events
         events.subscribe(Contacts, self._on_contacts)
         events.subscribe(ContactBegan, lambda ev: self._on_touch(
@@ -120,25 +114,65 @@ class ScriptingSystem(System):
         events.subscribe(HandGrasped, lambda ev: self._on_grip("onGrasp", ev.hand, ev.object))
         events.subscribe(HandReleased, lambda ev: self._on_grip("onRelease", ev.hand,
                                                                 ev.object))
-        events.subscribe(KeyEvent, lambda ev: runtime.broadcast("onKey", ev.key, ev.pressed))
-        events.subscribe(Button, lambda ev: runtime.broadcast("onButton", ev.device, ev.name,
-                                                             ev.pressed))
-        events.subscribe(Axis, lambda ev: runtime.broadcast(
+        self._subscribe_broadcasts(engine)
+
+    def _added(self, entity: int, script: Script) -> None:
+        """A Script component came: it loads at the next frame, in a runtime started now
+        if this is the first (a scene without scripts never starts Lua)."""
+        if self.runtime is None:
+            self._start_runtime()
+        self._pending.append((entity, script))
+
+    def _start_runtime(self) -> ScriptRuntime:
+        """The Lua runtime with the API installed, made a resource of the engine."""
+        engine = self._engine
+        assert engine is not None and self.api is not None
+        content = engine.config.content_dir
+        scripts_dir = Path(content) / "scripts" if content is not None else None
+        limits = self.limits or engine.config.options.get("script_limits") or ScriptLimits()
+        runtime = ScriptRuntime(limits, scripts_dir, api=self.api.install,
+                                seed=engine.config.seed)
+        runtime.emit_hook = lambda name, data: engine.events.emit(CustomEvent(name, data))
+        self.runtime = runtime
+        engine.insert_resource(runtime)
+        return runtime
+
+    def _subscribe_broadcasts(self, engine: Engine) -> None:
+        """Input, timer, custom and despawn events for the scripts, once a runtime runs
+        (before it, no script is there to hear them)."""
+        def broadcast(callback: str, *args: object) -> None:
+            if self.runtime is not None:
+                self.runtime.broadcast(callback, *args)
+
+        def deliver(ev: CustomEvent) -> None:
+            if self.runtime is not None:
+                self.runtime.deliver(ev.name, ev.data)
+
+        def forget(ev: Despawned) -> None:
+            if self.runtime is not None:
+                self.runtime.kernel.forget(ev.entity)
+
+        events = engine.events
+        events.subscribe(KeyEvent, lambda ev: broadcast("onKey", ev.key, ev.pressed))
+        events.subscribe(Button, lambda ev: broadcast("onButton", ev.device, ev.name,
+                                                      ev.pressed))
+        events.subscribe(Axis, lambda ev: broadcast(
             "onInput", f"axis:{ev.device}/{ev.name}", ev.value))
-        events.subscribe(WheelCount, lambda ev: runtime.broadcast(
-            "onInput", f"wheel:{ev.device}", ev.count))
+        events.subscribe(WheelCount, lambda ev: broadcast("onInput", f"wheel:{ev.device}",
+                                                          ev.count))
         events.subscribe(TrackerPose, lambda ev: self._poses.__setitem__(ev.device, ev))
-        events.subscribe(DeviceLost, lambda ev: runtime.broadcast("onDeviceLost", ev.device))
-        events.subscribe(DeviceFound, lambda ev: runtime.broadcast("onDeviceFound",
-                                                                   ev.device))
-        events.subscribe(TimerEvent, lambda ev: runtime.broadcast("onTimer", ev.name))
-        events.subscribe(CustomEvent, lambda ev: runtime.deliver(ev.name, ev.data))
-        events.subscribe(Despawned, lambda ev: runtime.kernel.forget(ev.entity))
+        events.subscribe(DeviceLost, lambda ev: broadcast("onDeviceLost", ev.device))
+        events.subscribe(DeviceFound, lambda ev: broadcast("onDeviceFound", ev.device))
+        events.subscribe(TimerEvent, lambda ev: broadcast("onTimer", ev.name))
+        events.subscribe(CustomEvent, deliver)
+        events.subscribe(Despawned, forget)
 
     # -- per frame --------------------------------------------------------------
     def run(self, engine: Engine, dt: float) -> None:
         runtime = self.runtime
-        assert runtime is not None
+        if runtime is None:  # no script yet: nothing to run, no Lua started
+            self._poses.clear()
+            return
         runtime.time = engine.time  # timers run on the simulation's clock (a saved one too)
         if self._pending:
             self._load_pending(engine)

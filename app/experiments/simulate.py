@@ -31,7 +31,8 @@ from app.runner import fail
 def participant_run(path: str, participant: int, sessions: str, seed: int,
                     params: list[tuple[str, str]]) -> int:
     """One simulated participant's session (a Dask task); the exit code."""
-    from app.experiments.cli import RUN_FLAGS, run
+    from app.experiments.cli import run
+    from app.experiments.parser import RUN_FLAGS
 
     args = argparse.Namespace(
         path=path, participant=participant, resume=False, sessions=Path(sessions),

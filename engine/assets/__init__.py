@@ -43,7 +43,10 @@ could not convert string to float: 'zero'
 >>> unregister_loader("model", ".tri")
 """
 
-from engine.assets import dae, gltf, loaders, skinned
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from engine.assets.registry import (
     KINDS,
     Loader,
@@ -61,8 +64,12 @@ from engine.assets.service import (
     reason,
     split_nodes,
 )
-from engine.assets.skinned import AnimationClip, Channel, SkinnedModel, SkinnedPart
 from engine.assets.types import ImageAsset, MeshPart, ModelAsset, mesh_part, vertex_normals
+from engine.lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from engine.assets import dae, gltf, loaders, skinned
+    from engine.assets.skinned import AnimationClip, Channel, SkinnedModel, SkinnedPart
 
 __all__ = [
     "KINDS",
@@ -92,3 +99,8 @@ __all__ = [
     "unregister_loader",
     "vertex_normals",
 ]
+
+#: The glTF, Collada and avatar readers load when a scene names such a file (the registry
+#: imports them at its first lookup) or when a module imports them.
+__getattr__, __dir__ = lazy_exports(__name__, {
+    "engine.assets.skinned": ("AnimationClip", "Channel", "SkinnedModel", "SkinnedPart")})

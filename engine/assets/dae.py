@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from engine.assets.gltf import decompose
-from engine.assets.registry import register_loader
+from engine.assets.registry import built_in_loader
 from engine.assets.types import WHITE, MeshPart, ModelAsset, vertex_normals
 
 #: A file's axes (right, up, in) -> the engine's (X, Z, -Y), by ``<up_axis>``.
@@ -208,4 +208,4 @@ def _placed(part: MeshPart, matrix: np.ndarray) -> MeshPart:
                     part.color, part.texture, part.name)
 
 
-register_loader("document", ".dae")(ColladaDocument.read)
+built_in_loader("document", ".dae")(ColladaDocument.read)

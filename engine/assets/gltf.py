@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from engine.assets.loaders import rgba_pixels
-from engine.assets.registry import register_loader
+from engine.assets.registry import built_in_loader
 from engine.assets.types import WHITE, MeshPart, ModelAsset, vertex_normals
 from engine.rotation import compose
 
@@ -694,4 +694,4 @@ def _split_glb(data: bytes) -> tuple[dict[str, Any], bytes | None]:
     return _json(chunks[_CHUNK_JSON]), chunks.get(_CHUNK_BIN)
 
 
-register_loader("document", ".gltf", ".glb")(GltfDocument.read)
+built_in_loader("document", ".gltf", ".glb")(GltfDocument.read)

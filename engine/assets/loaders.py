@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from engine.assets.registry import register_loader
+from engine.assets.registry import built_in_loader
 from engine.assets.types import WHITE, ImageAsset, MeshPart, ModelAsset
 
 if TYPE_CHECKING:
@@ -34,7 +34,7 @@ MAX_IMAGE_PIXELS = 8192 * 8192
 _Y_UP_TO_Z_UP = np.array([[1.0, 0, 0, 0], [0, 0, -1.0, 0], [0, 1.0, 0, 0], [0, 0, 0, 1.0]])
 
 
-@register_loader("model", *MODEL_EXTENSIONS)
+@built_in_loader("model", *MODEL_EXTENSIONS)
 def load_trimesh_model(path: Path) -> ModelAsset:
     """Every triangle geometry of the file's scene, placed by its node, one part per
     geometry (trimesh splits by material), glTF turned Z up."""
@@ -133,7 +133,7 @@ def check_image_size(width: int, height: int) -> None:
                          f"decoded (a decompression bomb, or far too large)")
 
 
-@register_loader("image", *IMAGE_EXTENSIONS)
+@built_in_loader("image", *IMAGE_EXTENSIONS)
 def load_pillow_image(path: Path) -> ImageAsset:
     """Pixels through Pillow; the size is checked from the header before decoding."""
     from PIL import Image, UnidentifiedImageError
@@ -150,7 +150,7 @@ def load_pillow_image(path: Path) -> ImageAsset:
         raise ValueError(f"not decoded: {str(exc).rstrip('.')}") from None
 
 
-@register_loader("sound", *SOUND_EXTENSIONS)
+@built_in_loader("sound", *SOUND_EXTENSIONS)
 def load_sound_info(path: Path) -> SoundInfo:
     """The sound's header (rate, channels, frames), checked; decoding is per use
     (:meth:`engine.assets.Assets.clip`), since positional sources need a mono mixdown

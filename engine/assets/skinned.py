@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from engine.assets.registry import register_loader
+from engine.assets.registry import built_in_loader
 from engine.assets.types import WHITE, vertex_normals
 from engine.confine import Confinement
 
@@ -124,7 +124,7 @@ class SkinnedModel:
         return self.node_names.index(name) if name in self.node_names else None
 
 
-@register_loader("skin", ".glb", ".gltf", ".vrm")
+@built_in_loader("skin", ".glb", ".gltf", ".vrm")
 def load_skinned(path: Path) -> SkinnedModel:
     """Read a ``.glb``/``.gltf`` as a :class:`SkinnedModel` (raises ValueError with a
     reason on a file that cannot be used)."""

@@ -11,9 +11,21 @@ One module per format: :mod:`.gltf_physics`, :mod:`.collada`, :mod:`.extras`; th
 format-neutral declarations and their scene blocks are :mod:`.model`.
 """
 
-from engine.interchange.importer import FORMATS, Imported, import_model, read_model
-from engine.interchange.model import ModelDiagnostic
-from engine.interchange.models import expand_models
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from engine.lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from engine.interchange.importer import FORMATS, Imported, import_model, read_model
+    from engine.interchange.model import ModelDiagnostic
+    from engine.interchange.models import expand_models
 
 __all__ = ["FORMATS", "Imported", "ModelDiagnostic", "expand_models", "import_model",
            "read_model"]
+
+__getattr__, __dir__ = lazy_exports(__name__, {
+    "engine.interchange.importer": ("FORMATS", "Imported", "import_model", "read_model"),
+    "engine.interchange.model": ("ModelDiagnostic",),
+    "engine.interchange.models": ("expand_models",)})

@@ -25,6 +25,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+import engine.scene.blocks  # noqa: F401  (every block in the schema, before it is read below)
 from engine.interchange.model import ImportedScene, ObjectDecl, Problems
 from engine.scene import schema as sc
 from engine.scene.db import INCLUDE, STRING, STRUCTURE, Block, Entry, Value

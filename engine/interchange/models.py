@@ -23,7 +23,6 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from engine.assets import AssetError, Assets
-from engine.interchange.importer import FORMATS, import_model
 from engine.scene.db import STRING, STRUCTURE, Block, Entry, SceneDB, Value
 from engine.scene.diagnostics import ERROR, Diagnostic, Reporter
 from engine.scene.validate import validate
@@ -40,6 +39,8 @@ def expand_models(db: SceneDB, folder: Path, report: Reporter,
     entries = [e for e in db.root if e.key == MODEL and e.value.kind == STRUCTURE]
     if not entries:
         return []
+    from engine.interchange.importer import FORMATS, import_model  # only with a Model block
+
     materials = [str(b.get("ID")) for b in db.root.blocks("Material")]
     has_world = bool(db.root.blocks("World"))
     materials += list((known or {}).get("Material", ()))

@@ -45,7 +45,6 @@ from engine.physics.backend import (
     SleepState,
     WorldSettings,
 )
-from engine.physics.commands import SetSleepState
 from engine.realtime import TIME_STEP
 from engine.rotation import view_problem
 from engine.scene.db import (
@@ -629,6 +628,8 @@ def instantiate(engine: Engine, spec: SceneSpec, as_scene: bool = True) -> dict[
         js.joint.body_b = None if b is None else ids[b]
         joints[js.id] = engine.spawn(Name(js.id), js.joint)
     if spec.sleep:  # after the bodies and their joints (whose motors wake them) are made
+        from engine.physics.commands import SetSleepState  # a running engine has it loaded
+
         sleep = [SetSleepState(ids[oid], state) for oid, state in spec.sleep.items()]
         engine.defer(lambda: [engine.physics.push(command) for command in sleep])
     if as_scene:

@@ -119,7 +119,7 @@ class Parser:
 
     def __init__(self, rng: np.random.Generator | None, limits: Limits,
                  base_dir: Path | None = None, confine: Confinement | None = None):
-        self.rng = rng if rng is not None else np.random.default_rng(0)
+        self._rng = rng
         self.base_dir = base_dir
         #: Where included files may be (the content folder and the folders allowed).
         self.confine = confine or Confinement.of(base_dir or Path.cwd())
@@ -128,6 +128,14 @@ class Parser:
         self.scopes: list[dict[str, float]] = [{}]
         self.stack: list[str] = []
         self.files = 0
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The caller's generator, else one seeded 0, made at the first draw: a scene that
+        draws no random number loads no ``numpy.random``."""
+        if self._rng is None:
+            self._rng = np.random.default_rng(0)
+        return self._rng
 
     # -- files -------------------------------------------------------------
     def parse_file(self, path: Path, at: Loc | None = None) -> Block:

@@ -52,7 +52,6 @@ from engine.physics.backend import (
     SupportsExactState,
     SupportsSleepState,
 )
-from engine.physics.driver import PhysicsUnavailable
 from engine.rotation import quat_to_euler
 from engine.scene.db import (
     FLOAT,
@@ -627,6 +626,8 @@ def _physics_state(engine: Engine) -> tuple[int | None, dict[int, SleepState] | 
                                              dict[int, _Row]]:
     """The solver's random state, each body's auto-sleep state and its exact state, where
     the backend has them (none without local physics: a node, or physics stopped)."""
+    from engine.physics.driver import PhysicsUnavailable  # reading a scene needs no driver
+
     try:
         return engine.physics.request(lambda backend: (
             getattr(backend, "solver_seed", None),

@@ -27,7 +27,6 @@ services.net.protocol.MessageError: unknown request type 'launch' (known: bye, h
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 from pathlib import Path
@@ -123,6 +122,8 @@ _NOT_CONTENT_SUFFIXES = (".pyc", ".bak")
 def content_fingerprint(folder: Path) -> str:
     """A hash of a content folder: every file's path and bytes, hidden files, caches and
     ``.bak`` files left out. Two nodes with the same hash run the same content."""
+    import hashlib  # OpenSSL loads for serve and join only, not at every command's start
+
     digest = hashlib.sha256()
     root = Path(folder).resolve()
     for base, dirs, files in os.walk(root):

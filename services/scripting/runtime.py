@@ -20,8 +20,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import lupa.lua54 as lua54
-
 from components.script import SavedScript, ScriptHandler, ScriptTimer
 from services.scripting.persist import lua_literal
 from services.scripting.sandbox import (
@@ -36,7 +34,27 @@ from services.scripting.sandbox import (
 
 log = logging.getLogger("colosseum.script")
 
-LuaError = lua54.LuaError
+#: ``lupa.lua54``, imported when the first runtime starts (:func:`load_lua`): a run whose
+#: scene has no script loads no Lua.
+lua54: Any = None
+
+
+class _NoLuaYet(Exception):
+    """Stands for lupa's ``LuaError`` until Lua is loaded; nothing raises it (every
+    ``except LuaError`` is in a runtime's method, and a runtime loads Lua first)."""
+
+
+LuaError: type[Exception] = _NoLuaYet
+
+
+def load_lua() -> Any:
+    """``lupa.lua54``, imported once, on first use; ``LuaError`` is then lupa's."""
+    global lua54, LuaError
+    if lua54 is None:
+        import lupa.lua54 as module
+
+        lua54, LuaError = module, module.LuaError
+    return lua54
 
 
 @dataclass(slots=True)
@@ -159,10 +177,10 @@ class ScriptRuntime:
                  seed: int | None = None) -> None:
         self.limits = limits or ScriptLimits()
         self.scripts_dir = scripts_dir
-        self.lua = lua54.LuaRuntime(register_eval=False, register_builtins=False,
-                                    attribute_filter=_refuse_attribute,
-                                    unpack_returned_tuples=True,
-                                    max_memory=self.limits.memory)
+        self.lua = load_lua().LuaRuntime(register_eval=False, register_builtins=False,
+                                         attribute_filter=_refuse_attribute,
+                                         unpack_returned_tuples=True,
+                                         max_memory=self.limits.memory)
         ticks = max(1, self.limits.instructions // HOOK_STEP)
         k = self.lua.execute(KERNEL, HOOK_STEP, ticks, BUDGET_MESSAGE, INSTRUCTIONS_PER_SECOND,
                              name="=colosseum")
@@ -661,7 +679,8 @@ class ScriptRuntime:
 
 def to_python(value: Any, depth: int = 0) -> Any:
     """A Lua value as plain Python data (tables become lists or dicts), bounded in size."""
-    if lua54.lua_type(value) == "table":
+    lua_type = load_lua().lua_type
+    if lua_type(value) == "table":
         if depth > 16:
             raise ValueError("event data nested too deeply (more than 16 levels)")
         items = list(value.items())
@@ -671,6 +690,6 @@ def to_python(value: Any, depth: int = 0) -> Any:
         if keys == list(range(1, len(keys) + 1)):
             return [to_python(v, depth + 1) for _, v in items]
         return {k: to_python(v, depth + 1) for k, v in items}
-    if lua54.lua_type(value) is not None:  # functions, coroutines: not data
-        raise TypeError(f"cannot send a Lua {lua54.lua_type(value)} as event data")
+    if lua_type(value) is not None:  # functions, coroutines: not data
+        raise TypeError(f"cannot send a Lua {lua_type(value)} as event data")
     return value

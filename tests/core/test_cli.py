@@ -179,3 +179,28 @@ def test_a_commands_path_may_come_after_its_options() -> None:
         "my_sim"
     with pytest.raises(SystemExit):  # two paths: the second is not taken silently
         parse_args(["join", "tcp://127.0.0.1:5555", "a", "--user", "bob", "b"])
+
+
+@pytest.mark.parametrize("argv", [
+    ["run", "content/demo", "--frames", "3", "--headless", "--param", "n=2"],
+    ["--log-level", "debug", "check", "x", "--format", "json"],
+    ["--log-level=warning", "keys", "Object"],
+    ["serve", "x", "--bind", "tcp://127.0.0.1:6000", "--barrier-wait", "0.2"],
+    ["experiment", "run", "x", "--participant", "3", "--headless"],
+    ["sweep", "x", "--out", "o", "--param", "a=1,2", "--frames", "5"],
+    ["bench", "startup", "--quick"]])
+def test_a_command_line_parses_as_with_every_command_built(argv: list[str]) -> None:
+    """parse_args builds the named command's arguments alone; the result is the full
+    parser's."""
+    from app.cli import build_parser, parse_args
+
+    assert parse_args(argv) == build_parser().parse_args(argv)
+
+
+def test_a_command_without_its_arguments_gets_usage_not_a_traceback() -> None:
+    """``experiment run`` takes neither --seconds nor --frames: its usage once failed on
+    the empty group the two share."""
+    result = colosseum("experiment", "run")
+    assert result.returncode == 2
+    assert "required: path, --participant" in result.stderr
+    assert "Traceback" not in result.stderr

@@ -18,6 +18,14 @@ ROOT = Path(__file__).resolve().parents[2]
 #: Loaded only by a scene (or a command) that uses them.
 HEAVY = ("trimesh", "scipy", "moderngl", "lupa", "openal", "matplotlib", "zmq", "dask",
          "pythonosc", "soundfile", "PIL", "pymunk", "pylsl", "serial")
+#: Our own modules (and the standard library's, numpy's) that reading a scene file without
+#: models, shaders or random numbers does not need: they come with a run, a model, a
+#: shader, a command that writes.
+NOT_FOR_READING = ("engine.app", "engine.events", "engine.physics.commands",
+                   "engine.physics.driver", "engine.interchange.importer",
+                   "engine.assets.gltf", "engine.assets.dae", "engine.assets.skinned",
+                   "services.render", "app.experiments.cli", "engine.experiments.session",
+                   "numpy.random", "subprocess", "tempfile", "hashlib")
 #: A scene with boxes and a ground: no model, script, sound, shader or device.
 PLAIN = """World { Gravity [0 0 -9.81] }
 Object { ID "ground" Dynamic 0 VisualAttributes { Geometry { Primitive "plane" } }
@@ -28,10 +36,12 @@ Object { ID "box" Position [0 0 1]
 """
 
 
-def loaded_by(code: str, cwd: Path) -> set[str]:
-    """Top-level modules in ``sys.modules`` after ``code`` ran in a fresh interpreter."""
+def loaded_by(code: str, cwd: Path, whole: bool = False) -> set[str]:
+    """Top-level modules (``whole``: every module, by its full name) in ``sys.modules``
+    after ``code`` ran in a fresh interpreter."""
+    name = "m" if whole else "m.split('.')[0]"
     probe = (f"{code}\nimport json, sys\n"
-             "print(json.dumps(sorted({m.split('.')[0] for m in sys.modules})))")
+             f"print(json.dumps(sorted({{{name} for m in sys.modules}})))")
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     done = subprocess.run([sys.executable, "-c", probe], cwd=cwd, env=env, capture_output=True,
                           text=True, timeout=120, check=False)
@@ -67,11 +77,20 @@ def test_check_and_keys_load_no_heavy_library(command: str, plain: Path) -> None
     assert "esper" not in loaded  # reading a scene needs no ECS world
 
 
+@pytest.mark.parametrize("command", ["check", "keys"])
+def test_reading_a_plain_scene_loads_none_of_our_runtime(command: str, plain: Path) -> None:
+    """Nor the engine's runtime, its model importers, the renderer, the experiment runner
+    or numpy.random (parse draws no number from a scene that has none)."""
+    argv = ("check", str(plain)) if command == "check" else ("keys",)
+    loaded = loaded_by(cli(*argv), plain.parent, whole=True)
+    assert loaded.isdisjoint(NOT_FOR_READING), sorted(loaded & set(NOT_FOR_READING))
+    assert "engine.scene.blocks" in loaded  # it did read the blocks
+
+
 def test_a_run_of_a_plain_scene_loads_none_of_what_it_does_not_use(plain: Path) -> None:
     loaded = loaded_by(cli("run", str(plain), "--frames", "1", "--headless", "--fast"),
                        plain.parent)
-    unused = set(HEAVY) - {"lupa"}  # the scripting plugin starts Lua for every scene
-    assert loaded.isdisjoint(unused), sorted(loaded & unused)
+    assert loaded.isdisjoint(HEAVY), sorted(loaded & set(HEAVY))  # Lua only for scripts
     assert "esper" in loaded and "numpy" in loaded  # it did run
 
 
@@ -80,3 +99,13 @@ def test_a_scene_with_a_model_loads_the_model_library(plain: Path) -> None:
     demo = ROOT / "content" / "demo"
     loaded = loaded_by(cli("check", str(demo)), plain.parent)
     assert {"trimesh", "soundfile"} <= loaded
+
+
+def test_a_scene_with_a_script_starts_lua(plain: Path) -> None:
+    """Lua comes with the scene's first script, also one added to a plain scene."""
+    (plain / "scripts").mkdir()
+    (plain / "scripts" / "scene.lua").write_text("x = 1\n", encoding="utf-8")
+    (plain / "main.scene").write_text(PLAIN + 'Script "scripts/scene.lua"\n', encoding="utf-8")
+    loaded = loaded_by(cli("run", str(plain), "--frames", "1", "--headless", "--fast"),
+                       plain.parent)
+    assert "lupa" in loaded
