@@ -179,10 +179,10 @@ FIGURES: dict[str, Callable[[list[dict[str, Any]]], list[Figure]]] = {
     "contacts": _by_row(lambda r: f"{r['pairs']} pairs {r['state']}", "ms/frame",
                         "unique ms", "ms/frame",
                         "pair keys and np.unique of the same contacts alone"),
-    "hands": lambda rows: [Figure(f"{r['case']} ({r['backend']})", r["ms_per_step"],
-                                  r["without_hands_ms"],
+    "hands": lambda rows: [Figure(f"{r['case']} ({r['backend']})", r["ms/step"],
+                                  r["without hands ms/step"],
                                   "ms/step", "the same scene without the hands")
-                           for r in rows if "ms_per_step" in r],
+                           for r in rows if "ms/step" in r],
     "avatars": lambda rows: [Figure(f"{r['avatars']} avatars, {r['case']}", r["ms_per_frame"],
                                     r["reference_ms"], "ms/frame", r["reference"])
                              for r in rows if r["ms_per_frame"] > 0],
