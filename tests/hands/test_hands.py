@@ -233,6 +233,17 @@ def at(seen: dict[str, list], key: str, t: float) -> object:
     return seen[key][int(np.searchsorted(seen["t"], t))]
 
 
+def at_or_last(seen: dict[str, list], key: str, t: float) -> object:
+    """:func:`at`, or the last frame's value where a threaded run's frames end before
+    ``t``: a frame notes the time of the frame before it (a threaded frame's time is the
+    physics thread's when the frame ends), and on a loaded machine the physics thread can
+    run a long stretch, to the end, while the main thread waits for a core (0.38 s of
+    simulated time once, in twelve runs); the lag window, the largest lead seen, covers
+    that stretch."""
+    i = int(np.searchsorted(seen["t"], t))
+    return seen[key][min(i, len(seen["t"]) - 1)]
+
+
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("dt", STEPS)
 def test_a_grasp_lifts_a_cup_and_a_release_drops_it(tmp_path: Path, backend, dt):
@@ -314,7 +325,7 @@ def test_serial_and_threaded_runs_lift_alike(tmp_path: Path, backend):
         for key in ("hand", "cup"):
             window = [v for u, v in zip(serial["t"], serial[key], strict=True)
                       if t - lag - 1e-9 <= u <= t + lag + 1e-9]
-            assert min(window) - 0.01 <= at(threaded, key, t) <= max(window) + 0.01
+            assert min(window) - 0.01 <= at_or_last(threaded, key, t) <= max(window) + 0.01
     assert at(threaded, "mode", 1.0) == at(serial, "mode", 1.0) == HandMode.GRASP
 
     # threaded, frames without a physics step (no contacts) keep what the last step said,
