@@ -266,14 +266,16 @@ def palm_motion(p, q, double t, previous, bint stale):
         o[k] = pp[k]
     for k in range(4):
         o[3 + k] = qq[k]
+    cdef const double *v0
+    cdef const double *w0
     if previous is not None:
         dt = t - <double>previous[0]
         if dt > 0.0:
             _palm_velocities(o, _doubles(previous[1], 3), _doubles(previous[2], 4), dt)
         else:  # no newer sample: as it was
+            v0, w0 = _doubles(previous[3], 3), _doubles(previous[4], 3)
             for k in range(3):
-                o[7 + k] = _doubles(previous[3], 3)[k]
-                o[10 + k] = _doubles(previous[4], 3)[k]
+                o[7 + k], o[10 + k] = v0[k], w0[k]
     if stale:
         for k in range(7, 13):
             o[k] = 0.0
@@ -300,26 +302,49 @@ cdef void _palm_velocities(double *o, const double *p0, const double *q0,
     o[10], o[11], o[12] = dx * scale / dt, dy * scale / dt, dz * scale / dt
 
 
-def far_ends(const double[:, :] poses, const double[:] lengths, rows=None):
-    """The far ends (n, 3) of bones ``lengths`` long along their x axes, at ``poses``
-    (pose-table rows: position, quaternion w x y z; ``rows``: those rows of the table
-    only, the bones' in order)."""
-    cdef Py_ssize_t n = lengths.shape[0], i, r
-    cdef const long[:] picked
+cdef const long long* _rows_of(object rows, Py_ssize_t n) except NULL:
+    """The data of ``n`` row indices, a C-ordered int64 array."""
+    if not isinstance(rows, cnp.ndarray) or cnp.PyArray_TYPE(<cnp.ndarray>rows) != \
+            cnp.NPY_INT64 or not cnp.PyArray_IS_C_CONTIGUOUS(<cnp.ndarray>rows) or \
+            cnp.PyArray_SIZE(<cnp.ndarray>rows) != n:
+        raise ValueError(f"expected {n} row indices, a C-ordered int64 array")
+    return <const long long*>cnp.PyArray_DATA(<cnp.ndarray>rows)
+
+
+cdef const double* _pose(const double *table, Py_ssize_t height, long long row) except NULL:
+    """Row ``row`` of a pose table ``height`` rows of 13 (position, quaternion w x y z,
+    velocities)."""
+    if not 0 <= row < height:
+        raise IndexError(f"row {row} is outside the pose table ({height} rows)")
+    return table + 13 * row
+
+
+cdef inline void _far_end(const double *pose, double length, double *out) noexcept nogil:
+    """The far end of a bone ``length`` long along its x axis, at ``pose``: its position
+    plus half its length along the first column of its quaternion's matrix."""
+    cdef double w = pose[3], x = pose[4], y = pose[5], z = pose[6]
+    cdef double h = length * 0.5
+    out[0] = pose[0] + (w * w + x * x - y * y - z * z) * h
+    out[1] = pose[1] + 2.0 * (x * y + w * z) * h
+    out[2] = pose[2] + 2.0 * (x * z - w * y) * h
+
+
+def far_ends(table, lengths, rows=None):
+    """The far ends (n, 3) of bones ``lengths`` long along their x axes, at rows ``rows``
+    of the pose ``table`` (n × 13; None: its first n rows, in order)."""
+    lengths = np.ascontiguousarray(lengths, np.float64)
+    cdef Py_ssize_t n = cnp.PyArray_SIZE(<cnp.ndarray>lengths), i
+    cdef const double *poses = _doubles(table, 13)
+    cdef Py_ssize_t height = cnp.PyArray_SIZE(<cnp.ndarray>table) // 13
+    cdef const long long *picked = NULL
     if rows is not None:
-        picked = rows
-        if picked.shape[0] != n:
-            raise ValueError("far_ends: a row for each length")
+        picked = _rows_of(np.ascontiguousarray(rows, np.int64), n)
+    cdef const double *length = _doubles(lengths, n)
     out = np.empty((n, 3))
     cdef double *o = _doubles(out, 3 * n, True)
-    cdef double w, x, y, z, h
     for i in range(n):
-        r = i if rows is None else picked[i]
-        w, x, y, z = poses[r, 3], poses[r, 4], poses[r, 5], poses[r, 6]
-        h = lengths[i] * 0.5
-        o[3 * i] = poses[r, 0] + (w * w + x * x - y * y - z * z) * h
-        o[3 * i + 1] = poses[r, 1] + 2.0 * (x * y + w * z) * h
-        o[3 * i + 2] = poses[r, 2] + 2.0 * (x * z - w * y) * h
+        _far_end(_pose(poses, height, i if picked == NULL else picked[i]), length[i],
+                 o + 3 * i)
     return out
 
 
@@ -329,25 +354,16 @@ def deviations(table, rows, lengths, tips) -> tuple:
     ``rows`` (15, base to tip, each finger's three) of the pose ``table`` (n × 13)."""
     cdef const double *poses = _doubles(table, 13)
     cdef Py_ssize_t height = cnp.PyArray_SIZE(<cnp.ndarray>table) // 13
-    if not isinstance(rows, cnp.ndarray) or cnp.PyArray_TYPE(<cnp.ndarray>rows) != \
-            cnp.NPY_INT64 or not cnp.PyArray_IS_C_CONTIGUOUS(<cnp.ndarray>rows) or \
-            cnp.PyArray_SIZE(<cnp.ndarray>rows) != 15:
-        raise ValueError("deviations: the 15 bones' rows as int64")
-    cdef const long long *row = <const long long*>cnp.PyArray_DATA(<cnp.ndarray>rows)
+    cdef const long long *row = _rows_of(rows, 15)
     cdef const double *length = _doubles(lengths, 15)
     cdef const double *tracked = _doubles(tips, 15)
     cdef double out[5]
-    cdef double w, x, y, z, h, dx, dy, dz
-    cdef const double *pose
+    cdef double end[3]
+    cdef double dx, dy, dz
     cdef int k
     for k in range(5):
-        if not 0 <= row[3 * k + 2] < height:
-            raise IndexError("deviations: a bone's row is outside the table")
-        pose = poses + 13 * row[3 * k + 2]
-        w, x, y, z = pose[3], pose[4], pose[5], pose[6]
-        h = length[3 * k + 2] * 0.5
-        dx = pose[0] + (w * w + x * x - y * y - z * z) * h - tracked[3 * k]
-        dy = pose[1] + 2.0 * (x * y + w * z) * h - tracked[3 * k + 1]
-        dz = pose[2] + 2.0 * (x * z - w * y) * h - tracked[3 * k + 2]
+        _far_end(_pose(poses, height, row[3 * k + 2]), length[3 * k + 2], end)
+        dx, dy, dz = end[0] - tracked[3 * k], end[1] - tracked[3 * k + 1], \
+            end[2] - tracked[3 * k + 2]
         out[k] = sqrt(dx * dx + dy * dy + dz * dz)
     return (out[0], out[1], out[2], out[3], out[4])

@@ -108,7 +108,7 @@ PARENT_A = np.array([STARTS[i - 1] if i % 3 else max(STARTS[i] - 1, 0) for i in 
 PARENT_B = np.array([ENDS[i - 1] if i % 3 else STARTS[i] for i in range(15)])
 #: Each bone's flexion axis and the thumb's rest heading, in the wrist's frame (right).
 REST_Y = np.array([ANATOMY[f].rest()[:, 1] for f, _, _ in BONES])
-THUMB_REST_X = ANATOMY["thumb"].rest()[:, 0]
+THUMB_REST_X = np.ascontiguousarray(ANATOMY["thumb"].rest()[:, 0])  # (read in C)
 THUMB_FIRST = HAND_JOINTS.index("thumb_metacarpal")
 _fingers.layout(STARTS, ENDS, PARENT_A, PARENT_B, TIPS)
 
@@ -233,7 +233,7 @@ def _cross_flat(axes: np.ndarray) -> np.ndarray:
 FLEX_FORMS = tuple(np.stack([_cross_flat(axes), np.tile(np.eye(3).ravel(), (15, 1))],
                             axis=2) for axes in (REST_Y, REST_Y * (-1.0, 1.0, -1.0)))
 #: The thumb's rest heading (its first bone's parent) in the wrist's frame: right, left.
-THUMB_REST = (np.ascontiguousarray(THUMB_REST_X), THUMB_REST_X * (1.0, -1.0, 1.0))
+THUMB_REST = (THUMB_REST_X, THUMB_REST_X * (1.0, -1.0, 1.0))
 #: x, y, z into the flattened cross-product form (3, 9): ``axes @ CROSS_FLAT``.
 CROSS_FLAT = _cross_flat(np.eye(3))
 
@@ -347,7 +347,7 @@ def aim(hands: list[tuple[Fingers, HandJoints, Transform | None]], now: float,
     counted from its zero, their rates from the sample before (zero once the samples
     stop coming), the torque bound (:data:`BONE_FORCE` at the tip, :data:`HOLD_FORCE`
     while holding). Also notes each hand's tracked bones' centres and velocities (the
-    fast-hand rays'), tips and palm (:func:`systems._fingers.note`)."""
+    fast-hand rays'), tips and palm (:func:`systems._fingers.aim`)."""
     out = []
     for fingers, sample, frame in hands:
         p, q = world_joints(sample, frame)
@@ -515,7 +515,7 @@ def tips_now(engine: Engine, fingers: Fingers) -> np.ndarray:
     """Where the physical fingertips are (5, 3): each distal bone's far end, read from the
     pose table in one go (:func:`systems._fingers.far_ends`)."""
     return _fingers.far_ends(engine.world.poses.table, fingers.lengths[2::3],
-                             _rows(engine, fingers)[2::3])
+                             _rows(engine, fingers)[2::3])  # (made contiguous there)
 
 
 def presses(contacts: np.ndarray, owner: dict[int, str], elapsed: float

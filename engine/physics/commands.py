@@ -459,8 +459,8 @@ class SetPoses(Command):
 
     def __post_init__(self) -> None:
         keys, table = keyed_table("SetPoses", self.keys, self.table, 13, "entity")
-        bad = None if np.isfinite(table).all() else ~np.isfinite(table).all(axis=1)
-        if bad is not None:
+        if not np.isfinite(table).all():  # which row:
+            bad = ~np.isfinite(table).all(axis=1)
             raise CommandError(f"SetPoses: body {keys[bad][0]}'s row is not 13 finite "
                                f"numbers: {table[bad][0].tolist()}")
         norm = np.sqrt(np.einsum("ij,ij->i", table[:, 3:7], table[:, 3:7]))

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 
 import numpy as np
 
@@ -459,11 +460,12 @@ class OdeBackend:
             slots = _ode.slots_for(self._world, keys)
         n = len(keys)
         table = state.table
-        # a table that passes in one go: no component over half the limit, no speed over
-        # it (the norm of three is at most √3 times the largest); others measured below
+        # a table that passes in one go: no component over the limit over √3, no speed
+        # over it (as SetPoses' limits are checked); others measured below
         if isinstance(table, np.ndarray) and table.shape == (n, 13) and \
                 table.dtype == np.float64 and np.isfinite(table).all() and \
-                (not n or np.abs(table[:, 7:13]).max() <= 0.5 * _ode.MAX_BODY_SPEED):
+                (not n or np.abs(table[:, 7:13]).max() * math.sqrt(3.0) <=
+                 _ode.MAX_BODY_SPEED):
             position, orientation, lin, ang = (np.ascontiguousarray(c) for c in state.columns())
             _ode.write_state(self._world, slots, position, orientation, lin, ang)
             return
