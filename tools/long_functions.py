@@ -35,8 +35,6 @@ ALLOWED: dict[str, str] = {
         "the token loop of a block: comments, blank lines, last entry shared",
     "engine/scene/lexer.py::Lexer.next_token":
         "dispatch on the next character, once a token: no call per branch",
-    "engine/physics/ode3d/_contacts.pxi::near_callback":
-        "ODE's per-pair callback in the GIL-free step: filter, collide, contact",
     "engine/physics/ode3d/_world.pxi::World.step":
         "the step as one sequence, the GIL released once around it",
     "engine/physics/pymunk2d/_rows.pyx::carried_down":

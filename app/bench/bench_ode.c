@@ -52,8 +52,6 @@
 static CsState stepper;
 static CsSettings settings;
 static double dt = 1.0 / 60.0;
-static dJointFeedback *feedback;
-static int feedback_cap;
 static int policy = 1;              /* 0: plain libode, contact joints made right here */
 static dWorldID plain_world;
 static dJointGroupID plain_group;
@@ -70,33 +68,24 @@ static void near_callback(void *data, dGeomID o1, dGeomID o2) {
     if (b1 == NULL || b1 == b2) return;
     if (!dBodyIsEnabled(b1) && (b2 == NULL || !dBodyIsEnabled(b2))) return;
     if (b2 != NULL && dAreConnectedExcluding(b1, b2, dJointTypeContact)) return;
+    if (policy) { /* as the engine: straight into stepper.h's room */
+        CsContact *room = cs_room(&stepper, MAX_CONTACTS);
+        if (room == NULL) return; /* stepper.oom: the step loop stops */
+        int n = dCollide(o1, o2, MAX_CONTACTS, &room[0].contact.geom, sizeof(CsContact));
+        for (int i = 0; i < n; i++) {
+            room[i].contact.surface.mode = dContactApprox1;
+            room[i].contact.surface.mu = 0.5;
+        }
+        cs_keep(&stepper, &settings, n, b1, b2, dt);
+        return;
+    }
     int n = dCollide(o1, o2, MAX_CONTACTS, &c[0].geom, sizeof(dContact));
     for (int i = 0; i < n; i++) {
         c[i].surface.mode = dContactApprox1;
         c[i].surface.mu = 0.5;
-        if (!policy) dJointAttach(dJointCreateContact(plain_world, plain_group, &c[i]), b1, b2);
+        dJointAttach(dJointCreateContact(plain_world, plain_group, &c[i]), b1, b2);
     }
-    plain_contacts += policy ? 0 : n;
-    if (policy) cs_collect(&stepper, &settings, c, n, b1, b2, dt);
-}
-
-/* Room for `n` feedback records, made before any joint points at one (the engine keeps
- * them in fixed chunks instead). Returns 0, or -1 out of memory. */
-static int reserve_feedback(int n) {
-    if (n <= feedback_cap) return 0;
-    int cap = feedback_cap ? 2 * feedback_cap : 1024;
-    while (cap < n) cap *= 2;
-    dJointFeedback *grown = realloc(feedback, (size_t)cap * sizeof(dJointFeedback));
-    if (grown == NULL) return -1;
-    feedback = grown;
-    feedback_cap = cap;
-    return 0;
-}
-
-/* Contact i's feedback record. */
-static dJointFeedback *contact_feedback(void *ctx, int i) {
-    (void)ctx;
-    return i < feedback_cap ? &feedback[i] : NULL;
+    plain_contacts += n;
 }
 
 /* CPU time of this thread: on a shared machine it counts our work, not our waiting. */
@@ -207,12 +196,11 @@ int main(int argc, char **argv) {
         cs_begin(&stepper, n);
         if (cs_any_awake(bodies, sizeof(dBodyID), n)) /* all asleep: no pair can touch */
             dSpaceCollide(space, NULL, near_callback);
-        if (reserve_feedback(stepper.ncontacts) < 0) {
+        if (stepper.oom) {
             fprintf(stderr, "out of memory\n");
             return 1;
         }
-        cs_solve(&stepper, &settings, world, contacts, bodies, sizeof(dBodyID), n, dt,
-                 contact_feedback, NULL);
+        cs_solve(&stepper, &settings, world, contacts, bodies, sizeof(dBodyID), n, dt);
         if (sleep && cs_sleep(&stepper, &rule, bodies, sizeof(dBodyID), n, dt,
                               exp(-dt / smoothing), sleep_time, NULL) < 0) {
             fprintf(stderr, "out of memory\n");
@@ -245,7 +233,6 @@ int main(int argc, char **argv) {
     free(rule.smoothing);
     free(rule.timer);
     free(rule.reference);
-    free(feedback);
     free(bodies);
     dJointGroupDestroy(contacts);
     dSpaceDestroy(space);

@@ -1,5 +1,5 @@
-# Contacts: the near callback (pair filter, material lookup, contact joints with
-# feedback, contact records), the impulses read back after the step, ray casts.
+# Contacts: the near callback (pair filter, material lookup, contact records), the
+# impulses read back after the step, ray casts.
 
 cdef struct RayCtx:
     dGeomID ray
@@ -12,25 +12,9 @@ cdef struct RayCtx:
     double depth
 
 
-cdef inline dJointFeedback* feedback_slot(Ctx* c, int i) noexcept nogil:
-    cdef int chunk = i // FB_CHUNK
-    cdef dJointFeedback** grown
-    if chunk >= c.nchunks:
-        grown = <dJointFeedback**>realloc(c.chunks, (chunk + 1) * sizeof(dJointFeedback*))
-        if grown == NULL:
-            return NULL
-        c.chunks = grown
-        c.chunks[chunk] = <dJointFeedback*>malloc(FB_CHUNK * sizeof(dJointFeedback))
-        if c.chunks[chunk] == NULL:
-            return NULL
-        c.nchunks = chunk + 1
-    return &c.chunks[chunk][i % FB_CHUNK]
-
-
-cdef inline bint culls_itself(dGeomID g) noexcept nogil:
+cdef inline bint culls_itself(int k) noexcept nogil:
     """Spheres touch at one point; ODE's box and plane colliders pick spread points
-    themselves when asked for fewer than they find."""
-    cdef int k = dGeomGetClass(g)
+    themselves when asked for fewer than they find (``k``: the geom's class)."""
     return k == dSphereClass or k == dBoxClass or k == dPlaneClass
 
 
@@ -84,14 +68,13 @@ cdef int spread_contacts(dContact* buf, int n, int keep) noexcept nogil:
     return keep
 
 
-cdef int collide(Ctx* c, dGeomID o1, dGeomID o2, int most) noexcept nogil:
+cdef int collide(Ctx* c, dGeomID o1, int k1, dGeomID o2, int k2, int most) noexcept nogil:
     """dCollide into ``c.buf``, but a capsule against a triangle mesh as its parts: the
     cylinder between its caps and the two cap spheres, each collided with the mesh (libode's
     capsule-trimesh test throws a small mesh resting on a large capsule off it: the
     conformance scenes ColliderTypeMatrix 16 and 17; its sphere- and cylinder-trimesh tests
-    hold it). The contacts of the three, up to ``most``, the caller thins as ever."""
-    cdef int k1 = dGeomGetClass(o1)
-    cdef int k2 = dGeomGetClass(o2)
+    hold it). The contacts of the three, up to ``most``, the caller thins as ever (``k1``,
+    ``k2``: the geoms' classes)."""
     cdef dGeomID cap
     cdef dReal r, length
     cdef const dReal* p
@@ -139,7 +122,45 @@ cdef inline bint linked_to_static(Ctx* c, int64_t body, int64_t static) noexcept
     return False
 
 
-# Long: ODE's per-pair callback in the GIL-free step: filter, collide, contact
+cdef inline void set_surface(dSurfaceParameters* f, Pair* p) noexcept nogil:
+    f.mode = p.mode
+    f.mu = p.mu
+    f.bounce = p.bounce
+    f.bounce_vel = p.bounce_vel
+    f.soft_erp = p.soft_erp
+    f.soft_cfm = p.soft_cfm
+
+
+cdef int make_contacts(Ctx* c, dGeomID o1, GeomInfo* g1, dGeomID o2, GeomInfo* g2,
+                       dBodyID b1, dBodyID b2, Pair* p) noexcept nogil:
+    """A pair's contacts, their surfaces from ``p``, kept by stepper.h; how many, or -1
+    out of memory. Where both geoms pick their own points (boxes, spheres, planes: most
+    pairs), ODE collides straight into stepper.h's room; the others collide into
+    ``c.buf``, thinned to ``max_contacts`` spread points, and are copied there."""
+    cdef CsContact* room
+    cdef int n, i
+    if culls_itself(g1.geom_class) and culls_itself(g2.geom_class):
+        room = cs_room(&c.stepper, c.max_contacts)
+        if room == NULL:
+            return -1
+        n = dCollide(o1, o2, c.max_contacts, &room[0].contact.geom, sizeof(CsContact))
+        for i in range(n):
+            set_surface(&room[i].contact.surface, p)
+        if n:
+            cs_keep(&c.stepper, &c.cfg, n, b1, b2, c.dt)
+        return n
+    if c.max_contacts >= CANDIDATES:
+        n = collide(c, o1, g1.geom_class, o2, g2.geom_class, c.max_contacts)
+    else:
+        n = spread_contacts(c.buf, collide(c, o1, g1.geom_class, o2, g2.geom_class,
+                                           CANDIDATES), c.max_contacts)
+    for i in range(n):
+        set_surface(&c.buf[i].surface, p)
+    if n and cs_collect(&c.stepper, &c.cfg, c.buf, n, b1, b2, c.dt) < 0:
+        return -1
+    return n
+
+
 cdef void near_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
     cdef Ctx* c = <Ctx*>data
     cdef GeomInfo* g1
@@ -147,21 +168,17 @@ cdef void near_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
     cdef GeomInfo* gt
     cdef dBodyID b1
     cdef dBodyID b2
-    cdef dBodyID bt
     cdef dGeomID ot
     cdef Pair* p
     cdef int n, i, k
-    cdef double sign
-    cdef dJointID j
-    cdef dJointFeedback* fb
-    cdef ContactRec* rec
     cdef ContactRec* grown
-    if dGeomIsSpace(o1) or dGeomIsSpace(o2):
-        dSpaceCollide2(o1, o2, data, near_callback)
-        return
     g1 = <GeomInfo*>dGeomGetData(o1)
     g2 = <GeomInfo*>dGeomGetData(o2)
-    if g1 == NULL or g2 == NULL or (g1.movable == 0 and g2.movable == 0):
+    if g1 == NULL or g2 == NULL:   # a space (it has no GeomInfo), or a geom not ours
+        if dGeomIsSpace(o1) or dGeomIsSpace(o2):
+            dSpaceCollide2(o1, o2, data, near_callback)
+        return
+    if g1.movable == 0 and g2.movable == 0:
         return
     if (g1.category & g2.mask) == 0 or (g2.category & g1.mask) == 0:
         return
@@ -185,38 +202,24 @@ cdef void near_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
     p = &c.pairs[g1.material * c.nmat + g2.material]
     if p.collide == 0:
         return
-    if c.max_contacts >= CANDIDATES or (culls_itself(o1) and culls_itself(o2)):
-        n = collide(c, o1, o2, c.max_contacts)
-    else:
-        n = spread_contacts(c.buf, collide(c, o1, o2, CANDIDATES), c.max_contacts)
-    for i in range(n):
-        c.buf[i].surface.mode = p.mode
-        c.buf[i].surface.mu = p.mu
-        c.buf[i].surface.bounce = p.bounce
-        c.buf[i].surface.bounce_vel = p.bounce_vel
-        c.buf[i].surface.soft_erp = p.soft_erp
-        c.buf[i].surface.soft_cfm = p.soft_cfm
-    if n and cs_collect(&c.stepper, &c.cfg, c.buf, n, b1, b2, c.dt) < 0:
+    n = make_contacts(c, o1, g1, o2, g2, b1, b2, p)
+    if n < 0:
         c.oom = 1
         return
-    for i in range(n):
-        if c.nrec >= c.caprec:
-            k = c.caprec * 2 if c.caprec > 0 else 1024
-            grown = <ContactRec*>realloc(c.recs, k * sizeof(ContactRec))
-            if grown == NULL:
-                c.oom = 1
-                return
-            c.recs = grown
-            c.caprec = k
-        rec = &c.recs[c.nrec]
-        rec.a = g1.key
-        rec.b = g2.key
-        for k in range(3):
-            rec.pos[k] = c.buf[i].geom.pos[k]
-            rec.normal[k] = c.buf[i].geom.normal[k]
-        rec.depth = c.buf[i].geom.depth
-        rec.impulse = 0.0
-        c.nrec += 1
+    if c.nrec + n > c.caprec:
+        k = c.caprec * 2 if c.caprec > 0 else 1024
+        while k < c.nrec + n:
+            k *= 2
+        grown = <ContactRec*>realloc(c.recs, k * sizeof(ContactRec))
+        if grown == NULL:
+            c.oom = 1
+            return
+        c.recs = grown
+        c.caprec = k
+    for i in range(c.nrec, c.nrec + n):
+        c.recs[i].a = g1.key     # the rest of each record when read (complete_records)
+        c.recs[i].b = g2.key
+    c.nrec += n
 
 
 cdef void ray_callback(void* data, dGeomID o1, dGeomID o2) noexcept nogil:
@@ -345,18 +348,25 @@ cdef void wake_touching(World w, int i):
             dGeomDisable(g)
 
 
-cdef dJointFeedback* contact_feedback(void* ctx, int i) noexcept nogil:
-    """Contact i's feedback record (stepper.h attaches it to the contact's joint)."""
-    return feedback_slot(<Ctx*>ctx, i)
-
-
-cdef void record_impulses(Ctx* c, double dt) noexcept nogil:
-    """Each contact's impulse, |f|·dt of its whole force (stepper.h's cs_whole_forces
-    adds what it preloaded to what the solver found). Run when the records are first read
-    after a step, not by the step: a step whose contacts nobody reads does not pay for
-    them (the resting rules read what the solver found, not these)."""
-    cdef int i
-    c.impulses_owed = 0
+cdef void complete_records(Ctx* c, double dt) noexcept nogil:
+    """Each contact's point, normal, depth and impulse, |f|·dt of its whole force
+    (stepper.h's cs_whole_forces adds what it preloaded to what the solver found), from
+    the step's contacts, which stepper.h keeps until the next step (the near callback
+    recorded only the pair's keys: a geom may be gone by now). Run when the records are
+    first read after a step, not by the step: a step whose contacts nobody reads does not
+    pay for them (the resting rules read what the solver found, not these)."""
+    cdef int i, k
+    cdef ContactRec* rec
+    cdef const dContactGeom* g
+    c.records_owed = 0
+    for i in range(min(c.nrec, c.stepper.ncontacts)):
+        rec = &c.recs[i]
+        g = &c.stepper.contacts[i].contact.geom
+        for k in range(3):
+            rec.pos[k] = g.pos[k]
+            rec.normal[k] = g.normal[k]
+        rec.depth = g.depth
+        rec.impulse = 0.0
     if c.oom or c.stepper.oom:
         return
     cs_whole_forces(&c.stepper)
@@ -366,9 +376,9 @@ cdef void record_impulses(Ctx* c, double dt) noexcept nogil:
 
 def contacts(World w) -> np.ndarray:
     """The last step's contacts as raw bytes shaped for CONTACT_DTYPE (caller views them),
-    their impulses recorded on the first read after the step."""
-    if w.ctx.impulses_owed:
-        record_impulses(&w.ctx, w.ctx.dt)
+    completed on the first read after the step."""
+    if w.ctx.records_owed:
+        complete_records(&w.ctx, w.ctx.dt)
     cdef cnp.ndarray[cnp.uint8_t, ndim=1] out = np.empty(
         w.ctx.nrec * sizeof(ContactRec), np.uint8)
     if w.ctx.nrec:

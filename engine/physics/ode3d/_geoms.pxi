@@ -157,6 +157,7 @@ def add_geom(World w, key, int kind, double[::1] dims, double[::1] offset, doubl
     info.category = category
     info.mask = mask
     info.movable = 1 if s.kind == KIND_DYNAMIC else 0
+    info.geom_class = dGeomGetClass(g)
     dGeomSetData(g, info)
     dGeomSetCategoryBits(g, category)
     dGeomSetCollideBits(g, mask)
@@ -285,6 +286,7 @@ def add_static_plane(World w, double a, double b, double c, double d, int materi
     info.category = category
     info.mask = mask
     info.movable = 0
+    info.geom_class = dGeomGetClass(g)
     dGeomSetData(g, info)
     dGeomSetCategoryBits(g, category)
     dGeomSetCollideBits(g, mask)

@@ -86,7 +86,6 @@ MODE_BOUNCE = dContactBounce
 MODE_SOFT = dContactSoftERP | dContactSoftCFM
 
 cdef enum:
-    FB_CHUNK = 4096
     KIND_DYNAMIC = 0
     KIND_STATIC = 1
     KIND_KINEMATIC = 2

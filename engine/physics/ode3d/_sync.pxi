@@ -133,11 +133,43 @@ cdef void reset_slot(Slot* s) noexcept nogil:
     disable(s.body)
 
 
+cdef inline int body_fault(const dReal* p, const dReal* q, const dReal* v, const dReal* av,
+                           double extent) noexcept nogil:
+    """FAULT_*_C of a body's state, or -1 when it is sane."""
+    cdef int k
+    cdef int why = -1
+    for k in range(3):
+        if not (isfinite(p[k]) and isfinite(v[k]) and isfinite(av[k])):
+            why = FAULT_NONFINITE_C
+    for k in range(4):
+        if not isfinite(q[k]):
+            why = FAULT_NONFINITE_C
+    if why < 0 and (norm3(v) > MAX_SPEED or norm3(av) > MAX_SPEED):
+        why = FAULT_RUNAWAY_C   # finite but runaway: the next step would overflow
+    if why < 0 and (fabs(p[0]) > extent or fabs(p[1]) > extent or fabs(p[2]) > extent):
+        why = FAULT_LEFT_WORLD_C
+    return why
+
+
+cdef inline bint plainly_sane(const dReal* p, const dReal* q, const dReal* v,
+                              const dReal* av, double extent) noexcept nogil:
+    """What body_fault finds -1 for nearly every body, at a fraction of its cost: one
+    finite sum (a non-finite term makes it non-finite), squared speeds well inside
+    MAX_SPEED (no square roots) and a position inside the world. False sends the body
+    to body_fault, which decides."""
+    cdef double total = (p[0] + p[1] + p[2] + q[0] + q[1] + q[2] + q[3] + v[0] + v[1] +
+                         v[2] + av[0] + av[1] + av[2])
+    cdef double bound = 0.98 * MAX_SPEED * MAX_SPEED
+    return (isfinite(total) and v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < bound and
+            av[0] * av[0] + av[1] * av[1] + av[2] * av[2] < bound and
+            fabs(p[0]) <= extent and fabs(p[1]) <= extent and fabs(p[2]) <= extent)
+
+
 cdef int check_bodies(World w) noexcept nogil:
     """Reset and disable bodies gone non-finite, past MAX_SPEED or out of the world
     (``w.faults`` gets slot * 4 + FAULT_*); remember every other moving body's pose as its
     last good one, so one leaving the world stops at its last pose inside."""
-    cdef int i, k, nf = 0
+    cdef int i, nf = 0
     cdef Slot* s
     cdef const dReal* p
     cdef const dReal* q
@@ -153,17 +185,7 @@ cdef int check_bodies(World w) noexcept nogil:
         q = dBodyGetQuaternion(s.body)
         v = dBodyGetLinearVel(s.body)
         av = dBodyGetAngularVel(s.body)
-        why = -1
-        for k in range(3):
-            if not (isfinite(p[k]) and isfinite(v[k]) and isfinite(av[k])):
-                why = FAULT_NONFINITE_C
-        for k in range(4):
-            if not isfinite(q[k]):
-                why = FAULT_NONFINITE_C
-        if why < 0 and (norm3(v) > MAX_SPEED or norm3(av) > MAX_SPEED):
-            why = FAULT_RUNAWAY_C   # finite but runaway: the next step would overflow
-        if why < 0 and (fabs(p[0]) > extent or fabs(p[1]) > extent or fabs(p[2]) > extent):
-            why = FAULT_LEFT_WORLD_C
+        why = -1 if plainly_sane(p, q, v, av, extent) else body_fault(p, q, v, av, extent)
         if why < 0:
             memcpy(&s.good[0], p, 3 * sizeof(double))
             memcpy(&s.good[3], q, 4 * sizeof(double))

@@ -12,6 +12,7 @@ cdef struct GeomInfo:
     uint32_t category
     uint32_t mask
     int movable          # 1 for dynamic bodies (kinematic and static never collide together)
+    int geom_class       # dGeomGetClass, kept: the near callback asks it of every pair
 
 
 cdef struct Pair:
@@ -51,10 +52,8 @@ cdef struct Ctx:         # what the near callback needs, passed through ODE's vo
     ContactRec* recs
     int nrec
     int caprec
-    dJointFeedback** chunks
-    int nchunks
     int oom
-    bint impulses_owed   # the last step's impulses are not in recs yet (contacts() puts them)
+    bint records_owed    # recs hold only the keys of the last step's contacts yet (contacts())
     double dt            # the step in progress
     int64_t* linked      # (body key, static key) pairs a joint holds together: no contacts
     dGeomID proxy        # a sphere in no space: a capsule's stand-in against a triangle mesh
@@ -80,8 +79,7 @@ cdef int collide_and_solve(void* arg) noexcept nogil:
                                                                sizeof(Slot), job.n):
         dSpaceCollide(job.space, job.ctx, near_callback)
     return cs_solve(&job.ctx.stepper, &job.ctx.cfg, job.ctx.world, job.ctx.group,
-                    &job.slots[0].body, sizeof(Slot), job.n, job.dt, contact_feedback,
-                    job.ctx)
+                    &job.slots[0].body, sizeof(Slot), job.n, job.dt)
 
 
 @cython.no_gc_clear  # __dealloc__ walks the geoms and joints to free their C memory
@@ -179,9 +177,6 @@ cdef class World:
         dSpaceDestroy(self.space)
         dWorldDestroy(self.world)
         self.world = NULL
-        for i in range(self.ctx.nchunks):
-            free(self.ctx.chunks[i])
-        free(self.ctx.chunks)
         cs_free(&self.ctx.stepper)
         free(self.ctx.recs)
         free(self.ctx.buf)
@@ -327,7 +322,7 @@ cdef class World:
     def step(self, double dt, bint sleep=False) -> list:
         """Aim the drives, collide and step (stepper.h: exact islands, warm-started
         contacts) with the GIL released and ODE's failures guarded, then check every moving
-        body (the contact impulses are recorded when read: :func:`contacts`); with
+        body (the contacts are recorded when read: :func:`contacts`); with
         ``sleep``, the sleep rule bound by :meth:`bind_sleep` then puts quiet islands to
         sleep (stepper.h's cs_sleep, over the islands of this step). Returns (key, FAULT_*) of the bodies stopped. Raises
         OdeFailure when ODE fails inside (the world is then abandoned)."""
@@ -346,7 +341,7 @@ cdef class World:
         dAllocateODEDataForThread(dAllocateMaskAll)
         dJointGroupEmpty(self.ctx.group)
         self.ctx.nrec = 0
-        self.ctx.impulses_owed = 0
+        self.ctx.records_owed = 0
         self.ctx.oom = 0
         self.last_dt = dt
         self.ctx.dt = dt
@@ -366,7 +361,7 @@ cdef class World:
                 if solved < 0:
                     self.ctx.oom = 1
                 kinematic_arrive(self, dt)
-                self.ctx.impulses_owed = 1  # recorded when read: contacts()
+                self.ctx.records_owed = 1  # completed when read: contacts()
                 nf = check_bodies(self)
                 if sleep and self.n and not self.ctx.stepper.oom:
                     for i in range(self.n):
@@ -376,6 +371,7 @@ cdef class World:
                                      sizeof(Slot), self.n, dt, keep, self.sleep_time,
                                      self.woken)
         if failed:
+            self.ctx.nrec = 0  # the world is abandoned: no contact of this step is told
             self.broken = (f"ODE error {ode_failure_code()}: "
                            f"{ode_failure().decode('utf-8', 'replace')}")
             raise OdeFailure(self.broken)

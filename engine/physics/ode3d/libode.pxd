@@ -264,8 +264,13 @@ cdef extern from "stepper.h" nogil:
         int preloaded
         int slid
 
+    ctypedef struct CsContact:
+        dContact contact
+
     ctypedef struct CsState:
         int oom
+        CsContact* contacts
+        int ncontacts
         double* forces
         CsBody* bodies
         int capbodies
@@ -277,8 +282,10 @@ cdef extern from "stepper.h" nogil:
     int cs_begin(CsState*, int)
     int cs_any_awake(const void*, size_t, int)
     int cs_collect(CsState*, const CsSettings*, const dContact*, int, dBodyID, dBodyID, double)
+    CsContact* cs_room(CsState*, int)
+    void cs_keep(CsState*, const CsSettings*, int, dBodyID, dBodyID, double)
     int cs_solve(CsState*, const CsSettings*, dWorldID, dJointGroupID, const void*, size_t, int,
-                 double, dJointFeedback* (*)(void*, int) noexcept, void*)
+                 double)
     void cs_whole_forces(CsState*)
     void cs_disable(dBodyID)
     int cs_sleep(CsState*, SrRule*, const void*, size_t, int, double, double, double,

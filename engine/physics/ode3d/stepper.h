@@ -2,9 +2,9 @@
  * plain-C reference of `colosseum bench physics` (app/bench/bench_ode.c), so both solve the
  * same problem with the same settings.
  *
- * A step: the caller collides, handing every pair's contacts to cs_collect (which does
- * not make joints yet); cs_solve then finds the islands, makes the contact joints with
- * their final surfaces, and steps; afterwards s->forces holds what the solver found each
+ * A step: the caller collides, every pair's contacts into cs_room's room and handed to
+ * cs_keep (or copied in by cs_collect), which does not make joints yet; cs_solve then
+ * finds the islands, makes the contact joints with their final surfaces, and steps; afterwards s->forces holds what the solver found each
  * contact to do, and cs_whole_forces makes them the whole forces (a caller that reads
  * them runs it: the preloads put back).
  * Three things on top of ODE's own step, each chosen by measurement (app/bench/accuracy.py,
@@ -106,6 +106,7 @@ typedef struct {
     CsContact *contacts;
     int ncontacts, capcontacts;
     double *forces;   /* after cs_solve: each contact's whole force on body 1 */
+    dJointFeedback *feedback;  /* each contact joint's record: the solver writes it */
     CsBody *bodies;
     int *parent, *kind, *rows;  /* per body: union-find parent; island kind and rows */
     int capbodies;
@@ -134,6 +135,7 @@ static inline void cs_free(CsState *s) {
     free(s->load);
     free(s->contacts);
     free(s->forces);
+    free(s->feedback);
     free(s->bodies);
     free(s->parent);
     free(s->kind);
@@ -173,56 +175,92 @@ static inline double cs_inverse_mass(dBodyID b) {
     return m.mass > 0.0 ? 1.0 / m.mass : 0.0;
 }
 
+/* Where a body is and how it moves, read once for all the contacts of a pair. */
+typedef struct {
+    const dReal *pos, *lvel, *avel;  /* NULL: the world, at rest */
+} CsMotion;
+
+static inline CsMotion cs_motion(dBodyID b) {
+    CsMotion m = {NULL, NULL, NULL};
+    if (b) {
+        m.pos = dBodyGetPosition(b);
+        m.lvel = dBodyGetLinearVel(b);
+        m.avel = dBodyGetAngularVel(b);
+    }
+    return m;
+}
+
+/* A body's velocity at `at`: dBodyGetPointVel's arithmetic in its order (the same bits),
+ * without a call into libode per contact. */
+static inline void cs_point_vel(const CsMotion *m, const dReal *at, dVector3 v) {
+    double p0 = at[0] - m->pos[0], p1 = at[1] - m->pos[1], p2 = at[2] - m->pos[2];
+    v[0] = (m->avel[1] * p2 - m->avel[2] * p1) + m->lvel[0];
+    v[1] = (m->avel[2] * p0 - m->avel[0] * p2) + m->lvel[1];
+    v[2] = (m->avel[0] * p1 - m->avel[1] * p0) + m->lvel[2];
+}
+
 /* Velocity of body 1 relative to body 2 at the contact: its normal part (negative:
  * closing) is returned, its tangential part's square stored in `slip2`. */
-static inline double cs_relative_speed(dBodyID b1, dBodyID b2, const dContactGeom *g,
-                                       double *slip2) {
+static inline double cs_relative_speed(const CsMotion *m1, const CsMotion *m2,
+                                       const dContactGeom *g, double *slip2) {
     dVector3 v1, v2 = {0, 0, 0, 0};
     double v[3], along;
     int k;
-    dBodyGetPointVel(b1, g->pos[0], g->pos[1], g->pos[2], v1);
-    if (b2) dBodyGetPointVel(b2, g->pos[0], g->pos[1], g->pos[2], v2);
+    cs_point_vel(m1, g->pos, v1);
+    if (m2->pos) cs_point_vel(m2, g->pos, v2);
     for (k = 0; k < 3; k++) v[k] = v1[k] - v2[k];
     along = v[0] * g->normal[0] + v[1] * g->normal[1] + v[2] * g->normal[2];
     *slip2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2] - along * along;
     return along;
 }
 
-/* Keep the `n` contacts bodies b1 (moving) and b2 (NULL: the world) made this step,
- * their surfaces set by the caller from the pair's materials; their softness is set
- * here. Their joints are made by cs_solve, in this order. Returns 0, or -1 out of memory. */
-static inline int cs_collect(CsState *s, const CsSettings *cfg, const dContact *contacts,
-                             int n, dBodyID b1, dBodyID b2, double dt) {
-    double soft = cfg->softness * dt * (cs_inverse_mass(b1) + cs_inverse_mass(b2));
-    int i;
+/* Room for `n` more contacts after the kept ones, or NULL out of memory. A caller may
+ * collide straight into it (dCollide into &room->contact.geom, sizeof(CsContact) apart),
+ * set the surfaces and hand them to cs_keep: no copy of each contact. */
+static inline CsContact *cs_room(CsState *s, int n) {
     if (s->ncontacts + n > s->capcontacts) {
         int cap = s->capcontacts ? 2 * s->capcontacts : 1024;
         CsContact *grown;
-        double *forces;
+        double *forces = NULL;
+        dJointFeedback *feedback = NULL;
         while (cap < s->ncontacts + n) cap *= 2;
+        /* (no joint points at a feedback record now: the last step's were emptied) */
         grown = (CsContact *)realloc(s->contacts, (size_t)cap * sizeof(CsContact));
         if (grown) s->contacts = grown;
         forces = grown ? (double *)realloc(s->forces, (size_t)cap * 3 * sizeof(double)) : NULL;
-        if (!forces) {
+        if (forces) s->forces = forces;
+        feedback = forces ? (dJointFeedback *)realloc(s->feedback,
+                                                      (size_t)cap * sizeof(dJointFeedback))
+                          : NULL;
+        if (!feedback) {
             s->oom = 1;
-            return -1;
+            return NULL;
         }
-        s->forces = forces;
+        s->feedback = feedback;
         s->capcontacts = cap;
     }
+    return &s->contacts[s->ncontacts];
+}
+
+/* Keep the `n` contacts in cs_room's room that bodies b1 (moving) and b2 (NULL: the
+ * world) made this step, their surfaces set by the caller from the pair's materials;
+ * their softness is set here. Their joints are made by cs_solve, in this order. */
+static inline void cs_keep(CsState *s, const CsSettings *cfg, int n, dBodyID b1,
+                           dBodyID b2, double dt) {
+    double soft = cfg->softness * dt * (cs_inverse_mass(b1) + cs_inverse_mass(b2));
+    int i, i1 = cs_body_index(b1), i2 = cs_body_index(b2);
+    CsMotion m1 = cs_motion(b1), m2 = cs_motion(b2);
     for (i = 0; i < n; i++) {
         CsContact *k = &s->contacts[s->ncontacts++];
         dSurfaceParameters *f = &k->contact.surface;
         double slip2, closing;
-        k->contact = contacts[i];
         k->b1 = b1;
         k->b2 = b2;
-        k->i1 = cs_body_index(b1);
-        k->i2 = cs_body_index(b2);
+        k->i1 = i1;
+        k->i2 = i2;
         k->authored = (f->mode & dContactSoftCFM) != 0;
-        closing = -cs_relative_speed(b1, b2, &k->contact.geom, &slip2);
+        closing = -cs_relative_speed(&m1, &m2, &k->contact.geom, &slip2);
         if (slip2 > REST_SLIP * REST_SLIP) {
-            int i1 = k->i1, i2 = k->i2;
             if (i1 >= 0 && i1 < s->capbodies) s->bodies[i1].slipping = 1;
             if (i2 >= 0 && i2 < s->capbodies) s->bodies[i2].slipping = 1;
         }
@@ -231,6 +269,16 @@ static inline int cs_collect(CsState *s, const CsSettings *cfg, const dContact *
         f->soft_cfm = (f->mode & dContactBounce) && f->bounce > 0.0 && closing > f->bounce_vel
                           ? 0.0 : soft;
     }
+}
+
+/* cs_keep for `n` contacts made elsewhere (copied in). Returns 0, or -1 out of memory. */
+static inline int cs_collect(CsState *s, const CsSettings *cfg, const dContact *contacts,
+                             int n, dBodyID b1, dBodyID b2, double dt) {
+    CsContact *room = cs_room(s, n);
+    int i;
+    if (room == NULL) return -1;
+    for (i = 0; i < n; i++) room[i].contact = contacts[i];
+    cs_keep(s, cfg, n, b1, b2, dt);
     return 0;
 }
 
@@ -538,7 +586,7 @@ static inline void cs_whole_forces(CsState *s) {
 
 static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
                            dJointGroupID group, const void *bodies, size_t stride, int n,
-                           double dt, dJointFeedback *(*feedback)(void *, int), void *ctx) {
+                           double dt) {
     dVector3 gravity;
     double g, down[3], keep;
     int i, k, status = 0, passes = 0, present[3] = {0, 0, 0};
@@ -568,8 +616,9 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
         }
         if (c->authored) s->kind[cs_root(s->parent, a)] |= CS_UNREST;
         if (b >= 0) cs_union(s, a, b);
-        s->kind[cs_root(s->parent, a)] |= CS_CONTACTS;
     }
+    for (i = 0; i < n; i++)  /* (once a body, not once a contact: a union merges kinds) */
+        if (s->bodies[i].contacts) s->kind[cs_root(s->parent, i)] |= CS_CONTACTS;
     for (i = 0; i < n; i++) {  /* the joints (contact joints are not made yet) */
         dBodyID b = cs_body_at(bodies, stride, i);
         int nj;
@@ -642,14 +691,10 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
     }
     for (i = 0; i < s->ncontacts; i++) {  /* the contact joints */
         CsContact *c = &s->contacts[i];
-        dJointFeedback *fb = feedback(ctx, i);
+        dJointFeedback *fb = &s->feedback[i];
         dJointID j;
         j = dJointCreateContact(world, group, &c->contact);
         dJointAttach(j, c->b1, c->b2);
-        if (fb == NULL) {
-            status = -1;
-            continue;
-        }
         /* the solver writes every field of a stepped joint's record; f1, the one read
          * back, starts at zero for a joint it does not step */
         fb->f1[0] = fb->f1[1] = fb->f1[2] = 0.0;
@@ -687,14 +732,10 @@ static inline int cs_solve(CsState *s, const CsSettings *cfg, dWorldID world,
     /* forces: what the solver found (the preloads put back after this loop) */
     for (i = 0; i < s->ncontacts; i++) {
         const CsContact *c = &s->contacts[i];
-        const dJointFeedback *fb = feedback(ctx, i);
+        const dJointFeedback *fb = &s->feedback[i];
         const double *nrm = c->contact.geom.normal;
         double *f = &s->forces[3 * i], mu = c->contact.surface.mu, along, slide2, friction, grip;
         int a = c->i1, b = c->i2;
-        if (fb == NULL) {
-            memset(f, 0, 3 * sizeof(double));
-            continue;
-        }
         for (k = 0; k < 3; k++) {
             f[k] = fb->f1[k];
             s->bodies[a].solved[k] += fb->f1[k];
