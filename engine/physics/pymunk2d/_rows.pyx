@@ -1,20 +1,24 @@
 # cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True, initializedcheck=False
-"""pymunk.batch buffers into engine rows, as C loops.
+"""A pymunk space's bodies and arbiters into engine rows, as C loops over chipmunk.
 
-``pymunk.batch`` (pymunk's public batch API) hands every body's and every arbiter's
-numbers over in one buffer each, in chipmunk's order. Turning them into our rows
-(the state table; sorted contact records) with numpy costs a few dozen array
-operations of a microsecond or more each, which at a few hundred bodies is a tenth
-of a step; here each is one pass. Nothing here touches pymunk or chipmunk: the
-inputs are plain arrays.
+The passes read chipmunk directly, through the functions pymunk's cffi library exports
+(``_chipmunk.pxi``): every body's pose and velocities, who sleeps, every cached
+arbiter's bodies, normal, points and impulse, and they write the forces and velocities
+the resting warm start sets, each one call with no Python per body (``pymunk.batch``,
+the public batch API, read the same numbers through the same functions, but its Python
+per call and its growable buffers were a fixed cost of each of the several reads a step
+takes). Turning the reads into our rows (the state table; sorted contact records) is one
+pass each too.
 
 A :class:`Rows` is planned for a fixed list of bodies, identified by their pymunk
-``Body.id`` (the backend plans a new one when bodies come or go).
+``Body.id`` (chipmunk's user data of the body, which is how an arbiter names its
+bodies) and reached through their cpBody pointers (the backend plans a new one when
+bodies come or go).
 """
 
 cimport numpy as cnp
 from libc.math cimport INFINITY, atan2, cos, exp, fabs, hypot, isfinite, sin, sqrt
-from libc.stdint cimport int8_t, int64_t, uint64_t
+from libc.stdint cimport int8_t, int64_t, uint64_t, uintptr_t
 from libc.stdlib cimport free, malloc, realloc
 from libc.string cimport memcpy
 
@@ -43,6 +47,8 @@ cdef enum:  # the same counts, for code without the GIL
     _BF = 6
     _AI = 3
     _AF = 14
+
+include "_chipmunk.pxi"
 
 
 cdef struct Contact:
@@ -82,10 +88,11 @@ cdef inline Py_ssize_t _root(Py_ssize_t *parent, Py_ssize_t r) noexcept nogil:
 
 
 cdef class Rows:
-    """Rows of one list of bodies (row ``i`` is the body with ``ids[i]``), keys in
-    increasing order.
+    """Rows of one list of bodies (row ``i`` is the body with ``ids[i]``, whose cpBody is
+    at ``bodies[i]``), keys in increasing order.
 
-    ``y`` holds each row's Y (kept as authored; the backend writes it in place),
+    ``owners`` is what keeps those cpBody alive (the pymunk bodies, held as long as the
+    rows); ``y`` holds each row's Y (kept as authored; the backend writes it in place),
     ``rest`` (n, 4) each body's fixed tilt, applied after the turn about Y, ``cog``
     (n, 2) its centre of mass in the body frame (pymunk keeps that point's velocity;
     ours is the origin's), ``static`` whether each row is a static body.
@@ -110,6 +117,10 @@ cdef class Rows:
     cdef const double *y
     cdef const double *rest
     cdef const double *cog
+    cdef object _owners, _bodies
+    cdef void **bodies  # each row's cpBody
+    # the arbiter read's rows (ARBITER_INTS, ARBITER_FLOATS per arbiter), grown as needed
+    cdef cnp.ndarray _arbiter_ints, _arbiter_floats
 
     def __cinit__(self) -> None:
         self.slot_id = NULL
@@ -120,13 +131,22 @@ cdef class Rows:
         self.scratch_b = NULL
         self.scratch_size = 0
 
-    def __init__(self, ids, keys, static, y, rest, cog, contact_dtype) -> None:
+    def __init__(self, ids, keys, static, y, rest, cog, contact_dtype, bodies=None,
+                 owners=None) -> None:
         cdef Py_ssize_t i, n = len(ids)
         cdef uint64_t size = 16, s
         if np.dtype(contact_dtype).itemsize != sizeof(Contact):
             raise ValueError("contact dtype does not match the Contact record")
-        if not (len(keys) == len(static) == len(y) == len(rest) == len(cog) == n):
+        if bodies is None:  # no space behind the rows: the passes over given arrays only
+            bodies = np.zeros(n, np.uintp)
+        if not (len(keys) == len(static) == len(y) == len(rest) == len(cog) == len(bodies)
+                == n):
             raise ValueError("Rows: arrays do not match the bodies")
+        self._owners = owners
+        self._bodies = np.ascontiguousarray(bodies, np.uintp)
+        self.bodies = <void **>cnp.PyArray_DATA(self._bodies)
+        self._arbiter_ints = np.zeros((0, _AI), np.int64)
+        self._arbiter_floats = np.zeros((0, _AF), np.float64)
         if n > 1 and not np.all(np.diff(keys) > 0):
             raise ValueError("Rows: rows must be in increasing key order")
         self._y = y
@@ -202,17 +222,90 @@ cdef class Rows:
             s = (s + 1) & self.mask
         return self.n
 
-    def order(self, const int64_t[::1] ids, Py_ssize_t[::1] gather) -> int:
-        """Where each row sits in pymunk's list ``ids`` (into ``gather``); how many of
-        the listed bodies are not ours."""
-        cdef Py_ssize_t i, r, others = 0
-        for i in range(ids.shape[0]):
-            r = self.row(<uint64_t>ids[i])
-            if r == self.n:
-                others += 1
-            else:
-                gather[r] = i
-        return others
+    cdef int _bound(self) except -1:
+        """Refuse a pass over chipmunk for rows planned without their bodies."""
+        if self.n and self.bodies[0] == NULL:
+            raise ValueError("Rows: planned without their cpBody pointers")
+        return 0
+
+    def read(self, double[:, ::1] raw, unsigned char[::1] awake) -> int:
+        """Every row's (x, z, θ, vx, vz, ω) as chipmunk has them (velocity of the centre
+        of mass) into ``raw`` (n, 6), row by row, and whether it is awake (neither static
+        nor asleep) into ``awake``; how many rows sleep."""
+        cdef Py_ssize_t r, sleepers = 0
+        cdef void *b
+        cdef double *p
+        cdef cpVect v
+        if raw.shape[0] != self.n or raw.shape[1] != _BF or awake.shape[0] != self.n:
+            raise ValueError("read: arrays do not match the rows")
+        self._bound()
+        with nogil:
+            for r in range(self.n):
+                b = self.bodies[r]
+                p = &raw[r, 0]
+                v = cp.position(b)
+                p[0] = v.x
+                p[1] = v.y
+                p[2] = cp.angle(b)
+                v = cp.velocity(b)
+                p[3] = v.x
+                p[4] = v.y
+                p[5] = cp.spin(b)
+                awake[r] = not self.static[r] and not cp.sleeping(b)
+                sleepers += not self.static[r] and not awake[r]
+        return sleepers
+
+    def awake(self, unsigned char[::1] awake) -> int:
+        """Whether each row is awake (neither static nor asleep), as :meth:`read` tells
+        it without the rest; how many rows sleep."""
+        cdef Py_ssize_t r, sleepers = 0
+        if awake.shape[0] != self.n:
+            raise ValueError("awake: array does not match the rows")
+        self._bound()
+        with nogil:
+            for r in range(self.n):
+                awake[r] = not self.static[r] and not cp.sleeping(self.bodies[r])
+                sleepers += not self.static[r] and not awake[r]
+        return sleepers
+
+    def arbiters(self, space):
+        """Every arbiter chipmunk has cached in ``space`` (its cpSpace's address), in its
+        order: ints (m, ARBITER_INTS: body ids a and b, contact count) and floats (m,
+        ARBITER_FLOATS: total impulse, normal, then per contact point a, point b and
+        distance, for two), as pymunk.batch reads them. Valid until the next call."""
+        cdef _ArbiterRead read
+        cdef void *where = <void *><uintptr_t>space
+        cdef Py_ssize_t size
+        if where == NULL:
+            raise ValueError("arbiters: no space")
+        while True:
+            read.ints = <int64_t *>cnp.PyArray_DATA(self._arbiter_ints)
+            read.floats = <double *>cnp.PyArray_DATA(self._arbiter_floats)
+            read.size = cnp.PyArray_DIM(self._arbiter_ints, 0)
+            read.used = 0
+            with nogil:
+                cp.each_cached_arbiter(where, _read_arbiter, &read)
+            if read.used <= read.size:
+                return self._arbiter_ints[:read.used], self._arbiter_floats[:read.used]
+            size = max(read.used + read.used // 2, 64)
+            self._arbiter_ints = np.zeros((size, _AI), np.int64)
+            self._arbiter_floats = np.zeros((size, _AF), np.float64)
+
+    def set_velocities(self, const double[:, ::1] raw, const unsigned char[::1] rows) -> None:
+        """The velocity and spin of each row flagged in ``rows`` from ``raw`` (a read,
+        (n, 6)), into chipmunk (which wakes the body, as a setter does)."""
+        cdef Py_ssize_t r
+        cdef cpVect v
+        if raw.shape[0] != self.n or raw.shape[1] != _BF or rows.shape[0] != self.n:
+            raise ValueError("set_velocities: arrays do not match the rows")
+        self._bound()
+        with nogil:
+            for r in range(self.n):
+                if rows[r]:
+                    v.x = raw[r, 3]
+                    v.y = raw[r, 4]
+                    cp.set_velocity(self.bodies[r], v)
+                    cp.set_spin(self.bodies[r], raw[r, 5])
 
     def table(self, const double[:, ::1] raw, const Py_ssize_t[::1] gather,
               double[:, ::1] out, double[:, ::1] keep, double extent=INFINITY,
@@ -680,32 +773,35 @@ cdef class Resting:
         self.found = False
         self.held_still = 0
 
-    def preload(self, cnp.ndarray forces, cnp.ndarray gather, cnp.ndarray awake,
-                cnp.ndarray out, double beta, double gx, double gz) -> int:
-        """The forces before a step (``forces``, pymunk's list: x, z per body, as read)
-        into ``out``, each awake row whose ramp is on given ``beta`` × ramp of its weight
-        upward; the share each row got into ``applied`` and the upward force (N) into
-        ``lifted`` (0 elsewhere). How many rows were preloaded (0: ``out`` need not be
-        written back). The arithmetic is body.force − m·gravity with m = share · mass,
-        as a one-by-one loop would set it."""
-        cdef Py_ssize_t i, r, p, m = cnp.PyArray_SIZE(forces) // 2, count = 0
-        cdef double *f = <double *>_data(forces, np.float64, 2 * m, "forces")
-        cdef double *o = <double *>_data(out, np.float64, 2 * m, "out")
-        cdef Py_ssize_t *g = <Py_ssize_t *>_data(gather, np.intp, self.n, "gather")
-        cdef unsigned char *a = <unsigned char *>_data(awake, np.uint8, self.n, "awake")
+    def preload(self, Rows rows, double beta, double gx, double gz) -> int:
+        """Before a step: each awake row whose ramp is on given ``beta`` × ramp of its
+        weight upward on top of the force it has (chipmunk's own, read and written back
+        for those rows alone); the share each row got into ``applied`` and the upward
+        force (N) into ``lifted`` (0 elsewhere). How many rows were preloaded. The
+        arithmetic is body.force − m·gravity with m = share · mass, as a one-by-one loop
+        would set it; an asleep row gets none (a force would wake it)."""
+        cdef Py_ssize_t r, count = 0
         cdef double share, mass, lift = sqrt(gx * gx + gz * gz)
+        cdef void *b
+        cdef cpVect f
+        if rows.n != self.n:
+            raise ValueError("Resting.preload: the rows were planned for other bodies")
+        rows._bound()
         with nogil:
-            memcpy(o, f, 2 * m * sizeof(double))
             for r in range(self.n):
                 self.applied[r] = 0.0
                 self.lifted[r] = 0.0
-                if not (self.ramp[r] > 0.0) or not a[r]:  # asleep: a force would wake it
+                if not (self.ramp[r] > 0.0) or rows.static[r]:
                     continue
-                p = g[r]
+                b = rows.bodies[r]
+                if cp.sleeping(b):
+                    continue
                 share = beta * self.ramp[r]
                 mass = share * self.mass[r]
-                o[2 * p] = f[2 * p] - mass * gx
-                o[2 * p + 1] = f[2 * p + 1] - mass * gz
+                f = cp.force(b)
+                f.x = f.x - mass * gx
+                f.y = f.y - mass * gz
+                cp.set_force(b, f)
                 self.applied[r] = share
                 self.lifted[r] = mass * lift
                 count += 1

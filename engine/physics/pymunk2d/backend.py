@@ -63,7 +63,7 @@ from engine.physics.backend import (
     locked_inertia,
 )
 from engine.physics.pymunk2d import _rows
-from engine.physics.pymunk2d.batch import Buffers, SpaceReader
+from engine.physics.pymunk2d.batch import SpaceReader
 from engine.physics.pymunk2d.joints import JointRecord, build_joint
 from engine.physics.pymunk2d.planar import split_orientation
 from engine.physics.pymunk2d.resting import RestingSupport, carried_down
@@ -166,7 +166,6 @@ class PymunkBackend:
         self._masses = np.zeros(0)  # kg, dynamic rows (0 for the others)
         self._static = np.zeros(0, bool)
         self._reader: SpaceReader | None = None
-        self._buffers = Buffers()  # every reader's: pymunk never frees a batch buffer
         self._sleep_on = True
         self._resting = RestingSupport(0, WorldSettings().warm_start)
         self._preloaded = False  # some row got a preload in the step just taken
@@ -310,11 +309,8 @@ class PymunkBackend:
 
     def _preload_weights(self) -> None:
         """Give the rows whose ramp is on their weight's share (an upward force for this
-        step, on top of the forces they have).
-
-        Every body's force is read and written in one batch each (a C pass in between,
-        :meth:`RestingSupport.preload`); where some body sleeps, which a batch write would
-        wake, the preloaded ones are set one by one instead."""
+        step, on top of the forces they have), in one compiled pass over those rows
+        (:meth:`RestingSupport.preload`)."""
         reader = self._space_reader()
         resting = self._resting
         if self._woken and resting.on:  # moved, pushed or woken by hand: not at rest
@@ -325,21 +321,7 @@ class PymunkBackend:
                 self._preloaded = False
             return
         self._preloaded = True
-        if self._step_read is not None and not self._driven:
-            # nothing has touched the space since the last step, which zeroed every
-            # dynamic body's force, and no joint drives a body: no force to read
-            forces, awake, asleep = reader.known_forces()
-        else:
-            forces, awake, asleep = reader.forces()
-        out = reader.force_rows()
-        if not resting.preload(forces, reader.gather, awake, out, self._gravity):
-            return
-        if not asleep:
-            reader.set_forces(out)
-            return
-        records, gather = self._records, reader.gather
-        for row in np.flatnonzero(resting.applied).tolist():
-            _SET_FORCE(records[row].body, out[gather[row]].tolist())
+        resting.preload(reader.rows, self._gravity)
 
     def _rest(self, dt: float, raw: np.ndarray, awake: np.ndarray) -> None:
         """The resting rule after a step (``raw``: the step's body read): what the
@@ -359,17 +341,14 @@ class PymunkBackend:
 
     def _hold_still(self, raw: np.ndarray) -> None:
         """Write back the velocities of the rows the resting pass held still (zeroed in
-        ``raw``, the step's read, which the state read and the sleep rule go on with): in
-        one batch, or one by one where some body sleeps (a batch write would wake it)."""
-        reader = self._reader
-        if not reader.sleepers:
-            reader.set_velocities(raw)
+        ``raw``, the step's read, which the state read and the sleep rule go on with), in
+        one pass over them; where some body sleeps, zero instead, one by one (as when a
+        batch write would have woken the sleepers)."""
+        if self._reader.sleepers:
+            for row in np.flatnonzero(self._resting.still).tolist():
+                _stop(self._records[row].body)
             return
-        records = self._records
-        for row in np.flatnonzero(self._resting.still).tolist():
-            body = records[row].body
-            body.velocity = (0.0, 0.0)
-            body.angular_velocity = 0.0
+        self._reader.set_velocities(raw, self._resting.still)
 
     def _rest_bodies(self) -> None:
         """Per row, for the resting rule: friction coefficient, mass under gravity (0: not
@@ -925,7 +904,7 @@ class PymunkBackend:
                                     for r, k in zip(recs, kind.tolist(), strict=True)),
                                    np.float64, n)
         self._reader = SpaceReader(self._space, [r.body for r in recs], self._keys, self._y,
-                                   self._rests, self._cogs, static, self._buffers)
+                                   self._rests, self._cogs, static)
         self._rule.layout(self._keys, ~static, (kind == pymunk.Body.DYNAMIC) & np.fromiter(
             (r.physical.can_sleep for r in recs), bool, n))
         self._dirty = False

@@ -127,13 +127,11 @@ class RestingSupport:
         self.still[rows] = False
         self.on = bool((self.ramp > 0).any())
 
-    def preload(self, forces: np.ndarray, gather: np.ndarray, awake: np.ndarray,
-                out: np.ndarray, gravity: tuple[float, float]) -> int:
-        """Before a step: ``forces`` (pymunk's list, as read) into ``out`` with each awake
-        row whose ramp is on given beta × ramp of its weight upward (the share into
-        ``applied``, the force into ``lifted``); how many rows got one."""
-        return self._pass.preload(forces, gather, awake.view(np.uint8), out, self.beta,
-                                  gravity[0], gravity[1])
+    def preload(self, rows: _rows.Rows, gravity: tuple[float, float]) -> int:
+        """Before a step: each awake row whose ramp is on given beta × ramp of its weight
+        upward, on top of the force its body has (written into chipmunk for those rows;
+        the share into ``applied``, the force into ``lifted``); how many rows got one."""
+        return self._pass.preload(rows, self.beta, gravity[0], gravity[1])
 
     def no_preload(self) -> None:
         """No row got a preload this step."""
