@@ -340,14 +340,9 @@ class PymunkBackend:
             self._hold_still(raw)
 
     def _hold_still(self, raw: np.ndarray) -> None:
-        """Write back the velocities of the rows the resting pass held still (zeroed in
-        ``raw``, the step's read, which the state read and the sleep rule go on with), in
-        one pass over them; where some body sleeps, zero instead, one by one (as when a
-        batch write would have woken the sleepers)."""
-        if self._reader.sleepers:
-            for row in np.flatnonzero(self._resting.still).tolist():
-                _stop(self._records[row].body)
-            return
+        """Write back the velocities of the rows the resting pass held still (``raw``,
+        the step's read, which the state read and the sleep rule go on with, holds them),
+        in one pass over those rows alone."""
         self._reader.set_velocities(raw, self._resting.still)
 
     def _rest_bodies(self) -> None:
