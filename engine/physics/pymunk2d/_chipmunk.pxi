@@ -131,6 +131,8 @@ def chipmunk_pointer(handle) -> int:
 cdef struct _ArbiterRead:
     int64_t *ints
     double *floats
+    Py_ssize_t *pairs  # each arbiter's rows a and b (n: the keyless world)
+    _Table table  # body ids to rows
     Py_ssize_t used
     Py_ssize_t size
 
@@ -138,8 +140,9 @@ cdef struct _ArbiterRead:
 cdef void _read_arbiter(void *arb, void *data) noexcept nogil:
     """One cached arbiter into the next ARBITER_INTS/ARBITER_FLOATS row, as
     pymunk.batch's pmSpaceArbiterIteratorFuncBatched reads it (the same calls; an
-    arbiter without contacts gets its ids and count only: nothing reads its floats).
-    Past the rows' end it only counts (the caller grows them and reads again)."""
+    arbiter without contacts gets its ids and count only: nothing reads its floats), and
+    its bodies' rows into ``pairs``. Past the rows' end it only counts (the caller grows
+    them and reads again)."""
     cdef _ArbiterRead *read = <_ArbiterRead *>data
     cdef void *a
     cdef void *b
@@ -155,6 +158,8 @@ cdef void _read_arbiter(void *arb, void *data) noexcept nogil:
     cp.arbiter_bodies(arb, &a, &b)
     ints[0] = <int64_t><uintptr_t>cp.user_data(a)
     ints[1] = <int64_t><uintptr_t>cp.user_data(b)
+    read.pairs[2 * (read.used - 1)] = _row_of(&read.table, <uint64_t>ints[0])
+    read.pairs[2 * (read.used - 1) + 1] = _row_of(&read.table, <uint64_t>ints[1])
     count = cp.arbiter_count(arb)
     ints[2] = count
     for k in range(_AF):

@@ -134,6 +134,8 @@ class PymunkBackend:
         self._step_dt = 0.0  # the last substep's, for contact impulses (carried_down)
         #: the contacts (and their rows) of the last step's substeps before its last
         self._earlier: list[tuple[np.ndarray, np.ndarray]] = []
+        #: those substeps' arbiters as read, not yet made contacts (:meth:`_substep_read`)
+        self._pending: list[tuple[np.ndarray, np.ndarray, bool, np.ndarray, float]] = []
         #: substeps the step under way takes (the bodies' damping, per step, reads it)
         self._parts = [1]
         self._gravity = (0.0, 0.0)  # the space's, as configured (x, z)
@@ -254,15 +256,41 @@ class PymunkBackend:
         n = substeps(dt)
         self._parts[0] = n
         held = self._held_forces() if n > 1 else None
-        self._earlier = earlier = []
+        self._earlier, self._pending = [], []
         for i in range(n):
             if i and held:
                 self._hold_forces(held)
             self._substep(dt / n)
             if i < n - 1:  # read now: the next substep replaces chipmunk's arbiters
-                earlier.append((self.contacts(), self._contacts_rows))
-        self._earlier = earlier
+                self._pending.append(self._substep_read())
         self._pushed.clear()
+
+    def _substep_read(self) -> tuple[np.ndarray, np.ndarray, bool, np.ndarray, float]:
+        """What a substep's contacts are made of, kept for :meth:`contacts` (a copy of
+        its arbiters as read, its preloads): made into contacts only when asked for, or
+        before anything changes the space (:func:`_dropping_the_step_read`)."""
+        ints, floats = self._reader.arbiters()
+        return (ints.copy(), floats.copy(), self._preloaded, self._resting.lifted.copy(),
+                self._step_dt)
+
+    def _made_contacts(self, ints: np.ndarray, floats: np.ndarray, preloaded: bool,
+                       lifted: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """A substep's contacts from its arbiters (and their rows), with the impulses of
+        its preloads carried down (:func:`carried_down`)."""
+        c, pairs = self._reader.rows.contacts(ints, floats)
+        gx, gz = self._gravity
+        g = math.hypot(gx, gz)
+        if preloaded and len(c) and g > 0.0 and len(lifted) == len(self._records):
+            up = np.array([-gx / g, 0.0, -gz / g])
+            c["impulse"] = carried_down(pairs[:, 0], pairs[:, 1], c["impulse"],
+                                        c["normal"] @ up, lifted * dt)
+        return c, pairs
+
+    def _make_pending(self) -> None:
+        """The earlier substeps' contacts made now, while the space is as they left it."""
+        for read in self._pending:
+            self._earlier.append(self._made_contacts(*read))
+        self._pending = []
 
     def _held_forces(self) -> list[tuple[int, pymunk.Body, pymunk.Vec2d, float]]:
         """The forces and torques added for this step (pymunk clears them as it steps),
@@ -301,7 +329,7 @@ class PymunkBackend:
         if self._resting.beta > 0.0 or self._sleep_on:
             raw, awake = reader.read()  # one read for both rules and the state read
             if self._resting.beta > 0.0:
-                self._rest(dt, raw, awake)
+                self._rest(dt)
             if not (self._sleep_on and self._apply_sleep(dt, raw, awake)):
                 self._step_read = raw  # none fell asleep: the read is the space as it is
         if not self._sleep_on:
@@ -323,27 +351,17 @@ class PymunkBackend:
         self._preloaded = True
         resting.preload(reader.rows, self._gravity)
 
-    def _rest(self, dt: float, raw: np.ndarray, awake: np.ndarray) -> None:
-        """The resting rule after a step (``raw``: the step's body read): what the
-        contacts did, each row's standing, and the rows to preload before the next step,
-        in one compiled pass."""
+    def _rest(self, dt: float) -> None:
+        """The resting rule after a step, over the step's body read: what the contacts
+        did, each row's standing, the rows to preload before the next step and the rows
+        held still (their velocities written back), in one compiled pass."""
         resting = self._resting
         if len(resting.steps) != len(self._records):
             resting.follow(np.full(len(self._records), -1))
             self._rest_rows = False
         if not self._rest_rows:
             self._rest_bodies()
-        reader = self._reader
-        resting.after(reader.rows, reader.arbiters(ordered=True), raw, reader.gather, awake, dt,
-                      self._gravity)
-        if resting.held_still:
-            self._hold_still(raw)
-
-    def _hold_still(self, raw: np.ndarray) -> None:
-        """Write back the velocities of the rows the resting pass held still (``raw``,
-        the step's read, which the state read and the sleep rule go on with, holds them),
-        in one pass over those rows alone."""
-        self._reader.set_velocities(raw, self._resting.still)
+        resting.after(self._reader.rows, dt, self._gravity)
 
     def _rest_bodies(self) -> None:
         """Per row, for the resting rule: friction coefficient, mass under gravity (0: not
@@ -1030,16 +1048,13 @@ class PymunkBackend:
 
     def contacts(self) -> np.ndarray:
         """The last step's contacts, with the whole impulses: what the solver found plus
-        the preloads it stood in for, carried down to the ground (:func:`carried_down`)."""
+        the preloads it stood in for, carried down to the ground (:func:`carried_down`);
+        a step taken as substeps reports theirs merged (:func:`_merge_contacts`)."""
         if self._contacts is None:
-            c, pairs = self._space_reader().contacts()
-            gx, gz = self._space.gravity
-            g = math.hypot(gx, gz)
-            lifted = self._resting.lifted
-            if self._preloaded and len(c) and g > 0.0 and len(lifted) == len(self._records):
-                up = np.array([-gx / g, 0.0, -gz / g])
-                c["impulse"] = carried_down(pairs[:, 0], pairs[:, 1], c["impulse"],
-                                            c["normal"] @ up, lifted * self._step_dt)
+            reader = self._space_reader()
+            self._make_pending()
+            c, pairs = self._made_contacts(*reader.arbiters(), self._preloaded,
+                                           self._resting.lifted, self._step_dt)
             if self._earlier:
                 c, pairs = _merge_contacts([*self._earlier, (c, pairs)])
                 self._earlier = []
@@ -1230,6 +1245,8 @@ def _dropping_the_step_read(method: Callable[..., Any]) -> Callable[..., Any]:
     @functools.wraps(method)
     def run(self: PymunkBackend, *args: Any, **kwargs: Any) -> Any:
         self._step_read = None
+        if self._pending:
+            self._make_pending()
         return method(self, *args, **kwargs)
     return run
 

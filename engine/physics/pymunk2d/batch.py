@@ -36,65 +36,41 @@ class SpaceReader:
     def __init__(self, space: pymunk.Space, bodies: list[pymunk.Body], keys: np.ndarray,
                  y: np.ndarray, rest: np.ndarray, cog: np.ndarray,
                  static: np.ndarray) -> None:
-        self._space = _rows.chipmunk_pointer(space._space)
         n = len(bodies)
-        #: the step's arbiters as read (ints, floats) and the sleep epoch then; dropped
-        #: by :meth:`new_step`, and read again if a body has fallen asleep or woken since
-        self._arbiter_read: tuple[np.ndarray, np.ndarray, int] | None = None
-        self._sleepers = 0
         ids = np.fromiter((b.id for b in bodies), np.int64, n)
         pointers = np.fromiter((_rows.chipmunk_pointer(b._body) for b in bodies), np.uintp, n)
         self._rows = _rows.Rows(ids, keys, static, y, rest, cog, CONTACT_DTYPE, pointers,
-                                list(bodies))
-        #: reads are in row order: row ``i`` of a read is row ``i`` (the passes take a
-        #: gather of rows into a read)
-        self.gather = np.arange(n, dtype=np.intp)
-        self._raw = np.zeros((n, 6))
-        self._awake = np.zeros(n, bool)
-        self._seen = np.zeros(n, bool)  # the awake flags the arbiters were last read with
-        self._epoch = 0  # counts the changes of who is awake
-
-    def _note(self, sleepers: int) -> None:
-        """A read's awake flags (in ``_awake``): a new epoch where they changed."""
-        self._sleepers = sleepers
-        if not np.array_equal(self._awake, self._seen):
-            self._seen[:] = self._awake
-            self._epoch += 1
+                                list(bodies), _rows.chipmunk_pointer(space._space))
 
     def read(self) -> tuple[np.ndarray, np.ndarray]:
         """Every body's (x, z, θ, vx, vz, ω) as pymunk has them (velocity of the centre of
-        mass), row by row; and which rows are awake. Valid until the next read."""
-        self._note(self._rows.read(self._raw, self._awake.view(np.uint8)))
-        return self._raw, self._awake
-
-    def set_velocities(self, raw: np.ndarray, rows: np.ndarray) -> None:
-        """The velocity and spin of the ``rows`` flagged (uint8 per row) from a read
-        (:meth:`read`'s array), in one pass (each wakes its body, as a setter does)."""
-        self._rows.set_velocities(raw, rows)
+        mass), row by row; and which rows are awake. The same two arrays each time: valid
+        until the next read."""
+        return self._rows.read()
 
     @property
     def sleepers(self) -> int:
         """How many bodies slept at the last read."""
-        return self._sleepers
+        return self._rows.sleepers
 
     def new_step(self) -> None:
         """The space was stepped: its arbiters are new."""
-        self._arbiter_read = None
+        self._rows.new_step()
 
     def table(self, raw: np.ndarray, out: np.ndarray, keep: np.ndarray,
               extent: float = math.inf, max_speed: float = math.inf) -> bool:
-        """A read as state rows (BodyState's layout) in ``out[:n]``, and in row order as
-        it is in ``keep`` (n, 6); whether all finite, inside ``extent`` and under
-        ``max_speed``."""
-        return self._rows.table(raw, self.gather, out, keep, extent, max_speed)
+        """A read as state rows (BodyState's layout) in ``out[:n]``, and as it is in
+        ``keep`` (n, 6); whether all finite, inside ``extent`` and under ``max_speed``."""
+        return self._rows.table(raw, out, keep, extent, max_speed)
 
     def motion(self, raw: np.ndarray, velocity: np.ndarray) -> None:
         """A read's centre-of-mass velocities as the sleep rule keeps them, (6, n)."""
-        self._rows.motion(raw, self.gather, velocity)
+        self._rows.motion(raw, velocity)
 
     @property
     def rows(self) -> _rows.Rows:
-        """The compiled rows (ids to rows) this reader was planned with."""
+        """The compiled rows (ids to rows, reads and writes) this reader was planned
+        with."""
         return self._rows
 
     def arbiters(self, ordered: bool = False) -> tuple[np.ndarray, np.ndarray]:
@@ -102,14 +78,7 @@ class SpaceReader:
         per arbiter), read once per step: chipmunk changes them between steps only as
         bodies fall asleep (their arbiters leave its cache) or wake, which the rows' awake
         flags tell (``ordered``: the caller has just read the bodies, which looked)."""
-        if not ordered:
-            self._note(self._rows.awake(self._awake.view(np.uint8)))
-        read = self._arbiter_read
-        if read is not None and read[2] == self._epoch:
-            return read[0], read[1]
-        ints, floats = self._rows.arbiters(self._space)
-        self._arbiter_read = (ints, floats, self._epoch)
-        return ints, floats
+        return self._rows.arbiters(ordered)
 
     def contacts(self) -> tuple[np.ndarray, np.ndarray]:
         """One CONTACT_DTYPE row per touching shape pair, sorted by keys then place, and
@@ -121,7 +90,7 @@ class SpaceReader:
         """Each row's island label: rows tied by the step's contacts between ``movable``
         rows, or by ``joints`` ((m, 2) rows; -1: the world) (see
         :meth:`_rows.Rows.islands`)."""
-        labels = np.empty(len(self.gather), np.intp)
-        self._rows.islands(self.arbiters()[0], movable.view(np.uint8), labels,
+        labels = np.empty(len(movable), np.intp)
+        self._rows.islands(movable.view(np.uint8), labels,
                            np.ascontiguousarray(joints, np.int64))
         return labels

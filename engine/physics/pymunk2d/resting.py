@@ -138,11 +138,10 @@ class RestingSupport:
         self.applied[:] = 0.0
         self.lifted[:] = 0.0
 
-    def after(self, reader_rows: _rows.Rows, arbiters: tuple[np.ndarray, np.ndarray],
-              raw: np.ndarray, gather: np.ndarray, awake: np.ndarray, dt: float,
-              gravity: tuple[float, float]) -> None:
+    def after(self, rows: _rows.Rows, dt: float, gravity: tuple[float, float]) -> None:
         """After a step: every row's standing and its ramp for the next step, in one
-        compiled pass (:meth:`_rows.Resting.after`). At rest means held up by its
+        compiled pass (:meth:`_rows.Resting.after`) over the bodies as ``rows`` last read
+        them (right after the step) and the step's arbiters. At rest means held up by its
         contacts (REST_SUPPORT of its weight, the share it was preloaded with aside) with
         its friction short of its bound, not pushed sideways, for two steps (policy.h's
         rp_stand); preloaded, a body stays so while it is held up at all (chipmunk
@@ -151,12 +150,9 @@ class RestingSupport:
         ground; not jointed or touching a kinematic body) ramps in by RAMP a step in an
         island with no moving row that is unrest or weightless, and out by twice that;
         off at once where no contact is left. A preloaded row on a face slower than
-        REST_STILL_* is held still: its velocity zeroed in ``raw``, which the caller writes
-        back when :attr:`held_still` says some row was."""
-        ints, floats = arbiters
-        self.on = self._pass.after(reader_rows, ints, floats, raw, gather,
-                                   awake.view(np.uint8), dt, gravity[0], gravity[1],
-                                   self.beta, RAMP) > 0
+        REST_STILL_* is held still: its velocity zeroed in the read and in chipmunk
+        (:attr:`held_still` counts them)."""
+        self.on = self._pass.after(rows, dt, gravity[0], gravity[1], self.beta, RAMP) > 0
 
 
 def carried_down(rows_a: np.ndarray, rows_b: np.ndarray, impulse: np.ndarray,
