@@ -128,43 +128,67 @@ def chipmunk_pointer(handle) -> int:
     return int(pymunk.ffi.cast("uintptr_t", handle))
 
 
-cdef struct _ArbiterRead:
-    int64_t *ints
-    double *floats
-    Py_ssize_t *pairs  # each arbiter's rows a and b (n: the keyless world)
-    _Table table  # body ids to rows
+cdef extern from *:
+    void _prefetch "__builtin_prefetch"(const void *address) noexcept nogil
+
+
+cdef struct _Collect:
+    void **arbiters
     Py_ssize_t used
     Py_ssize_t size
 
 
-cdef void _read_arbiter(void *arb, void *data) noexcept nogil:
-    """One cached arbiter into the next ARBITER_INTS/ARBITER_FLOATS row, as
-    pymunk.batch's pmSpaceArbiterIteratorFuncBatched reads it (the same calls; an
-    arbiter without contacts gets its ids and count only: nothing reads its floats), and
-    its bodies' rows into ``pairs``. Past the rows' end it only counts (the caller grows
-    them and reads again)."""
-    cdef _ArbiterRead *read = <_ArbiterRead *>data
+cdef void _collect(void *arb, void *data) noexcept nogil:
+    """chipmunk's cached arbiters, in its order, into ``arbiters`` (past its end: only
+    counted; the caller grows it and collects again)."""
+    cdef _Collect *c = <_Collect *>data
+    if c.used < c.size:
+        c.arbiters[c.used] = arb
+    c.used += 1
+
+
+cdef void _read_arbiters(void **arbiters, Py_ssize_t m, int64_t *ints, double *floats,
+                         Py_ssize_t *pairs, const _Table *table) noexcept nogil:
+    """Each of ``m`` arbiters into its ARBITER_INTS/ARBITER_FLOATS row (and its bodies'
+    rows into ``pairs``), as pymunk.batch's pmSpaceArbiterIteratorFuncBatched reads it
+    (the same calls; an arbiter without contacts gets its ids and count only: nothing
+    reads its floats). After chipmunk's step little of them is in the cache: the arbiters
+    a few ahead, and their bodies, are asked for early (a hint only: what is read is
+    read through chipmunk's functions)."""
+    cdef Py_ssize_t i
     cdef void *a
     cdef void *b
-    cdef int64_t *ints
-    cdef double *f
+    for i in range(m):
+        if i + 8 < m:
+            _prefetch(arbiters[i + 8])
+            _prefetch(<char *>arbiters[i + 8] + 64)
+            _prefetch(<char *>arbiters[i + 8] + 128)
+        if i + 4 < m:
+            cp.arbiter_bodies(arbiters[i + 4], &a, &b)
+            _prefetch(<char *>a + 64)
+            _prefetch(<char *>a + 128)
+            _prefetch(<char *>b + 64)
+            _prefetch(<char *>b + 128)
+        _read_arbiter(arbiters[i], &ints[_AI * i], &floats[_AF * i], &pairs[2 * i], table)
+
+
+cdef inline void _read_arbiter(void *arb, int64_t *ints, double *f, Py_ssize_t *pair,
+                               const _Table *table) noexcept nogil:
+    """One arbiter (see :func:`_read_arbiters`)."""
+    cdef void *a
+    cdef void *b
     cdef cpVect v
     cdef int count, k
-    read.used += 1
-    if read.used > read.size:
-        return
-    ints = &read.ints[_AI * (read.used - 1)]
-    f = &read.floats[_AF * (read.used - 1)]
     cp.arbiter_bodies(arb, &a, &b)
     ints[0] = <int64_t><uintptr_t>cp.user_data(a)
     ints[1] = <int64_t><uintptr_t>cp.user_data(b)
-    read.pairs[2 * (read.used - 1)] = _row_of(&read.table, <uint64_t>ints[0])
-    read.pairs[2 * (read.used - 1) + 1] = _row_of(&read.table, <uint64_t>ints[1])
+    pair[0] = _row_of(table, <uint64_t>ints[0])
+    pair[1] = _row_of(table, <uint64_t>ints[1])
     count = cp.arbiter_count(arb)
     ints[2] = count
-    for k in range(_AF):
-        f[k] = 0.0
     if count <= 0:
+        for k in range(_AF):
+            f[k] = 0.0
         return
     v = cp.total_impulse(arb)
     f[0] = v.x
@@ -180,3 +204,6 @@ cdef void _read_arbiter(void *arb, void *data) noexcept nogil:
         f[6 + 5 * k] = v.x
         f[7 + 5 * k] = v.y
         f[8 + 5 * k] = cp.depth(arb, k)
+    if count != 2:
+        for k in range(9, _AF):
+            f[k] = 0.0

@@ -148,7 +148,7 @@ cdef class Rows:
     cdef readonly Py_ssize_t sleepers, epoch
     # the step's arbiter read (ARBITER_INTS, ARBITER_FLOATS per arbiter, and its rows a,
     # b), grown as needed: m arbiters, read when ``epoch`` was read_epoch (-1: none)
-    cdef cnp.ndarray _arbiter_ints, _arbiter_floats, _pairs
+    cdef cnp.ndarray _arbiter_ptrs, _arbiter_ints, _arbiter_floats, _pairs
     cdef Py_ssize_t m, read_epoch
 
     def __cinit__(self) -> None:
@@ -178,6 +178,7 @@ cdef class Rows:
         self._arbiter_ints = np.zeros((0, _AI), np.int64)
         self._arbiter_floats = np.zeros((0, _AF), np.float64)
         self._pairs = np.zeros((0, 2), np.intp)
+        self._arbiter_ptrs = np.zeros(0, np.uintp)
         self.m = 0
         self.read_epoch = -1
         self.epoch = 0
@@ -278,6 +279,9 @@ cdef class Rows:
         cdef bint changed = False
         for r in range(self.n):
             b = self.bodies[r]
+            if r + 8 < self.n:  # a hint: the bodies ahead, which the step left uncached
+                _prefetch(<char *>self.bodies[r + 8] + 64)
+                _prefetch(<char *>self.bodies[r + 8] + 128)
             if pose:
                 p = &self.raw[_BF * r]
                 v = cp.position(b)
@@ -311,28 +315,31 @@ cdef class Rows:
         one's rows into ``pairs``) unless they were read this step, with who is awake as
         it is now: chipmunk changes its cache of arbiters between steps only as bodies
         fall asleep (their arbiters leave it) or wake."""
-        cdef _ArbiterRead read
+        cdef _Collect found
         cdef Py_ssize_t size
         if self.read_epoch == self.epoch:
             return 0
         if self.space == NULL:
             raise ValueError("Rows: planned without their space")
         while True:
-            read.ints = <int64_t *>cnp.PyArray_DATA(self._arbiter_ints)
-            read.floats = <double *>cnp.PyArray_DATA(self._arbiter_floats)
-            read.pairs = <Py_ssize_t *>cnp.PyArray_DATA(self._pairs)
-            read.size = cnp.PyArray_DIM(self._arbiter_ints, 0)
-            read.used = 0
-            read.table = self.lookup
+            found.arbiters = <void **>cnp.PyArray_DATA(self._arbiter_ptrs)
+            found.size = cnp.PyArray_DIM(self._arbiter_ptrs, 0)
+            found.used = 0
             with nogil:
-                cp.each_cached_arbiter(self.space, _read_arbiter, &read)
-            if read.used <= read.size:
+                cp.each_cached_arbiter(self.space, _collect, &found)
+            if found.used <= found.size:
                 break
-            size = max(read.used + read.used // 2, 64)
+            size = max(found.used + found.used // 2, 64)
+            self._arbiter_ptrs = np.zeros(size, np.uintp)
             self._arbiter_ints = np.zeros((size, _AI), np.int64)
             self._arbiter_floats = np.zeros((size, _AF), np.float64)
             self._pairs = np.zeros((size, 2), np.intp)
-        self.m = read.used
+        with nogil:
+            _read_arbiters(found.arbiters, found.used,
+                           <int64_t *>cnp.PyArray_DATA(self._arbiter_ints),
+                           <double *>cnp.PyArray_DATA(self._arbiter_floats),
+                           <Py_ssize_t *>cnp.PyArray_DATA(self._pairs), &self.lookup)
+        self.m = found.used
         self.read_epoch = self.epoch
         return 0
 

@@ -269,7 +269,8 @@ class PymunkBackend:
         """What a substep's contacts are made of, kept for :meth:`contacts` (a copy of
         its arbiters as read, its preloads): made into contacts only when asked for, or
         before anything changes the space (:func:`_dropping_the_step_read`)."""
-        ints, floats = self._reader.arbiters()
+        # the substep's body read stands where none fell asleep: who is awake was seen
+        ints, floats = self._reader.arbiters(self._step_read is not None)
         return (ints.copy(), floats.copy(), self._preloaded, self._resting.lifted.copy(),
                 self._step_dt)
 
