@@ -279,9 +279,8 @@ cdef class Rows:
         cdef bint changed = False
         for r in range(self.n):
             b = self.bodies[r]
-            if r + 8 < self.n:  # a hint: the bodies ahead, which the step left uncached
-                _prefetch(<char *>self.bodies[r + 8] + 64)
-                _prefetch(<char *>self.bodies[r + 8] + 128)
+            if r + 8 < self.n:
+                _ahead(self.bodies[r + 8])
             if pose:
                 p = &self.raw[_BF * r]
                 v = cp.position(b)
