@@ -171,22 +171,7 @@ cdef class Rows:
         if not (len(keys) == len(static) == len(y) == len(rest) == len(cog) == len(bodies)
                 == n):
             raise ValueError("Rows: arrays do not match the bodies")
-        self._owners = owners
-        self._bodies = np.ascontiguousarray(bodies, np.uintp)
-        self.bodies = <void **>cnp.PyArray_DATA(self._bodies)
-        self.space = <void *><uintptr_t>space
-        self._arbiter_ints = np.zeros((0, _AI), np.int64)
-        self._arbiter_floats = np.zeros((0, _AF), np.float64)
-        self._pairs = np.zeros((0, 2), np.intp)
-        self._arbiter_ptrs = np.zeros(0, np.uintp)
-        self.m = 0
-        self.read_epoch = -1
-        self.epoch = 0
-        self.sleepers = 0
-        self._raw = np.zeros((n, _BF))
-        self._awake = np.zeros(n, bool)
-        self.raw = <double *>cnp.PyArray_DATA(self._raw)
-        self.awake = <unsigned char *>cnp.PyArray_DATA(self._awake)
+        self._chipmunk(bodies, owners, space)
         if n > 1 and not np.all(np.diff(keys) > 0):
             raise ValueError("Rows: rows must be in increasing key order")
         self._y = y
@@ -226,6 +211,27 @@ cdef class Rows:
         self.lookup.slot_row = self.slot_row
         self.lookup.mask = self.mask
         self.lookup.n = n
+
+    cdef void _chipmunk(self, bodies, owners, space) except *:
+        """The rows' cpBody and cpSpace (held alive by ``owners``), and the buffers the
+        passes over them read into."""
+        n = len(bodies)
+        self._owners = owners
+        self._bodies = np.ascontiguousarray(bodies, np.uintp)
+        self.bodies = <void **>cnp.PyArray_DATA(self._bodies)
+        self.space = <void *><uintptr_t>space
+        self._arbiter_ints = np.zeros((0, _AI), np.int64)
+        self._arbiter_floats = np.zeros((0, _AF), np.float64)
+        self._pairs = np.zeros((0, 2), np.intp)
+        self._arbiter_ptrs = np.zeros(0, np.uintp)
+        self.m = 0
+        self.read_epoch = -1
+        self.epoch = 0
+        self.sleepers = 0
+        self._raw = np.zeros((n, _BF))
+        self._awake = np.zeros(n, bool)
+        self.raw = <double *>cnp.PyArray_DATA(self._raw)
+        self.awake = <unsigned char *>cnp.PyArray_DATA(self._awake)
 
     def __dealloc__(self) -> None:
         free(self.slot_id)
