@@ -453,7 +453,7 @@ cdef class Rows:
                 velocity[4, i] = -p[5]
                 velocity[5, i] = 0.0
 
-    # Long: one typed pass over pymunk.batch's arbiter buffers (C locals)
+    # Long: one typed pass over the arbiter rows (C locals)
     def contacts(self, const int64_t[:, ::1] ints, const double[:, ::1] floats):
         """One CONTACT_DTYPE row per touching arbiter, sorted by keys then place; and
         each one's rows (side a, side b; -1: the keyless world), (m, 2) int64.
@@ -781,7 +781,7 @@ cdef class Resting:
     place), bound once per layout of rows, and its two passes per step: the preload
     before the step (:meth:`preload`) and everything after it (:meth:`after`: what each
     row's contacts did, its standing by policy.h's rp_stand, the rows chosen, their
-    islands and the ramps), each one call over pymunk.batch's buffers."""
+    islands and the ramps), each one call over chipmunk (through the rows)."""
 
     cdef Py_ssize_t n
     cdef object _keep  # the arrays behind the pointers
