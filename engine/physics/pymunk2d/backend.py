@@ -277,9 +277,9 @@ class PymunkBackend:
         its arbiters as read, its preloads): made into contacts only when asked for, or
         before anything changes the space (:func:`_dropping_the_step_read`)."""
         # the substep's body read stands where none fell asleep: who is awake was seen
-        ints, floats = self._reader.arbiters(self._step_read is not None)
-        return (ints.copy(), floats.copy(), self._preloaded, self._resting.lifted.copy(),
-                self._step_dt)
+        ints, floats = self._reader.rows.arbiters(self._step_read is not None)
+        return (ints.copy(), floats.copy(), self._preloaded,
+                self._resting.arrays["lifted"].copy(), self._step_dt)
 
     def _made_contacts(self, ints: np.ndarray, floats: np.ndarray, preloaded: bool,
                        lifted: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -326,8 +326,8 @@ class PymunkBackend:
         # after the preload: it is an outside force to a joint's momentum balance
         strained = self._strain_before(dt) if self._strained else None
         self._space.step(dt)
-        reader = self._reader
-        reader.new_step()
+        rows = self._reader.rows
+        rows.new_step()
         if strained:
             self._strain_after(strained, dt)
         if self._aims:
@@ -335,7 +335,7 @@ class PymunkBackend:
         self._contacts = None
         self._step_read = None
         if self._resting.beta > 0.0 or self._sleep_on:
-            raw, awake = reader.read()  # one read for both rules and the state read
+            raw, awake = rows.read()  # one read for both rules and the state read
             if self._resting.beta > 0.0:
                 self._rest(dt)
             if not (self._sleep_on and self._apply_sleep(dt, raw, awake)):
@@ -364,7 +364,7 @@ class PymunkBackend:
         did, each row's standing, the rows to preload before the next step and the rows
         held still (their velocities written back), in one compiled pass."""
         resting = self._resting
-        if len(resting.steps) != len(self._records):
+        if resting.n != len(self._records):
             resting.follow(np.full(len(self._records), -1))
             self._rest_rows = False
         if not self._rest_rows:
@@ -905,7 +905,7 @@ class PymunkBackend:
         recs = sorted(self._bodies.values(), key=lambda r: r.key)
         n = len(recs)
         old_rows = np.fromiter((self._row.get(r.key, -1) for r in recs), np.int64, n)
-        if len(self._resting.steps) == len(self._records):
+        if self._resting.n == len(self._records):
             self._resting.follow(old_rows)
         else:
             self._resting.follow(np.full(n, -1))
@@ -1062,7 +1062,7 @@ class PymunkBackend:
             reader = self._space_reader()
             self._make_pending()
             c, pairs = self._made_contacts(*reader.arbiters(), self._preloaded,
-                                           self._resting.lifted, self._step_dt)
+                                           self._resting.arrays["lifted"], self._step_dt)
             if self._earlier:
                 c, pairs = _merge_contacts([*self._earlier, (c, pairs)])
                 self._earlier = []

@@ -65,6 +65,7 @@ class RestingSupport:
 
     def __init__(self, n: int, beta: float) -> None:
         self.beta = beta
+        self.n = n  # rows
         self.arrays = self._fresh(n)
         self._pass = _rows.Resting(self.arrays)
         #: whether some row has its ramp on (it gets a preload before the next step)
@@ -89,6 +90,7 @@ class RestingSupport:
         for name in self._FOLLOW:
             arrays[name][had] = self.arrays[name][old_rows[had]]
         self.arrays = arrays
+        self.n = len(old_rows)
         self._pass = _rows.Resting(arrays)
         self.on = bool((arrays["ramp"] > 0).any())
 
