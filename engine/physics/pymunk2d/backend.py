@@ -30,8 +30,8 @@ of the rows it holds still; then the sleep rule (``sleep.h``'s pass; islands, wh
 body is ready, by a union-find over the same arbiters and the joints). A substep before
 a step's last keeps a copy of its arbiters: its contacts are made only when
 :meth:`contacts` asks (or before anything changes the space). Against bare pymunk taking
-the same substeps (``python -m app.bench.physics2d``, docs/PHYSICS.md): 1.24 to 1.32 of
-its time at 2,000 to 100 boxes (1.28 to 1.41 with the sleep rule on), where the reads
+the same substeps (``python -m app.bench.physics2d``, docs/PHYSICS.md): 1.23 to 1.33 of
+its time at 2,000 to 100 boxes (1.27 to 1.40 with the sleep rule on), where the reads
 alone (chipmunk's own functions, after a step whose cache holds little of them) are 7 to
 10 % of chipmunk's step.
 
