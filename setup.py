@@ -2,8 +2,8 @@
 (engine/physics/ode3d/_ode.pyx, which includes the .pxi files beside it, one per concept,
 cimports their libode.pxd declarations and includes stepper.h, the step policy it shares
 with app/bench/bench_ode.c, and through it engine/physics/sleep.h), the sleep rule's per-body
-pass (engine/physics/_sleep.pyx, over sleep.h), the pass that turns pymunk.batch buffers
-into engine rows (engine/physics/pymunk2d/_rows.pyx), the scene scanner
+pass (engine/physics/_sleep.pyx, over sleep.h), the passes that read chipmunk (through
+pymunk's cffi library) into engine rows (engine/physics/pymunk2d/_rows.pyx), the scene scanner
 (engine/scene/_scan.pyx) and the network pose codec's per-frame passes
 (services/net/_codec.pyx: built without fused multiply-add, so every machine's arithmetic
 is the same to the bit, as a server's copy of the poses and its nodes' must be), and the

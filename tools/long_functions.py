@@ -41,7 +41,7 @@ ALLOWED: dict[str, str] = {
         "one typed pass over the contact rows (C locals; a helper per part would be a "
         "Python call per row)",
     "engine/physics/pymunk2d/_rows.pyx::Rows.contacts":
-        "one typed pass over pymunk.batch's arbiter buffers (C locals, as carried_down)",
+        "one typed pass over the arbiter rows (C locals, as carried_down)",
     "engine/physics/pymunk2d/_rows.pyx::planar_poses":
         "one typed pass over the pose table into the plane (C locals, as carried_down)",
 }

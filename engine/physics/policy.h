@@ -5,8 +5,9 @@
  * compiled pass (pymunk2d/_rows.pyx, over its batch state table, in the plane) both call
  * rp_stand; the sleep rule, the other half of the stepping policy, is sleep.h, which both
  * run as well. What stays with a backend is what its library needs: ODE collects its
- * contacts and preloads before its solve inside its own step, chipmunk is read through
- * pymunk.batch and ramps its preload in against its own warm start (rp_ramp).
+ * contacts and preloads before its solve inside its own step; pymunk reads chipmunk
+ * through the functions pymunk's cffi library exports and ramps its preload in against
+ * chipmunk's own warm start (rp_ramp).
  *
  * Why these rules and constants: stepper.h's header comment and docs/PHYSICS.md.
  */

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pymunk
+import pymunk.batch
 import pytest
 
 from components import Physical, Shape
@@ -286,3 +287,61 @@ def test_the_sleep_rule_s_islands_from_the_arbiters_are_the_contacts_and_joints_
     assert ours[rows[1]] == ours[rows[2]] != ours[rows[4]]  # a pile; piles apart
     assert ours[rows[20]] == ours[rows[21]]  # the kinematic ties what it touches
     assert ours[rows[22]] == ours[rows[23]] != ours[rows[1]]
+
+
+def _batch_arbiters(space: pymunk.Space) -> tuple[np.ndarray, np.ndarray]:
+    """The space's cached arbiters as pymunk's public batch API reads them."""
+    fields = pymunk.batch.ArbiterFields
+    buffer = pymunk.batch.Buffer()
+    pymunk.batch.get_space_arbiters(space, fields.BODY_A_ID | fields.BODY_B_ID
+                                    | fields.CONTACT_COUNT | fields.TOTAL_IMPULSE
+                                    | fields.NORMAL | fields.POINT_A_1 | fields.POINT_B_1
+                                    | fields.DISTANCE_1 | fields.POINT_A_2
+                                    | fields.POINT_B_2 | fields.DISTANCE_2, buffer)
+    return (np.frombuffer(buffer.int_buf(), np.int64).reshape(-1, 3).copy(),
+            np.frombuffer(buffer.float_buf(), np.float64).reshape(-1, 14).copy())
+
+
+def _batch_bodies(space: pymunk.Space) -> dict[int, np.ndarray]:
+    """Every body's (x, z, θ, vx, vz, ω) as pymunk's public batch API reads them, by id."""
+    fields = pymunk.batch.BodyFields
+    buffer = pymunk.batch.Buffer()
+    pymunk.batch.get_space_bodies(space, fields.BODY_ID | fields.POSITION | fields.ANGLE
+                                  | fields.VELOCITY | fields.ANGULAR_VELOCITY, buffer)
+    ids = np.frombuffer(buffer.int_buf(), np.int64)
+    rows = np.frombuffer(buffer.float_buf(), np.float64).reshape(-1, 6)
+    return {int(i): row.copy() for i, row in zip(ids, rows, strict=True)}
+
+
+def test_the_direct_chipmunk_reads_are_pymunk_batch_s_to_the_bit(kit) -> None:
+    """The compiled passes read chipmunk through pymunk's cffi library (_chipmunk.pxi):
+    what they read is what pymunk.batch reads, to the bit, arbiter by arbiter in
+    chipmunk's order (those without contacts: their ids and count) and body by body,
+    asleep or awake. A pymunk whose chipmunk reads otherwise fails here."""
+    backend = PymunkBackend()
+    backend.configure(WorldSettings(auto_sleep=True))
+    kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
+    for i in range(60):  # boxes and balls falling onto each other; some settle and sleep
+        kit.add(backend, i, kit.box((0.4, 0.4, 0.4)) if i % 2 else kit.sphere(0.2),
+                (0.5 * (i % 12), 0.0, 0.2 + 0.45 * (i // 12)))
+    checked = sleepers = 0
+    for step in range(400):
+        backend.step(0.01)
+        if step % 25:
+            continue
+        reader = backend._space_reader()
+        reader.new_step()  # read afresh, not the step's
+        ints, floats = reader.arbiters()
+        theirs_ints, theirs_floats = _batch_arbiters(backend._space)
+        assert np.array_equal(ints, theirs_ints)
+        touching = ints[:, 2] > 0
+        assert np.array_equal(floats[touching], theirs_floats[touching])
+        raw, awake = reader.read()
+        theirs = _batch_bodies(backend._space)
+        for row, rec in enumerate(backend._records):
+            assert np.array_equal(raw[row], theirs[rec.body.id]), rec.key
+            assert awake[row] == (not rec.body.is_sleeping
+                                  and rec.body.body_type != pymunk.Body.STATIC)
+        checked += int(touching.sum())
+        sleepers += reader.sleepers
+    assert checked > 150 and sleepers > 0

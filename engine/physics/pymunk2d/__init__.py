@@ -7,8 +7,9 @@ as authored, and anything the plane cannot hold is logged once per object on
 ``colosseum.physics.pymunk``. Beyond the protocol it offers what the ODE backend
 offers, with the same meaning: ``add_static_plane``, ``is_sleeping``, ``has_joint``,
 ``keys``, ``take_faults``, and the sleep rule's state (``sleep_states``,
-``set_sleep_state``). It uses pymunk's public API only (state and contacts come
-through ``pymunk.batch``).
+``set_sleep_state``). It uses pymunk's public API, and for the reads and writes of
+every step the chipmunk functions pymunk's cffi library exports (``pymunk.cp``; the
+same ones ``pymunk.batch`` calls, their C types checked at import; ``_rows``).
 """
 
 from engine.physics.pymunk2d.backend import PymunkBackend

@@ -1,20 +1,24 @@
 # cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True, initializedcheck=False
-"""pymunk.batch buffers into engine rows, as C loops.
+"""A pymunk space's bodies and arbiters into engine rows, as C loops over chipmunk.
 
-``pymunk.batch`` (pymunk's public batch API) hands every body's and every arbiter's
-numbers over in one buffer each, in chipmunk's order. Turning them into our rows
-(the state table; sorted contact records) with numpy costs a few dozen array
-operations of a microsecond or more each, which at a few hundred bodies is a tenth
-of a step; here each is one pass. Nothing here touches pymunk or chipmunk: the
-inputs are plain arrays.
+The passes read chipmunk directly, through the functions pymunk's cffi library exports
+(``_chipmunk.pxi``): every body's pose and velocities, who sleeps, every cached
+arbiter's bodies, normal, points and impulse, and they write the forces and velocities
+the resting warm start sets, each one call with no Python per body (``pymunk.batch``,
+the public batch API, read the same numbers through the same functions, but its Python
+per call and its growable buffers were a fixed cost of each of the several reads a step
+takes). Turning the reads into our rows (the state table; sorted contact records) is one
+pass each too.
 
 A :class:`Rows` is planned for a fixed list of bodies, identified by their pymunk
-``Body.id`` (the backend plans a new one when bodies come or go).
+``Body.id`` (chipmunk's user data of the body, which is how an arbiter names its
+bodies) and reached through their cpBody pointers (the backend plans a new one when
+bodies come or go).
 """
 
 cimport numpy as cnp
 from libc.math cimport INFINITY, atan2, cos, exp, fabs, hypot, isfinite, sin, sqrt
-from libc.stdint cimport int8_t, int64_t, uint64_t
+from libc.stdint cimport int8_t, int64_t, uint64_t, uintptr_t
 from libc.stdlib cimport free, malloc, realloc
 from libc.string cimport memcpy
 
@@ -45,6 +49,34 @@ cdef enum:  # the same counts, for code without the GIL
     _AF = 14
 
 
+cdef struct _Table:
+    # body id -> row: open addressing with linear probing (slot_row -1: empty)
+    const uint64_t *slot_id
+    const Py_ssize_t *slot_row
+    uint64_t mask
+    Py_ssize_t n
+
+
+cdef inline uint64_t _mix(uint64_t h) noexcept nogil:
+    """splitmix64's finaliser: ids share their low bits, so spread every bit."""
+    h = (h ^ (h >> 30)) * <uint64_t>0xBF58476D1CE4E5B9
+    h = (h ^ (h >> 27)) * <uint64_t>0x94D049BB133111EB
+    return h ^ (h >> 31)
+
+
+cdef inline Py_ssize_t _row_of(const _Table *t, uint64_t body_id) noexcept nogil:
+    """A body's row; ``n`` (the keyless world) when it is not one of ours."""
+    cdef uint64_t s = _mix(body_id) & t.mask
+    while t.slot_row[s] != -1:
+        if t.slot_id[s] == body_id:
+            return t.slot_row[s]
+        s = (s + 1) & t.mask
+    return t.n
+
+
+include "_chipmunk.pxi"
+
+
 cdef struct Contact:
     # laid out as CONTACT_DTYPE: a, b, position (3), normal (3), depth, impulse
     int64_t a
@@ -53,13 +85,6 @@ cdef struct Contact:
     double normal[3]
     double depth
     double impulse
-
-
-cdef inline uint64_t _mix(uint64_t h) noexcept nogil:
-    """splitmix64's finaliser: ids share their low bits, so spread every bit."""
-    h = (h ^ (h >> 30)) * <uint64_t>0xBF58476D1CE4E5B9
-    h = (h ^ (h >> 27)) * <uint64_t>0x94D049BB133111EB
-    return h ^ (h >> 31)
 
 
 cdef inline bint _before(const Contact *a, const Contact *b) noexcept nogil:
@@ -82,10 +107,11 @@ cdef inline Py_ssize_t _root(Py_ssize_t *parent, Py_ssize_t r) noexcept nogil:
 
 
 cdef class Rows:
-    """Rows of one list of bodies (row ``i`` is the body with ``ids[i]``), keys in
-    increasing order.
+    """Rows of one list of bodies (row ``i`` is the body with ``ids[i]``, whose cpBody is
+    at ``bodies[i]``), keys in increasing order.
 
-    ``y`` holds each row's Y (kept as authored; the backend writes it in place),
+    ``owners`` is what keeps those cpBody alive (the pymunk bodies, held as long as the
+    rows); ``y`` holds each row's Y (kept as authored; the backend writes it in place),
     ``rest`` (n, 4) each body's fixed tilt, applied after the turn about Y, ``cog``
     (n, 2) its centre of mass in the body frame (pymunk keeps that point's velocity;
     ours is the origin's), ``static`` whether each row is a static body.
@@ -95,6 +121,7 @@ cdef class Rows:
     cdef uint64_t mask
     cdef uint64_t *slot_id
     cdef Py_ssize_t *slot_row
+    cdef _Table lookup  # the same, for the passes
     cdef Py_ssize_t *run_end
     # contacts' scratch, kept between calls (grown as needed): records, side-a row, side-b
     cdef Contact *scratch
@@ -110,6 +137,19 @@ cdef class Rows:
     cdef const double *y
     cdef const double *rest
     cdef const double *cog
+    cdef object _owners, _bodies
+    cdef void *space  # the cpSpace
+    cdef void **bodies  # each row's cpBody
+    # the last read (n, 6) and who is awake (n), and the arrays behind them
+    cdef double *raw
+    cdef unsigned char *awake
+    cdef cnp.ndarray _raw, _awake
+    #: how many rows slept at the last look; counts the changes of who is awake
+    cdef readonly Py_ssize_t sleepers, epoch
+    # the step's arbiter read (ARBITER_INTS, ARBITER_FLOATS per arbiter, and its rows a,
+    # b), grown as needed: m arbiters, read when ``epoch`` was read_epoch (-1: none)
+    cdef cnp.ndarray _arbiter_ptrs, _arbiter_ints, _arbiter_floats, _pairs
+    cdef Py_ssize_t m, read_epoch
 
     def __cinit__(self) -> None:
         self.slot_id = NULL
@@ -120,13 +160,18 @@ cdef class Rows:
         self.scratch_b = NULL
         self.scratch_size = 0
 
-    def __init__(self, ids, keys, static, y, rest, cog, contact_dtype) -> None:
+    def __init__(self, ids, keys, static, y, rest, cog, contact_dtype, bodies=None,
+                 owners=None, space=0) -> None:
         cdef Py_ssize_t i, n = len(ids)
         cdef uint64_t size = 16, s
         if np.dtype(contact_dtype).itemsize != sizeof(Contact):
             raise ValueError("contact dtype does not match the Contact record")
-        if not (len(keys) == len(static) == len(y) == len(rest) == len(cog) == n):
+        if bodies is None:  # no space behind the rows: the passes over given arrays only
+            bodies = np.zeros(n, np.uintp)
+        if not (len(keys) == len(static) == len(y) == len(rest) == len(cog) == len(bodies)
+                == n):
             raise ValueError("Rows: arrays do not match the bodies")
+        self._chipmunk(bodies, owners, space)
         if n > 1 and not np.all(np.diff(keys) > 0):
             raise ValueError("Rows: rows must be in increasing key order")
         self._y = y
@@ -162,6 +207,31 @@ cdef class Rows:
                 s = (s + 1) & self.mask
             self.slot_id[s] = <uint64_t>ids[i]
             self.slot_row[s] = i
+        self.lookup.slot_id = self.slot_id
+        self.lookup.slot_row = self.slot_row
+        self.lookup.mask = self.mask
+        self.lookup.n = n
+
+    cdef void _chipmunk(self, bodies, owners, space) except *:
+        """The rows' cpBody and cpSpace (held alive by ``owners``), and the buffers the
+        passes over them read into."""
+        n = len(bodies)
+        self._owners = owners
+        self._bodies = np.ascontiguousarray(bodies, np.uintp)
+        self.bodies = <void **>cnp.PyArray_DATA(self._bodies)
+        self.space = <void *><uintptr_t>space
+        self._arbiter_ints = np.zeros((0, _AI), np.int64)
+        self._arbiter_floats = np.zeros((0, _AF), np.float64)
+        self._pairs = np.zeros((0, 2), np.intp)
+        self._arbiter_ptrs = np.zeros(0, np.uintp)
+        self.m = 0
+        self.read_epoch = -1
+        self.epoch = 0
+        self.sleepers = 0
+        self._raw = np.zeros((n, _BF))
+        self._awake = np.zeros(n, bool)
+        self.raw = <double *>cnp.PyArray_DATA(self._raw)
+        self.awake = <unsigned char *>cnp.PyArray_DATA(self._awake)
 
     def __dealloc__(self) -> None:
         free(self.slot_id)
@@ -195,30 +265,123 @@ cdef class Rows:
 
     cdef inline Py_ssize_t row(self, uint64_t body_id) noexcept nogil:
         """A body's row; ``n`` (the keyless world) when it is not one of ours."""
-        cdef uint64_t s = _mix(body_id) & self.mask
-        while self.slot_row[s] != -1:
-            if self.slot_id[s] == body_id:
-                return self.slot_row[s]
-            s = (s + 1) & self.mask
-        return self.n
+        return _row_of(&self.lookup, body_id)
 
-    def order(self, const int64_t[::1] ids, Py_ssize_t[::1] gather) -> int:
-        """Where each row sits in pymunk's list ``ids`` (into ``gather``); how many of
-        the listed bodies are not ours."""
-        cdef Py_ssize_t i, r, others = 0
-        for i in range(ids.shape[0]):
-            r = self.row(<uint64_t>ids[i])
-            if r == self.n:
-                others += 1
-            else:
-                gather[r] = i
-        return others
+    cdef int _bound(self) except -1:
+        """Refuse a pass over chipmunk for rows planned without their bodies."""
+        if self.n and self.bodies[0] == NULL:
+            raise ValueError("Rows: planned without their cpBody pointers")
+        return 0
 
-    def table(self, const double[:, ::1] raw, const Py_ssize_t[::1] gather,
-              double[:, ::1] out, double[:, ::1] keep, double extent=INFINITY,
-              double max_speed=INFINITY) -> bool:
-        """Rows of ``raw`` (pymunk's list: x, z, θ, vx, vz, ω) into state rows in ``out``
-        (BodyState's layout), and as they are into ``keep`` (n, 6) in row order; whether
+    cdef Py_ssize_t _look(self, bint pose) noexcept nogil:
+        """Whether each row is awake (neither static nor asleep) into ``awake``, and with
+        ``pose`` its (x, z, θ, vx, vz, ω) into ``raw``; a new ``epoch`` where who is awake
+        changed. How many rows sleep."""
+        cdef Py_ssize_t r, sleepers = 0
+        cdef void *b
+        cdef double *p
+        cdef cpVect v
+        cdef unsigned char now
+        cdef bint changed = False
+        for r in range(self.n):
+            b = self.bodies[r]
+            if r + 8 < self.n:
+                _ahead(self.bodies[r + 8])
+            if pose:
+                p = &self.raw[_BF * r]
+                v = cp.position(b)
+                p[0] = v.x
+                p[1] = v.y
+                p[2] = cp.angle(b)
+                v = cp.velocity(b)
+                p[3] = v.x
+                p[4] = v.y
+                p[5] = cp.spin(b)
+            now = not self.static[r] and not cp.sleeping(b)
+            changed |= now != self.awake[r]
+            self.awake[r] = now
+            sleepers += not self.static[r] and not now
+        if changed:
+            self.epoch += 1
+        self.sleepers = sleepers
+        return sleepers
+
+    def read(self):
+        """Every row's (x, z, θ, vx, vz, ω) as chipmunk has them (velocity of the centre
+        of mass), row by row, and whether it is awake (neither static nor asleep): the
+        arrays :attr:`raw` (n, 6) and :attr:`awake` (n,), the same two each time."""
+        self._bound()
+        with nogil:
+            self._look(True)
+        return self._raw, self._awake
+
+    cdef int _arbiters(self) except -1:
+        """The step's arbiters read into ``arbiter_ints``/``arbiter_floats`` (and each
+        one's rows into ``pairs``) unless they were read this step, with who is awake as
+        it is now: chipmunk changes its cache of arbiters between steps only as bodies
+        fall asleep (their arbiters leave it) or wake."""
+        cdef _Collect found
+        cdef Py_ssize_t size
+        if self.read_epoch == self.epoch:
+            return 0
+        if self.space == NULL:
+            raise ValueError("Rows: planned without their space")
+        while True:
+            found.arbiters = <void **>cnp.PyArray_DATA(self._arbiter_ptrs)
+            found.size = cnp.PyArray_DIM(self._arbiter_ptrs, 0)
+            found.used = 0
+            with nogil:
+                cp.each_cached_arbiter(self.space, _collect, &found)
+            if found.used <= found.size:
+                break
+            size = max(found.used + found.used // 2, 64)
+            self._arbiter_ptrs = np.zeros(size, np.uintp)
+            self._arbiter_ints = np.zeros((size, _AI), np.int64)
+            self._arbiter_floats = np.zeros((size, _AF), np.float64)
+            self._pairs = np.zeros((size, 2), np.intp)
+        with nogil:
+            _read_arbiters(found.arbiters, found.used,
+                           <int64_t *>cnp.PyArray_DATA(self._arbiter_ints),
+                           <double *>cnp.PyArray_DATA(self._arbiter_floats),
+                           <Py_ssize_t *>cnp.PyArray_DATA(self._pairs), &self.lookup)
+        self.m = found.used
+        self.read_epoch = self.epoch
+        return 0
+
+    def new_step(self) -> None:
+        """The space was stepped: its arbiters are new."""
+        self.read_epoch = -1
+
+    def arbiters(self, bint looked=False):
+        """The step's arbiters, read once: ints (m, ARBITER_INTS: body ids a and b,
+        contact count) and floats (m, ARBITER_FLOATS: total impulse, normal, then per
+        contact point a, point b and distance, for two), every arbiter chipmunk has cached,
+        in its order, as pymunk.batch reads them. ``looked``: who is awake was read since
+        anything could change it (else it is looked at first). Valid until the next
+        read."""
+        self._bound()
+        if not looked:
+            with nogil:
+                self._look(False)
+        self._arbiters()
+        return self._arbiter_ints[:self.m], self._arbiter_floats[:self.m]
+
+    cdef void _set_velocities(self, const unsigned char *rows) noexcept nogil:
+        """The velocity and spin of each row flagged in ``rows`` from :attr:`raw`, into
+        chipmunk (which wakes the body, as a setter does)."""
+        cdef Py_ssize_t r
+        cdef cpVect v
+        for r in range(self.n):
+            if rows[r]:
+                v.x = self.raw[_BF * r + 3]
+                v.y = self.raw[_BF * r + 4]
+                cp.set_velocity(self.bodies[r], v)
+                cp.set_spin(self.bodies[r], self.raw[_BF * r + 5])
+
+    def table(self, const double[:, ::1] raw, double[:, ::1] out, double[:, ::1] keep,
+              double extent=INFINITY, double max_speed=INFINITY) -> bool:
+        """Rows of ``raw`` (a read, row by row: x, z, θ, vx, vz, ω) into state rows in
+        ``out`` (BodyState's layout), and as they are into ``keep`` (n, 6); whether
         all of them were finite, inside ``extent`` (|x|, |z|) and under ``max_speed``
         (|vx|, |vz|, |ω|).
 
@@ -232,9 +395,11 @@ cdef class Rows:
         cdef const double *g
         cdef double *row
         cdef double c, s, ox, oz, total = 0.0, far = 0.0, fast = 0.0
+        if raw.shape[0] != self.n or out.shape[0] < self.n or keep.shape[0] != self.n:
+            raise ValueError("table: arrays do not match the rows")
         with nogil:
             for i in range(self.n):
-                p = &raw[gather[i], 0]
+                p = &raw[i, 0]
                 row = &out[i, 0]
                 memcpy(&keep[i, 0], p, 6 * sizeof(double))
                 total += p[0] + p[1] + p[2] + p[3] + p[4] + p[5]
@@ -271,15 +436,16 @@ cdef class Rows:
                 row[12] = 0.0
         return bool(isfinite(total)) and not (far > extent or fast > max_speed)
 
-    def motion(self, const double[:, ::1] raw, const Py_ssize_t[::1] gather,
-               double[:, ::1] velocity) -> None:
+    def motion(self, const double[:, ::1] raw, double[:, ::1] velocity) -> None:
         """Centre-of-mass velocities as the sleep rule keeps them: columns of (6, n),
         (vx, 0, vz) then (0, −ω, 0)."""
         cdef Py_ssize_t i
         cdef const double *p
+        if raw.shape[0] != self.n or velocity.shape[1] != self.n:
+            raise ValueError("motion: arrays do not match the rows")
         with nogil:
             for i in range(self.n):
-                p = &raw[gather[i], 0]
+                p = &raw[i, 0]
                 velocity[0, i] = p[3]
                 velocity[1, i] = 0.0
                 velocity[2, i] = p[4]
@@ -287,7 +453,7 @@ cdef class Rows:
                 velocity[4, i] = -p[5]
                 velocity[5, i] = 0.0
 
-    # Long: one typed pass over pymunk.batch's arbiter buffers (C locals)
+    # Long: one typed pass over the arbiter rows (C locals)
     def contacts(self, const int64_t[:, ::1] ints, const double[:, ::1] floats):
         """One CONTACT_DTYPE row per touching arbiter, sorted by keys then place; and
         each one's rows (side a, side b; -1: the keyless world), (m, 2) int64.
@@ -359,20 +525,21 @@ cdef class Rows:
                             <int64_t *>cnp.PyArray_DATA(pairs))
         return out, pairs
 
-    def islands(self, const int64_t[:, ::1] ints, const unsigned char[::1] moving,
-                Py_ssize_t[::1] labels, const int64_t[:, ::1] joints) -> None:
+    def islands(self, const unsigned char[::1] moving, Py_ssize_t[::1] labels,
+                const int64_t[:, ::1] joints) -> None:
         """Each row's island (``labels``: rows of one island share one): rows tied by
-        touching arbiters between ``moving`` rows, or by ``joints`` ((m, 2) rows; -1:
-        the world, which ties nothing), through a union-find (static geometry, and any
-        row not moving, ties nothing together)."""
-        cdef Py_ssize_t m = ints.shape[0], i, ra, rb
+        the step's touching arbiters (:meth:`arbiters`) between ``moving`` rows, or by
+        ``joints`` ((m, 2) rows; -1: the world, which ties nothing), through a union-find
+        (static geometry, and any row not moving, ties nothing together)."""
+        cdef Py_ssize_t i, ra, rb
         if (moving.shape[0] != self.n or labels.shape[0] != self.n
-                or (m and ints.shape[1] != _AI)
                 or (joints.shape[0] and joints.shape[1] != 2)):
             raise ValueError("islands: arrays do not match the rows")
+        self.arbiters()
         with nogil:
-            _islands(self, &ints[0, 0] if m else NULL, m, &moving[0] if self.n else NULL,
-                     &labels[0] if self.n else NULL, False)
+            _islands(self.n, <const int64_t *>cnp.PyArray_DATA(self._arbiter_ints),
+                     <const Py_ssize_t *>cnp.PyArray_DATA(self._pairs), self.m,
+                     &moving[0] if self.n else NULL, &labels[0] if self.n else NULL, False)
             for i in range(joints.shape[0]):
                 ra = joints[i, 0]
                 rb = joints[i, 1]
@@ -614,7 +781,7 @@ cdef class Resting:
     place), bound once per layout of rows, and its two passes per step: the preload
     before the step (:meth:`preload`) and everything after it (:meth:`after`: what each
     row's contacts did, its standing by policy.h's rp_stand, the rows chosen, their
-    islands and the ramps), each one call over pymunk.batch's buffers."""
+    islands and the ramps), each one call over chipmunk (through the rows)."""
 
     cdef Py_ssize_t n
     cdef object _keep  # the arrays behind the pointers
@@ -680,82 +847,90 @@ cdef class Resting:
         self.found = False
         self.held_still = 0
 
-    def preload(self, cnp.ndarray forces, cnp.ndarray gather, cnp.ndarray awake,
-                cnp.ndarray out, double beta, double gx, double gz) -> int:
-        """The forces before a step (``forces``, pymunk's list: x, z per body, as read)
-        into ``out``, each awake row whose ramp is on given ``beta`` × ramp of its weight
-        upward; the share each row got into ``applied`` and the upward force (N) into
-        ``lifted`` (0 elsewhere). How many rows were preloaded (0: ``out`` need not be
-        written back). The arithmetic is body.force − m·gravity with m = share · mass,
-        as a one-by-one loop would set it."""
-        cdef Py_ssize_t i, r, p, m = cnp.PyArray_SIZE(forces) // 2, count = 0
-        cdef double *f = <double *>_data(forces, np.float64, 2 * m, "forces")
-        cdef double *o = <double *>_data(out, np.float64, 2 * m, "out")
-        cdef Py_ssize_t *g = <Py_ssize_t *>_data(gather, np.intp, self.n, "gather")
-        cdef unsigned char *a = <unsigned char *>_data(awake, np.uint8, self.n, "awake")
+    def preload(self, Rows rows, double beta, double gx, double gz) -> int:
+        """Before a step: each awake row whose ramp is on given ``beta`` × ramp of its
+        weight upward on top of the force it has (chipmunk's own, read and written back
+        for those rows alone); the share each row got into ``applied`` and the upward
+        force (N) into ``lifted`` (0 elsewhere). How many rows were preloaded. The
+        arithmetic is body.force − m·gravity with m = share · mass, as a one-by-one loop
+        would set it; an asleep row gets none (a force would wake it)."""
+        cdef Py_ssize_t r, count = 0
         cdef double share, mass, lift = sqrt(gx * gx + gz * gz)
+        cdef void *b
+        cdef cpVect f
+        if rows.n != self.n:
+            raise ValueError("Resting.preload: the rows were planned for other bodies")
+        rows._bound()
         with nogil:
-            memcpy(o, f, 2 * m * sizeof(double))
             for r in range(self.n):
                 self.applied[r] = 0.0
                 self.lifted[r] = 0.0
-                if not (self.ramp[r] > 0.0) or not a[r]:  # asleep: a force would wake it
+                if not (self.ramp[r] > 0.0) or rows.static[r]:
                     continue
-                p = g[r]
+                b = rows.bodies[r]
+                if cp.sleeping(b):
+                    continue
                 share = beta * self.ramp[r]
                 mass = share * self.mass[r]
-                o[2 * p] = f[2 * p] - mass * gx
-                o[2 * p + 1] = f[2 * p + 1] - mass * gz
+                f = cp.force(b)
+                f.x = f.x - mass * gx
+                f.y = f.y - mass * gz
+                cp.set_force(b, f)
                 self.applied[r] = share
                 self.lifted[r] = mass * lift
                 count += 1
         return count
 
-    def after(self, Rows rows, cnp.ndarray ints, cnp.ndarray floats, cnp.ndarray raw,
-              cnp.ndarray gather, cnp.ndarray awake, double dt, double gx, double gz,
-              double beta, double ramp_up) -> int:
+    def after(self, Rows rows, double dt, double gx, double gz, double beta,
+              double ramp_up) -> int:
         """Everything the resting warm start does after a step: what each row's contacts
-        did (the step's arbiters ``ints``/``floats``), each row's standing (policy.h's
-        rp_stand), the rows that may be preloaded (at rest two steps, or preloaded and
-        still held up; slower than REST_SLIP, four times that to stay; on a face or on
-        level ground; not jointed or touching a kinematic body), the islands when some
-        are, and every row's ramp (up by ``ramp_up`` where chosen, down by twice that
-        elsewhere). ``raw``: the step's body read (row r at ``gather[r]``), ``awake`` per
-        row; a row held still (preloaded, on a face, slower than REST_STILL_*) has its
-        velocity zeroed in ``raw``, which the caller writes back (``held_still`` counts them).
-        How many rows have their ramp on for the next step."""
-        cdef Py_ssize_t m = cnp.PyArray_DIM(ints, 0) if cnp.PyArray_NDIM(ints) else 0
-        cdef Py_ssize_t nb = cnp.PyArray_SIZE(raw) // _BF, i, r, on = 0
-        cdef int64_t *arb = <int64_t *>_data(ints, np.int64, _AI * m, "ints")
-        cdef double *fl = <double *>_data(floats, np.float64, _AF * m, "floats")
-        cdef double *body = <double *>_data(raw, np.float64, _BF * nb, "raw")
-        cdef Py_ssize_t *g = <Py_ssize_t *>_data(gather, np.intp, self.n, "gather")
-        cdef unsigned char *a = <unsigned char *>_data(awake, np.uint8, self.n, "awake")
+        did (the step's arbiters, read by ``rows`` if they were not yet), each row's
+        standing (policy.h's rp_stand), the rows that may be preloaded (at rest two
+        steps, or preloaded and still held up; slower than REST_SLIP, four times that to
+        stay; on a face or on level ground; not jointed or touching a kinematic body),
+        the islands when some are, and every row's ramp (up by ``ramp_up`` where chosen,
+        down by twice that elsewhere). The bodies are as ``rows`` last read them, which
+        must be right after the step; a row held still (preloaded, on a face, slower than
+        REST_STILL_*) has its velocity zeroed in that read and in chipmunk
+        (``held_still`` counts them). How many rows have their ramp on for the next
+        step."""
+        cdef Py_ssize_t r, on = 0
         cdef double g_size = sqrt(gx * gx + gz * gz), down[2]
         cdef double keep = exp(-dt / REST_SMOOTHING)
         cdef int chosen = 0
+        cdef const int64_t *arb
+        cdef const Py_ssize_t *pairs
+        cdef const double *fl
         self.held_still = 0
         if rows.n != self.n:
             raise ValueError("Resting.after: the rows were planned for other bodies")
         if g_size == 0.0:
             return 0
+        rows._bound()
+        rows._arbiters()
+        arb = <const int64_t *>cnp.PyArray_DATA(rows._arbiter_ints)
+        pairs = <const Py_ssize_t *>cnp.PyArray_DATA(rows._pairs)
+        fl = <const double *>cnp.PyArray_DATA(rows._arbiter_floats)
         down[0] = gx / g_size
         down[1] = gz / g_size
         with nogil:
-            self._support(rows, arb, fl, m, dt, down)
-            chosen = self._stand(body, g, a, down, keep, beta, g_size)
+            self._support(rows, arb, pairs, fl, rows.m, dt, down)
+            chosen = self._stand(rows.raw, rows.awake, down, keep, beta, g_size)
             self.found = chosen > 0
             if self.found:
-                _islands(rows, arb, m, self.moving, self.labels)
+                _islands(self.n, arb, pairs, rows.m, self.moving, self.labels)
             rp_ramp(self.n, self.points, self.chosen, self.labels if self.found else NULL,
                     self.moving, self.unrest, self.mass, self.ramp, ramp_up,
                     -2.0 * ramp_up, self.blocked)
             for r in range(self.n):
                 on += self.ramp[r] > 0.0
+            if self.held_still:
+                rows._set_velocities(self.still)
         return on
 
-    cdef void _support(self, Rows rows, const int64_t *arb, const double *fl, Py_ssize_t m,
-                       double dt, const double *down) noexcept nogil:
+    cdef void _support(self, Rows rows, const int64_t *arb, const Py_ssize_t *pairs,
+                       const double *fl, Py_ssize_t m, double dt,
+                       const double *down) noexcept nogil:
         """What each row's contacts did this step: their net force on it (x, z; N), the
         friction they made and the most they could (a pair's μ is the geometric mean),
         its contact points, whether a normal is off the vertical, the span across gravity
@@ -784,8 +959,8 @@ cdef class Resting:
             n_points = <int>arb[_AI * i + 2]
             if n_points <= 0:
                 continue
-            ends[0] = rows.row(<uint64_t>arb[_AI * i])
-            ends[1] = rows.row(<uint64_t>arb[_AI * i + 1])
+            ends[0] = pairs[2 * i]
+            ends[1] = pairs[2 * i + 1]
             f = &fl[_AF * i]
             # pymunk's total impulse is what its body a received (b the opposite)
             jx, jz, nx, nz = f[0] / dt, f[1] / dt, f[2], f[3]
@@ -811,9 +986,8 @@ cdef class Resting:
                 if ends[1 - k] < n and self.kinematic[ends[1 - k]]:
                     self.unrest[r] = 1
 
-    cdef int _stand(self, double *body, const Py_ssize_t *g, const unsigned char *a,
-                    const double *down, double keep, double beta,
-                    double g_size) noexcept nogil:
+    cdef int _stand(self, double *body, const unsigned char *a, const double *down,
+                    double keep, double beta, double g_size) noexcept nogil:
         """Each row's standing (rp_stand) and whether it is chosen; how many are."""
         cdef Py_ssize_t i
         cdef RpStep s
@@ -821,7 +995,7 @@ cdef class Resting:
         cdef double *p
         cdef int rests, stays, count = 0
         for i in range(self.n):
-            self._hold(i, &body[_BF * g[i]], a[i], down)
+            self._hold(i, &body[_BF * i], a[i], down)
             s.solved = &self.force[2 * i]
             s.mu = self.mu[i]
             s.friction = self.friction[i]
@@ -835,7 +1009,7 @@ cdef class Resting:
             self.steps[i] = rp_count(self.steps[i], rests)
             stays = s.weight > 0.0 and up >= 0.5 * REST_SUPPORT * s.share * s.weight
             self.kept[i] = s.preloaded and stays
-            p = &body[_BF * g[i]]
+            p = &body[_BF * i]
             speed = hypot(p[3], p[4])
             self.chosen[i] = ((self.steps[i] >= 2 or self.kept[i])
                               and speed < (4.0 * REST_SLIP if self.kept[i] else REST_SLIP)
@@ -907,19 +1081,21 @@ cdef inline void _reach(double *span, const double *f, int n_points,
         span[1] = max(span[1], at)
 
 
-cdef void _islands(Rows rows, const int64_t *arb, Py_ssize_t m, const unsigned char *moving,
-                   Py_ssize_t *labels, bint flat=True) noexcept nogil:
-    """Each row's island: rows tied by touching arbiters between ``moving`` rows (a
-    union-find; static geometry and rows not moving tie nothing together). ``flat``:
-    every label its root (otherwise the caller ties more and flattens)."""
-    cdef Py_ssize_t i, r, ra, rb, n = rows.n
+cdef void _islands(Py_ssize_t n, const int64_t *arb, const Py_ssize_t *pairs, Py_ssize_t m,
+                   const unsigned char *moving, Py_ssize_t *labels,
+                   bint flat=True) noexcept nogil:
+    """Each of ``n`` rows' island: rows tied by touching arbiters (``arb``, their rows
+    ``pairs``; n: the keyless world) between ``moving`` rows (a union-find; static
+    geometry and rows not moving tie nothing together). ``flat``: every label its root
+    (otherwise the caller ties more and flattens)."""
+    cdef Py_ssize_t i, r, ra, rb
     for r in range(n):
         labels[r] = r
     for i in range(m):
         if arb[_AI * i + 2] <= 0:
             continue
-        ra = rows.row(<uint64_t>arb[_AI * i])
-        rb = rows.row(<uint64_t>arb[_AI * i + 1])
+        ra = pairs[2 * i]
+        rb = pairs[2 * i + 1]
         if ra >= n or rb >= n or not moving[ra] or not moving[rb]:
             continue
         ra = _root(labels, ra)

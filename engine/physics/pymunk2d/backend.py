@@ -14,19 +14,26 @@ Sleeping is :mod:`engine.physics.sleep`'s rule, as under ODE. chipmunk's own sle
 stays on with a timer that never runs out (:data:`NEVER`), so chipmunk keeps its islands
 and wakes a sleeping group that an awake body touches, but only the rule puts bodies to
 sleep: each island as one chipmunk group, so they wake together. The rule reads the
-state through ``batch`` (pymunk's public ``pymunk.batch``), which also tells who sleeps.
+state through ``batch`` (compiled passes over chipmunk), which also tells who sleeps.
 
 A step longer than MAX_SUBSTEP (0.01 s) is taken as equal substeps of at most that, each
 as below (chipmunk's solver leaves a stack rocking at 1/60 s and 0.02 s; docs/PHYSICS.md).
 
-Cost: a step (a substep) is the space's own step plus a fixed handful of batch calls and compiled
-passes, no Python per body: before it, every force read (skipped while nothing touched
-the space since the last step), the preload added and every force written; after it, one
-body read and one arbiter read shared by the resting warm start (one pass,
-``_rows.Resting.after``) and the sleep rule (``sleep.h``'s pass; islands, when some body
-is ready, by a union-find over the arbiters and joints), and that body read is also what a
-state read right after the step returns (any public method that may change the space
-drops it first).
+Cost: a step (a substep) is the space's own step plus a few compiled passes that read
+and write chipmunk directly (the functions pymunk's cffi library exports, those
+``pymunk.batch`` calls: ``_rows``' ``_chipmunk.pxi``), no Python per body: before it,
+the preloaded rows' forces read and written (``_rows.Resting.preload``); after it, one
+body read, shared by the resting warm start, the sleep rule and a state read right after
+the step (any public method that may change the space drops it first), and one pass
+(``_rows.Resting.after``) that reads the step's arbiters, once, and writes the velocities
+of the rows it holds still; then the sleep rule (``sleep.h``'s pass; islands, when some
+body is ready, by a union-find over the same arbiters and the joints). A substep before
+a step's last keeps a copy of its arbiters: its contacts are made only when
+:meth:`contacts` asks (or before anything changes the space). Against bare pymunk taking
+the same substeps (``python -m app.bench.physics2d``, docs/PHYSICS.md): 1.23 to 1.33 of
+its time at 2,000 to 100 boxes (1.27 to 1.40 with the sleep rule on), where the reads
+alone (chipmunk's own functions, after a step whose cache holds little of them) are 7 to
+10 % of chipmunk's step.
 
 Whatever the plane cannot represent is reported once per object on the logger
 ``colosseum.physics.pymunk`` with the approximation used, never raised. Bad calls
@@ -63,7 +70,7 @@ from engine.physics.backend import (
     locked_inertia,
 )
 from engine.physics.pymunk2d import _rows
-from engine.physics.pymunk2d.batch import Buffers, SpaceReader
+from engine.physics.pymunk2d.batch import SpaceReader
 from engine.physics.pymunk2d.joints import JointRecord, build_joint
 from engine.physics.pymunk2d.planar import split_orientation
 from engine.physics.pymunk2d.resting import RestingSupport, carried_down
@@ -134,6 +141,8 @@ class PymunkBackend:
         self._step_dt = 0.0  # the last substep's, for contact impulses (carried_down)
         #: the contacts (and their rows) of the last step's substeps before its last
         self._earlier: list[tuple[np.ndarray, np.ndarray]] = []
+        #: those substeps' arbiters as read, not yet made contacts (:meth:`_substep_read`)
+        self._pending: list[tuple[np.ndarray, np.ndarray, bool, np.ndarray, float]] = []
         #: substeps the step under way takes (the bodies' damping, per step, reads it)
         self._parts = [1]
         self._gravity = (0.0, 0.0)  # the space's, as configured (x, z)
@@ -166,7 +175,6 @@ class PymunkBackend:
         self._masses = np.zeros(0)  # kg, dynamic rows (0 for the others)
         self._static = np.zeros(0, bool)
         self._reader: SpaceReader | None = None
-        self._buffers = Buffers()  # every reader's: pymunk never frees a batch buffer
         self._sleep_on = True
         self._resting = RestingSupport(0, WorldSettings().warm_start)
         self._preloaded = False  # some row got a preload in the step just taken
@@ -255,15 +263,42 @@ class PymunkBackend:
         n = substeps(dt)
         self._parts[0] = n
         held = self._held_forces() if n > 1 else None
-        self._earlier = earlier = []
+        self._earlier, self._pending = [], []
         for i in range(n):
             if i and held:
                 self._hold_forces(held)
             self._substep(dt / n)
             if i < n - 1:  # read now: the next substep replaces chipmunk's arbiters
-                earlier.append((self.contacts(), self._contacts_rows))
-        self._earlier = earlier
+                self._pending.append(self._substep_read())
         self._pushed.clear()
+
+    def _substep_read(self) -> tuple[np.ndarray, np.ndarray, bool, np.ndarray, float]:
+        """What a substep's contacts are made of, kept for :meth:`contacts` (a copy of
+        its arbiters as read, its preloads): made into contacts only when asked for, or
+        before anything changes the space (:func:`_dropping_the_step_read`)."""
+        # the substep's body read stands where none fell asleep: who is awake was seen
+        ints, floats = self._reader.rows.arbiters(self._step_read is not None)
+        return (ints.copy(), floats.copy(), self._preloaded,
+                self._resting.arrays["lifted"].copy(), self._step_dt)
+
+    def _made_contacts(self, ints: np.ndarray, floats: np.ndarray, preloaded: bool,
+                       lifted: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """A substep's contacts from its arbiters (and their rows), with the impulses of
+        its preloads carried down (:func:`carried_down`)."""
+        c, pairs = self._reader.rows.contacts(ints, floats)
+        gx, gz = self._gravity
+        g = math.hypot(gx, gz)
+        if preloaded and len(c) and g > 0.0 and len(lifted) == len(self._records):
+            up = np.array([-gx / g, 0.0, -gz / g])
+            c["impulse"] = carried_down(pairs[:, 0], pairs[:, 1], c["impulse"],
+                                        c["normal"] @ up, lifted * dt)
+        return c, pairs
+
+    def _make_pending(self) -> None:
+        """The earlier substeps' contacts made now, while the space is as they left it."""
+        for read in self._pending:
+            self._earlier.append(self._made_contacts(*read))
+        self._pending = []
 
     def _held_forces(self) -> list[tuple[int, pymunk.Body, pymunk.Vec2d, float]]:
         """The forces and torques added for this step (pymunk clears them as it steps),
@@ -291,8 +326,8 @@ class PymunkBackend:
         # after the preload: it is an outside force to a joint's momentum balance
         strained = self._strain_before(dt) if self._strained else None
         self._space.step(dt)
-        reader = self._reader
-        reader.new_step()
+        rows = self._reader.rows
+        rows.new_step()
         if strained:
             self._strain_after(strained, dt)
         if self._aims:
@@ -300,9 +335,9 @@ class PymunkBackend:
         self._contacts = None
         self._step_read = None
         if self._resting.beta > 0.0 or self._sleep_on:
-            raw, awake = reader.read()  # one read for both rules and the state read
+            raw, awake = rows.read()  # one read for both rules and the state read
             if self._resting.beta > 0.0:
-                self._rest(dt, raw, awake)
+                self._rest(dt)
             if not (self._sleep_on and self._apply_sleep(dt, raw, awake)):
                 self._step_read = raw  # none fell asleep: the read is the space as it is
         if not self._sleep_on:
@@ -310,11 +345,8 @@ class PymunkBackend:
 
     def _preload_weights(self) -> None:
         """Give the rows whose ramp is on their weight's share (an upward force for this
-        step, on top of the forces they have).
-
-        Every body's force is read and written in one batch each (a C pass in between,
-        :meth:`RestingSupport.preload`); where some body sleeps, which a batch write would
-        wake, the preloaded ones are set one by one instead."""
+        step, on top of the forces they have), in one compiled pass over those rows
+        (:meth:`RestingSupport.preload`)."""
         reader = self._space_reader()
         resting = self._resting
         if self._woken and resting.on:  # moved, pushed or woken by hand: not at rest
@@ -325,51 +357,19 @@ class PymunkBackend:
                 self._preloaded = False
             return
         self._preloaded = True
-        if self._step_read is not None and not self._driven:
-            # nothing has touched the space since the last step, which zeroed every
-            # dynamic body's force, and no joint drives a body: no force to read
-            forces, awake, asleep = reader.known_forces()
-        else:
-            forces, awake, asleep = reader.forces()
-        out = reader.force_rows()
-        if not resting.preload(forces, reader.gather, awake, out, self._gravity):
-            return
-        if not asleep:
-            reader.set_forces(out)
-            return
-        records, gather = self._records, reader.gather
-        for row in np.flatnonzero(resting.applied).tolist():
-            _SET_FORCE(records[row].body, out[gather[row]].tolist())
+        resting.preload(reader.rows, self._gravity)
 
-    def _rest(self, dt: float, raw: np.ndarray, awake: np.ndarray) -> None:
-        """The resting rule after a step (``raw``: the step's body read): what the
-        contacts did, each row's standing, and the rows to preload before the next step,
-        in one compiled pass."""
+    def _rest(self, dt: float) -> None:
+        """The resting rule after a step, over the step's body read: what the contacts
+        did, each row's standing, the rows to preload before the next step and the rows
+        held still (their velocities written back), in one compiled pass."""
         resting = self._resting
-        if len(resting.steps) != len(self._records):
+        if resting.n != len(self._records):
             resting.follow(np.full(len(self._records), -1))
             self._rest_rows = False
         if not self._rest_rows:
             self._rest_bodies()
-        reader = self._reader
-        resting.after(reader.rows, reader.arbiters(ordered=True), raw, reader.gather, awake, dt,
-                      self._gravity)
-        if resting.held_still:
-            self._hold_still(raw)
-
-    def _hold_still(self, raw: np.ndarray) -> None:
-        """Write back the velocities of the rows the resting pass held still (zeroed in
-        ``raw``, the step's read, which the state read and the sleep rule go on with): in
-        one batch, or one by one where some body sleeps (a batch write would wake it)."""
-        reader = self._reader
-        if not reader.sleepers:
-            reader.set_velocities(raw)
-            return
-        records = self._records
-        for row in np.flatnonzero(self._resting.still).tolist():
-            body = records[row].body
-            body.velocity = (0.0, 0.0)
-            body.angular_velocity = 0.0
+        resting.after(self._reader.rows, dt, self._gravity)
 
     def _rest_bodies(self) -> None:
         """Per row, for the resting rule: friction coefficient, mass under gravity (0: not
@@ -905,7 +905,7 @@ class PymunkBackend:
         recs = sorted(self._bodies.values(), key=lambda r: r.key)
         n = len(recs)
         old_rows = np.fromiter((self._row.get(r.key, -1) for r in recs), np.int64, n)
-        if len(self._resting.steps) == len(self._records):
+        if self._resting.n == len(self._records):
             self._resting.follow(old_rows)
         else:
             self._resting.follow(np.full(n, -1))
@@ -925,7 +925,7 @@ class PymunkBackend:
                                     for r, k in zip(recs, kind.tolist(), strict=True)),
                                    np.float64, n)
         self._reader = SpaceReader(self._space, [r.body for r in recs], self._keys, self._y,
-                                   self._rests, self._cogs, static, self._buffers)
+                                   self._rests, self._cogs, static)
         self._rule.layout(self._keys, ~static, (kind == pymunk.Body.DYNAMIC) & np.fromiter(
             (r.physical.can_sleep for r in recs), bool, n))
         self._dirty = False
@@ -1056,16 +1056,13 @@ class PymunkBackend:
 
     def contacts(self) -> np.ndarray:
         """The last step's contacts, with the whole impulses: what the solver found plus
-        the preloads it stood in for, carried down to the ground (:func:`carried_down`)."""
+        the preloads it stood in for, carried down to the ground (:func:`carried_down`);
+        a step taken as substeps reports theirs merged (:func:`_merge_contacts`)."""
         if self._contacts is None:
-            c, pairs = self._space_reader().contacts()
-            gx, gz = self._space.gravity
-            g = math.hypot(gx, gz)
-            lifted = self._resting.lifted
-            if self._preloaded and len(c) and g > 0.0 and len(lifted) == len(self._records):
-                up = np.array([-gx / g, 0.0, -gz / g])
-                c["impulse"] = carried_down(pairs[:, 0], pairs[:, 1], c["impulse"],
-                                            c["normal"] @ up, lifted * self._step_dt)
+            reader = self._space_reader()
+            self._make_pending()
+            c, pairs = self._made_contacts(*reader.arbiters(), self._preloaded,
+                                           self._resting.arrays["lifted"], self._step_dt)
             if self._earlier:
                 c, pairs = _merge_contacts([*self._earlier, (c, pairs)])
                 self._earlier = []
@@ -1256,6 +1253,8 @@ def _dropping_the_step_read(method: Callable[..., Any]) -> Callable[..., Any]:
     @functools.wraps(method)
     def run(self: PymunkBackend, *args: Any, **kwargs: Any) -> Any:
         self._step_read = None
+        if self._pending:
+            self._make_pending()
         return method(self, *args, **kwargs)
     return run
 

@@ -14,9 +14,10 @@ than REST_SLIP, resting on a face (two contact points in the plane) or on level 
 only, with no joint and touching no kinematic body, in an island (bodies touching) with
 no jointed, weightless or pushed body: each preloaded weight must reach the ground through
 contacts (a platform a force holds up or a wheelchair's seat would take the preload of
-what rests on it instead). What the contacts did is read from pymunk's arbiters in one
-batch and everything after the step is one compiled pass (``_rows.Resting.after``), as
-is the preload before it (``_rows.Resting.preload``): no Python per body.
+what rests on it instead). Everything after the step is one compiled pass over chipmunk
+(``_rows.Resting.after``: the arbiters read, what the contacts did, the standing, the
+held rows' velocities written), as is the preload before it (``_rows.Resting.preload``,
+the preloaded rows' forces read and written): no Python per body.
 
 A preloaded body resting on a face (two contact points) in equilibrium (its centre of
 mass over the span of the points it lies on, policy.h's REST_BASE_MARGIN in: a block whose
@@ -64,6 +65,7 @@ class RestingSupport:
 
     def __init__(self, n: int, beta: float) -> None:
         self.beta = beta
+        self.n = n  # rows
         self.arrays = self._fresh(n)
         self._pass = _rows.Resting(self.arrays)
         #: whether some row has its ramp on (it gets a preload before the next step)
@@ -88,6 +90,7 @@ class RestingSupport:
         for name in self._FOLLOW:
             arrays[name][had] = self.arrays[name][old_rows[had]]
         self.arrays = arrays
+        self.n = len(old_rows)
         self._pass = _rows.Resting(arrays)
         self.on = bool((arrays["ramp"] > 0).any())
 
@@ -127,24 +130,21 @@ class RestingSupport:
         self.still[rows] = False
         self.on = bool((self.ramp > 0).any())
 
-    def preload(self, forces: np.ndarray, gather: np.ndarray, awake: np.ndarray,
-                out: np.ndarray, gravity: tuple[float, float]) -> int:
-        """Before a step: ``forces`` (pymunk's list, as read) into ``out`` with each awake
-        row whose ramp is on given beta × ramp of its weight upward (the share into
-        ``applied``, the force into ``lifted``); how many rows got one."""
-        return self._pass.preload(forces, gather, awake.view(np.uint8), out, self.beta,
-                                  gravity[0], gravity[1])
+    def preload(self, rows: _rows.Rows, gravity: tuple[float, float]) -> int:
+        """Before a step: each awake row whose ramp is on given beta × ramp of its weight
+        upward, on top of the force its body has (written into chipmunk for those rows;
+        the share into ``applied``, the force into ``lifted``); how many rows got one."""
+        return self._pass.preload(rows, self.beta, gravity[0], gravity[1])
 
     def no_preload(self) -> None:
         """No row got a preload this step."""
         self.applied[:] = 0.0
         self.lifted[:] = 0.0
 
-    def after(self, reader_rows: _rows.Rows, arbiters: tuple[np.ndarray, np.ndarray],
-              raw: np.ndarray, gather: np.ndarray, awake: np.ndarray, dt: float,
-              gravity: tuple[float, float]) -> None:
+    def after(self, rows: _rows.Rows, dt: float, gravity: tuple[float, float]) -> None:
         """After a step: every row's standing and its ramp for the next step, in one
-        compiled pass (:meth:`_rows.Resting.after`). At rest means held up by its
+        compiled pass (:meth:`_rows.Resting.after`) over the bodies as ``rows`` last read
+        them (right after the step) and the step's arbiters. At rest means held up by its
         contacts (REST_SUPPORT of its weight, the share it was preloaded with aside) with
         its friction short of its bound, not pushed sideways, for two steps (policy.h's
         rp_stand); preloaded, a body stays so while it is held up at all (chipmunk
@@ -153,12 +153,9 @@ class RestingSupport:
         ground; not jointed or touching a kinematic body) ramps in by RAMP a step in an
         island with no moving row that is unrest or weightless, and out by twice that;
         off at once where no contact is left. A preloaded row on a face slower than
-        REST_STILL_* is held still: its velocity zeroed in ``raw``, which the caller writes
-        back when :attr:`held_still` says some row was."""
-        ints, floats = arbiters
-        self.on = self._pass.after(reader_rows, ints, floats, raw, gather,
-                                   awake.view(np.uint8), dt, gravity[0], gravity[1],
-                                   self.beta, RAMP) > 0
+        REST_STILL_* is held still: its velocity zeroed in the read and in chipmunk
+        (:attr:`held_still` counts them)."""
+        self.on = self._pass.after(rows, dt, gravity[0], gravity[1], self.beta, RAMP) > 0
 
 
 def carried_down(rows_a: np.ndarray, rows_b: np.ndarray, impulse: np.ndarray,
