@@ -20,7 +20,7 @@ naming that object are written to match.
 
 An avatar's block gets its root pose; an ``AvatarState`` says what it was doing (its
 clips, fades and queue, its path, ground following, held objects, driven bones and its
-capsule's pose; see :class:`components.avatar.SavedAvatar`), so it continues instead of
+capsule's pose; see :class:`components.avatar_saved.SavedAvatar`), so it continues instead of
 starting as its block says.
 
 Each visual anomaly's block (engine.anomalies) says whether it is on and its severity as
@@ -41,7 +41,7 @@ import engine.scene.blocks as blocks
 import engine.scene.random_state as random_state
 import engine.scene.schema as sc
 from components import HandState, Joint, Name, Transform
-from components.avatar import SavedAvatar
+from components.avatar_saved import SavedAvatar
 from components.exact import exact_degrees, exact_preimage
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, Spring
 from engine.anomalies import ANOMALIES, Anomalies

@@ -25,7 +25,8 @@ NOT_FOR_READING = ("engine.app", "engine.events", "engine.physics.commands",
                    "engine.physics.driver", "engine.interchange.importer",
                    "engine.assets.gltf", "engine.assets.dae", "engine.assets.skinned",
                    "services.render", "app.experiments.cli", "engine.experiments.session",
-                   "numpy.random", "subprocess", "tempfile", "hashlib")
+                   "components.avatar_saved", "numpy.random", "subprocess", "tempfile",
+                   "hashlib")
 #: A scene with boxes and a ground: no model, script, sound, shader or device.
 PLAIN = """World { Gravity [0 0 -9.81] }
 Object { ID "ground" Dynamic 0 VisualAttributes { Geometry { Primitive "plane" } }
@@ -112,8 +113,9 @@ def test_a_scene_with_a_script_starts_lua(plain: Path) -> None:
 
 
 #: Our modules for features a plain scene does not have: avatars (animation, skinned
-#: models), hands (fingers), the scripting API and runtime, saving a state.
+#: models, a saved avatar), hands (fingers), the scripting API and runtime, saving a state.
 NOT_IN_A_PLAIN_RUN = ("systems.avatars", "engine.animation", "engine.assets.skinned",
+                      "components.avatar_saved",
                       "systems.hands", "systems.hand_fingers", "systems.hand_ghost",
                       "services.scripting.api", "services.scripting.runtime",
                       "engine.scene.snapshot")
