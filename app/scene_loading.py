@@ -46,11 +46,15 @@ class LoadedScene:
 
     def configure(self, config: EngineConfig, backend: str | None = None,
                   dt: float | None = None) -> None:
-        """Apply the scene's World settings; command-line flags win over the file."""
+        """Apply the scene's World settings; command-line flags win over the file. The
+        components the scene makes are named too: a feature's plugin waits for its first
+        one where the scene has none (systems.FEATURES)."""
         config.backend = backend or self.spec.backend
         config.dt = dt or self.spec.time_step
         config.max_dt = max(config.max_dt, config.dt)
         config.world = self.spec.world
+        config.options["components"] = frozenset(
+            type(c).__name__ for entity in self.spec.entities for c in entity.components)
 
     def instantiate(self, engine: Engine) -> None:
         from engine.scene import instantiate
@@ -238,8 +242,8 @@ def _build(content: Content, rng: np.random.Generator | None, params: dict[str, 
     scene as parsed when it parsed), ContentError (its systems') or ParamError."""
     from engine.content import import_systems
     from engine.scene import SceneError, build_specs, parse_file, parse_text, validated
+    from engine.scene.loader import content_folder
     from engine.scene.params import with_params
-    from engine.scene.snapshot import content_folder
 
     db = parse_text(with_params(content.scene, params), str(content.scene), rng,
                     allow=allow) if params else parse_file(content.scene, rng, allow=allow)

@@ -6,24 +6,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from components.avatar import (
-    Avatar,
-    ClipSpec,
-    Hold,
-    SavedAvatar,
-    SavedDrive,
-    SavedGroup,
-    SavedHold,
-    SavedLayer,
-    SavedRequest,
-)
+from components.avatar import Avatar, ClipSpec, Hold
 from components.blocks import BlockDeclaration, BuildContext, Key, declare
 from components.script import Script
 from components.transform import Transform
 from components.user import UserOwned
 from components.visual import Visual
+
+if TYPE_CHECKING:
+    from components.avatar_saved import SavedAvatar, SavedGroup, SavedRequest
 
 #: name, the key it was written at, the item of that key (None: the whole value), where
 #: -> whether the model has it (a name it lacks is told there).
@@ -191,6 +184,8 @@ def _not_negative(v: Mapping[str, Any], at: BuildContext, *keys: str) -> None:
 
 
 def _saved_groups(s: BuildContext, clip: Check) -> tuple[SavedGroup, ...]:
+    from components.avatar_saved import SavedGroup, SavedLayer
+
     groups = []
     for g, at in s.inner("Group"):
         if not 0.0 <= g["Phase"] <= 1.0:
@@ -210,6 +205,8 @@ def _saved_groups(s: BuildContext, clip: Check) -> tuple[SavedGroup, ...]:
 
 
 def _saved_queue(s: BuildContext, clip: Check) -> tuple[SavedRequest, ...]:
+    from components.avatar_saved import SavedRequest
+
     queue = []
     for q, at in s.inner("Queued"):
         _not_negative(q, at, "Fade", "Speed")
@@ -224,6 +221,8 @@ def _saved_avatar(r: Mapping[str, Any], s: BuildContext, clip: Check, bone: Chec
                   ) -> SavedAvatar:
     """An ``AvatarState`` as its avatar resumes from it. Clips and bones its model lacks
     are told and left out; numbers out of range are errors."""
+    from components.avatar_saved import SavedAvatar, SavedDrive, SavedHold
+
     groups, queue = _saved_groups(s, clip), _saved_queue(s, clip)
     path = _points(r, s, "Path")
     if not 0 <= r["Waypoint"] <= len(path):

@@ -9,11 +9,13 @@ core and the services below the plugin layer never import a plugin to find it.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
-from components.avatar import SavedAvatar
 from components.script import SavedScript
 from engine.system import PluginName
+
+if TYPE_CHECKING:
+    from components.avatar_saved import SavedAvatar
 
 #: A uniform's value: one number or a vector of numbers.
 UniformValue = float | tuple[float, ...]
@@ -86,7 +88,7 @@ class AvatarStates(Protocol):
 
     def saved_avatars(self, object_name: Callable[[int], str | None]
                       ) -> dict[int, SavedAvatar]:
-        """Avatar entity -> where it stands (see :class:`components.avatar.SavedAvatar`);
+        """Avatar entity -> where it stands (see :class:`components.avatar_saved.SavedAvatar`);
         ``object_name`` gives the scene ID an object is written under (None: it is not
         written, so an avatar holding it lets go in the saved state, with a message)."""
         ...

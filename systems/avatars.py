@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from components import Avatar, Hold, Name, Physical, Shape, Transform, Visual
-from components.avatar import SavedAvatar, SavedDrive, SavedHold
+from components.avatar_saved import SavedAvatar, SavedDrive, SavedHold
 from components.physical import BodyKind
 from engine.animation import AnimationEnded, AnimationError, ClipSettings, Mixer, Palettes
 from engine.animation.ik import Chains, from_to, make_chains, solve

@@ -38,13 +38,13 @@ from engine.events import (
 from engine.services import ScriptStates
 from engine.system import ANY_COMPONENT, Phase, PluginName, System
 from services.input.events import Axis, Button, DeviceFound, DeviceLost, TrackerPose, WheelCount
-from services.scripting.api import ScriptAPI
-from services.scripting.runtime import Script as LoadedScript
-from services.scripting.runtime import ScriptLimits, ScriptLoadError, ScriptRuntime
 
 if TYPE_CHECKING:
     from engine.app import Engine
     from engine.world import World
+    from services.scripting.api import ScriptAPI
+    from services.scripting.runtime import Script as LoadedScript
+    from services.scripting.runtime import ScriptLimits, ScriptRuntime
 
 log = logging.getLogger("colosseum.script")
 
@@ -72,7 +72,7 @@ class ScriptingSystem(System):
         self.limits = limits
         self.reload_interval = reload_interval
         self.runtime: ScriptRuntime | None = None
-        self.api: ScriptAPI | None = None
+        self._api: ScriptAPI | None = None
         self._pending: list[tuple[int, Script]] = []
         self._started: list[LoadedScript] = []
         self._by_entity: dict[int, list[LoadedScript]] = {}
@@ -95,7 +95,6 @@ class ScriptingSystem(System):
     # -- setup ------------------------------------------------------------------
     def setup(self, engine: Engine) -> None:
         self._engine = engine
-        self.api = ScriptAPI(engine)
         engine.insert_resource(self)
         engine.insert_resource(self, as_type=ScriptStates)
         world = engine.world
@@ -123,10 +122,24 @@ class ScriptingSystem(System):
             self._start_runtime()
         self._pending.append((entity, script))
 
+    @property
+    def api(self) -> ScriptAPI:
+        """The scripting API (what Lua calls, and Python may call as Lua would), made when
+        first asked for: at the first script, or by a tool spawning as a script does."""
+        if self._api is None:
+            from services.scripting.api import ScriptAPI
+
+            assert self._engine is not None, "the scripting system is not set up yet"
+            self._api = ScriptAPI(self._engine)
+        return self._api
+
     def _start_runtime(self) -> ScriptRuntime:
-        """The Lua runtime with the API installed, made a resource of the engine."""
+        """The Lua runtime with the API installed, made a resource of the engine; both are
+        loaded here, at the first script (a scene without scripts loads neither)."""
+        from services.scripting.runtime import ScriptLimits, ScriptRuntime
+
         engine = self._engine
-        assert engine is not None and self.api is not None
+        assert engine is not None
         content = engine.config.content_dir
         scripts_dir = Path(content) / "scripts" if content is not None else None
         limits = self.limits or engine.config.options.get("script_limits") or ScriptLimits()
@@ -203,10 +216,11 @@ class ScriptingSystem(System):
             runtime.call(loaded, callback)
 
     def _find(self, name: str) -> int:
-        assert self.api is not None
         return self.api.find(name)
 
     def _load(self, engine: Engine, entity: int, component: Script) -> LoadedScript | None:
+        from services.scripting.runtime import ScriptLoadError
+
         runtime = self.runtime
         assert runtime is not None
         is_object = engine.world.has_component(entity, Transform)
@@ -428,8 +442,8 @@ class ScriptingSystem(System):
         return states
 
     def shutdown(self, engine: Engine) -> None:
-        if self.api is not None:
-            self.api.flush()  # how often each repeated message came again
+        if self._api is not None:
+            self._api.flush()  # how often each repeated message came again
         self._pending.clear()
         self._broken.clear()
 

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from components.avatar import SavedGroup, SavedLayer, SavedRequest
+from components.avatar_saved import SavedGroup, SavedLayer, SavedRequest
 from engine.animation import _compose
 from engine.animation.library import CUBIC, ROTATION, STEP, Library, Rig
 from engine.animation.sampling import hermite

@@ -17,7 +17,6 @@ from engine.scene.diagnostics import ERROR, Diagnostic, Report, Reporter, SceneE
 from engine.scene.factory import Pose, SceneSpec, build_specs
 from engine.scene.parser import Limits, parse_file, parse_text
 from engine.scene.paths import FOLDER, NOT_FOUND, file_problem, shown
-from engine.scene.snapshot import content_folder
 from engine.scene.validate import validate
 from engine.scene.writer import write
 
@@ -42,6 +41,30 @@ def _unreadable(path: Path) -> SceneError | None:
     else:
         message = f"no such file: {shown(path)}"
     return SceneError([Diagnostic(str(path), 1, 1, "error", message)])
+
+
+def content_folder(db: SceneDB) -> Path:
+    """The folder a scene's file names are relative to: the content folder a saved state
+    names (``Content``), else the scene file's own. Raises SceneError when a saved
+    state's folder is not there: the file was moved without it."""
+    named = db.root.value("Content")
+    if named is None or not isinstance(named.data, str):  # (the schema check reports one
+        return Path(db.path).parent                        # that is not a string)
+    folder = (Path(db.path).parent / named.data).resolve()
+    if folder.is_dir() and not (folder / "main.scene").is_file():  # not one to trust
+        raise SceneError([Diagnostic(
+            named.loc.path, named.loc.line, named.loc.col, ERROR,
+            f"this saved state continues {named.data!r}, which is not a content folder (it "
+            "has no main.scene); a saved state's files are read from the content folder it "
+            "continues, so it must name one")], db.sources)
+    if folder.is_dir():
+        return folder
+    raise SceneError([Diagnostic(
+        named.loc.path, named.loc.line, named.loc.col, ERROR,
+        f"this saved state continues the content folder {named.data!r}, relative to the "
+        f"file ({folder}), which does not exist: the file was moved (or its content folder "
+        "was). Paths in a saved state are relative to the file; put it back, or change "
+        "Content to the content folder's path from where the file is now")], db.sources)
 
 
 def validated(db: SceneDB, content_dir: Path | None = None,

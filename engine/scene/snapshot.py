@@ -20,7 +20,7 @@ naming that object are written to match.
 
 An avatar's block gets its root pose; an ``AvatarState`` says what it was doing (its
 clips, fades and queue, its path, ground following, held objects, driven bones and its
-capsule's pose; see :class:`components.avatar.SavedAvatar`), so it continues instead of
+capsule's pose; see :class:`components.avatar_saved.SavedAvatar`), so it continues instead of
 starting as its block says.
 
 Each visual anomaly's block (engine.anomalies) says whether it is on and its severity as
@@ -41,7 +41,7 @@ import engine.scene.blocks as blocks
 import engine.scene.random_state as random_state
 import engine.scene.schema as sc
 from components import HandState, Joint, Name, Transform
-from components.avatar import SavedAvatar
+from components.avatar_saved import SavedAvatar
 from components.exact import exact_degrees, exact_preimage
 from components.joint import LINEAR_KINDS, SCENE_JOINT_TYPES, Spring
 from engine.anomalies import ANOMALIES, Anomalies
@@ -65,7 +65,7 @@ from engine.scene.db import (
     SceneDB,
     Value,
 )
-from engine.scene.diagnostics import ERROR, Diagnostic, Loc, SceneError
+from engine.scene.diagnostics import Loc
 from engine.scene.factory import SceneIds, SpawnRecord
 from engine.scene.parser import parse_text
 from engine.scene.writer import write
@@ -687,30 +687,6 @@ def _world_clock(engine: Engine, root: Block, seed: int | None) -> None:
     generator = random_state.text(engine.rng)
     if generator is not None:
         _set(entry.value.data, "RandomState", _string(generator))
-
-
-def content_folder(db: SceneDB) -> Path:
-    """The folder a scene's file names are relative to: the content folder a saved state
-    names (``Content``), else the scene file's own. Raises SceneError when a saved
-    state's folder is not there: the file was moved without it."""
-    named = db.root.value("Content")
-    if named is None or not isinstance(named.data, str):  # (the schema check reports one
-        return Path(db.path).parent                        # that is not a string)
-    folder = (Path(db.path).parent / named.data).resolve()
-    if folder.is_dir() and not (folder / "main.scene").is_file():  # not one to trust
-        raise SceneError([Diagnostic(
-            named.loc.path, named.loc.line, named.loc.col, ERROR,
-            f"this saved state continues {named.data!r}, which is not a content folder (it "
-            "has no main.scene); a saved state's files are read from the content folder it "
-            "continues, so it must name one")], db.sources)
-    if folder.is_dir():
-        return folder
-    raise SceneError([Diagnostic(
-        named.loc.path, named.loc.line, named.loc.col, ERROR,
-        f"this saved state continues the content folder {named.data!r}, relative to the "
-        f"file ({folder}), which does not exist: the file was moved (or its content folder "
-        "was). Paths in a saved state are relative to the file; put it back, or change "
-        "Content to the content folder's path from where the file is now")], db.sources)
 
 
 def _header(source: str, time: float, content: Path | None) -> str:

@@ -8,27 +8,37 @@ calibrates, filters and publishes to the event bus and to :class:`InputState`
 (``engine.resource(InputState).tracker("hand_r")``). Everything a frame receives can
 be recorded and replayed bit-identically (:mod:`~services.input.record`; the file format
 is in docs/input-format.md).
+
+Its names load on first use (:mod:`engine.lazy`): a system that reads the latest-state
+table alone does not load the devices, the hub and the recorder with it.
 """
 
-from services.input.calibration import Calibration, openxr_to_engine
-from services.input.config import make_device, merge_devices, parse_input_option
-from services.input.device import BadMessage, DeviceError, DeviceStatus, InputDevice
-from services.input.events import (
-    AnyInput,
-    Axis,
-    Button,
-    DeviceFound,
-    DeviceLost,
-    Key,
-    Pointer,
-    TrackerPose,
-    WheelCount,
-)
-from services.input.hub import InputHub
-from services.input.record import ReplayError, read_recording
-from services.input.replay import InputRecorder, InputReplayer
-from services.input.state import Binding, InputState, TrackerState, WheelState, parse_binding
-from services.input.wheel import WheelRate
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from engine.lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from services.input.calibration import Calibration, openxr_to_engine
+    from services.input.config import make_device, merge_devices, parse_input_option
+    from services.input.device import BadMessage, DeviceError, DeviceStatus, InputDevice
+    from services.input.events import (
+        AnyInput,
+        Axis,
+        Button,
+        DeviceFound,
+        DeviceLost,
+        Key,
+        Pointer,
+        TrackerPose,
+        WheelCount,
+    )
+    from services.input.hub import InputHub
+    from services.input.record import ReplayError, read_recording
+    from services.input.replay import InputRecorder, InputReplayer
+    from services.input.state import Binding, InputState, TrackerState, WheelState, parse_binding
+    from services.input.wheel import WheelRate
 
 __all__ = [
     "AnyInput",
@@ -61,3 +71,16 @@ __all__ = [
     "parse_input_option",
     "read_recording",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, {
+    "services.input.calibration": ("Calibration", "openxr_to_engine"),
+    "services.input.config": ("make_device", "merge_devices", "parse_input_option"),
+    "services.input.device": ("BadMessage", "DeviceError", "DeviceStatus", "InputDevice"),
+    "services.input.events": ("AnyInput", "Axis", "Button", "DeviceFound", "DeviceLost", "Key",
+                              "Pointer", "TrackerPose", "WheelCount"),
+    "services.input.hub": ("InputHub",),
+    "services.input.record": ("ReplayError", "read_recording"),
+    "services.input.replay": ("InputRecorder", "InputReplayer"),
+    "services.input.state": ("Binding", "InputState", "TrackerState", "WheelState",
+                             "parse_binding"),
+    "services.input.wheel": ("WheelRate",)})

@@ -25,7 +25,8 @@ NOT_FOR_READING = ("engine.app", "engine.events", "engine.physics.commands",
                    "engine.physics.driver", "engine.interchange.importer",
                    "engine.assets.gltf", "engine.assets.dae", "engine.assets.skinned",
                    "services.render", "app.experiments.cli", "engine.experiments.session",
-                   "numpy.random", "subprocess", "tempfile", "hashlib")
+                   "components.avatar_saved", "numpy.random", "subprocess", "tempfile",
+                   "hashlib")
 #: A scene with boxes and a ground: no model, script, sound, shader or device.
 PLAIN = """World { Gravity [0 0 -9.81] }
 Object { ID "ground" Dynamic 0 VisualAttributes { Geometry { Primitive "plane" } }
@@ -109,3 +110,55 @@ def test_a_scene_with_a_script_starts_lua(plain: Path) -> None:
     loaded = loaded_by(cli("run", str(plain), "--frames", "1", "--headless", "--fast"),
                        plain.parent)
     assert "lupa" in loaded
+
+
+#: Our modules for features a plain scene does not have: avatars (animation, skinned
+#: models, a saved avatar), hands (fingers), the scripting API and runtime, saving a state.
+NOT_IN_A_PLAIN_RUN = ("systems.avatars", "engine.animation", "engine.assets.skinned",
+                      "components.avatar_saved",
+                      "systems.hands", "systems.hand_fingers", "systems.hand_ghost",
+                      "services.scripting.api", "services.scripting.runtime",
+                      "engine.scene.snapshot")
+
+
+def test_a_run_of_a_plain_scene_loads_no_feature_it_does_not_have(plain: Path) -> None:
+    loaded = loaded_by(cli("run", str(plain), "--frames", "1", "--headless", "--fast"),
+                       plain.parent, whole=True)
+    assert loaded.isdisjoint(NOT_IN_A_PLAIN_RUN), sorted(loaded & set(NOT_IN_A_PLAIN_RUN))
+    assert {"systems.dynamics", "systems.scripting", "systems.sound"} <= loaded
+
+
+@pytest.mark.parametrize(("folder", "plugin"), [("hands", "systems.hands"),
+                                                ("avatars", "systems.avatars")])
+def test_a_scene_with_the_feature_loads_its_plugin(folder: str, plugin: str,
+                                                   plain: Path) -> None:
+    loaded = loaded_by(cli("run", str(ROOT / "content" / folder), "--frames", "2",
+                           "--headless", "--fast"), plain.parent, whole=True)
+    assert plugin in loaded
+
+
+#: A hand on a body, for an engine whose scene had none.
+HAND = """Object { ID "palm" Position [0 0 1]
+  PhysicalAttributes { Mass 0.4 Geometry { Primitive "box" Size [0.09 0.18 0.03] } }
+  Hand { Tracker "hand_r" } }
+"""
+
+
+@pytest.mark.parametrize("told", [True, False])
+def test_a_feature_plugin_waits_for_its_first_component(told: bool, tmp_path: Path) -> None:
+    """An engine told its scene has no hand builds the hands plugin when the first Hand is
+    added (as a script's spawn adds one); one told nothing builds it at once."""
+    from engine import EngineConfig, Phase
+    from engine.scene import instantiate, spec_from_text
+    from systems import create_engine
+
+    options = {"components": frozenset({"Transform", "Physical"})} if told else {}
+    with create_engine(EngineConfig(backend="ode", fast=True, options=options)) as engine:
+        engine.step()
+        assert ("hands" in engine.plugins) is not told
+        instantiate(engine, spec_from_text(HAND, tmp_path))
+        engine.step()
+        assert "hands" in engine.plugins
+        names = [s.name for s in engine.systems[Phase.PRE_PHYSICS]]
+        assert names.count("HandDriveSystem") == 1, names
+        engine.step()
