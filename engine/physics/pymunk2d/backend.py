@@ -660,7 +660,8 @@ class PymunkBackend:
         self._woken.add(rec.key)
 
     def set_sleeping(self, key: int, sleeping: bool) -> None:
-        """Put a dynamic body to sleep at rest (alone: what it touches wakes it), or wake it."""
+        """Put a dynamic body to sleep at rest (alone: what it touches wakes it; one touching
+        an awake body is stopped but stays awake, as that touch would wake it), or wake it."""
         rec = self._record(key)
         if rec.body.body_type != pymunk.Body.DYNAMIC:
             return
@@ -671,7 +672,8 @@ class PymunkBackend:
             self._warn(f"body {key}", "sleep", "cannot sleep while auto_sleep is off; ignored")
         else:
             _stop(rec.body)
-            rec.body.sleep()
+            if _may_sleep_alone(rec.body):
+                rec.body.sleep()
 
     def _apply_sleep(self, dt: float, raw: np.ndarray, awake: np.ndarray) -> bool:
         """The sleep rule after a step (``raw``: the step's body read): quiet islands go
@@ -733,7 +735,8 @@ class PymunkBackend:
             return
         if state.asleep and self._sleep_on:
             _stop(rec.body)
-            rec.body.sleep()
+            if _may_sleep_alone(rec.body):
+                rec.body.sleep()
         elif not state.asleep:
             rec.body.activate()
 
@@ -1217,6 +1220,18 @@ def _merge_contacts(parts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndar
     share = np.divide(out["impulse"], own, out=1.0 / count, where=own > 0.0)
     out["impulse"] = total[kept] * share
     return out, rows[keep]
+
+
+def _may_sleep_alone(body: pymunk.Body) -> bool:
+    """Whether chipmunk may put ``body`` to sleep by itself: it touches no awake dynamic
+    body. One that does would be woken by that touch at the next step anyway (as on
+    ODE), and chipmunk (pymunk 7.3) corrupts its arbiter lists when a body between awake
+    ones is put to sleep: the process aborts in ``free()`` a step or two later."""
+    touching: list[pymunk.Arbiter] = []
+    body.each_arbiter(touching.append)
+    return not any(other is not body and other.body_type == pymunk.Body.DYNAMIC
+                   and not other.is_sleeping
+                   for arbiter in touching for other in arbiter.bodies)
 
 
 def _stop(body: pymunk.Body) -> None:
