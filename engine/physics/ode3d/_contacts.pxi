@@ -1,5 +1,5 @@
-# Contacts: the near callback (pair filter, material lookup, contact records), the
-# impulses read back after the step, ray casts.
+# Contacts: the near callback (pair filter, material lookup, contact records, each
+# completed when read after the step), ray casts.
 
 cdef struct RayCtx:
     dGeomID ray

@@ -4,9 +4,10 @@
  *
  * A step: the caller collides, every pair's contacts into cs_room's room and handed to
  * cs_keep (or copied in by cs_collect), which does not make joints yet; cs_solve then
- * finds the islands, makes the contact joints with their final surfaces, and steps; afterwards s->forces holds what the solver found each
- * contact to do, and cs_whole_forces makes them the whole forces (a caller that reads
- * them runs it: the preloads put back).
+ * finds the islands, makes the contact joints with their final surfaces, and steps;
+ * afterwards s->forces holds what the solver found each contact to do, and
+ * cs_whole_forces makes them the whole forces (a caller that reads them runs it: the
+ * preloads put back).
  * Three things on top of ODE's own step, each chosen by measurement (app/bench/accuracy.py,
  * docs/PHYSICS.md):
  *

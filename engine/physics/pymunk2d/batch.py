@@ -80,12 +80,6 @@ class SpaceReader:
         flags tell (``ordered``: the caller has just read the bodies, which looked)."""
         return self._rows.arbiters(ordered)
 
-    def contacts(self) -> tuple[np.ndarray, np.ndarray]:
-        """One CONTACT_DTYPE row per touching shape pair, sorted by keys then place, and
-        each one's rows (a, b; -1: the keyless world), (m, 2) (see
-        :meth:`_rows.Rows.contacts`)."""
-        return self._rows.contacts(*self.arbiters())
-
     def islands(self, movable: np.ndarray, joints: np.ndarray) -> np.ndarray:
         """Each row's island label: rows tied by the step's contacts between ``movable``
         rows, or by ``joints`` ((m, 2) rows; -1: the world) (see
