@@ -20,11 +20,11 @@ Cost is per simulated second as well as per step, since a setting with a finer s
 takes more steps: the frontier (``--plot``) is drawn over CPU ms per simulated second.
 
 Then, measured interleaved ``repeats`` times: ours at the default settings against MuJoCo
-at its defaults on the boxes scene at 60 Hz (sleeping off on both, and ours with its
-default sleeping too); the price of the policy, ours against plain libode at the same
-iterations and step, with each policy turned off in turn; and a settled scene asleep
-against the same scene awake. Each ratio is the median of the repeats' own ratios, with
-their spread (min–max).
+at its defaults on the boxes scene at 60 Hz (sleeping off on both; then both with their
+sleeping on, where the installed MuJoCo can sleep: 4.0 and later); the price of the
+policy, ours against plain libode at the same iterations and step, with each policy turned
+off in turn; and a settled scene asleep against the same scene awake. Each ratio is the
+median of the repeats' own ratios, with their spread (min–max).
 
 Run: ``colosseum bench pareto [--quick] [--json F] [--plot F.png]``.
 """
@@ -119,31 +119,42 @@ def time_libode(exe: Path, n: int, dt: float, steps: int, iterations: int, polic
     return {"ms": float(fields["ms_per_step"]), "asleep": float(fields["asleep"])}
 
 
-def mujoco_boxes(n: int, dt: float, iterations: int | None = None) -> tuple[Any, Any]:
-    """The boxes scene in MuJoCo at its defaults (the step, μ 0.5 set)."""
+def mujoco_sleeps() -> bool:
+    """Whether the installed MuJoCo can put bodies to sleep (4.0 and later)."""
+    import mujoco
+
+    return hasattr(mujoco.mjtEnableBit, "mjENBL_SLEEP")
+
+
+def mujoco_boxes(n: int, dt: float, iterations: int | None = None,
+                 sleep: bool = False) -> tuple[Any, Any]:
+    """The boxes scene in MuJoCo at its defaults (the step, μ 0.5 set; its sleeping
+    enabled in the model, as its docs ask, when ``sleep``)."""
     import mujoco
 
     friction = 'friction="0.5 0.005 0.0001"'
     bodies = "".join(f'<body pos="{x} {y} {z}"><freejoint/><geom type="box" size=".5 .5 .5" '
                      f'mass="1" {friction}/></body>' for x, y, z in box_positions(n))
+    flag = '<flag sleep="enable"/>' if sleep else ""
     model = mujoco.MjModel.from_xml_string(
-        f'<mujoco><option timestep="{dt}"/><worldbody><geom type="plane" size="0 0 1" '
-        f'{friction}/>{bodies}</worldbody></mujoco>')
+        f'<mujoco><option timestep="{dt}">{flag}</option><worldbody>'
+        f'<geom type="plane" size="0 0 1" {friction}/>{bodies}</worldbody></mujoco>')
     if iterations is not None:
         model.opt.iterations = iterations
     return model, mujoco.MjData(model)
 
 
-def time_mujoco(n: int, dt: float, steps: int, iterations: int | None = None
-                ) -> dict[str, float]:
+def time_mujoco(n: int, dt: float, steps: int, iterations: int | None = None,
+                sleep: bool = False) -> dict[str, float]:
     import mujoco
 
-    model, data = mujoco_boxes(n, dt, iterations)
+    model, data = mujoco_boxes(n, dt, iterations, sleep)
     step = mujoco.mj_step
     t0 = time.thread_time()
     for _ in range(steps):
         step(model, data)
-    return {"ms": (time.thread_time() - t0) / steps * 1e3, "asleep": 0.0}
+    asleep = float(n - (data.nbody_awake - 1)) if sleep else 0.0
+    return {"ms": (time.thread_time() - t0) / steps * 1e3, "asleep": asleep}
 
 
 @contextmanager
@@ -300,22 +311,25 @@ def _spread(ratios: list[float]) -> dict[str, float]:
 
 
 def versus_mujoco(ns: tuple[int, ...], seconds: float, repeats: int) -> list[dict[str, Any]]:
-    """Ours at the default settings against MuJoCo at its defaults, 60 Hz, interleaved."""
+    """Ours at the default settings against MuJoCo at its defaults, 60 Hz, interleaved:
+    both awake, and (where MuJoCo can sleep) both with their sleeping on."""
+    pairs = [("ours", "mujoco")] + ([("ours sleeping", "mujoco sleeping")]
+                                   if mujoco_sleeps() else [])
     rows = []
     for n in ns:
         steps = round(seconds / HEADLINE_STEP)
-        times: dict[str, list[float]] = {"mujoco": [], "ours": [], "ours sleeping": []}
+        times: dict[str, list[float]] = {who: [] for pair in pairs for who in pair}
         for _ in range(repeats):
-            times["mujoco"].append(time_mujoco(n, HEADLINE_STEP, steps)["ms"])
-            times["ours"].append(time_ours("ode", n, HEADLINE_STEP, steps)["ms"])
-            times["ours sleeping"].append(time_ours("ode", n, HEADLINE_STEP, steps,
-                                                    auto_sleep=True)["ms"])
-        for who in ("ours", "ours sleeping"):
-            row = {"table": "defaults vs MuJoCo", "N": n, "ours": who,
-                   "ours ms/step": statistics.median(times[who]),
-                   "mujoco ms/step": statistics.median(times["mujoco"]),
-                   **_spread([m / o for m, o in zip(times["mujoco"], times[who],
-                                                    strict=True)])}
+            for ours, theirs in pairs:
+                sleep = ours == "ours sleeping"
+                times[theirs].append(time_mujoco(n, HEADLINE_STEP, steps, sleep=sleep)["ms"])
+                times[ours].append(time_ours("ode", n, HEADLINE_STEP, steps,
+                                             auto_sleep=sleep)["ms"])
+        for ours, theirs in pairs:
+            row = {"table": "defaults vs MuJoCo", "N": n, "ours": ours,
+                   "ours ms/step": statistics.median(times[ours]), "mujoco": theirs,
+                   "mujoco ms/step": statistics.median(times[theirs]),
+                   **_spread([m / o for m, o in zip(times[theirs], times[ours], strict=True)])}
             row["faster by"] = row.pop("ratio")
             print_row(row)
             rows.append(row)
@@ -439,8 +453,10 @@ def figures(rows: list[dict[str, Any]]) -> list[Any]:
     out = []
     for r in rows:
         if r["table"] == "defaults vs MuJoCo":
+            mujoco = ("MuJoCo with its sleeping on" if r.get("mujoco") == "mujoco sleeping"
+                      else "MuJoCo at its defaults")
             out.append(Figure(f"N={r['N']}, {r['ours']}", r["ours ms/step"], r["mujoco ms/step"],
-                              "ms/step", "MuJoCo at its defaults, the same scene and step"))
+                              "ms/step", f"{mujoco}, the same scene and step"))
         elif r["table"] == "price of the policy" and r["variant"] == "policies on, sleeping off":
             out.append(Figure(f"N={r['N']}, policy on", r["ms/step"], r["plain ms/step"],
                               "ms/step", "plain libode QuickStep, same iterations and step"))

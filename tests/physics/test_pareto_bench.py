@@ -66,3 +66,17 @@ def test_a_quick_run_has_every_table_and_a_plot(tmp_path: Path, monkeypatch) -> 
     data = {"rows": rows, "machine": {"platform": "test"}, "date": "2026-01-01"}
     path = pareto.plot(json.loads(json.dumps(data)), tmp_path / "pareto.png")
     assert path.stat().st_size > 1000
+
+
+def test_mujoco_is_compared_sleeping_beside_ours_sleeping() -> None:
+    """Ours with its sleeping on is set beside MuJoCo with its own sleeping on, not beside
+    MuJoCo awake: where MuJoCo can sleep, its settled boxes do fall asleep."""
+    pytest.importorskip("mujoco")
+    if not pareto.mujoco_sleeps():
+        pytest.skip("this MuJoCo has no sleeping")
+    assert pareto.time_mujoco(20, 1 / 60, 180, sleep=True)["asleep"] == 20
+    assert pareto.time_mujoco(20, 1 / 60, 180)["asleep"] == 0
+    rows = pareto.versus_mujoco((20,), 0.5, 1)
+    assert [(r["ours"], r["mujoco"]) for r in rows] == [
+        ("ours", "mujoco"), ("ours sleeping", "mujoco sleeping")]
+    assert all(r["faster by"] > 0 for r in rows)
