@@ -391,32 +391,46 @@ def _step_only(n: int, steps: int, iterations: int) -> float:
     return ms
 
 
-def asleep_vs_awake(n: int, repeats: int, settle: float = 12.0) -> list[dict[str, Any]]:
+def _sleeper(engine: str, n: int, sleep: bool) -> tuple[Any, Any, Any]:
+    """The boxes scene on ``engine`` (ours on ODE, or MuJoCo) at its defaults, sleeping or
+    not: its step at 60 Hz, how many boxes are asleep, and its closing."""
+    if engine == "mujoco":
+        import mujoco
+
+        model, data = mujoco_boxes(n, HEADLINE_STEP, sleep=sleep)
+        return (lambda: mujoco.mj_step(model, data), lambda: n - (data.nbody_awake - 1),
+                lambda: None)
+    backend = _ours("ode", n, WorldSettings(max_contacts=4, auto_sleep=sleep))
+    return (lambda: backend.step(HEADLINE_STEP), backend.sleeping_count, backend.close)
+
+
+def asleep_vs_awake(n: int, repeats: int, settle: float = 12.0,
+                    engine: str = "ours") -> list[dict[str, Any]]:
     """A settled scene at the default settings once every body is asleep, against the same
-    settled scene with sleeping off; and when it fell asleep."""
+    settled scene with sleeping off; and when it fell asleep (``engine``: ours on ODE, or
+    MuJoCo with its own sleeping)."""
     ratios, fell, slept_ms, awake_ms = [], [], [], []
     for _ in range(repeats):
-        sleeping = _ours("ode", n, WorldSettings(max_contacts=4))
-        awake = _ours("ode", n, WorldSettings(max_contacts=4, auto_sleep=False))
+        sleeping, awake = _sleeper(engine, n, True), _sleeper(engine, n, False)
         when = math.nan
         for i in range(round(settle / HEADLINE_STEP)):
-            sleeping.step(HEADLINE_STEP)
-            awake.step(HEADLINE_STEP)
-            if math.isnan(when) and sleeping.sleeping_count() == n:
+            sleeping[0]()
+            awake[0]()
+            if math.isnan(when) and sleeping[1]() == n:
                 when = (i + 1) * HEADLINE_STEP
         times = []
-        for backend in (sleeping, awake):
+        for step, _, close in (sleeping, awake):
             t0 = time.thread_time()
             for _ in range(60):
-                backend.step(HEADLINE_STEP)
+                step()
             times.append((time.thread_time() - t0) / 60 * 1e3)
-            backend.close()
+            close()
         slept_ms.append(times[0])
         awake_ms.append(times[1])
         ratios.append(times[0] / times[1])
         fell.append(when)
     asleep_at = statistics.median(fell) if all(math.isfinite(t) for t in fell) else None
-    row = {"table": "asleep vs awake", "N": n, "all asleep at s": asleep_at,
+    row = {"table": "asleep vs awake", "engine": engine, "N": n, "all asleep at s": asleep_at,
            "asleep ms/step": statistics.median(slept_ms),
            "awake ms/step": statistics.median(awake_ms), **_spread(ratios)}
     row["x awake"] = row.pop("ratio")
@@ -442,6 +456,8 @@ def run_bench(quick: bool = False, repeats: int | None = None,
             rows += versus_mujoco(ns, 4.0 if not quick else 1.0, repeats)
         rows += price_of_policy(exe, ns, 4.0 if not quick else 1.0, repeats)
     rows += asleep_vs_awake(ns[0], max(1, repeats // 2))
+    if installed("mujoco") and mujoco_sleeps():
+        rows += asleep_vs_awake(ns[0], max(1, repeats // 2), engine="mujoco")
     return rows
 
 
@@ -461,7 +477,8 @@ def figures(rows: list[dict[str, Any]]) -> list[Any]:
             out.append(Figure(f"N={r['N']}, policy on", r["ms/step"], r["plain ms/step"],
                               "ms/step", "plain libode QuickStep, same iterations and step"))
         elif r["table"] == "asleep vs awake":
-            out.append(Figure(f"N={r['N']} settled, asleep", r["asleep ms/step"],
+            who = "MuJoCo, " if r.get("engine") == "mujoco" else ""
+            out.append(Figure(f"{who}N={r['N']} settled, asleep", r["asleep ms/step"],
                               r["awake ms/step"], "ms/step", "the same scene awake"))
     return out
 

@@ -80,3 +80,14 @@ def test_mujoco_is_compared_sleeping_beside_ours_sleeping() -> None:
     assert [(r["ours"], r["mujoco"]) for r in rows] == [
         ("ours", "mujoco"), ("ours sleeping", "mujoco sleeping")]
     assert all(r["faster by"] > 0 for r in rows)
+
+
+@pytest.mark.parametrize("engine", ["ours", "mujoco"])
+def test_a_settled_scene_asleep_costs_less_than_awake_on_either_engine(engine: str) -> None:
+    if engine == "mujoco":
+        pytest.importorskip("mujoco")
+        if not pareto.mujoco_sleeps():
+            pytest.skip("this MuJoCo has no sleeping")
+    (row,) = pareto.asleep_vs_awake(30, 1, settle=4.0, engine=engine)
+    assert row["engine"] == engine and 0 < row["all asleep at s"] < 4.0
+    assert row["asleep ms/step"] < 0.5 * row["awake ms/step"]
