@@ -20,6 +20,27 @@ settings.register_profile("dev", deadline=None)
 settings.load_profile("ci" if os.environ.get("CI") else "dev")
 
 
+#: Tests that keep wall-clock time or measure it: real processes and sockets on deadlines
+#: (serve/join, devices on real transports, OpenXR, sound), timed costs and ratios, a step
+#: timed against a thread; a folder, a file or one test (its node id). ``tools/dev test``
+#: runs them alone, after the rest has run on every core (pytest-xdist), so a busy
+#: neighbour cannot make them miss their deadlines.
+SERIAL = ("tests/net/", "tests/input/", "tests/xr/", "tests/audio/",
+          "tests/core/test_actuation.py", "tests/core/test_readme_flows.py",
+          "tests/experiments/test_experiment_lsl.py", "tests/experiments/test_run.py",
+          "tests/render/test_anomaly_switching.py", "tests/scripting/test_scripting_sandbox.py",
+          "tests/scripting/test_churn.py::test_a_spawn_and_a_delete_cost_the_same",
+          "tests/physics/test_ode_physics.py::test_gil_is_released_while_stepping",
+          "tests/stroke/test_sweep.py::test_the_crumbs_fall_asleep_and_then_cost")
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Mark the tests of :data:`SERIAL` ``serial``."""
+    for item in items:
+        if item.nodeid.startswith(SERIAL):
+            item.add_marker(pytest.mark.serial)
+
+
 def available_backends() -> list[str]:
     names = ["ballistic", "pymunk"]
     if importlib.util.find_spec("engine.physics.ode3d") is not None:
