@@ -1,11 +1,16 @@
 # Included by _rows.pyx: the chipmunk functions its passes call, taken once at import from
 # pymunk's own cffi library (``pymunk.cp``, ``pymunk.ffi``, which pymunk documents for
-# such use). The passes call the very functions ``pymunk.batch`` calls, so what they read
-# is the same to the bit; what they save is pymunk.batch's Python per call and its
-# growable buffers, and they read one arbiter in a third of the calls. Bodies are reached
-# through their cpBody pointers (``Body._body``), kept per row while the rows stand.
-# Each function's C type is checked against pymunk's declaration of it at import: a
-# pymunk whose chipmunk differs fails there, by name, not later in C.
+# such use), and where the fields of an arbiter and its contacts lie. The passes call the
+# very functions ``pymunk.batch`` calls, so what they read is the same to the bit; what
+# they save is pymunk.batch's Python per call and its growable buffers. An arbiter's
+# bodies, contact count, normal and total impulse are read from its fields (cpArbiter and
+# cpContact, which pymunk's cffi declares in full: their offsets are its build's),
+# with the arithmetic of chipmunk's getters (cpArbiter.c) in the same order; its points
+# and depths go through the getters (they add the bodies' centres of gravity, and cpBody's
+# layout is not declared). Bodies are reached through their cpBody pointers
+# (``Body._body``), kept per row while the rows stand. Each function's C type and each
+# field's offset and type are checked against pymunk's declarations at import: a pymunk
+# whose chipmunk differs fails there, by name, not later in C.
 
 ctypedef struct cpVect:
     double x
@@ -19,9 +24,6 @@ ctypedef unsigned char (*_BodyBool)(void *) noexcept nogil
 ctypedef void *(*_BodyPointer)(void *) noexcept nogil
 ctypedef void (*_ArbiterFunc)(void *, void *) noexcept nogil
 ctypedef void (*_EachArbiter)(void *, _ArbiterFunc, void *) noexcept nogil
-ctypedef void (*_ArbiterBodies)(void *, void **, void **) noexcept nogil
-ctypedef int (*_ArbiterInt)(void *) noexcept nogil
-ctypedef cpVect (*_ArbiterVect)(void *) noexcept nogil
 ctypedef cpVect (*_ArbiterPoint)(void *, int) noexcept nogil
 ctypedef double (*_ArbiterDepth)(void *, int) noexcept nogil
 
@@ -38,10 +40,6 @@ cdef struct _Chipmunk:
     _BodyBool sleeping
     _BodyPointer user_data
     _EachArbiter each_cached_arbiter
-    _ArbiterBodies arbiter_bodies
-    _ArbiterInt arbiter_count
-    _ArbiterVect total_impulse
-    _ArbiterVect normal
     _ArbiterPoint point_a
     _ArbiterPoint point_b
     _ArbiterDepth depth
@@ -64,10 +62,6 @@ CHIPMUNK_FUNCTIONS = (
     ("cpBodyGetUserData", "void *(*)(struct cpBody *)"),
     ("cpSpaceEachCachedArbiter",
      "void(*)(struct cpSpace *, void(*)(struct cpArbiter *, void *), void *)"),
-    ("cpArbiterGetBodies", "void(*)(struct cpArbiter *, struct cpBody * *, struct cpBody * *)"),
-    ("cpArbiterGetCount", "int(*)(struct cpArbiter *)"),
-    ("cpArbiterTotalImpulse", "struct cpVect(*)(struct cpArbiter *)"),
-    ("cpArbiterGetNormal", "struct cpVect(*)(struct cpArbiter *)"),
     ("cpArbiterGetPointA", "struct cpVect(*)(struct cpArbiter *, int)"),
     ("cpArbiterGetPointB", "struct cpVect(*)(struct cpArbiter *, int)"),
     ("cpArbiterGetDepth", "double(*)(struct cpArbiter *, int)"),
@@ -109,16 +103,105 @@ cdef void _bind_chipmunk() except *:
     cp.sleeping = <_BodyBool><uintptr_t>a[8]
     cp.user_data = <_BodyPointer><uintptr_t>a[9]
     cp.each_cached_arbiter = <_EachArbiter><uintptr_t>a[10]
-    cp.arbiter_bodies = <_ArbiterBodies><uintptr_t>a[11]
-    cp.arbiter_count = <_ArbiterInt><uintptr_t>a[12]
-    cp.total_impulse = <_ArbiterVect><uintptr_t>a[13]
-    cp.normal = <_ArbiterVect><uintptr_t>a[14]
-    cp.point_a = <_ArbiterPoint><uintptr_t>a[15]
-    cp.point_b = <_ArbiterPoint><uintptr_t>a[16]
-    cp.depth = <_ArbiterDepth><uintptr_t>a[17]
+    cp.point_a = <_ArbiterPoint><uintptr_t>a[11]
+    cp.point_b = <_ArbiterPoint><uintptr_t>a[12]
+    cp.depth = <_ArbiterDepth><uintptr_t>a[13]
 
 
 _bind_chipmunk()
+
+
+cdef struct _Layout:
+    # byte offsets in chipmunk's cpArbiter and cpContact, as pymunk's cffi declares them
+    Py_ssize_t body_a, body_b, count, contacts, n, swapped, state
+    Py_ssize_t jn, jt, contact  # cpContact: jnAcc, jtAcc; its size
+    int cached  # CP_ARBITER_STATE_CACHED: from it on an arbiter has no contacts
+
+
+cdef _Layout arbiter
+
+#: The fields the passes read, each with its C type as pymunk's cffi declares it.
+CHIPMUNK_FIELDS = (
+    ("struct cpArbiter", "body_a", "struct cpBody *"),
+    ("struct cpArbiter", "body_b", "struct cpBody *"),
+    ("struct cpArbiter", "count", "int"),
+    ("struct cpArbiter", "contacts", "struct cpContact *"),
+    ("struct cpArbiter", "n", "struct cpVect"),
+    ("struct cpArbiter", "swapped", "unsigned char"),
+    ("struct cpArbiter", "state", "enum cpArbiterState"),
+    ("struct cpContact", "jnAcc", "double"),
+    ("struct cpContact", "jtAcc", "double"),
+    ("struct cpVect", "x", "double"),
+    ("struct cpVect", "y", "double"),
+)
+
+
+def chipmunk_layout(ffi) -> dict:
+    """Each of CHIPMUNK_FIELDS' offsets in ``ffi``'s declarations (pymunk's), by
+    "struct.field", with the size of cpContact and the value of CP_ARBITER_STATE_CACHED;
+    ImportError naming what is missing or of another type."""
+    import pymunk
+    out = {}
+    for struct, name, ctype in CHIPMUNK_FIELDS:
+        try:
+            fields = dict(ffi.typeof(struct).fields or ())
+        except ffi.error:
+            fields = {}
+        if name not in fields:
+            raise ImportError(f"pymunk {pymunk.version} declares no {struct} field {name}: "
+                              "engine/physics/pymunk2d/_chipmunk.pxi reads it")
+        if fields[name].type is not ffi.typeof(ctype) or fields[name].bitsize != -1:
+            raise ImportError(f"pymunk {pymunk.version} declares {struct}'s {name} as "
+                              f"{fields[name].type.cname}, not {ctype} "
+                              "(engine/physics/pymunk2d/_chipmunk.pxi)")
+        out[f"{struct}.{name}"] = fields[name].offset
+    states = ffi.typeof("enum cpArbiterState").relements
+    if (ffi.sizeof("struct cpVect") != sizeof(cpVect) or out["struct cpVect.y"] != sizeof(double)
+            or ffi.sizeof("enum cpArbiterState") != sizeof(int)
+            or "CP_ARBITER_STATE_CACHED" not in states):
+        raise ImportError(f"pymunk {pymunk.version}: cpVect or cpArbiterState is not as "
+                          "engine/physics/pymunk2d/_chipmunk.pxi reads them")
+    out["contact"] = ffi.sizeof("struct cpContact")
+    out["cached"] = states["CP_ARBITER_STATE_CACHED"]
+    return out
+
+
+cdef void _bind_layout() except *:
+    import pymunk
+    cdef dict o = chipmunk_layout(pymunk.ffi)
+    arbiter.body_a = o["struct cpArbiter.body_a"]
+    arbiter.body_b = o["struct cpArbiter.body_b"]
+    arbiter.count = o["struct cpArbiter.count"]
+    arbiter.contacts = o["struct cpArbiter.contacts"]
+    arbiter.n = o["struct cpArbiter.n"]
+    arbiter.swapped = o["struct cpArbiter.swapped"]
+    arbiter.state = o["struct cpArbiter.state"]
+    arbiter.jn = o["struct cpContact.jnAcc"]
+    arbiter.jt = o["struct cpContact.jtAcc"]
+    arbiter.contact = o["contact"]
+    arbiter.cached = o["cached"]
+
+
+_bind_layout()
+
+
+cdef inline void *_body_a(const char *arb) noexcept nogil:
+    return (<void * const *>(arb + arbiter.body_a))[0]
+
+
+cdef inline void *_body_b(const char *arb) noexcept nogil:
+    return (<void * const *>(arb + arbiter.body_b))[0]
+
+
+cdef inline bint _swapped(const char *arb) noexcept nogil:
+    return (<const unsigned char *>(arb + arbiter.swapped))[0] != 0
+
+
+cdef inline int _count(const char *arb) noexcept nogil:
+    """cpArbiterGetCount: none once the arbiter is only cached (its shapes apart)."""
+    if (<const int *>(arb + arbiter.state))[0] < arbiter.cached:
+        return (<const int *>(arb + arbiter.count))[0]
+    return 0
 
 
 def chipmunk_pointer(handle) -> int:
@@ -156,60 +239,89 @@ cdef void _collect(void *arb, void *data) noexcept nogil:
 
 
 cdef void _read_arbiters(void **arbiters, Py_ssize_t m, int64_t *ints, double *floats,
-                         Py_ssize_t *pairs, const _Table *table) noexcept nogil:
+                         Py_ssize_t *pairs, const _Table *table, const _Table *by_body,
+                         const int64_t *ids) noexcept nogil:
     """Each of ``m`` arbiters into its ARBITER_INTS/ARBITER_FLOATS row (and its bodies'
-    rows into ``pairs``), as pymunk.batch's pmSpaceArbiterIteratorFuncBatched reads it
-    (the same calls; an arbiter without contacts gets its ids and count only: nothing
-    reads its floats). After chipmunk's step little of them is in the cache: the arbiters
-    a few ahead, and their bodies, are asked for early (a hint only: what is read is
-    read through chipmunk's functions)."""
+    rows into ``pairs``): what pymunk.batch's pmSpaceArbiterIteratorFuncBatched reads,
+    to the bit (an arbiter without contacts gets its ids and count only: nothing reads
+    its floats). After chipmunk's step little of them is in the cache: the arbiters a few
+    ahead, and their bodies, are asked for early (a hint only)."""
     cdef Py_ssize_t i
-    cdef void *a
-    cdef void *b
+    cdef const char *ahead
     for i in range(m):
         if i + 8 < m:
             _prefetch(arbiters[i + 8])
             _prefetch(<char *>arbiters[i + 8] + 64)
             _prefetch(<char *>arbiters[i + 8] + 128)
         if i + 4 < m:
-            cp.arbiter_bodies(arbiters[i + 4], &a, &b)
-            _ahead(a)
-            _ahead(b)
-        _read_arbiter(arbiters[i], &ints[_AI * i], &floats[_AF * i], &pairs[2 * i], table)
+            ahead = <const char *>arbiters[i + 4]
+            _ahead(_body_a(ahead))
+            _ahead(_body_b(ahead))
+        _read_arbiter(<const char *>arbiters[i], &ints[_AI * i], &floats[_AF * i],
+                      &pairs[2 * i], table, by_body, ids)
 
 
-cdef inline void _read_arbiter(void *arb, int64_t *ints, double *f, Py_ssize_t *pair,
-                               const _Table *table) noexcept nogil:
-    """One arbiter (see :func:`_read_arbiters`)."""
-    cdef void *a
-    cdef void *b
-    cdef cpVect v
+cdef inline void _identify(void *body, int64_t *id, Py_ssize_t *row, const _Table *table,
+                           const _Table *by_body, const int64_t *ids) noexcept nogil:
+    """A body's id (chipmunk's user data) and row: ours by its cpBody pointer, any other
+    (the space's own static body) by its user data."""
+    row[0] = _row_of(by_body, <uint64_t><uintptr_t>body)
+    if row[0] < by_body.n:
+        id[0] = ids[row[0]]
+    else:
+        id[0] = <int64_t><uintptr_t>cp.user_data(body)
+        row[0] = _row_of(table, <uint64_t>id[0])
+
+
+cdef inline void _read_arbiter(const char *arb, int64_t *ints, double *f, Py_ssize_t *pair,
+                               const _Table *table, const _Table *by_body,
+                               const int64_t *ids) noexcept nogil:
+    """One arbiter (see :func:`_read_arbiters`). Its bodies as cpArbiterGetBodies gives
+    them (b first where swapped), its normal as cpArbiterGetNormal (negated where
+    swapped) and its total impulse as cpArbiterTotalImpulse (each contact's (jnAcc, jtAcc)
+    turned by the unswapped normal and summed, negated where not swapped); points and
+    depths through chipmunk's getters."""
+    cdef bint swapped = _swapped(arb)
+    cdef cpVect v, n, total
+    cdef const char *contacts
+    cdef const char *c
+    cdef double jn, jt, sign
     cdef int count, k
-    cp.arbiter_bodies(arb, &a, &b)
-    ints[0] = <int64_t><uintptr_t>cp.user_data(a)
-    ints[1] = <int64_t><uintptr_t>cp.user_data(b)
-    pair[0] = _row_of(table, <uint64_t>ints[0])
-    pair[1] = _row_of(table, <uint64_t>ints[1])
-    count = cp.arbiter_count(arb)
+    if swapped:
+        _identify(_body_b(arb), &ints[0], &pair[0], table, by_body, ids)
+        _identify(_body_a(arb), &ints[1], &pair[1], table, by_body, ids)
+    else:
+        _identify(_body_a(arb), &ints[0], &pair[0], table, by_body, ids)
+        _identify(_body_b(arb), &ints[1], &pair[1], table, by_body, ids)
+    count = _count(arb)
     ints[2] = count
     if count <= 0:
         for k in range(_AF):
             f[k] = 0.0
         return
-    v = cp.total_impulse(arb)
-    f[0] = v.x
-    f[1] = v.y
-    v = cp.normal(arb)
-    f[2] = v.x
-    f[3] = v.y
+    n = (<const cpVect *>(arb + arbiter.n))[0]
+    contacts = (<const char * const *>(arb + arbiter.contacts))[0]
+    total.x = 0.0
+    total.y = 0.0
+    for k in range(count):
+        c = contacts + k * arbiter.contact
+        jn = (<const double *>(c + arbiter.jn))[0]
+        jt = (<const double *>(c + arbiter.jt))[0]
+        total.x = total.x + (n.x * jn - n.y * jt)
+        total.y = total.y + (n.x * jt + n.y * jn)
+    f[0] = total.x if swapped else -total.x
+    f[1] = total.y if swapped else -total.y
+    sign = -1.0 if swapped else 1.0
+    f[2] = n.x * sign
+    f[3] = n.y * sign
     for k in range(2 if count == 2 else 1):
-        v = cp.point_a(arb, k)
+        v = cp.point_a(<void *>arb, k)
         f[4 + 5 * k] = v.x
         f[5 + 5 * k] = v.y
-        v = cp.point_b(arb, k)
+        v = cp.point_b(<void *>arb, k)
         f[6 + 5 * k] = v.x
         f[7 + 5 * k] = v.y
-        f[8 + 5 * k] = cp.depth(arb, k)
+        f[8 + 5 * k] = cp.depth(<void *>arb, k)
     if count != 2:
         for k in range(9, _AF):
             f[k] = 0.0

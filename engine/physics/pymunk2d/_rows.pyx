@@ -50,7 +50,8 @@ cdef enum:  # the same counts, for code without the GIL
 
 
 cdef struct _Table:
-    # body id -> row: open addressing with linear probing (slot_row -1: empty)
+    # body id (or cpBody pointer) -> row: open addressing with linear probing (slot_row
+    # -1: empty)
     const uint64_t *slot_id
     const Py_ssize_t *slot_row
     uint64_t mask
@@ -62,6 +63,21 @@ cdef inline uint64_t _mix(uint64_t h) noexcept nogil:
     h = (h ^ (h >> 30)) * <uint64_t>0xBF58476D1CE4E5B9
     h = (h ^ (h >> 27)) * <uint64_t>0x94D049BB133111EB
     return h ^ (h >> 31)
+
+
+cdef void _fill(uint64_t *slot_id, Py_ssize_t *slot_row, uint64_t mask, const uint64_t *ids,
+                Py_ssize_t n) noexcept nogil:
+    """A table of ``mask + 1`` slots (at most a quarter full) from row ``i`` to ``ids[i]``."""
+    cdef uint64_t s
+    cdef Py_ssize_t i
+    for s in range(mask + 1):
+        slot_row[s] = -1
+    for i in range(n):
+        s = _mix(ids[i]) & mask
+        while slot_row[s] != -1:
+            s = (s + 1) & mask
+        slot_id[s] = ids[i]
+        slot_row[s] = i
 
 
 cdef inline Py_ssize_t _row_of(const _Table *t, uint64_t body_id) noexcept nogil:
@@ -122,6 +138,10 @@ cdef class Rows:
     cdef uint64_t *slot_id
     cdef Py_ssize_t *slot_row
     cdef _Table lookup  # the same, for the passes
+    cdef uint64_t *slot_body  # cpBody pointer -> row, likewise
+    cdef Py_ssize_t *slot_body_row
+    cdef _Table by_body
+    cdef cnp.ndarray _ids  # each row's body id (chipmunk's user data of its body)
     cdef Py_ssize_t *run_end
     # contacts' scratch, kept between calls (grown as needed): records, side-a row, side-b
     cdef Contact *scratch
@@ -154,6 +174,8 @@ cdef class Rows:
     def __cinit__(self) -> None:
         self.slot_id = NULL
         self.slot_row = NULL
+        self.slot_body = NULL
+        self.slot_body_row = NULL
         self.run_end = NULL
         self.scratch = NULL
         self.scratch_a = NULL
@@ -162,8 +184,7 @@ cdef class Rows:
 
     def __init__(self, ids, keys, static, y, rest, cog, contact_dtype, bodies=None,
                  owners=None, space=0) -> None:
-        cdef Py_ssize_t i, n = len(ids)
-        cdef uint64_t size = 16, s
+        cdef Py_ssize_t n = len(ids)
         if np.dtype(contact_dtype).itemsize != sizeof(Contact):
             raise ValueError("contact dtype does not match the Contact record")
         if bodies is None:  # no space behind the rows: the passes over given arrays only
@@ -190,27 +211,36 @@ cdef class Rows:
         self.any_cog = bool(np.any(self._cog))
         self.contact_dtype = contact_dtype
         self.n = n
-        # id -> row: open addressing with linear probing, at most a quarter full
+        self._tables(ids)
+
+    cdef void _tables(self, ids) except *:
+        """Body id -> row and cpBody pointer -> row (open addressing with linear probing,
+        at most a quarter full), and the scratch of the contacts' sort."""
+        cdef Py_ssize_t n = self.n
+        cdef uint64_t size = 16
         while size < 4 * <uint64_t>n:
             size <<= 1
         self.mask = size - 1
+        self._ids = np.ascontiguousarray(ids, np.int64).reshape(n)
         self.slot_id = <uint64_t *>malloc(size * sizeof(uint64_t))
         self.slot_row = <Py_ssize_t *>malloc(size * sizeof(Py_ssize_t))
+        self.slot_body = <uint64_t *>malloc(size * sizeof(uint64_t))
+        self.slot_body_row = <Py_ssize_t *>malloc(size * sizeof(Py_ssize_t))
         self.run_end = <Py_ssize_t *>malloc((n + 1) * sizeof(Py_ssize_t))
-        if self.slot_id == NULL or self.slot_row == NULL or self.run_end == NULL:
+        if (self.slot_id == NULL or self.slot_row == NULL or self.slot_body == NULL
+                or self.slot_body_row == NULL or self.run_end == NULL):
             raise MemoryError
-        for s in range(size):
-            self.slot_row[s] = -1
-        for i in range(n):
-            s = _mix(<uint64_t>ids[i]) & self.mask
-            while self.slot_row[s] != -1:
-                s = (s + 1) & self.mask
-            self.slot_id[s] = <uint64_t>ids[i]
-            self.slot_row[s] = i
+        _fill(self.slot_id, self.slot_row, self.mask,
+              <const uint64_t *>cnp.PyArray_DATA(self._ids), n)
+        _fill(self.slot_body, self.slot_body_row, self.mask, <const uint64_t *>self.bodies, n)
         self.lookup.slot_id = self.slot_id
         self.lookup.slot_row = self.slot_row
         self.lookup.mask = self.mask
         self.lookup.n = n
+        self.by_body.slot_id = self.slot_body
+        self.by_body.slot_row = self.slot_body_row
+        self.by_body.mask = self.mask
+        self.by_body.n = n
 
     cdef void _chipmunk(self, bodies, owners, space) except *:
         """The rows' cpBody and cpSpace (held alive by ``owners``), and the buffers the
@@ -236,6 +266,8 @@ cdef class Rows:
     def __dealloc__(self) -> None:
         free(self.slot_id)
         free(self.slot_row)
+        free(self.slot_body)
+        free(self.slot_body_row)
         free(self.run_end)
         free(self.scratch)
         free(self.scratch_a)
@@ -343,7 +375,8 @@ cdef class Rows:
             _read_arbiters(found.arbiters, found.used,
                            <int64_t *>cnp.PyArray_DATA(self._arbiter_ints),
                            <double *>cnp.PyArray_DATA(self._arbiter_floats),
-                           <Py_ssize_t *>cnp.PyArray_DATA(self._pairs), &self.lookup)
+                           <Py_ssize_t *>cnp.PyArray_DATA(self._pairs), &self.lookup,
+                           &self.by_body, <const int64_t *>cnp.PyArray_DATA(self._ids))
         self.m = found.used
         self.read_epoch = self.epoch
         return 0
