@@ -1024,7 +1024,7 @@ cdef class Resting:
         """Each row's standing (rp_stand) and whether it is chosen; how many are."""
         cdef Py_ssize_t i
         cdef RpStep s
-        cdef double up, speed
+        cdef double up
         cdef double *p
         cdef int rests, stays, count = 0
         for i in range(self.n):
@@ -1043,9 +1043,9 @@ cdef class Resting:
             stays = s.weight > 0.0 and up >= 0.5 * REST_SUPPORT * s.share * s.weight
             self.kept[i] = s.preloaded and stays
             p = &body[_BF * i]
-            speed = hypot(p[3], p[4])
             self.chosen[i] = ((self.steps[i] >= 2 or self.kept[i])
-                              and speed < (4.0 * REST_SLIP if self.kept[i] else REST_SLIP)
+                              and _slower(p[3], p[4],
+                                          4.0 * REST_SLIP if self.kept[i] else REST_SLIP)
                               and not self.unrest[i]
                               and (self.points[i] >= 2 or self.tilted[i] == 0))
             self.moving[i] = self.dynamic[i] and a[i]
@@ -1087,17 +1087,37 @@ cdef class Resting:
         stack loses for a step the corner that lifts by a hair)."""
         cdef double *base = &self.base[2 * i]
         cdef const double *reach = &self.reach[2 * i]
-        cdef double c = cos(p[2]), s = sin(p[2]), cx, cz, at, margin
+        cdef const double *g = &self.cog[2 * i]
+        cdef double c, s, cx, cz, at, margin
         if reach[1] > reach[0]:
             base[0] = reach[0]
             base[1] = reach[1]
         elif not (self.still[i] and (self.points[i] >= 2 or not self.tilted[i])):
             return False
-        cx = p[0] + c * self.cog[2 * i] - s * self.cog[2 * i + 1]
-        cz = p[1] + s * self.cog[2 * i] + c * self.cog[2 * i + 1]
+        if g[0] == 0.0 and g[1] == 0.0 and isfinite(p[2]):
+            # the turned centre of gravity is zeros (c·0 − s·0): the position, to the
+            # sign of a zero, which the comparisons below do not tell apart
+            cx = p[0]
+            cz = p[1]
+        else:
+            c = cos(p[2])
+            s = sin(p[2])
+            cx = p[0] + c * g[0] - s * g[1]
+            cz = p[1] + s * g[0] + c * g[1]
         at = -cx * down[1] + cz * down[0]
         margin = REST_BASE_MARGIN * (base[1] - base[0])
         return base[0] + margin <= at <= base[1] - margin
+
+
+cdef inline bint _slower(double x, double y, double limit) noexcept nogil:
+    """Whether hypot(x, y) < limit, as computed, with hypot only near the limit (where
+    x² + y², within a few ulps of the square of it, could tell otherwise)."""
+    cdef double q = x * x + y * y
+    if q < 0.81 * limit * limit:
+        return True
+    if q > 1.21 * limit * limit:
+        return False
+    return hypot(x, y) < limit
 
 
 cdef inline void _reach(double *span, const double *f, int n_points,
