@@ -163,7 +163,8 @@ cdef class Rows:
     # the last read (n, 6) and who is awake (n), and the arrays behind them
     cdef double *raw
     cdef unsigned char *awake
-    cdef cnp.ndarray _raw, _awake
+    #: the last body read, (n, 6), and who is awake then (n): :meth:`read`'s two arrays
+    cdef readonly cnp.ndarray bodies_read, bodies_awake
     #: how many rows slept at the last look; counts the changes of who is awake
     cdef readonly Py_ssize_t sleepers, epoch
     # the step's arbiter read (ARBITER_INTS, ARBITER_FLOATS per arbiter, and its rows a,
@@ -258,10 +259,10 @@ cdef class Rows:
         self.read_epoch = -1
         self.epoch = 0
         self.sleepers = 0
-        self._raw = np.zeros((n, _BF))
-        self._awake = np.zeros(n, bool)
-        self.raw = <double *>cnp.PyArray_DATA(self._raw)
-        self.awake = <unsigned char *>cnp.PyArray_DATA(self._awake)
+        self.bodies_read = np.zeros((n, _BF))
+        self.bodies_awake = np.zeros(n, bool)
+        self.raw = <double *>cnp.PyArray_DATA(self.bodies_read)
+        self.awake = <unsigned char *>cnp.PyArray_DATA(self.bodies_awake)
 
     def __dealloc__(self) -> None:
         free(self.slot_id)
@@ -341,11 +342,12 @@ cdef class Rows:
     def read(self):
         """Every row's (x, z, θ, vx, vz, ω) as chipmunk has them (velocity of the centre
         of mass), row by row, and whether it is awake (neither static nor asleep): the
-        arrays :attr:`raw` (n, 6) and :attr:`awake` (n,), the same two each time."""
+        arrays :attr:`bodies_read` (n, 6) and :attr:`bodies_awake` (n,), the same two each
+        time."""
         self._bound()
         with nogil:
             self._look(True)
-        return self._raw, self._awake
+        return self.bodies_read, self.bodies_awake
 
     cdef int _arbiters(self) except -1:
         """The step's arbiters read into ``arbiter_ints``/``arbiter_floats`` (and each
@@ -411,7 +413,7 @@ cdef class Rows:
                 cp.set_velocity(self.bodies[r], v)
                 cp.set_spin(self.bodies[r], self.raw[_BF * r + 5])
 
-    def table(self, const double[:, ::1] raw, double[:, ::1] out, double[:, ::1] keep,
+    def table(self, cnp.ndarray raw, cnp.ndarray out, cnp.ndarray keep,
               double extent=INFINITY, double max_speed=INFINITY) -> bool:
         """Rows of ``raw`` (a read, row by row: x, z, θ, vx, vz, ω) into state rows in
         ``out`` (BodyState's layout), and as they are into ``keep`` (n, 6); whether
@@ -428,13 +430,18 @@ cdef class Rows:
         cdef const double *g
         cdef double *row
         cdef double c, s, ox, oz, total = 0.0, far = 0.0, fast = 0.0
-        if raw.shape[0] != self.n or out.shape[0] < self.n or keep.shape[0] != self.n:
+        cdef const double *read = <const double *>_data(raw, np.float64, _BF * self.n, "raw")
+        cdef double *kept = <double *>_data(keep, np.float64, _BF * self.n, "keep")
+        cdef double *rows
+        if not (cnp.PyArray_NDIM(out) == 2 and cnp.PyArray_DIM(out, 0) >= self.n
+                and cnp.PyArray_DIM(out, 1) == 13):
             raise ValueError("table: arrays do not match the rows")
+        rows = <double *>_data(out, np.float64, cnp.PyArray_SIZE(out), "out")
         with nogil:
             for i in range(self.n):
-                p = &raw[i, 0]
-                row = &out[i, 0]
-                memcpy(&keep[i, 0], p, 6 * sizeof(double))
+                p = &read[_BF * i]
+                row = &rows[13 * i]
+                memcpy(&kept[_BF * i], p, 6 * sizeof(double))
                 total += p[0] + p[1] + p[2] + p[3] + p[4] + p[5]
                 far = max(far, max(fabs(p[0]), fabs(p[1])))
                 fast = max(fast, max(fabs(p[3]), max(fabs(p[4]), fabs(p[5]))))
@@ -469,22 +476,27 @@ cdef class Rows:
                 row[12] = 0.0
         return bool(isfinite(total)) and not (far > extent or fast > max_speed)
 
-    def motion(self, const double[:, ::1] raw, double[:, ::1] velocity) -> None:
+    def motion(self, cnp.ndarray raw, cnp.ndarray velocity, cnp.ndarray awake=None,
+               cnp.ndarray awake_out=None) -> None:
         """Centre-of-mass velocities as the sleep rule keeps them: columns of (6, n),
-        (vx, 0, vz) then (0, −ω, 0)."""
-        cdef Py_ssize_t i
+        (vx, 0, vz) then (0, −ω, 0); and ``awake`` (n bools) copied into ``awake_out``
+        where given."""
+        cdef Py_ssize_t i, n = self.n
         cdef const double *p
-        if raw.shape[0] != self.n or velocity.shape[1] != self.n:
-            raise ValueError("motion: arrays do not match the rows")
+        cdef const double *r = <const double *>_data(raw, np.float64, _BF * n, "raw")
+        cdef double *v = <double *>_data(velocity, np.float64, 6 * n, "velocity")
+        if awake is not None:
+            memcpy(_data(awake_out, np.bool_, n, "awake_out"),
+                   _data(awake, np.bool_, n, "awake"), n)
         with nogil:
-            for i in range(self.n):
-                p = &raw[i, 0]
-                velocity[0, i] = p[3]
-                velocity[1, i] = 0.0
-                velocity[2, i] = p[4]
-                velocity[3, i] = 0.0
-                velocity[4, i] = -p[5]
-                velocity[5, i] = 0.0
+            for i in range(n):
+                p = &r[_BF * i]
+                v[i] = p[3]
+                v[n + i] = 0.0
+                v[2 * n + i] = p[4]
+                v[3 * n + i] = 0.0
+                v[4 * n + i] = -p[5]
+                v[5 * n + i] = 0.0
 
     # Long: one typed pass over the arbiter rows (C locals)
     def contacts(self, const int64_t[:, ::1] ints, const double[:, ::1] floats):
@@ -915,7 +927,7 @@ cdef class Resting:
         return count
 
     def after(self, Rows rows, double dt, double gx, double gz, double beta,
-              double ramp_up) -> int:
+              double ramp_up, bint read=False) -> int:
         """Everything the resting warm start does after a step: what each row's contacts
         did (the step's arbiters, read by ``rows`` if they were not yet), each row's
         standing (policy.h's rp_stand), the rows that may be preloaded (at rest two
@@ -925,7 +937,8 @@ cdef class Resting:
         down by twice that elsewhere). The bodies are as ``rows`` last read them, which
         must be right after the step; a row held still (preloaded, on a face, slower than
         REST_STILL_*) has its velocity zeroed in that read and in chipmunk
-        (``held_still`` counts them). How many rows have their ramp on for the next
+        (``held_still`` counts them). ``read``: read the bodies first (``rows.read()``'s
+        read, into the same arrays). How many rows have their ramp on for the next
         step."""
         cdef Py_ssize_t r, on = 0
         cdef double g_size = sqrt(gx * gx + gz * gz), down[2]
@@ -937,9 +950,12 @@ cdef class Resting:
         self.held_still = 0
         if rows.n != self.n:
             raise ValueError("Resting.after: the rows were planned for other bodies")
+        rows._bound()
+        if read:
+            with nogil:
+                rows._look(True)
         if g_size == 0.0:
             return 0
-        rows._bound()
         rows._arbiters()
         arb = <const int64_t *>cnp.PyArray_DATA(rows._arbiter_ints)
         pairs = <const Py_ssize_t *>cnp.PyArray_DATA(rows._pairs)
