@@ -257,6 +257,10 @@ cdef void _read_arbiters(void **arbiters, Py_ssize_t m, int64_t *ints, double *f
             ahead = <const char *>arbiters[i + 4]
             _ahead(_body_a(ahead))
             _ahead(_body_b(ahead))
+            ahead = (<const char * const *>(ahead + arbiter.contacts))[0]  # its contacts
+            _prefetch(ahead)
+            _prefetch(ahead + 64)
+            _prefetch(ahead + 128)
         _read_arbiter(<const char *>arbiters[i], &ints[_AI * i], &floats[_AF * i],
                       &pairs[2 * i], table, by_body, ids)
 

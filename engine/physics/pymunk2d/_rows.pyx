@@ -170,6 +170,8 @@ cdef class Rows:
     # the step's arbiter read (ARBITER_INTS, ARBITER_FLOATS per arbiter, and its rows a,
     # b), grown as needed: m arbiters, read when ``epoch`` was read_epoch (-1: none)
     cdef cnp.ndarray _arbiter_ptrs, _arbiter_ints, _arbiter_floats, _pairs
+    # (ints, floats) buffers handed over by :meth:`keep_arbiters`, and those free again
+    cdef list _kept, _spare
     cdef Py_ssize_t m, read_epoch
 
     def __cinit__(self) -> None:
@@ -255,6 +257,8 @@ cdef class Rows:
         self._arbiter_floats = np.zeros((0, _AF), np.float64)
         self._pairs = np.zeros((0, 2), np.intp)
         self._arbiter_ptrs = np.zeros(0, np.uintp)
+        self._kept = []
+        self._spare = []
         self.m = 0
         self.read_epoch = -1
         self.epoch = 0
@@ -400,6 +404,28 @@ cdef class Rows:
                 self._look(False)
         self._arbiters()
         return self._arbiter_ints[:self.m], self._arbiter_floats[:self.m]
+
+    def keep_arbiters(self, bint looked=False):
+        """:meth:`arbiters`' read handed over: valid until :meth:`reuse` (the next reads
+        go into other buffers), where a copy of it cost a substep two new arrays."""
+        cdef tuple read = self.arbiters(looked)
+        cdef Py_ssize_t size = cnp.PyArray_DIM(self._arbiter_ptrs, 0)
+        self._kept.append((self._arbiter_ints, self._arbiter_floats))
+        while self._spare:
+            ints, floats = self._spare.pop()
+            if cnp.PyArray_DIM(ints, 0) == size:
+                break
+        else:
+            ints, floats = np.zeros((size, _AI), np.int64), np.zeros((size, _AF), np.float64)
+        self._arbiter_ints, self._arbiter_floats = ints, floats
+        self.read_epoch = -1  # the read is no longer in the rows' buffers
+        return read
+
+    def reuse(self) -> None:
+        """The reads :meth:`keep_arbiters` handed over are no longer held: their buffers
+        take the next ones."""
+        self._spare.extend(self._kept)
+        self._kept.clear()
 
     cdef void _set_velocities(self, const unsigned char *rows) noexcept nogil:
         """The velocity and spin of each row flagged in ``rows`` from :attr:`raw`, into

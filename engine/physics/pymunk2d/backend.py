@@ -265,6 +265,8 @@ class PymunkBackend:
         self._parts[0] = n
         held = self._held_forces() if n > 1 and self._pushed else None
         self._earlier, self._pending = [], []
+        if self._rows is not None:
+            self._rows.reuse()  # the last step's substeps' arbiters are no longer held
         for i in range(n):
             if i and held:
                 self._hold_forces(held)
@@ -277,10 +279,12 @@ class PymunkBackend:
         """What a substep's contacts are made of, kept for :meth:`contacts` (a copy of
         its arbiters as read, its preloads): made into contacts only when asked for, or
         before anything changes the space (:func:`_dropping_the_step_read`)."""
-        # the substep's body read stands where none fell asleep: who is awake was seen
-        ints, floats = self._rows.arbiters(self._step_read is not None)
-        return (ints.copy(), floats.copy(), self._preloaded,
-                self._resting.arrays["lifted"].copy(), self._step_dt)
+        # the substep's body read stands where none fell asleep: who is awake was seen;
+        # the read is handed over (the next substep reads into other buffers) until the
+        # next step
+        ints, floats = self._rows.keep_arbiters(self._step_read is not None)
+        return (ints, floats, self._preloaded, self._resting.arrays["lifted"].copy(),
+                self._step_dt)
 
     def _made_contacts(self, ints: np.ndarray, floats: np.ndarray, preloaded: bool,
                        lifted: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
