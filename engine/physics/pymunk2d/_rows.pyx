@@ -456,13 +456,13 @@ cdef class Rows:
         cdef const double *g
         cdef double *row
         cdef double c, s, ox, oz, total = 0.0, far = 0.0, fast = 0.0
-        cdef const double *read = <const double *>_data(raw, np.float64, _BF * self.n, "raw")
-        cdef double *kept = <double *>_data(keep, np.float64, _BF * self.n, "keep")
+        cdef const double *read = <const double *>_numbers(raw, cnp.NPY_DOUBLE, _BF * self.n, "raw")
+        cdef double *kept = <double *>_numbers(keep, cnp.NPY_DOUBLE, _BF * self.n, "keep")
         cdef double *rows
         if not (cnp.PyArray_NDIM(out) == 2 and cnp.PyArray_DIM(out, 0) >= self.n
                 and cnp.PyArray_DIM(out, 1) == 13):
             raise ValueError("table: arrays do not match the rows")
-        rows = <double *>_data(out, np.float64, cnp.PyArray_SIZE(out), "out")
+        rows = <double *>_numbers(out, cnp.NPY_DOUBLE, cnp.PyArray_SIZE(out), "out")
         with nogil:
             for i in range(self.n):
                 p = &read[_BF * i]
@@ -509,11 +509,11 @@ cdef class Rows:
         where given."""
         cdef Py_ssize_t i, n = self.n
         cdef const double *p
-        cdef const double *r = <const double *>_data(raw, np.float64, _BF * n, "raw")
-        cdef double *v = <double *>_data(velocity, np.float64, 6 * n, "velocity")
+        cdef const double *r = <const double *>_numbers(raw, cnp.NPY_DOUBLE, _BF * n, "raw")
+        cdef double *v = <double *>_numbers(velocity, cnp.NPY_DOUBLE, 6 * n, "velocity")
         if awake is not None:
-            memcpy(_data(awake_out, np.bool_, n, "awake_out"),
-                   _data(awake, np.bool_, n, "awake"), n)
+            memcpy(_numbers(awake_out, cnp.NPY_BOOL, n, "awake_out"),
+                   _numbers(awake, cnp.NPY_BOOL, n, "awake"), n)
         with nogil:
             for i in range(n):
                 p = &r[_BF * i]
@@ -836,6 +836,18 @@ cdef extern from "policy.h" nogil:
                  double up, double down, unsigned char *blocked)
     double REST_SUPPORT, REST_SLIP, REST_SMOOTHING, REST_STILL_LINEAR, REST_STILL_ANGULAR
     double REST_BASE_MARGIN
+
+
+cdef inline void *_numbers(cnp.ndarray a, int typenum, Py_ssize_t size,
+                           str name) except NULL:
+    """:func:`_data` for the per-step calls: the type checked by its number (a dtype
+    compared in Python cost more than the pass over 100 rows)."""
+    if a is None or cnp.PyArray_TYPE(a) != typenum:
+        raise ValueError(f"{name}: expected a {'bool' if typenum == cnp.NPY_BOOL else 'float64'}"
+                         f" array, got {None if a is None else a.dtype}")
+    if not cnp.PyArray_IS_C_CONTIGUOUS(a) or cnp.PyArray_SIZE(a) != size:
+        raise ValueError(f"{name}: expected {size} contiguous items, got {np.shape(a)}")
+    return cnp.PyArray_DATA(a)
 
 
 cdef inline void *_data(cnp.ndarray a, object dtype, Py_ssize_t size, str name) except NULL:
