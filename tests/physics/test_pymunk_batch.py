@@ -336,8 +336,10 @@ def test_the_direct_chipmunk_reads_are_pymunk_batch_s_to_the_bit(kit, swap: bool
     chipmunk's order (those without contacts: their ids and count) and body by body,
     asleep or awake. An arbiter's bodies, count, normal and total impulse are read from
     its fields with its getters' arithmetic, swapped arbiters too (the getters turn their
-    bodies, normal and impulse round; ``swap``: every arbiter swapped for the reads). A
-    pymunk whose chipmunk reads otherwise fails here."""
+    bodies, normal and impulse round; ``swap``: every arbiter swapped for the reads), and
+    in the step's own read its points and depths from the bodies' positions the step's
+    body read took (their centres of gravity). A pymunk whose chipmunk reads otherwise
+    fails here."""
     backend = PymunkBackend()
     backend.configure(WorldSettings(auto_sleep=True))
     kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
@@ -350,7 +352,12 @@ def test_the_direct_chipmunk_reads_are_pymunk_batch_s_to_the_bit(kit, swap: bool
         if step % 25:
             continue
         reader = backend._space_reader()
-        reader.new_step()  # read afresh, not the step's
+        # the step's own read (its points from the step's body read), then afresh
+        ints, floats = reader.arbiters()
+        theirs_ints, theirs_floats = _batch_arbiters(backend._space)
+        assert np.array_equal(ints, theirs_ints)
+        assert np.array_equal(floats[ints[:, 2] > 0], theirs_floats[ints[:, 2] > 0])
+        reader.new_step()
         swapped = _swap_arbiters(backend._space) if swap else 0
         turned += swapped
         ints, floats = (a.copy() for a in reader.arbiters())

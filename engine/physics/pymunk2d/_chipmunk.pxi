@@ -43,6 +43,7 @@ cdef struct _Chipmunk:
     _ArbiterPoint point_a
     _ArbiterPoint point_b
     _ArbiterDepth depth
+    _BodyVect cog
 
 
 cdef _Chipmunk cp
@@ -65,6 +66,7 @@ CHIPMUNK_FUNCTIONS = (
     ("cpArbiterGetPointA", "struct cpVect(*)(struct cpArbiter *, int)"),
     ("cpArbiterGetPointB", "struct cpVect(*)(struct cpArbiter *, int)"),
     ("cpArbiterGetDepth", "double(*)(struct cpArbiter *, int)"),
+    ("cpBodyGetCenterOfGravity", "struct cpVect(*)(struct cpBody *)"),
 )
 
 
@@ -106,6 +108,7 @@ cdef void _bind_chipmunk() except *:
     cp.point_a = <_ArbiterPoint><uintptr_t>a[11]
     cp.point_b = <_ArbiterPoint><uintptr_t>a[12]
     cp.depth = <_ArbiterDepth><uintptr_t>a[13]
+    cp.cog = <_BodyVect><uintptr_t>a[14]
 
 
 _bind_chipmunk()
@@ -114,7 +117,7 @@ _bind_chipmunk()
 cdef struct _Layout:
     # byte offsets in chipmunk's cpArbiter and cpContact, as pymunk's cffi declares them
     Py_ssize_t body_a, body_b, count, contacts, n, swapped, state
-    Py_ssize_t jn, jt, contact  # cpContact: jnAcc, jtAcc; its size
+    Py_ssize_t r1, r2, jn, jt, contact  # cpContact: r1, r2, jnAcc, jtAcc; its size
     int cached  # CP_ARBITER_STATE_CACHED: from it on an arbiter has no contacts
 
 
@@ -129,6 +132,8 @@ CHIPMUNK_FIELDS = (
     ("struct cpArbiter", "n", "struct cpVect"),
     ("struct cpArbiter", "swapped", "unsigned char"),
     ("struct cpArbiter", "state", "enum cpArbiterState"),
+    ("struct cpContact", "r1", "struct cpVect"),
+    ("struct cpContact", "r2", "struct cpVect"),
     ("struct cpContact", "jnAcc", "double"),
     ("struct cpContact", "jtAcc", "double"),
     ("struct cpVect", "x", "double"),
@@ -176,6 +181,8 @@ cdef void _bind_layout() except *:
     arbiter.n = o["struct cpArbiter.n"]
     arbiter.swapped = o["struct cpArbiter.swapped"]
     arbiter.state = o["struct cpArbiter.state"]
+    arbiter.r1 = o["struct cpContact.r1"]
+    arbiter.r2 = o["struct cpContact.r2"]
     arbiter.jn = o["struct cpContact.jnAcc"]
     arbiter.jt = o["struct cpContact.jtAcc"]
     arbiter.contact = o["contact"]
@@ -238,9 +245,19 @@ cdef void _collect(void *arb, void *data) noexcept nogil:
     c.used += 1
 
 
+cdef struct _Known:
+    # what an arbiter read knows of the rows: body id -> row, cpBody pointer -> row, each
+    # row's id; and, where the rows' bodies were read right before (else NULL), that read
+    # and whether each row's position there is its centre of gravity (chipmunk's body p)
+    const _Table *table
+    const _Table *by_body
+    const int64_t *ids
+    const double *raw
+    const unsigned char *centred
+
+
 cdef void _read_arbiters(void **arbiters, Py_ssize_t m, int64_t *ints, double *floats,
-                         Py_ssize_t *pairs, const _Table *table, const _Table *by_body,
-                         const int64_t *ids) noexcept nogil:
+                         Py_ssize_t *pairs, const _Known *known) noexcept nogil:
     """Each of ``m`` arbiters into its ARBITER_INTS/ARBITER_FLOATS row (and its bodies'
     rows into ``pairs``): what pymunk.batch's pmSpaceArbiterIteratorFuncBatched reads,
     to the bit (an arbiter without contacts gets its ids and count only: nothing reads
@@ -262,29 +279,30 @@ cdef void _read_arbiters(void **arbiters, Py_ssize_t m, int64_t *ints, double *f
             _prefetch(ahead + 64)
             _prefetch(ahead + 128)
         _read_arbiter(<const char *>arbiters[i], &ints[_AI * i], &floats[_AF * i],
-                      &pairs[2 * i], table, by_body, ids)
+                      &pairs[2 * i], known)
 
 
-cdef inline void _identify(void *body, int64_t *id, Py_ssize_t *row, const _Table *table,
-                           const _Table *by_body, const int64_t *ids) noexcept nogil:
+cdef inline void _identify(void *body, int64_t *id, Py_ssize_t *row,
+                           const _Known *known) noexcept nogil:
     """A body's id (chipmunk's user data) and row: ours by its cpBody pointer, any other
     (the space's own static body) by its user data."""
-    row[0] = _row_of(by_body, <uint64_t><uintptr_t>body)
-    if row[0] < by_body.n:
-        id[0] = ids[row[0]]
+    row[0] = _row_of(known.by_body, <uint64_t><uintptr_t>body)
+    if row[0] < known.by_body.n:
+        id[0] = known.ids[row[0]]
     else:
         id[0] = <int64_t><uintptr_t>cp.user_data(body)
-        row[0] = _row_of(table, <uint64_t>id[0])
+        row[0] = _row_of(known.table, <uint64_t>id[0])
 
 
 cdef inline void _read_arbiter(const char *arb, int64_t *ints, double *f, Py_ssize_t *pair,
-                               const _Table *table, const _Table *by_body,
-                               const int64_t *ids) noexcept nogil:
+                               const _Known *known) noexcept nogil:
     """One arbiter (see :func:`_read_arbiters`). Its bodies as cpArbiterGetBodies gives
     them (b first where swapped), its normal as cpArbiterGetNormal (negated where
     swapped) and its total impulse as cpArbiterTotalImpulse (each contact's (jnAcc, jtAcc)
-    turned by the unswapped normal and summed, negated where not swapped); points and
-    depths through chipmunk's getters."""
+    turned by the unswapped normal and summed, negated where not swapped); its points and
+    depths as cpArbiterGetPointA/B and cpArbiterGetDepth make them from the bodies'
+    centres of gravity (body p, unswapped) and each contact's r1, r2, where the rows' read
+    has both bodies' (:func:`_points`), else through those getters."""
     cdef bint swapped = _swapped(arb)
     cdef cpVect v, n, total
     cdef const char *contacts
@@ -292,11 +310,11 @@ cdef inline void _read_arbiter(const char *arb, int64_t *ints, double *f, Py_ssi
     cdef double jn, jt, sign
     cdef int count, k
     if swapped:
-        _identify(_body_b(arb), &ints[0], &pair[0], table, by_body, ids)
-        _identify(_body_a(arb), &ints[1], &pair[1], table, by_body, ids)
+        _identify(_body_b(arb), &ints[0], &pair[0], known)
+        _identify(_body_a(arb), &ints[1], &pair[1], known)
     else:
-        _identify(_body_a(arb), &ints[0], &pair[0], table, by_body, ids)
-        _identify(_body_b(arb), &ints[1], &pair[1], table, by_body, ids)
+        _identify(_body_a(arb), &ints[0], &pair[0], known)
+        _identify(_body_b(arb), &ints[1], &pair[1], known)
     count = _count(arb)
     ints[2] = count
     if count <= 0:
@@ -318,6 +336,9 @@ cdef inline void _read_arbiter(const char *arb, int64_t *ints, double *f, Py_ssi
     sign = -1.0 if swapped else 1.0
     f[2] = n.x * sign
     f[3] = n.y * sign
+    if _points(contacts, count, n, pair[1] if swapped else pair[0],
+               pair[0] if swapped else pair[1], f, known):
+        return
     for k in range(2 if count == 2 else 1):
         v = cp.point_a(<void *>arb, k)
         f[4 + 5 * k] = v.x
@@ -329,3 +350,36 @@ cdef inline void _read_arbiter(const char *arb, int64_t *ints, double *f, Py_ssi
     if count != 2:
         for k in range(9, _AF):
             f[k] = 0.0
+
+
+cdef inline bint _points(const char *contacts, int count, cpVect n, Py_ssize_t row_a,
+                         Py_ssize_t row_b, double *f, const _Known *known) noexcept nogil:
+    """An arbiter's points and depths from the rows' read, where it has both bodies'
+    centres of gravity (``row_a``, ``row_b``: the rows of its unswapped bodies a and b):
+    cpArbiterGetPointA is body a's p + r1, GetPointB body b's p + r2, GetDepth
+    ((r2 − r1) + (p_b − p_a))·n, in those operations. Whether it could."""
+    cdef const double *pa
+    cdef const double *pb
+    cdef const cpVect *r1
+    cdef const cpVect *r2
+    cdef const char *c
+    cdef int k
+    if (known.raw == NULL or row_a >= known.by_body.n or row_b >= known.by_body.n
+            or not known.centred[row_a] or not known.centred[row_b]):
+        return False
+    pa = &known.raw[_BF * row_a]
+    pb = &known.raw[_BF * row_b]
+    for k in range(2 if count == 2 else 1):
+        c = contacts + k * arbiter.contact
+        r1 = <const cpVect *>(c + arbiter.r1)
+        r2 = <const cpVect *>(c + arbiter.r2)
+        f[4 + 5 * k] = pa[0] + r1.x
+        f[5 + 5 * k] = pa[1] + r1.y
+        f[6 + 5 * k] = pb[0] + r2.x
+        f[7 + 5 * k] = pb[1] + r2.y
+        f[8 + 5 * k] = (((r2.x - r1.x) + (pb[0] - pa[0])) * n.x
+                        + ((r2.y - r1.y) + (pb[1] - pa[1])) * n.y)
+    if count != 2:
+        for k in range(9, _AF):
+            f[k] = 0.0
+    return True

@@ -165,6 +165,9 @@ cdef class Rows:
     cdef unsigned char *awake
     #: the last body read, (n, 6), and who is awake then (n): :meth:`read`'s two arrays
     cdef readonly cnp.ndarray bodies_read, bodies_awake
+    # per row, whether that read's position is its centre of gravity (chipmunk's body p:
+    # the centre of gravity is the body's origin and the position finite)
+    cdef cnp.ndarray _centred
     #: how many rows slept at the last look; counts the changes of who is awake
     cdef readonly Py_ssize_t sleepers, epoch
     # the step's arbiter read (ARBITER_INTS, ARBITER_FLOATS per arbiter, and its rows a,
@@ -267,6 +270,7 @@ cdef class Rows:
         self.bodies_awake = np.zeros(n, bool)
         self.raw = <double *>cnp.PyArray_DATA(self.bodies_read)
         self.awake = <unsigned char *>cnp.PyArray_DATA(self.bodies_awake)
+        self._centred = np.zeros(n, np.uint8)
 
     def __dealloc__(self) -> None:
         free(self.slot_id)
@@ -319,6 +323,7 @@ cdef class Rows:
         cdef double *p
         cdef cpVect v
         cdef unsigned char now
+        cdef unsigned char *centred = <unsigned char *>cnp.PyArray_DATA(self._centred)
         cdef bint changed = False
         for r in range(self.n):
             b = self.bodies[r]
@@ -334,6 +339,11 @@ cdef class Rows:
                 p[3] = v.x
                 p[4] = v.y
                 p[5] = cp.spin(b)
+                v = cp.cog(b)
+                # cpBodyGetPosition is the origin, body p the centre of gravity: the same
+                # where the centre of gravity is the origin (the transform's c·0 terms)
+                centred[r] = (v.x == 0.0 and v.y == 0.0 and isfinite(p[0])
+                              and isfinite(p[1]))
             now = not self.static[r] and not cp.sleeping(b)
             changed |= now != self.awake[r]
             self.awake[r] = now
@@ -353,12 +363,14 @@ cdef class Rows:
             self._look(True)
         return self.bodies_read, self.bodies_awake
 
-    cdef int _arbiters(self) except -1:
+    cdef int _arbiters(self, bint read=False) except -1:
         """The step's arbiters read into ``arbiter_ints``/``arbiter_floats`` (and each
         one's rows into ``pairs``) unless they were read this step, with who is awake as
         it is now: chipmunk changes its cache of arbiters between steps only as bodies
-        fall asleep (their arbiters leave it) or wake."""
+        fall asleep (their arbiters leave it) or wake. ``read``: the bodies were read
+        right before, nothing moved since (their positions give the points)."""
         cdef _Collect found
+        cdef _Known known
         cdef Py_ssize_t size
         if self.read_epoch == self.epoch:
             return 0
@@ -377,12 +389,16 @@ cdef class Rows:
             self._arbiter_ints = np.zeros((size, _AI), np.int64)
             self._arbiter_floats = np.zeros((size, _AF), np.float64)
             self._pairs = np.zeros((size, 2), np.intp)
+        known.table = &self.lookup
+        known.by_body = &self.by_body
+        known.ids = <const int64_t *>cnp.PyArray_DATA(self._ids)
+        known.raw = self.raw if read else NULL
+        known.centred = <const unsigned char *>cnp.PyArray_DATA(self._centred)
         with nogil:
             _read_arbiters(found.arbiters, found.used,
                            <int64_t *>cnp.PyArray_DATA(self._arbiter_ints),
                            <double *>cnp.PyArray_DATA(self._arbiter_floats),
-                           <Py_ssize_t *>cnp.PyArray_DATA(self._pairs), &self.lookup,
-                           &self.by_body, <const int64_t *>cnp.PyArray_DATA(self._ids))
+                           <Py_ssize_t *>cnp.PyArray_DATA(self._pairs), &known)
         self.m = found.used
         self.read_epoch = self.epoch
         return 0
@@ -994,7 +1010,7 @@ cdef class Resting:
                 rows._look(True)
         if g_size == 0.0:
             return 0
-        rows._arbiters()
+        rows._arbiters(read)
         arb = <const int64_t *>cnp.PyArray_DATA(rows._arbiter_ints)
         pairs = <const Py_ssize_t *>cnp.PyArray_DATA(rows._pairs)
         fl = <const double *>cnp.PyArray_DATA(rows._arbiter_floats)
