@@ -474,11 +474,7 @@ cdef class Rows:
         cdef double c, s, ox, oz, total = 0.0, far = 0.0, fast = 0.0
         cdef const double *read = <const double *>_numbers(raw, cnp.NPY_DOUBLE, _BF * self.n, "raw")
         cdef double *kept = <double *>_numbers(keep, cnp.NPY_DOUBLE, _BF * self.n, "keep")
-        cdef double *rows
-        if not (cnp.PyArray_NDIM(out) == 2 and cnp.PyArray_DIM(out, 0) >= self.n
-                and cnp.PyArray_DIM(out, 1) == 13):
-            raise ValueError("table: arrays do not match the rows")
-        rows = <double *>_numbers(out, cnp.NPY_DOUBLE, cnp.PyArray_SIZE(out), "out")
+        cdef double *rows = _state_rows(out, self.n)
         with nogil:
             for i in range(self.n):
                 p = &read[_BF * i]
@@ -864,6 +860,14 @@ cdef inline void *_numbers(cnp.ndarray a, int typenum, Py_ssize_t size,
     if not cnp.PyArray_IS_C_CONTIGUOUS(a) or cnp.PyArray_SIZE(a) != size:
         raise ValueError(f"{name}: expected {size} contiguous items, got {np.shape(a)}")
     return cnp.PyArray_DATA(a)
+
+
+cdef inline double *_state_rows(cnp.ndarray out, Py_ssize_t n) except NULL:
+    """``out``'s data: a contiguous float64 table of at least ``n`` state rows (13)."""
+    if not (cnp.PyArray_NDIM(out) == 2 and cnp.PyArray_DIM(out, 0) >= n
+            and cnp.PyArray_DIM(out, 1) == 13):
+        raise ValueError("table: arrays do not match the rows")
+    return <double *>_numbers(out, cnp.NPY_DOUBLE, cnp.PyArray_SIZE(out), "out")
 
 
 cdef inline void *_data(cnp.ndarray a, object dtype, Py_ssize_t size, str name) except NULL:
