@@ -2,13 +2,13 @@
 """A pymunk space's bodies and arbiters into engine rows, as C loops over chipmunk.
 
 The passes read chipmunk directly, through the functions pymunk's cffi library exports
-(``_chipmunk.pxi``): every body's pose and velocities, who sleeps, every cached
-arbiter's bodies, normal, points and impulse, and they write the forces and velocities
-the resting warm start sets, each one call with no Python per body (``pymunk.batch``,
-the public batch API, read the same numbers through the same functions, but its Python
-per call and its growable buffers were a fixed cost of each of the several reads a step
-takes). Turning the reads into our rows (the state table; sorted contact records) is one
-pass each too.
+and the arbiter fields it declares (``_chipmunk.pxi``): every body's pose and velocities,
+who sleeps, every cached arbiter's bodies, normal, points and impulse, and they write the
+forces and velocities the resting warm start sets, each one call with no Python per body
+(``pymunk.batch``, the public batch API, reads the same numbers to the bit through
+chipmunk's getters, but its Python per call and its growable buffers were a fixed cost of
+each of the several reads a step takes). Turning the reads into our rows (the state
+table; sorted contact records) is one pass each too.
 
 A :class:`Rows` is planned for a fixed list of bodies, identified by their pymunk
 ``Body.id`` (chipmunk's user data of the body, which is how an arbiter names its

@@ -21,19 +21,20 @@ as below (chipmunk's solver leaves a stack rocking at 1/60 s and 0.02 s; docs/PH
 
 Cost: a step (a substep) is the space's own step plus a few compiled passes that read
 and write chipmunk directly (the functions pymunk's cffi library exports, those
-``pymunk.batch`` calls: ``_rows``' ``_chipmunk.pxi``), no Python per body: before it,
-the preloaded rows' forces read and written (``_rows.Resting.preload``); after it, one
-body read, shared by the resting warm start, the sleep rule and a state read right after
-the step (any public method that may change the space drops it first), and one pass
-(``_rows.Resting.after``) that reads the step's arbiters, once, and writes the velocities
-of the rows it holds still; then the sleep rule (``sleep.h``'s pass; islands, when some
-body is ready, by a union-find over the same arbiters and the joints). A substep before
-a step's last keeps a copy of its arbiters: its contacts are made only when
-:meth:`contacts` asks (or before anything changes the space). Against bare pymunk taking
-the same substeps (``python -m app.bench.physics2d``, docs/PHYSICS.md): 1.23 to 1.33 of
-its time at 2,000 to 100 boxes (1.27 to 1.40 with the sleep rule on), where the reads
-alone (chipmunk's own functions, after a step whose cache holds little of them) are 7 to
-10 % of chipmunk's step.
+``pymunk.batch`` calls, and the arbiter fields it declares: ``_rows``' ``_chipmunk.pxi``),
+no Python per body: before it, the preloaded rows' forces read and written
+(``_rows.Resting.preload``); after it, one pass (``_rows.Resting.after``) that reads the
+bodies (the read the sleep rule and a state read right after the step take too; any
+public method that may change the space drops it first) and the step's arbiters, once,
+and writes the velocities of the rows it holds still; then the sleep rule (``sleep.h``'s
+pass; islands, when some body is ready, by a union-find over the same arbiters and the
+joints). A substep before a step's last hands its arbiter read over (no copy): its
+contacts are made only when :meth:`contacts` asks (or before anything changes the
+space). Against bare pymunk taking the same substeps (``python -m app.bench.physics2d``,
+docs/PHYSICS.md): 1.17 to 1.27 of its time at 2,000 to 100 boxes (1.20 to 1.32 with the
+sleep rule on), 1.10 to 1.14 of its instructions (1.14 to 1.18), where the arbiter read
+is 2.5 % of chipmunk's step's instructions and more of its time (the arbiters, their
+contacts and bodies, after a step whose cache holds little of them).
 
 Whatever the plane cannot represent is reported once per object on the logger
 ``colosseum.physics.pymunk`` with the approximation used, never raised. Bad calls

@@ -15,9 +15,10 @@ only, with no joint and touching no kinematic body, in an island (bodies touchin
 no jointed, weightless or pushed body: each preloaded weight must reach the ground through
 contacts (a platform a force holds up or a wheelchair's seat would take the preload of
 what rests on it instead). Everything after the step is one compiled pass over chipmunk
-(``_rows.Resting.after``: the arbiters read, what the contacts did, the standing, the
-held rows' velocities written), as is the preload before it (``_rows.Resting.preload``,
-the preloaded rows' forces read and written): no Python per body.
+(``_rows.Resting.after``: the bodies and arbiters read, what the contacts did, the
+standing, the held rows' velocities written), as is the preload before it
+(``_rows.Resting.preload``, the preloaded rows' forces read and written): no Python per
+body.
 
 A preloaded body resting on a face (two contact points) in equilibrium (its centre of
 mass over the span of the points it lies on, policy.h's REST_BASE_MARGIN in: a block whose
