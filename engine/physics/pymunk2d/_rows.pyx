@@ -754,6 +754,68 @@ def planar_poses(const double[:, ::1] table, const double[:, ::1] rest,
 
 
 # Long: one typed pass over the contact rows (C locals)
+def merge_substeps(const int64_t[:, ::1] rows, const int64_t[::1] sub,
+                   const double[::1] impulse):
+    """backend._merge_contacts' arithmetic in C, to the bit: which of a step's contacts
+    (``rows``: each one's rows (a, b); ``sub``: its substep, in order; ``impulse``) are
+    kept (those of each pair's last substep) and their impulses then: the pair's total
+    over its substeps (summed in the contacts' order, as numpy's bincount sums) times the
+    contact's share of what its substep gave the pair (equal shares where it gave none).
+    Returns (keep (bool, m), impulses of the kept)."""
+    cdef Py_ssize_t m = impulse.shape[0], i, p, pairs = 0, kept = 0
+    cdef uint64_t size = 16, s, key
+    if rows.shape[0] != m or sub.shape[0] != m or (m and rows.shape[1] != 2):
+        raise ValueError("merge_substeps: arrays do not match the contacts")
+    while size < 2 * <uint64_t>max(m, 1):
+        size <<= 1
+    cdef cnp.ndarray keep = np.zeros(m, bool)
+    cdef unsigned char *out = <unsigned char *>cnp.PyArray_DATA(keep)
+    cdef cnp.ndarray slot_key = np.empty(size, np.uint64)
+    cdef cnp.ndarray slot_pair = np.full(size, -1, np.intp)
+    cdef cnp.ndarray of = np.empty(max(m, 1), np.intp)
+    cdef cnp.ndarray sums = np.zeros((4, max(m, 1)))  # total, own, count, last substep
+    cdef uint64_t *keys = <uint64_t *>cnp.PyArray_DATA(slot_key)
+    cdef Py_ssize_t *slots = <Py_ssize_t *>cnp.PyArray_DATA(slot_pair)
+    cdef Py_ssize_t *pair = <Py_ssize_t *>cnp.PyArray_DATA(of)
+    cdef double *total = <double *>cnp.PyArray_DATA(sums)
+    cdef double *own = total + max(m, 1)
+    cdef double *count = own + max(m, 1)
+    cdef double *last = count + max(m, 1)
+    with nogil:
+        for i in range(m):  # each pair of rows its own index (open addressing)
+            key = (<uint64_t>(rows[i, 0] + 1) << 32) ^ <uint64_t>(rows[i, 1] + 1)
+            s = _mix(key) & (size - 1)
+            while slots[s] != -1 and keys[s] != key:
+                s = (s + 1) & (size - 1)
+            if slots[s] == -1:
+                keys[s] = key
+                slots[s] = pairs
+                last[pairs] = -1.0
+                pairs += 1
+            p = pair[i] = slots[s]
+            total[p] += impulse[i]
+            if sub[i] > last[p]:
+                last[p] = sub[i]
+        for i in range(m):
+            p = pair[i]
+            if sub[i] == last[p]:
+                out[i] = 1
+                own[p] += impulse[i]
+                count[p] += 1.0
+                kept += 1
+    cdef cnp.ndarray result = np.empty(kept)
+    cdef double *r = <double *>cnp.PyArray_DATA(result)
+    kept = 0
+    with nogil:
+        for i in range(m):
+            if out[i]:
+                p = pair[i]
+                r[kept] = total[p] * (impulse[i] / own[p] if own[p] > 0.0 else 1.0 / count[p])
+                kept += 1
+    return keep, result
+
+
+# Long: one typed pass over the contact rows (C locals)
 def carried_down(const int64_t[::1] rows_a, const int64_t[::1] rows_b,
                  const double[:] impulse, const double[::1] normal_up,
                  const double[::1] load, int rounds) -> cnp.ndarray:

@@ -1215,22 +1215,15 @@ def _merge_contacts(parts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndar
     """A step's contacts from its substeps' (each: contacts and their rows): each pair of
     bodies with the points it had in the last substep it touched in, and the impulses of
     all its substeps (shared among those points as that substep shared its own; equally
-    where it had none), so an impact in an early substep is reported whole."""
+    where it had none), so an impact in an early substep is reported whole. One compiled
+    pass (:func:`_rows.merge_substeps`)."""
     c = np.concatenate([part[0] for part in parts])
     rows = np.concatenate([part[1] for part in parts])
-    sub = np.concatenate([np.full(len(part[0]), i) for i, part in enumerate(parts)])
-    span = int(rows.max(initial=0)) + 2  # rows run from -1 (static geometry)
-    _, pair = np.unique((rows[:, 0] + 1) * span + rows[:, 1] + 1, return_inverse=True)
-    pair = pair.reshape(-1)
-    total = np.bincount(pair, weights=c["impulse"])
-    last = np.full(len(total), -1)
-    np.maximum.at(last, pair, sub)
-    keep = sub == last[pair]
-    out, kept = c[keep].copy(), pair[keep]
-    own = np.bincount(kept, weights=out["impulse"], minlength=len(total))[kept]
-    count = np.bincount(kept, minlength=len(total))[kept]
-    share = np.divide(out["impulse"], own, out=1.0 / count, where=own > 0.0)
-    out["impulse"] = total[kept] * share
+    sub = np.repeat(np.arange(len(parts), dtype=np.int64), [len(part[0]) for part in parts])
+    keep, impulse = _rows.merge_substeps(np.ascontiguousarray(rows, np.int64), sub,
+                                         np.ascontiguousarray(c["impulse"]))
+    out = c[keep]
+    out["impulse"] = impulse
     return out, rows[keep]
 
 
