@@ -771,7 +771,7 @@ def merge_substeps(const int64_t[:, ::1] rows, const int64_t[::1] sub,
     cdef cnp.ndarray keep = np.zeros(m, bool)
     cdef unsigned char *out = <unsigned char *>cnp.PyArray_DATA(keep)
     cdef cnp.ndarray slot_key = np.empty(size, np.uint64)
-    cdef cnp.ndarray slot_pair = np.full(size, -1, np.intp)
+    cdef cnp.ndarray slot_pair = np.empty(size, np.intp)
     cdef cnp.ndarray of = np.empty(max(m, 1), np.intp)
     cdef cnp.ndarray sums = np.zeros((4, max(m, 1)))  # total, own, count, last substep
     cdef uint64_t *keys = <uint64_t *>cnp.PyArray_DATA(slot_key)
@@ -782,6 +782,8 @@ def merge_substeps(const int64_t[:, ::1] rows, const int64_t[::1] sub,
     cdef double *count = own + max(m, 1)
     cdef double *last = count + max(m, 1)
     with nogil:
+        for s in range(size):
+            slots[s] = -1
         for i in range(m):  # each pair of rows its own index (open addressing)
             key = (<uint64_t>(rows[i, 0] + 1) << 32) ^ <uint64_t>(rows[i, 1] + 1)
             s = _mix(key) & (size - 1)
