@@ -770,10 +770,9 @@ def merge_substeps(const int64_t[:, ::1] rows, const int64_t[::1] sub,
         size <<= 1
     cdef cnp.ndarray keep = np.zeros(m, bool)
     cdef unsigned char *out = <unsigned char *>cnp.PyArray_DATA(keep)
-    cdef cnp.ndarray slot_key = np.empty(size, np.uint64)
-    cdef cnp.ndarray slot_pair = np.empty(size, np.intp)
-    cdef cnp.ndarray of = np.empty(max(m, 1), np.intp)
-    cdef cnp.ndarray sums = np.zeros((4, max(m, 1)))  # total, own, count, last substep
+    cdef cnp.ndarray slot_key = np.empty(size, np.uint64), slot_pair = np.empty(size, np.intp)
+    # each contact's pair; per pair its total, own (kept) sum, count and last substep
+    cdef cnp.ndarray of = np.empty(max(m, 1), np.intp), sums = np.zeros((4, max(m, 1)))
     cdef uint64_t *keys = <uint64_t *>cnp.PyArray_DATA(slot_key)
     cdef Py_ssize_t *slots = <Py_ssize_t *>cnp.PyArray_DATA(slot_pair)
     cdef Py_ssize_t *pair = <Py_ssize_t *>cnp.PyArray_DATA(of)
