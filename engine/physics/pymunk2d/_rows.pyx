@@ -753,67 +753,99 @@ def planar_poses(const double[:, ::1] table, const double[:, ::1] rest,
     return flagged
 
 
+cdef Py_ssize_t _gather(list parts, Contact *c, int64_t *rows, int64_t *sub) except -1:
+    """The substeps' contacts and their rows one after another into ``c``, ``rows``, and
+    each one's substep into ``sub``; how many."""
+    cdef Py_ssize_t at = 0, k, i, size
+    cdef cnp.ndarray records, pairs
+    for k, (records, pairs) in enumerate(parts):
+        size = cnp.PyArray_DIM(records, 0)
+        if (records.dtype.itemsize != sizeof(Contact) or not cnp.PyArray_IS_C_CONTIGUOUS(records)
+                or cnp.PyArray_SIZE(pairs) != 2 * size):
+            raise ValueError("merge_substeps: a substep's contacts are not contact rows")
+        memcpy(&c[at], cnp.PyArray_DATA(records), size * sizeof(Contact))
+        memcpy(&rows[2 * at], _numbers(pairs, cnp.NPY_INT64, 2 * size, "rows"),
+               2 * size * sizeof(int64_t))
+        for i in range(at, at + size):
+            sub[i] = k
+        at += size
+    return at
+
+
+cdef Py_ssize_t _pairs_of(const int64_t *rows, Py_ssize_t m, Py_ssize_t *pair,
+                          uint64_t *keys, Py_ssize_t *slots, uint64_t size) noexcept nogil:
+    """Each contact's pair of rows (a, b) as an index (open addressing over ``size``
+    slots); how many pairs."""
+    cdef Py_ssize_t i, pairs = 0
+    cdef uint64_t s, key
+    for s in range(size):
+        slots[s] = -1
+    for i in range(m):
+        key = (<uint64_t>(rows[2 * i] + 1) << 32) ^ <uint64_t>(rows[2 * i + 1] + 1)
+        s = _mix(key) & (size - 1)
+        while slots[s] != -1 and keys[s] != key:
+            s = (s + 1) & (size - 1)
+        if slots[s] == -1:
+            keys[s] = key
+            slots[s] = pairs
+            pairs += 1
+        pair[i] = slots[s]
+    return pairs
+
+
 # Long: one typed pass over the contact rows (C locals)
-def merge_substeps(const int64_t[:, ::1] rows, const int64_t[::1] sub,
-                   const double[::1] impulse):
-    """backend._merge_contacts' arithmetic in C, to the bit: which of a step's contacts
-    (``rows``: each one's rows (a, b); ``sub``: its substep, in order; ``impulse``) are
-    kept (those of each pair's last substep) and their impulses then: the pair's total
-    over its substeps (summed in the contacts' order, as numpy's bincount sums) times the
-    contact's share of what its substep gave the pair (equal shares where it gave none).
-    Returns (keep (bool, m), impulses of the kept)."""
-    cdef Py_ssize_t m = impulse.shape[0], i, p, pairs = 0, kept = 0
-    cdef uint64_t size = 16, s, key
-    if rows.shape[0] != m or sub.shape[0] != m or (m and rows.shape[1] != 2):
-        raise ValueError("merge_substeps: arrays do not match the contacts")
-    while size < 2 * <uint64_t>max(m, 1):
+def merge_substeps(list parts, contact_dtype):
+    """backend._merge_contacts' arithmetic in C, to the bit: a step's contacts from its
+    substeps' (each: contact rows and their rows (a, b)), each pair with the points of
+    its last substep and the pair's total impulse over its substeps (summed in the
+    contacts' order, as numpy's bincount sums) times each point's share of what that
+    substep gave the pair (equal shares where it gave none). Returns (contacts, rows)."""
+    cdef Py_ssize_t m = sum(len(part[0]) for part in parts), cap = max(m, 1), i, p, kept = 0
+    cdef uint64_t size = 16
+    while size < 2 * <uint64_t>cap:
         size <<= 1
-    cdef cnp.ndarray keep = np.zeros(m, bool)
-    cdef unsigned char *out = <unsigned char *>cnp.PyArray_DATA(keep)
-    cdef cnp.ndarray slot_key = np.empty(size, np.uint64), slot_pair = np.empty(size, np.intp)
-    # each contact's pair; per pair its total, own (kept) sum, count and last substep
-    cdef cnp.ndarray of = np.empty(max(m, 1), np.intp), sums = np.zeros((4, max(m, 1)))
-    cdef uint64_t *keys = <uint64_t *>cnp.PyArray_DATA(slot_key)
-    cdef Py_ssize_t *slots = <Py_ssize_t *>cnp.PyArray_DATA(slot_pair)
-    cdef Py_ssize_t *pair = <Py_ssize_t *>cnp.PyArray_DATA(of)
+    cdef cnp.ndarray gathered = np.empty(cap, contact_dtype), rows = np.empty((cap, 2), np.int64)
+    cdef cnp.ndarray ints = np.empty((3, cap), np.int64), slots = np.empty(2 * size, np.int64)
+    cdef cnp.ndarray sums = np.zeros((4, cap))  # per pair: total, own (kept), count, last
+    cdef Contact *c = <Contact *>cnp.PyArray_DATA(gathered)
+    cdef int64_t *r = <int64_t *>cnp.PyArray_DATA(rows)
+    cdef int64_t *sub = <int64_t *>cnp.PyArray_DATA(ints)
+    cdef Py_ssize_t *pair = <Py_ssize_t *>(sub + cap)
+    cdef unsigned char *keep = <unsigned char *>(sub + 2 * cap)
     cdef double *total = <double *>cnp.PyArray_DATA(sums)
-    cdef double *own = total + max(m, 1)
-    cdef double *count = own + max(m, 1)
-    cdef double *last = count + max(m, 1)
+    cdef double *own = total + cap
+    cdef double *count = own + cap
+    cdef double *last = count + cap
+    _gather(parts, c, r, sub)
     with nogil:
-        for s in range(size):
-            slots[s] = -1
-        for i in range(m):  # each pair of rows its own index (open addressing)
-            key = (<uint64_t>(rows[i, 0] + 1) << 32) ^ <uint64_t>(rows[i, 1] + 1)
-            s = _mix(key) & (size - 1)
-            while slots[s] != -1 and keys[s] != key:
-                s = (s + 1) & (size - 1)
-            if slots[s] == -1:
-                keys[s] = key
-                slots[s] = pairs
-                last[pairs] = -1.0
-                pairs += 1
-            p = pair[i] = slots[s]
-            total[p] += impulse[i]
-            if sub[i] > last[p]:
-                last[p] = sub[i]
+        for p in range(_pairs_of(r, m, pair, <uint64_t *>cnp.PyArray_DATA(slots),
+                                 <Py_ssize_t *>cnp.PyArray_DATA(slots) + size, size)):
+            last[p] = -1.0
+        for i in range(m):
+            total[pair[i]] += c[i].impulse
+            last[pair[i]] = max(last[pair[i]], <double>sub[i])
         for i in range(m):
             p = pair[i]
-            if sub[i] == last[p]:
-                out[i] = 1
-                own[p] += impulse[i]
+            keep[i] = sub[i] == last[p]
+            if keep[i]:
+                own[p] += c[i].impulse
                 count[p] += 1.0
                 kept += 1
-    cdef cnp.ndarray result = np.empty(kept)
-    cdef double *r = <double *>cnp.PyArray_DATA(result)
+    cdef cnp.ndarray out = np.empty(kept, contact_dtype), out_rows = np.empty((kept, 2), np.int64)
+    cdef Contact *o = <Contact *>cnp.PyArray_DATA(out)
+    cdef int64_t *orow = <int64_t *>cnp.PyArray_DATA(out_rows)
     kept = 0
     with nogil:
         for i in range(m):
-            if out[i]:
+            if keep[i]:
                 p = pair[i]
-                r[kept] = total[p] * (impulse[i] / own[p] if own[p] > 0.0 else 1.0 / count[p])
+                o[kept] = c[i]
+                o[kept].impulse = total[p] * (c[i].impulse / own[p] if own[p] > 0.0
+                                              else 1.0 / count[p])
+                orow[2 * kept] = r[2 * i]
+                orow[2 * kept + 1] = r[2 * i + 1]
                 kept += 1
-    return keep, result
+    return out, out_rows
 
 
 # Long: one typed pass over the contact rows (C locals)

@@ -1217,19 +1217,7 @@ def _merge_contacts(parts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndar
     all its substeps (shared among those points as that substep shared its own; equally
     where it had none), so an impact in an early substep is reported whole. One compiled
     pass (:func:`_rows.merge_substeps`)."""
-    sizes = [len(part[0]) for part in parts]
-    c = np.empty(sum(sizes), parts[0][0].dtype)  # filled by slices: concatenate would
-    at = 0  # promote the record's fields each call
-    for part, size in zip(parts, sizes, strict=True):
-        c[at:at + size] = part[0]
-        at += size
-    rows = np.concatenate([part[1] for part in parts])
-    sub = np.repeat(np.arange(len(parts), dtype=np.int64), sizes)
-    keep, impulse = _rows.merge_substeps(np.ascontiguousarray(rows, np.int64), sub,
-                                         np.ascontiguousarray(c["impulse"]))
-    out = c[keep]
-    out["impulse"] = impulse
-    return out, rows[keep]
+    return _rows.merge_substeps(parts, CONTACT_DTYPE)
 
 
 def _may_sleep_alone(body: pymunk.Body) -> bool:
