@@ -31,7 +31,7 @@ pass; islands, when some body is ready, by a union-find over the same arbiters a
 joints). A substep before a step's last hands its arbiter read over (no copy): its
 contacts are made only when :meth:`contacts` asks (or before anything changes the
 space). Against bare pymunk taking the same substeps (``python -m app.bench.physics2d``,
-docs/PHYSICS.md): 1.16 to 1.18 of its time at 2,000 to 100 boxes (1.20 to 1.24 with the
+docs/PHYSICS.md): 1.17 to 1.19 of its time at 100 to 2,000 boxes (1.21 to 1.23 with the
 sleep rule on), 1.10 to 1.14 of its instructions (1.14 to 1.18), where the arbiter read
 is 2.5 % of chipmunk's step's instructions and more of its time (the arbiters, their
 contacts and bodies, after a step whose cache holds little of them).
