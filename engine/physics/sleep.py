@@ -235,7 +235,7 @@ class SleepRule:
         """
         if not self._pass.advance(dt, math.exp(-dt / SMOOTHING), self.time,
                                   None if woken is None else woken.view(np.uint8)):
-            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+            return _NONE, _NONE
         if islands is not None:
             labels = islands()
         elif edges is not None:
@@ -306,6 +306,12 @@ class SleepRule:
             self.reference[:, row] = state.reference
             self.started[row] = True
         self.timer[row] = state.timer
+
+
+#: :meth:`SleepRule.update`'s rows and labels on a step where no body is ready (most
+#: steps): one read-only empty array, not two new ones each step.
+_NONE = np.zeros(0, np.int64)
+_NONE.setflags(write=False)
 
 
 def _bounds(linear: float, angular: float) -> np.ndarray:

@@ -313,26 +313,61 @@ def _batch_bodies(space: pymunk.Space) -> dict[int, np.ndarray]:
     return {int(i): row.copy() for i, row in zip(ids, rows, strict=True)}
 
 
-def test_the_direct_chipmunk_reads_are_pymunk_batch_s_to_the_bit(kit) -> None:
+def _swap_arbiters(space: pymunk.Space) -> int:
+    """Turn every cached arbiter's ``swapped`` flag over (through pymunk's declaration of
+    cpArbiter); how many are swapped now. chipmunk swaps an arbiter whose collision
+    handler names the pair's types the other way round; pymunk 7 looks its handlers up by
+    the ordered pair, so none is found swapped after a step, yet the getters honour it."""
+    found = [0]
+
+    @pymunk.ffi.callback("void(*)(struct cpArbiter *, void *)")
+    def turn(arbiter, _data) -> None:  # noqa: ANN001 (cffi pointers)
+        arbiter.swapped = not arbiter.swapped
+        found[0] += bool(arbiter.swapped)
+
+    pymunk.cp.cpSpaceEachCachedArbiter(space._space, turn, pymunk.ffi.NULL)
+    return found[0]
+
+
+@pytest.mark.parametrize("swap", [False, True], ids=["as-stepped", "swapped"])
+def test_the_direct_chipmunk_reads_are_pymunk_batch_s_to_the_bit(kit, swap: bool) -> None:
     """The compiled passes read chipmunk through pymunk's cffi library (_chipmunk.pxi):
     what they read is what pymunk.batch reads, to the bit, arbiter by arbiter in
     chipmunk's order (those without contacts: their ids and count) and body by body,
-    asleep or awake. A pymunk whose chipmunk reads otherwise fails here."""
+    asleep or awake. An arbiter's bodies, count, normal and total impulse are read from
+    its fields with its getters' arithmetic, swapped arbiters too (the getters turn their
+    bodies, normal and impulse round; ``swap``: every arbiter swapped for the reads), and
+    in the step's own read its points and depths from the bodies' positions the step's
+    body read took (their centres of gravity). A pymunk whose chipmunk reads otherwise
+    fails here."""
     backend = PymunkBackend()
     backend.configure(WorldSettings(auto_sleep=True))
     kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
     for i in range(60):  # boxes and balls falling onto each other; some settle and sleep
         kit.add(backend, i, kit.box((0.4, 0.4, 0.4)) if i % 2 else kit.sphere(0.2),
                 (0.5 * (i % 12), 0.0, 0.2 + 0.45 * (i // 12)))
-    checked = sleepers = 0
+    checked = sleepers = turned = 0
     for step in range(400):
         backend.step(0.01)
         if step % 25:
             continue
         reader = backend._space_reader()
-        reader.new_step()  # read afresh, not the step's
+        # the step's own read (its points from the step's body read), then afresh
         ints, floats = reader.arbiters()
         theirs_ints, theirs_floats = _batch_arbiters(backend._space)
+        assert np.array_equal(ints, theirs_ints)
+        assert np.array_equal(floats[ints[:, 2] > 0], theirs_floats[ints[:, 2] > 0])
+        reader.new_step()
+        swapped = _swap_arbiters(backend._space) if swap else 0
+        turned += swapped
+        ints, floats = (a.copy() for a in reader.arbiters())
+        theirs_ints, theirs_floats = _batch_arbiters(backend._space)
+        if swap:
+            assert swapped == len(ints)
+            _swap_arbiters(backend._space)
+            reader.new_step()
+            unswapped = reader.arbiters()[0]
+            assert np.array_equal(unswapped[:, :2], theirs_ints[:, 1::-1])
         assert np.array_equal(ints, theirs_ints)
         touching = ints[:, 2] > 0
         assert np.array_equal(floats[touching], theirs_floats[touching])
@@ -344,4 +379,42 @@ def test_the_direct_chipmunk_reads_are_pymunk_batch_s_to_the_bit(kit) -> None:
                                   and rec.body.body_type != pymunk.Body.STATIC)
         checked += int(touching.sum())
         sleepers += reader.sleepers
-    assert checked > 150 and sleepers > 0
+    assert checked > 150 and sleepers > 0 and (turned > 150) == swap
+
+
+_DECLARED = """
+struct cpVect { double x, y; };
+struct cpBody;
+enum cpArbiterState { CP_ARBITER_STATE_FIRST_COLLISION, CP_ARBITER_STATE_NORMAL,
+    CP_ARBITER_STATE_IGNORE, CP_ARBITER_STATE_CACHED, CP_ARBITER_STATE_INVALIDATED };
+struct cpContact { struct cpVect r1, r2; double nMass, tMass, bounce, jnAcc, jtAcc; };
+struct cpArbiter { struct cpBody *body_a, *body_b; %s; struct cpContact *contacts;
+    struct cpVect n; unsigned char swapped; enum cpArbiterState state; };
+"""
+
+
+@pytest.mark.parametrize(("count", "message"), [
+    ("int count", None),
+    ("int counted", "declares no struct cpArbiter field count"),
+    ("short count", "declares struct cpArbiter's count as short, not int")])
+def test_the_arbiter_layout_is_pymunk_s_declaration_checked_by_name(count: str,
+                                                                    message: str | None):
+    """The fields the passes read are taken from pymunk's cffi declaration at import:
+    their offsets as declared, and a pymunk that lacks one, or declares it otherwise,
+    fails by name (here a declaration of our own stands in for pymunk's)."""
+    import cffi
+
+    from engine.physics.pymunk2d import _rows
+
+    ffi = cffi.FFI()
+    ffi.cdef(_DECLARED % count)
+    if message is None:
+        layout = _rows.chipmunk_layout(ffi)
+        assert layout["struct cpArbiter.count"] == 16
+        assert layout["struct cpContact.jtAcc"] == 64 and layout["contact"] == 72
+        assert layout["cached"] == 3
+        assert _rows.chipmunk_layout(pymunk.ffi)["struct cpArbiter.swapped"] == \
+            pymunk.ffi.offsetof("struct cpArbiter", "swapped")
+    else:
+        with pytest.raises(ImportError, match=message):
+            _rows.chipmunk_layout(ffi)

@@ -79,3 +79,48 @@ def test_contacts_report_every_substep_s_impulse(dt: float) -> None:
         still = abs(float(bench.Probe(backend)().velocity(1)[2]))
     assert still < 1e-3
     assert total == pytest.approx(mass * bench.G * seconds, rel=0.01)
+
+
+def _merged_by_numpy(parts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray,
+                                                                          np.ndarray]:
+    """The substeps' contacts merged as the backend merged them in numpy before its
+    compiled pass (_rows.merge_substeps): the reference it must equal to the bit."""
+    c = np.concatenate([part[0] for part in parts])
+    rows = np.concatenate([part[1] for part in parts])
+    sub = np.concatenate([np.full(len(part[0]), i) for i, part in enumerate(parts)])
+    span = int(rows.max(initial=0)) + 2
+    _, pair = np.unique((rows[:, 0] + 1) * span + rows[:, 1] + 1, return_inverse=True)
+    pair = pair.reshape(-1)
+    total = np.bincount(pair, weights=c["impulse"])
+    last = np.full(len(total), -1)
+    np.maximum.at(last, pair, sub)
+    keep = sub == last[pair]
+    out, kept = c[keep].copy(), pair[keep]
+    own = np.bincount(kept, weights=out["impulse"], minlength=len(total))[kept]
+    count = np.bincount(kept, minlength=len(total))[kept]
+    share = np.divide(out["impulse"], own, out=1.0 / count, where=own > 0.0)
+    out["impulse"] = total[kept] * share
+    return out, rows[keep]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_merging_substeps_contacts_is_the_numpy_formulation_to_the_bit(seed: int) -> None:
+    """Pairs met in one substep or several, some with no impulse in their last one, the
+    static side (-1) among them: the compiled merge keeps the same contacts with the same
+    impulses, bit for bit."""
+    from engine.physics.backend import CONTACT_DTYPE
+    from engine.physics.pymunk2d.backend import _merge_contacts
+
+    rng = np.random.default_rng(seed)
+    parts = []
+    for _ in range(int(rng.integers(2, 5))):
+        m = int(rng.integers(0, 60))
+        c = np.zeros(m, CONTACT_DTYPE)
+        c["impulse"] = rng.exponential(1.0, m) * (rng.random(m) > 0.2)
+        c["depth"] = rng.random(m)
+        rows = rng.integers(-1, 12, (m, 2)).astype(np.int64)
+        parts.append((c, rows))
+    ours, theirs = _merge_contacts(parts), _merged_by_numpy(parts)
+    assert ours[0].tobytes() == theirs[0].tobytes()
+    assert np.array_equal(ours[1], theirs[1])
+    assert len(ours[0]) < sum(len(part[0]) for part in parts)

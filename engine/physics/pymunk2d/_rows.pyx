@@ -2,13 +2,13 @@
 """A pymunk space's bodies and arbiters into engine rows, as C loops over chipmunk.
 
 The passes read chipmunk directly, through the functions pymunk's cffi library exports
-(``_chipmunk.pxi``): every body's pose and velocities, who sleeps, every cached
-arbiter's bodies, normal, points and impulse, and they write the forces and velocities
-the resting warm start sets, each one call with no Python per body (``pymunk.batch``,
-the public batch API, read the same numbers through the same functions, but its Python
-per call and its growable buffers were a fixed cost of each of the several reads a step
-takes). Turning the reads into our rows (the state table; sorted contact records) is one
-pass each too.
+and the arbiter fields it declares (``_chipmunk.pxi``): every body's pose and velocities,
+who sleeps, every cached arbiter's bodies, normal, points and impulse, and they write the
+forces and velocities the resting warm start sets, each one call with no Python per body
+(``pymunk.batch``, the public batch API, reads the same numbers to the bit through
+chipmunk's getters, but its Python per call and its growable buffers were a fixed cost of
+each of the several reads a step takes). Turning the reads into our rows (the state
+table; sorted contact records) is one pass each too.
 
 A :class:`Rows` is planned for a fixed list of bodies, identified by their pymunk
 ``Body.id`` (chipmunk's user data of the body, which is how an arbiter names its
@@ -50,7 +50,8 @@ cdef enum:  # the same counts, for code without the GIL
 
 
 cdef struct _Table:
-    # body id -> row: open addressing with linear probing (slot_row -1: empty)
+    # body id (or cpBody pointer) -> row: open addressing with linear probing (slot_row
+    # -1: empty)
     const uint64_t *slot_id
     const Py_ssize_t *slot_row
     uint64_t mask
@@ -62,6 +63,21 @@ cdef inline uint64_t _mix(uint64_t h) noexcept nogil:
     h = (h ^ (h >> 30)) * <uint64_t>0xBF58476D1CE4E5B9
     h = (h ^ (h >> 27)) * <uint64_t>0x94D049BB133111EB
     return h ^ (h >> 31)
+
+
+cdef void _fill(uint64_t *slot_id, Py_ssize_t *slot_row, uint64_t mask, const uint64_t *ids,
+                Py_ssize_t n) noexcept nogil:
+    """A table of ``mask + 1`` slots (at most a quarter full) from row ``i`` to ``ids[i]``."""
+    cdef uint64_t s
+    cdef Py_ssize_t i
+    for s in range(mask + 1):
+        slot_row[s] = -1
+    for i in range(n):
+        s = _mix(ids[i]) & mask
+        while slot_row[s] != -1:
+            s = (s + 1) & mask
+        slot_id[s] = ids[i]
+        slot_row[s] = i
 
 
 cdef inline Py_ssize_t _row_of(const _Table *t, uint64_t body_id) noexcept nogil:
@@ -122,6 +138,10 @@ cdef class Rows:
     cdef uint64_t *slot_id
     cdef Py_ssize_t *slot_row
     cdef _Table lookup  # the same, for the passes
+    cdef uint64_t *slot_body  # cpBody pointer -> row, likewise
+    cdef Py_ssize_t *slot_body_row
+    cdef _Table by_body
+    cdef cnp.ndarray _ids  # each row's body id (chipmunk's user data of its body)
     cdef Py_ssize_t *run_end
     # contacts' scratch, kept between calls (grown as needed): records, side-a row, side-b
     cdef Contact *scratch
@@ -143,17 +163,25 @@ cdef class Rows:
     # the last read (n, 6) and who is awake (n), and the arrays behind them
     cdef double *raw
     cdef unsigned char *awake
-    cdef cnp.ndarray _raw, _awake
+    #: the last body read, (n, 6), and who is awake then (n): :meth:`read`'s two arrays
+    cdef readonly cnp.ndarray bodies_read, bodies_awake
+    # per row, whether that read's position is its centre of gravity (chipmunk's body p:
+    # the centre of gravity is the body's origin and the position finite)
+    cdef cnp.ndarray _centred
     #: how many rows slept at the last look; counts the changes of who is awake
     cdef readonly Py_ssize_t sleepers, epoch
     # the step's arbiter read (ARBITER_INTS, ARBITER_FLOATS per arbiter, and its rows a,
     # b), grown as needed: m arbiters, read when ``epoch`` was read_epoch (-1: none)
     cdef cnp.ndarray _arbiter_ptrs, _arbiter_ints, _arbiter_floats, _pairs
+    # (ints, floats) buffers handed over by :meth:`keep_arbiters`, and those free again
+    cdef list _kept, _spare
     cdef Py_ssize_t m, read_epoch
 
     def __cinit__(self) -> None:
         self.slot_id = NULL
         self.slot_row = NULL
+        self.slot_body = NULL
+        self.slot_body_row = NULL
         self.run_end = NULL
         self.scratch = NULL
         self.scratch_a = NULL
@@ -162,8 +190,7 @@ cdef class Rows:
 
     def __init__(self, ids, keys, static, y, rest, cog, contact_dtype, bodies=None,
                  owners=None, space=0) -> None:
-        cdef Py_ssize_t i, n = len(ids)
-        cdef uint64_t size = 16, s
+        cdef Py_ssize_t n = len(ids)
         if np.dtype(contact_dtype).itemsize != sizeof(Contact):
             raise ValueError("contact dtype does not match the Contact record")
         if bodies is None:  # no space behind the rows: the passes over given arrays only
@@ -190,27 +217,36 @@ cdef class Rows:
         self.any_cog = bool(np.any(self._cog))
         self.contact_dtype = contact_dtype
         self.n = n
-        # id -> row: open addressing with linear probing, at most a quarter full
+        self._tables(ids)
+
+    cdef void _tables(self, ids) except *:
+        """Body id -> row and cpBody pointer -> row (open addressing with linear probing,
+        at most a quarter full), and the scratch of the contacts' sort."""
+        cdef Py_ssize_t n = self.n
+        cdef uint64_t size = 16
         while size < 4 * <uint64_t>n:
             size <<= 1
         self.mask = size - 1
+        self._ids = np.ascontiguousarray(ids, np.int64).reshape(n)
         self.slot_id = <uint64_t *>malloc(size * sizeof(uint64_t))
         self.slot_row = <Py_ssize_t *>malloc(size * sizeof(Py_ssize_t))
+        self.slot_body = <uint64_t *>malloc(size * sizeof(uint64_t))
+        self.slot_body_row = <Py_ssize_t *>malloc(size * sizeof(Py_ssize_t))
         self.run_end = <Py_ssize_t *>malloc((n + 1) * sizeof(Py_ssize_t))
-        if self.slot_id == NULL or self.slot_row == NULL or self.run_end == NULL:
+        if (self.slot_id == NULL or self.slot_row == NULL or self.slot_body == NULL
+                or self.slot_body_row == NULL or self.run_end == NULL):
             raise MemoryError
-        for s in range(size):
-            self.slot_row[s] = -1
-        for i in range(n):
-            s = _mix(<uint64_t>ids[i]) & self.mask
-            while self.slot_row[s] != -1:
-                s = (s + 1) & self.mask
-            self.slot_id[s] = <uint64_t>ids[i]
-            self.slot_row[s] = i
+        _fill(self.slot_id, self.slot_row, self.mask,
+              <const uint64_t *>cnp.PyArray_DATA(self._ids), n)
+        _fill(self.slot_body, self.slot_body_row, self.mask, <const uint64_t *>self.bodies, n)
         self.lookup.slot_id = self.slot_id
         self.lookup.slot_row = self.slot_row
         self.lookup.mask = self.mask
         self.lookup.n = n
+        self.by_body.slot_id = self.slot_body
+        self.by_body.slot_row = self.slot_body_row
+        self.by_body.mask = self.mask
+        self.by_body.n = n
 
     cdef void _chipmunk(self, bodies, owners, space) except *:
         """The rows' cpBody and cpSpace (held alive by ``owners``), and the buffers the
@@ -224,18 +260,23 @@ cdef class Rows:
         self._arbiter_floats = np.zeros((0, _AF), np.float64)
         self._pairs = np.zeros((0, 2), np.intp)
         self._arbiter_ptrs = np.zeros(0, np.uintp)
+        self._kept = []
+        self._spare = []
         self.m = 0
         self.read_epoch = -1
         self.epoch = 0
         self.sleepers = 0
-        self._raw = np.zeros((n, _BF))
-        self._awake = np.zeros(n, bool)
-        self.raw = <double *>cnp.PyArray_DATA(self._raw)
-        self.awake = <unsigned char *>cnp.PyArray_DATA(self._awake)
+        self.bodies_read = np.zeros((n, _BF))
+        self.bodies_awake = np.zeros(n, bool)
+        self.raw = <double *>cnp.PyArray_DATA(self.bodies_read)
+        self.awake = <unsigned char *>cnp.PyArray_DATA(self.bodies_awake)
+        self._centred = np.zeros(n, np.uint8)
 
     def __dealloc__(self) -> None:
         free(self.slot_id)
         free(self.slot_row)
+        free(self.slot_body)
+        free(self.slot_body_row)
         free(self.run_end)
         free(self.scratch)
         free(self.scratch_a)
@@ -282,6 +323,7 @@ cdef class Rows:
         cdef double *p
         cdef cpVect v
         cdef unsigned char now
+        cdef unsigned char *centred = <unsigned char *>cnp.PyArray_DATA(self._centred)
         cdef bint changed = False
         for r in range(self.n):
             b = self.bodies[r]
@@ -297,6 +339,11 @@ cdef class Rows:
                 p[3] = v.x
                 p[4] = v.y
                 p[5] = cp.spin(b)
+                v = cp.cog(b)
+                # cpBodyGetPosition is the origin, body p the centre of gravity: the same
+                # where the centre of gravity is the origin (the transform's c·0 terms)
+                centred[r] = (v.x == 0.0 and v.y == 0.0 and isfinite(p[0])
+                              and isfinite(p[1]))
             now = not self.static[r] and not cp.sleeping(b)
             changed |= now != self.awake[r]
             self.awake[r] = now
@@ -309,18 +356,21 @@ cdef class Rows:
     def read(self):
         """Every row's (x, z, θ, vx, vz, ω) as chipmunk has them (velocity of the centre
         of mass), row by row, and whether it is awake (neither static nor asleep): the
-        arrays :attr:`raw` (n, 6) and :attr:`awake` (n,), the same two each time."""
+        arrays :attr:`bodies_read` (n, 6) and :attr:`bodies_awake` (n,), the same two each
+        time."""
         self._bound()
         with nogil:
             self._look(True)
-        return self._raw, self._awake
+        return self.bodies_read, self.bodies_awake
 
-    cdef int _arbiters(self) except -1:
+    cdef int _arbiters(self, bint read=False) except -1:
         """The step's arbiters read into ``arbiter_ints``/``arbiter_floats`` (and each
         one's rows into ``pairs``) unless they were read this step, with who is awake as
         it is now: chipmunk changes its cache of arbiters between steps only as bodies
-        fall asleep (their arbiters leave it) or wake."""
+        fall asleep (their arbiters leave it) or wake. ``read``: the bodies were read
+        right before, nothing moved since (their positions give the points)."""
         cdef _Collect found
+        cdef _Known known
         cdef Py_ssize_t size
         if self.read_epoch == self.epoch:
             return 0
@@ -339,11 +389,16 @@ cdef class Rows:
             self._arbiter_ints = np.zeros((size, _AI), np.int64)
             self._arbiter_floats = np.zeros((size, _AF), np.float64)
             self._pairs = np.zeros((size, 2), np.intp)
+        known.table = &self.lookup
+        known.by_body = &self.by_body
+        known.ids = <const int64_t *>cnp.PyArray_DATA(self._ids)
+        known.raw = self.raw if read else NULL
+        known.centred = <const unsigned char *>cnp.PyArray_DATA(self._centred)
         with nogil:
             _read_arbiters(found.arbiters, found.used,
                            <int64_t *>cnp.PyArray_DATA(self._arbiter_ints),
                            <double *>cnp.PyArray_DATA(self._arbiter_floats),
-                           <Py_ssize_t *>cnp.PyArray_DATA(self._pairs), &self.lookup)
+                           <Py_ssize_t *>cnp.PyArray_DATA(self._pairs), &known)
         self.m = found.used
         self.read_epoch = self.epoch
         return 0
@@ -366,6 +421,28 @@ cdef class Rows:
         self._arbiters()
         return self._arbiter_ints[:self.m], self._arbiter_floats[:self.m]
 
+    def keep_arbiters(self, bint looked=False):
+        """:meth:`arbiters`' read handed over: valid until :meth:`reuse` (the next reads
+        go into other buffers), where a copy of it cost a substep two new arrays."""
+        cdef tuple read = self.arbiters(looked)
+        cdef Py_ssize_t size = cnp.PyArray_DIM(self._arbiter_ptrs, 0)
+        self._kept.append((self._arbiter_ints, self._arbiter_floats))
+        while self._spare:
+            ints, floats = self._spare.pop()
+            if cnp.PyArray_DIM(ints, 0) == size:
+                break
+        else:
+            ints, floats = np.zeros((size, _AI), np.int64), np.zeros((size, _AF), np.float64)
+        self._arbiter_ints, self._arbiter_floats = ints, floats
+        self.read_epoch = -1  # the read is no longer in the rows' buffers
+        return read
+
+    def reuse(self) -> None:
+        """The reads :meth:`keep_arbiters` handed over are no longer held: their buffers
+        take the next ones."""
+        self._spare.extend(self._kept)
+        self._kept.clear()
+
     cdef void _set_velocities(self, const unsigned char *rows) noexcept nogil:
         """The velocity and spin of each row flagged in ``rows`` from :attr:`raw`, into
         chipmunk (which wakes the body, as a setter does)."""
@@ -378,7 +455,7 @@ cdef class Rows:
                 cp.set_velocity(self.bodies[r], v)
                 cp.set_spin(self.bodies[r], self.raw[_BF * r + 5])
 
-    def table(self, const double[:, ::1] raw, double[:, ::1] out, double[:, ::1] keep,
+    def table(self, cnp.ndarray raw, cnp.ndarray out, cnp.ndarray keep,
               double extent=INFINITY, double max_speed=INFINITY) -> bool:
         """Rows of ``raw`` (a read, row by row: x, z, θ, vx, vz, ω) into state rows in
         ``out`` (BodyState's layout), and as they are into ``keep`` (n, 6); whether
@@ -395,13 +472,14 @@ cdef class Rows:
         cdef const double *g
         cdef double *row
         cdef double c, s, ox, oz, total = 0.0, far = 0.0, fast = 0.0
-        if raw.shape[0] != self.n or out.shape[0] < self.n or keep.shape[0] != self.n:
-            raise ValueError("table: arrays do not match the rows")
+        cdef const double *read = <const double *>_numbers(raw, cnp.NPY_DOUBLE, _BF * self.n, "raw")
+        cdef double *kept = <double *>_numbers(keep, cnp.NPY_DOUBLE, _BF * self.n, "keep")
+        cdef double *rows = _state_rows(out, self.n)
         with nogil:
             for i in range(self.n):
-                p = &raw[i, 0]
-                row = &out[i, 0]
-                memcpy(&keep[i, 0], p, 6 * sizeof(double))
+                p = &read[_BF * i]
+                row = &rows[13 * i]
+                memcpy(&kept[_BF * i], p, 6 * sizeof(double))
                 total += p[0] + p[1] + p[2] + p[3] + p[4] + p[5]
                 far = max(far, max(fabs(p[0]), fabs(p[1])))
                 fast = max(fast, max(fabs(p[3]), max(fabs(p[4]), fabs(p[5]))))
@@ -436,22 +514,27 @@ cdef class Rows:
                 row[12] = 0.0
         return bool(isfinite(total)) and not (far > extent or fast > max_speed)
 
-    def motion(self, const double[:, ::1] raw, double[:, ::1] velocity) -> None:
+    def motion(self, cnp.ndarray raw, cnp.ndarray velocity, cnp.ndarray awake=None,
+               cnp.ndarray awake_out=None) -> None:
         """Centre-of-mass velocities as the sleep rule keeps them: columns of (6, n),
-        (vx, 0, vz) then (0, −ω, 0)."""
-        cdef Py_ssize_t i
+        (vx, 0, vz) then (0, −ω, 0); and ``awake`` (n bools) copied into ``awake_out``
+        where given."""
+        cdef Py_ssize_t i, n = self.n
         cdef const double *p
-        if raw.shape[0] != self.n or velocity.shape[1] != self.n:
-            raise ValueError("motion: arrays do not match the rows")
+        cdef const double *r = <const double *>_numbers(raw, cnp.NPY_DOUBLE, _BF * n, "raw")
+        cdef double *v = <double *>_numbers(velocity, cnp.NPY_DOUBLE, 6 * n, "velocity")
+        if awake is not None:
+            memcpy(_numbers(awake_out, cnp.NPY_BOOL, n, "awake_out"),
+                   _numbers(awake, cnp.NPY_BOOL, n, "awake"), n)
         with nogil:
-            for i in range(self.n):
-                p = &raw[i, 0]
-                velocity[0, i] = p[3]
-                velocity[1, i] = 0.0
-                velocity[2, i] = p[4]
-                velocity[3, i] = 0.0
-                velocity[4, i] = -p[5]
-                velocity[5, i] = 0.0
+            for i in range(n):
+                p = &r[_BF * i]
+                v[i] = p[3]
+                v[n + i] = 0.0
+                v[2 * n + i] = p[4]
+                v[3 * n + i] = 0.0
+                v[4 * n + i] = -p[5]
+                v[5 * n + i] = 0.0
 
     # Long: one typed pass over the arbiter rows (C locals)
     def contacts(self, const int64_t[:, ::1] ints, const double[:, ::1] floats):
@@ -670,6 +753,101 @@ def planar_poses(const double[:, ::1] table, const double[:, ::1] rest,
     return flagged
 
 
+cdef Py_ssize_t _gather(list parts, Contact *c, int64_t *rows, int64_t *sub) except -1:
+    """The substeps' contacts and their rows one after another into ``c``, ``rows``, and
+    each one's substep into ``sub``; how many."""
+    cdef Py_ssize_t at = 0, k, i, size
+    cdef cnp.ndarray records, pairs
+    for k, (records, pairs) in enumerate(parts):
+        size = cnp.PyArray_DIM(records, 0)
+        if (records.dtype.itemsize != sizeof(Contact) or not cnp.PyArray_IS_C_CONTIGUOUS(records)
+                or cnp.PyArray_SIZE(pairs) != 2 * size):
+            raise ValueError("merge_substeps: a substep's contacts are not contact rows")
+        memcpy(&c[at], cnp.PyArray_DATA(records), size * sizeof(Contact))
+        memcpy(&rows[2 * at], _numbers(pairs, cnp.NPY_INT64, 2 * size, "rows"),
+               2 * size * sizeof(int64_t))
+        for i in range(at, at + size):
+            sub[i] = k
+        at += size
+    return at
+
+
+cdef Py_ssize_t _pairs_of(const int64_t *rows, Py_ssize_t m, Py_ssize_t *pair,
+                          uint64_t *keys, Py_ssize_t *slots, uint64_t size) noexcept nogil:
+    """Each contact's pair of rows (a, b) as an index (open addressing over ``size``
+    slots); how many pairs."""
+    cdef Py_ssize_t i, pairs = 0
+    cdef uint64_t s, key
+    for s in range(size):
+        slots[s] = -1
+    for i in range(m):
+        key = (<uint64_t>(rows[2 * i] + 1) << 32) ^ <uint64_t>(rows[2 * i + 1] + 1)
+        s = _mix(key) & (size - 1)
+        while slots[s] != -1 and keys[s] != key:
+            s = (s + 1) & (size - 1)
+        if slots[s] == -1:
+            keys[s] = key
+            slots[s] = pairs
+            pairs += 1
+        pair[i] = slots[s]
+    return pairs
+
+
+# Long: one typed pass over the contact rows (C locals)
+def merge_substeps(list parts, contact_dtype):
+    """backend._merge_contacts' arithmetic in C, to the bit: a step's contacts from its
+    substeps' (each: contact rows and their rows (a, b)), each pair with the points of
+    its last substep and the pair's total impulse over its substeps (summed in the
+    contacts' order, as numpy's bincount sums) times each point's share of what that
+    substep gave the pair (equal shares where it gave none). Returns (contacts, rows)."""
+    cdef Py_ssize_t m = sum(len(part[0]) for part in parts), cap = max(m, 1), i, p, kept = 0
+    cdef uint64_t size = 16
+    while size < 2 * <uint64_t>cap:
+        size <<= 1
+    cdef cnp.ndarray gathered = np.empty(cap, contact_dtype), rows = np.empty((cap, 2), np.int64)
+    cdef cnp.ndarray ints = np.empty((3, cap), np.int64), slots = np.empty(2 * size, np.int64)
+    cdef cnp.ndarray sums = np.zeros((4, cap))  # per pair: total, own (kept), count, last
+    cdef Contact *c = <Contact *>cnp.PyArray_DATA(gathered)
+    cdef int64_t *r = <int64_t *>cnp.PyArray_DATA(rows)
+    cdef int64_t *sub = <int64_t *>cnp.PyArray_DATA(ints)
+    cdef Py_ssize_t *pair = <Py_ssize_t *>(sub + cap)
+    cdef unsigned char *keep = <unsigned char *>(sub + 2 * cap)
+    cdef double *total = <double *>cnp.PyArray_DATA(sums)
+    cdef double *own = total + cap
+    cdef double *count = own + cap
+    cdef double *last = count + cap
+    _gather(parts, c, r, sub)
+    with nogil:
+        for p in range(_pairs_of(r, m, pair, <uint64_t *>cnp.PyArray_DATA(slots),
+                                 <Py_ssize_t *>cnp.PyArray_DATA(slots) + size, size)):
+            last[p] = -1.0
+        for i in range(m):
+            total[pair[i]] += c[i].impulse
+            last[pair[i]] = max(last[pair[i]], <double>sub[i])
+        for i in range(m):
+            p = pair[i]
+            keep[i] = sub[i] == last[p]
+            if keep[i]:
+                own[p] += c[i].impulse
+                count[p] += 1.0
+                kept += 1
+    cdef cnp.ndarray out = np.empty(kept, contact_dtype), out_rows = np.empty((kept, 2), np.int64)
+    cdef Contact *o = <Contact *>cnp.PyArray_DATA(out)
+    cdef int64_t *orow = <int64_t *>cnp.PyArray_DATA(out_rows)
+    kept = 0
+    with nogil:
+        for i in range(m):
+            if keep[i]:
+                p = pair[i]
+                o[kept] = c[i]
+                o[kept].impulse = total[p] * (c[i].impulse / own[p] if own[p] > 0.0
+                                              else 1.0 / count[p])
+                orow[2 * kept] = r[2 * i]
+                orow[2 * kept + 1] = r[2 * i + 1]
+                kept += 1
+    return out, out_rows
+
+
 # Long: one typed pass over the contact rows (C locals)
 def carried_down(const int64_t[::1] rows_a, const int64_t[::1] rows_b,
                  const double[:] impulse, const double[::1] normal_up,
@@ -765,6 +943,26 @@ cdef extern from "policy.h" nogil:
                  double up, double down, unsigned char *blocked)
     double REST_SUPPORT, REST_SLIP, REST_SMOOTHING, REST_STILL_LINEAR, REST_STILL_ANGULAR
     double REST_BASE_MARGIN
+
+
+cdef inline void *_numbers(cnp.ndarray a, int typenum, Py_ssize_t size,
+                           str name) except NULL:
+    """:func:`_data` for the per-step calls: the type checked by its number (a dtype
+    compared in Python cost more than the pass over 100 rows)."""
+    if a is None or cnp.PyArray_TYPE(a) != typenum:
+        raise ValueError(f"{name}: expected a {'bool' if typenum == cnp.NPY_BOOL else 'float64'}"
+                         f" array, got {None if a is None else a.dtype}")
+    if not cnp.PyArray_IS_C_CONTIGUOUS(a) or cnp.PyArray_SIZE(a) != size:
+        raise ValueError(f"{name}: expected {size} contiguous items, got {np.shape(a)}")
+    return cnp.PyArray_DATA(a)
+
+
+cdef inline double *_state_rows(cnp.ndarray out, Py_ssize_t n) except NULL:
+    """``out``'s data: a contiguous float64 table of at least ``n`` state rows (13)."""
+    if not (cnp.PyArray_NDIM(out) == 2 and cnp.PyArray_DIM(out, 0) >= n
+            and cnp.PyArray_DIM(out, 1) == 13):
+        raise ValueError("table: arrays do not match the rows")
+    return <double *>_numbers(out, cnp.NPY_DOUBLE, cnp.PyArray_SIZE(out), "out")
 
 
 cdef inline void *_data(cnp.ndarray a, object dtype, Py_ssize_t size, str name) except NULL:
@@ -882,7 +1080,7 @@ cdef class Resting:
         return count
 
     def after(self, Rows rows, double dt, double gx, double gz, double beta,
-              double ramp_up) -> int:
+              double ramp_up, bint read=False) -> int:
         """Everything the resting warm start does after a step: what each row's contacts
         did (the step's arbiters, read by ``rows`` if they were not yet), each row's
         standing (policy.h's rp_stand), the rows that may be preloaded (at rest two
@@ -892,7 +1090,8 @@ cdef class Resting:
         down by twice that elsewhere). The bodies are as ``rows`` last read them, which
         must be right after the step; a row held still (preloaded, on a face, slower than
         REST_STILL_*) has its velocity zeroed in that read and in chipmunk
-        (``held_still`` counts them). How many rows have their ramp on for the next
+        (``held_still`` counts them). ``read``: read the bodies first (``rows.read()``'s
+        read, into the same arrays). How many rows have their ramp on for the next
         step."""
         cdef Py_ssize_t r, on = 0
         cdef double g_size = sqrt(gx * gx + gz * gz), down[2]
@@ -904,10 +1103,13 @@ cdef class Resting:
         self.held_still = 0
         if rows.n != self.n:
             raise ValueError("Resting.after: the rows were planned for other bodies")
+        rows._bound()
+        if read:
+            with nogil:
+                rows._look(True)
         if g_size == 0.0:
             return 0
-        rows._bound()
-        rows._arbiters()
+        rows._arbiters(read)
         arb = <const int64_t *>cnp.PyArray_DATA(rows._arbiter_ints)
         pairs = <const Py_ssize_t *>cnp.PyArray_DATA(rows._pairs)
         fl = <const double *>cnp.PyArray_DATA(rows._arbiter_floats)
@@ -991,7 +1193,7 @@ cdef class Resting:
         """Each row's standing (rp_stand) and whether it is chosen; how many are."""
         cdef Py_ssize_t i
         cdef RpStep s
-        cdef double up, speed
+        cdef double up
         cdef double *p
         cdef int rests, stays, count = 0
         for i in range(self.n):
@@ -1010,9 +1212,9 @@ cdef class Resting:
             stays = s.weight > 0.0 and up >= 0.5 * REST_SUPPORT * s.share * s.weight
             self.kept[i] = s.preloaded and stays
             p = &body[_BF * i]
-            speed = hypot(p[3], p[4])
             self.chosen[i] = ((self.steps[i] >= 2 or self.kept[i])
-                              and speed < (4.0 * REST_SLIP if self.kept[i] else REST_SLIP)
+                              and _slower(p[3], p[4],
+                                          4.0 * REST_SLIP if self.kept[i] else REST_SLIP)
                               and not self.unrest[i]
                               and (self.points[i] >= 2 or self.tilted[i] == 0))
             self.moving[i] = self.dynamic[i] and a[i]
@@ -1054,17 +1256,37 @@ cdef class Resting:
         stack loses for a step the corner that lifts by a hair)."""
         cdef double *base = &self.base[2 * i]
         cdef const double *reach = &self.reach[2 * i]
-        cdef double c = cos(p[2]), s = sin(p[2]), cx, cz, at, margin
+        cdef const double *g = &self.cog[2 * i]
+        cdef double c, s, cx, cz, at, margin
         if reach[1] > reach[0]:
             base[0] = reach[0]
             base[1] = reach[1]
         elif not (self.still[i] and (self.points[i] >= 2 or not self.tilted[i])):
             return False
-        cx = p[0] + c * self.cog[2 * i] - s * self.cog[2 * i + 1]
-        cz = p[1] + s * self.cog[2 * i] + c * self.cog[2 * i + 1]
+        if g[0] == 0.0 and g[1] == 0.0 and isfinite(p[2]):
+            # the turned centre of gravity is zeros (c·0 − s·0): the position, to the
+            # sign of a zero, which the comparisons below do not tell apart
+            cx = p[0]
+            cz = p[1]
+        else:
+            c = cos(p[2])
+            s = sin(p[2])
+            cx = p[0] + c * g[0] - s * g[1]
+            cz = p[1] + s * g[0] + c * g[1]
         at = -cx * down[1] + cz * down[0]
         margin = REST_BASE_MARGIN * (base[1] - base[0])
         return base[0] + margin <= at <= base[1] - margin
+
+
+cdef inline bint _slower(double x, double y, double limit) noexcept nogil:
+    """Whether hypot(x, y) < limit, as computed, with hypot only near the limit (where
+    x² + y², within a few ulps of the square of it, could tell otherwise)."""
+    cdef double q = x * x + y * y
+    if q < 0.81 * limit * limit:
+        return True
+    if q > 1.21 * limit * limit:
+        return False
+    return hypot(x, y) < limit
 
 
 cdef inline void _reach(double *span, const double *f, int n_points,

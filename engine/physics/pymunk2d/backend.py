@@ -21,19 +21,20 @@ as below (chipmunk's solver leaves a stack rocking at 1/60 s and 0.02 s; docs/PH
 
 Cost: a step (a substep) is the space's own step plus a few compiled passes that read
 and write chipmunk directly (the functions pymunk's cffi library exports, those
-``pymunk.batch`` calls: ``_rows``' ``_chipmunk.pxi``), no Python per body: before it,
-the preloaded rows' forces read and written (``_rows.Resting.preload``); after it, one
-body read, shared by the resting warm start, the sleep rule and a state read right after
-the step (any public method that may change the space drops it first), and one pass
-(``_rows.Resting.after``) that reads the step's arbiters, once, and writes the velocities
-of the rows it holds still; then the sleep rule (``sleep.h``'s pass; islands, when some
-body is ready, by a union-find over the same arbiters and the joints). A substep before
-a step's last keeps a copy of its arbiters: its contacts are made only when
-:meth:`contacts` asks (or before anything changes the space). Against bare pymunk taking
-the same substeps (``python -m app.bench.physics2d``, docs/PHYSICS.md): 1.23 to 1.33 of
-its time at 2,000 to 100 boxes (1.27 to 1.40 with the sleep rule on), where the reads
-alone (chipmunk's own functions, after a step whose cache holds little of them) are 7 to
-10 % of chipmunk's step.
+``pymunk.batch`` calls, and the arbiter fields it declares: ``_rows``' ``_chipmunk.pxi``),
+no Python per body: before it, the preloaded rows' forces read and written
+(``_rows.Resting.preload``); after it, one pass (``_rows.Resting.after``) that reads the
+bodies (the read the sleep rule and a state read right after the step take too; any
+public method that may change the space drops it first) and the step's arbiters, once,
+and writes the velocities of the rows it holds still; then the sleep rule (``sleep.h``'s
+pass; islands, when some body is ready, by a union-find over the same arbiters and the
+joints). A substep before a step's last hands its arbiter read over (no copy): its
+contacts are made only when :meth:`contacts` asks (or before anything changes the
+space). Against bare pymunk taking the same substeps (``python -m app.bench.physics2d``,
+docs/PHYSICS.md): 1.17 to 1.19 of its time at 100 to 2,000 boxes (1.21 to 1.23 with the
+sleep rule on), 1.10 to 1.14 of its instructions (1.14 to 1.18), where the arbiter read
+is 2.5 % of chipmunk's step's instructions and more of its time (the arbiters, their
+contacts and bodies, after a step whose cache holds little of them).
 
 Whatever the plane cannot represent is reported once per object on the logger
 ``colosseum.physics.pymunk`` with the approximation used, never raised. Bad calls
@@ -175,6 +176,7 @@ class PymunkBackend:
         self._masses = np.zeros(0)  # kg, dynamic rows (0 for the others)
         self._static = np.zeros(0, bool)
         self._reader: SpaceReader | None = None
+        self._rows: _rows.Rows | None = None  # the reader's compiled rows
         self._sleep_on = True
         self._resting = RestingSupport(0, WorldSettings().warm_start)
         self._preloaded = False  # some row got a preload in the step just taken
@@ -262,8 +264,10 @@ class PymunkBackend:
         a whole step of the space with the resting warm start and the sleep rule."""
         n = substeps(dt)
         self._parts[0] = n
-        held = self._held_forces() if n > 1 else None
+        held = self._held_forces() if n > 1 and self._pushed else None
         self._earlier, self._pending = [], []
+        if self._rows is not None:
+            self._rows.reuse()  # the last step's substeps' arbiters are no longer held
         for i in range(n):
             if i and held:
                 self._hold_forces(held)
@@ -276,16 +280,18 @@ class PymunkBackend:
         """What a substep's contacts are made of, kept for :meth:`contacts` (a copy of
         its arbiters as read, its preloads): made into contacts only when asked for, or
         before anything changes the space (:func:`_dropping_the_step_read`)."""
-        # the substep's body read stands where none fell asleep: who is awake was seen
-        ints, floats = self._reader.rows.arbiters(self._step_read is not None)
-        return (ints.copy(), floats.copy(), self._preloaded,
-                self._resting.arrays["lifted"].copy(), self._step_dt)
+        # the substep's body read stands where none fell asleep: who is awake was seen;
+        # the read is handed over (the next substep reads into other buffers) until the
+        # next step
+        ints, floats = self._rows.keep_arbiters(self._step_read is not None)
+        return (ints, floats, self._preloaded, self._resting.arrays["lifted"].copy(),
+                self._step_dt)
 
     def _made_contacts(self, ints: np.ndarray, floats: np.ndarray, preloaded: bool,
                        lifted: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """A substep's contacts from its arbiters (and their rows), with the impulses of
         its preloads carried down (:func:`carried_down`)."""
-        c, pairs = self._reader.rows.contacts(ints, floats)
+        c, pairs = self._rows.contacts(ints, floats)
         gx, gz = self._gravity
         g = math.hypot(gx, gz)
         if preloaded and len(c) and g > 0.0 and len(lifted) == len(self._records):
@@ -317,8 +323,9 @@ class PymunkBackend:
     def _substep(self, dt: float) -> None:
         """Step the space (resting bodies given their weight's share first, see
         :mod:`resting`); then let the sleep rule put quiet islands to sleep."""
-        for rec in self._driven.values():
-            rec.before_step(dt)
+        if self._driven:
+            for rec in self._driven.values():
+                rec.before_step(dt)
         if self._aims:
             self._lead_aims(dt)
         self._step_dt = dt
@@ -326,7 +333,7 @@ class PymunkBackend:
         # after the preload: it is an outside force to a joint's momentum balance
         strained = self._strain_before(dt) if self._strained else None
         self._space.step(dt)
-        rows = self._reader.rows
+        rows = self._rows
         rows.new_step()
         if strained:
             self._strain_after(strained, dt)
@@ -334,11 +341,15 @@ class PymunkBackend:
             self._arrive(dt)
         self._contacts = None
         self._step_read = None
-        if self._resting.beta > 0.0 or self._sleep_on:
-            raw, awake = rows.read()  # one read for both rules and the state read
-            if self._resting.beta > 0.0:
+        rest = self._resting.beta > 0.0
+        if rest or self._sleep_on:
+            # one body read for both rules and the state read (the resting pass makes it)
+            if rest:
                 self._rest(dt)
-            if not (self._sleep_on and self._apply_sleep(dt, raw, awake)):
+            else:
+                rows.read()
+            raw = rows.bodies_read
+            if not (self._sleep_on and self._apply_sleep(dt, raw, rows.bodies_awake)):
                 self._step_read = raw  # none fell asleep: the read is the space as it is
         if not self._sleep_on:
             self._woken.clear()  # the wakes were for the resting rule alone
@@ -347,7 +358,8 @@ class PymunkBackend:
         """Give the rows whose ramp is on their weight's share (an upward force for this
         step, on top of the forces they have), in one compiled pass over those rows
         (:meth:`RestingSupport.preload`)."""
-        reader = self._space_reader()
+        if self._dirty:
+            self._reindex()
         resting = self._resting
         if self._woken and resting.on:  # moved, pushed or woken by hand: not at rest
             resting.forget(self._rule.rows(np.fromiter(self._woken, np.int64)))
@@ -357,19 +369,20 @@ class PymunkBackend:
                 self._preloaded = False
             return
         self._preloaded = True
-        resting.preload(reader.rows, self._gravity)
+        resting.preload(self._rows, self._gravity)
 
     def _rest(self, dt: float) -> None:
-        """The resting rule after a step, over the step's body read: what the contacts
-        did, each row's standing, the rows to preload before the next step and the rows
-        held still (their velocities written back), in one compiled pass."""
+        """The resting rule after a step, in one compiled pass: the step's body read (the
+        rows' :attr:`~_rows.Rows.bodies_read`), what the contacts did, each row's
+        standing, the rows to preload before the next step and the rows held still (their
+        velocities written back)."""
         resting = self._resting
         if resting.n != len(self._records):
             resting.follow(np.full(len(self._records), -1))
             self._rest_rows = False
         if not self._rest_rows:
             self._rest_bodies()
-        resting.after(self._reader.rows, dt, self._gravity)
+        resting.after(self._rows, dt, self._gravity)
 
     def _rest_bodies(self) -> None:
         """Per row, for the resting rule: friction coefficient, mass under gravity (0: not
@@ -679,10 +692,8 @@ class PymunkBackend:
         """The sleep rule after a step (``raw``: the step's body read): quiet islands go
         to sleep, each as one chipmunk group (woken together), at rest. Whether some
         did."""
-        reader = self._reader
         rule = self._rule
-        reader.motion(raw, rule.velocity)
-        rule.awake[:] = awake
+        self._rows.motion(raw, rule.velocity, awake, rule.awake)
         woken = None
         if self._woken:
             woken = np.zeros(len(rule.keys), bool)
@@ -929,6 +940,7 @@ class PymunkBackend:
                                    np.float64, n)
         self._reader = SpaceReader(self._space, [r.body for r in recs], self._keys, self._y,
                                    self._rests, self._cogs, static)
+        self._rows = self._reader.rows
         self._rule.layout(self._keys, ~static, (kind == pymunk.Body.DYNAMIC) & np.fromiter(
             (r.physical.can_sleep for r in recs), bool, n))
         self._dirty = False
@@ -957,11 +969,11 @@ class PymunkBackend:
         keep = self._read_rows
         if len(keep) != n:
             keep = self._read_rows = np.empty((n, 6))
-        if not reader.table(raw, out, keep, self._extent, MAX_SPEED):  # gone, or escaped
+        if not self._rows.table(raw, out, keep, self._extent, MAX_SPEED):  # gone, escaped
             self._reset_broken(keep)
             self._step_read = None
             raw, _ = reader.read()
-            reader.table(raw, out, keep)
+            self._rows.table(raw, out, keep)
         # this read is the last good one now: swap buffers rather than copy
         self._read_rows, last = self._last_good[1], keep
         self._last_good = (self._keys, last)
@@ -1203,23 +1215,9 @@ def _merge_contacts(parts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndar
     """A step's contacts from its substeps' (each: contacts and their rows): each pair of
     bodies with the points it had in the last substep it touched in, and the impulses of
     all its substeps (shared among those points as that substep shared its own; equally
-    where it had none), so an impact in an early substep is reported whole."""
-    c = np.concatenate([part[0] for part in parts])
-    rows = np.concatenate([part[1] for part in parts])
-    sub = np.concatenate([np.full(len(part[0]), i) for i, part in enumerate(parts)])
-    span = int(rows.max(initial=0)) + 2  # rows run from -1 (static geometry)
-    _, pair = np.unique((rows[:, 0] + 1) * span + rows[:, 1] + 1, return_inverse=True)
-    pair = pair.reshape(-1)
-    total = np.bincount(pair, weights=c["impulse"])
-    last = np.full(len(total), -1)
-    np.maximum.at(last, pair, sub)
-    keep = sub == last[pair]
-    out, kept = c[keep].copy(), pair[keep]
-    own = np.bincount(kept, weights=out["impulse"], minlength=len(total))[kept]
-    count = np.bincount(kept, minlength=len(total))[kept]
-    share = np.divide(out["impulse"], own, out=1.0 / count, where=own > 0.0)
-    out["impulse"] = total[kept] * share
-    return out, rows[keep]
+    where it had none), so an impact in an early substep is reported whole. One compiled
+    pass (:func:`_rows.merge_substeps`)."""
+    return _rows.merge_substeps(parts, CONTACT_DTYPE)
 
 
 def _may_sleep_alone(body: pymunk.Body) -> bool:

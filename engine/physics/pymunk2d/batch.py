@@ -3,9 +3,10 @@
 One call reads every body's position, angle and velocities, row by row (and who sleeps),
 one every cached arbiter's bodies, normal, points and impulse, straight from chipmunk
 through pymunk's cffi library (``_rows``' ``_chipmunk.pxi``: the functions
-``pymunk.batch`` calls, without its Python); a compiled pass (``_rows``) turns them into
-our rows. The arbiters are read once per step (chipmunk changes its cache of them between
-steps only as bodies fall asleep or wake, which the rows' awake flags tell).
+``pymunk.batch`` calls and the arbiter fields pymunk declares, the same numbers to the
+bit, without its Python); a compiled pass (``_rows``) turns them into our rows. The
+arbiters are read once per step (chipmunk changes its cache of them between steps only as
+bodies fall asleep or wake, which the rows' awake flags tell).
 
 A reader is planned for a fixed list of bodies, rows in key order (the backend plans a new
 one when bodies come or go): it holds them, so the cpBody pointers the passes follow stay

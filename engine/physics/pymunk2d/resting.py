@@ -15,9 +15,10 @@ only, with no joint and touching no kinematic body, in an island (bodies touchin
 no jointed, weightless or pushed body: each preloaded weight must reach the ground through
 contacts (a platform a force holds up or a wheelchair's seat would take the preload of
 what rests on it instead). Everything after the step is one compiled pass over chipmunk
-(``_rows.Resting.after``: the arbiters read, what the contacts did, the standing, the
-held rows' velocities written), as is the preload before it (``_rows.Resting.preload``,
-the preloaded rows' forces read and written): no Python per body.
+(``_rows.Resting.after``: the bodies and arbiters read, what the contacts did, the
+standing, the held rows' velocities written), as is the preload before it
+(``_rows.Resting.preload``, the preloaded rows' forces read and written): no Python per
+body.
 
 A preloaded body resting on a face (two contact points) in equilibrium (its centre of
 mass over the span of the points it lies on, policy.h's REST_BASE_MARGIN in: a block whose
@@ -143,8 +144,8 @@ class RestingSupport:
 
     def after(self, rows: _rows.Rows, dt: float, gravity: tuple[float, float]) -> None:
         """After a step: every row's standing and its ramp for the next step, in one
-        compiled pass (:meth:`_rows.Resting.after`) over the bodies as ``rows`` last read
-        them (right after the step) and the step's arbiters. At rest means held up by its
+        compiled pass (:meth:`_rows.Resting.after`) over the bodies (read by it, right
+        after the step) and the step's arbiters. At rest means held up by its
         contacts (REST_SUPPORT of its weight, the share it was preloaded with aside) with
         its friction short of its bound, not pushed sideways, for two steps (policy.h's
         rp_stand); preloaded, a body stays so while it is held up at all (chipmunk
@@ -154,8 +155,10 @@ class RestingSupport:
         island with no moving row that is unrest or weightless, and out by twice that;
         off at once where no contact is left. A preloaded row on a face slower than
         REST_STILL_* is held still: its velocity zeroed in the read and in chipmunk
-        (:attr:`held_still` counts them)."""
-        self.on = self._pass.after(rows, dt, gravity[0], gravity[1], self.beta, RAMP) > 0
+        (:attr:`held_still` counts them). The bodies are read first (``rows.read()``'s
+        read, which the step's state read and the sleep rule take too)."""
+        self.on = self._pass.after(rows, dt, gravity[0], gravity[1], self.beta, RAMP,
+                                   True) > 0
 
 
 def carried_down(rows_a: np.ndarray, rows_b: np.ndarray, impulse: np.ndarray,
