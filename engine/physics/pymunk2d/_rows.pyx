@@ -1094,7 +1094,8 @@ cdef class Resting:
         read, into the same arrays). How many rows have their ramp on for the next
         step."""
         cdef Py_ssize_t r, on = 0
-        cdef double g_size = sqrt(gx * gx + gz * gz), down[2]
+        cdef double g_size = sqrt(gx * gx + gz * gz)
+        cdef double down[2]
         cdef double keep = exp(-dt / REST_SMOOTHING)
         cdef int chosen = 0
         cdef const int64_t *arb
