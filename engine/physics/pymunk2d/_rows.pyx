@@ -1080,18 +1080,18 @@ cdef class Resting:
         return count
 
     def after(self, Rows rows, double dt, double gx, double gz, double beta,
-              double ramp_up, bint read=False) -> int:
-        """Everything the resting warm start does after a step: what each row's contacts
-        did (the step's arbiters, read by ``rows`` if they were not yet), each row's
+              double ramp_up) -> int:
+        """Everything the resting warm start does after a step: the bodies read (right
+        after the step: ``rows.read()``'s read, into the same arrays, which the step's
+        state read and the sleep rule take too), what each row's contacts did (the
+        step's arbiters, read by ``rows`` if they were not yet), each row's
         standing (policy.h's rp_stand), the rows that may be preloaded (at rest two
         steps, or preloaded and still held up; slower than REST_SLIP, four times that to
         stay; on a face or on level ground; not jointed or touching a kinematic body),
         the islands when some are, and every row's ramp (up by ``ramp_up`` where chosen,
-        down by twice that elsewhere). The bodies are as ``rows`` last read them, which
-        must be right after the step; a row held still (preloaded, on a face, slower than
-        REST_STILL_*) has its velocity zeroed in that read and in chipmunk
-        (``held_still`` counts them). ``read``: read the bodies first (``rows.read()``'s
-        read, into the same arrays). How many rows have their ramp on for the next
+        down by twice that elsewhere). A row held still (preloaded, on a face, slower
+        than REST_STILL_*) has its velocity zeroed in that read and in chipmunk
+        (``held_still`` counts them). How many rows have their ramp on for the next
         step."""
         cdef Py_ssize_t r, on = 0
         cdef double g_size = sqrt(gx * gx + gz * gz)
@@ -1105,12 +1105,11 @@ cdef class Resting:
         if rows.n != self.n:
             raise ValueError("Resting.after: the rows were planned for other bodies")
         rows._bound()
-        if read:
-            with nogil:
-                rows._look(True)
+        with nogil:
+            rows._look(True)
         if g_size == 0.0:
             return 0
-        rows._arbiters(read)
+        rows._arbiters(True)
         arb = <const int64_t *>cnp.PyArray_DATA(rows._arbiter_ints)
         pairs = <const Py_ssize_t *>cnp.PyArray_DATA(rows._pairs)
         fl = <const double *>cnp.PyArray_DATA(rows._arbiter_floats)

@@ -66,7 +66,6 @@ class RestingSupport:
 
     def __init__(self, n: int, beta: float) -> None:
         self.beta = beta
-        self.n = n  # rows
         self.arrays = self._fresh(n)
         self._pass = _rows.Resting(self.arrays)
         #: whether some row has its ramp on (it gets a preload before the next step)
@@ -76,6 +75,11 @@ class RestingSupport:
     def _fresh(cls, n: int) -> dict[str, np.ndarray]:
         return {name: np.zeros((n, *shape), dtype) for name, (shape, dtype) in
                 cls._SHAPES.items()}
+
+    @property
+    def n(self) -> int:
+        """How many rows."""
+        return len(self.arrays["steps"])
 
     def __getattr__(self, name: str) -> np.ndarray:
         try:
@@ -91,7 +95,6 @@ class RestingSupport:
         for name in self._FOLLOW:
             arrays[name][had] = self.arrays[name][old_rows[had]]
         self.arrays = arrays
-        self.n = len(old_rows)
         self._pass = _rows.Resting(arrays)
         self.on = bool((arrays["ramp"] > 0).any())
 
@@ -157,8 +160,7 @@ class RestingSupport:
         REST_STILL_* is held still: its velocity zeroed in the read and in chipmunk
         (:attr:`held_still` counts them). The bodies are read first (``rows.read()``'s
         read, which the step's state read and the sleep rule take too)."""
-        self.on = self._pass.after(rows, dt, gravity[0], gravity[1], self.beta, RAMP,
-                                   True) > 0
+        self.on = self._pass.after(rows, dt, gravity[0], gravity[1], self.beta, RAMP) > 0
 
 
 def carried_down(rows_a: np.ndarray, rows_b: np.ndarray, impulse: np.ndarray,
