@@ -144,6 +144,11 @@ def mujoco_boxes(n: int, dt: float, iterations: int | None = None,
     return model, mujoco.MjData(model)
 
 
+def mujoco_asleep(data: Any) -> int:
+    """How many of MuJoCo's bodies are asleep (its world body is always awake)."""
+    return int(data.model.nbody - data.nbody_awake)
+
+
 def time_mujoco(n: int, dt: float, steps: int, iterations: int | None = None,
                 sleep: bool = False) -> dict[str, float]:
     import mujoco
@@ -153,7 +158,7 @@ def time_mujoco(n: int, dt: float, steps: int, iterations: int | None = None,
     t0 = time.thread_time()
     for _ in range(steps):
         step(model, data)
-    asleep = float(n - (data.nbody_awake - 1)) if sleep else 0.0
+    asleep = float(mujoco_asleep(data)) if sleep else 0.0
     return {"ms": (time.thread_time() - t0) / steps * 1e3, "asleep": asleep}
 
 
@@ -398,7 +403,7 @@ def _sleeper(engine: str, n: int, sleep: bool) -> tuple[Any, Any, Any]:
         import mujoco
 
         model, data = mujoco_boxes(n, HEADLINE_STEP, sleep=sleep)
-        return (lambda: mujoco.mj_step(model, data), lambda: n - (data.nbody_awake - 1),
+        return (lambda: mujoco.mj_step(model, data), lambda: mujoco_asleep(data),
                 lambda: None)
     backend = _ours("ode", n, WorldSettings(max_contacts=4, auto_sleep=sleep))
     return (lambda: backend.step(HEADLINE_STEP), backend.sleeping_count, backend.close)
