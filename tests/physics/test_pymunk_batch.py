@@ -418,3 +418,57 @@ def test_the_arbiter_layout_is_pymunk_s_declaration_checked_by_name(count: str,
     else:
         with pytest.raises(ImportError, match=message):
             _rows.chipmunk_layout(ffi)
+
+
+def test_the_probe_finds_where_a_cpbody_keeps_its_velocity_force_and_spin() -> None:
+    """The passes write an awake body's velocity, force and spin at the offsets a probe
+    of a throwaway body found at import (pymunk does not declare cpBody's fields): with
+    the pymunk we pin it finds all three, apart; where it finds no single answer (here a
+    window too short to hold any of them) each is -1, and the setters are used."""
+    from engine.physics.pymunk2d import _rows
+
+    found = _rows.probe_body()
+    assert found == _rows.BODY_FIELDS
+    assert all(at >= 0 and at % 8 == 0 for at in found.values()), found
+    spans = sorted((at, at + (8 if name == "w" else 16)) for name, at in found.items())
+    assert all(a[1] <= b[0] for a, b in zip(spans, spans[1:], strict=False)), found
+    assert _rows.probe_body(min(found.values())) == {"v": -1, "f": -1, "w": -1}
+
+
+def _resting_run(threshold: float | None, kit) -> tuple[list[bytes], int, int, int]:
+    """Three columns of boxes dropped and settling with sleeping on, 5 s at 1/60 s:
+    each step's state read and contacts; how many steps preloaded rows, held rows still,
+    and how many bodies sleep at the end. ``threshold``: chipmunk's sleep time threshold
+    put in place of the backend's NEVER."""
+    backend = PymunkBackend()
+    backend.configure(WorldSettings(auto_sleep=True))
+    kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
+    for i in range(30):
+        kit.add(backend, i, kit.box((1.0, 1.0, 1.0)), (1.2 * (i // 10), 0.0, 0.55 + 1.1 * (i % 10)))
+    if threshold is not None:
+        backend._space.sleep_time_threshold = threshold
+    table = np.empty((31, 13))
+    reads, preloaded, held = [], 0, 0
+    for _ in range(300):
+        backend.step(1 / 60)
+        keys = backend.read_state_into(table)
+        reads.append(keys.tobytes() + table.tobytes() + backend.contacts().tobytes())
+        preloaded += backend._resting.on
+        held += backend._resting.held_still > 0
+    return reads, preloaded, held, sum(backend.is_sleeping(i) for i in range(30))
+
+
+def test_the_velocities_and_forces_written_straight_are_the_setters_to_the_bit(kit) -> None:
+    """An awake body's velocity, spin and force are written without chipmunk's
+    cpBodyActivate where no idle time can decide anything (the backend's threshold, NEVER):
+    the same run with a threshold just low enough for the passes to use the setters (one
+    no idle time reaches either) is the same to the bit, step for step, preloading and
+    holding rows still, and with bodies asleep at the end."""
+    from engine.physics.pymunk2d import _rows
+
+    assert _rows.IDLE_UNREACHED <= 1e300  # the backend's NEVER: the straight writes
+    direct, preloaded, held, asleep = _resting_run(None, kit)
+    setters, *counts = _resting_run(_rows.IDLE_UNREACHED / 10, kit)
+    assert preloaded > 0 and held > 0 and asleep > 0, (preloaded, held, asleep)
+    assert counts == [preloaded, held, asleep]
+    assert [i for i, (a, b) in enumerate(zip(direct, setters, strict=True)) if a != b] == []
