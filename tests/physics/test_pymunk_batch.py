@@ -472,3 +472,31 @@ def test_the_velocities_and_forces_written_straight_are_the_setters_to_the_bit(k
     assert preloaded > 0 and held > 0 and asleep > 0, (preloaded, held, asleep)
     assert counts == [preloaded, held, asleep]
     assert [i for i, (a, b) in enumerate(zip(direct, setters, strict=True)) if a != b] == []
+
+
+def test_a_step_with_no_body_asleep_leaves_chipmunk_s_sleeping_off_to_the_same_bit(
+        kit, monkeypatch: pytest.MonkeyPatch) -> None:
+    """While no body sleeps a step is taken with chipmunk's sleep timer off (QUIET: it
+    skips its islands, which decide nothing then), NEVER again after it: the same run
+    with the timer left at NEVER every step is the same to the bit, bodies asleep at the
+    end, and the timer is off from the second step (the first one's read is the first)
+    until it is needed."""
+    from engine.physics.pymunk2d import backend as module
+
+    seen: list[float] = []
+    step = pymunk.Space.step
+
+    def counted(space: pymunk.Space, dt: float) -> None:
+        seen.append(space.sleep_time_threshold)
+        step(space, dt)
+
+    monkeypatch.setattr(pymunk.Space, "step", counted)
+    quiet, *counts = _resting_run(None, kit)
+    timers, seen[:] = list(seen), []
+    monkeypatch.setattr(module, "QUIET", module.NEVER)
+    never, *again = _resting_run(None, kit)
+    assert counts == again and counts[2] > 0, (counts, again)
+    assert set(seen) == {module.NEVER}
+    off = timers.index(module.NEVER, 1)  # the first step's read comes after it
+    assert timers[0] == module.NEVER and set(timers[1:off]) == {math.inf}, timers[:off + 1]
+    assert [i for i, (a, b) in enumerate(zip(quiet, never, strict=True)) if a != b] == []

@@ -92,6 +92,12 @@ MAX_SUBSTEP = 0.01
 #: chipmunk's sleep timer while auto-sleep is on: chipmunk keeps its islands and wakes
 #: what an awake body touches, but never decides on its own (the sleep rule does).
 NEVER = 1e300
+#: chipmunk's sleep timer for a step taken while auto-sleep is on and no body sleeps
+#: (known from the last substep's body read, nothing changed since): off, so chipmunk
+#: skips its islands and idle times, which would decide nothing (none to wake, NEVER
+#: reached by none); NEVER again right after the step (a body can only be put to sleep
+#: with a timer on). The same trajectory to the bit (docs/PHYSICS.md).
+QUIET = math.inf
 #: A shape filter that collides with nothing (``set_collision_enabled(key, False)``).
 NOTHING = pymunk.ShapeFilter(categories=0, mask=0)
 
@@ -332,7 +338,14 @@ class PymunkBackend:
         self._preload_weights()
         # after the preload: it is an outside force to a joint's momentum balance
         strained = self._strain_before(dt) if self._strained else None
-        self._space.step(dt)
+        quiet = self._sleep_on and self._step_read is not None and not self._rows.sleepers
+        if quiet:
+            self._space.sleep_time_threshold = QUIET
+        try:
+            self._space.step(dt)
+        finally:
+            if quiet:
+                self._space.sleep_time_threshold = NEVER
         rows = self._rows
         rows.new_step()
         if strained:
