@@ -418,3 +418,95 @@ def test_the_arbiter_layout_is_pymunk_s_declaration_checked_by_name(count: str,
     else:
         with pytest.raises(ImportError, match=message):
             _rows.chipmunk_layout(ffi)
+
+
+def test_the_probe_finds_where_a_cpbody_keeps_its_velocity_force_and_spin() -> None:
+    """The passes write an awake body's velocity, force and spin at the offsets a probe
+    of a throwaway body found at import (pymunk does not declare cpBody's fields): with
+    the pymunk we pin it finds all three, apart; where it finds no single answer (here a
+    window too short to hold any of them) each is -1, and the setters are used."""
+    from engine.physics.pymunk2d import _rows
+
+    found = _rows.probe_body()
+    assert found == _rows.BODY_FIELDS
+    assert all(at >= 0 and at % 8 == 0 for at in found.values()), found
+    spans = sorted((at, at + (8 if name == "w" else 16)) for name, at in found.items())
+    assert all(a[1] <= b[0] for a, b in zip(spans, spans[1:], strict=False)), found
+    assert _rows.probe_body(min(found.values())) == {"v": -1, "f": -1, "w": -1}
+
+
+def _resting_run(kit) -> tuple[list[bytes], int, int, int]:
+    """Three columns of boxes dropped and settling with sleeping on, 5 s at 1/60 s:
+    each step's state read and contacts; how many steps preloaded rows, held rows still,
+    and how many bodies sleep at the end."""
+    backend = PymunkBackend()
+    backend.configure(WorldSettings(auto_sleep=True))
+    kit.add(backend, kit.GROUND, kit.ground_plane(), (0.0, 0.0, 0.0))
+    for i in range(30):
+        kit.add(backend, i, kit.box((1.0, 1.0, 1.0)), (1.2 * (i // 10), 0.0, 0.55 + 1.1 * (i % 10)))
+    table = np.empty((31, 13))
+    reads, preloaded, held = [], 0, 0
+    for _ in range(300):
+        backend.step(1 / 60)
+        keys = backend.read_state_into(table)
+        reads.append(keys.tobytes() + table.tobytes() + backend.contacts().tobytes())
+        preloaded += backend._resting.on
+        held += backend._resting.held_still > 0
+    return reads, preloaded, held, sum(backend.is_sleeping(i) for i in range(30))
+
+
+def _timers(monkeypatch: pytest.MonkeyPatch) -> list[float]:
+    """chipmunk's sleep timer as each space step from now on starts, as they come."""
+    seen: list[float] = []
+    step = pymunk.Space.step
+
+    def counted(space: pymunk.Space, dt: float) -> None:
+        seen.append(space.sleep_time_threshold)
+        step(space, dt)
+
+    monkeypatch.setattr(pymunk.Space, "step", counted)
+    return seen
+
+
+def test_the_velocities_and_forces_written_straight_are_the_setters_to_the_bit(
+        kit, monkeypatch: pytest.MonkeyPatch) -> None:
+    """An awake body's velocity, spin and force are written without chipmunk's
+    cpBodyActivate where no idle time can decide anything (the backend's timers, NEVER
+    and QUIET): the same run with a timer just low enough for the passes to use the
+    setters (one no idle time reaches either) at every step is the same to the bit,
+    preloading and holding rows still, and with bodies asleep at the end."""
+    from engine.physics.pymunk2d import _rows
+    from engine.physics.pymunk2d import backend as module
+
+    assert min(module.NEVER, module.QUIET) >= _rows.IDLE_UNREACHED  # straight writes
+    direct, preloaded, held, asleep = _resting_run(kit)
+    low = _rows.IDLE_UNREACHED / 10
+    monkeypatch.setattr(module, "NEVER", low)
+    monkeypatch.setattr(module, "QUIET", low)
+    timers = _timers(monkeypatch)
+    setters, *counts = _resting_run(kit)
+    assert set(timers) == {low}
+    assert preloaded > 0 and held > 0 and asleep > 0, (preloaded, held, asleep)
+    assert counts == [preloaded, held, asleep]
+    assert [i for i, (a, b) in enumerate(zip(direct, setters, strict=True)) if a != b] == []
+
+
+def test_a_step_with_no_body_asleep_leaves_chipmunk_s_sleeping_off_to_the_same_bit(
+        kit, monkeypatch: pytest.MonkeyPatch) -> None:
+    """While no body sleeps a step is taken with chipmunk's sleep timer off (QUIET: it
+    skips its islands, which decide nothing then), NEVER again after it: the same run
+    with the timer left at NEVER every step is the same to the bit, bodies asleep at the
+    end, and the timer is off from the second step (the first one's read is the first)
+    until it is needed."""
+    from engine.physics.pymunk2d import backend as module
+
+    seen = _timers(monkeypatch)
+    quiet, *counts = _resting_run(kit)
+    timers, seen[:] = list(seen), []
+    monkeypatch.setattr(module, "QUIET", module.NEVER)
+    never, *again = _resting_run(kit)
+    assert counts == again and counts[2] > 0, (counts, again)
+    assert set(seen) == {module.NEVER}
+    off = timers.index(module.NEVER, 1)  # the first step's read comes after it
+    assert timers[0] == module.NEVER and set(timers[1:off]) == {math.inf}, timers[:off + 1]
+    assert [i for i, (a, b) in enumerate(zip(quiet, never, strict=True)) if a != b] == []

@@ -21,6 +21,7 @@ ctypedef double (*_BodyFloat)(void *) noexcept nogil
 ctypedef void (*_SetBodyVect)(void *, cpVect) noexcept nogil
 ctypedef void (*_SetBodyFloat)(void *, double) noexcept nogil
 ctypedef unsigned char (*_BodyBool)(void *) noexcept nogil
+ctypedef double (*_SpaceFloat)(void *) noexcept nogil
 ctypedef void *(*_BodyPointer)(void *) noexcept nogil
 ctypedef void (*_ArbiterFunc)(void *, void *) noexcept nogil
 ctypedef void (*_EachArbiter)(void *, _ArbiterFunc, void *) noexcept nogil
@@ -39,6 +40,7 @@ cdef struct _Chipmunk:
     _SetBodyFloat set_spin
     _BodyBool sleeping
     _BodyPointer user_data
+    _SpaceFloat sleep_threshold
     _EachArbiter each_cached_arbiter
     _ArbiterPoint point_a
     _ArbiterPoint point_b
@@ -61,6 +63,7 @@ CHIPMUNK_FUNCTIONS = (
     ("cpBodySetAngularVelocity", "void(*)(struct cpBody *, double)"),
     ("cpBodyIsSleeping", "unsigned char(*)(struct cpBody *)"),
     ("cpBodyGetUserData", "void *(*)(struct cpBody *)"),
+    ("cpSpaceGetSleepTimeThreshold", "double(*)(struct cpSpace *)"),
     ("cpSpaceEachCachedArbiter",
      "void(*)(struct cpSpace *, void(*)(struct cpArbiter *, void *), void *)"),
     ("cpArbiterGetPointA", "struct cpVect(*)(struct cpArbiter *, int)"),
@@ -104,11 +107,12 @@ cdef void _bind_chipmunk() except *:
     cp.set_spin = <_SetBodyFloat><uintptr_t>a[7]
     cp.sleeping = <_BodyBool><uintptr_t>a[8]
     cp.user_data = <_BodyPointer><uintptr_t>a[9]
-    cp.each_cached_arbiter = <_EachArbiter><uintptr_t>a[10]
-    cp.point_a = <_ArbiterPoint><uintptr_t>a[11]
-    cp.point_b = <_ArbiterPoint><uintptr_t>a[12]
-    cp.depth = <_ArbiterDepth><uintptr_t>a[13]
-    cp.cog = <_BodyVect><uintptr_t>a[14]
+    cp.sleep_threshold = <_SpaceFloat><uintptr_t>a[10]
+    cp.each_cached_arbiter = <_EachArbiter><uintptr_t>a[11]
+    cp.point_a = <_ArbiterPoint><uintptr_t>a[12]
+    cp.point_b = <_ArbiterPoint><uintptr_t>a[13]
+    cp.depth = <_ArbiterDepth><uintptr_t>a[14]
+    cp.cog = <_BodyVect><uintptr_t>a[15]
 
 
 _bind_chipmunk()
@@ -190,6 +194,104 @@ cdef void _bind_layout() except *:
 
 
 _bind_layout()
+
+
+cdef struct _BodyFields:
+    # byte offsets in chipmunk's cpBody of v, f and w, found by :func:`probe_body`; -1
+    # where it found no single answer (the setters are used)
+    Py_ssize_t v, f, w
+
+
+cdef _BodyFields body_fields
+
+#: How many bytes of a cpBody the probe reads: its v, f and w lie at 80, 96 and 120 in
+#: chipmunk 7, whose cpBody is 272 bytes (the struct ends with the sleeping fields).
+BODY_WINDOW = 192
+
+
+def probe_body(Py_ssize_t window=BODY_WINDOW) -> dict:
+    """Where a cpBody keeps its velocity ``v``, force ``f`` and spin ``w``: byte offsets
+    in its first ``window`` bytes, by name, each -1 where no single answer was found.
+
+    pymunk's cffi does not declare cpBody's fields, so they are found on a throwaway
+    body: each is set through pymunk (chipmunk's setter) to distinctive values, twice, and
+    must lie at one and the same aligned offset both times, and apart from the others; a
+    value written there must then read back through chipmunk's getter."""
+    import struct
+
+    import pymunk
+    ffi = pymunk.ffi
+    body = pymunk.Body(1.0, 1.0)
+    raw = ffi.cast("char *", body._body)
+    fields = (("v", "velocity", ((-7.3e13, 2.9e-7), (5.1e-9, -3.7e15), (-1.25e11, 6.5e-5))),
+              ("f", "force", ((3.3e-11, -8.1e12), (-6.7e14, 1.9e-6), (2.5e-3, -4.75e10))),
+              ("w", "angular_velocity", ((-9.7e-12,), (4.3e16,), (-1.5e-8,))))
+    out = {}
+    for name, attribute, values in fields:
+        found = set()
+        for value in values[:2]:
+            setattr(body, attribute, value if len(value) == 2 else value[0])
+            seen = bytes(ffi.buffer(raw, window))
+            pattern = struct.pack(f"<{len(value)}d", *value)
+            at = [i for i in range(0, window - len(pattern) + 1, 8)
+                  if seen[i:i + len(pattern)] == pattern]
+            found.add(at[0] if len(at) == 1 else -1)
+        out[name] = found.pop() if len(found) == 1 else -1
+        if out[name] >= 0:
+            ffi.cast("double *", raw + out[name])[0:len(values[2])] = values[2]
+            back = getattr(body, attribute)
+            if (tuple(back) if len(values[2]) == 2 else (back,)) != values[2]:
+                out[name] = -1
+    spans = sorted((at, at + (8 if name == "w" else 16)) for name, at in out.items() if at >= 0)
+    if any(a[1] > b[0] for a, b in zip(spans, spans[1:])):
+        return {name: -1 for name in out}
+    return out
+
+
+#: What :func:`probe_body` found at import: the offsets the passes write at.
+BODY_FIELDS = probe_body()
+body_fields.v = BODY_FIELDS["v"]
+body_fields.f = BODY_FIELDS["f"]
+body_fields.w = BODY_FIELDS["w"]
+
+
+#: A space's sleep time threshold from which no idle time reaches it: an idle time is the
+#: sum of a body's quiet steps (the backend's NEVER is 1e300; infinite: no sleeping).
+IDLE_UNREACHED = 1e290
+cdef double _idle_unreached = IDLE_UNREACHED
+
+
+cdef inline bint _idle_unread(void *space) noexcept nogil:
+    """Whether the direct writes are the setters to the bit for ``space``: the probe found
+    every field and no idle time can decide anything there (see :func:`_awake_velocity`)."""
+    return (body_fields.v >= 0 and body_fields.f >= 0 and body_fields.w >= 0
+            and cp.sleep_threshold(space) >= _idle_unreached)
+
+
+cdef inline void _awake_velocity(void *body, cpVect v, double w, bint direct) noexcept nogil:
+    """Set a body's velocity and spin as cpBodySetVelocity and cpBodySetAngularVelocity
+    do, written straight into it where ``direct`` (:func:`_idle_unread`) and it is not
+    asleep: their cpBodyActivate, on a body that is not asleep, only zeroes idle times
+    (its own and those of the dynamic bodies it touches, walking its arbiters; nothing for
+    a kinematic or static body), and chipmunk reads idle times only to put a component to
+    sleep (cpSpaceProcessComponents' ComponentActive: one under the space's threshold keeps
+    it awake) and to tell a static body (cpBodyGetType: INFINITY). A body asleep goes
+    through the setters (they wake it)."""
+    if not direct or cp.sleeping(body):
+        cp.set_velocity(body, v)
+        cp.set_spin(body, w)
+        return
+    (<cpVect *>(<char *>body + body_fields.v))[0] = v
+    (<double *>(<char *>body + body_fields.w))[0] = w
+
+
+cdef inline void _awake_force(void *body, cpVect f, bint direct) noexcept nogil:
+    """Set a body's force as cpBodySetForce does, written straight into it where
+    ``direct`` and it is not asleep (see :func:`_awake_velocity`)."""
+    if not direct or cp.sleeping(body):
+        cp.set_force(body, f)
+        return
+    (<cpVect *>(<char *>body + body_fields.f))[0] = f
 
 
 cdef inline void *_body_a(const char *arb) noexcept nogil:

@@ -445,15 +445,15 @@ cdef class Rows:
 
     cdef void _set_velocities(self, const unsigned char *rows) noexcept nogil:
         """The velocity and spin of each row flagged in ``rows`` from :attr:`raw`, into
-        chipmunk (which wakes the body, as a setter does)."""
+        chipmunk as its setters set them (:func:`_awake_velocity`)."""
         cdef Py_ssize_t r
         cdef cpVect v
+        cdef bint direct = self.space != NULL and _idle_unread(self.space)
         for r in range(self.n):
             if rows[r]:
                 v.x = self.raw[_BF * r + 3]
                 v.y = self.raw[_BF * r + 4]
-                cp.set_velocity(self.bodies[r], v)
-                cp.set_spin(self.bodies[r], self.raw[_BF * r + 5])
+                _awake_velocity(self.bodies[r], v, self.raw[_BF * r + 5], direct)
 
     def table(self, cnp.ndarray raw, cnp.ndarray out, cnp.ndarray keep,
               double extent=INFINITY, double max_speed=INFINITY) -> bool:
@@ -1056,10 +1056,12 @@ cdef class Resting:
         cdef double share, mass, lift = sqrt(gx * gx + gz * gz)
         cdef void *b
         cdef cpVect f
+        cdef bint direct
         if rows.n != self.n:
             raise ValueError("Resting.preload: the rows were planned for other bodies")
         rows._bound()
         with nogil:
+            direct = rows.space != NULL and _idle_unread(rows.space)
             for r in range(self.n):
                 self.applied[r] = 0.0
                 self.lifted[r] = 0.0
@@ -1073,7 +1075,7 @@ cdef class Resting:
                 f = cp.force(b)
                 f.x = f.x - mass * gx
                 f.y = f.y - mass * gz
-                cp.set_force(b, f)
+                _awake_force(b, f, direct)
                 self.applied[r] = share
                 self.lifted[r] = mass * lift
                 count += 1

@@ -13,8 +13,10 @@ counterpart and is ignored (reported once); pymunk bounces at any impact speed, 
 Sleeping is :mod:`engine.physics.sleep`'s rule, as under ODE. chipmunk's own sleeping
 stays on with a timer that never runs out (:data:`NEVER`), so chipmunk keeps its islands
 and wakes a sleeping group that an awake body touches, but only the rule puts bodies to
-sleep: each island as one chipmunk group, so they wake together. The rule reads the
-state through ``batch`` (compiled passes over chipmunk), which also tells who sleeps.
+sleep: each island as one chipmunk group, so they wake together (a step in which no body
+sleeps is taken with the timer off, :data:`QUIET`: chipmunk's islands would do nothing
+then). The rule reads the state through ``batch`` (compiled passes over chipmunk), which
+also tells who sleeps.
 
 A step longer than MAX_SUBSTEP (0.01 s) is taken as equal substeps of at most that, each
 as below (chipmunk's solver leaves a stack rocking at 1/60 s and 0.02 s; docs/PHYSICS.md).
@@ -26,15 +28,17 @@ no Python per body: before it, the preloaded rows' forces read and written
 (``_rows.Resting.preload``); after it, one pass (``_rows.Resting.after``) that reads the
 bodies (the read the sleep rule and a state read right after the step take too; any
 public method that may change the space drops it first) and the step's arbiters, once,
-and writes the velocities of the rows it holds still; then the sleep rule (``sleep.h``'s
-pass; islands, when some body is ready, by a union-find over the same arbiters and the
-joints). A substep before a step's last hands its arbiter read over (no copy): its
-contacts are made only when :meth:`contacts` asks (or before anything changes the
-space). Against bare pymunk taking the same substeps (``python -m app.bench.physics2d``,
-docs/PHYSICS.md): 1.17 to 1.19 of its time at 100 to 2,000 boxes (1.21 to 1.23 with the
-sleep rule on), 1.10 to 1.14 of its instructions (1.14 to 1.18), where the arbiter read
-is 2.5 % of chipmunk's step's instructions and more of its time (the arbiters, their
-contacts and bodies, after a step whose cache holds little of them).
+and writes the velocities of the rows it holds still (into an awake body straight, as
+the preload its forces: chipmunk's setters walk the body's arbiters to reset idle times
+that decide nothing here); then the sleep rule (``sleep.h``'s pass; islands, when some
+body is ready, by a union-find over the same arbiters and the joints). A substep before
+a step's last hands its arbiter read over (no copy): its contacts are made only when
+:meth:`contacts` asks (or before anything changes the space). Against bare pymunk taking
+the same substeps (``python -m app.bench.physics2d``, docs/PHYSICS.md): 1.16 to 1.18 of
+its time at 100 to 2,000 boxes (1.17 to 1.21 with the sleep rule on), 1.08 to 1.11 of its
+instructions (1.10 to 1.14), where the arbiter read is 2.5 % of chipmunk's step's
+instructions and more of its time (the arbiters, their contacts and bodies, after a step
+whose cache holds little of them).
 
 Whatever the plane cannot represent is reported once per object on the logger
 ``colosseum.physics.pymunk`` with the approximation used, never raised. Bad calls
@@ -92,6 +96,12 @@ MAX_SUBSTEP = 0.01
 #: chipmunk's sleep timer while auto-sleep is on: chipmunk keeps its islands and wakes
 #: what an awake body touches, but never decides on its own (the sleep rule does).
 NEVER = 1e300
+#: chipmunk's sleep timer for a step taken while auto-sleep is on and no body sleeps
+#: (known from the last substep's body read, nothing changed since): off, so chipmunk
+#: skips its islands and idle times, which would decide nothing (none to wake, NEVER
+#: reached by none); NEVER again right after the step (a body can only be put to sleep
+#: with a timer on). The same trajectory to the bit (docs/PHYSICS.md).
+QUIET = math.inf
 #: A shape filter that collides with nothing (``set_collision_enabled(key, False)``).
 NOTHING = pymunk.ShapeFilter(categories=0, mask=0)
 
@@ -332,7 +342,14 @@ class PymunkBackend:
         self._preload_weights()
         # after the preload: it is an outside force to a joint's momentum balance
         strained = self._strain_before(dt) if self._strained else None
-        self._space.step(dt)
+        quiet = self._sleep_on and self._step_read is not None and not self._rows.sleepers
+        if quiet:
+            self._space.sleep_time_threshold = QUIET
+        try:
+            self._space.step(dt)
+        finally:
+            if quiet:
+                self._space.sleep_time_threshold = NEVER
         rows = self._rows
         rows.new_step()
         if strained:
