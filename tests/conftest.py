@@ -31,6 +31,7 @@ SERIAL = ("tests/net/", "tests/input/", "tests/xr/", "tests/audio/",
           "tests/render/test_anomaly_switching.py", "tests/scripting/test_scripting_sandbox.py",
           "tests/scripting/test_churn.py::test_a_spawn_and_a_delete_cost_the_same",
           "tests/physics/test_ode_physics.py::test_gil_is_released_while_stepping",
+          "tests/core/test_threaded.py::test_no_torn_snapshot_over_thousands_of_frames",
           "tests/stroke/test_sweep.py::test_the_crumbs_fall_asleep_and_then_cost")
 
 
